@@ -1,0 +1,132 @@
+"""The Python front door: load a listing, run it, get `Run` objects back.
+
+    >>> import amilpy
+    >>> model = amilpy.loads("X = INTGRL(1.0, -X)\\nTIMER FINTIM = 1.0\\nEND\\n")
+    >>> run, = model.run()
+    >>> round(float(run["X"][-1]), 6)
+    0.367879
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import replace
+
+from . import ir
+from .check import check, method_name
+from .diagnostics import AmilError, Diagnostic, nearest
+from .parse import parse
+from .result import Run
+
+
+class Model:
+    """A checked listing, ready to run any number of times."""
+
+    def __init__(self, model: ir.Model) -> None:
+        self.ir = model
+
+    @property
+    def name(self) -> str:
+        return self.ir.name
+
+    @property
+    def path(self) -> str | None:
+        return self.ir.path
+
+    @property
+    def variables(self) -> list[str]:
+        return self.ir.variables
+
+    @property
+    def parameters(self) -> dict[str, float]:
+        return dict(self.ir.runs[0].data)
+
+    def python_source(self, **params: float) -> str:
+        """The generated Python of the first run (what `--show-python` prints)."""
+        from .runner import Options, _Simulation
+
+        spec = self._specs(params)[0]
+        return _Simulation(self.ir, spec, Options()).c.source
+
+    def _specs(self, params: dict[str, float]) -> list[ir.RunSpec]:
+        known = set(self.ir.data_names)
+        overrides = {}
+        for key, value in params.items():
+            name = key.upper()
+            if name not in known:
+                hint = nearest(name, known)
+                raise AmilError([Diagnostic(
+                    f"{name} is not a PARAM/CONST/INCON value of this model",
+                    None, f"did you mean {hint}?" if hint else
+                    "only data values can be set from outside")], self.ir.path)
+            try:
+                overrides[name] = float(value)
+            except (TypeError, ValueError):
+                raise AmilError(f"{name} must be a number, got {value!r}") from None
+        specs = []
+        for spec in self.ir.runs:
+            if overrides:
+                data = dict(spec.data)
+                data.update(overrides)
+                changed = {**spec.changed, **overrides}
+                label = ", ".join(f"{n} = {v:g}" for n, v in changed.items())
+                spec = replace(spec, data=data, changed=changed, label=label or spec.label)
+            specs.append(spec)
+        return specs
+
+    def run(self, method: str | None = None, rtol: float | None = None,
+            atol: float | None = None, *, events: bool = True,
+            outputs: list[str] | None = None, max_steps: int | None = None,
+            max_events: int | None = None, max_time: float | None = None,
+            progress=None, **params: float) -> list[Run]:
+        """Run every run of the listing (value lists, END groups); data values
+        given as keywords override the listing's for all of them."""
+        from .runner import Options, simulate
+
+        if method is not None and method_name(method) is None:
+            raise AmilError(f"unknown integration method {method}")
+        for label, tol in (("rtol", rtol), ("atol", atol)):
+            if tol is not None and not tol > 0:
+                raise AmilError(f"{label} must be positive, got {tol}")
+        if outputs is not None:
+            outputs = [o.upper() for o in outputs]
+            unknown = [o for o in outputs if o not in self.ir.variables]
+            if unknown:
+                raise AmilError(f"{unknown[0]} is not a variable of the model")
+        opts = Options(method=method, rtol=rtol, atol=atol, events=events, outputs=outputs,
+                       max_time=max_time, progress=progress)
+        if max_steps:
+            opts.max_steps = max_steps
+        if max_events:
+            opts.max_events = max_events
+        return [simulate(self.ir, spec, opts) for spec in self._specs(params)]
+
+    def __repr__(self) -> str:
+        return f"<amilpy.Model {self.name!r}: {len(self.ir.states)} states, " \
+               f"{len(self.ir.runs)} runs>"
+
+
+def loads(text: str, name: str = "<listing>") -> Model:
+    """Parse and check a listing given as text."""
+    program = parse(text, name)
+    return Model(check(program, name))
+
+
+def load(path: str | os.PathLike) -> Model:
+    """Parse and check a listing file (UTF-8)."""
+    path = os.fspath(path)
+    try:
+        with open(path, "rb") as fh:
+            raw = fh.read()
+    except OSError as exc:
+        raise AmilError(f"cannot read {path}: {exc.strerror}", path) from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw[: exc.start].count(b"\n") + 1
+        col = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
+        from .diagnostics import Span
+
+        raise AmilError([Diagnostic("the file is not valid UTF-8", Span(line, col),
+                                    "save the listing as UTF-8")], path) from None
+    return loads(text, path)

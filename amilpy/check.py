@@ -1,0 +1,823 @@
+"""Syntax -> IR: names, sections, run groups, lowering of simulation functions,
+dependency sorting and algebraic-loop detection.
+
+Every fault found here is collected and reported together (see `Reporter`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from . import ir
+from . import syntax as ast
+from .diagnostics import Reporter, Span, nearest
+from .library import ALIASES, FUNCTIONS, MEMORY_SLOTS, lookup
+
+RESERVED = ("TIME", "DELT", "DELMIN", "DELMAX", "FINTIM", "PRDEL", "OUTDEL", "PI")
+TIMER_KEYS = ("FINTIM", "DELT", "PRDEL", "OUTDEL", "DELMIN", "DELMAX")
+METHODS = {
+    "AUTO": "AUTO", "RKS": "RK45", "RK45": "RK45", "RKSFX": "RK4", "RK4": "RK4", "SIMP": "RK4",
+    "RECT": "EULER", "EULER": "EULER", "TRAPZ": "TRAPZ", "HEUN": "TRAPZ", "ADAMS": "ADAMS",
+    "AB2": "ADAMS", "DOP853": "DOP853", "MILNE": "LSODA", "LSODA": "LSODA", "STIFF": "RADAU",
+    "RADAU": "RADAU", "BDF": "BDF", "GEAR": "BDF",
+}
+
+_DATA_STATEMENTS = (ast.Data, ast.Table, ast.Timer, ast.Method, ast.Tolerance, ast.Finish,
+                    ast.Report, ast.Label, ast.Title)
+
+
+def method_name(name: str) -> str | None:
+    """The canonical integrator route for a METHOD name (or None if unknown)."""
+    return METHODS.get(name.upper())
+
+
+def check(program: ast.Program, name: str | None = None) -> ir.Model:
+    return _Checker(program, name).run()
+
+
+class _Checker:
+    def __init__(self, program: ast.Program, name: str | None) -> None:
+        self.program = program
+        self.rep = Reporter(program.path, program.source)
+        self.name = name or program.path or "<listing>"
+
+    # ------------------------------------------------------------------ driver
+    def run(self) -> ir.Model:
+        groups = self.split_groups()
+        first = groups[0] if groups else []
+        sections = self.sections(first)
+        for later in groups[1:]:
+            for st in later:
+                if not isinstance(st, _DATA_STATEMENTS):
+                    self.rep.error(
+                        "only data and control statements may follow the first END",
+                        st.span,
+                        "a later run group may change PARAM, TIMER, METHOD, PRINT ...; "
+                        "equations belong before the first END",
+                    )
+        runs, data_names, data_spans = self.run_specs(groups)
+        self.rep.raise_if_any()
+        model = self.lower(sections, runs, data_names, data_spans)
+        self.rep.raise_if_any()
+        return model
+
+    def split_groups(self) -> list[list[ast.Statement]]:
+        groups: list[list[ast.Statement]] = [[]]
+        for st in self.program.statements:
+            if isinstance(st, ast.Stop):
+                break
+            if isinstance(st, ast.End):
+                groups.append([])
+                continue
+            groups[-1].append(st)
+        if len(groups) > 1 and not any(
+            not isinstance(s, (ast.Title,)) for s in groups[-1]
+        ):
+            groups.pop()  # a final END (or END followed by STOP) opens no new run
+        return groups
+
+    def sections(self, group: list[ast.Statement]) -> dict[str, list[ast.Statement]]:
+        out: dict[str, list[ast.Statement]] = {"INITIAL": [], "DYNAMIC": [], "TERMINAL": []}
+        current = "DYNAMIC"
+        for st in group:
+            if isinstance(st, ast.Section):
+                current = st.name
+            elif isinstance(st, (ast.Assign, ast.Termt)):
+                if isinstance(st, ast.Termt) and current != "DYNAMIC":
+                    self.rep.error("TERMT belongs in DYNAMIC", st.span)
+                out[current].append(st)
+        return out
+
+    # ------------------------------------------------------------- run groups
+    def run_specs(self, groups):
+        data: dict[str, float] = {}
+        data_spans: dict[str, Span] = {}
+        data_kind: dict[str, str] = {}
+        tables: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = {}
+        timer: dict[str, float] = {}
+        method: str | None = None
+        relerr = abserr = None
+        rel_each: dict[str, float] = {}
+        abs_each: dict[str, float] = {}
+        reports: list[ir.Report] = []
+        titles: list[str] = []
+        finish: list[ast.Setting] = []
+        runs: list[ir.RunSpec] = []
+        base: dict[str, float] | None = None
+        self.finish_settings: list[ast.Setting] = []
+        for gi, group in enumerate(groups):
+            lists: dict[str, tuple[float, ...]] = {}
+            new_reports = [] if any(isinstance(s, ast.Report) for s in group) else None
+            new_titles = [] if any(isinstance(s, ast.Title) for s in group) else None
+            for st in group:
+                if isinstance(st, ast.Data):
+                    for item in st.items:
+                        self.check_assignable(item.name, item.span, "a data value")
+                        if gi == 0 and item.name in data_spans and data_kind.get(item.name):
+                            self.rep.error(
+                                f"{item.name} is given a value twice",
+                                item.span,
+                                f"first given at line {data_spans[item.name].line}",
+                            )
+                        data_spans.setdefault(item.name, item.span)
+                        data_kind[item.name] = st.keyword
+                        data[item.name] = item.values[0]
+                        if item.is_list:
+                            lists[item.name] = item.values
+                elif isinstance(st, ast.Table):
+                    self.check_table(st)
+                    tables[st.name] = (st.xs, st.ys)
+                elif isinstance(st, ast.Timer):
+                    for s in st.settings:
+                        if s.name not in TIMER_KEYS:
+                            hint = nearest(s.name, set(TIMER_KEYS))
+                            self.rep.error(
+                                f"unknown TIMER setting {s.name}",
+                                s.span,
+                                f"did you mean {hint}?" if hint else
+                                "TIMER takes " + ", ".join(TIMER_KEYS),
+                            )
+                        elif s.value <= 0 and s.name != "DELMIN":
+                            self.rep.error(f"{s.name} must be positive (got {s.value:g})", s.span)
+                        timer[s.name] = s.value
+                elif isinstance(st, ast.Method):
+                    if method_name(st.name) is None:
+                        hint = nearest(st.name, set(METHODS))
+                        self.rep.error(
+                            f"unknown integration method {st.name}",
+                            st.span,
+                            (f"did you mean {hint}? " if hint else "")
+                            + "known: " + ", ".join(sorted(METHODS)),
+                        )
+                    method = st.name
+                elif isinstance(st, ast.Tolerance):
+                    target_each = rel_each if st.kind == "RELERR" else abs_each
+                    if st.default is not None:
+                        if st.default <= 0:
+                            self.rep.error(f"{st.kind} must be positive", st.span)
+                        if st.kind == "RELERR":
+                            relerr = st.default
+                        else:
+                            abserr = st.default
+                    for s in st.settings:
+                        if s.value <= 0:
+                            self.rep.error(f"{st.kind} must be positive", s.span)
+                        target_each[s.name] = s.value
+                elif isinstance(st, ast.Finish):
+                    finish.extend(st.settings)
+                elif isinstance(st, ast.Report):
+                    (new_reports if new_reports is not None else reports).append(
+                        ir.Report(st.kind, st.names, None, st.span))
+                    self._all_report_statements = getattr(self, "_all_report_statements", [])
+                    self._all_report_statements.append(st)
+                elif isinstance(st, ast.Label):
+                    target = new_reports if new_reports is not None else reports
+                    outs = [i for i, r in enumerate(target) if r.kind == "OUTPUT"]
+                    if outs:
+                        target[outs[-1]] = replace(target[outs[-1]], label=st.text)
+                    else:
+                        titles_target = new_titles if new_titles is not None else titles
+                        titles_target.append(st.text)
+                elif isinstance(st, ast.Title):
+                    (new_titles if new_titles is not None else titles).append(st.text)
+            if new_reports is not None:
+                reports = new_reports
+            if new_titles is not None:
+                titles = new_titles
+            if gi == 0:
+                self.finish_settings = list(finish)
+                if "FINTIM" not in timer:
+                    last = self.program.statements[-1].span if self.program.statements else None
+                    self.rep.error(
+                        "FINTIM is not given",
+                        last,
+                        "add a TIMER statement, e.g. TIMER FINTIM = 1.0, PRDEL = 0.01",
+                    )
+            lengths = {len(v) for v in lists.values()}
+            if len(lengths) > 1:
+                first = next(iter(lists))
+                self.rep.error(
+                    "value lists in one run group must have the same length",
+                    data_spans.get(first),
+                    ", ".join(f"{k} has {len(v)}" for k, v in lists.items()),
+                )
+            count = max(lengths) if lengths else 1
+            for k in range(count):
+                values = dict(data)
+                for lname, lvalues in lists.items():
+                    values[lname] = lvalues[min(k, len(lvalues) - 1)]
+                if base is None:
+                    base = dict(values)
+                changed = {n: v for n, v in values.items() if base.get(n) != v}
+                if lists:
+                    changed.update({n: values[n] for n in lists})
+                label = ", ".join(f"{n} = {v:g}" for n, v in changed.items())
+                runs.append(ir.RunSpec(
+                    label=label or ("RUN 1" if gi == 0 else f"RUN {len(runs) + 1}"),
+                    data=values, changed=changed, tables=dict(tables), timer=dict(timer),
+                    method=method, relerr=relerr, abserr=abserr, relerr_each=dict(rel_each),
+                    abserr_each=dict(abs_each), reports=list(reports), titles=list(titles),
+                ))
+            # a later group inherits everything, value lists collapse to their first value
+            for lname in lists:
+                data[lname] = lists[lname][0]
+        if not runs:
+            self.rep.error("the listing has no statements", None)
+        self.tables = tables
+        return runs, list(data), data_spans
+
+    def check_table(self, st: ast.Table) -> None:
+        if st.odd_count:
+            self.rep.error(
+                f"FUNCTION {st.name} has an odd number of values",
+                st.span,
+                "a table is pairs x1,y1, x2,y2, ...; a decimal comma (1,5) splits a number in two",
+            )
+        for i in range(1, len(st.xs)):
+            if not st.xs[i] > st.xs[i - 1]:
+                self.rep.error(
+                    f"FUNCTION {st.name}: x values must increase strictly "
+                    f"(x{i} = {st.xs[i - 1]:g}, x{i + 1} = {st.xs[i]:g})",
+                    st.span,
+                    "write the points in order of increasing x",
+                )
+                break
+        if len(st.xs) < 2:
+            self.rep.error(f"FUNCTION {st.name} needs at least two points", st.span)
+
+    def check_assignable(self, name: str, span: Span, what: str) -> bool:
+        if name in RESERVED:
+            self.rep.error(
+                f"{name} is a reserved name and cannot be {what}",
+                span,
+                "TIME, DELT, DELMIN, DELMAX, FINTIM, PRDEL, OUTDEL and PI are read-only; "
+                "set the TIMER values with a TIMER statement",
+            )
+            return False
+        if lookup(name) is not None and FUNCTIONS[ALIASES.get(name, name)].kind != "math":
+            pass  # CSMP allows a variable named like a function; calls are told apart by '('
+        return True
+
+    # ---------------------------------------------------------------- lowering
+    def lower(self, sections, runs, data_names, data_spans) -> ir.Model:
+        self.data_names = set(data_names)
+        self.table_names = set(self.tables)
+        self.states: list[ir.State] = []
+        self.switches: list[ir.Switch] = []
+        self.surfaces: list[ir.Surface] = []
+        self.memories: list[ir.Memory] = []
+        self.nslots = 0
+        self.hidden_count = 0
+        self.ic_exprs: list[ast.Expr] = []
+        defined: dict[str, Span] = {}
+        self.defined_where: dict[str, str] = {}
+
+        def define(target: str, span: Span, where: str) -> bool:
+            if not self.check_assignable(target, span, "assigned"):
+                return False
+            if target in defined:
+                self.rep.error(
+                    f"{target} is defined twice",
+                    span,
+                    f"first defined at line {defined[target].line}; a name has one definition",
+                    related=((defined[target], f"{target} first defined here"),),
+                )
+                return False
+            if target in self.data_names:
+                self.rep.error(
+                    f"{target} is both a data value and computed",
+                    span,
+                    f"it is given a value at line {data_spans[target].line}; drop one of them",
+                )
+                return False
+            defined[target] = span
+            self.defined_where[target] = where
+            return True
+
+        # INITIAL: plain assignments, evaluated once, sorted.
+        initial: list[ir.Equation] = []
+        for st in sections["INITIAL"]:
+            for target, tspan in zip(st.targets, st.target_spans, strict=True):
+                define(target, tspan, "INITIAL")
+            self.check_calls(st.expr, allow=("math", "table", "switch", "time"), section="INITIAL")
+            if len(st.targets) > 1:
+                self.rep.error("only OUTSW gives two values, and only in DYNAMIC", st.span)
+                continue
+            initial.append(ir.Equation(st.targets[0], self.lower_pure(st.expr), st.span))
+        self.initial_names = {e.target for e in initial}
+
+        # DYNAMIC
+        dyn_eqs: list[ir.Equation] = []
+        self.pending_termt: list[ast.Termt] = []
+        for st in sections["DYNAMIC"]:
+            if isinstance(st, ast.Termt):
+                self.pending_termt.append(st)
+                continue
+            ok = all(define(t, s, "DYNAMIC") for t, s in zip(st.targets, st.target_spans,
+                                                            strict=True))
+            self.check_calls(st.expr, allow=None, section="DYNAMIC")
+            if not ok:
+                continue
+            dyn_eqs.extend(self.lower_dynamic(st))
+
+        terminal: list[ir.Equation] = []
+        for st in sections["TERMINAL"]:
+            for target, tspan in zip(st.targets, st.target_spans, strict=True):
+                define(target, tspan, "TERMINAL")
+            self.check_calls(st.expr, allow=("math", "table", "switch", "time"),
+                             section="TERMINAL")
+            if len(st.targets) == 1:
+                terminal.append(ir.Equation(st.targets[0], self.lower_pure(st.expr), st.span))
+
+        self.defined = defined
+        state_names = {s.name for s in self.states}
+        known = set(defined) | self.data_names | set(RESERVED)
+
+        # names used but never defined
+        def check_names(expr, where_ok: set[str]):
+            for node in ast.walk(expr):
+                if isinstance(node, ast.Name) and node.name not in where_ok:
+                    self.undefined(node, known)
+
+        initial_ok = self.data_names | self.initial_names | {"PI", "FINTIM", "DELT", "PRDEL",
+                                                             "OUTDEL", "DELMIN", "DELMAX", "TIME"}
+        for st in sections["INITIAL"]:
+            for node in ast.walk(st.expr):
+                if isinstance(node, ast.Name) and node.name not in initial_ok:
+                    if node.name in defined:
+                        self.rep.error(
+                            f"INITIAL uses {node.name}, which is computed in "
+                            f"{self.defined_where[node.name]}",
+                            node.span,
+                            "INITIAL runs once before the dynamics; it can use data values "
+                            "and other INITIAL values only",
+                        )
+                    else:
+                        self.undefined(node, known)
+        for st in sections["DYNAMIC"] + sections["TERMINAL"]:
+            check_names(st.expr, known)
+        for st in self.ic_exprs:
+            for node in ast.walk(st):
+                if isinstance(node, ast.Name) and node.name not in initial_ok:
+                    if node.name in defined:
+                        self.rep.error(
+                            f"the initial value uses {node.name}, which changes in time",
+                            node.span,
+                            "an initial condition must be a number, a data value or an "
+                            "INITIAL value",
+                        )
+                    else:
+                        self.undefined(node, known)
+
+        # reports and FINISH must name known quantities
+        report_known = known - {"DELT", "DELMIN", "DELMAX", "FINTIM", "PRDEL", "OUTDEL", "PI"}
+        for st in getattr(self, "_all_report_statements", []):
+            for n, s in zip(st.names, st.name_spans, strict=True):
+                if n not in report_known and n != "TIME":
+                    hint = nearest(n, report_known - {"TIME"})
+                    self.rep.error(
+                        f"{st.kind} names {n}, which the model never defines",
+                        s,
+                        f"did you mean {hint}?" if hint else None,
+                    )
+        for s in self.finish_settings:
+            if s.name not in known:
+                hint = nearest(s.name, known)
+                self.rep.error(f"FINISH names {s.name}, which the model never defines", s.span,
+                               f"did you mean {hint}?" if hint else None)
+        self.rep.raise_if_any()
+
+        initial_sorted = self.sort(initial, set(self.initial_names), "INITIAL")
+        dyn_sorted = self.sort(dyn_eqs, {e.target for e in dyn_eqs}, "DYNAMIC")
+
+        # FINISH and TERMT surfaces
+        for s in self.finish_settings:
+            expr = ast.BinOp("-", ast.Name(s.name, s.span), ast.Num(s.value, s.span), s.span)
+            self.add_surface(expr, "sign", None, "finish", s.span, f"FINISH {s.name}={s.value:g}")
+        for st in self.pending_termt:
+            self.check_calls(st.expr, allow=None, section="DYNAMIC")
+            expr = self.lower_expr(st.expr, "TERMT")
+            self.add_surface(expr, "sign", None, "termt", st.span, "TERMT")
+
+        model = ir.Model(
+            name=self.name, path=self.program.path, source=self.program.source,
+            initial=initial_sorted, dynamic=dyn_sorted, terminal=terminal,
+            states=self.states, switches=self.switches, surfaces=self.surfaces,
+            memories=self.memories, runs=runs, data_names=data_names,
+            spans={**data_spans, **defined},
+        )
+        self.classify_surfaces(model, state_names)
+        return model
+
+    def undefined(self, node: ast.Name, known: set[str]) -> None:
+        if node.name in self.table_names:
+            self.rep.error(f"{node.name} is a FUNCTION table, not a value", node.span,
+                           f"look it up with AFGEN({node.name}, X)")
+            return
+        hint = nearest(node.name, known - {"DELMIN", "DELMAX"})
+        self.rep.error(
+            f"{node.name} is used but never defined",
+            node.span,
+            (f"did you mean {hint}? " if hint else "")
+            + "give it a value with PARAM/CONST/INCON or an equation",
+        )
+
+    # ----------------------------------------------------------- call checks
+    def check_calls(self, expr: ast.Expr, allow, section: str) -> None:
+        for node in ast.walk(expr):
+            if not isinstance(node, ast.Call):
+                continue
+            func = lookup(node.func)
+            if func is None:
+                hint = nearest(node.func, set(FUNCTIONS) | set(ALIASES))
+                self.rep.error(
+                    f"unknown function {node.func}",
+                    node.span,
+                    f"did you mean {hint}?" if hint else "see the function list in the manual",
+                )
+                continue
+            lo, hi = func.nargs
+            n = len(node.args)
+            if n < lo or (hi is not None and n > hi):
+                want = f"{lo}" if hi == lo else (f"{lo} to {hi}" if hi else f"at least {lo}")
+                hint = None
+                comma = self.decimal_comma(node)
+                if comma:
+                    hint = f"'{comma}' reads as two arguments; the decimal separator is a " \
+                           f"point: write {comma.replace(',', '.')}"
+                elif n > (hi or n):
+                    hint = "a decimal comma (1,5) splits a number into two arguments"
+                self.rep.error(
+                    f"{node.func} takes {want} argument{'s' if want != '1' else ''}, "
+                    f"got {n}",
+                    node.span,
+                    hint,
+                )
+                continue
+            if allow is not None and func.kind not in allow:
+                self.rep.error(
+                    f"{node.func} cannot be used in {section}",
+                    node.span,
+                    "states, memory functions and IMPULS belong in DYNAMIC",
+                )
+            if func.kind == "table":
+                first = node.args[0]
+                if not isinstance(first, ast.Name) or first.name not in self.table_names:
+                    label = first.name if isinstance(first, ast.Name) else "its first argument"
+                    hint = nearest(label, self.table_names) if isinstance(first, ast.Name) else None
+                    self.rep.error(
+                        f"{node.func} needs a FUNCTION table as first argument; "
+                        f"{label} is not one",
+                        node.args[0].span,
+                        f"did you mean {hint}?" if hint else
+                        "define it with FUNCTION NAME = x1,y1, x2,y2, ...",
+                    )
+
+    def decimal_comma(self, node: ast.Call) -> str | None:
+        lines = (self.program.source or "").split("\n")
+        for a, b in zip(node.args, node.args[1:], strict=False):
+            if isinstance(a, ast.Num) and isinstance(b, ast.Num):
+                sa, sb = a.span, b.span
+                if sa.end_line == sb.line and sa.end_column == sb.column - 1:
+                    line = lines[sa.line - 1]
+                    if line[sa.end_column - 1: sb.column - 1] == ",":
+                        return line[sa.column - 1: sb.end_column - 1]
+        return None
+
+    # -------------------------------------------------------------- lowering
+    def lower_pure(self, expr: ast.Expr) -> ast.Expr:
+        """INITIAL/TERMINAL: switches evaluate literally; no states or memory."""
+        return self.lower_expr(expr, None, literal=True)
+
+    def lower_dynamic(self, st: ast.Assign) -> list[ir.Equation]:
+        expr = st.expr
+        if len(st.targets) == 2:
+            if not (isinstance(expr, ast.Call) and lookup(expr.func)
+                    and lookup(expr.func).outputs == 2):
+                self.rep.error("only OUTSW gives two values", st.span,
+                               "write one assignment per variable")
+                return []
+            index = self.add_switch(expr, st.targets[0])
+            return [ir.Equation(t, ir.SwitchValue(index, expr.span, k), st.span)
+                    for k, t in enumerate(st.targets)]
+        if len(st.targets) > 2:
+            self.rep.error("at most two variables can be assigned together (OUTSW)", st.span)
+            return []
+        target = st.targets[0]
+        if isinstance(expr, ast.Call):
+            func = lookup(expr.func)
+            if func is not None and func.kind == "state" and func.name in ("INTGRL", "INTEG"):
+                self.make_state(target, expr, hidden=False)
+                return []
+            if func is not None and func.kind == "state":
+                # REALPL/LEDLAG/CMPXPL/MODINT as the whole right-hand side: the
+                # state carries the user's name where the output is the state.
+                value = self.lower_state_function(expr, target)
+                if isinstance(value, ast.Name) and value.name == target:
+                    return []
+                return [ir.Equation(target, value, st.span)]
+        if isinstance(expr, ast.Call) and lookup(expr.func) and lookup(expr.func).outputs == 2:
+            self.rep.error("OUTSW gives two values: write Y1, Y2 = OUTSW(X, V)", st.span)
+            return []
+        return [ir.Equation(target, self.lower_expr(expr, target), st.span)]
+
+    def hidden(self, kind: str) -> str:
+        self.hidden_count += 1
+        return f"{kind}#{self.hidden_count}"
+
+    def make_state(self, name: str, call: ast.Call, hidden: bool) -> str:
+        func = lookup(call.func)
+        if func.name == "INTEG":
+            deriv, ic = call.args
+        else:
+            ic, deriv = call.args
+        self.ic_exprs.append(ic)
+        self.states.append(ir.State(name, self.lower_expr(ic, name, literal=True),
+                                    self.lower_expr(deriv, name), call.span, hidden))
+        return name
+
+    def lower_state_function(self, call: ast.Call, target: str | None) -> ast.Expr:
+        """REALPL, LEDLAG, CMPXPL, MODINT (and nested INTGRL) as states."""
+        func = lookup(call.func)
+        sp = call.span
+        owner = target or "?"
+        if func.name in ("INTGRL", "INTEG"):
+            name = self.hidden("INTGRL")
+            self.make_state(name, call, hidden=True)
+            return ast.Name(name, sp)
+        args = call.args
+        if func.name == "REALPL":
+            ic, p, x = args
+            name = target if target else self.hidden("REALPL")
+            deriv = ast.BinOp("/", ast.BinOp("-", x, ast.Name(name, sp), sp), p, sp)
+            self.ic_exprs.append(ic)
+            self.states.append(ir.State(name, self.lower_expr(ic, owner, literal=True),
+                                        self.lower_expr(deriv, owner), sp, target is None))
+            return ast.Name(name, sp)
+        if func.name == "LEDLAG":
+            p1, p2, x = args
+            z = self.hidden("LEDLAG")
+            zname = ast.Name(z, sp)
+            deriv = ast.BinOp("/", ast.BinOp("-", x, zname, sp), p2, sp)
+            self.states.append(ir.State(z, ast.Num(0.0, sp), self.lower_expr(deriv, owner),
+                                        sp, True))
+            # Y = z + P1/P2*(X - z)
+            out = ast.BinOp("+", zname, ast.BinOp("*", ast.BinOp("/", p1, p2, sp),
+                                                  ast.BinOp("-", x, zname, sp), sp), sp)
+            return self.lower_expr(out, owner)
+        if func.name == "CMPXPL":
+            ic1, ic2, p1, p2, x = args
+            name = target if target else self.hidden("CMPXPL")
+            rate = self.hidden("CMPXPL'")
+            y, yd = ast.Name(name, sp), ast.Name(rate, sp)
+            two = ast.Num(2.0, sp)
+            acc = ast.BinOp("-", ast.BinOp("-", x, ast.BinOp("*", ast.BinOp(
+                "*", ast.BinOp("*", two, p1, sp), p2, sp), yd, sp), sp),
+                ast.BinOp("*", ast.BinOp("*", p2, p2, sp), y, sp), sp)
+            self.ic_exprs.extend([ic1, ic2])
+            self.states.append(ir.State(name, self.lower_expr(ic1, owner, literal=True),
+                                        yd, sp, target is None))
+            self.states.append(ir.State(rate, self.lower_expr(ic2, owner, literal=True),
+                                        self.lower_expr(acc, owner), sp, True))
+            return ast.Name(name, sp)
+        if func.name == "MODINT":
+            ic, x1, x2, x3 = args
+            name = target if target else self.hidden("MODINT")
+            s1 = self.add_surface(self.lower_expr(x1, owner), "sign", None, "switch", sp,
+                                  f"MODINT X1 for {owner}")
+            s2 = self.add_surface(self.lower_expr(x2, owner), "sign", None, "switch", sp,
+                                  f"MODINT X2 for {owner}")
+            self.ic_exprs.append(ic)
+            self.states.append(ir.State(name, self.lower_expr(ic, owner, literal=True),
+                                        self.lower_expr(x3, owner), sp, target is None,
+                                        reset_surfaces=(s1, s2)))
+            return ast.Name(name, sp)
+        raise AssertionError(func.name)
+
+    def add_surface(self, expr, kind, owner, purpose, span, description) -> int:
+        index = len(self.surfaces)
+        self.surfaces.append(ir.Surface(index, expr, kind, owner, purpose, "state", span,
+                                        description))
+        return index
+
+    def add_switch(self, call: ast.Call, target: str) -> int:
+        func = lookup(call.func)
+        args = tuple(self.lower_expr(a, target) for a in call.args)
+        index = len(self.switches)
+        surfaces = []
+        for k, template in enumerate(func.surfaces):
+            expr = _instantiate(template, args, call.span)
+            desc = f"{call.func} for {target} (line {call.span.line})"
+            if len(func.surfaces) > 1:
+                desc += f", surface {k + 1}"
+            surfaces.append(self.add_surface(expr, func.surface_kind, index, "switch",
+                                             call.span, desc))
+        self.switches.append(ir.Switch(index, func.name, args, tuple(surfaces), call.span,
+                                       target))
+        return index
+
+    def lower_expr(self, expr: ast.Expr, target: str | None, literal: bool = False):
+        """Replace simulation-function calls by IR nodes, recursively."""
+        if isinstance(expr, (ast.Num, ast.Name)):
+            return expr
+        if isinstance(expr, ast.Neg):
+            return ast.Neg(self.lower_expr(expr.operand, target, literal), expr.span)
+        if isinstance(expr, ast.BinOp):
+            return ast.BinOp(expr.op, self.lower_expr(expr.left, target, literal),
+                             self.lower_expr(expr.right, target, literal), expr.span)
+        if isinstance(expr, ast.Call):
+            func = lookup(expr.func)
+            if func is None:
+                return expr
+            if func.kind == "math":
+                return ast.Call(func.name, tuple(self.lower_expr(a, target, literal)
+                                                 for a in expr.args), expr.span, expr.arg_spans)
+            if func.kind == "table":
+                name = expr.args[0].name if isinstance(expr.args[0], ast.Name) else "?"
+                return ir.TableLookup(name, self.lower_expr(expr.args[1], target, literal),
+                                      func.name == "NLFGEN", expr.span)
+            if literal:
+                if func.kind in ("switch", "time"):
+                    # INITIAL/TERMINAL: a switch is evaluated once, literally
+                    return ast.Call(func.name, tuple(self.lower_expr(a, target, literal)
+                                                     for a in expr.args), expr.span)
+                return expr
+            if func.kind == "state":
+                return self.lower_state_function(expr, None)
+            if func.kind in ("switch", "time"):
+                if func.outputs == 2:
+                    self.rep.error("OUTSW gives two values: write Y1, Y2 = OUTSW(X, V)",
+                                   expr.span)
+                    return ast.Num(0.0, expr.span)
+                return ir.SwitchValue(self.add_switch(expr, target or "?"), expr.span)
+            if func.kind == "impulse":
+                return ir.Impulse(self.lower_expr(expr.args[0], target),
+                                  self.lower_expr(expr.args[1], target), expr.span)
+            if func.kind == "memory":
+                args = tuple(self.lower_expr(a, target) for a in expr.args)
+                index = len(self.memories)
+                surfaces = tuple(
+                    self.add_surface(_instantiate(t, args, expr.span), "sign", index, "memory",
+                                     expr.span, f"{func.name} for {target} (line "
+                                                f"{expr.span.line})")
+                    for t in func.surfaces)
+                slots = MEMORY_SLOTS[func.name]
+                self.memories.append(ir.Memory(index, func.name, args, self.nslots, slots,
+                                               surfaces, expr.span, target or "?"))
+                self.nslots += slots
+                return ir.MemoryValue(index, expr.span)
+        return expr
+
+    # ----------------------------------------------------------------- sorting
+    def sort(self, equations: list[ir.Equation], targets: set[str], section: str):
+        """Order equations so each follows what it reads; report algebraic loops."""
+        by_target = {e.target: e for e in equations}
+        deps: dict[str, list[str]] = {}
+        for e in equations:
+            seen: list[str] = []
+            for n in names_in(e.expr, self):
+                if n in targets and n != e.target and n not in seen:
+                    seen.append(n)
+                elif n == e.target:
+                    seen.append(n)
+            deps[e.target] = seen
+        order: list[ir.Equation] = []
+        state = {t: 0 for t in by_target}  # 0 new, 1 on stack, 2 done
+        reported: set[frozenset[str]] = set()
+        for root in by_target:
+            if state[root]:
+                continue
+            # iterative DFS, keeping the path to report cycles
+            stack = [(root, iter(deps[root]))]
+            path = [root]
+            state[root] = 1
+            while stack:
+                node, it = stack[-1]
+                nxt = next(it, None)
+                if nxt is None:
+                    stack.pop()
+                    path.pop()
+                    state[node] = 2
+                    order.append(by_target[node])
+                    continue
+                if state[nxt] == 1:
+                    cycle = path[path.index(nxt):]
+                    key = frozenset(cycle)
+                    if key not in reported:
+                        reported.add(key)
+                        self.loop_error(cycle, by_target, section)
+                    continue
+                if state[nxt] == 0:
+                    state[nxt] = 1
+                    path.append(nxt)
+                    stack.append((nxt, iter(deps[nxt])))
+        return order
+
+    def loop_error(self, cycle: list[str], by_target, section: str) -> None:
+        first = by_target[cycle[0]]
+        chain = " -> ".join(cycle + [cycle[0]])
+        related = tuple((by_target[n].span, f"{n} is computed here") for n in cycle[1:])
+        self.rep.error(
+            f"algebraic loop in {section}: {chain}",
+            first.span,
+            "every variable of the loop needs the others at the same instant; break it with "
+            "a state (INTGRL), e.g. a fast first-order lag REALPL",
+            related=related,
+        )
+
+    # --------------------------------------------------------- classification
+    def classify_surfaces(self, model: ir.Model, state_names: set[str]) -> None:
+        """Mark each surface const / time / state by what its expression reads."""
+        eq = {e.target: e.expr for e in model.dynamic}
+        memo: dict[str, str] = {}
+        rank = {"const": 0, "time": 1, "state": 2}
+
+        def of_expr(expr) -> str:
+            best = "const"
+            for node in iter_nodes(expr):
+                kind = "const"
+                if isinstance(node, ast.Name):
+                    kind = of_name(node.name)
+                elif isinstance(node, ir.MemoryValue):
+                    kind = "state"
+                elif isinstance(node, ir.SwitchValue):
+                    sw = model.switches[node.switch]
+                    kind = max((of_expr(a) for a in sw.args), key=rank.get, default="const")
+                elif isinstance(node, ir.Impulse):
+                    kind = "time"
+                if rank[kind] > rank[best]:
+                    best = kind
+                    if best == "state":
+                        break
+            return best
+
+        def of_name(name: str) -> str:
+            if name == "TIME":
+                return "time"
+            if name in state_names:
+                return "state"
+            if name not in eq:
+                return "const"
+            if name in memo:
+                return memo[name]
+            memo[name] = "state"  # guards recursion on malformed input
+            memo[name] = of_expr(eq[name])
+            return memo[name]
+
+        for i, s in enumerate(model.surfaces):
+            model.surfaces[i] = replace(s, depends=of_expr(s.expr))
+
+
+def _instantiate(template: str, args: tuple, span: Span) -> ast.Expr:
+    """Build a surface expression from a library template over arguments A, B, ..."""
+    import ast as pyast
+
+    def build(node):
+        if isinstance(node, pyast.Expression):
+            return build(node.body)
+        if isinstance(node, pyast.Name):
+            if node.id == "TIME":
+                return ast.Name("TIME", span)
+            return args["ABCDEFGH".index(node.id)]
+        if isinstance(node, pyast.BinOp):
+            op = {pyast.Sub: "-", pyast.Add: "+", pyast.Div: "/", pyast.Mult: "*"}[type(node.op)]
+            return ast.BinOp(op, build(node.left), build(node.right), span)
+        raise AssertionError(template)
+
+    return build(pyast.parse(template, mode="eval"))
+
+
+def iter_nodes(expr):
+    """All nodes of an IR expression (syntax nodes plus IR nodes), not descending
+    into switch/memory instances (their arguments live on the instance)."""
+    stack = [expr]
+    while stack:
+        node = stack.pop()
+        yield node
+        if isinstance(node, ast.BinOp):
+            stack.append(node.right)
+            stack.append(node.left)
+        elif isinstance(node, ast.Neg):
+            stack.append(node.operand)
+        elif isinstance(node, ast.Call):
+            stack.extend(node.args)
+        elif isinstance(node, ir.TableLookup):
+            stack.append(node.x)
+        elif isinstance(node, ir.Impulse):
+            stack.extend((node.start, node.period))
+
+
+def names_in(expr, checker) -> list[str]:
+    """Variable names an IR expression reads, including through switch/memory args."""
+    out: list[str] = []
+    stack = [expr]
+    while stack:
+        node = stack.pop()
+        for sub in iter_nodes(node):
+            if isinstance(sub, ast.Name):
+                out.append(sub.name)
+            elif isinstance(sub, ir.SwitchValue):
+                stack.extend(checker.switches[sub.switch].args)
+            elif isinstance(sub, ir.MemoryValue):
+                stack.extend(checker.memories[sub.memory].args)
+    return out

@@ -1,0 +1,619 @@
+"""IR -> Python syntax tree -> code object, once per run.
+
+The model's data and INITIAL values are folded into the code as constants, so
+the hot functions are straight-line float arithmetic. Generated code is built as
+a `ast` tree (model text is never pasted into source), compiled with the
+listing's path as file name and each statement on its listing line, so a fault
+inside points at the `.amil` line. Its globals are only the names this module
+puts there (`NAMESPACE`), with empty builtins: no imports, no attributes.
+
+Functions made for one run (all take plain lists of floats):
+  rhs(t, y, m, z)              state derivatives under frozen modes m
+  surf(t, y, m, z)             the watched switching surfaces
+  out(t, y, m, z)              every recorded variable, only at output instants
+  mem(t, y, m, mn, z)          memory values after an accepted step (m: the modes
+                               the step was taken with, mn: the modes from now on)
+"""
+
+from __future__ import annotations
+
+import ast as py
+import math
+from dataclasses import dataclass, field
+
+from . import ir
+from . import syntax as syn
+from .check import iter_nodes
+from .diagnostics import AmilError, Diagnostic, Span
+from .library import FUNCTIONS, MATH, afgen, impulse_at, level_of, lookup, nlfgen, safe_pow
+
+NAMESPACE: dict[str, object] = {f"_{k}": v for k, v in MATH.items()}
+NAMESPACE.update({
+    "_AFGEN": afgen, "_NLFGEN": nlfgen, "_IMPULS": impulse_at, "_POW": safe_pow,
+    "_LEVEL": level_of, "_SGN": lambda x: (x > 0.0) - (x < 0.0),
+})
+
+# Names the generated code reads, and which a model name can never produce
+# (model names become v_NAME, hidden states h_N): the compiler's own vocabulary.
+_ARGS = ("t", "y", "m", "mn", "z")
+
+
+@dataclass
+class Compiled:
+    """The callables and constants of one run of one model."""
+
+    state_names: list[str]
+    y0: list[float]
+    z0: list[float]
+    out_names: list[str]
+    constants: dict[str, float]
+    rhs: object
+    surf: object
+    out: object
+    mem: object
+    watched: list[int]  # surface indices surf() returns, in order
+    const_modes: dict[int, float]  # surfaces fixed for the whole run
+    modes_literal: object  # (t, y, z) -> list of literal modes of watched surfaces
+    affine_time: dict[int, tuple[float, float]]  # surface -> (value at 0, slope)
+    impulses: list[tuple[float, float]]
+    source: str
+    tables: dict[str, tuple] = field(default_factory=dict)
+
+
+def _num(v: float) -> py.expr:
+    if v != v:
+        return py.Call(py.Name("_FLOAT", py.Load()), [py.Constant("nan")], [])
+    if math.isinf(v):
+        return py.Call(py.Name("_FLOAT", py.Load()), [py.Constant("inf" if v > 0 else "-inf")],
+                       [])
+    if v < 0 or (v == 0 and math.copysign(1.0, v) < 0):
+        return py.UnaryOp(py.USub(), py.Constant(-float(v)))
+    return py.Constant(float(v))
+
+
+def _const_value(node: py.expr) -> float | None:
+    if isinstance(node, py.Constant) and isinstance(node.value, float):
+        return node.value
+    if (isinstance(node, py.UnaryOp) and isinstance(node.op, py.USub)
+            and isinstance(node.operand, py.Constant) and isinstance(node.operand.value, float)):
+        return -node.operand.value
+    return None
+
+
+_PYOPS = {"+": py.Add, "-": py.Sub, "*": py.Mult, "/": py.Div}
+
+
+class _Folder(py.NodeTransformer):
+    """Constant folding on the generated tree (keeps float semantics)."""
+
+    def visit_BinOp(self, node):
+        self.generic_visit(node)
+        a, b = _const_value(node.left), _const_value(node.right)
+        if a is not None and b is not None and not isinstance(node.op, py.Pow):
+            try:
+                if isinstance(node.op, py.Add):
+                    v = a + b
+                elif isinstance(node.op, py.Sub):
+                    v = a - b
+                elif isinstance(node.op, py.Mult):
+                    v = a * b
+                elif isinstance(node.op, py.Div):
+                    v = a / b
+                else:
+                    return node
+            except (ArithmeticError, ValueError):
+                return node
+            return py.copy_location(_num(v), node)
+        return node
+
+    def visit_UnaryOp(self, node):
+        self.generic_visit(node)
+        if isinstance(node.op, py.USub):
+            inner = node.operand
+            if isinstance(inner, py.UnaryOp) and isinstance(inner.op, py.USub):
+                return inner.operand
+        return node
+
+    def visit_IfExp(self, node):
+        self.generic_visit(node)
+        test = _truth(node.test)
+        if test is None:
+            return node
+        return node.body if test else node.orelse
+
+
+def _truth(node) -> bool | None:
+    if isinstance(node, py.Constant) and isinstance(node.value, bool):
+        return node.value
+    if isinstance(node, py.Compare) and len(node.ops) == 1:
+        a, b = _const_value(node.left), _const_value(node.comparators[0])
+        if a is None or b is None:
+            return None
+        op = node.ops[0]
+        return {py.Lt: a < b, py.Gt: a > b, py.LtE: a <= b, py.GtE: a >= b, py.Eq: a == b,
+                py.NotEq: a != b}[type(op)]
+    if isinstance(node, py.BoolOp):
+        vals = [_truth(v) for v in node.values]
+        if isinstance(node.op, py.And):
+            if any(v is False for v in vals):
+                return False
+            return True if all(v is True for v in vals) else None
+        if any(v is True for v in vals):
+            return True
+        return False if all(v is False for v in vals) else None
+    return None
+
+
+def _local(name: str) -> str:
+    """Python identifier for a model variable (hidden ones have '#')."""
+    if "#" in name:
+        kind, n = name.split("#")
+        return "h_" + kind.replace("'", "D") + "_" + n
+    return "v_" + name
+
+
+class _Emitter:
+    """Emits Python expressions for IR expressions in one context.
+
+    context: "rhs" (frozen modes, IMPULS = 0), "out" (frozen modes, IMPULS exact),
+    "mem" (like out), "literal" (modes from the current signs: INITIAL/TERMINAL).
+    """
+
+    def __init__(self, model: ir.Model, constants: dict[str, float], const_modes,
+                 context: str, mode_names: dict[int, str], tables) -> None:
+        self.model = model
+        self.constants = constants
+        self.const_modes = const_modes
+        self.context = context
+        self.mode_names = mode_names
+        self.tables = tables
+
+    def mode(self, surface: int) -> py.expr:
+        if surface in self.const_modes:
+            return _num(self.const_modes[surface])
+        if self.context == "literal":
+            s = self.model.surfaces[surface]
+            fn = "_LEVEL" if s.kind == "level" else "_SGN"
+            return py.Call(py.Name(fn, py.Load()), [self.emit(s.expr)], [])
+        return py.Name(self.mode_names[surface], py.Load())
+
+    def emit(self, e) -> py.expr:
+        if isinstance(e, syn.Num):
+            return _num(e.value)
+        if isinstance(e, syn.Name):
+            if e.name == "TIME":
+                return py.Name("t", py.Load())
+            if e.name in self.constants:
+                return _num(self.constants[e.name])
+            return py.Name(_local(e.name), py.Load())
+        if isinstance(e, syn.Neg):
+            return py.UnaryOp(py.USub(), self.emit(e.operand))
+        if isinstance(e, syn.BinOp):
+            left, right = self.emit(e.left), self.emit(e.right)
+            if e.op == "**":
+                k = _const_value(right)
+                if k is not None and k.is_integer() and abs(k) <= 64:
+                    if k == 2.0:
+                        # x*x: exact and far cheaper than pow
+                        if isinstance(left, py.Name):
+                            return py.BinOp(left, py.Mult(), py.Name(left.id, py.Load()))
+                    return py.BinOp(left, py.Pow(), py.Constant(int(k)))
+                a = _const_value(left)
+                if a is not None and k is not None:
+                    return _num(safe_pow(a, k))
+                return py.Call(py.Name("_POW", py.Load()), [left, right], [])
+            return py.BinOp(left, _PYOPS[e.op](), right)
+        if isinstance(e, syn.Call):
+            func = lookup(e.func)
+            args = [self.emit(a) for a in e.args]
+            if func.kind in ("switch", "time"):  # literal use (INITIAL/TERMINAL)
+                return self.literal_switch(func, e.args)
+            values = [_const_value(a) for a in args]
+            if all(v is not None for v in values) and func.name != "FLOAT":
+                try:
+                    v = MATH[func.name](*values)
+                    return _num(float(v))
+                except (ArithmeticError, ValueError, TypeError):
+                    pass
+            return py.Call(py.Name("_" + func.name, py.Load()), args, [])
+        if isinstance(e, ir.TableLookup):
+            name = "_T_" + e.table
+            self.tables[name] = self.table_value(e.table)
+            fn = "_NLFGEN" if e.quadratic else "_AFGEN"
+            return py.Call(py.Name(fn, py.Load()), [py.Name(name, py.Load()), self.emit(e.x)], [])
+        if isinstance(e, ir.SwitchValue):
+            sw = self.model.switches[e.switch]
+            func = FUNCTIONS[sw.func]
+            return self.template(func.values[e.output], sw.args, sw.surfaces)
+        if isinstance(e, ir.MemoryValue):
+            return self.memory_value(self.model.memories[e.memory])
+        if isinstance(e, ir.Impulse):
+            if self.context == "rhs":
+                return py.Constant(0.0)
+            return py.Call(py.Name("_IMPULS", py.Load()),
+                           [py.Name("t", py.Load()), self.emit(e.start), self.emit(e.period)], [])
+        raise AssertionError(f"cannot emit {e!r}")
+
+    def table_value(self, name: str):
+        return self.tables_source[name]
+
+    def literal_switch(self, func, args):
+        """A switch in INITIAL/TERMINAL: evaluate its surfaces' signs on the spot."""
+        lowered = tuple(args)
+        from .check import _instantiate
+
+        modes = []
+        for template in func.surfaces:
+            expr = _instantiate(template, lowered, Span(0, 0))
+            fn = "_LEVEL" if func.surface_kind == "level" else "_SGN"
+            modes.append(py.Call(py.Name(fn, py.Load()), [self.emit(expr)], []))
+        return self.template_with(func.values[0], [self.emit(a) for a in args], modes)
+
+    def template(self, text: str, args, surfaces) -> py.expr:
+        return self.template_with(text, [self.emit(a) for a in args],
+                                  [self.mode(s) for s in surfaces])
+
+    @staticmethod
+    def template_with(text: str, args: list[py.expr], modes: list[py.expr]) -> py.expr:
+        tree = py.parse(text, mode="eval").body
+
+        class Sub(py.NodeTransformer):
+            def visit_Name(self, node):
+                if node.id == "TIME":
+                    return py.Name("t", py.Load())
+                if node.id.startswith("M") and node.id[1:].isdigit():
+                    return modes[int(node.id[1:])]
+                if len(node.id) == 1:
+                    return args["ABCDEFGH".index(node.id)]
+                return node
+
+            def visit_Call(self, node):
+                self.generic_visit(node)
+                node.func = py.Name("_" + node.func.id, py.Load())
+                return node
+
+        return Sub().visit(tree)
+
+    def memory_value(self, mem: ir.Memory) -> py.expr:
+        a = [self.emit(x) for x in mem.args]
+        z = [py.Name(f"z{mem.slot + k}", py.Load()) for k in range(mem.nslots)]
+        modes = [self.mode(s) for s in mem.surfaces]
+        t = py.Name("t", py.Load())
+        if mem.func == "HSTRSS":
+            ic, p1, p2, x = a
+            return py.Call(py.Name("_AMIN1", py.Load()), [
+                py.BinOp(x, py.Sub(), p1),
+                py.Call(py.Name("_AMAX1", py.Load()), [py.BinOp(x, py.Sub(), p2), z[0]], []),
+            ], [])
+        if mem.func == "ZHOLD":
+            return py.IfExp(py.Compare(modes[0], [py.Gt()], [py.Constant(0.0)]), a[1], z[0])
+        if mem.func == "RST":
+            return self.template_with(
+                "(0.0 if M0 > 0 else (1.0 if M1 > 0 else ((1.0 - A) if M2 > 0 else B)))",
+                [z[0], py.Name(z[0].id, py.Load())], modes)
+        if mem.func == "PULSE":
+            return py.IfExp(py.Compare(t, [py.Lt()], [z[0]]), py.Constant(1.0),
+                            py.Constant(0.0))
+        if mem.func == "DERIV":
+            x = a[1]
+            return py.IfExp(
+                py.Compare(t, [py.Gt()], [z[1]]),
+                py.BinOp(py.BinOp(x, py.Sub(), z[0]), py.Div(),
+                         py.BinOp(py.Name("t", py.Load()), py.Sub(), z[1])),
+                z[2])
+        raise AssertionError(mem.func)
+
+
+def _needs(model: ir.Model, roots: list, constants) -> list[ir.Equation]:
+    """The sorted algebraic equations that the given expressions read, transitively."""
+    eqs = {e.target: e for e in model.dynamic}
+    need: set[str] = set()
+    stack = list(roots)
+    while stack:
+        e = stack.pop()
+        for node in iter_nodes(e):
+            if isinstance(node, syn.Name) and node.name in eqs and node.name not in need:
+                need.add(node.name)
+                stack.append(eqs[node.name].expr)
+            elif isinstance(node, ir.SwitchValue):
+                sw = model.switches[node.switch]
+                stack.extend(sw.args)
+                stack.extend(model.surfaces[s].expr for s in sw.surfaces)
+            elif isinstance(node, ir.MemoryValue):
+                mem = model.memories[node.memory]
+                stack.extend(mem.args)
+    return [e for e in model.dynamic if e.target in need]
+
+
+def _assign(name: str, value: py.expr, line: int) -> py.stmt:
+    stmt = py.Assign([py.Name(name, py.Store())], value)
+    stmt.lineno = line
+    return stmt
+
+
+def _function(name: str, args: tuple[str, ...], body: list[py.stmt]) -> py.FunctionDef:
+    fn = py.FunctionDef(
+        name=name,
+        args=py.arguments(posonlyargs=[], args=[py.arg(a) for a in args], vararg=None,
+                          kwonlyargs=[], kw_defaults=[], kwarg=None, defaults=[]),
+        body=body or [py.Pass()],
+        decorator_list=[],
+        returns=None,
+        type_params=[],
+    )
+    return fn
+
+
+class Compiler:
+    """Builds the `Compiled` functions of one run from the IR and its constants."""
+
+    def __init__(self, model: ir.Model, constants: dict[str, float], tables,
+                 const_modes: dict[int, float], outputs: list[str] | None = None,
+                 events: bool = True) -> None:
+        self.model = model
+        self.constants = constants
+        self.tables = tables
+        self.const_modes = const_modes
+        self.outputs = outputs
+        self.events = events
+        self.watched = [s.index for s in model.surfaces if s.index not in const_modes]
+        self.mode_names = {s: f"m{k}" for k, s in enumerate(self.watched)}
+        self.mode_names_new = {s: f"n{k}" for k, s in enumerate(self.watched)}
+        self.global_tables: dict[str, tuple] = {}
+
+    def emitter(self, context: str, new_modes: bool = False) -> _Emitter:
+        names = self.mode_names_new if new_modes else self.mode_names
+        em = _Emitter(self.model, self.constants, self.const_modes, context, names,
+                      self.global_tables)
+        em.tables_source = self.tables
+        return em
+
+    def prologue(self, used_states: bool = True, modes: str = "m", mem: bool = True):
+        body: list[py.stmt] = []
+        n = len(self.model.states)
+        if used_states and n:
+            targets = [py.Name(_local(s.name), py.Store()) for s in self.model.states]
+            body.append(py.Assign([py.Tuple(targets, py.Store()) if n > 1 else targets[0]],
+                                  py.Name("y", py.Load()) if n > 1 else
+                                  py.Subscript(py.Name("y", py.Load()), py.Constant(0),
+                                               py.Load())))
+        if self.watched:
+            prefix = "m" if modes == "m" else "n"
+            names = [py.Name(f"{prefix}{k}", py.Store()) for k in range(len(self.watched))]
+            src = py.Name(modes, py.Load())
+            body.append(py.Assign([py.Tuple(names, py.Store())], src) if len(names) > 1 else
+                        py.Assign([names[0]], py.Subscript(src, py.Constant(0), py.Load())))
+        nz = sum(m.nslots for m in self.model.memories)
+        if mem and nz:
+            names = [py.Name(f"z{k}", py.Store()) for k in range(nz)]
+            body.append(py.Assign([py.Tuple(names, py.Store())], py.Name("z", py.Load()))
+                        if nz > 1 else py.Assign([names[0]], py.Subscript(
+                            py.Name("z", py.Load()), py.Constant(0), py.Load())))
+        return body
+
+    def algebra(self, roots, em: _Emitter) -> list[py.stmt]:
+        return [_assign(_local(e.target), em.emit(e.expr), e.span.line)
+                for e in _needs(self.model, roots, self.constants)]
+
+    def build(self) -> Compiled:
+        model = self.model
+        em_rhs = self.emitter("rhs")
+        derivs = []
+        for s in model.states:
+            d = s.deriv
+            derivs.append(d)
+        # rhs --------------------------------------------------------------
+        body = self.prologue()
+        body += self.algebra(derivs, em_rhs)
+        ret = []
+        for s in model.states:
+            value = em_rhs.emit(s.deriv)
+            if s.reset_surfaces:
+                value = py.IfExp(py.Compare(em_rhs.mode(s.reset_surfaces[0]), [py.Gt()],
+                                            [py.Constant(0.0)]), value, py.Constant(0.0))
+            ret.append(value)
+        body.append(py.Return(py.List(ret, py.Load())))
+        fns = [_function("rhs", ("t", "y", "m", "z"), body)]
+        # surfaces -------------------------------------------------------------
+        em_s = self.emitter("rhs")
+        roots = [model.surfaces[i].expr for i in self.watched]
+        body = self.prologue() + self.algebra(roots, em_s)
+        vals = []
+        for i in self.watched:
+            s = model.surfaces[i]
+            v = em_s.emit(s.expr)
+            if s.kind == "level":
+                # distance to the edges of the current level's band, in units of P
+                k = py.Name(self.mode_names[i], py.Load())
+                v = py.BinOp(py.Constant(0.5), py.Sub(),
+                             py.Call(py.Name("_ABS", py.Load()),
+                                     [py.BinOp(v, py.Sub(), k)], []))
+            vals.append(v)
+        body.append(py.Return(py.List(vals, py.Load())))
+        fns.append(_function("surf", ("t", "y", "m", "z"), body))
+        # literal modes of the watched surfaces (restart rule starts from these)
+        em_l = self.emitter("rhs")
+        body = self.prologue() + self.algebra(roots, em_l)
+        vals = []
+        for i in self.watched:
+            s = model.surfaces[i]
+            fn = "_LEVEL" if s.kind == "level" else "_SGN"
+            vals.append(py.Call(py.Name(fn, py.Load()), [em_l.emit(s.expr)], []))
+        body.append(py.Return(py.List(vals, py.Load())))
+        fns.append(_function("modes", ("t", "y", "m", "z"), body))
+        # outputs ----------------------------------------------------------------
+        em_o = self.emitter("out")
+        out_names = self.outputs if self.outputs is not None else model.variables
+        roots = [syn.Name(n, Span(0, 0)) for n in out_names]
+        body = self.prologue() + self.algebra(roots, em_o)
+        body.append(py.Return(py.List([em_o.emit(r) for r in roots], py.Load())))
+        fns.append(_function("out", ("t", "y", "m", "z"), body))
+        # memory -------------------------------------------------------------------
+        em_m = self.emitter("mem")
+        em_new = self.emitter("mem", new_modes=True)
+        mem_roots = [a for m in model.memories for a in m.args]
+        body = self.prologue() + (self.prologue(used_states=False, modes="mn", mem=False)
+                                  if self.watched else [])
+        body += self.algebra(mem_roots, em_m)
+        new: list[py.expr] = []
+        for mem in model.memories:
+            value = em_m.memory_value(mem)
+            z = [py.Name(f"z{mem.slot + k}", py.Load()) for k in range(mem.nslots)]
+            if mem.func in ("HSTRSS", "ZHOLD", "RST"):
+                new.append(value)
+            elif mem.func == "PULSE":
+                p = em_m.emit(mem.args[0])
+                trigger = py.BoolOp(py.And(), [
+                    py.Compare(em_new.mode(mem.surfaces[0]), [py.Gt()], [py.Constant(0.0)]),
+                    py.Compare(py.Name("t", py.Load()), [py.GtE()], [z[0]]),
+                ])
+                new.append(py.IfExp(trigger, py.BinOp(py.Name("t", py.Load()), py.Add(), p),
+                                    z[0]))
+            elif mem.func == "DERIV":
+                new.extend([em_m.emit(mem.args[1]), py.Name("t", py.Load()), value])
+        body.append(py.Return(py.List(new, py.Load())))
+        fns.append(_function("mem", ("t", "y", "m", "mn", "z"), body))
+
+        module = py.Module(body=fns, type_ignores=[])
+        module = _Folder().visit(module)
+        py.fix_missing_locations(module)
+        _assert_closed(module)
+        source = py.unparse(module)
+        code = compile(module, model.path or model.name, "exec")
+        namespace: dict[str, object] = {"__builtins__": {}}
+        namespace.update(NAMESPACE)
+        namespace.update(self.global_tables)
+        exec(code, namespace)  # noqa: S102 - compiler-built tree, closed namespace
+
+        # initial values -------------------------------------------------------------
+        y0 = [self.constant(s.ic, s.span) for s in model.states]
+        z0: list[float] = []
+        for mem in model.memories:
+            if mem.func == "HSTRSS":
+                z0.append(self.constant(mem.args[0], mem.span))
+            elif mem.func in ("ZHOLD", "RST"):
+                z0.append(0.0)
+            elif mem.func == "PULSE":
+                z0.append(-math.inf)
+            elif mem.func == "DERIV":
+                z0.extend([0.0, 0.0, self.constant(mem.args[0], mem.span)])
+        affine = {}
+        for i in self.watched:
+            s = model.surfaces[i]
+            if s.depends == "time" and self.events:
+                if _is_affine(s.expr, self.constants):
+                    affine[i] = (0.0, 0.0)
+        impulses = []
+        for e in _all_exprs(model):
+            for node in iter_nodes(e):
+                if isinstance(node, ir.Impulse):
+                    impulses.append((self.constant(node.start, node.span),
+                                     self.constant(node.period, node.span)))
+        return Compiled(
+            state_names=[s.name for s in model.states], y0=y0, z0=z0,
+            out_names=list(out_names), constants=self.constants, rhs=namespace["rhs"],
+            surf=namespace["surf"], out=namespace["out"], mem=namespace["mem"],
+            watched=self.watched, const_modes=self.const_modes,
+            modes_literal=namespace["modes"], affine_time=affine, impulses=impulses,
+            source=source, tables=self.global_tables,
+        )
+
+    def constant(self, expr, span: Span) -> float:
+        return evaluate_constant(self.model, expr, self.constants, self.tables, span)
+
+
+def _all_exprs(model: ir.Model):
+    for e in model.dynamic:
+        yield e.expr
+    for s in model.states:
+        yield s.deriv
+    for sw in model.switches:
+        yield from sw.args
+    for m in model.memories:
+        yield from m.args
+    for s in model.surfaces:
+        yield s.expr
+
+
+def _is_affine(expr, constants) -> bool:
+    """True if a time-only surface is affine in TIME (its root is then exact)."""
+    def lin(e) -> int:  # 0 constant, 1 affine, 2 other
+        if isinstance(e, syn.Num):
+            return 0
+        if isinstance(e, syn.Name):
+            return 1 if e.name == "TIME" else (0 if e.name in constants else 2)
+        if isinstance(e, syn.Neg):
+            return lin(e.operand)
+        if isinstance(e, syn.BinOp):
+            a, b = lin(e.left), lin(e.right)
+            if e.op in "+-":
+                return max(a, b)
+            if e.op == "*":
+                return a + b if a + b <= 1 else 2
+            if e.op == "/":
+                return a if b == 0 else 2
+            return 0 if a == b == 0 else 2
+        if isinstance(e, syn.Call):
+            return 0 if all(lin(x) == 0 for x in e.args) else 2
+        return 2
+    return lin(expr) <= 1
+
+
+def _assert_closed(module: py.Module) -> None:
+    """Generated code reads only the compiler's names: no attributes, no builtins."""
+    allowed = set(NAMESPACE) | set(_ARGS)
+    for node in py.walk(module):
+        if isinstance(node, (py.Attribute, py.Import, py.ImportFrom, py.Global, py.Lambda)):
+            raise AssertionError(f"generated code contains {type(node).__name__}")
+        if isinstance(node, py.Name) and isinstance(node.ctx, py.Load):
+            ok = (node.id in allowed or node.id.startswith(("v_", "h_", "_T_"))
+                  or (node.id[0] in "mnz" and node.id[1:].isdigit()))
+            if not ok:
+                raise AssertionError(f"generated code reads unknown name {node.id}")
+
+
+# ------------------------------------------------------------ constant evaluation
+
+def evaluate_constant(model: ir.Model, expr, constants: dict[str, float], tables,
+                      span: Span) -> float:
+    """Evaluate an expression of constants (INITIAL, initial conditions)."""
+    comp_tables: dict[str, tuple] = {}
+    em = _Emitter(model, constants, {}, "literal", {}, comp_tables)
+    em.tables_source = tables
+    try:
+        tree = py.Expression(em.emit(expr))
+    except KeyError as exc:  # a name that is not a constant
+        raise AmilError([Diagnostic(f"{exc.args[0]} is not known before the run starts",
+                                    span)], model.path, model.source) from None
+    py.fix_missing_locations(tree)
+    _assert_closed(py.Module(body=[py.Expr(tree.body)], type_ignores=[]))
+    namespace: dict[str, object] = {"__builtins__": {}}
+    namespace.update(NAMESPACE)
+    namespace.update(comp_tables)
+    try:
+        value = eval(compile(tree, model.path or model.name, "eval"), namespace)  # noqa: S307
+    except ZeroDivisionError:
+        raise AmilError([Diagnostic("division by zero", span,
+                                    "check the data values this expression uses")],
+                        model.path, model.source) from None
+    except OverflowError:
+        raise AmilError([Diagnostic("value too large (overflow)", span)], model.path,
+                        model.source) from None
+    except NameError as exc:
+        name = str(exc).split("'")[1] if "'" in str(exc) else str(exc)
+        raise AmilError([Diagnostic(
+            f"{name.removeprefix('v_')} is not known before the run starts", span,
+            "an initial value or INITIAL statement can use numbers, data values and INITIAL "
+            "values only")], model.path, model.source) from None
+    return float(value)
+
+
+def initial_values(model: ir.Model, data: dict[str, float], tables,
+                   reserved: dict[str, float]) -> dict[str, float]:
+    """Data values, TIMER values and the INITIAL section, evaluated in sorted order."""
+    constants = dict(reserved)
+    constants.update(data)
+    constants["PI"] = math.pi
+    for eq in model.initial:
+        constants[eq.target] = evaluate_constant(model, eq.expr, constants, tables, eq.span)
+    return constants

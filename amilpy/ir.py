@@ -1,0 +1,170 @@
+"""The checked, sorted model that the compiler and the runner read.
+
+`check.py` builds it from the syntax; nothing here refers back to the listing's
+text except through spans (for messages). Expressions are `syntax` expressions
+plus the four node kinds below, which stand for the simulation functions whose
+value is not a plain function of their arguments.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .diagnostics import Span
+from .syntax import Expr
+
+# -------------------------------------------------- expression nodes of the IR
+
+
+@dataclass(frozen=True)
+class SwitchValue:
+    """The value of switch instance `switch` (output `output` for OUTSW)."""
+
+    switch: int
+    span: Span
+    output: int = 0
+
+
+@dataclass(frozen=True)
+class MemoryValue:
+    """The value of memory-function instance `memory` (HSTRSS, ZHOLD, ...)."""
+
+    memory: int
+    span: Span
+
+
+@dataclass(frozen=True)
+class TableLookup:
+    """AFGEN (linear) or NLFGEN (quadratic) interpolation in a FUNCTION table."""
+
+    table: str
+    x: Expr
+    quadratic: bool
+    span: Span
+
+
+@dataclass(frozen=True)
+class Impulse:
+    """IMPULS(P1, P2): 1 exactly at t = P1 + k*P2, else 0 (see library)."""
+
+    start: Expr
+    period: Expr
+    span: Span
+
+
+# ---------------------------------------------------------------- instances
+
+
+@dataclass(frozen=True)
+class Surface:
+    """A continuous function of (TIME, states) whose sign selects a branch.
+
+    `kind` is "sign" (mode -1, 0 or +1) or "level" (QNTZR: mode is the integer
+    quantisation level k and the surface is X/P). `depends` is "const" (the
+    branch is fixed for the whole run, so it is not watched), "time" (only TIME
+    and constants: breakpoints) or "state" (an event to locate).
+    """
+
+    index: int
+    expr: Expr
+    kind: str
+    owner: int | None  # switch or memory instance; None for FINISH/TERMT
+    purpose: str  # "switch", "memory", "finish", "termt"
+    depends: str
+    span: Span
+    description: str
+
+
+@dataclass(frozen=True)
+class Switch:
+    index: int
+    func: str  # canonical name: FCNSW, INSW, OUTSW, COMPAR, LIMIT, DEADSP, QNTZR,
+    #            STEP, RAMP, SINE, AND, IOR, NOR, NAND, EOR, NOT, EQUIV
+    args: tuple[Expr, ...]
+    surfaces: tuple[int, ...]
+    span: Span
+    target: str
+
+
+@dataclass(frozen=True)
+class Memory:
+    index: int
+    func: str  # HSTRSS, ZHOLD, RST, PULSE, DERIV
+    args: tuple[Expr, ...]
+    slot: int  # first index in the memory vector z
+    nslots: int
+    surfaces: tuple[int, ...]
+    span: Span
+    target: str
+
+
+@dataclass(frozen=True)
+class State:
+    name: str  # a model name, or a hidden one like "INTGRL#2" for nested calls
+    ic: Expr
+    deriv: Expr
+    span: Span
+    hidden: bool = False
+    # MODINT: while surface `hold_surface[0]` <= 0 and `hold_surface[1]` > 0 the
+    # state is held at its IC.
+    reset_surfaces: tuple[int, ...] = ()
+
+
+@dataclass(frozen=True)
+class Equation:
+    target: str
+    expr: Expr
+    span: Span
+
+
+@dataclass(frozen=True)
+class Report:
+    kind: str  # PRINT, OUTPUT, RANGE, PREPARE
+    names: tuple[str, ...]
+    label: str | None
+    span: Span
+
+
+@dataclass
+class RunSpec:
+    """Everything that may change from one run to the next."""
+
+    label: str
+    data: dict[str, float]  # PARAM/CONST/INCON values
+    changed: dict[str, float]  # what makes this run differ from the first
+    tables: dict[str, tuple[tuple[float, ...], tuple[float, ...]]]
+    timer: dict[str, float]  # FINTIM, DELT, PRDEL, OUTDEL, DELMIN, DELMAX as given
+    method: str | None
+    relerr: float | None
+    abserr: float | None
+    relerr_each: dict[str, float] = field(default_factory=dict)
+    abserr_each: dict[str, float] = field(default_factory=dict)
+    reports: list[Report] = field(default_factory=list)
+    titles: list[str] = field(default_factory=list)
+
+
+@dataclass
+class Model:
+    """A checked program: sorted equations, states, switches, and its runs."""
+
+    name: str
+    path: str | None
+    source: str
+    initial: list[Equation]  # sorted
+    dynamic: list[Equation]  # sorted algebraic equations
+    terminal: list[Equation]  # in written order
+    states: list[State]
+    switches: list[Switch]
+    surfaces: list[Surface]
+    memories: list[Memory]
+    runs: list[RunSpec]
+    data_names: list[str]
+    # names -> where defined, for reports and hints
+    spans: dict[str, Span] = field(default_factory=dict)
+
+    @property
+    def variables(self) -> list[str]:
+        """Every named quantity of DYNAMIC a run records (states and algebraic)."""
+        names = [s.name for s in self.states if not s.hidden]
+        names += [e.target for e in self.dynamic]
+        return names

@@ -1,0 +1,128 @@
+"""What a run produces: sampled variables, events, RANGE, status.
+
+A `Run` is plain data (numpy arrays and lists); printing and plotting read it,
+nothing here computes dynamics.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+
+import numpy as np
+
+
+class Status(str, Enum):
+    """How a run ended; the value is what a user reads."""
+
+    FINISHED = "finished"  # reached FINTIM
+    STOPPED = "stopped"  # a FINISH condition or TERMT halted it
+    FAILED = "failed"  # integration failed; what was computed is kept
+
+    def __str__(self) -> str:
+        return self.value
+
+
+@dataclass(frozen=True)
+class Event:
+    """A switching instant: `old` -> `new` branch of one surface at `time`."""
+
+    time: float
+    switch: str
+    surface: int
+    old: float
+    new: float
+    kind: str = "switch"  # switch, slide, finish, termt, breakpoint
+
+    def describe_branch(self, mode: float) -> str:
+        if self.kind == "level":
+            return f"level {mode:g}"
+        return {-1.0: "X<0", 0.0: "X=0", 1.0: "X>0", 2.0: "sliding"}.get(mode, f"{mode:g}")
+
+    def __str__(self) -> str:
+        return (f"TIME = {self.time:.9g}: {self.switch}: {self.describe_branch(self.old)} -> "
+                f"{self.describe_branch(self.new)}")
+
+
+@dataclass
+class Table:
+    """Values of some variables on a time grid (the printout, or PREPARE)."""
+
+    t: np.ndarray
+    columns: dict[str, np.ndarray]
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.columns[name.upper()]
+
+
+@dataclass
+class Run:
+    label: str
+    params: dict[str, float]
+    constants: dict[str, float]
+    times: np.ndarray  # every recorded instant (union of output grids)
+    values: dict[str, np.ndarray]  # name -> values at `times`
+    outdel_mask: np.ndarray
+    prdel_mask: np.ndarray
+    events: list[Event]
+    status: Status
+    message: str
+    final: dict[str, float]
+    stats: dict[str, float]
+    method: str
+    rtol: float
+    atol: float
+    titles: list[str] = field(default_factory=list)
+    reports: list = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    t_end: float = 0.0
+    final_state: dict = field(default_factory=dict)  # for continuing a run (sweeps)
+
+    @property
+    def t(self) -> np.ndarray:
+        """The OUTDEL grid (with 0, FINTIM and the stop instant)."""
+        return self.times[self.outdel_mask]
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        key = name.upper()
+        if key == "TIME":
+            return self.t
+        if key in self.values:
+            return self.values[key][self.outdel_mask]
+        if key in self.constants:
+            return np.full(self.t.shape, self.constants[key])
+        raise KeyError(f"{name} is not a variable of this run")
+
+    def __contains__(self, name: str) -> bool:
+        key = name.upper()
+        return key in self.values or key in self.constants or key == "TIME"
+
+    @property
+    def printout(self) -> Table:
+        """The PRDEL-grid table of every recorded variable."""
+        mask = self.prdel_mask
+        return Table(self.times[mask], {k: v[mask] for k, v in self.values.items()})
+
+    @property
+    def range(self) -> dict[str, tuple[float, float, float, float]]:
+        """name -> (min, time of min, max, time of max) over the recorded instants."""
+        out = {}
+        for name, v in self.values.items():
+            if v.size == 0 or not np.any(np.isfinite(v)):
+                out[name] = (np.nan, np.nan, np.nan, np.nan)
+                continue
+            i, j = int(np.nanargmin(v)), int(np.nanargmax(v))
+            out[name] = (float(v[i]), float(self.times[i]), float(v[j]), float(self.times[j]))
+        return out
+
+    @property
+    def ok(self) -> bool:
+        return self.status != Status.FAILED
+
+    def sample(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+        """All recorded instants and values of one variable."""
+        return self.times, self.values[name.upper()]
+
+    def __repr__(self) -> str:
+        return (f"<Run {self.label!r}: {self.status}, {len(self.times)} rows, "
+                f"{len(self.events)} events>")

@@ -1,0 +1,802 @@
+"""One run: segments between breakpoints, events located on the dense output,
+restarts in the new branch, memory updates on accepted steps, output sampling.
+
+A run is a pure function of (model, run spec, options): `simulate` builds the
+compiled functions for the run's constants and integrates; nothing global is
+touched, so runs can be farmed out.
+
+Discontinuities. Each switching surface has a mode (its branch) that is frozen
+while a segment is integrated, so the stepper always sees a smooth right-hand
+side. Surfaces on TIME alone whose root is known in advance are breakpoints:
+segments end exactly there. The other surfaces are watched: after every
+accepted step their sign is checked; a crossing is located by Brent's method
+on the stepper's dense output, the step is cut there, and the run restarts.
+The new mode comes from the direction the dynamics take in each branch (a
+look-ahead of the surface's rate): if both branches push the surface back to
+zero, the run slides along it (Filippov: the convex combination of the two
+vector fields that keeps the surface at zero) until one side lets go.
+"""
+
+from __future__ import annotations
+
+import math
+import time as _clock
+from bisect import bisect_right
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import ir
+from .codegen import Compiled, Compiler, evaluate_constant, initial_values
+from .diagnostics import AmilError, Diagnostic
+from .result import Event, Run, Status
+from .steppers import is_fixed, make_stepper
+
+SLIDE = 2.0
+
+DEFAULTS = {
+    "rtol": 1e-6,
+    "atol": 1e-9,
+    "max_steps": 5_000_000,
+    "max_events": 200_000,
+    "max_rows": 2_000_000,
+}
+
+
+@dataclass
+class Options:
+    method: str | None = None
+    rtol: float | None = None
+    atol: float | None = None
+    events: bool = True
+    outputs: list[str] | None = None
+    max_steps: int = DEFAULTS["max_steps"]
+    max_events: int = DEFAULTS["max_events"]
+    max_rows: int = DEFAULTS["max_rows"]
+    max_time: float | None = None  # wall-clock seconds
+    start: dict | None = None  # continue from a previous run's final_state
+    progress: object = None  # callable(t, fintim, events, steps) or None
+
+
+@dataclass
+class _Grid:
+    times: np.ndarray
+    outdel: np.ndarray
+    prdel: np.ndarray
+
+
+def timer_values(spec: ir.RunSpec, route: str) -> dict[str, float]:
+    """CSMP TIMER defaults: OUTDEL = FINTIM/100 and PRDEL = OUTDEL when neither is
+    given; one given, the other takes its value; DELT divides the output interval."""
+    t = dict(spec.timer)
+    fintim = t["FINTIM"]
+    if "OUTDEL" not in t and "PRDEL" not in t:
+        t["OUTDEL"] = fintim / 100.0
+        t["PRDEL"] = t["OUTDEL"]
+    elif "OUTDEL" not in t:
+        t["OUTDEL"] = t["PRDEL"]
+    elif "PRDEL" not in t:
+        t["PRDEL"] = t["OUTDEL"]
+    interval = min(t["OUTDEL"], t["PRDEL"], fintim)
+    if "DELT" in t:
+        n = max(1, math.ceil(interval / t["DELT"] - 1e-9))
+        t["DELT"] = interval / n
+    else:
+        t["DELT"] = interval / 16.0
+    t.setdefault("DELMIN", 0.0)
+    t.setdefault("DELMAX", math.inf)
+    return t
+
+
+def _grid(t0: float, fintim: float, step: float) -> np.ndarray:
+    n = int(math.floor((fintim - t0) / step * (1 + 1e-12) + 1e-9))
+    g = t0 + step * np.arange(n + 1)
+    if fintim - g[-1] > 1e-9 * step:
+        g = np.append(g, fintim)
+    else:
+        g[-1] = fintim
+    return g
+
+
+def _make_grid(t0: float, fintim: float, outdel: float, prdel: float) -> _Grid:
+    go = _grid(t0, fintim, outdel)
+    gp = _grid(t0, fintim, prdel)
+    times = np.union1d(go, gp)
+    return _Grid(times, np.isin(times, go), np.isin(times, gp))
+
+
+def _sign(x: float) -> float:
+    return 1.0 if x > 0 else (-1.0 if x < 0 else 0.0)
+
+
+@dataclass
+class _Surfaces:
+    """Bookkeeping of the watched surfaces during a run."""
+
+    kinds: list[str]
+    purposes: list[str]
+    descriptions: list[str]
+    gradients: list[np.ndarray | None]  # d e/d y when the surface is linear in states
+    breakpoint_only: list[bool]  # affine in TIME: handled as breakpoints
+    armed: list[bool] = field(default_factory=list)
+
+
+class _Simulation:
+    def __init__(self, model: ir.Model, spec: ir.RunSpec, opts: Options) -> None:
+        self.model = model
+        self.spec = spec
+        self.opts = opts
+        from .check import method_name
+
+        requested = opts.method or spec.method or "AUTO"
+        route = method_name(requested)
+        if route is None:
+            raise AmilError(f"unknown integration method {requested}")
+        self.route = route
+        self.method = requested.upper()
+        self.timer = timer_values(spec, route)
+        reserved = {k: self.timer[k] for k in ("FINTIM", "DELT", "PRDEL", "OUTDEL", "DELMIN",
+                                               "DELMAX")}
+        self.constants = initial_values(model, spec.data, spec.tables, reserved)
+        const_modes = {}
+        for s in model.surfaces:
+            if s.depends == "const":
+                from .codegen import _Emitter  # noqa: F401 - literal evaluation below
+                value = evaluate_constant(model, s.expr, self.constants, spec.tables, s.span)
+                const_modes[s.index] = (math.ceil(value - 0.5) if s.kind == "level"
+                                        else _sign(value))
+        if not opts.events:
+            # event location off (for comparisons): every surface is still
+            # evaluated, but crossings are only noticed at step ends
+            pass
+        self.c: Compiled = Compiler(model, self.constants, spec.tables, const_modes,
+                                    opts.outputs, opts.events).build()
+        self.rtol = opts.rtol or spec.relerr or DEFAULTS["rtol"]
+        atol = opts.atol or spec.abserr or DEFAULTS["atol"]
+        names = self.c.state_names
+        if spec.abserr_each or spec.relerr_each:
+            vec = np.full(len(names), atol)
+            for i, n in enumerate(names):
+                vec[i] = spec.abserr_each.get(n, atol)
+            self.atol = vec
+            if spec.relerr_each:
+                self.rtol = min([self.rtol] + list(spec.relerr_each.values()))
+        else:
+            self.atol = atol
+        self.atol_scalar = float(np.min(self.atol))
+        self.fintim = self.timer["FINTIM"]
+        self.delt = self.timer["DELT"]
+        self._setup_surfaces()
+
+    # ------------------------------------------------------------- surfaces
+    def _setup_surfaces(self) -> None:
+        c, model = self.c, self.model
+        kinds, purposes, descs, grads, bp = [], [], [], [], []
+        state_index = {n: i for i, n in enumerate(c.state_names)}
+        for i in c.watched:
+            s = model.surfaces[i]
+            kinds.append(s.kind)
+            purposes.append(s.purpose)
+            descs.append(s.description)
+            grads.append(_linear_gradient(s.expr, state_index, self.constants)
+                         if s.kind == "sign" else None)
+            bp.append(i in c.affine_time)
+        self.sf = _Surfaces(kinds, purposes, descs, grads, bp, [True] * len(kinds))
+        # breakpoints known before the run: roots of surfaces affine in TIME
+        self.breakpoints: list[float] = []
+        y_dummy = list(c.y0)
+        z0 = list(c.z0)
+        m0 = [0.0] * len(c.watched)
+        for k, i in enumerate(c.watched):
+            if not bp[k]:
+                continue
+            root = self._affine_root(k, y_dummy, m0, z0)
+            if root is not None and 0.0 < root < self.fintim:
+                self.breakpoints.append(root)
+        for start, period in c.impulses:
+            if period > 0:
+                n = int(min((self.fintim - start) / period, 1_000_000))
+                self.breakpoints.extend(start + k * period for k in range(max(n, -1) + 1)
+                                        if 0.0 < start + k * period < self.fintim)
+            elif 0.0 < start < self.fintim:
+                self.breakpoints.append(start)
+        self.breakpoints = sorted(set(self.breakpoints))
+
+    def _affine_root(self, k: int, y, m, z) -> float | None:
+        """The first float at which an affine time surface reaches zero."""
+        def e(t: float) -> float:
+            return self.c.surf(t, y, m, z)[k]
+
+        e0, e1 = e(0.0), e(self.fintim)
+        slope = (e1 - e0) / self.fintim
+        if slope == 0.0 or _sign(e0) == _sign(e1) and e1 != 0.0:
+            return None
+        r = -e0 / slope
+        # polish to the first float where the sign has changed (or is zero)
+        before = _sign(e0)
+        for _ in range(64):
+            if _sign(e(r)) == before and before != 0:
+                r = math.nextafter(r, math.inf)
+            else:
+                break
+        for _ in range(64):
+            p = math.nextafter(r, -math.inf)
+            if _sign(e(p)) != before and p > 0:
+                r = p
+            else:
+                break
+        return r
+
+    # ---------------------------------------------------------------- rhs
+    def rhs_for(self, m: list[float], z: list[float]):
+        rhs = self.c.rhs
+        slides = [k for k, v in enumerate(m) if v == SLIDE]
+        bad: list = self.arith_faults
+
+        if not slides:
+            def f(t, y):
+                try:
+                    return rhs(t, y.tolist(), m, z)
+                except (ArithmeticError, ValueError) as exc:
+                    bad.append((t, exc))
+                    return [math.nan] * len(y)
+            return f
+
+        k = slides[0]
+
+        def f_slide(t, y):
+            try:
+                fp, fm, alpha = self.filippov(k, t, y, m, z)
+            except (ArithmeticError, ValueError) as exc:
+                bad.append((t, exc))
+                return [math.nan] * len(y)
+            return alpha * fp + (1.0 - alpha) * fm
+        return f_slide
+
+    def filippov(self, k: int, t: float, y: np.ndarray, m, z):
+        mp, mm = list(m), list(m)
+        mp[k], mm[k] = 1.0, -1.0
+        yl = y.tolist()
+        fp = np.asarray(self.c.rhs(t, yl, mp, z), dtype=float)
+        fm = np.asarray(self.c.rhs(t, yl, mm, z), dtype=float)
+        dp = self.surface_rate(k, t, y, fp, mp, z)
+        dm = self.surface_rate(k, t, y, fm, mm, z)
+        denom = dm - dp
+        alpha = 0.5 if denom == 0 else min(1.0, max(0.0, dm / denom))
+        return fp, fm, alpha
+
+    def surface_rate(self, k: int, t: float, y: np.ndarray, f: np.ndarray, m, z) -> float:
+        """d e_k/dt along f: exact for surfaces linear in the states, else a difference."""
+        g = self.sf.gradients[k]
+        if g is not None:
+            return float(g @ f)
+        h = self.lookahead_h
+        e0 = self.c.surf(t, y.tolist(), m, z)[k]
+        e1 = self.c.surf(t + h, (y + h * f).tolist(), m, z)[k]
+        return (e1 - e0) / h
+
+    # ------------------------------------------------------------ restart
+    def choose_modes(self, t: float, y: np.ndarray, z, m: list[float], triggered: set[int],
+                     first: bool = False) -> list[float]:
+        """Modes in force from t on. Surfaces not triggered keep their literal sign."""
+        c = self.c
+        new = list(m)
+        lit = c.modes_literal(t, y.tolist(), m, z)
+        for k in range(len(new)):
+            kind = self.sf.kinds[k]
+            if kind == "level":
+                if k in triggered or first:
+                    new[k] = self.level_ahead(k, t, y, new, z)
+                continue
+            if not first and k not in triggered and (lit[k] == new[k] or new[k] == SLIDE):
+                continue
+            if not first and k not in triggered and lit[k] != 0.0 and new[k] != 0.0:
+                # crossed at the same instant as the triggering surface
+                pass
+            if first and lit[k] != 0.0:
+                new[k] = lit[k]
+                continue
+            new[k] = self.direction(k, t, y, new, z, old=m[k] if not first else None)
+        return new
+
+    def direction(self, k: int, t: float, y: np.ndarray, m, z, old) -> float:
+        """Which side of surface k the motion goes to from a point on it."""
+        mp, mm = list(m), list(m)
+        mp[k], mm[k] = 1.0, -1.0
+        yl = y.tolist()
+        fp = np.asarray(self.c.rhs(t, yl, mp, z), dtype=float)
+        fm = np.asarray(self.c.rhs(t, yl, mm, z), dtype=float)
+        dp = self.surface_rate(k, t, y, fp, mp, z)
+        dm = self.surface_rate(k, t, y, fm, mm, z)
+        tiny = 1e-300
+        scale = max(abs(dp), abs(dm))
+        if scale <= tiny or (abs(dp) <= 1e-13 * scale and abs(dm) <= 1e-13 * scale):
+            return 0.0
+        # noise level of a rate computed by differences
+        eps = 0.0 if self.sf.gradients[k] is not None else 1e-9 * scale
+        up, down = dp > eps, dm < -eps
+        if up and down:  # repelling: keep going the way it was going
+            if old is not None and old != 0.0 and old != SLIDE:
+                return -old
+            return 1.0 if dp >= -dm else -1.0
+        if up:
+            return 1.0
+        if down:
+            return -1.0
+        if dp < -eps and dm > eps and self.opts.events:
+            return SLIDE
+        return 0.0
+
+    def level_ahead(self, k: int, t: float, y: np.ndarray, m, z) -> float:
+        """QNTZR: the level the argument is at just after t."""
+        lit = self.c.modes_literal(t, y.tolist(), m, z)[k]
+        f = np.asarray(self.c.rhs(t, y.tolist(), m, z), dtype=float)
+        h = self.lookahead_h
+        ahead = self.c.modes_literal(t + h, (y + h * f).tolist(), m, z)[k]
+        return ahead if abs(ahead - lit) <= 1 else lit
+
+    def apply_resets(self, y: np.ndarray, m: list[float]) -> np.ndarray:
+        """MODINT: hold the state at its IC while X1 <= 0 and X2 > 0."""
+        pos = {i: k for k, i in enumerate(self.c.watched)}
+        for si, s in enumerate(self.model.states):
+            if s.reset_surfaces:
+                s1, s2 = s.reset_surfaces
+                m1 = self.c.const_modes.get(s1, m[pos[s1]] if s1 in pos else 0.0)
+                m2 = self.c.const_modes.get(s2, m[pos[s2]] if s2 in pos else 0.0)
+                if m1 <= 0 and m2 > 0:
+                    y = y.copy()
+                    y[si] = self.c.y0[si]
+        return y
+
+    # ------------------------------------------------------------------ run
+    def run(self) -> Run:
+        c, opts = self.c, self.opts
+        started = _clock.perf_counter()
+        self.arith_faults: list = []
+        start = opts.start
+        t0 = float(start["t"]) if start else 0.0
+        if start:
+            self.fintim = t0 + self.timer["FINTIM"]
+            self.breakpoints = [b + t0 for b in self.breakpoints]
+        y = np.array(start["y"] if start else c.y0, dtype=float)
+        z = list(start["z"]) if start else list(c.z0)
+        grid = _make_grid(t0, self.fintim, self.timer["OUTDEL"], self.timer["PRDEL"])
+        if len(grid.times) > opts.max_rows:
+            raise AmilError([Diagnostic(
+                f"the run would print {len(grid.times)} rows (limit {opts.max_rows})",
+                None, "raise OUTDEL/PRDEL")], self.model.path, self.model.source)
+        self.lookahead_h = 1e-8 * max(self.fintim - t0, abs(t0) * 1e-8)
+        n_watch = len(c.watched)
+        m = [0.0] * n_watch
+        events: list[Event] = []
+        nsteps = 0
+        nfev = 0
+        status, message = Status.FINISHED, ""
+        rows_t: list[float] = []
+        rows_v: list[list[float]] = []
+        warnings: list[str] = []
+        slide_noted: set[int] = set()
+        watch_idx = [k for k in range(n_watch) if not self.sf.breakpoint_only[k]
+                     and self.opts.events]
+        if start and "m" in start and len(start["m"]) == n_watch:
+            m = list(start["m"])
+        else:
+            m = self.choose_modes(t0, y, z, m, set(), first=True)
+        y = self.apply_resets(y, m)
+        if c.z0:
+            z[:] = c.mem(t0, y.tolist(), m, m, z)
+        for k in range(n_watch):
+            if m[k] == SLIDE:
+                self.note_slide(k, t0, warnings, slide_noted, events, 0.0)
+        out_i = 0
+        times = grid.times
+
+        def record(t: float, yv: np.ndarray, mv) -> None:
+            rows_t.append(t)
+            rows_v.append(self.outputs(t, yv, mv, z))
+
+        # t0 row
+        record(t0, y, m)
+        out_i = 1
+        t = t0
+        stop_reason = None
+        last_step = None
+        recent_events: list[float] = []
+        stepper = None
+        try:
+            while t < self.fintim and stop_reason is None:
+                k_bp = bisect_right(self.breakpoints, t * (1 + 1e-15) + 1e-300)
+                seg_end = self.fintim
+                if k_bp < len(self.breakpoints):
+                    seg_end = min(seg_end, self.breakpoints[k_bp])
+                for end_time in self.pulse_ends(z, t):
+                    seg_end = min(seg_end, end_time)
+                f = self.rhs_for(m, z)
+                max_step = self.timer["DELMAX"] if "DELMAX" in self.spec.timer else math.inf
+                stepper = make_stepper(self.route, f, t, y, seg_end, rtol=self.rtol,
+                                       atol=self.atol, delt=self.delt, max_step=max_step,
+                                       first_step=last_step)
+                e_prev = c.surf(t, y.tolist(), m, z) if watch_idx else []
+                restart = False
+                while not restart:
+                    err = stepper.step()
+                    nsteps += 1
+                    if err is not None:
+                        raise _Failure(stepper.t, self.explain_failure(err, stepper))
+                    ta, tb = stepper.t_old, stepper.t
+                    yb = stepper.y
+                    if not np.all(np.isfinite(yb)):
+                        bad = int(np.flatnonzero(~np.isfinite(yb))[0])
+                        raise _Failure(ta, f"{c.state_names[bad]} is no longer finite "
+                                           f"after TIME = {ta:.9g}" + self.fault_note())
+                    triggered: set[int] = set()
+                    stop_here = None
+                    if watch_idx:
+                        e_b = c.surf(tb, yb.tolist(), m, z)
+                        hits = []
+                        for k in watch_idx:
+                            if m[k] == SLIDE:
+                                continue
+                            if self.crossed(k, m[k], e_prev[k], e_b[k]):
+                                hits.append(k)
+                        slide_exit = self.slide_exits(m, tb, yb, z)
+                        if hits or slide_exit:
+                            interp = stepper.interpolant()
+                            t_star, first_k = tb, None
+                            for k in hits:
+                                tk = self.locate(k, m, z, interp, ta, tb, e_prev[k], e_b[k])
+                                if tk < t_star or first_k is None:
+                                    t_star, first_k = tk, k
+                            for k, sign in slide_exit:
+                                tk = self.locate_slide_exit(k, sign, m, z, interp, ta, tb)
+                                if tk < t_star or first_k is None:
+                                    t_star, first_k = tk, k
+                            if t_star < tb:
+                                stepper.truncate(t_star)
+                                tb, yb = stepper.t, stepper.y
+                            e_b = c.surf(tb, yb.tolist(), m, z)
+                            triggered = {first_k}
+                            for k in hits:
+                                if self.crossed(k, m[k], e_prev[k], e_b[k]) or k == first_k:
+                                    triggered.add(k)
+                            for k, _ in slide_exit:
+                                if k == first_k:
+                                    triggered.add(k)
+                        # a surface sitting at zero (mode 0) that has moved off it
+                        for k in watch_idx:
+                            if m[k] == 0.0 and self.sf.kinds[k] == "sign" and \
+                                    abs(e_b[k]) > 1e-12 * (1 + abs(e_prev[k])) and e_b[k] != 0:
+                                triggered.add(k)
+                        e_prev = e_b
+                    # outputs inside (ta, tb]
+                    while out_i < len(times) and times[out_i] <= tb * (1 + 4e-16):
+                        to = float(times[out_i])
+                        if to >= tb:
+                            record(tb, yb, m)
+                        else:
+                            record(to, np.asarray(stepper.interpolant()(to), dtype=float), m)
+                        out_i += 1
+                    at_boundary = tb >= seg_end
+                    if at_boundary and tb < self.fintim:
+                        # a breakpoint: surfaces on TIME decide anew
+                        for k in range(n_watch):
+                            if self.sf.breakpoint_only[k] or k in triggered:
+                                triggered.add(k)
+                    if triggered:
+                        finish = [k for k in triggered if self.sf.purposes[k] in
+                                  ("finish", "termt")]
+                        new_m = self.choose_modes(tb, yb, z, m, triggered)
+                        for k in finish:
+                            fired = (self.sf.purposes[k] == "termt" and new_m[k] > 0) or \
+                                    (self.sf.purposes[k] == "finish" and new_m[k] != m[k])
+                            if fired:
+                                stop_here = k
+                        for k in sorted(triggered):
+                            if new_m[k] != m[k]:
+                                kind = "slide" if new_m[k] == SLIDE else self.sf.kinds[k]
+                                if self.sf.purposes[k] in ("finish", "termt"):
+                                    kind = self.sf.purposes[k]
+                                if self.sf.breakpoint_only[k]:
+                                    kind = "breakpoint"
+                                events.append(Event(tb, self.sf.descriptions[k],
+                                                    c.watched[k], m[k], new_m[k],
+                                                    "level" if kind == "level" else kind))
+                                if new_m[k] == SLIDE:
+                                    self.note_slide(k, tb, warnings, slide_noted, events, m[k])
+                        if c.z0:
+                            z[:] = c.mem(tb, yb.tolist(), m, new_m, z)
+                        changed = new_m != m
+                        m[:] = new_m
+                        y = self.apply_resets(yb, m)
+                        t = tb
+                        if stop_here is not None:
+                            stop_reason = stop_here
+                            if not rows_t or rows_t[-1] != tb:
+                                record(tb, y, m)
+                            break
+                        if changed or at_boundary or not np.array_equal(y, yb):
+                            recent_events.append(tb)
+                            if len(events) > opts.max_events:
+                                raise _Failure(tb, f"more than {opts.max_events} switching "
+                                                   "events (raise --max-events)")
+                            self.check_chatter(recent_events, events)
+                            restart = True
+                            last_step = max(tb - ta, 1e-12 * max(abs(tb), 1.0))
+                            nfev += stepper.nfev
+                            stepper = None
+                            break
+                    elif c.z0:
+                        z[:] = c.mem(tb, yb.tolist(), m, m, z)
+                    t = tb
+                    y = yb
+                    if at_boundary:
+                        restart = True
+                        nfev += stepper.nfev
+                        stepper = None
+                        break
+                    if nsteps >= opts.max_steps:
+                        raise _Failure(t, f"more than {opts.max_steps} steps (raise "
+                                          "--max-steps, or check the model for stiffness)")
+                    if opts.max_time and _clock.perf_counter() - started > opts.max_time:
+                        raise _Failure(t, f"wall-clock limit of {opts.max_time:g} s reached")
+                    if opts.progress is not None and nsteps % 200 == 0:
+                        opts.progress(t, self.fintim, len(events), nsteps)
+                    if self.z_changes_breakpoints(z, t, seg_end):
+                        restart = True
+                        nfev += stepper.nfev
+                        stepper = None
+                        break
+            if stop_reason is not None:
+                status = Status.STOPPED
+                message = f"stopped at TIME = {t:.9g}: {self.sf.descriptions[stop_reason]}"
+        except _Failure as fail:
+            status = Status.FAILED
+            message = f"integration failed at TIME = {fail.t:.9g}: {fail.reason}"
+            t = fail.t
+        except KeyboardInterrupt:
+            status = Status.FAILED
+            message = f"interrupted at TIME = {t:.9g}"
+        if stepper is not None:
+            nfev += stepper.nfev
+        if status == Status.FINISHED and (not rows_t or rows_t[-1] < self.fintim):
+            record(self.fintim, y, m)
+        return self.result(rows_t, rows_v, grid, events, status, message, warnings,
+                           dict(nsteps=nsteps, nfev=nfev, nevents=len(events),
+                                seconds=_clock.perf_counter() - started),
+                           t, y, z, m)
+
+    # ---------------------------------------------------------------- helpers
+    def crossed(self, k: int, mode: float, e_a: float, e_b: float) -> bool:
+        if self.sf.kinds[k] == "level":
+            return e_b < 0.0
+        if mode > 0:
+            return e_b < 0.0
+        if mode < 0:
+            return e_b > 0.0
+        return False
+
+    def locate(self, k, m, z, interp, ta, tb, e_a, e_b) -> float:
+        from scipy.optimize import brentq
+
+        def g(t):
+            return self.c.surf(t, list(map(float, interp(t))), m, z)[k]
+
+        ga = g(ta)
+        gb = g(tb)
+        if ga == 0.0 or _sign(ga) == _sign(gb):
+            # the surface started on zero (a restart) and came back: take the end
+            # of the step where it is seen on the wrong side
+            return tb if gb != 0.0 else tb
+        return brentq(g, ta, tb, xtol=4 * np.finfo(float).eps * max(abs(tb), 1e-300),
+                      rtol=4 * np.finfo(float).eps, maxiter=200)
+
+    def slide_exits(self, m, t, y, z) -> list[tuple[int, float]]:
+        out = []
+        for k, v in enumerate(m):
+            if v == SLIDE:
+                fp, fm, _ = self.filippov(k, t, y, m, z)
+                mp, mm = list(m), list(m)
+                mp[k], mm[k] = 1.0, -1.0
+                dp = self.surface_rate(k, t, y, fp, mp, z)
+                dm = self.surface_rate(k, t, y, fm, mm, z)
+                if dp > 0:
+                    out.append((k, 1.0))
+                elif dm < 0:
+                    out.append((k, -1.0))
+        return out
+
+    def locate_slide_exit(self, k, sign, m, z, interp, ta, tb) -> float:
+        from scipy.optimize import brentq
+
+        mp, mm = list(m), list(m)
+        mp[k], mm[k] = 1.0, -1.0
+
+        def g(t):
+            y = np.asarray(interp(t), dtype=float)
+            fp, fm, _ = self.filippov(k, t, y, m, z)
+            if sign > 0:
+                return self.surface_rate(k, t, y, fp, mp, z)
+            return -self.surface_rate(k, t, y, fm, mm, z)
+
+        ga, gb = g(ta), g(tb)
+        if ga > 0 or gb <= 0:
+            return tb
+        return brentq(g, ta, tb, xtol=4 * np.finfo(float).eps * max(abs(tb), 1e-300),
+                      maxiter=200)
+
+    def note_slide(self, k, t, warnings, noted, events, old) -> None:
+        if k in noted:
+            return
+        noted.add(k)
+        warnings.append(f"sliding on {self.sf.descriptions[k]} from TIME = {t:.6g}: both "
+                        "branches push it back to zero, so the run follows the motion that "
+                        "keeps it there (Filippov)")
+
+    def check_chatter(self, recent: list[float], events) -> None:
+        if len(recent) < 200:
+            return
+        window = recent[-200:]
+        span = window[-1] - window[0]
+        if span <= 1e-9 * max(self.fintim, abs(window[-1])):
+            last = events[-1]
+            raise _Failure(window[-1], f"{last.switch} chatters: 200 switches within "
+                                       f"{span:.3g} s")
+        del recent[:-200]
+
+    def pulse_ends(self, z, t) -> list[float]:
+        out = []
+        for mem in self.model.memories:
+            if mem.func == "PULSE":
+                end = z[mem.slot]
+                if t < end < self.fintim:
+                    out.append(end)
+        return out
+
+    def z_changes_breakpoints(self, z, t, seg_end) -> bool:
+        return any(t < e < seg_end for e in self.pulse_ends(z, t))
+
+    def outputs(self, t, y, m, z) -> list[float]:
+        slides = [k for k, v in enumerate(m) if v == SLIDE]
+        try:
+            if not slides:
+                return self.c.out(t, y.tolist(), m, z)
+            k = slides[0]
+            _, _, alpha = self.filippov(k, t, y, m, z)
+            mp, mm = list(m), list(m)
+            mp[k], mm[k] = 1.0, -1.0
+            op = self.c.out(t, y.tolist(), mp, z)
+            om = self.c.out(t, y.tolist(), mm, z)
+            return [alpha * a + (1 - alpha) * b for a, b in zip(op, om, strict=True)]
+        except (ArithmeticError, ValueError):
+            return [math.nan] * len(self.c.out_names)
+
+    def fault_note(self) -> str:
+        if not self.arith_faults:
+            return ""
+        t, exc = self.arith_faults[-1]
+        line = _fault_line(exc)
+        where = f" (line {line})" if line else ""
+        return f"; last arithmetic fault at TIME = {t:.9g}{where}: {exc}"
+
+    def explain_failure(self, err: str, stepper) -> str:
+        return err + self.fault_note()
+
+    def result(self, rows_t, rows_v, grid, events, status, message, warnings, stats, t, y,
+               z, m) -> Run:
+        names = self.c.out_names
+        times = np.asarray(rows_t, dtype=float)
+        table = np.asarray(rows_v, dtype=float).reshape(len(rows_t), len(names))
+        values = {n: table[:, i].copy() for i, n in enumerate(names)}
+        out_set = set(grid.times[grid.outdel].tolist())
+        pr_set = set(grid.times[grid.prdel].tolist())
+        last = times[-1] if len(times) else None
+        outdel_mask = np.array([tt in out_set or tt == last for tt in times.tolist()], bool)
+        prdel_mask = np.array([tt in pr_set or tt == last for tt in times.tolist()], bool)
+        final = {n: float(v[-1]) for n, v in values.items()} if len(times) else {}
+        for i, n in enumerate(self.c.state_names):
+            if "#" not in n:
+                final[n] = float(y[i])
+        params = {k: v for k, v in self.constants.items()}
+        return Run(
+            label=self.spec.label, params=dict(self.spec.data), constants=params,
+            times=times, values=values, outdel_mask=outdel_mask, prdel_mask=prdel_mask,
+            events=events, status=status, message=message, final=final, stats=stats,
+            method=self.method, rtol=self.rtol, atol=self.atol_scalar,
+            titles=list(self.spec.titles), reports=list(self.spec.reports),
+            warnings=warnings, t_end=float(t),
+            final_state={"t": float(t), "y": y.tolist(), "z": list(z), "m": list(m)},
+        )
+
+
+class _Failure(Exception):
+    def __init__(self, t: float, reason: str) -> None:
+        super().__init__(reason)
+        self.t = t
+        self.reason = reason
+
+
+def _fault_line(exc: BaseException) -> int | None:
+    tb = exc.__traceback__
+    line = None
+    while tb is not None:
+        if tb.tb_frame.f_code.co_name in ("rhs", "out", "surf", "mem", "modes"):
+            line = tb.tb_lineno
+        tb = tb.tb_next
+    return line
+
+
+def _linear_gradient(expr, state_index: dict[str, int], constants) -> np.ndarray | None:
+    """d e/d y for a surface that is a constant-coefficient combination of states."""
+    from . import syntax as syn
+
+    n = len(state_index)
+
+    def lin(e) -> tuple[np.ndarray, bool] | None:
+        if isinstance(e, syn.Num):
+            return np.zeros(n), True
+        if isinstance(e, syn.Name):
+            if e.name in state_index:
+                g = np.zeros(n)
+                g[state_index[e.name]] = 1.0
+                return g, False
+            if e.name in constants:
+                return np.zeros(n), True
+            return None
+        if isinstance(e, syn.Neg):
+            r = lin(e.operand)
+            return None if r is None else (-r[0], r[1])
+        if isinstance(e, syn.BinOp):
+            a, b = lin(e.left), lin(e.right)
+            if a is None or b is None:
+                return None
+            if e.op in "+-":
+                return (a[0] + b[0] if e.op == "+" else a[0] - b[0]), a[1] and b[1]
+            if e.op == "*" and (a[1] or b[1]):
+                k = _const(e.left if a[1] else e.right, constants)
+                if k is None:
+                    return None
+                return (b[0] if a[1] else a[0]) * k, a[1] and b[1]
+            if e.op == "/" and b[1]:
+                k = _const(e.right, constants)
+                if k is None or k == 0:
+                    return None
+                return a[0] / k, a[1]
+            return None
+        return None
+
+    r = lin(expr)
+    if r is None or r[1]:
+        return None
+    return r[0]
+
+
+def _const(expr, constants) -> float | None:
+    from . import syntax as syn
+
+    if isinstance(expr, syn.Num):
+        return expr.value
+    if isinstance(expr, syn.Name) and expr.name in constants:
+        return constants[expr.name]
+    if isinstance(expr, syn.Neg):
+        v = _const(expr.operand, constants)
+        return None if v is None else -v
+    if isinstance(expr, syn.BinOp):
+        a, b = _const(expr.left, constants), _const(expr.right, constants)
+        if a is None or b is None:
+            return None
+        try:
+            return {"+": a + b, "-": a - b, "*": a * b}.get(expr.op) if expr.op != "/" else a / b
+        except ZeroDivisionError:
+            return None
+    return None
+
+
+def simulate(model: ir.Model, spec: ir.RunSpec, options: Options | None = None) -> Run:
+    """Integrate one run of a checked model. Faults in the data raise AmilError;
+    a failing integration returns a Run with status FAILED and the rows so far."""
+    sim = _Simulation(model, spec, options or Options())
+    return sim.run()
+
+
+def probe_is_fixed(route: str) -> bool:
+    return is_fixed(route)

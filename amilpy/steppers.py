@@ -1,0 +1,250 @@
+"""Integrator routes behind one small interface.
+
+A stepper integrates one smooth segment (modes frozen) from `t0` towards
+`t_bound`, one accepted step at a time. The runner needs only:
+
+    step() -> str | None     advance one accepted step; a message if it failed
+    t, y, t_old              where the last step ended and began
+    interpolant()            callable t -> y on [t_old, t] (dense output)
+    truncate(t)              end the last step at t in [t_old, t] (an event)
+    nfev                     right-hand-side evaluations so far
+
+Event location, breakpoints and output sampling live in the runner and use only
+these, so a route can be added without touching them: subclass `Stepper`, add
+it to `ROUTES`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+Rhs = Callable[[float, np.ndarray], np.ndarray]
+
+
+class Stepper:
+    t: float
+    t_old: float
+    y: np.ndarray
+    nfev: int = 0
+    njev: int = 0
+    nlu: int = 0
+
+    def step(self) -> str | None:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def interpolant(self) -> Callable[[float], np.ndarray]:  # pragma: no cover
+        raise NotImplementedError
+
+    def truncate(self, t: float) -> None:
+        """End the last step at `t` (default: take the dense output there)."""
+        self.y = np.asarray(self.interpolant()(t), dtype=float)
+        self.t = t
+
+
+class ScipyStepper(Stepper):
+    """SciPy's `OdeSolver` classes: RK45, DOP853, Radau, BDF, LSODA."""
+
+    def __init__(self, name: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float,
+                 rtol: float, atol, max_step: float, first_step: float | None) -> None:
+        from scipy import integrate
+
+        cls = getattr(integrate, name)
+        options = {"rtol": rtol, "atol": atol, "max_step": max_step}
+        if first_step is not None:
+            options["first_step"] = min(first_step, abs(t_bound - t0))
+        if name == "LSODA":
+            # LSODA takes min_step; SciPy's other solvers do not
+            pass
+        self.solver = cls(fun, t0, y0, t_bound, **options)
+        self.t = self.t_old = t0
+        self.y = np.asarray(y0, dtype=float)
+        self._dense = None
+
+    @property
+    def nfev(self) -> int:  # type: ignore[override]
+        return self.solver.nfev
+
+    @property
+    def njev(self) -> int:  # type: ignore[override]
+        return self.solver.njev
+
+    @property
+    def nlu(self) -> int:  # type: ignore[override]
+        return self.solver.nlu
+
+    def step(self) -> str | None:
+        msg = self.solver.step()
+        if self.solver.status == "failed":
+            return msg or "the integrator failed"
+        self.t_old = self.solver.t_old
+        self.t = self.solver.t
+        self.y = self.solver.y
+        self._dense = None
+        return None
+
+    def interpolant(self):
+        if self._dense is None:
+            self._dense = self.solver.dense_output()
+        return self._dense
+
+    @property
+    def step_size(self) -> float | None:
+        return self.solver.step_size
+
+
+class FixedStepper(Stepper):
+    """CSMP's fixed-step methods with step DELT on a grid anchored at TIME = 0.
+
+    Steps end on the DELT grid (so output instants that are multiples of DELT are
+    hit exactly); a step is shortened to end at the segment bound (a breakpoint)
+    and, after an event, at the located instant. Dense output is the cubic
+    Hermite through both ends, of the same order as RK4.
+    """
+
+    order = 1
+
+    def __init__(self, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float, delt: float) -> None:
+        self.fun = fun
+        self.t = self.t_old = t0
+        self.y = np.asarray(y0, dtype=float)
+        self.t_bound = t_bound
+        self.delt = delt
+        self.f = self._call(t0, self.y)
+        self.y_old = self.y
+        self.f_old = self.f
+        self.history: list[np.ndarray] = []  # previous derivatives (Adams)
+        self._nfev = 1
+
+    @property
+    def nfev(self) -> int:  # type: ignore[override]
+        return self._nfev
+
+    def _call(self, t: float, y: np.ndarray) -> np.ndarray:
+        self._nfev = getattr(self, "_nfev", 0) + 1
+        return np.asarray(self.fun(t, y), dtype=float)
+
+    def next_time(self) -> float:
+        k = math.floor(self.t / self.delt + 1e-9) + 1
+        t_next = k * self.delt
+        # a sliver left before the grid point after an event: merge into one step
+        if t_next - self.t < 1e-6 * self.delt:
+            t_next += self.delt
+        return min(t_next, self.t_bound)
+
+    def advance(self, t: float, y: np.ndarray, f: np.ndarray, h: float) -> np.ndarray:
+        raise NotImplementedError
+
+    def step(self) -> str | None:
+        if self.t >= self.t_bound:
+            return "the segment is already finished"
+        t_new = self.next_time()
+        h = t_new - self.t
+        y_new = self.advance(self.t, self.y, self.f, h)
+        if not np.all(np.isfinite(y_new)):
+            bad = int(np.flatnonzero(~np.isfinite(y_new))[0])
+            self.bad_index = bad
+            return f"the state is no longer finite (step DELT = {self.delt:g} may be unstable)"
+        self.history.append(self.f)
+        self.t_old, self.y_old, self.f_old = self.t, self.y, self.f
+        self.t, self.y = t_new, y_new
+        self.f = self._call(t_new, y_new)
+        return None
+
+    def interpolant(self):
+        t0, t1, y0, y1, f0, f1 = self.t_old, self.t, self.y_old, self.y, self.f_old, self.f
+        h = t1 - t0
+
+        def hermite(t: float) -> np.ndarray:
+            if h == 0:
+                return y1
+            s = (t - t0) / h
+            h00 = (1 + 2 * s) * (1 - s) ** 2
+            h10 = s * (1 - s) ** 2
+            h01 = s * s * (3 - 2 * s)
+            h11 = s * s * (s - 1)
+            return h00 * y0 + h10 * h * f0 + h01 * y1 + h11 * h * f1
+
+        return hermite
+
+    def truncate(self, t: float) -> None:
+        """Redo the last step with the method itself, ending exactly at t."""
+        h = t - self.t_old
+        if self.history:
+            self.history.pop()
+        self.t, self.y, self.f = self.t_old, self.y_old, self.f_old
+        if h > 0:
+            y_new = self.advance(self.t, self.y, self.f, h)
+            self.history.append(self.f)
+            self.t_old = self.t
+            self.t, self.y = t, y_new
+            self.f = self._call(t, y_new)
+
+
+class Euler(FixedStepper):
+    order = 1
+
+    def advance(self, t, y, f, h):
+        return y + h * f
+
+
+class Heun(FixedStepper):
+    """TRAPZ: Euler predictor, trapezoid corrector."""
+
+    order = 2
+
+    def advance(self, t, y, f, h):
+        yp = y + h * f
+        return y + 0.5 * h * (f + self._call(t + h, yp))
+
+
+class RK4(FixedStepper):
+    order = 4
+
+    def advance(self, t, y, f, h):
+        k1 = f
+        k2 = self._call(t + 0.5 * h, y + 0.5 * h * k1)
+        k3 = self._call(t + 0.5 * h, y + 0.5 * h * k2)
+        k4 = self._call(t + h, y + h * k3)
+        return y + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+
+class AdamsBashforth2(FixedStepper):
+    """ADAMS: two-step Adams-Bashforth; starts (and restarts) with a Heun step."""
+
+    order = 2
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.prev: tuple[float, np.ndarray] | None = None
+
+    def advance(self, t, y, f, h):
+        if self.t_old < t and self.history and self.t > self.t_old:
+            h_prev = t - self.t_old
+            f_prev = self.f_old
+            # variable-step AB2 (steps after a shortened one keep second order)
+            r = h / h_prev
+            return y + h * ((1.0 + 0.5 * r) * f - 0.5 * r * f_prev)
+        yp = y + h * f
+        return y + 0.5 * h * (f + self._call(t + h, yp))
+
+
+VARIABLE = {"RK45": "RK45", "DOP853": "DOP853", "RADAU": "Radau", "BDF": "BDF",
+            "LSODA": "LSODA", "AUTO": "LSODA"}
+FIXED: dict[str, type[FixedStepper]] = {"RK4": RK4, "EULER": Euler, "TRAPZ": Heun,
+                                        "ADAMS": AdamsBashforth2}
+
+
+def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float, *,
+                 rtol: float, atol, delt: float, max_step: float = math.inf,
+                 first_step: float | None = None) -> Stepper:
+    """The stepper for a canonical route name (see check.METHODS)."""
+    if route in FIXED:
+        return FIXED[route](fun, t0, y0, t_bound, delt)
+    return ScipyStepper(VARIABLE[route], fun, t0, y0, t_bound, rtol, atol, max_step, first_step)
+
+
+def is_fixed(route: str) -> bool:
+    return route in FIXED

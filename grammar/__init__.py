@@ -1,0 +1,1 @@
+"""The AMIL grammar, shipped as package data (`amil.lark`)."""
