@@ -6,7 +6,15 @@ codegen (-> Python callables) -> runner (steppers, events) -> result -> printout
 
 from .api import Model, load, loads
 from .diagnostics import AmilError
-from .result import Event, Run, Status
 
 __all__ = ["AmilError", "Event", "Model", "Run", "Status", "load", "loads"]
 __version__ = "0.1.0"
+
+
+def __getattr__(name: str):
+    # result.py needs numpy; `amilpy check` should not pay for importing it
+    if name in ("Event", "Run", "Status"):
+        from . import result
+
+        return getattr(result, name)
+    raise AttributeError(f"module 'amilpy' has no attribute {name!r}")

@@ -11,12 +11,15 @@ from __future__ import annotations
 
 import os
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 from . import ir
 from .check import check, method_name
 from .diagnostics import AmilError, Diagnostic, nearest
 from .parse import parse
-from .result import Run
+
+if TYPE_CHECKING:
+    from .result import Run
 
 
 class Model:

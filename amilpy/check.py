@@ -56,7 +56,6 @@ class _Checker:
                         "equations belong before the first END",
                     )
         runs, data_names, data_spans = self.run_specs(groups)
-        self.rep.raise_if_any()
         model = self.lower(sections, runs, data_names, data_spans)
         self.rep.raise_if_any()
         return model
@@ -333,17 +332,27 @@ class _Checker:
         state_names = {s.name for s in self.states}
         known = set(defined) | self.data_names | set(RESERVED)
 
-        # names used but never defined
+        # names used but never defined (a table name as AFGEN's first argument is fine)
+        table_args: set[int] = set()
+        for section in sections.values():
+            for st in section:
+                for node in ast.walk(st.expr):
+                    if isinstance(node, ast.Call) and node.args and \
+                            getattr(lookup(node.func), "kind", "") == "table":
+                        table_args.add(id(node.args[0]))
+
         def check_names(expr, where_ok: set[str]):
             for node in ast.walk(expr):
-                if isinstance(node, ast.Name) and node.name not in where_ok:
+                if isinstance(node, ast.Name) and node.name not in where_ok \
+                        and id(node) not in table_args:
                     self.undefined(node, known)
 
         initial_ok = self.data_names | self.initial_names | {"PI", "FINTIM", "DELT", "PRDEL",
                                                              "OUTDEL", "DELMIN", "DELMAX", "TIME"}
         for st in sections["INITIAL"]:
             for node in ast.walk(st.expr):
-                if isinstance(node, ast.Name) and node.name not in initial_ok:
+                if isinstance(node, ast.Name) and node.name not in initial_ok \
+                        and id(node) not in table_args:
                     if node.name in defined:
                         self.rep.error(
                             f"INITIAL uses {node.name}, which is computed in "
@@ -385,7 +394,6 @@ class _Checker:
                 hint = nearest(s.name, known)
                 self.rep.error(f"FINISH names {s.name}, which the model never defines", s.span,
                                f"did you mean {hint}?" if hint else None)
-        self.rep.raise_if_any()
 
         initial_sorted = self.sort(initial, set(self.initial_names), "INITIAL")
         dyn_sorted = self.sort(dyn_eqs, {e.target for e in dyn_eqs}, "DYNAMIC")
@@ -764,8 +772,14 @@ class _Checker:
             memo[name] = of_expr(eq[name])
             return memo[name]
 
+        def has_impulse(expr) -> bool:
+            return any(isinstance(n, ir.Impulse) for n in iter_nodes(expr))
+
         for i, s in enumerate(model.surfaces):
-            model.surfaces[i] = replace(s, depends=of_expr(s.expr))
+            # IMPULS is 1 only at its instants, which are breakpoints: a surface on
+            # it never changes sign between steps, so it is not watched
+            depends = "impulse" if has_impulse(s.expr) else of_expr(s.expr)
+            model.surfaces[i] = replace(s, depends=depends)
 
 
 def _instantiate(template: str, args: tuple, span: Span) -> ast.Expr:

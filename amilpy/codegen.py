@@ -25,11 +25,21 @@ from . import ir
 from . import syntax as syn
 from .check import iter_nodes
 from .diagnostics import AmilError, Diagnostic, Span
-from .library import FUNCTIONS, MATH, afgen, impulse_at, level_of, lookup, nlfgen, safe_pow
+from .library import (
+    FUNCTIONS,
+    MATH,
+    afgen,
+    deriv,
+    impulse_at,
+    level_of,
+    lookup,
+    nlfgen,
+    safe_pow,
+)
 
 NAMESPACE: dict[str, object] = {f"_{k}": v for k, v in MATH.items()}
 NAMESPACE.update({
-    "_AFGEN": afgen, "_NLFGEN": nlfgen, "_IMPULS": impulse_at, "_POW": safe_pow,
+    "_AFGEN": afgen, "_NLFGEN": nlfgen, "_DERIV": deriv, "_IMPULS": impulse_at, "_POW": safe_pow,
     "_LEVEL": level_of, "_SGN": lambda x: (x > 0.0) - (x < 0.0),
 })
 
@@ -177,6 +187,20 @@ class _Emitter:
             return py.Call(py.Name(fn, py.Load()), [self.emit(s.expr)], [])
         return py.Name(self.mode_names[surface], py.Load())
 
+    def memory_mode(self, surface: int) -> py.expr:
+        """At step ends (and output instants) a memory function reads its condition
+        as it stands (so IMPULS, which is 1 only at its instants, triggers it), or
+        the branch the step was taken in when that was the positive one (so a value
+        tracked up to a located crossing is kept)."""
+        mode = self.mode(surface)
+        if self.context not in ("mem", "out"):
+            return mode
+        literal = py.Call(py.Name("_SGN", py.Load()),
+                          [self.emit(self.model.surfaces[surface].expr)], [])
+        if _const_value(mode) is not None:
+            return literal if _const_value(mode) <= 0 else mode
+        return py.IfExp(py.Compare(mode, [py.Gt()], [py.Constant(0.0)]), mode, literal)
+
     def emit(self, e) -> py.expr:
         if isinstance(e, syn.Num):
             return _num(e.value)
@@ -277,7 +301,7 @@ class _Emitter:
     def memory_value(self, mem: ir.Memory) -> py.expr:
         a = [self.emit(x) for x in mem.args]
         z = [py.Name(f"z{mem.slot + k}", py.Load()) for k in range(mem.nslots)]
-        modes = [self.mode(s) for s in mem.surfaces]
+        modes = [self.memory_mode(s) for s in mem.surfaces]
         t = py.Name("t", py.Load())
         if mem.func == "HSTRSS":
             ic, p1, p2, x = a
@@ -295,12 +319,7 @@ class _Emitter:
             return py.IfExp(py.Compare(t, [py.Lt()], [z[0]]), py.Constant(1.0),
                             py.Constant(0.0))
         if mem.func == "DERIV":
-            x = a[1]
-            return py.IfExp(
-                py.Compare(t, [py.Gt()], [z[1]]),
-                py.BinOp(py.BinOp(x, py.Sub(), z[0]), py.Div(),
-                         py.BinOp(py.Name("t", py.Load()), py.Sub(), z[1])),
-                z[2])
+            return py.Call(py.Name("_DERIV", py.Load()), [a[1], t] + z, [])
         raise AssertionError(mem.func)
 
 
@@ -329,6 +348,25 @@ def _assign(name: str, value: py.expr, line: int) -> py.stmt:
     stmt = py.Assign([py.Name(name, py.Store())], value)
     stmt.lineno = line
     return stmt
+
+
+def _place(module: py.Module) -> None:
+    """Give every node the listing line of its statement, so a fault inside
+    generated code reports the `.amil` line (other statements take line 1)."""
+    for fn in module.body:
+        last = 1
+        for stmt in fn.body:
+            line = getattr(stmt, "lineno", None) or 1
+            last = max(last, line)
+            for node in py.walk(stmt):
+                if isinstance(node, (py.expr, py.stmt, py.excepthandler, py.arg)):
+                    node.lineno = node.end_lineno = line
+                    node.col_offset = node.end_col_offset = 0
+        fn.lineno, fn.end_lineno = 1, last
+        fn.col_offset = fn.end_col_offset = 0
+        for node in py.walk(fn.args):
+            node.lineno = node.end_lineno = 1
+            node.col_offset = node.end_col_offset = 0
 
 
 def _function(name: str, args: tuple[str, ...], body: list[py.stmt]) -> py.FunctionDef:
@@ -464,18 +502,22 @@ class Compiler:
             elif mem.func == "PULSE":
                 p = em_m.emit(mem.args[0])
                 trigger = py.BoolOp(py.And(), [
-                    py.Compare(em_new.mode(mem.surfaces[0]), [py.Gt()], [py.Constant(0.0)]),
+                    py.Compare(em_new.memory_mode(mem.surfaces[0]), [py.Gt()],
+                               [py.Constant(0.0)]),
                     py.Compare(py.Name("t", py.Load()), [py.GtE()], [z[0]]),
                 ])
                 new.append(py.IfExp(trigger, py.BinOp(py.Name("t", py.Load()), py.Add(), p),
                                     z[0]))
             elif mem.func == "DERIV":
-                new.extend([em_m.emit(mem.args[1]), py.Name("t", py.Load()), value])
+                # (x1, t1) the newest point, (x2, t2) the one before, then the value
+                new.extend([em_m.emit(mem.args[1]), py.Name("t", py.Load()),
+                            py.Name(z[0].id, py.Load()), py.Name(z[1].id, py.Load()), value])
         body.append(py.Return(py.List(new, py.Load())))
         fns.append(_function("mem", ("t", "y", "m", "mn", "z"), body))
 
         module = py.Module(body=fns, type_ignores=[])
         module = _Folder().visit(module)
+        _place(module)
         py.fix_missing_locations(module)
         _assert_closed(module)
         source = py.unparse(module)
@@ -496,11 +538,11 @@ class Compiler:
             elif mem.func == "PULSE":
                 z0.append(-math.inf)
             elif mem.func == "DERIV":
-                z0.extend([0.0, 0.0, self.constant(mem.args[0], mem.span)])
+                z0.extend([0.0, 0.0, 0.0, 0.0, self.constant(mem.args[0], mem.span)])
         affine = {}
         for i in self.watched:
             s = model.surfaces[i]
-            if s.depends == "time" and self.events:
+            if s.depends == "time" and self.events and s.kind == "sign":
                 if _is_affine(s.expr, self.constants):
                     affine[i] = (0.0, 0.0)
         impulses = []

@@ -118,7 +118,7 @@ _register(_f("DERIV", "memory", (2, 2), doc="dX/dt, Y(0)=IC"))
 _register(_f("AFGEN", "table", (2, 2), doc="linear interpolation in a FUNCTION table"))
 _register(_f("NLFGEN", "table", (2, 2), doc="quadratic interpolation in a FUNCTION table"))
 
-MEMORY_SLOTS = {"HSTRSS": 1, "ZHOLD": 1, "RST": 1, "PULSE": 1, "DERIV": 3}
+MEMORY_SLOTS = {"HSTRSS": 1, "ZHOLD": 1, "RST": 1, "PULSE": 1, "DERIV": 5}
 
 
 def lookup(name: str) -> Func | None:
@@ -226,6 +226,22 @@ def nlfgen(table: tuple[tuple[float, ...], tuple[float, ...]], x: float) -> floa
     return (y0 * (x - x1) * (x - x2) / ((x0 - x1) * (x0 - x2))
             + y1 * (x - x0) * (x - x2) / ((x1 - x0) * (x1 - x2))
             + y2 * (x - x0) * (x - x1) / ((x2 - x0) * (x2 - x1)))
+
+
+def deriv(x: float, t: float, x1: float, t1: float, x2: float, t2: float,
+          previous: float) -> float:
+    """DERIV: dX/dt from the last two accepted points and the current one.
+
+    Second order (exact for a quadratic in time) once two earlier points are
+    known; a plain difference after a start; the last value at a step end.
+    """
+    if not t > t1:
+        return previous
+    if t2 < t1:
+        return (x2 * (t - t1) / ((t2 - t1) * (t2 - t))
+                + x1 * (t - t2) / ((t1 - t2) * (t1 - t))
+                + x * ((t - t2) + (t - t1)) / ((t - t2) * (t - t1)))
+    return (x - x1) / (t - t1)
 
 
 def impulse_at(t: float, start: float, period: float) -> float:

@@ -37,7 +37,7 @@ class Event:
     def describe_branch(self, mode: float) -> str:
         if self.kind == "level":
             return f"level {mode:g}"
-        return {-1.0: "X<0", 0.0: "X=0", 1.0: "X>0", 2.0: "sliding"}.get(mode, f"{mode:g}")
+        return {-1.0: "X<0", 0.0: "X=0", 1.0: "X>0", 0.5: "sliding"}.get(mode, f"{mode:g}")
 
     def __str__(self) -> str:
         return (f"TIME = {self.time:.9g}: {self.switch}: {self.describe_branch(self.old)} -> "

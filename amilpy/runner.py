@@ -32,7 +32,7 @@ from .diagnostics import AmilError, Diagnostic
 from .result import Event, Run, Status
 from .steppers import is_fixed, make_stepper
 
-SLIDE = 2.0
+SLIDE = 0.5  # not a sign (-1, 0, 1) nor a QNTZR level (an integer)
 
 DEFAULTS = {
     "rtol": 1e-6,
@@ -140,8 +140,9 @@ class _Simulation:
         self.constants = initial_values(model, spec.data, spec.tables, reserved)
         const_modes = {}
         for s in model.surfaces:
+            if s.depends == "impulse":
+                const_modes[s.index] = 0.0
             if s.depends == "const":
-                from .codegen import _Emitter  # noqa: F401 - literal evaluation below
                 value = evaluate_constant(model, s.expr, self.constants, spec.tables, s.span)
                 const_modes[s.index] = (math.ceil(value - 0.5) if s.kind == "level"
                                         else _sign(value))
@@ -184,15 +185,17 @@ class _Simulation:
         self.sf = _Surfaces(kinds, purposes, descs, grads, bp, [True] * len(kinds))
         # breakpoints known before the run: roots of surfaces affine in TIME
         self.breakpoints: list[float] = []
+        self.roots: dict[int, float] = {}
         y_dummy = list(c.y0)
         z0 = list(c.z0)
         m0 = [0.0] * len(c.watched)
-        for k, i in enumerate(c.watched):
+        for k in range(len(c.watched)):
             if not bp[k]:
                 continue
             root = self._affine_root(k, y_dummy, m0, z0)
             if root is not None and 0.0 < root < self.fintim:
                 self.breakpoints.append(root)
+                self.roots[k] = root
         for start, period in c.impulses:
             if period > 0:
                 n = int(min((self.fintim - start) / period, 1_000_000))
@@ -391,12 +394,17 @@ class _Simulation:
         out_i = 0
         times = grid.times
 
-        def record(t: float, yv: np.ndarray, mv) -> None:
+        rows_g: list[int] = []  # grid index of each row (-1: a stop instant)
+
+        def record(t: float, yv: np.ndarray, mv, g: int = -1) -> None:
+            if g >= 0 and abs(t - times[g]) <= 1e-12 * max(abs(t), 1e-300):
+                t = float(times[g])  # print the grid instant, not a float next to it
             rows_t.append(t)
+            rows_g.append(g)
             rows_v.append(self.outputs(t, yv, mv, z))
 
         # t0 row
-        record(t0, y, m)
+        record(t0, y, m, 0)
         out_i = 1
         t = t0
         stop_reason = None
@@ -412,7 +420,10 @@ class _Simulation:
                 for end_time in self.pulse_ends(z, t):
                     seg_end = min(seg_end, end_time)
                 f = self.rhs_for(m, z)
-                max_step = self.timer["DELMAX"] if "DELMAX" in self.spec.timer else math.inf
+                # never step over more than an output interval: a switch that goes
+                # and comes back inside one step would be missed
+                max_step = min(self.timer["DELMAX"], max(self.timer["OUTDEL"],
+                                                         self.timer["PRDEL"]))
                 stepper = make_stepper(self.route, f, t, y, seg_end, rtol=self.rtol,
                                        atol=self.atol, delt=self.delt, max_step=max_step,
                                        first_step=last_step)
@@ -468,19 +479,18 @@ class _Simulation:
                                     abs(e_b[k]) > 1e-12 * (1 + abs(e_prev[k])) and e_b[k] != 0:
                                 triggered.add(k)
                         e_prev = e_b
-                    # outputs inside (ta, tb]
-                    while out_i < len(times) and times[out_i] <= tb * (1 + 4e-16):
+                    # outputs inside (ta, tb); the one at tb waits for the new modes
+                    while out_i < len(times) and times[out_i] < tb * (1 - 4e-16):
                         to = float(times[out_i])
-                        if to >= tb:
-                            record(tb, yb, m)
-                        else:
-                            record(to, np.asarray(stepper.interpolant()(to), dtype=float), m)
+                        record(to, np.asarray(stepper.interpolant()(to), dtype=float), m,
+                               out_i)
                         out_i += 1
+                    at_output = out_i < len(times) and times[out_i] <= tb * (1 + 4e-16)
                     at_boundary = tb >= seg_end
                     if at_boundary and tb < self.fintim:
-                        # a breakpoint: surfaces on TIME decide anew
-                        for k in range(n_watch):
-                            if self.sf.breakpoint_only[k] or k in triggered:
+                        # a breakpoint: the surfaces on TIME that reach zero here decide anew
+                        for k, root in self.roots.items():
+                            if root == tb:
                                 triggered.add(k)
                     if triggered:
                         finish = [k for k in triggered if self.sf.purposes[k] in
@@ -509,10 +519,21 @@ class _Simulation:
                         m[:] = new_m
                         y = self.apply_resets(yb, m)
                         t = tb
+                        if at_output:
+                            # at a switching instant the printout shows the branch in
+                            # force from then on; a surface exactly at zero shows its
+                            # X=0 branch (FSW's B), as the function is defined
+                            lit = c.modes_literal(tb, y.tolist(), m, z)
+                            shown = [0.0 if (lit[k] == 0.0 and self.sf.kinds[k] == "sign"
+                                             and m[k] != SLIDE) else m[k]
+                                     for k in range(n_watch)]
+                            record(tb, y, shown, out_i)
+                            out_i += 1
+                            at_output = False
                         if stop_here is not None:
                             stop_reason = stop_here
                             if not rows_t or rows_t[-1] != tb:
-                                record(tb, y, m)
+                                record(tb, y, m, -1)
                             break
                         if changed or at_boundary or not np.array_equal(y, yb):
                             recent_events.append(tb)
@@ -527,6 +548,9 @@ class _Simulation:
                             break
                     elif c.z0:
                         z[:] = c.mem(tb, yb.tolist(), m, m, z)
+                    if at_output:
+                        record(tb, yb, m, out_i)
+                        out_i += 1
                     t = tb
                     y = yb
                     if at_boundary:
@@ -558,9 +582,9 @@ class _Simulation:
             message = f"interrupted at TIME = {t:.9g}"
         if stepper is not None:
             nfev += stepper.nfev
-        if status == Status.FINISHED and (not rows_t or rows_t[-1] < self.fintim):
-            record(self.fintim, y, m)
-        return self.result(rows_t, rows_v, grid, events, status, message, warnings,
+        if status == Status.FINISHED and out_i < len(times):
+            record(self.fintim, y, m, len(times) - 1)
+        return self.result(rows_t, rows_g, rows_v, grid, events, status, message, warnings,
                            dict(nsteps=nsteps, nfev=nfev, nevents=len(events),
                                 seconds=_clock.perf_counter() - started),
                            t, y, z, m)
@@ -583,10 +607,22 @@ class _Simulation:
 
         ga = g(ta)
         gb = g(tb)
+        if gb == 0.0:
+            return tb
         if ga == 0.0 or _sign(ga) == _sign(gb):
-            # the surface started on zero (a restart) and came back: take the end
-            # of the step where it is seen on the wrong side
-            return tb if gb != 0.0 else tb
+            # The step began on the surface (a restart there): find where it had
+            # left to the consistent side, and bracket the crossing from there.
+            ta_new = None
+            for j in range(1, 33):
+                tj = ta + (tb - ta) * j / 32.0
+                gj = g(tj)
+                if gj != 0.0 and _sign(gj) != _sign(gb):
+                    ta_new = tj
+                elif ta_new is not None:
+                    break
+            if ta_new is None:
+                return tb
+            ta = ta_new
         return brentq(g, ta, tb, xtol=4 * np.finfo(float).eps * max(abs(tb), 1e-300),
                       rtol=4 * np.finfo(float).eps, maxiter=200)
 
@@ -681,17 +717,21 @@ class _Simulation:
     def explain_failure(self, err: str, stepper) -> str:
         return err + self.fault_note()
 
-    def result(self, rows_t, rows_v, grid, events, status, message, warnings, stats, t, y,
-               z, m) -> Run:
+    def result(self, rows_t, rows_g, rows_v, grid, events, status, message, warnings, stats,
+               t, y, z, m) -> Run:
         names = self.c.out_names
         times = np.asarray(rows_t, dtype=float)
         table = np.asarray(rows_v, dtype=float).reshape(len(rows_t), len(names))
         values = {n: table[:, i].copy() for i, n in enumerate(names)}
-        out_set = set(grid.times[grid.outdel].tolist())
-        pr_set = set(grid.times[grid.prdel].tolist())
-        last = times[-1] if len(times) else None
-        outdel_mask = np.array([tt in out_set or tt == last for tt in times.tolist()], bool)
-        prdel_mask = np.array([tt in pr_set or tt == last for tt in times.tolist()], bool)
+        g = np.asarray(rows_g, dtype=int)
+        last = np.zeros(len(g), bool)
+        if len(g):
+            last[-1] = True  # the stop instant (FINISH, TERMT, failure) is always shown
+        on_grid = g >= 0
+        outdel_mask = last.copy()
+        prdel_mask = last.copy()
+        outdel_mask[on_grid] |= grid.outdel[g[on_grid]]
+        prdel_mask[on_grid] |= grid.prdel[g[on_grid]]
         final = {n: float(v[-1]) for n, v in values.items()} if len(times) else {}
         for i, n in enumerate(self.c.state_names):
             if "#" not in n:

@@ -1,0 +1,144 @@
+"""The command line: `amilpy run`, `amilpy check`.
+
+Exit codes: 0 success, 1 a fault in the model (diagnostics on stderr),
+2 a usage error, 3 the integration failed (what was computed is still printed
+and written, marked partial). Errors are rendered here, once; no traceback
+reaches the user.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+from .diagnostics import AmilError
+
+EXIT_OK, EXIT_MODEL, EXIT_USAGE, EXIT_FAILED = 0, 1, 2, 3
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="amilpy",
+        description="Run AMIL/CSMP-style simulation listings.",
+    )
+    sub = p.add_subparsers(dest="command", required=True)
+
+    run = sub.add_parser("run", help="run a listing: printout, plots, CSV")
+    run.add_argument("file")
+    run.add_argument("--plot", action="store_true", help="draw one figure per OUTPUT statement")
+    run.add_argument("--out", metavar="DIR", help="where PNG/CSV files go (default: next to "
+                                                  "the model)")
+    run.add_argument("--csv", metavar="PATH", help="write the OUTDEL-grid values as CSV")
+    run.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
+                     help="override a PARAM/CONST/INCON value (repeatable)")
+    run.add_argument("--method", help="integration method (AUTO, RKS, DOP853, LSODA, STIFF, "
+                                      "BDF, RK4, EULER, TRAPZ, ADAMS)")
+    run.add_argument("--rtol", type=float, help="relative tolerance (RELERR)")
+    run.add_argument("--atol", type=float, help="absolute tolerance (ABSERR)")
+    run.add_argument("--show-python", action="store_true",
+                     help="print the generated Python of the first run")
+    run.add_argument("--quiet", action="store_true", help="no printout, only files and errors")
+    run.add_argument("--max-time", type=float, metavar="S", help="wall-clock limit per run")
+    run.add_argument("--max-steps", type=int, help="step limit per run (default 5e6)")
+    run.add_argument("--max-events", type=int, help="event limit per run (default 2e5)")
+
+    chk = sub.add_parser("check", help="parse and check a listing, do not run it")
+    chk.add_argument("file")
+    return p
+
+
+def _parse_sets(items: list[str]) -> dict[str, float]:
+    out = {}
+    for item in items:
+        if "=" not in item:
+            raise _Usage(f"--set takes NAME=VALUE, got {item!r}")
+        name, value = item.split("=", 1)
+        try:
+            out[name.strip().upper()] = float(value.replace("D", "E").replace("d", "e"))
+        except ValueError:
+            raise _Usage(f"--set {name}: {value!r} is not a number") from None
+    return out
+
+
+class _Usage(Exception):
+    pass
+
+
+def cmd_check(args) -> int:
+    from .api import load
+
+    model = load(args.file)
+    ir = model.ir
+    print(f"{args.file}: ok — {len([s for s in ir.states if not s.hidden])} states, "
+          f"{len(ir.dynamic)} equations, {len(ir.switches)} switches, {len(ir.runs)} run(s)")
+    return EXIT_OK
+
+
+def cmd_run(args) -> int:
+    from .api import load
+    from .printout import format_runs, report_names, write_csv
+
+    model = load(args.file)
+    params = _parse_sets(args.set)
+    if args.show_python:
+        print(model.python_source(**params))
+    runs = model.run(method=args.method, rtol=args.rtol, atol=args.atol,
+                     max_time=args.max_time, max_steps=args.max_steps,
+                     max_events=args.max_events, **params)
+    if not args.quiet:
+        sys.stdout.write(format_runs(runs))
+        sys.stdout.flush()
+    stem = os.path.splitext(os.path.basename(args.file))[0]
+    out_dir = args.out or os.path.dirname(os.path.abspath(args.file))
+    written = []
+    if report_names(runs[0], "PREPARE"):
+        path = os.path.join(out_dir, f"{stem}.csv")
+        write_csv(path, runs)
+        written.append(path)
+    if args.csv:
+        write_csv(args.csv, runs)
+        written.append(args.csv)
+    if args.plot:
+        from .plot import display_available, plot_runs
+
+        written.extend(plot_runs(runs, out_dir, stem, show=display_available()))
+    if written and not args.quiet:
+        print("\nwritten: " + ", ".join(written))
+    failed = [r for r in runs if not r.ok]
+    for r in failed:
+        print(f"amilpy: {args.file}: run {r.label!r}: {r.message}", file=sys.stderr)
+    return EXIT_FAILED if failed else EXIT_OK
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = _parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # argparse has printed the usage
+        return int(exc.code) if isinstance(exc.code, int) else EXIT_USAGE
+    try:
+        if args.command == "check":
+            return cmd_check(args)
+        return cmd_run(args)
+    except _Usage as exc:
+        print(f"amilpy: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except AmilError as exc:
+        print(exc.render(), file=sys.stderr)
+        return EXIT_MODEL
+    except KeyboardInterrupt:
+        print("amilpy: interrupted", file=sys.stderr)
+        return EXIT_FAILED
+    except BrokenPipeError:
+        return EXIT_OK
+    except MemoryError:
+        print("amilpy: out of memory", file=sys.stderr)
+        return EXIT_FAILED
+    except RecursionError:
+        print("amilpy: the listing is nested too deeply", file=sys.stderr)
+        return EXIT_MODEL
+
+
+if __name__ == "__main__":
+    sys.exit(main())
