@@ -266,7 +266,7 @@ class _Checker:
         self.surfaces: list[ir.Surface] = []
         self.memories: list[ir.Memory] = []
         self.nslots = 0
-        self.hidden_count = 0
+        self.hidden_counts: dict[str, int] = {}
         self.ic_exprs: list[ast.Expr] = []
         defined: dict[str, Span] = {}
         self.defined_where: dict[str, str] = {}
@@ -298,7 +298,9 @@ class _Checker:
         for st in sections["INITIAL"]:
             for target, tspan in zip(st.targets, st.target_spans, strict=True):
                 define(target, tspan, "INITIAL")
-            self.check_calls(st.expr, allow=("math", "table", "switch", "time"), section="INITIAL")
+            if not self.check_calls(st.expr, allow=("math", "table", "switch", "time"),
+                                    section="INITIAL"):
+                continue
             if len(st.targets) > 1:
                 self.rep.error("only OUTSW gives two values, and only in DYNAMIC", st.span)
                 continue
@@ -314,8 +316,7 @@ class _Checker:
                 continue
             ok = all(define(t, s, "DYNAMIC") for t, s in zip(st.targets, st.target_spans,
                                                             strict=True))
-            self.check_calls(st.expr, allow=None, section="DYNAMIC")
-            if not ok:
+            if not self.check_calls(st.expr, allow=None, section="DYNAMIC") or not ok:
                 continue
             dyn_eqs.extend(self.lower_dynamic(st))
 
@@ -323,9 +324,8 @@ class _Checker:
         for st in sections["TERMINAL"]:
             for target, tspan in zip(st.targets, st.target_spans, strict=True):
                 define(target, tspan, "TERMINAL")
-            self.check_calls(st.expr, allow=("math", "table", "switch", "time"),
-                             section="TERMINAL")
-            if len(st.targets) == 1:
+            if self.check_calls(st.expr, allow=("math", "table", "switch", "time"),
+                                section="TERMINAL") and len(st.targets) == 1:
                 terminal.append(ir.Equation(st.targets[0], self.lower_pure(st.expr), st.span))
 
         self.defined = defined
@@ -403,10 +403,13 @@ class _Checker:
             expr = ast.BinOp("-", ast.Name(s.name, s.span), ast.Num(s.value, s.span), s.span)
             self.add_surface(expr, "sign", None, "finish", s.span, f"FINISH {s.name}={s.value:g}")
         for st in self.pending_termt:
-            self.check_calls(st.expr, allow=None, section="DYNAMIC")
+            if not self.check_calls(st.expr, allow=None, section="DYNAMIC"):
+                continue
             expr = self.lower_expr(st.expr, "TERMT")
             self.add_surface(expr, "sign", None, "termt", st.span, "TERMT")
 
+        # states in a canonical order: the listing's order must not matter
+        self.states.sort(key=lambda s: (s.hidden, s.name))
         model = ir.Model(
             name=self.name, path=self.program.path, source=self.program.source,
             initial=initial_sorted, dynamic=dyn_sorted, terminal=terminal,
@@ -431,7 +434,13 @@ class _Checker:
         )
 
     # ----------------------------------------------------------- call checks
-    def check_calls(self, expr: ast.Expr, allow, section: str) -> None:
+    def check_calls(self, expr: ast.Expr, allow, section: str) -> bool:
+        """Report unknown functions and wrong argument counts; False if any."""
+        before = len(self.rep.diagnostics)
+        self._check_calls(expr, allow, section)
+        return len(self.rep.diagnostics) == before
+
+    def _check_calls(self, expr: ast.Expr, allow, section: str) -> None:
         for node in ast.walk(expr):
             if not isinstance(node, ast.Call):
                 continue
@@ -529,9 +538,13 @@ class _Checker:
             return []
         return [ir.Equation(target, self.lower_expr(expr, target), st.span)]
 
-    def hidden(self, kind: str) -> str:
-        self.hidden_count += 1
-        return f"{kind}#{self.hidden_count}"
+    def hidden(self, kind: str, owner: str | None) -> str:
+        """A name for a state the listing does not name (a nested INTGRL, the
+        inside of LEDLAG...): from the statement it sits in, so that the order of
+        statements does not change the names (nor the order of the states)."""
+        owner = owner or "?"
+        self.hidden_counts[owner] = self.hidden_counts.get(owner, 0) + 1
+        return f"{kind}#{owner}.{self.hidden_counts[owner]}"
 
     def make_state(self, name: str, call: ast.Call, hidden: bool) -> str:
         func = lookup(call.func)
@@ -544,19 +557,20 @@ class _Checker:
                                     self.lower_expr(deriv, name), call.span, hidden))
         return name
 
-    def lower_state_function(self, call: ast.Call, target: str | None) -> ast.Expr:
+    def lower_state_function(self, call: ast.Call, target: str | None,
+                             owner: str | None = None) -> ast.Expr:
         """REALPL, LEDLAG, CMPXPL, MODINT (and nested INTGRL) as states."""
         func = lookup(call.func)
         sp = call.span
-        owner = target or "?"
+        owner = target or owner or "?"
         if func.name in ("INTGRL", "INTEG"):
-            name = self.hidden("INTGRL")
+            name = self.hidden("INTGRL", owner)
             self.make_state(name, call, hidden=True)
             return ast.Name(name, sp)
         args = call.args
         if func.name == "REALPL":
             ic, p, x = args
-            name = target if target else self.hidden("REALPL")
+            name = target if target else self.hidden("REALPL", owner)
             deriv = ast.BinOp("/", ast.BinOp("-", x, ast.Name(name, sp), sp), p, sp)
             self.ic_exprs.append(ic)
             self.states.append(ir.State(name, self.lower_expr(ic, owner, literal=True),
@@ -564,7 +578,7 @@ class _Checker:
             return ast.Name(name, sp)
         if func.name == "LEDLAG":
             p1, p2, x = args
-            z = self.hidden("LEDLAG")
+            z = self.hidden("LEDLAG", owner)
             zname = ast.Name(z, sp)
             deriv = ast.BinOp("/", ast.BinOp("-", x, zname, sp), p2, sp)
             self.states.append(ir.State(z, ast.Num(0.0, sp), self.lower_expr(deriv, owner),
@@ -575,8 +589,8 @@ class _Checker:
             return self.lower_expr(out, owner)
         if func.name == "CMPXPL":
             ic1, ic2, p1, p2, x = args
-            name = target if target else self.hidden("CMPXPL")
-            rate = self.hidden("CMPXPL'")
+            name = target if target else self.hidden("CMPXPL", owner)
+            rate = self.hidden("CMPXPL'", owner)
             y, yd = ast.Name(name, sp), ast.Name(rate, sp)
             two = ast.Num(2.0, sp)
             acc = ast.BinOp("-", ast.BinOp("-", x, ast.BinOp("*", ast.BinOp(
@@ -590,7 +604,7 @@ class _Checker:
             return ast.Name(name, sp)
         if func.name == "MODINT":
             ic, x1, x2, x3 = args
-            name = target if target else self.hidden("MODINT")
+            name = target if target else self.hidden("MODINT", owner)
             s1 = self.add_surface(self.lower_expr(x1, owner), "sign", None, "switch", sp,
                                   f"MODINT X1 for {owner}")
             s2 = self.add_surface(self.lower_expr(x2, owner), "sign", None, "switch", sp,
@@ -651,7 +665,7 @@ class _Checker:
                                                      for a in expr.args), expr.span)
                 return expr
             if func.kind == "state":
-                return self.lower_state_function(expr, None)
+                return self.lower_state_function(expr, None, owner=target)
             if func.kind in ("switch", "time"):
                 if func.outputs == 2:
                     self.rep.error("OUTSW gives two values: write Y1, Y2 = OUTSW(X, V)",
@@ -749,8 +763,11 @@ class _Checker:
                 elif isinstance(node, ir.MemoryValue):
                     kind = "state"
                 elif isinstance(node, ir.SwitchValue):
+                    # a switch's value moves with its arguments and with its branch,
+                    # which moves with its surfaces (STEP's is TIME - P)
                     sw = model.switches[node.switch]
-                    kind = max((of_expr(a) for a in sw.args), key=rank.get, default="const")
+                    parts = list(sw.args) + [model.surfaces[i].expr for i in sw.surfaces]
+                    kind = max((of_expr(a) for a in parts), key=rank.get, default="const")
                 elif isinstance(node, ir.Impulse):
                     kind = "time"
                 if rank[kind] > rank[best]:

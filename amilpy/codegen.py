@@ -157,8 +157,9 @@ def _truth(node) -> bool | None:
 def _local(name: str) -> str:
     """Python identifier for a model variable (hidden ones have '#')."""
     if "#" in name:
-        kind, n = name.split("#")
-        return "h_" + kind.replace("'", "D") + "_" + n
+        # hidden names hold '#', '.' and "'": spell every non-alphanumeric
+        # character as _XX so that no two names meet
+        return "h_" + "".join(c if c.isalnum() else f"_{ord(c):02X}" for c in name)
     return "v_" + name
 
 
@@ -395,6 +396,10 @@ class Compiler:
         self.outputs = outputs
         self.events = events
         self.watched = [s.index for s in model.surfaces if s.index not in const_modes]
+        if not events:
+            # only FINISH/TERMT stay watched: they stop the run, they switch nothing
+            self.watched = [i for i in self.watched
+                            if model.surfaces[i].purpose in ("finish", "termt")]
         self.mode_names = {s: f"m{k}" for k, s in enumerate(self.watched)}
         self.mode_names_new = {s: f"n{k}" for k, s in enumerate(self.watched)}
         self.global_tables: dict[str, tuple] = {}
@@ -435,7 +440,9 @@ class Compiler:
 
     def build(self) -> Compiled:
         model = self.model
-        em_rhs = self.emitter("rhs")
+        # Without events (for comparisons only) switches are read literally at
+        # every evaluation, as a naive integrator would, and nothing is watched.
+        em_rhs = self.emitter("rhs" if self.events else "literal")
         derivs = []
         for s in model.states:
             d = s.deriv
@@ -480,7 +487,7 @@ class Compiler:
         body.append(py.Return(py.List(vals, py.Load())))
         fns.append(_function("modes", ("t", "y", "m", "z"), body))
         # outputs ----------------------------------------------------------------
-        em_o = self.emitter("out")
+        em_o = self.emitter("out" if self.events else "literal")
         out_names = self.outputs if self.outputs is not None else model.variables
         roots = [syn.Name(n, Span(0, 0)) for n in out_names]
         body = self.prologue() + self.algebra(roots, em_o)
@@ -543,7 +550,8 @@ class Compiler:
         for i in self.watched:
             s = model.surfaces[i]
             if s.depends == "time" and self.events and s.kind == "sign":
-                if _is_affine(s.expr, self.constants):
+                if _is_affine(s.expr, self.constants,
+                              {e.target: e.expr for e in model.dynamic}):
                     affine[i] = (0.0, 0.0)
         impulses = []
         for e in _all_exprs(model):
@@ -577,13 +585,26 @@ def _all_exprs(model: ir.Model):
         yield s.expr
 
 
-def _is_affine(expr, constants) -> bool:
-    """True if a time-only surface is affine in TIME (its root is then exact)."""
+def _is_affine(expr, constants, equations: dict | None = None) -> bool:
+    """True if a time-only surface is affine in TIME (its root is then exact),
+    looking through the algebraic variables it reads."""
+    equations = equations or {}
+    memo: dict[str, int] = {}
+
     def lin(e) -> int:  # 0 constant, 1 affine, 2 other
         if isinstance(e, syn.Num):
             return 0
         if isinstance(e, syn.Name):
-            return 1 if e.name == "TIME" else (0 if e.name in constants else 2)
+            if e.name == "TIME":
+                return 1
+            if e.name in constants:
+                return 0
+            if e.name in equations:
+                if e.name not in memo:
+                    memo[e.name] = 2  # a cycle never reaches here; be safe anyway
+                    memo[e.name] = lin(equations[e.name])
+                return memo[e.name]
+            return 2
         if isinstance(e, syn.Neg):
             return lin(e.operand)
         if isinstance(e, syn.BinOp):

@@ -138,7 +138,11 @@ def fortran_aint(x: float) -> float:
 
 
 def fortran_amod(a: float, b: float) -> float:
-    return math.fmod(a, b)
+    """Fortran MOD: the remainder with the sign of a (NaN for b = 0)."""
+    try:
+        return math.fmod(a, b)
+    except ValueError:
+        return math.nan
 
 
 def safe_exp(x: float) -> float:
@@ -277,7 +281,7 @@ MATH: dict[str, object] = {
     "AINT": fortran_aint,
     "FLOAT": float,
     "ATAN2": math.atan2,
-    "AMOD": _domain(lambda a, b: math.fmod(a, b)),
+    "AMOD": fortran_amod,
     "SIGN": fortran_sign,
     "AMAX1": max,
     "AMIN1": min,

@@ -185,6 +185,10 @@ def _describe_token(token) -> str:
     if token.type == "_NL":
         return "end of line"
     value = str(token)
+    if token.type == "TEXT":
+        # free text is only read after TITLE/LABEL; elsewhere show what starts it
+        stripped = value.strip()
+        value = stripped[:1] if not stripped[:1].isalnum() else stripped.split()[0]
     if len(value) > 30:
         value = value[:27] + "..."
     return repr(value)

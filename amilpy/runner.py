@@ -279,28 +279,53 @@ class _Simulation:
         return (e1 - e0) / h
 
     # ------------------------------------------------------------ restart
-    def choose_modes(self, t: float, y: np.ndarray, z, m: list[float], triggered: set[int],
-                     first: bool = False) -> list[float]:
-        """Modes in force from t on. Surfaces not triggered keep their literal sign."""
-        c = self.c
+    def choose_modes(self, t: float, y: np.ndarray, z, m: list[float], at_zero: set[int],
+                     first: bool = False, forced: dict[int, float] | None = None
+                     ) -> list[float]:
+        """Modes in force from t on.
+
+        Surfaces known to be at zero here (a located crossing, a breakpoint, or
+        exactly zero at the start) go the way the dynamics take them; every other
+        surface takes the sign it has now (it may have jumped with a switch it
+        depends on).
+        """
         new = list(m)
-        lit = c.modes_literal(t, y.tolist(), m, z)
-        for k in range(len(new)):
-            kind = self.sf.kinds[k]
-            if kind == "level":
-                if k in triggered or first:
-                    new[k] = self.level_ahead(k, t, y, new, z)
-                continue
-            if not first and k not in triggered and (lit[k] == new[k] or new[k] == SLIDE):
-                continue
-            if not first and k not in triggered and lit[k] != 0.0 and new[k] != 0.0:
-                # crossed at the same instant as the triggering surface
-                pass
-            if first and lit[k] != 0.0:
-                new[k] = lit[k]
-                continue
-            new[k] = self.direction(k, t, y, new, z, old=m[k] if not first else None)
+        decided: set[int] = set(forced or ())
+        for k, mode in (forced or {}).items():
+            new[k] = mode
+        # A surface may depend on another switch's value (MODINT on STEP, say):
+        # settle the signs again with the new branches until nothing moves.
+        for _ in range(len(new) + 1):
+            before = list(new)
+            lit = self.c.modes_literal(t, y.tolist(), new, z)
+            for k in range(len(new)):
+                if self.sf.kinds[k] == "level":
+                    if k not in decided and (k in at_zero or first or lit[k] != new[k]):
+                        new[k] = self.level_ahead(k, t, y, new, z)
+                        decided.add(k)
+                    continue
+                if k in at_zero or (first and lit[k] == 0.0):
+                    if k not in decided:
+                        new[k] = self.direction(k, t, y, new, z, old=None if first else m[k])
+                        decided.add(k)
+                elif lit[k] != 0.0 and new[k] != SLIDE and lit[k] != new[k]:
+                    new[k] = lit[k]
+            if new == before:
+                break
         return new
+
+    def silent(self, k: int, t: float, y: np.ndarray, m, z) -> bool:
+        """True if surface k's branch does not change the derivatives here."""
+        if self.sf.purposes[k] in ("finish", "termt") or self.sf.kinds[k] != "sign":
+            return False
+        mp, mm = list(m), list(m)
+        mp[k], mm[k] = 1.0, -1.0
+        yl = y.tolist()
+        try:
+            return self.c.rhs(t, yl, mp, z) == self.c.rhs(t, yl, mm, z) and \
+                self.c.rhs(t, yl, [*m[:k], 0.0, *m[k + 1:]], z) == self.c.rhs(t, yl, mp, z)
+        except (ArithmeticError, ValueError):
+            return False
 
     def direction(self, k: int, t: float, y: np.ndarray, m, z, old) -> float:
         """Which side of surface k the motion goes to from a point on it."""
@@ -379,8 +404,7 @@ class _Simulation:
         rows_v: list[list[float]] = []
         warnings: list[str] = []
         slide_noted: set[int] = set()
-        watch_idx = [k for k in range(n_watch) if not self.sf.breakpoint_only[k]
-                     and self.opts.events]
+        watch_idx = [k for k in range(n_watch) if not self.sf.breakpoint_only[k]]
         if start and "m" in start and len(start["m"]) == n_watch:
             m = list(start["m"])
         else:
@@ -403,8 +427,10 @@ class _Simulation:
             rows_g.append(g)
             rows_v.append(self.outputs(t, yv, mv, z))
 
-        # t0 row
-        record(t0, y, m, 0)
+        # t0 row: a surface exactly at zero shows its X=0 branch (FSW's B)
+        lit0 = c.modes_literal(t0, y.tolist(), m, z)
+        record(t0, y, [0.0 if (lit0[k] == 0.0 and self.sf.kinds[k] == "sign"
+                               and m[k] != SLIDE) else m[k] for k in range(n_watch)], 0)
         out_i = 1
         t = t0
         stop_reason = None
@@ -440,44 +466,54 @@ class _Simulation:
                         bad = int(np.flatnonzero(~np.isfinite(yb))[0])
                         raise _Failure(ta, f"{c.state_names[bad]} is no longer finite "
                                            f"after TIME = {ta:.9g}" + self.fault_note())
-                    triggered: set[int] = set()
+                    triggered: set[int] = set()  # located at zero here
+                    departed: set[int] = set()  # left a zero it sat on
+                    truncated = False
+                    exits: dict[int, float] = {}
                     stop_here = None
                     if watch_idx:
                         e_b = c.surf(tb, yb.tolist(), m, z)
                         hits = []
+                        silent: list[int] = []
                         for k in watch_idx:
                             if m[k] == SLIDE:
                                 continue
                             if self.crossed(k, m[k], e_prev[k], e_b[k]):
+                                if self.silent(k, tb, yb, m, z):
+                                    # its branch feeds nothing the states see now
+                                    # (a switch inside an unused branch): follow
+                                    # its sign, no need to stop and restart
+                                    silent.append(k)
+                                    continue
                                 hits.append(k)
                         slide_exit = self.slide_exits(m, tb, yb, z)
                         if hits or slide_exit:
                             interp = stepper.interpolant()
-                            t_star, first_k = tb, None
-                            for k in hits:
-                                tk = self.locate(k, m, z, interp, ta, tb, e_prev[k], e_b[k])
-                                if tk < t_star or first_k is None:
-                                    t_star, first_k = tk, k
+                            roots = {k: self.locate(k, m, z, interp, ta, tb, e_prev[k], e_b[k])
+                                     for k in hits}
                             for k, sign in slide_exit:
-                                tk = self.locate_slide_exit(k, sign, m, z, interp, ta, tb)
-                                if tk < t_star or first_k is None:
-                                    t_star, first_k = tk, k
+                                roots[k] = self.locate_slide_exit(k, sign, m, z, interp, ta, tb)
+                            t_star = min(roots.values())
                             if t_star < tb:
+                                # the solver has moved past t_star: it must restart
                                 stepper.truncate(t_star)
                                 tb, yb = stepper.t, stepper.y
+                                truncated = True
                             e_b = c.surf(tb, yb.tolist(), m, z)
-                            triggered = {first_k}
-                            for k in hits:
-                                if self.crossed(k, m[k], e_prev[k], e_b[k]) or k == first_k:
-                                    triggered.add(k)
-                            for k, _ in slide_exit:
-                                if k == first_k:
-                                    triggered.add(k)
+                            close = 8 * np.finfo(float).eps * max(abs(tb), 1e-300)
+                            triggered = {k for k, tk in roots.items() if tk - t_star <= close}
+                            # leaving a sliding motion: the side it leaves to is known
+                            exits = {k: sign for k, sign in slide_exit if k in triggered}
+                        if silent and not truncated:
+                            lit = self.c.modes_literal(tb, yb.tolist(), m, z)
+                            for k in silent:
+                                m[k] = lit[k]
+                            e_b = c.surf(tb, yb.tolist(), m, z)
                         # a surface sitting at zero (mode 0) that has moved off it
                         for k in watch_idx:
                             if m[k] == 0.0 and self.sf.kinds[k] == "sign" and \
                                     abs(e_b[k]) > 1e-12 * (1 + abs(e_prev[k])) and e_b[k] != 0:
-                                triggered.add(k)
+                                departed.add(k)
                         e_prev = e_b
                     # outputs inside (ta, tb); the one at tb waits for the new modes
                     while out_i < len(times) and times[out_i] < tb * (1 - 4e-16):
@@ -492,16 +528,16 @@ class _Simulation:
                         for k, root in self.roots.items():
                             if root == tb:
                                 triggered.add(k)
-                    if triggered:
+                    if triggered or departed or (at_boundary and tb < self.fintim):
                         finish = [k for k in triggered if self.sf.purposes[k] in
                                   ("finish", "termt")]
-                        new_m = self.choose_modes(tb, yb, z, m, triggered)
+                        new_m = self.choose_modes(tb, yb, z, m, triggered, forced=exits)
                         for k in finish:
                             fired = (self.sf.purposes[k] == "termt" and new_m[k] > 0) or \
                                     (self.sf.purposes[k] == "finish" and new_m[k] != m[k])
                             if fired:
                                 stop_here = k
-                        for k in sorted(triggered):
+                        for k in range(n_watch):
                             if new_m[k] != m[k]:
                                 kind = "slide" if new_m[k] == SLIDE else self.sf.kinds[k]
                                 if self.sf.purposes[k] in ("finish", "termt"):
@@ -535,7 +571,7 @@ class _Simulation:
                             if not rows_t or rows_t[-1] != tb:
                                 record(tb, y, m, -1)
                             break
-                        if changed or at_boundary or not np.array_equal(y, yb):
+                        if changed or at_boundary or truncated or not np.array_equal(y, yb):
                             recent_events.append(tb)
                             if len(events) > opts.max_events:
                                 raise _Failure(tb, f"more than {opts.max_events} switching "
@@ -621,7 +657,7 @@ class _Simulation:
                 elif ta_new is not None:
                     break
             if ta_new is None:
-                return tb
+                return ta  # on zero at the step's start and on the wrong side after
             ta = ta_new
         return brentq(g, ta, tb, xtol=4 * np.finfo(float).eps * max(abs(tb), 1e-300),
                       rtol=4 * np.finfo(float).eps, maxiter=200)

@@ -231,6 +231,25 @@ class AdamsBashforth2(FixedStepper):
         return y + 0.5 * h * (f + self._call(t + h, yp))
 
 
+class Clock(Stepper):
+    """A model with no states: time advances in steps of at most `max_step`
+    (an output interval) so that switches on TIME are still watched."""
+
+    def __init__(self, t0: float, t_bound: float, max_step: float) -> None:
+        self.t = self.t_old = t0
+        self.t_bound = t_bound
+        self.h = max_step if math.isfinite(max_step) else (t_bound - t0) / 100.0
+        self.y = np.zeros(0)
+
+    def step(self) -> str | None:
+        self.t_old = self.t
+        self.t = min(self.t + self.h, self.t_bound)
+        return None
+
+    def interpolant(self):
+        return lambda t: np.zeros(0)
+
+
 VARIABLE = {"RK45": "RK45", "DOP853": "DOP853", "RADAU": "Radau", "BDF": "BDF",
             "LSODA": "LSODA", "AUTO": "LSODA"}
 FIXED: dict[str, type[FixedStepper]] = {"RK4": RK4, "EULER": Euler, "TRAPZ": Heun,
@@ -241,6 +260,8 @@ def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float
                  rtol: float, atol, delt: float, max_step: float = math.inf,
                  first_step: float | None = None) -> Stepper:
     """The stepper for a canonical route name (see check.METHODS)."""
+    if len(y0) == 0:
+        return Clock(t0, t_bound, min(max_step, delt) if route in FIXED else max_step)
     if route in FIXED:
         return FIXED[route](fun, t0, y0, t_bound, delt)
     return ScipyStepper(VARIABLE[route], fun, t0, y0, t_bound, rtol, atol, max_step, first_step)
