@@ -437,6 +437,10 @@ class _Simulation:
         last_step = None
         recent_events: list[float] = []
         stepper = None
+        # steps this short make no progress: FINTIM*1e-12 is ~4000 ulps of FINTIM
+        h_floor = max(self.timer["DELMIN"], 1e-12 * (self.fintim - t0))
+        tiny_steps = 0
+        last_good = None
         try:
             while t < self.fintim and stop_reason is None:
                 k_bp = bisect_right(self.breakpoints, t * (1 + 1e-15) + 1e-300)
@@ -462,6 +466,16 @@ class _Simulation:
                         raise _Failure(stepper.t, self.explain_failure(err, stepper))
                     ta, tb = stepper.t_old, stepper.t
                     yb = stepper.y
+                    last_good = (tb, yb, m)
+                    if tb - ta < h_floor:
+                        tiny_steps += 1
+                        if tiny_steps >= 100:
+                            big = int(np.argmax(np.abs(yb)))
+                            raise _Failure(tb, "step size underflow: 100 steps shorter than "
+                                               f"{h_floor:.3g} s; {c.state_names[big]} = "
+                                               f"{yb[big]:.6g} (a finite-time singularity?)")
+                    else:
+                        tiny_steps = 0
                     if not np.all(np.isfinite(yb)):
                         bad = int(np.flatnonzero(~np.isfinite(yb))[0])
                         raise _Failure(ta, f"{c.state_names[bad]} is no longer finite "
@@ -613,6 +627,11 @@ class _Simulation:
             status = Status.FAILED
             message = f"integration failed at TIME = {fail.t:.9g}: {fail.reason}"
             t = fail.t
+            # keep the last accepted state as the final row (everything computed)
+            if last_good is not None and (not rows_t or last_good[0] > rows_t[-1]) and \
+                    np.all(np.isfinite(last_good[1])):
+                record(last_good[0], np.asarray(last_good[1], float), last_good[2], -1)
+                t, y = last_good[0], np.asarray(last_good[1], float)
         except KeyboardInterrupt:
             status = Status.FAILED
             message = f"interrupted at TIME = {t:.9g}"
