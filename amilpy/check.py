@@ -186,10 +186,9 @@ class _Checker:
             if gi == 0:
                 self.finish_settings = list(finish)
                 if "FINTIM" not in timer:
-                    last = self.program.statements[-1].span if self.program.statements else None
                     self.rep.error(
                         "FINTIM is not given",
-                        last,
+                        None,
                         "add a TIMER statement, e.g. TIMER FINTIM = 1.0, PRDEL = 0.01",
                     )
             lengths = {len(v) for v in lists.values()}

@@ -160,6 +160,8 @@ def _syntax_diagnostic(exc, text: str, parser) -> Diagnostic:
         )
     if isinstance(exc, UnexpectedToken) and token is not None and token.end_column:
         span = Span(line, column, token.end_line or line, token.end_column)
+    if label is None and token is not None:
+        label = _fallback_label(token, text)
     if label:
         return Diagnostic(f"{label} (found {shown})", span, _EXAMPLES[label][0])
     expected = sorted(getattr(exc, "expected", None) or getattr(exc, "allowed", ()) or ())
@@ -168,6 +170,21 @@ def _syntax_diagnostic(exc, text: str, parser) -> Diagnostic:
     if token is not None and str(token) == ",":
         hint = (hint + "; " if hint else "") + "a decimal separator is a point, not a comma"
     return Diagnostic(f"unexpected {shown}", span, hint)
+
+
+def _fallback_label(token, text: str) -> str | None:
+    """Recognise the two commonest slips where no example state matched."""
+    pos = getattr(token, "start_pos", None)
+    if token.type in ("_NL", "$END"):
+        end = len(text) if pos is None else pos
+        start = text.rfind("\n", 0, end) + 1
+        line = text[start:end].split("!", 1)[0]
+        if line.count("(") > line.count(")"):
+            return "missing closing parenthesis"
+    if pos is not None and pos >= 2 and text[pos - 1] == "," and text[pos - 2].isdigit() \
+            and str(token)[:1].isdigit():
+        return "a decimal comma in a data statement"
+    return None
 
 
 _TERMINAL_NAMES = {

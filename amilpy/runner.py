@@ -304,7 +304,10 @@ class _Simulation:
                         new[k] = self.level_ahead(k, t, y, new, z)
                         decided.add(k)
                     continue
-                if k in at_zero or (first and lit[k] == 0.0):
+                landed = lit[k] == 0.0 and new[k] not in (0.0, SLIDE)
+                if k in at_zero or (first and lit[k] == 0.0) or landed:
+                    # at zero: located there, started there, or jumped onto it with
+                    # a switch it depends on
                     if k not in decided:
                         new[k] = self.direction(k, t, y, new, z, old=None if first else m[k])
                         decided.add(k)
@@ -787,7 +790,10 @@ class _Simulation:
         prdel_mask = last.copy()
         outdel_mask[on_grid] |= grid.outdel[g[on_grid]]
         prdel_mask[on_grid] |= grid.prdel[g[on_grid]]
-        final = {n: float(v[-1]) for n, v in values.items()} if len(times) else {}
+        from .check import RESERVED
+
+        final = {k: float(v) for k, v in self.constants.items() if k not in RESERVED}
+        final.update({n: float(v[-1]) for n, v in values.items()} if len(times) else {})
         for i, n in enumerate(self.c.state_names):
             if "#" not in n:
                 final[n] = float(y[i])

@@ -1,0 +1,33 @@
+"""Golden files: each `golden/NAME.amil` with its expected printout
+(`NAME.out`) or diagnostics (`NAME.err`), exactly as `amilpy run` shows them.
+
+Regenerate after a deliberate change with `AMILPY_GOLDEN=update pytest tests/test_golden.py`
+and read the diff before committing it.
+"""
+
+import glob
+import os
+
+import pytest
+
+from amilpy.cli import main
+
+HERE = os.path.join(os.path.dirname(__file__), "golden")
+CASES = sorted(os.path.splitext(os.path.basename(p))[0]
+               for p in glob.glob(os.path.join(HERE, "*.amil")))
+
+
+@pytest.mark.parametrize("name", CASES)
+def test_golden(name, capsys, monkeypatch):
+    monkeypatch.chdir(HERE)
+    code = main(["run", f"{name}.amil"])
+    captured = capsys.readouterr()
+    kind = "err" if code == 1 else "out"
+    got = captured.err if code == 1 else captured.out
+    path = os.path.join(HERE, f"{name}.{kind}")
+    if os.environ.get("AMILPY_GOLDEN") == "update":
+        with open(path, "w", encoding="utf-8") as fh:
+            fh.write(got)
+    with open(path, encoding="utf-8") as fh:
+        expected = fh.read()
+    assert got == expected
