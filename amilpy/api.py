@@ -81,7 +81,7 @@ class Model:
             atol: float | None = None, *, events: bool = True,
             outputs: list[str] | None = None, max_steps: int | None = None,
             max_events: int | None = None, max_time: float | None = None,
-            progress=None, **params: float) -> list[Run]:
+            fintim: float | None = None, progress=None, **params: float) -> list[Run]:
         """Run every run of the listing (value lists, END groups); data values
         given as keywords override the listing's for all of them."""
         from .runner import Options, simulate
@@ -97,12 +97,27 @@ class Model:
             if unknown:
                 raise AmilError(f"{unknown[0]} is not a variable of the model")
         opts = Options(method=method, rtol=rtol, atol=atol, events=events, outputs=outputs,
-                       max_time=max_time, progress=progress)
+                       max_time=max_time, progress=progress, fintim=fintim)
         if max_steps:
             opts.max_steps = max_steps
         if max_events:
             opts.max_events = max_events
         return [simulate(self.ir, spec, opts) for spec in self._specs(params)]
+
+    def sweep(self, name: str, values, *, both_ways: bool = False, carry_state: bool = False,
+              settle: float = 0.0, measure: str | None = None, method: str | None = None,
+              rtol: float | None = None, atol: float | None = None,
+              fintim: float | None = None, keep_runs: bool = False, progress=None,
+              **params: float):
+        """One run per value of data value `name` (see `amilpy.sweep.sweep`)."""
+        from .sweep import sweep
+
+        if method is not None and method_name(method) is None:
+            raise AmilError(f"unknown integration method {method}")
+        return sweep(self, name, [float(v) for v in values], both_ways=both_ways,
+                     carry_state=carry_state, settle=settle, measure=measure, method=method,
+                     rtol=rtol, atol=atol, fintim=fintim, keep_runs=keep_runs,
+                     progress=progress, **params)
 
     def __repr__(self) -> str:
         return f"<amilpy.Model {self.name!r}: {len(self.ir.states)} states, " \

@@ -42,6 +42,28 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--max-time", type=float, metavar="S", help="wall-clock limit per run")
     run.add_argument("--max-steps", type=int, help="step limit per run (default 5e6)")
     run.add_argument("--max-events", type=int, help="event limit per run (default 2e5)")
+    run.add_argument("--fintim", type=float, metavar="S", help="run length instead of FINTIM")
+
+    sw = sub.add_parser("sweep", help="one run per value of a data value (amplitude-"
+                                      "frequency characteristics)")
+    sw.add_argument("file")
+    sw.add_argument("range", metavar="NAME=START:STOP:STEP")
+    sw.add_argument("--both-ways", action="store_true", help="sweep up, then back down")
+    sw.add_argument("--carry-state", action="store_true",
+                    help="each run continues from the previous run's final state")
+    sw.add_argument("--settle", type=float, default=0.0, metavar="S",
+                    help="measure only after S seconds of each run")
+    sw.add_argument("--measure", metavar="VAR", help="the variable measured (default: the "
+                                                     "first OUTPUT/PRINT variable)")
+    sw.add_argument("--fintim", type=float, metavar="S", help="length of each run")
+    sw.add_argument("--csv", metavar="PATH")
+    sw.add_argument("--plot", action="store_true")
+    sw.add_argument("--out", metavar="DIR")
+    sw.add_argument("--set", metavar="NAME=VALUE", action="append", default=[])
+    sw.add_argument("--method")
+    sw.add_argument("--rtol", type=float)
+    sw.add_argument("--atol", type=float)
+    sw.add_argument("--quiet", action="store_true")
 
     chk = sub.add_parser("check", help="parse and check a listing, do not run it")
     chk.add_argument("file")
@@ -85,7 +107,7 @@ def cmd_run(args) -> int:
         print(model.python_source(**params))
     runs = model.run(method=args.method, rtol=args.rtol, atol=args.atol,
                      max_time=args.max_time, max_steps=args.max_steps,
-                     max_events=args.max_events, **params)
+                     max_events=args.max_events, fintim=args.fintim, **params)
     if not args.quiet:
         sys.stdout.write(format_runs(runs))
         sys.stdout.flush()
@@ -111,6 +133,46 @@ def cmd_run(args) -> int:
     return EXIT_FAILED if failed else EXIT_OK
 
 
+def cmd_sweep(args) -> int:
+    from .api import load
+    from .printout import atomic_write
+    from .sweep import parse_range, plot_sweep
+
+    model = load(args.file)
+    name, values = parse_range(args.range)
+    params = _parse_sets(args.set)
+
+    def progress(i, n, value):
+        if not args.quiet and sys.stderr.isatty():
+            print(f"\r{name} = {value:g} ({i}/{n})", end="", file=sys.stderr, flush=True)
+
+    result = model.sweep(name, values, both_ways=args.both_ways, carry_state=args.carry_state,
+                         settle=args.settle, measure=args.measure, method=args.method,
+                         rtol=args.rtol, atol=args.atol, fintim=args.fintim,
+                         progress=progress, **params)
+    if not args.quiet:
+        if sys.stderr.isatty():
+            print(file=sys.stderr)
+        sys.stdout.write(result.format())
+        for direction, (a, b) in result.jumps().items():
+            print(f"largest {'rise' if direction == 'up' else 'fall'} sweeping {direction}: "
+                  f"between {name} = {a:g} and {b:g}")
+    stem = os.path.splitext(os.path.basename(args.file))[0]
+    out_dir = args.out or os.path.dirname(os.path.abspath(args.file))
+    if args.csv:
+        atomic_write(args.csv, result.csv_text().encode("utf-8"))
+    if args.plot:
+        path = plot_sweep(result, os.path.join(out_dir, f"{stem}_sweep.png"))
+        if not args.quiet:
+            print(f"written: {path}")
+    failed = [p for p in result.points if p.status == "failed"]
+    if failed:
+        print(f"amilpy: {args.file}: the run at {name} = {failed[0].value:g} failed; the "
+              "sweep stopped there", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = _parser()
     try:
@@ -120,6 +182,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "check":
             return cmd_check(args)
+        if args.command == "sweep":
+            return cmd_sweep(args)
         return cmd_run(args)
     except _Usage as exc:
         print(f"amilpy: {exc}", file=sys.stderr)

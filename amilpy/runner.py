@@ -55,6 +55,7 @@ class Options:
     max_rows: int = DEFAULTS["max_rows"]
     max_time: float | None = None  # wall-clock seconds
     start: dict | None = None  # continue from a previous run's final_state
+    fintim: float | None = None  # run length instead of the listing's FINTIM
     progress: object = None  # callable(t, fintim, events, steps) or None
 
 
@@ -65,10 +66,15 @@ class _Grid:
     prdel: np.ndarray
 
 
-def timer_values(spec: ir.RunSpec, route: str) -> dict[str, float]:
+def timer_values(spec: ir.RunSpec, route: str, fintim: float | None = None
+                 ) -> dict[str, float]:
     """CSMP TIMER defaults: OUTDEL = FINTIM/100 and PRDEL = OUTDEL when neither is
     given; one given, the other takes its value; DELT divides the output interval."""
     t = dict(spec.timer)
+    if fintim is not None:
+        if not fintim > 0:
+            raise AmilError(f"FINTIM must be positive (got {fintim:g})")
+        t["FINTIM"] = fintim
     fintim = t["FINTIM"]
     if "OUTDEL" not in t and "PRDEL" not in t:
         t["OUTDEL"] = fintim / 100.0
@@ -134,7 +140,7 @@ class _Simulation:
             raise AmilError(f"unknown integration method {requested}")
         self.route = route
         self.method = requested.upper()
-        self.timer = timer_values(spec, route)
+        self.timer = timer_values(spec, route, opts.fintim)
         reserved = {k: self.timer[k] for k in ("FINTIM", "DELT", "PRDEL", "OUTDEL", "DELMIN",
                                                "DELMAX")}
         self.constants = initial_values(model, spec.data, spec.tables, reserved)
@@ -165,7 +171,9 @@ class _Simulation:
         else:
             self.atol = atol
         self.atol_scalar = float(np.min(self.atol))
-        self.fintim = self.timer["FINTIM"]
+        # a continued run (a sweep with carried state) goes on from its start TIME
+        self.t0 = float(opts.start["t"]) if opts.start else 0.0
+        self.fintim = self.t0 + self.timer["FINTIM"]
         self.delt = self.timer["DELT"]
         self._setup_surfaces()
 
@@ -193,15 +201,17 @@ class _Simulation:
             if not bp[k]:
                 continue
             root = self._affine_root(k, y_dummy, m0, z0)
-            if root is not None and 0.0 < root < self.fintim:
+            if root is not None and self.t0 < root < self.fintim:
                 self.breakpoints.append(root)
                 self.roots[k] = root
+        t0 = self.t0
         for start, period in c.impulses:
             if period > 0:
-                n = int(min((self.fintim - start) / period, 1_000_000))
-                self.breakpoints.extend(start + k * period for k in range(max(n, -1) + 1)
-                                        if 0.0 < start + k * period < self.fintim)
-            elif 0.0 < start < self.fintim:
+                k0 = max(0, math.ceil((t0 - start) / period))
+                n = int(min((self.fintim - start) / period, k0 + 1_000_000))
+                self.breakpoints.extend(start + k * period for k in range(k0, max(n, -1) + 1)
+                                        if t0 < start + k * period < self.fintim)
+            elif t0 < start < self.fintim:
                 self.breakpoints.append(start)
         self.breakpoints = sorted(set(self.breakpoints))
 
@@ -210,11 +220,12 @@ class _Simulation:
         def e(t: float) -> float:
             return self.c.surf(t, y, m, z)[k]
 
-        e0, e1 = e(0.0), e(self.fintim)
-        slope = (e1 - e0) / self.fintim
+        t0 = self.t0
+        e0, e1 = e(t0), e(self.fintim)
+        slope = (e1 - e0) / (self.fintim - t0)
         if slope == 0.0 or _sign(e0) == _sign(e1) and e1 != 0.0:
             return None
-        r = -e0 / slope
+        r = t0 - e0 / slope
         # polish to the first float where the sign has changed (or is zero)
         before = _sign(e0)
         for _ in range(64):
@@ -224,7 +235,7 @@ class _Simulation:
                 break
         for _ in range(64):
             p = math.nextafter(r, -math.inf)
-            if _sign(e(p)) != before and p > 0:
+            if _sign(e(p)) != before and p > t0:
                 r = p
             else:
                 break
@@ -385,10 +396,7 @@ class _Simulation:
         started = _clock.perf_counter()
         self.arith_faults: list = []
         start = opts.start
-        t0 = float(start["t"]) if start else 0.0
-        if start:
-            self.fintim = t0 + self.timer["FINTIM"]
-            self.breakpoints = [b + t0 for b in self.breakpoints]
+        t0 = self.t0
         y = np.array(start["y"] if start else c.y0, dtype=float)
         z = list(start["z"]) if start else list(c.z0)
         grid = _make_grid(t0, self.fintim, self.timer["OUTDEL"], self.timer["PRDEL"])
