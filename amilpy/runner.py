@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 import time as _clock
-from bisect import bisect_right
+from bisect import bisect_left, bisect_right
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -171,6 +171,9 @@ class _Simulation:
         else:
             self.atol = atol
         self.atol_scalar = float(np.min(self.atol))
+        # AUTO drives Fortran LSODA over chunks of output instants. Memory functions
+        # must see every accepted step, so a model with them takes the LSODA class.
+        self.fast = self.route == "AUTO" and not model.memories
         # a continued run (a sweep with carried state) goes on from its start TIME
         self.t0 = float(opts.start["t"]) if opts.start else 0.0
         self.fintim = self.t0 + self.timer["FINTIM"]
@@ -465,9 +468,14 @@ class _Simulation:
                 # and comes back inside one step would be missed
                 max_step = min(self.timer["DELMAX"], max(self.timer["OUTDEL"],
                                                          self.timer["PRDEL"]))
+                checks = None
+                if self.fast:
+                    # the AUTO route steps from output instant to output instant
+                    lo = bisect_right(times, t, out_i)
+                    checks = times[lo:bisect_left(times, seg_end, lo)].tolist()
                 stepper = make_stepper(self.route, f, t, y, seg_end, rtol=self.rtol,
                                        atol=self.atol, delt=self.delt, max_step=max_step,
-                                       first_step=last_step)
+                                       first_step=last_step, checks=checks)
                 e_prev = c.surf(t, y.tolist(), m, z) if watch_idx else []
                 restart = False
                 while not restart:
