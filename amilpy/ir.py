@@ -161,6 +161,8 @@ class Model:
     data_names: list[str]
     # names -> where defined, for reports and hints
     spans: dict[str, Span] = field(default_factory=dict)
+    # compiled functions per set of constants: repeated runs do not recompile
+    compiled: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def variables(self) -> list[str]:

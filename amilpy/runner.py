@@ -156,8 +156,14 @@ class _Simulation:
             # event location off (for comparisons): every surface is still
             # evaluated, but crossings are only noticed at step ends
             pass
-        self.c: Compiled = Compiler(model, self.constants, spec.tables, const_modes,
-                                    opts.outputs, opts.events).build()
+        key = (tuple(sorted(self.constants.items())), repr(sorted(spec.tables.items())),
+               tuple(opts.outputs) if opts.outputs is not None else None, opts.events)
+        if key not in model.compiled:
+            if len(model.compiled) > 64:  # a long sweep: keep the cache small
+                model.compiled.clear()
+            model.compiled[key] = Compiler(model, self.constants, spec.tables, const_modes,
+                                           opts.outputs, opts.events).build()
+        self.c: Compiled = model.compiled[key]
         self.rtol = opts.rtol or spec.relerr or DEFAULTS["rtol"]
         atol = opts.atol or spec.abserr or DEFAULTS["atol"]
         names = self.c.state_names

@@ -16,6 +16,7 @@ it to `ROUTES`.
 
 from __future__ import annotations
 
+import bisect
 import math
 import warnings
 from collections.abc import Callable
@@ -337,11 +338,11 @@ class OdeintStepper(Stepper):
             self._nfev += solver.nfev
             end_y = solver.y
 
+            ends = [b for _, b, _ in pieces]
+
             def dense(t: float) -> np.ndarray:
-                for a, b, d in pieces:
-                    if t <= b:
-                        return d(t)
-                return end_y
+                k = bisect.bisect_left(ends, t)
+                return pieces[k][2](t) if k < len(pieces) else end_y
 
             self._dense = dense
             self.y = end_y  # consistent with the dense output at the interval's end
