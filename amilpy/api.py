@@ -81,7 +81,8 @@ class Model:
             atol: float | None = None, *, events: bool = True,
             outputs: list[str] | None = None, max_steps: int | None = None,
             max_events: int | None = None, max_time: float | None = None,
-            fintim: float | None = None, progress=None, **params: float) -> list[Run]:
+            fintim: float | None = None, progress=None, advice: bool = True,
+            **params: float) -> list[Run]:
         """Run every run of the listing (value lists, END groups); data values
         given as keywords override the listing's for all of them."""
         from .runner import Options, simulate
@@ -102,7 +103,19 @@ class Model:
             opts.max_steps = max_steps
         if max_events:
             opts.max_events = max_events
-        return [simulate(self.ir, spec, opts) for spec in self._specs(params)]
+        runs = []
+        advised = False
+        for spec in self._specs(params):
+            run = simulate(self.ir, spec, opts)
+            if advice and not advised:
+                from .advice import stiffness_advice
+
+                run.advice = stiffness_advice(self.ir, spec, run, method_name(run.method))
+                advised = run.advice is not None  # say it once
+            runs.append(run)
+            if run.message.startswith("interrupted"):
+                break  # Ctrl-C: keep what was computed, start nothing new
+        return runs
 
     def sweep(self, name: str, values, *, both_ways: bool = False, carry_state: bool = False,
               settle: float = 0.0, measure: str | None = None, method: str | None = None,

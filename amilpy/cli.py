@@ -39,6 +39,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--show-python", action="store_true",
                      help="print the generated Python of the first run")
     run.add_argument("--quiet", action="store_true", help="no printout, only files and errors")
+    run.add_argument("--no-advice", action="store_true",
+                     help="do not probe for stiffness after an expensive explicit run")
     run.add_argument("--max-time", type=float, metavar="S", help="wall-clock limit per run")
     run.add_argument("--max-steps", type=int, help="step limit per run (default 5e6)")
     run.add_argument("--max-events", type=int, help="event limit per run (default 2e5)")
@@ -97,6 +99,35 @@ def cmd_check(args) -> int:
     return EXIT_OK
 
 
+class Progress:
+    """A progress line on stderr for runs longer than about a second (TTY only)."""
+
+    def __init__(self, enabled: bool) -> None:
+        import time
+
+        self.enabled = enabled and sys.stderr.isatty()
+        self.clock = time.perf_counter
+        self.start = self.clock()
+        self.last = 0.0
+        self.shown = False
+
+    def __call__(self, t: float, fintim: float, events: int, steps: int) -> None:
+        if not self.enabled:
+            return
+        now = self.clock()
+        if now - self.start < 1.0 or now - self.last < 0.2:
+            return
+        self.last = now
+        rate = steps / max(now - self.start, 1e-9)
+        print(f"\rTIME {t:.6g} / {fintim:g}  ({100 * t / fintim:5.1f}%)  events {events}  "
+              f"{rate:,.0f} steps/s ", end="", file=sys.stderr, flush=True)
+        self.shown = True
+
+    def done(self) -> None:
+        if self.shown:
+            print("\r" + " " * 72 + "\r", end="", file=sys.stderr, flush=True)
+
+
 def cmd_run(args) -> int:
     from .api import load
     from .printout import format_runs, report_names, write_csv
@@ -105,9 +136,12 @@ def cmd_run(args) -> int:
     params = _parse_sets(args.set)
     if args.show_python:
         print(model.python_source(**params))
-    runs = model.run(method=args.method, rtol=args.rtol, atol=args.atol,
+    progress = Progress(not args.quiet)
+    runs = model.run(method=args.method, rtol=args.rtol, atol=args.atol, progress=progress,
                      max_time=args.max_time, max_steps=args.max_steps,
-                     max_events=args.max_events, fintim=args.fintim, **params)
+                     max_events=args.max_events, fintim=args.fintim,
+                     advice=not args.no_advice, **params)
+    progress.done()
     if not args.quiet:
         sys.stdout.write(format_runs(runs))
         sys.stdout.flush()
@@ -127,6 +161,9 @@ def cmd_run(args) -> int:
         written.extend(plot_runs(runs, out_dir, stem, show=display_available()))
     if written and not args.quiet:
         print("\nwritten: " + ", ".join(written))
+    for r in runs:
+        if r.advice and not args.quiet:
+            print(f"amilpy: note: {r.advice}", file=sys.stderr)
     failed = [r for r in runs if not r.ok]
     for r in failed:
         print(f"amilpy: {args.file}: run {r.label!r}: {r.message}", file=sys.stderr)

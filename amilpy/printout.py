@@ -124,6 +124,10 @@ def csv_text(runs: list[Run], names: list[str] | None = None) -> str:
     if names is None:
         names = report_names(runs[0], "PREPARE") or printed_names(runs[0])
     several = len(runs) > 1
+    for k, run in enumerate(runs, start=1):
+        if not run.ok:
+            # a failed run's rows are all here, but the file must say it is partial
+            buf.write(f"# PARTIAL (run {k}): {run.message}\n")
     writer.writerow((["RUN"] if several else []) + ["TIME"] + names)
     for k, run in enumerate(runs, start=1):
         t = run.t

@@ -77,6 +77,7 @@ class Run:
     warnings: list[str] = field(default_factory=list)
     t_end: float = 0.0
     final_state: dict = field(default_factory=dict)  # for continuing a run (sweeps)
+    advice: str | None = None  # a note on the method (see advice.py)
 
     @property
     def t(self) -> np.ndarray:
