@@ -165,8 +165,9 @@ class _Checker:
                 elif isinstance(st, ast.Finish):
                     finish.extend(st.settings)
                 elif isinstance(st, ast.Report):
+                    kind = "OUTPUT" if st.kind == "PRTPLT" else st.kind
                     (new_reports if new_reports is not None else reports).append(
-                        ir.Report(st.kind, st.names, None, st.span))
+                        ir.Report(kind, st.names, None, st.span, st.kind == "PRTPLT"))
                     self._all_report_statements = getattr(self, "_all_report_statements", [])
                     self._all_report_statements.append(st)
                 elif isinstance(st, ast.Label):

@@ -27,6 +27,8 @@ def _parser() -> argparse.ArgumentParser:
     run = sub.add_parser("run", help="run a listing: printout, plots, CSV")
     run.add_argument("file")
     run.add_argument("--plot", action="store_true", help="draw one figure per OUTPUT statement")
+    run.add_argument("--ascii", action="store_true",
+                     help="line-printer plots in the printout (as PRTPLT does)")
     run.add_argument("--out", metavar="DIR", help="where PNG/CSV files go (default: next to "
                                                   "the model)")
     run.add_argument("--csv", metavar="PATH", help="write the OUTDEL-grid values as CSV")
@@ -143,7 +145,7 @@ def cmd_run(args) -> int:
                      advice=not args.no_advice, **params)
     progress.done()
     if not args.quiet:
-        sys.stdout.write(format_runs(runs))
+        sys.stdout.write(format_runs(runs, ascii_plots=args.ascii))
         sys.stdout.flush()
     stem = os.path.splitext(os.path.basename(args.file))[0]
     out_dir = args.out or os.path.dirname(os.path.abspath(args.file))

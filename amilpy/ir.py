@@ -123,6 +123,7 @@ class Report:
     names: tuple[str, ...]
     label: str | None
     span: Span
+    printer: bool = False  # PRTPLT: a figure and a line-printer plot in the printout
 
 
 @dataclass

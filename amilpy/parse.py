@@ -218,7 +218,7 @@ _DATA_ALIASES = {
     "INCON": "INCON",
 }
 _REPORT_ALIASES = {
-    "PRINT": "PRINT", "OUTPUT": "OUTPUT", "PRTPLT": "OUTPUT", "PLOT": "OUTPUT",
+    "PRINT": "PRINT", "OUTPUT": "OUTPUT", "PRTPLT": "PRTPLT", "PLOT": "OUTPUT",
     "RANGE": "RANGE", "PREPARE": "PREPARE",
 }
 _BINOPS = {"add": "+", "sub": "-", "mul": "*", "div": "/", "pow": "**"}

@@ -43,8 +43,58 @@ def printed_names(run: Run) -> list[str]:
     return [n for n in names if n != "TIME"]
 
 
+SYMBOLS = "*+ox#@%&"
+PLOT_WIDTH = 51
+PLOT_ROWS = 101
+
+
+def printer_plot(run: Run, names: list[str], label: str | None = None) -> str:
+    """The line-printer plot of CSMP's PRTPLT: time runs down the page, one row per
+    output instant (at most 101, evenly thinned), the values printed beside a
+    field where each variable has its symbol, on one scale from min to max."""
+    t = run.t
+    cols = []
+    for n in names:
+        try:
+            cols.append(np.asarray(run[n], dtype=float))
+        except KeyError:
+            cols.append(np.full(t.shape, math.nan))
+    finite = np.concatenate([c[np.isfinite(c)] for c in cols]) if cols else np.array([])
+    lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
+    if hi == lo:
+        lo, hi = lo - 1.0, hi + 1.0
+    step = max(1, math.ceil(len(t) / PLOT_ROWS))
+    rows = list(range(0, len(t), step))
+    if rows[-1] != len(t) - 1:
+        rows.append(len(t) - 1)
+
+    def column(v: float) -> int:
+        return int(round((v - lo) / (hi - lo) * (PLOT_WIDTH - 1)))
+
+    zero = column(0.0) if lo < 0.0 < hi else None
+    out = io.StringIO()
+    if label:
+        out.write(f"\n{label}\n")
+    legend = "   ".join(f"{SYMBOLS[k % len(SYMBOLS)]} {n}" for k, n in enumerate(names))
+    out.write(f"\nPRINTER PLOT   {legend}\n")
+    pad = " " * (WIDTH * (1 + len(names)) + 1)
+    scale = f"{lo:<.4E}".ljust(PLOT_WIDTH - 11) + f"{hi:>.4E}"
+    out.write(pad + scale + "\n")
+    out.write("TIME".rjust(WIDTH) + "".join(n.rjust(WIDTH) for n in names) + " "
+              + "+" + "-" * (PLOT_WIDTH - 2) + "+\n")
+    for i in rows:
+        field = [" "] * PLOT_WIDTH
+        if zero is not None:
+            field[zero] = "|"
+        for k, c in enumerate(cols):
+            if math.isfinite(c[i]):
+                field[column(c[i])] = SYMBOLS[k % len(SYMBOLS)]
+        out.write(_e(t[i]) + "".join(_e(c[i]) for c in cols) + " " + "".join(field) + "\n")
+    return out.getvalue()
+
+
 def format_run(run: Run, index: int | None = None, total: int = 1,
-               show_events: bool = True) -> str:
+               show_events: bool = True, ascii_plots: bool = False) -> str:
     out = io.StringIO()
     for title in run.titles:
         out.write(title + "\n")
@@ -63,6 +113,11 @@ def format_run(run: Run, index: int | None = None, total: int = 1,
                 np.full(table.t.shape, run.constants.get(n, math.nan)) for n in block]
         for i, t in enumerate(table.t):
             out.write(_e(t) + "".join(_e(c[i]) for c in cols) + "\n")
+    for r in run.reports:
+        if r.kind == "OUTPUT" and (r.printer or ascii_plots):
+            out.write(printer_plot(run, [n for n in r.names if n != "TIME"], r.label))
+    if ascii_plots and not any(r.kind == "OUTPUT" for r in run.reports):
+        out.write(printer_plot(run, names))
     ranged = report_names(run, "RANGE")
     if ranged:
         rng = run.range
@@ -91,8 +146,9 @@ def format_run(run: Run, index: int | None = None, total: int = 1,
     return out.getvalue()
 
 
-def format_runs(runs: list[Run], show_events: bool = True) -> str:
-    parts = [format_run(r, i + 1, len(runs), show_events) for i, r in enumerate(runs)]
+def format_runs(runs: list[Run], show_events: bool = True, ascii_plots: bool = False) -> str:
+    parts = [format_run(r, i + 1, len(runs), show_events, ascii_plots)
+             for i, r in enumerate(runs)]
     return ("\n" + "-" * 72 + "\n").join(parts)
 
 

@@ -143,7 +143,7 @@ class Termt:
 
 @dataclass(frozen=True)
 class Report:
-    kind: str  # PRINT, OUTPUT, RANGE, PREPARE (aliases folded)
+    kind: str  # PRINT, OUTPUT, PRTPLT, RANGE, PREPARE (PLOT folded into OUTPUT)
     names: tuple[str, ...]
     name_spans: tuple[Span, ...]
     span: Span
