@@ -61,6 +61,11 @@ class AmilError(Exception):
     def render(self) -> str:
         return render(self.diagnostics, self.path, self.source)
 
+    def _repr_html_(self) -> str:
+        from html import escape
+
+        return f"<pre style='color:#b00'>{escape(self.render())}</pre>"
+
 
 def _source_excerpt(source: str | None, span: Span) -> list[str]:
     if source is None:

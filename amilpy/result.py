@@ -127,3 +127,57 @@ class Run:
     def __repr__(self) -> str:
         return (f"<Run {self.label!r}: {self.status}, {len(self.times)} rows, "
                 f"{len(self.events)} events>")
+
+    # ------------------------------------------------------------- notebooks
+    def to_pandas(self):
+        """The OUTDEL-grid values as a pandas DataFrame indexed by TIME (pandas is
+        optional: `pip install pandas`)."""
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("Run.to_pandas needs pandas: pip install pandas") from None
+        frame = pd.DataFrame({n: self[n] for n in self.values if "#" not in n},
+                             index=pd.Index(self.t, name="TIME"))
+        frame.attrs.update(label=self.label, status=str(self.status), message=self.message)
+        return frame
+
+    def plot(self, *names: str, ax=None):
+        """Plot variables against TIME (all recorded ones if none are named);
+        returns the matplotlib axes."""
+        import matplotlib.pyplot as plt
+
+        if ax is None:
+            _, ax = plt.subplots(figsize=(7, 4))
+        for name in names or [n for n in self.values if "#" not in n]:
+            ax.plot(self.t, self[name], label=name.upper())
+        ax.set_xlabel("TIME")
+        ax.set_title(self.titles[0] if self.titles else self.label)
+        ax.grid(True, alpha=0.3)
+        ax.legend()
+        return ax
+
+    def _repr_html_(self) -> str:
+        from html import escape
+
+        names = [n for n in self.values if "#" not in n][:8]
+        table = self.printout
+        rows = list(range(len(table.t)))
+        if len(rows) > 12:
+            rows = rows[:6] + [-1] + rows[-5:]
+        head = "".join(f"<th>{escape(n)}</th>" for n in ["TIME", *names])
+        body = []
+        for i in rows:
+            if i == -1:
+                body.append(f"<tr><td colspan='{len(names) + 1}'>&hellip;</td></tr>")
+                continue
+            cells = [table.t[i]] + [table.columns[n][i] for n in names]
+            body.append("<tr>" + "".join(f"<td>{v:.6g}</td>" for v in cells) + "</tr>")
+        colour = {"finished": "green", "stopped": "teal", "failed": "red"}[str(self.status)]
+        title = escape(self.titles[0]) + "<br>" if self.titles else ""
+        events = f", {len(self.events)} events" if self.events else ""
+        note = f"<br><i>{escape(self.message)}</i>" if self.message else ""
+        return (f"<div><b>{title}{escape(self.label)}</b> &mdash; "
+                f"<span style='color:{colour}'>{self.status}</span>, METHOD {self.method}, "
+                f"{self.stats.get('nsteps', 0)} steps{events}{note}"
+                f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody>"
+                f"</table></div>")
