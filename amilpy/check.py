@@ -223,6 +223,7 @@ class _Checker:
         if not runs:
             self.rep.error("the listing has no statements", None)
         self.tables = tables
+        self.data_kind = data_kind
         return runs, list(data), data_spans
 
     def check_table(self, st: ast.Table) -> None:
@@ -415,7 +416,7 @@ class _Checker:
             initial=initial_sorted, dynamic=dyn_sorted, terminal=terminal,
             states=self.states, switches=self.switches, surfaces=self.surfaces,
             memories=self.memories, runs=runs, data_names=data_names,
-            spans={**data_spans, **defined},
+            spans={**data_spans, **defined}, data_kinds=dict(self.data_kind),
         )
         self.classify_surfaces(model, state_names)
         return model

@@ -69,6 +69,15 @@ def _parser() -> argparse.ArgumentParser:
     sw.add_argument("--atol", type=float)
     sw.add_argument("--quiet", action="store_true")
 
+    rep = sub.add_parser("report", help="a lab-report document: listing, data, equations, "
+                                        "printouts, events, plots")
+    rep.add_argument("file")
+    rep.add_argument("--out", metavar="DIR")
+    rep.add_argument("--format", default="md", help="comma-separated: md, pdf, tex "
+                                                    "(default md)")
+    rep.add_argument("--set", metavar="NAME=VALUE", action="append", default=[])
+    rep.add_argument("--method")
+
     chk = sub.add_parser("check", help="parse and check a listing, do not run it")
     chk.add_argument("file")
     return p
@@ -212,6 +221,20 @@ def cmd_sweep(args) -> int:
     return EXIT_OK
 
 
+def cmd_report(args) -> int:
+    from .report import FORMATS, make_report
+
+    formats = [f.strip().lower() for f in args.format.split(",") if f.strip()]
+    bad = [f for f in formats if f not in FORMATS]
+    if bad or not formats:
+        raise _Usage(f"--format takes {', '.join(FORMATS)}; got {args.format!r}")
+    written = make_report(args.file, args.out, formats, method=args.method,
+                          **_parse_sets(args.set))
+    for fmt, path in written.items():
+        print(f"{fmt}: {path}")
+    return EXIT_OK
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = _parser()
     try:
@@ -223,6 +246,8 @@ def main(argv: list[str] | None = None) -> int:
             return cmd_check(args)
         if args.command == "sweep":
             return cmd_sweep(args)
+        if args.command == "report":
+            return cmd_report(args)
         return cmd_run(args)
     except _Usage as exc:
         print(f"amilpy: {exc}", file=sys.stderr)

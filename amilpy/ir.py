@@ -162,6 +162,7 @@ class Model:
     data_names: list[str]
     # names -> where defined, for reports and hints
     spans: dict[str, Span] = field(default_factory=dict)
+    data_kinds: dict[str, str] = field(default_factory=dict)  # PARAM, CONST or INCON
     # compiled functions per set of constants: repeated runs do not recompile
     compiled: dict = field(default_factory=dict, repr=False, compare=False)
 
