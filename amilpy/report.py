@@ -13,8 +13,6 @@ import io
 import math
 import os
 
-
-
 from . import ir
 from . import syntax as syn
 from .printout import atomic_write, format_run, printed_names, report_names
@@ -120,7 +118,8 @@ class Report:
             md.write(self._md_table(run))
             ranged = report_names(run, "RANGE")
             if ranged:
-                md.write("\n| RANGE | minimum | time | maximum | time |\n|---|---:|---:|---:|---:|\n")
+                md.write("\n| RANGE | minimum | time | maximum | time |\n"
+                         "|---|---:|---:|---:|---:|\n")
                 rng = run.range
                 for n in ranged:
                     lo, tlo, hi, thi = rng.get(n, (math.nan,) * 4)

@@ -46,7 +46,8 @@ def test_report_of_every_shipped_model(path, tmp_path):
 def test_polish_title_in_every_format(tmp_path):
     listing = tmp_path / "napęd.amil"
     listing.write_text("TITLE Napęd z mikrosilnikiem — prędkość kątowa ω\nX = INTGRL(1.0, -X)\n"
-                       "TIMER FINTIM = 1.0, PRDEL = 0.25\nPRINT X\nRANGE X\nEND\n", encoding="utf-8")
+                       "TIMER FINTIM = 1.0, PRDEL = 0.25\nPRINT X\nRANGE X\nEND\n",
+                       encoding="utf-8")
     assert main(["report", str(listing), "--out", str(tmp_path / "r"),
                  "--format", "md,tex,pdf"]) == 0
     out = tmp_path / "r"
