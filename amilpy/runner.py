@@ -578,6 +578,8 @@ class _Simulation:
                                 stop_here = k
                         for k in range(n_watch):
                             if new_m[k] != m[k]:
+                                if k not in triggered and self.silent(k, tb, yb, new_m, z):
+                                    continue  # a branch nothing uses now: not an event
                                 kind = "slide" if new_m[k] == SLIDE else self.sf.kinds[k]
                                 if self.sf.purposes[k] in ("finish", "termt"):
                                     kind = self.sf.purposes[k]
