@@ -45,7 +45,7 @@ FORMATTERS = ("terminal", "html", "latex")
 _CONTINUATION = r"(\.\.\.|&)(?=[ \t\f\r]*(?:![^\n]*)?$)"
 
 try:
-    from pygments.lexer import RegexLexer, default, include, words
+    from pygments.lexer import RegexLexer, bygroups, default, include, words
     from pygments.token import (
         Comment,
         Error,
@@ -85,7 +85,7 @@ else:
                 # A comment line: first non-blank character `*`. Only tried at
                 # the start of a line that does not continue a previous one
                 # (the `contline` state below has no such rule).
-                (r"^[ \t\f\r]*\*[^\n]*", Comment.Single),
+                (r"^([ \t\f\r]*)(\*[^\n]*)", bygroups(Whitespace, Comment.Single)),
                 (_CONTINUATION, Punctuation, "cont_tail"),
                 include("code"),
                 (r"\n", Whitespace),
@@ -191,4 +191,9 @@ def style_defs(formatter: str = "html", **options: Any) -> str:
         return ""
     if formatter not in FORMATTERS:
         raise ValueError(f"formatter must be one of {', '.join(FORMATTERS)}, not {formatter!r}")
-    return _formatter(formatter, options).get_style_defs()
+    fmt = _formatter(formatter, options)
+    if formatter == "html":
+        # scoped to the output's <div class="highlight">, so a report page's
+        # own styles keep their names
+        return fmt.get_style_defs("." + fmt.cssclass)
+    return fmt.get_style_defs()

@@ -101,7 +101,7 @@ class Report:
         md.write(f"# {self.title}\n\n")
         for t in self.runs[0].titles[1:]:
             md.write(f"{t}  \n")
-        md.write(f"Model file: `{os.path.basename(self.path)}`\n\n## Listing\n\n```\n")
+        md.write(f"Model file: `{os.path.basename(self.path)}`\n\n## Listing\n\n```amil\n")
         width = len(str(len(self.listing)))
         for i, line in enumerate(self.listing, start=1):
             md.write(f"{i:>{width}}  {line}\n")
@@ -160,10 +160,13 @@ class Report:
         tex.write("\\documentclass[a4paper,10pt]{article}\n\\usepackage[utf8]{inputenc}\n"
                   "\\usepackage[T1]{fontenc}\n\\usepackage{lmodern}\n\\usepackage{booktabs}\n"
                   "\\usepackage{longtable}\n\\usepackage{graphicx}\n\\usepackage{fancyvrb}\n"
-                  "\\usepackage[margin=2cm]{geometry}\n\\begin{document}\n")
-        tex.write(f"\\section*{{{_tex(self.title)}}}\n")
-        tex.write("\\subsection*{Listing}\n\\begin{Verbatim}[numbers=left,fontsize=\\small]\n")
-        tex.write("\n".join(self.listing) + "\n\\end{Verbatim}\n")
+                  "\\usepackage{color}\n\\usepackage[margin=2cm]{geometry}\n")
+        from .highlight import highlight_listing, style_defs
+
+        # the listing goes through the AMIL lexer (coloured when Pygments is there)
+        tex.write(style_defs("latex") + "\n\\begin{document}\n")
+        tex.write(f"\\section*{{{_tex(self.title)}}}\n\\subsection*{{Listing}}\n")
+        tex.write(highlight_listing("\n".join(self.listing) + "\n", "latex", linenos=True))
         tex.write("\\subsection*{Data and initial values}\n\\begin{longtable}{lrl}\n\\toprule\n"
                   "Name & Value & Defined \\\\\n\\midrule\n")
         for name, value, where in data_rows(self.ir, self.runs[0]):
