@@ -40,7 +40,7 @@ from .library import (
 NAMESPACE: dict[str, object] = {f"_{k}": v for k, v in MATH.items()}
 NAMESPACE.update({
     "_AFGEN": afgen, "_NLFGEN": nlfgen, "_DERIV": deriv, "_IMPULS": impulse_at, "_POW": safe_pow,
-    "_LEVEL": level_of, "_SGN": lambda x: (x > 0.0) - (x < 0.0),
+    "_LEVEL": level_of, "_SGN": lambda x: 1.0 if x > 0.0 else (-1.0 if x < 0.0 else 0.0),
 })
 
 # Names the generated code reads, and which a model name can never produce

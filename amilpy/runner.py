@@ -342,6 +342,7 @@ class _Simulation(Switching):
                                        atol=self.atol, delt=self.delt, max_step=max_step,
                                        first_step=last_step, checks=checks)
                 e_prev = c.surf(t, y.tolist(), m, z) if watch_idx else []
+                self.segment_start = t
                 restart = False
                 while not restart:
                     err = stepper.step()
@@ -387,11 +388,16 @@ class _Simulation(Switching):
                         slide_exit = self.slide_exits(m, tb, yb, z)
                         if hits or slide_exit:
                             interp = stepper.interpolant()
-                            roots = {k: self.locate(k, m, z, interp, ta, tb, e_prev[k], e_b[k])
-                                     for k in hits}
+                            roots = {}
+                            for k in hits:
+                                tk = self.locate(k, m, z, interp, ta, tb, e_prev[k], e_b[k])
+                                if tk is None:
+                                    departed.add(k)  # no crossing to bracket: sign at tb
+                                else:
+                                    roots[k] = tk
                             for k, sign in slide_exit:
                                 roots[k] = self.locate_slide_exit(k, sign, m, z, interp, ta, tb)
-                            t_star = min(roots.values())
+                            t_star = min(roots.values(), default=tb)
                             if t_star < tb:
                                 # the solver has moved past t_star: it must restart
                                 stepper.truncate(t_star)
@@ -444,6 +450,14 @@ class _Simulation(Switching):
                                     kind = self.sf.purposes[k]
                                 if self.sf.breakpoint_only[k]:
                                     kind = "breakpoint"
+                                last = next((e for e in reversed(events)
+                                             if e.surface == c.watched[k]), None)
+                                if last is not None and last.old == new_m[k] and \
+                                        abs(last.time - tb) <= 1e-12 * max(abs(tb), 1e-300):
+                                    # switched and switched back at one instant (noise
+                                    # at a tangential crossing): nothing happened
+                                    events.remove(last)
+                                    continue
                                 events.append(Event(tb, self.sf.descriptions[k],
                                                     c.watched[k], m[k], new_m[k],
                                                     "level" if kind == "level" else kind))

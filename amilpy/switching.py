@@ -172,7 +172,10 @@ class Switching:
             return e_b > 0.0
         return False
 
-    def locate(self, k, m, z, interp, ta, tb, e_a, e_b) -> float:
+    def locate(self, k, m, z, interp, ta, tb, e_a, e_b) -> float | None:
+        """Where in [ta, tb] surface k crossed, or None when the step began on the
+        surface and was on the wrong side all along (nothing to bracket: the
+        caller takes the surface's sign at tb instead of stopping at ta again)."""
         from scipy.optimize import brentq
 
         def g(t):
@@ -194,7 +197,10 @@ class Switching:
                 elif ta_new is not None:
                     break
             if ta_new is None:
-                return ta  # on zero at the step's start and on the wrong side after
+                # on zero at ta and on the wrong side after: a crossing at ta, unless
+                # ta is where the run just restarted (then stopping there again
+                # would make no progress)
+                return ta if ta > self.segment_start else None
             ta = ta_new
         return brentq(g, ta, tb, xtol=4 * np.finfo(float).eps * max(abs(tb), 1e-300),
                       rtol=4 * np.finfo(float).eps, maxiter=200)
