@@ -35,6 +35,7 @@ from .library import (
     lookup,
     nlfgen,
     safe_pow,
+    vector_functions,
 )
 
 NAMESPACE: dict[str, object] = {f"_{k}": v for k, v in MATH.items()}
@@ -68,6 +69,9 @@ class Compiled:
     impulses: list[tuple[float, float]]
     source: str
     tables: dict[str, tuple] = field(default_factory=dict)
+    # surf and out over NumPy columns: y is a list of arrays, t an array
+    surf_v: object = None
+    out_v: object = None
 
 
 def _num(v: float) -> py.expr:
@@ -533,6 +537,10 @@ class Compiler:
         namespace.update(NAMESPACE)
         namespace.update(self.global_tables)
         exec(code, namespace)  # noqa: S102 - compiler-built tree, closed namespace
+        vector: dict[str, object] = {"__builtins__": {}}
+        vector.update({f"_{k}": v for k, v in vector_functions().items()})
+        vector.update(self.global_tables)
+        exec(code, vector)  # noqa: S102 - the same code, elementwise functions
 
         # initial values -------------------------------------------------------------
         y0 = [self.constant(s.ic, s.span) for s in model.states]
@@ -566,6 +574,7 @@ class Compiler:
             watched=self.watched, const_modes=self.const_modes,
             modes_literal=namespace["modes"], affine_time=affine, impulses=impulses,
             source=source, tables=self.global_tables,
+            surf_v=vector["surf"], out_v=vector["out"],
         )
 
     def constant(self, expr, span: Span) -> float:

@@ -286,3 +286,34 @@ MATH: dict[str, object] = {
     "AMAX1": max,
     "AMIN1": min,
 }
+
+
+def vector_functions() -> dict[str, object]:
+    """The same functions on NumPy arrays, elementwise: the runner evaluates the
+    generated surface and output functions over a whole chunk of output instants
+    at once (the same code object, run with these in its namespace)."""
+    import functools
+
+    import numpy as np
+
+    def sign(a, b):
+        return np.where(np.asarray(b) >= 0.0, np.abs(a), -np.abs(a))
+
+    def many(f):
+        return lambda *args: functools.reduce(f, args)
+
+    def each(f):
+        return np.vectorize(f, otypes=[float])
+
+    return {
+        "ABS": np.abs, "SQRT": np.sqrt, "EXP": np.exp, "ALOG": np.log, "ALOG10": np.log10,
+        "SIN": np.sin, "COS": np.cos, "TAN": np.tan, "ASIN": np.arcsin, "ACOS": np.arccos,
+        "ATAN": np.arctan, "SINH": np.sinh, "COSH": np.cosh, "TANH": np.tanh,
+        "AINT": np.trunc, "FLOAT": lambda x: np.asarray(x, dtype=float),
+        "ATAN2": np.arctan2, "AMOD": np.fmod, "SIGN": sign,
+        "AMAX1": many(np.maximum), "AMIN1": many(np.minimum),
+        "AFGEN": lambda table, x: np.interp(x, table[0], table[1]),
+        "NLFGEN": lambda table, x: each(lambda v: nlfgen(table, v))(x),
+        "DERIV": each(deriv), "IMPULS": each(impulse_at), "POW": np.power,
+        "LEVEL": lambda v: np.ceil(np.asarray(v) - 0.5), "SGN": np.sign,
+    }

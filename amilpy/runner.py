@@ -30,7 +30,7 @@ from . import ir
 from .codegen import Compiled, Compiler, evaluate_constant, initial_values
 from .diagnostics import AmilError, Diagnostic
 from .result import Event, Run, Status
-from .steppers import is_fixed, make_stepper
+from .steppers import OdeintStepper, is_fixed, make_stepper
 from .switching import SLIDE, Switching, _linear_gradient, _sign, _Surfaces
 
 DEFAULTS = {
@@ -343,8 +343,25 @@ class _Simulation(Switching):
                                        first_step=last_step, checks=checks)
                 e_prev = c.surf(t, y.tolist(), m, z) if watch_idx else []
                 self.segment_start = t
+                bulk = isinstance(stepper, OdeintStepper) and SLIDE not in m
                 restart = False
                 while not restart:
+                    if bulk:
+                        # AUTO: take the clean part of an odeint chunk at once
+                        taken, e_bulk = self.take_clean(stepper, m, z, seg_end, times, out_i,
+                                                        watch_idx, rows_t, rows_g, rows_v)
+                        if taken:
+                            out_i += taken
+                            nsteps += taken
+                            t, y = stepper.t, stepper.y
+                            if e_bulk is not None:
+                                e_prev = e_bulk
+                            if opts.max_time and _clock.perf_counter() - started > \
+                                    opts.max_time:
+                                raise _Failure(t, f"wall-clock limit of {opts.max_time:g} s "
+                                                  "reached")
+                            if opts.progress is not None:
+                                opts.progress(t, self.fintim, len(events), nsteps)
                     err = stepper.step()
                     nsteps += 1
                     if err is not None:
@@ -563,6 +580,53 @@ class _Simulation(Switching):
             raise _Failure(window[-1], f"{last.switch} chatters: 200 switches within "
                                        f"{span:.3g} s")
         del recent[:-200]
+
+    def take_clean(self, stepper, m, z, seg_end, times, out_i, watch_idx, rows_t, rows_g,
+                   rows_v) -> tuple[int, list | None]:
+        """Record at once the pending odeint instants before the first one that needs
+        a look (a surface crossed, a non-finite state, the segment's end), using
+        the surface and output functions over NumPy columns. Returns how many were
+        taken and the surfaces at the last of them."""
+        T, Y = stepper.pending()
+        n = len(T)
+        if n and T[-1] >= seg_end:
+            n -= 1  # the segment's end is a breakpoint: the step-by-step path ends it
+        if n == 0 or out_i + n > len(times) or T[0] != times[out_i]:
+            return 0, None
+        T, Y = T[:n], Y[:n]
+        finite = np.isfinite(Y).all(axis=1)
+        if not finite.all():
+            n = int(np.argmin(finite))
+        cols = list(Y[:n].T)
+        e_last = None
+        if n and watch_idx:
+            with np.errstate(all="ignore"):
+                E = [np.broadcast_to(np.asarray(v, float), (n,))
+                     for v in self.c.surf_v(T[:n], cols, m, z)]
+            bad = np.zeros(n, bool)
+            for k in watch_idx:
+                mode = m[k]
+                if self.sf.kinds[k] == "level" or mode > 0:
+                    bad |= E[k] < 0.0
+                elif mode < 0:
+                    bad |= E[k] > 0.0
+                else:
+                    bad |= E[k] != 0.0
+            if bad.any():
+                n = int(np.argmax(bad))
+                cols = [c[:n] for c in cols]
+            e_last = [float(e[n - 1]) for e in E] if n else None
+        if n == 0:
+            return 0, None
+        with np.errstate(all="ignore"):
+            outs = self.c.out_v(T[:n], cols, m, z)
+        table = np.column_stack([np.broadcast_to(np.asarray(v, float), (n,)) for v in outs]) \
+            if outs else np.empty((n, 0))
+        rows_t.extend(T[:n].tolist())
+        rows_g.extend(range(out_i, out_i + n))
+        rows_v.extend(table.tolist())
+        stepper.consume(n)
+        return n, e_last
 
     def pulse_ends(self, z, t) -> list[float]:
         out = []

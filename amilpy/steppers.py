@@ -257,7 +257,9 @@ class OdeintStepper(Stepper):
         self.checks = [c for c in checks if t0 < c < t_bound] + [t_bound]
         self.rtol, self.atol, self.max_step = rtol, atol, max_step
         self.first_step = first_step
-        self.rows: list[tuple[float, np.ndarray]] = []
+        self.T = np.empty(0)  # the check instants integrated so far ...
+        self.Y = np.empty((0, len(self.y)))  # ... their states ...
+        self.pos = 0  # ... and how many of them the runner has taken
         self.next_check = 0
         self.chunk = 16
         self._nfev = 0
@@ -294,34 +296,50 @@ class OdeintStepper(Stepper):
             while (good < len(ts) and good < len(tcur) and tcur[good] >= ts[good]
                    and np.all(np.isfinite(ys[good + 1]))):
                 good += 1
-            self.rows.extend(zip(ts[:good], ys[1:good + 1], strict=True))
+            self.T, self.Y, self.pos = np.asarray(ts[:good], float), ys[1:good + 1], 0
             t_last, y_last = (ts[good - 1], ys[good]) if good else (self.t, self.y)
             self.fallback = ScipyStepper("LSODA", self.fun, float(t_last), y_last,
                                          self.t_bound, self.rtol, self.atol, self.max_step,
                                          None)
             return None
-        self.rows.extend(zip(ts, ys[1:], strict=True))
+        self.T, self.Y, self.pos = np.asarray(ts, float), ys[1:], 0
         self.next_check += len(ts)
         return None
 
     fallback: ScipyStepper | None = None
 
-    def step(self) -> str | None:
-        if not self.rows and self.fallback is None:
+    def pending(self) -> tuple[np.ndarray, np.ndarray]:
+        """The integrated check instants the runner has not taken yet (integrating
+        the next chunk if there are none); empty once LSODA's class has taken over."""
+        if self.pos >= len(self.T) and self.fallback is None:
             self._fill()
-        if not self.rows and self.fallback is not None:
+        return self.T[self.pos:], self.Y[self.pos:]
+
+    def consume(self, n: int) -> None:
+        """Take the next n pending instants at once (the runner found them clean)."""
+        last = self.pos + n - 1
+        if n >= 2:
+            self.t_old, self.y_old = float(self.T[last - 1]), self.Y[last - 1]
+        else:
+            self.t_old, self.y_old = self.t, self.y
+        self.t, self.y = float(self.T[last]), self.Y[last]
+        self.pos += n
+        self._dense = None
+
+    def step(self) -> str | None:
+        if self.pos >= len(self.T) and self.fallback is None:
+            self._fill()
+        if self.pos >= len(self.T) and self.fallback is not None:
             err = self.fallback.step()
             self.t_old, self.t, self.y = self.fallback.t_old, self.fallback.t, self.fallback.y
             self._dense = None
             return err
-        t, y = self.rows.pop(0)
-        self.t_old, self.y_old = self.t, self.y
-        self.t, self.y = float(t), np.asarray(y, dtype=float)
-        self._dense = None
+        self.consume(1)
         return None
 
     def interpolant(self):
-        if self.fallback is not None and not self.rows and self.t == self.fallback.t:
+        if self.fallback is not None and self.pos >= len(self.T) and \
+                self.t == self.fallback.t:
             return self.fallback.interpolant()
         if self._dense is None:
             from scipy.integrate import LSODA
