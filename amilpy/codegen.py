@@ -42,6 +42,8 @@ NAMESPACE: dict[str, object] = {f"_{k}": v for k, v in MATH.items()}
 NAMESPACE.update({
     "_AFGEN": afgen, "_NLFGEN": nlfgen, "_DERIV": deriv, "_IMPULS": impulse_at, "_POW": safe_pow,
     "_LEVEL": level_of, "_SGN": lambda x: 1.0 if x > 0.0 else (-1.0 if x < 0.0 else 0.0),
+    "_WHERE": lambda c, a, b: a if c else b, "_ALL": lambda *v: all(v),
+    "_ANY": lambda *v: any(v),
 })
 
 # Names the generated code reads, and which a model name can never produce
@@ -526,6 +528,10 @@ class Compiler:
         body.append(py.Return(py.List(new, py.Load())))
         fns.append(_function("mem", ("t", "y", "m", "mn", "z"), body))
 
+        # surf and out once more for NumPy columns: a condition there may be an array
+        # (a memory function reading its condition), so if/else becomes a where()
+        fns.append(_vectorised(fns[1], "surf_vec"))
+        fns.append(_vectorised(fns[3], "out_vec"))
         module = py.Module(body=fns, type_ignores=[])
         module = _Folder().visit(module)
         _place(module)
@@ -574,11 +580,30 @@ class Compiler:
             watched=self.watched, const_modes=self.const_modes,
             modes_literal=namespace["modes"], affine_time=affine, impulses=impulses,
             source=source, tables=self.global_tables,
-            surf_v=vector["surf"], out_v=vector["out"],
+            surf_v=vector["surf_vec"], out_v=vector["out_vec"],
         )
 
     def constant(self, expr, span: Span) -> float:
         return evaluate_constant(self.model, expr, self.constants, self.tables, span)
+
+
+def _vectorised(fn: py.FunctionDef, name: str) -> py.FunctionDef:
+    """A copy of a generated function whose conditionals work elementwise."""
+    import copy
+
+    class Where(py.NodeTransformer):
+        def visit_IfExp(self, node):
+            self.generic_visit(node)
+            return py.Call(py.Name("_WHERE", py.Load()), [node.test, node.body, node.orelse], [])
+
+        def visit_BoolOp(self, node):
+            self.generic_visit(node)
+            fn = "_ALL" if isinstance(node.op, py.And) else "_ANY"
+            return py.Call(py.Name(fn, py.Load()), node.values, [])
+
+    new = Where().visit(copy.deepcopy(fn))
+    new.name = name
+    return new
 
 
 def _all_exprs(model: ir.Model):

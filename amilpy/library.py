@@ -316,4 +316,5 @@ def vector_functions() -> dict[str, object]:
         "NLFGEN": lambda table, x: each(lambda v: nlfgen(table, v))(x),
         "DERIV": each(deriv), "IMPULS": each(impulse_at), "POW": np.power,
         "LEVEL": lambda v: np.ceil(np.asarray(v) - 0.5), "SGN": np.sign,
+        "WHERE": np.where, "ALL": many(np.logical_and), "ANY": many(np.logical_or),
     }

@@ -162,7 +162,10 @@ class _Simulation(Switching):
         self.atol_scalar = float(np.min(self.atol))
         # AUTO drives Fortran LSODA over chunks of output instants. Memory functions
         # must see every accepted step, so a model with them takes the LSODA class.
-        self.fast = self.route == "AUTO" and not model.memories
+        # ZHOLD and PULSE change their memory only where the run restarts anyway (an
+        # event or a breakpoint), so they may too; the others need every step.
+        self.fast = self.route == "AUTO" and all(
+            mem.func in ("ZHOLD", "PULSE") for mem in model.memories)
         # a continued run (a sweep with carried state) goes on from its start TIME
         self.t0 = float(opts.start["t"]) if opts.start else 0.0
         self.fintim = self.t0 + self.timer["FINTIM"]
