@@ -696,6 +696,10 @@ def evaluate_constant(model: ir.Model, expr, constants: dict[str, float], tables
     except OverflowError:
         raise AmilError([Diagnostic("value too large (overflow)", span)], model.path,
                         model.source) from None
+    except (ValueError, TypeError) as exc:
+        raise AmilError([Diagnostic(f"cannot be evaluated: {exc}", span,
+                                    "check the arguments' ranges (ASIN, ACOS, SQRT, ALOG)")],
+                        model.path, model.source) from None
     except NameError as exc:
         name = str(exc).split("'")[1] if "'" in str(exc) else str(exc)
         raise AmilError([Diagnostic(

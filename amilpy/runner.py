@@ -340,7 +340,7 @@ class _Simulation(Switching):
                 if self.fast:
                     # the AUTO route steps from output instant to output instant
                     lo = bisect_right(times, t, out_i)
-                    checks = times[lo:bisect_left(times, seg_end, lo)].tolist()
+                    checks = times[lo:bisect_left(times, seg_end, lo)]
                 stepper = make_stepper(self.route, f, t, y, seg_end, rtol=self.rtol,
                                        atol=self.atol, delt=self.delt, max_step=max_step,
                                        first_step=last_step, checks=checks)

@@ -254,7 +254,8 @@ class OdeintStepper(Stepper):
         self.y = np.asarray(y0, dtype=float)
         self.y_old = self.y
         self.t_bound = t_bound
-        self.checks = [c for c in checks if t0 < c < t_bound] + [t_bound]
+        # the runner passes the instants strictly inside (t0, t_bound), in order
+        self.checks = np.append(np.asarray(checks, dtype=float), t_bound)
         self.rtol, self.atol, self.max_step = rtol, atol, max_step
         self.first_step = first_step
         self.T = np.empty(0)  # the check instants integrated so far ...
@@ -274,7 +275,7 @@ class OdeintStepper(Stepper):
 
         ts = self.checks[self.next_check:self.next_check + self.chunk]
         self.chunk = min(self.chunk * 4, 4096)
-        grid = np.array([self.t] + ts)
+        grid = np.concatenate(([self.t], ts))
         options = {"rtol": self.rtol, "atol": self.atol, "tfirst": True, "full_output": True,
                    "mxstep": 1_000_000}
         if math.isfinite(self.max_step):
@@ -296,13 +297,13 @@ class OdeintStepper(Stepper):
             while (good < len(ts) and good < len(tcur) and tcur[good] >= ts[good]
                    and np.all(np.isfinite(ys[good + 1]))):
                 good += 1
-            self.T, self.Y, self.pos = np.asarray(ts[:good], float), ys[1:good + 1], 0
+            self.T, self.Y, self.pos = ts[:good], ys[1:good + 1], 0
             t_last, y_last = (ts[good - 1], ys[good]) if good else (self.t, self.y)
             self.fallback = ScipyStepper("LSODA", self.fun, float(t_last), y_last,
                                          self.t_bound, self.rtol, self.atol, self.max_step,
                                          None)
             return None
-        self.T, self.Y, self.pos = np.asarray(ts, float), ys[1:], 0
+        self.T, self.Y, self.pos = ts, ys[1:], 0
         self.next_check += len(ts)
         return None
 
@@ -344,9 +345,13 @@ class OdeintStepper(Stepper):
         if self._dense is None:
             from scipy.integrate import LSODA
 
-            # integrate the interval once more with dense output
-            solver = LSODA(self.fun_ivp, self.t_old, self.y_old, self.t, rtol=self.rtol,
-                           atol=self.atol)
+            # Integrate the interval once more with dense output. Tighter than the
+            # run: the state at the located crossing starts the next segment, and
+            # a run with many switches must not add a tolerance's worth at each.
+            rtol = max(self.rtol * 0.01, 1e-13)
+            atol = np.maximum(np.asarray(self.atol, dtype=float) * 0.01, 1e-300)
+            solver = LSODA(self.fun_ivp, self.t_old, self.y_old, self.t, rtol=rtol,
+                           atol=atol)
             pieces = []
             while solver.status == "running":
                 solver.step()
