@@ -1,0 +1,424 @@
+"""Work-precision benchmark: amilpy's methods against hand-written SciPy, at equal error.
+
+    OPENBLAS_NUM_THREADS=1 python benchmarks/work_precision.py            # everything
+    python benchmarks/work_precision.py --models ex4_clutch --repeats 3
+    python benchmarks/work_precision.py --quick                           # a smoke run
+
+For every case (``benchmarks/cases.py``) and every route:
+
+* amilpy AUTO, RKS, DOP853, LSODA, RADAU, BDF at rtol 1e-3 .. 1e-10, atol = rtol * (the
+  smallest state scale of the model, i.e. max|y_ref| of its smallest state);
+* amilpy RK4, EULER, TRAPZ at DELT = OUTDEL / 2**k (TIMER DELT added to the listing);
+* the same equations hand-written as a plain Python function (floats: the solver's array
+  is turned into a list with ``y.tolist()`` first, the fastest way to call such a
+  function) and integrated by ``solve_ivp`` (RK45, DOP853, LSODA, Radau, BDF), ``odeint``
+  and ``ode`` (dop853, vode/BDF, lsoda), each to the same output grid, split at the
+  switches on TIME, integrating straight through the switches on states;
+
+it records the wall time (median of ``--repeats`` runs, one run when it takes over 1 s;
+the model is compiled before any timing, and amilpy's first run with its compilation is
+reported separately), RHS evaluations, steps, events and
+
+    error = max over the OUTDEL grid and the states of |y - y_ref| / (1e-12 + max|y_ref|)
+
+against the reference (``tests/references`` for the shipped models, closed forms for the
+core ones). Each route's work-precision line (its Pareto front: cheapest time for each
+error reached) is interpolated log-log to read the time needed for errors 1e-3, 1e-6,
+1e-9; the summary prints, per case and level, the fastest hand-written route, amilpy
+AUTO's time and their ratio. Output in ``--out`` (default ``benchmarks/results``):
+``work_precision.csv``, ``work_precision.md``, ``summary.csv`` and one
+``wp_<case>.png`` per case.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import os
+import statistics
+import sys
+import time
+import warnings
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cases import ROOT, Case, all_cases, error_on_grid, with_delt  # noqa: E402
+
+AMILPY_METHODS = ["AUTO", "RKS", "DOP853", "LSODA", "RADAU", "BDF"]
+FIXED_METHODS = ["RK4", "EULER", "TRAPZ"]
+TOLS = [10.0**-k for k in range(3, 11)]
+HAND_TOLS = [10.0**-k for k in range(3, 12)]
+HAND_ROUTES = ["ivp_RK45", "ivp_DOP853", "ivp_LSODA", "ivp_Radau", "ivp_BDF", "odeint",
+               "ode_dop853", "ode_vode_bdf", "ode_lsoda"]
+LEVELS = [1e-3, 1e-6, 1e-9]
+SLOW = 4.0  # seconds: a route whose run takes longer stops tightening
+
+
+def _median_time(fn, repeats: int):
+    """(median seconds, last result) of ``repeats`` calls; one call if it is slow."""
+    times, res = [], None
+    for _ in range(max(1, repeats)):
+        t0 = time.perf_counter()
+        res = fn()
+        times.append(time.perf_counter() - t0)
+        if times[-1] > 1.0:
+            break
+    return statistics.median(times), res
+
+
+# --------------------------------------------------------------------------- amilpy
+
+def first_run_cost(case: Case) -> dict:
+    """Parse+check, first run (compiles) and a steady run, at the listing's defaults."""
+    import amilpy
+
+    t0 = time.perf_counter()
+    model = amilpy.loads(case.text, case.name)
+    t1 = time.perf_counter()
+    model.run()
+    t2 = time.perf_counter()
+    steady, _ = _median_time(lambda: model.run(), 3)
+    return {"case": case.name, "load_s": t1 - t0, "first_run_s": t2 - t1, "steady_run_s": steady}
+
+
+def amilpy_point(model, case: Case, method: str, rtol: float | None, atol: float | None,
+                 repeats: int, delt: float | None = None) -> dict:
+    row = {"case": case.name, "kind": "amilpy", "route": method, "rtol": rtol, "atol": atol,
+           "delt": delt}
+    try:
+        secs, runs = _median_time(lambda: model.run(method=method, rtol=rtol, atol=atol),
+                                  repeats)
+        r = runs[0]
+        err = error_on_grid(case, r.t, {n: r[n] for n in case.states})
+        row.update(time=secs, nfev=r.stats.get("nfev"), nsteps=r.stats.get("nsteps"),
+                   events=len(r.events), error=err, status=str(r.status))
+    except Exception as exc:  # noqa: BLE001 - a failing route is a result, not a crash
+        row.update(time=math.nan, nfev=None, nsteps=None, events=None, error=math.inf,
+                   status=f"ERROR {type(exc).__name__}: {str(exc).splitlines()[0][:80]}")
+    return row
+
+
+def amilpy_rows(case: Case, repeats: int, tols, ladder: int, methods, fixed) -> list[dict]:
+    import amilpy
+
+    model = amilpy.loads(case.text, case.name)
+    model.run()  # compile once for this set of constants
+    fac = case.atol_factor()
+    rows = []
+    for method in methods:
+        for rtol in tols:
+            row = amilpy_point(model, case, method, rtol, rtol * fac, repeats)
+            rows.append(row)
+            print(_fmt(row), flush=True)
+            if not row["time"] < SLOW or row["status"].startswith("ERROR"):
+                break
+    for method in fixed:
+        for k in range(ladder):
+            delt = case.outdel / 2**k
+            m = amilpy.loads(with_delt(case.text, delt), case.name)
+            m.run(method=method)  # compile (a new DELT is a new constant)
+            row = amilpy_point(m, case, method, None, None, repeats, delt)
+            rows.append(row)
+            print(_fmt(row), flush=True)
+            if not row["time"] < SLOW or row["status"].startswith("ERROR"):
+                break
+    return rows
+
+
+# --------------------------------------------------------------------------- hand-written
+
+def _pieces(case: Case):
+    """[(ta, tb, f, grid points in (ta, tb])] with f(t, y) taking the solver's array."""
+    grid, _ = case.ref()
+    out, ta = [], 0.0
+    for tb, f in case.segments():
+        def g(t, y, f=f):
+            return f(t, y.tolist())
+        eps = 1e-9 * case.outdel
+        pts = grid[(grid > ta + eps) & (grid <= tb + eps)]
+        out.append((ta, tb, g, pts))
+        ta = tb
+    return out
+
+
+def hand_solve(case: Case, route: str, rtol: float, atol: float):
+    """Integrate the hand-written equations; (grid, {state: values}, nfev, nsteps)."""
+    from scipy.integrate import ode, odeint, solve_ivp
+
+    y = np.array(case.y0, dtype=float)
+    ts, ys = [0.0], [y.copy()]
+    nfev = nsteps = 0
+    for ta, tb, f, pts in _pieces(case):
+        tail = [] if len(pts) and abs(pts[-1] - tb) <= 1e-12 * max(tb, 1) else [tb]
+        want = np.concatenate([pts, tail])
+        if route.startswith("ivp_"):
+            sol = solve_ivp(f, (ta, tb), y, method=route[4:], t_eval=want, rtol=rtol, atol=atol)
+            if sol.status < 0:
+                raise RuntimeError(sol.message)
+            seg = sol.y.T
+            nfev += sol.nfev  # (solve_ivp does not report its step count)
+        elif route == "odeint":
+            seg, info = odeint(f, y, np.concatenate([[ta], want]), tfirst=True, rtol=rtol,
+                               atol=atol, mxstep=10**7, full_output=True)
+            if info["message"] != "Integration successful.":
+                raise RuntimeError(info["message"])
+            seg = seg[1:]
+            nfev += int(info["nfe"][-1])
+            nsteps += int(info["nst"][-1])
+        else:
+            name = route[4:]
+            kw = {"method": "bdf"} if name == "vode_bdf" else {}
+            r = ode(f).set_integrator("vode" if name == "vode_bdf" else name, rtol=rtol,
+                                      atol=atol, nsteps=10**7, **kw)
+            r.set_initial_value(y, ta)
+            seg = np.empty((len(want), len(y)))
+            for i, tp in enumerate(want):
+                seg[i] = r.integrate(tp)
+                if not r.successful():
+                    raise RuntimeError(f"ode {name} failed at {tp}")
+        ts.extend(pts.tolist())
+        ys.extend(seg[: len(pts)])
+        y = np.array(seg[-1], dtype=float)
+    vals = np.array(ys)
+    return np.array(ts), {n: vals[:, i] for i, n in enumerate(case.states)}, nfev, nsteps
+
+
+def hand_rows(case: Case, repeats: int, tols, routes) -> list[dict]:
+    fac = case.atol_factor()
+    rows = []
+    for route in routes:
+        for rtol in tols:
+            row = {"case": case.name, "kind": "hand", "route": route, "rtol": rtol,
+                   "atol": rtol * fac, "delt": None, "events": 0}
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    secs, (t, vals, nfev, nsteps) = _median_time(
+                        lambda route=route, rtol=rtol: hand_solve(case, route, rtol, rtol * fac),
+                        repeats)
+                row.update(time=secs, nfev=nfev or None, nsteps=nsteps or None,
+                           error=error_on_grid(case, t, vals), status="finished")
+            except Exception as exc:  # noqa: BLE001
+                row.update(time=math.nan, nfev=None, nsteps=None, error=math.inf,
+                           status=f"ERROR {type(exc).__name__}: {str(exc)[:80]}")
+            rows.append(row)
+            print(_fmt(row), flush=True)
+            if not row["time"] < SLOW:
+                break
+    return rows
+
+
+# --------------------------------------------------------------------------- analysis
+
+def front(rows: list[dict]) -> list[tuple[float, float]]:
+    """Pareto front (time, error): time increasing, error strictly decreasing."""
+    pts = sorted((r["time"], r["error"]) for r in rows
+                 if math.isfinite(r["time"]) and math.isfinite(r["error"]) and r["error"] > 0)
+    out, best = [], math.inf
+    for t, e in pts:
+        if e < best:
+            out.append((t, e))
+            best = e
+    return out
+
+
+def time_at(rows: list[dict], level: float) -> float:
+    """Time needed for error <= level, interpolated log-log on the front (inf: not reached)."""
+    fr = front(rows)
+    if not fr or fr[-1][1] > level:
+        return math.inf
+    if fr[0][1] <= level:
+        return fr[0][0]
+    for (t0, e0), (t1, e1) in zip(fr[:-1], fr[1:], strict=True):
+        if e0 > level >= e1:
+            s = (math.log(level) - math.log(e0)) / (math.log(e1) - math.log(e0))
+            return math.exp(math.log(t0) + s * (math.log(t1) - math.log(t0)))
+    return math.inf  # pragma: no cover
+
+
+def summarize(case: Case, rows: list[dict], levels=LEVELS) -> list[dict]:
+    by_route: dict[tuple[str, str], list[dict]] = {}
+    for r in rows:
+        by_route.setdefault((r["kind"], r["route"]), []).append(r)
+    out = []
+    for level in levels:
+        hand = {k[1]: time_at(v, level) for k, v in by_route.items() if k[0] == "hand"}
+        ami = {k[1]: time_at(v, level) for k, v in by_route.items() if k[0] == "amilpy"}
+        best_hand = min(hand, key=hand.get) if hand else None
+        best_ami = min(ami, key=ami.get) if ami else None
+        auto = ami.get("AUTO", math.inf)
+        th = hand[best_hand] if best_hand else math.inf
+        out.append({
+            "case": case.name, "level": level,
+            "best_hand": best_hand if best_hand and math.isfinite(th) else "not reached",
+            "hand_s": th, "auto_s": auto,
+            "ratio": auto / th if math.isfinite(th) and math.isfinite(auto) else math.nan,
+            "best_amilpy": best_ami if best_ami and math.isfinite(ami[best_ami]) else "-",
+            "best_amilpy_s": ami[best_ami] if best_ami else math.inf,
+            "min_err_hand": min((e for _, e in front(sum((v for k, v in by_route.items()
+                                                          if k[0] == "hand"), []))),
+                                default=math.inf),
+            "min_err_auto": min((e for _, e in front(by_route.get(("amilpy", "AUTO"), []))),
+                                default=math.inf),
+        })
+    return out
+
+
+def _g(x, fmt="{:.3g}") -> str:
+    if x is None or (isinstance(x, float) and math.isnan(x)):
+        return ""
+    if isinstance(x, float):
+        return "inf" if math.isinf(x) else fmt.format(x)
+    return str(x)
+
+
+def _fmt(r: dict) -> str:
+    setting = f"rtol={_g(r['rtol'])}" if r["rtol"] else f"DELT={_g(r['delt'])}"
+    return (f"  {r['case']:<22} {r['kind']:<6} {r['route']:<13} {setting:<14} "
+            f"t={_g(r['time'] * 1e3 if r['time'] == r['time'] else math.nan)} ms "
+            f"nfev={_g(r['nfev'])} steps={_g(r['nsteps'])} ev={_g(r['events'])} "
+            f"err={_g(r['error'], '{:.2e}')} {r['status'] if r['status'] != 'finished' else ''}")
+
+
+COLUMNS = ["case", "kind", "route", "rtol", "atol", "delt", "time", "nfev", "nsteps", "events",
+           "error", "status"]
+
+
+def write_outputs(out_dir: str, rows, summary, firsts, plot: bool = True) -> None:
+    os.makedirs(out_dir, exist_ok=True)
+    with open(os.path.join(out_dir, "work_precision.csv"), "w", newline="") as fh:
+        w = csv.DictWriter(fh, COLUMNS)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: r.get(k) for k in COLUMNS})
+    scols = ["case", "level", "best_hand", "hand_s", "auto_s", "ratio", "best_amilpy",
+             "best_amilpy_s", "min_err_hand", "min_err_auto"]
+    with open(os.path.join(out_dir, "summary.csv"), "w", newline="") as fh:
+        w = csv.DictWriter(fh, scols)
+        w.writeheader()
+        for r in summary:
+            w.writerow(r)
+    with open(os.path.join(out_dir, "work_precision.md"), "w") as fh:
+        fh.write(markdown(rows, summary, firsts))
+    if plot:
+        for case in sorted({r["case"] for r in rows}):
+            plot_case(case, [r for r in rows if r["case"] == case],
+                      os.path.join(out_dir, f"wp_{case}.png"))
+
+
+def markdown(rows, summary, firsts) -> str:
+    lines = ["## Equal-error summary (time to reach the error level; ratio = AUTO / fastest "
+             "hand-written)", "",
+             "| case | error | fastest hand-written | its time [ms] | amilpy AUTO [ms] | ratio "
+             "| fastest amilpy | its time [ms] | best error hand | best error AUTO |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for s in summary:
+        lines.append(
+            f"| {s['case']} | {s['level']:.0e} | {s['best_hand']} | {_g(s['hand_s'] * 1e3)} | "
+            f"{_g(s['auto_s'] * 1e3)} | {_g(s['ratio'], '{:.2f}')} | {s['best_amilpy']} | "
+            f"{_g(s['best_amilpy_s'] * 1e3)} | {_g(s['min_err_hand'], '{:.1e}')} | "
+            f"{_g(s['min_err_auto'], '{:.1e}')} |")
+    lines += ["", "## amilpy first-run cost (listing defaults)", "",
+              "| case | parse+check [ms] | first run [ms] | steady run [ms] |", "|---|---|---|---|"]
+    for f in firsts:
+        lines.append(f"| {f['case']} | {f['load_s'] * 1e3:.1f} | {f['first_run_s'] * 1e3:.1f} | "
+                     f"{f['steady_run_s'] * 1e3:.1f} |")
+    lines += ["", "## All points", ""]
+    for case in dict.fromkeys(r["case"] for r in rows):
+        lines += [f"### {case}", "",
+                  "| kind | route | rtol | DELT | time [ms] | nfev | steps | events | error "
+                  "| status |", "|---|---|---|---|---|---|---|---|---|---|"]
+        for r in rows:
+            if r["case"] != case:
+                continue
+            lines.append(
+                f"| {r['kind']} | {r['route']} | {_g(r['rtol'], '{:.0e}')} | "
+                f"{_g(r['delt'], '{:.3g}')} | {_g(r['time'] * 1e3)} | {_g(r['nfev'])} | "
+                f"{_g(r['nsteps'])} | {_g(r['events'])} | {_g(r['error'], '{:.2e}')} | "
+                f"{r['status']} |")
+        lines.append("")
+    return "\n".join(lines) + "\n"
+
+
+def plot_case(case: str, rows: list[dict], path: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 5.5))
+    routes = dict.fromkeys((r["kind"], r["route"]) for r in rows)
+    for kind, route in routes:
+        pts = [(r["time"], r["error"]) for r in rows if (r["kind"], r["route"]) == (kind, route)
+               and math.isfinite(r["time"]) and math.isfinite(r["error"]) and r["error"] > 0]
+        if not pts:
+            continue
+        t, e = zip(*pts, strict=True)
+        style = dict(ls="-", marker="o") if kind == "amilpy" else dict(ls="--", marker="x")
+        if route == "AUTO":
+            style.update(lw=2.5, color="k")
+        ax.loglog(e, np.array(t) * 1e3, label=f"{'amilpy ' if kind == 'amilpy' else ''}{route}",
+                  ms=4, **style)
+    ax.set_xlabel("error (max over grid and states, relative to the state's max)")
+    ax.set_ylabel("wall time [ms]")
+    ax.invert_xaxis()
+    ax.set_title(f"work-precision: {case}")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+# --------------------------------------------------------------------------- main
+
+def main(models=None, tols=None, hand_tols=None, repeats: int = 3, ladder: int = 7,
+         methods=None, fixed=None, hand_routes=None, out_dir: str | None = None,
+         plot: bool = True, slow: float | None = None) -> dict:
+    global SLOW
+    if slow is not None:
+        SLOW = slow
+    cases = all_cases()
+    names = models or list(cases)
+    tols = tols or TOLS
+    hand_tols = hand_tols or HAND_TOLS
+    out_dir = out_dir or os.path.join(ROOT, "benchmarks", "results")
+    rows, summary, firsts = [], [], []
+    import amilpy  # one-time imports (SciPy, the grammar) are startup.py's subject
+    amilpy.loads(cases["exp_decay"].text).run()
+    for name in names:
+        case = cases[name]
+        print(f"== {name}", flush=True)
+        case.ref()
+        firsts.append(first_run_cost(case))
+        rows_c = amilpy_rows(case, repeats, tols, ladder,
+                             AMILPY_METHODS if methods is None else methods,
+                             FIXED_METHODS if fixed is None else fixed)
+        rows_c += hand_rows(case, repeats, hand_tols, HAND_ROUTES if hand_routes is None
+                            else hand_routes)
+        rows += rows_c
+        summary += summarize(case, rows_c)
+    write_outputs(out_dir, rows, summary, firsts, plot)
+    print()
+    print(markdown([], summary, firsts))
+    return {"rows": rows, "summary": summary, "first": firsts, "out_dir": out_dir}
+
+
+if __name__ == "__main__":
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--models", nargs="*", help="case names (default: all)")
+    p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--ladder", type=int, default=7, help="DELT = OUTDEL/2**k, k < this")
+    p.add_argument("--quick", action="store_true", help="two tolerances, one repeat")
+    p.add_argument("--slow", type=float, default=SLOW, help="stop a route past this [s]")
+    p.add_argument("--out", default=None)
+    a = p.parse_args()
+    if a.quick:
+        main(a.models, tols=[1e-3, 1e-6], hand_tols=[1e-3, 1e-6], repeats=1, ladder=2,
+             out_dir=a.out, slow=a.slow)
+    else:
+        main(a.models, repeats=a.repeats, ladder=a.ladder, out_dir=a.out, slow=a.slow)

@@ -1,0 +1,89 @@
+"""The benchmark scripts still run (tiny settings). No assertion on wall-clock time."""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+
+import pytest
+
+BENCH = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "benchmarks")
+sys.path.insert(0, BENCH)
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+
+def test_front_and_interpolation():
+    import work_precision as wp
+
+    rows = [{"time": 1.0, "error": 1e-3}, {"time": 2.0, "error": 1e-5},
+            {"time": 1.5, "error": 1e-2},  # dominated: slower and less accurate
+            {"time": math.nan, "error": math.inf}]
+    assert wp.front(rows) == [(1.0, 1e-3), (2.0, 1e-5)]
+    assert wp.time_at(rows, 1e-2) == 1.0
+    assert wp.time_at(rows, 1e-4) == pytest.approx(math.sqrt(2.0))  # halfway, log-log
+    assert math.isinf(wp.time_at(rows, 1e-6))
+
+
+def test_cases_error_metric():
+    from cases import all_cases, error_on_grid
+
+    case = all_cases()["fsw_on_time"]
+    g, ref = case.ref()
+    assert error_on_grid(case, g, ref) == 0.0
+    assert error_on_grid(case, g, {"X": ref["X"] + 1e-3}) == pytest.approx(
+        1e-3 / max(abs(ref["X"])), rel=1e-9)
+    assert math.isinf(error_on_grid(case, g[:10], {"X": ref["X"][:10]}))  # stopped early
+
+
+def test_work_precision_runs(tmp_path):
+    import work_precision as wp
+
+    res = wp.main(models=["exp_decay", "fsw_on_time"], tols=[1e-3, 1e-6],
+                  hand_tols=[1e-3, 1e-6], repeats=1, ladder=1,
+                  methods=["AUTO", "RKS"], fixed=["RK4"],
+                  hand_routes=["odeint", "ivp_RK45", "ode_dop853"], out_dir=str(tmp_path))
+    kinds = {(r["kind"], r["route"]) for r in res["rows"]}
+    assert ("amilpy", "AUTO") in kinds and ("hand", "odeint") in kinds
+    assert all(r["status"] == "finished" for r in res["rows"])
+    assert all(r["error"] < 1e-2 for r in res["rows"])
+    assert len(res["summary"]) == 2 * 3
+    for name in ("work_precision.csv", "work_precision.md", "summary.csv",
+                 "wp_exp_decay.png", "wp_fsw_on_time.png"):
+        assert (tmp_path / name).stat().st_size > 0
+
+
+def test_hand_written_routes_all_run():
+    import work_precision as wp
+    from cases import all_cases, error_on_grid
+
+    case = all_cases()["fsw_on_time"]
+    for route in wp.HAND_ROUTES:
+        t, vals, _, _ = wp.hand_solve(case, route, 1e-6, 1e-9)
+        assert error_on_grid(case, t, vals) < 1e-3, route
+
+
+def test_percall_runs(tmp_path):
+    import percall
+
+    rows = percall.main(models=["exp_decay"], number=100, n_steps=10, out_dir=str(tmp_path))
+    assert rows[0]["rhs_amilpy_raw_us"] > 0 and rows[0]["run_AUTO_nfev"] > 0
+    assert (tmp_path / "percall.md").stat().st_size > 0
+
+
+def test_skip_effects_runs(tmp_path):
+    import skip_effects
+
+    res = skip_effects.main(repeats=1, out_dir=str(tmp_path))
+    assert res["d"]["folded_us"] > 0
+    assert (tmp_path / "skip_effects.md").stat().st_size > 0
+
+
+def test_startup_runs(tmp_path):
+    import startup
+
+    res = startup.main(repeats=1, out_dir=str(tmp_path))
+    assert all(r["rc"] == 0 for r in res["rows"])
+    assert "amilpy" in res["imports_check"]
+    assert (tmp_path / "startup.md").stat().st_size > 0
