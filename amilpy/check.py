@@ -6,6 +6,7 @@ Every fault found here is collected and reported together (see `Reporter`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 from . import ir
@@ -136,6 +137,9 @@ class _Checker:
                                 f"did you mean {hint}?" if hint else
                                 "TIMER takes " + ", ".join(TIMER_KEYS),
                             )
+                        elif not math.isfinite(s.value):
+                            self.rep.error(f"{s.name} must be a finite number (got {s.value:g})",
+                                           s.span)
                         elif s.value <= 0 and s.name != "DELMIN":
                             self.rep.error(f"{s.name} must be positive (got {s.value:g})", s.span)
                         timer[s.name] = s.value

@@ -213,6 +213,8 @@ def _describe_token(token) -> str:
 
 # -------------------------------------------------------------- tree -> syntax
 
+MAX_RUNS = 10_000  # value-list runs in one group: beyond this, a typo or a sweep
+
 _DATA_ALIASES = {
     "PARAM": "PARAM", "PARAMETER": "PARAM", "CONST": "CONST", "CONSTANT": "CONST",
     "INCON": "INCON",
@@ -290,11 +292,14 @@ class _Builder:
             if item.data == "data_list":
                 values: list[float] = []
                 for entry in item.children[1:]:
-                    if entry.data == "repeat":
-                        count = int(str(entry.children[0]))
-                        values.extend([self.value(entry.children[1])] * count)
-                    else:
-                        values.append(self.value(entry))
+                    count = int(str(entry.children[0])) if entry.data == "repeat" else 1
+                    if len(values) + count > MAX_RUNS:
+                        raise AmilError([Diagnostic(
+                            f"the value list of {name} gives more than {MAX_RUNS} runs",
+                            self.span(item), "a sweep of many values is `amilpy sweep`")],
+                            self.path, self.source)
+                    value = self.value(entry.children[1] if entry.data == "repeat" else entry)
+                    values.extend([value] * count)
                 items.append(ast.DataItem(name, tuple(values), self.span(item), True))
             else:
                 items.append(ast.DataItem(name, (self.value(item.children[1]),), self.span(item)))

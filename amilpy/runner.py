@@ -83,6 +83,14 @@ def timer_values(spec: ir.RunSpec, route: str, fintim: float | None = None
     elif "PRDEL" not in t:
         t["PRDEL"] = t["OUTDEL"]
     interval = min(t["OUTDEL"], t["PRDEL"], fintim)
+    for name in ("FINTIM", "OUTDEL", "PRDEL"):
+        if not (math.isfinite(t[name]) and t[name] > 0.0):
+            raise AmilError(f"{name} = {t[name]:g} is not a usable time (FINTIM = {fintim:g})")
+    rows = fintim / interval
+    if not rows <= DEFAULTS["max_rows"]:
+        raise AmilError(f"FINTIM/{'OUTDEL' if t['OUTDEL'] <= t['PRDEL'] else 'PRDEL'} = "
+                        f"{rows:.3g} output rows (limit {DEFAULTS['max_rows']}): raise "
+                        "OUTDEL/PRDEL")
     if "DELT" in t:
         n = max(1, math.ceil(interval / t["DELT"] - 1e-9))
         t["DELT"] = interval / n
@@ -287,32 +295,40 @@ class _Simulation(Switching):
         warnings: list[str] = []
         slide_noted: set[int] = set()
         watch_idx = [k for k in range(n_watch) if not self.sf.breakpoint_only[k]]
-        if start and "m" in start and len(start["m"]) == n_watch:
-            m = list(start["m"])
-        else:
-            m = self.choose_modes(t0, y, z, m, set(), first=True)
-        y = self.apply_resets(y, m)
-        if c.z0:
-            z[:] = c.mem(t0, y.tolist(), m, m, z)
-        for k in range(n_watch):
-            if m[k] == SLIDE:
-                self.note_slide(k, t0, warnings, slide_noted, events, 0.0)
-        out_i = 0
-        times = grid.times
+        try:
+            if start and "m" in start and len(start["m"]) == n_watch:
+                m = list(start["m"])
+            else:
+                m = self.choose_modes(t0, y, z, m, set(), first=True)
+            y = self.apply_resets(y, m)
+            if c.z0:
+                z[:] = c.mem(t0, y.tolist(), m, m, z)
+            for k in range(n_watch):
+                if m[k] == SLIDE:
+                    self.note_slide(k, t0, warnings, slide_noted, events, 0.0)
+            out_i = 0
+            times = grid.times
 
-        rows_g: list[int] = []  # grid index of each row (-1: a stop instant)
+            rows_g: list[int] = []  # grid index of each row (-1: a stop instant)
 
-        def record(t: float, yv: np.ndarray, mv, g: int = -1) -> None:
-            if g >= 0 and abs(t - times[g]) <= 1e-12 * max(abs(t), 1e-300):
-                t = float(times[g])  # print the grid instant, not a float next to it
-            rows_t.append(t)
-            rows_g.append(g)
-            rows_v.append(self.outputs(t, yv, mv, z))
+            def record(t: float, yv: np.ndarray, mv, g: int = -1) -> None:
+                if g >= 0 and abs(t - times[g]) <= 1e-12 * max(abs(t), 1e-300):
+                    t = float(times[g])  # print the grid instant, not a float next to it
+                rows_t.append(t)
+                rows_g.append(g)
+                rows_v.append(self.outputs(t, yv, mv, z))
 
-        # t0 row: a surface exactly at zero shows its X=0 branch (FSW's B)
-        lit0 = c.modes_literal(t0, y.tolist(), m, z)
-        record(t0, y, [0.0 if (lit0[k] == 0.0 and self.sf.kinds[k] == "sign"
-                               and m[k] != SLIDE) else m[k] for k in range(n_watch)], 0)
+            # t0 row: a surface exactly at zero shows its X=0 branch (FSW's B)
+            lit0 = c.modes_literal(t0, y.tolist(), m, z)
+            record(t0, y, [0.0 if (lit0[k] == 0.0 and self.sf.kinds[k] == "sign"
+                                   and m[k] != SLIDE) else m[k] for k in range(n_watch)], 0)
+        except (ArithmeticError, ValueError) as exc:
+            # a fault in the switching surfaces at the start (QNTZR with P = 0, say)
+            line = _fault_line(exc)
+            where = f" (line {line})" if line else ""
+            return self.result([], [], [], grid, [], Status.FAILED,
+                               f"cannot start at TIME = {t0:.9g}: {exc}{where}", [],
+                               dict(nsteps=0, nfev=0, nevents=0, seconds=0.0), t0, y, z, m)
         out_i = 1
         t = t0
         stop_reason = None
@@ -324,6 +340,10 @@ class _Simulation(Switching):
         tiny_steps = 0
         last_good = None
         try:
+            if not np.all(np.isfinite(y)):
+                bad = int(np.flatnonzero(~np.isfinite(y))[0])
+                raise _Failure(t0, f"the initial value of {c.state_names[bad]} is not finite "
+                                   f"({y[bad]:g})")
             while t < self.fintim and stop_reason is None:
                 k_bp = bisect_right(self.breakpoints, t * (1 + 1e-15) + 1e-300)
                 seg_end = self.fintim
@@ -332,6 +352,14 @@ class _Simulation(Switching):
                 for end_time in self.pulse_ends(z, t):
                     seg_end = min(seg_end, end_time)
                 f = self.rhs_for(m, z)
+                if len(y):
+                    # a derivative that is not finite where a segment starts can never
+                    # give an accepted step: say so instead of shrinking the step forever
+                    f0 = np.asarray(f(t, y), dtype=float)
+                    if not np.all(np.isfinite(f0)):
+                        bad = int(np.flatnonzero(~np.isfinite(f0))[0])
+                        raise _Failure(t, f"the derivative of {c.state_names[bad]} is "
+                                          f"{f0[bad]:g} at TIME = {t:.9g}" + self.fault_note())
                 # never step over more than an output interval: a switch that goes
                 # and comes back inside one step would be missed
                 max_step = min(self.timer["DELMAX"], max(self.timer["OUTDEL"],
@@ -368,6 +396,10 @@ class _Simulation(Switching):
                     err = stepper.step()
                     nsteps += 1
                     if err is not None:
+                        bad = getattr(stepper, "bad_index", None)
+                        if bad is not None:
+                            err = f"{c.state_names[bad]} is no longer finite after TIME = " \
+                                  f"{stepper.t:.9g}: {err}"
                         raise _Failure(stepper.t, self.explain_failure(err, stepper))
                     ta, tb = stepper.t_old, stepper.t
                     yb = stepper.y
@@ -442,8 +474,17 @@ class _Simulation(Switching):
                     # outputs inside (ta, tb); the one at tb waits for the new modes
                     while out_i < len(times) and times[out_i] < tb * (1 - 4e-16):
                         to = float(times[out_i])
-                        record(to, np.asarray(stepper.interpolant()(to), dtype=float), m,
-                               out_i)
+                        yo = np.asarray(stepper.interpolant()(to), dtype=float)
+                        if not np.all(np.isfinite(yo)) and np.all(np.isfinite(yb)):
+                            # the dense output overflowed inside (DOP853's does near
+                            # 1E300) while both ends are finite: a cubic through them
+                            yo = _hermite(to, ta, y, np.asarray(f(ta, y), float), tb, yb,
+                                          np.asarray(f(tb, yb), float))
+                        if not np.all(np.isfinite(yo)):
+                            bad = int(np.flatnonzero(~np.isfinite(yo))[0])
+                            raise _Failure(ta, f"{c.state_names[bad]} is no longer finite "
+                                               f"after TIME = {ta:.9g}")
+                        record(to, yo, m, out_i)
                         out_i += 1
                     at_output = out_i < len(times) and times[out_i] <= tb * (1 + 4e-16)
                     at_boundary = tb >= seg_end
@@ -555,6 +596,13 @@ class _Simulation(Switching):
         except KeyboardInterrupt:
             status = Status.FAILED
             message = f"interrupted at TIME = {t:.9g}"
+        except (ArithmeticError, ValueError) as exc:
+            # arithmetic in generated code (surfaces, outputs) or SciPy refusing
+            # non-finite values: the run ends here, with what it computed so far
+            status = Status.FAILED
+            line = _fault_line(exc)
+            where = f" (line {line})" if line else ""
+            message = f"integration failed at TIME = {t:.9g}: {exc}{where}"
         if stepper is not None:
             nfev += stepper.nfev
         if status == Status.FINISHED and out_i < len(times):
@@ -579,9 +627,9 @@ class _Simulation(Switching):
         window = recent[-200:]
         span = window[-1] - window[0]
         if span <= 1e-9 * max(self.fintim, abs(window[-1])):
-            last = events[-1]
-            raise _Failure(window[-1], f"{last.switch} chatters: 200 switches within "
-                                       f"{span:.3g} s")
+            what = f"{events[-1].switch} chatters" if events else "the run makes no progress"
+            raise _Failure(window[-1], f"{what}: 200 restarts within {span:.3g} s "
+                                       f"at TIME = {window[-1]:.9g}")
         del recent[:-200]
 
     def take_clean(self, stepper, m, z, seg_end, times, out_i, watch_idx, rows_t, rows_g,
@@ -710,11 +758,20 @@ class _Failure(Exception):
         self.reason = reason
 
 
+def _hermite(t, t0, y0, f0, t1, y1, f1) -> np.ndarray:
+    h = t1 - t0
+    s = (t - t0) / h
+    with np.errstate(all="ignore"):
+        return ((1 + 2 * s) * (1 - s) ** 2 * y0 + s * (1 - s) ** 2 * h * f0
+                + s * s * (3 - 2 * s) * y1 + s * s * (s - 1) * h * f1)
+
+
 def _fault_line(exc: BaseException) -> int | None:
     tb = exc.__traceback__
     line = None
     while tb is not None:
-        if tb.tb_frame.f_code.co_name in ("rhs", "out", "surf", "mem", "modes"):
+        if tb.tb_frame.f_code.co_name in ("rhs", "out", "surf", "mem", "modes", "surf_vec",
+                                          "out_vec"):
             line = tb.tb_lineno
         tb = tb.tb_next
     return line
@@ -723,7 +780,18 @@ def _fault_line(exc: BaseException) -> int | None:
 def simulate(model: ir.Model, spec: ir.RunSpec, options: Options | None = None) -> Run:
     """Integrate one run of a checked model. Faults in the data raise AmilError;
     a failing integration returns a Run with status FAILED and the rows so far."""
-    sim = _Simulation(model, spec, options or Options())
+    try:
+        sim = _Simulation(model, spec, options or Options())
+    except (ArithmeticError, ValueError) as exc:
+        # set-up evaluates constant parts (breakpoint instants, fixed branches):
+        # a fault there is in the listing's data, shown at its line
+        from .diagnostics import Span
+
+        line = _fault_line(exc)
+        raise AmilError([Diagnostic(f"cannot be evaluated before the run: {exc}",
+                                    Span(line, 1) if line else None,
+                                    "check the constant expressions on that line")],
+                        model.path, model.source) from None
     return sim.run()
 
 

@@ -1,0 +1,80 @@
+"""Chattering: Coulomb friction (stick-slip) and relays written with FSW."""
+
+import time
+
+import numpy as np
+import pytest
+
+import amilpy
+from stress import cases as C
+
+X_TOL = {**{m: 1e-5 for m in C.VARIABLE}, "RK4": 1e-8, "TRAPZ": 1e-4, "ADAMS": 1e-4,
+         "EULER": 3e-3}
+T_TOL = {**{m: 1e-5 for m in C.VARIABLE}, "RK4": 1e-6, "TRAPZ": 1e-4, "ADAMS": 1e-4,
+         "EULER": 3e-3}
+
+
+@pytest.fixture(scope="module")
+def stick_slip():
+    return amilpy.loads(C.STICK_SLIP.format(fintim="20.0"), name="stick_slip.amil")
+
+
+@pytest.mark.parametrize("method", C.METHODS)
+def test_stick_slip_against_closed_form(stick_slip, method):
+    r, = stick_slip.run(method=method)
+    assert r.status == "finished", r.message
+    x, v, t1, t2 = C.stick_slip_exact(r.t)
+    assert np.max(np.abs(r["X"] - x)) <= X_TOL[method]
+    assert np.max(np.abs(r["V"] - v)) <= X_TOL[method]
+    # stick at t1 (sliding on VR = 0), slip again at t2 when K*X reaches FC
+    slides = [e for e in r.events if e.kind == "slide"]
+    assert slides and abs(slides[0].time - t1) <= T_TOL[method]
+    leaves = [e for e in r.events if e.old == 0.5]
+    assert leaves and abs(leaves[0].time - t2) <= T_TOL[method] * 10
+    # while stuck, friction holds the mass: F = K*X (Filippov), not +-FC
+    stuck = (r.t > t1 + 0.1) & (r.t < t2 - 0.1)
+    assert np.allclose(r["F"][stuck], r["X"][stuck], atol=X_TOL[method] * 10)
+    assert np.allclose(r["V"][stuck], 0.1, atol=X_TOL[method])
+    # the warning: once, naming the switch and when it slid
+    assert len(r.warnings) == 1, r.warnings
+    w = r.warnings[0]
+    assert "sliding" in w and "FSW" in w and "line 5" in w
+    assert f"{slides[0].time:.6g}" in w
+    assert len(r.events) <= 10
+
+
+@pytest.mark.parametrize("method", C.METHODS)
+def test_relay_on_integrator_slides(method):
+    r, = amilpy.loads(C.RELAY_INTEGRATOR).run(method=method)
+    assert r.status == "finished" and len(r.events) == 1
+    assert abs(r.events[0].time - 1.0) <= 1e-6 and r.events[0].kind == "slide"
+    after = r.t > 1.0 + 1e-6
+    assert np.max(np.abs(r["X"][after])) <= 1e-9
+    assert len(r.warnings) == 1
+
+
+@pytest.mark.parametrize("method", C.METHODS)
+def test_relay_sliding_line(method):
+    r, = amilpy.loads(C.RELAY_SLIDING).run(method=method)
+    assert r.status == "finished", r.message
+    x, tr = C.relay_sliding_exact(r.t)
+    tol = 5e-3 if method == "EULER" else 1e-4
+    assert np.max(np.abs(r["X"] - x)) <= tol
+    assert len(r.events) <= 4 and len(r.warnings) == 1
+
+
+@pytest.mark.parametrize("method", C.METHODS)
+def test_relay_with_lag_is_bounded(method):
+    """A relay through a lag switches ever faster (Zeno); the run must end in
+    bounded events and time with a clear message, or finish."""
+    started = time.perf_counter()
+    r, = amilpy.loads(C.RELAY_LAG).run(method=method, max_events=2000, max_time=20)
+    elapsed = time.perf_counter() - started
+    assert elapsed < 15
+    assert len(r.events) <= 2001
+    if not r.ok:
+        assert "TIME =" in r.message
+        assert any(s in r.message for s in ("chatters", "switching events", "step size")), \
+            r.message
+        assert len(r.times) > 100  # the rows before are kept
+    assert np.all(np.isfinite(r["X"]))
