@@ -165,6 +165,8 @@ class Model:
     data_kinds: dict[str, str] = field(default_factory=dict)  # PARAM, CONST or INCON
     # compiled functions per set of constants: repeated runs do not recompile
     compiled: dict = field(default_factory=dict, repr=False, compare=False)
+    # INITIAL values per set of data, output grids per timer: likewise
+    memo: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def variables(self) -> list[str]:

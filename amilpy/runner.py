@@ -134,7 +134,15 @@ class _Simulation(Switching):
         self.timer = timer_values(spec, route, opts.fintim)
         reserved = {k: self.timer[k] for k in ("FINTIM", "DELT", "PRDEL", "OUTDEL", "DELMIN",
                                                "DELMAX")}
-        self.constants = initial_values(model, spec.data, spec.tables, reserved)
+        # INITIAL is compiled and evaluated once per set of data (sweeps and repeated
+        # runs come back to the same values)
+        ckey = ("initial", tuple(sorted(spec.data.items())), tuple(sorted(reserved.items())),
+                repr(sorted(spec.tables.items())))
+        if ckey not in model.memo:
+            if len(model.memo) > 256:
+                model.memo.clear()
+            model.memo[ckey] = initial_values(model, spec.data, spec.tables, reserved)
+        self.constants = dict(model.memo[ckey])
         const_modes = {}
         for s in model.surfaces:
             if s.depends == "impulse":
@@ -278,7 +286,11 @@ class _Simulation(Switching):
         t0 = self.t0
         y = np.array(start["y"] if start else c.y0, dtype=float)
         z = list(start["z"]) if start else list(c.z0)
-        grid = _make_grid(t0, self.fintim, self.timer["OUTDEL"], self.timer["PRDEL"])
+        gkey = ("grid", t0, self.fintim, self.timer["OUTDEL"], self.timer["PRDEL"])
+        if gkey not in self.model.memo:
+            self.model.memo[gkey] = _make_grid(t0, self.fintim, self.timer["OUTDEL"],
+                                               self.timer["PRDEL"])
+        grid = self.model.memo[gkey]
         if len(grid.times) > opts.max_rows:
             raise AmilError([Diagnostic(
                 f"the run would print {len(grid.times)} rows (limit {opts.max_rows})",
@@ -369,9 +381,13 @@ class _Simulation(Switching):
                     # the AUTO route steps from output instant to output instant
                     lo = bisect_right(times, t, out_i)
                     checks = times[lo:bisect_left(times, seg_end, lo)]
+                # with no state switch to watch (FINISH/TERMT end the run: no restart)
+                # nothing is thrown away after a chunk: one odeint call per segment
+                chunk = 16 if any(self.sf.purposes[k] in ("switch", "memory")
+                                  for k in watch_idx) else 1 << 30
                 stepper = make_stepper(self.route, f, t, y, seg_end, rtol=self.rtol,
                                        atol=self.atol, delt=self.delt, max_step=max_step,
-                                       first_step=last_step, checks=checks)
+                                       first_step=last_step, checks=checks, chunk=chunk)
                 e_prev = c.surf(t, y.tolist(), m, z) if watch_idx else []
                 self.segment_start = t
                 bulk = isinstance(stepper, OdeintStepper) and SLIDE not in m

@@ -248,7 +248,8 @@ class OdeintStepper(Stepper):
     """
 
     def __init__(self, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float, checks,
-                 rtol: float, atol, max_step: float, first_step: float | None) -> None:
+                 rtol: float, atol, max_step: float, first_step: float | None,
+                 chunk: int = 16) -> None:
         self.fun = fun
         self.t = self.t_old = t0
         self.y = np.asarray(y0, dtype=float)
@@ -262,7 +263,7 @@ class OdeintStepper(Stepper):
         self.Y = np.empty((0, len(self.y)))  # ... their states ...
         self.pos = 0  # ... and how many of them the runner has taken
         self.next_check = 0
-        self.chunk = 16
+        self.chunk = chunk
         self._nfev = 0
         self._dense = None
 
@@ -402,14 +403,15 @@ FIXED: dict[str, type[FixedStepper]] = {"RK4": RK4, "EULER": Euler, "TRAPZ": Heu
 
 def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float, *,
                  rtol: float, atol, delt: float, max_step: float = math.inf,
-                 first_step: float | None = None, checks=None) -> Stepper:
+                 first_step: float | None = None, checks=None, chunk: int = 16) -> Stepper:
     """The stepper for a canonical route name (see check.METHODS). `checks` are
     the instants the runner needs to look at (the output grid); only the AUTO
     route, which steps from check to check, uses them."""
     if len(y0) == 0:
         return Clock(t0, t_bound, min(max_step, delt) if route in FIXED else max_step)
     if route == "AUTO" and checks is not None:
-        return OdeintStepper(fun, t0, y0, t_bound, checks, rtol, atol, max_step, first_step)
+        return OdeintStepper(fun, t0, y0, t_bound, checks, rtol, atol, max_step, first_step,
+                             chunk)
     if route in FIXED:
         return FIXED[route](fun, t0, y0, t_bound, delt)
     return ScipyStepper(VARIABLE[route], fun, t0, y0, t_bound, rtol, atol, max_step, first_step)
