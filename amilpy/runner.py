@@ -381,10 +381,9 @@ class _Simulation(Switching):
                     # the AUTO route steps from output instant to output instant
                     lo = bisect_right(times, t, out_i)
                     checks = times[lo:bisect_left(times, seg_end, lo)]
-                # with no state switch to watch (FINISH/TERMT end the run: no restart)
-                # nothing is thrown away after a chunk: one odeint call per segment
-                chunk = 16 if any(self.sf.purposes[k] in ("switch", "memory")
-                                  for k in watch_idx) else 1 << 30
+                # with nothing to watch nothing is thrown away after a chunk: one odeint
+                # call per segment (a FINISH would throw away the rest of the run)
+                chunk = 16 if watch_idx else 1 << 30
                 stepper = make_stepper(self.route, f, t, y, seg_end, rtol=self.rtol,
                                        atol=self.atol, delt=self.delt, max_step=max_step,
                                        first_step=last_step, checks=checks, chunk=chunk)
