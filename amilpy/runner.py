@@ -667,8 +667,7 @@ class _Simulation(Switching):
         e_last = None
         if n and watch_idx:
             with np.errstate(all="ignore"):
-                E = [np.broadcast_to(np.asarray(v, float), (n,))
-                     for v in self.c.surf_v(T[:n], cols, m, z)]
+                E = [_column(v, n) for v in self.c.surf_v(T[:n], cols, m, z)]
             bad = np.zeros(n, bool)
             for k in watch_idx:
                 mode = m[k]
@@ -686,8 +685,7 @@ class _Simulation(Switching):
             return 0, None
         with np.errstate(all="ignore"):
             outs = self.c.out_v(T[:n], cols, m, z)
-        table = np.column_stack([np.broadcast_to(np.asarray(v, float), (n,)) for v in outs]) \
-            if outs else np.empty((n, 0))
+        table = np.column_stack([_column(v, n) for v in outs]) if outs else np.empty((n, 0))
         rows_t.extend(T[:n].tolist())
         rows_g.extend(range(out_i, out_i + n))
         rows_v.extend(table.tolist())
@@ -771,6 +769,13 @@ class _Failure(Exception):
         super().__init__(reason)
         self.t = t
         self.reason = reason
+
+
+def _column(v, n: int) -> np.ndarray:
+    """A vector function's result as n values (a constant comes back as a float)."""
+    if isinstance(v, np.ndarray) and v.shape == (n,):
+        return v
+    return np.full(n, float(v))
 
 
 def _hermite(t, t0, y0, f0, t1, y1, f1) -> np.ndarray:
