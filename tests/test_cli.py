@@ -118,3 +118,32 @@ def test_invalid_utf8(tmp_path, capsys):
     path.write_bytes(b"X = 1.0\nY = \xff\xfe\n")
     assert main(["check", str(path)]) == 1
     assert ":2:5: error: the file is not valid UTF-8" in capsys.readouterr().err
+
+
+def test_ctrl_c_keeps_the_rows_and_exits_3(tmp_path, capsys, monkeypatch):
+    # Ctrl-C in the middle of a run: the rows so far are printed and written,
+    # marked partial, and no further run starts
+    import amilpy.cli as cli
+
+    path = tmp_path / "long.amil"
+    path.write_text("PARAM K = (1.0, 2.0)\nX = INTGRL(0.0, COS(K*TIME))\n"
+                    "TIMER FINTIM = 100.0, OUTDEL = 0.01\nPRINT X\nPREPARE X\nEND\n")
+
+    class Interrupt:
+        def __init__(self, enabled):
+            pass
+
+        def __call__(self, t, fintim, events, steps):
+            if t > 10.0:
+                raise KeyboardInterrupt
+
+        def done(self):
+            pass
+
+    monkeypatch.setattr(cli, "Progress", Interrupt)
+    assert main(["run", str(path), "--method", "RKS"]) == 3
+    out = capsys.readouterr()
+    assert "interrupted at TIME = " in out.err and "PARTIAL RESULTS" in out.out
+    rows = (tmp_path / "long.csv").read_text().splitlines()
+    assert rows[0].startswith("# PARTIAL (run 1): interrupted at TIME = ")
+    assert rows[1] == "TIME,X" and len(rows) > 500  # one run only, cut after TIME 10
