@@ -39,14 +39,20 @@ class _Surfaces:
 
 
 class Switching:
-    def filippov(self, k: int, t: float, y: np.ndarray, m, z):
+    def branch_rates(self, k: int, t: float, y: np.ndarray, m, z):
+        """Both branches of surface k: their vector fields f+ and f-, and the
+        surface's rate along each (d+, d-)."""
         mp, mm = list(m), list(m)
         mp[k], mm[k] = 1.0, -1.0
         yl = y.tolist()
         fp = np.asarray(self.c.rhs(t, yl, mp, z), dtype=float)
         fm = np.asarray(self.c.rhs(t, yl, mm, z), dtype=float)
-        dp = self.surface_rate(k, t, y, fp, mp, z)
-        dm = self.surface_rate(k, t, y, fm, mm, z)
+        return (fp, fm, self.surface_rate(k, t, y, fp, mp, z),
+                self.surface_rate(k, t, y, fm, mm, z))
+
+    def filippov(self, k: int, t: float, y: np.ndarray, m, z):
+        """f+, f- and the weight of f+ that keeps a sliding surface at zero."""
+        fp, fm, dp, dm = self.branch_rates(k, t, y, m, z)
         denom = dm - dp
         alpha = 0.5 if denom == 0 else min(1.0, max(0.0, dm / denom))
         return fp, fm, alpha
@@ -115,13 +121,7 @@ class Switching:
 
     def direction(self, k: int, t: float, y: np.ndarray, m, z, old) -> float:
         """Which side of surface k the motion goes to from a point on it."""
-        mp, mm = list(m), list(m)
-        mp[k], mm[k] = 1.0, -1.0
-        yl = y.tolist()
-        fp = np.asarray(self.c.rhs(t, yl, mp, z), dtype=float)
-        fm = np.asarray(self.c.rhs(t, yl, mm, z), dtype=float)
-        dp = self.surface_rate(k, t, y, fp, mp, z)
-        dm = self.surface_rate(k, t, y, fm, mm, z)
+        _, _, dp, dm = self.branch_rates(k, t, y, m, z)
         tiny = 1e-300
         scale = max(abs(dp), abs(dm))
         if scale <= tiny or (abs(dp) <= 1e-13 * scale and abs(dm) <= 1e-13 * scale):
@@ -209,11 +209,7 @@ class Switching:
         out = []
         for k, v in enumerate(m):
             if v == SLIDE:
-                fp, fm, _ = self.filippov(k, t, y, m, z)
-                mp, mm = list(m), list(m)
-                mp[k], mm[k] = 1.0, -1.0
-                dp = self.surface_rate(k, t, y, fp, mp, z)
-                dm = self.surface_rate(k, t, y, fm, mm, z)
+                _, _, dp, dm = self.branch_rates(k, t, y, m, z)
                 if dp > 0:
                     out.append((k, 1.0))
                 elif dm < 0:
@@ -223,15 +219,9 @@ class Switching:
     def locate_slide_exit(self, k, sign, m, z, interp, ta, tb) -> float:
         from scipy.optimize import brentq
 
-        mp, mm = list(m), list(m)
-        mp[k], mm[k] = 1.0, -1.0
-
         def g(t):
-            y = np.asarray(interp(t), dtype=float)
-            fp, fm, _ = self.filippov(k, t, y, m, z)
-            if sign > 0:
-                return self.surface_rate(k, t, y, fp, mp, z)
-            return -self.surface_rate(k, t, y, fm, mm, z)
+            _, _, dp, dm = self.branch_rates(k, t, np.asarray(interp(t), dtype=float), m, z)
+            return dp if sign > 0 else -dm
 
         ga, gb = g(ta), g(tb)
         if ga > 0 or gb <= 0:
