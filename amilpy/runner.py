@@ -302,8 +302,7 @@ class _Simulation(Switching):
         nsteps = 0
         nfev = 0
         status, message = Status.FINISHED, ""
-        rows_t: list[float] = []
-        rows_v: list[list[float]] = []
+        rows = _Rows(len(c.out_names))
         warnings: list[str] = []
         slide_noted: set[int] = set()
         watch_idx = [k for k in range(n_watch) if not self.sf.breakpoint_only[k]]
@@ -321,14 +320,11 @@ class _Simulation(Switching):
             out_i = 0
             times = grid.times
 
-            rows_g: list[int] = []  # grid index of each row (-1: a stop instant)
 
             def record(t: float, yv: np.ndarray, mv, g: int = -1) -> None:
                 if g >= 0 and abs(t - times[g]) <= 1e-12 * max(abs(t), 1e-300):
                     t = float(times[g])  # print the grid instant, not a float next to it
-                rows_t.append(t)
-                rows_g.append(g)
-                rows_v.append(self.outputs(t, yv, mv, z))
+                rows.add(t, g, self.outputs(t, yv, mv, z))
 
             # t0 row: a surface exactly at zero shows its X=0 branch (FSW's B)
             lit0 = c.modes_literal(t0, y.tolist(), m, z)
@@ -338,7 +334,7 @@ class _Simulation(Switching):
             # a fault in the switching surfaces at the start (QNTZR with P = 0, say)
             line = _fault_line(exc)
             where = f" (line {line})" if line else ""
-            return self.result([], [], [], grid, [], Status.FAILED,
+            return self.result(_Rows(len(c.out_names)), grid, [], Status.FAILED,
                                f"cannot start at TIME = {t0:.9g}: {exc}{where}", [],
                                dict(nsteps=0, nfev=0, nevents=0, seconds=0.0), t0, y, z, m)
         out_i = 1
@@ -395,7 +391,7 @@ class _Simulation(Switching):
                     if bulk:
                         # AUTO: take the clean part of an odeint chunk at once
                         taken, e_bulk = self.take_clean(stepper, m, z, seg_end, times, out_i,
-                                                        watch_idx, rows_t, rows_g, rows_v)
+                                                        watch_idx, rows)
                         if taken:
                             out_i += taken
                             nsteps += taken
@@ -558,7 +554,7 @@ class _Simulation(Switching):
                             at_output = False
                         if stop_here is not None:
                             stop_reason = stop_here
-                            if not rows_t or rows_t[-1] != tb:
+                            if rows.last_t != tb:
                                 record(tb, y, m, -1)
                             break
                         if changed or at_boundary or truncated or not np.array_equal(y, yb):
@@ -604,7 +600,8 @@ class _Simulation(Switching):
             message = f"integration failed at TIME = {fail.t:.9g}: {fail.reason}"
             t = fail.t
             # keep the last accepted state as the final row (everything computed)
-            if last_good is not None and (not rows_t or last_good[0] > rows_t[-1]) and \
+            if last_good is not None and (rows.last_t is None or last_good[0] > rows.last_t) \
+                    and \
                     np.all(np.isfinite(last_good[1])):
                 record(last_good[0], np.asarray(last_good[1], float), last_good[2], -1)
                 t, y = last_good[0], np.asarray(last_good[1], float)
@@ -622,7 +619,7 @@ class _Simulation(Switching):
             nfev += stepper.nfev
         if status == Status.FINISHED and out_i < len(times):
             record(self.fintim, y, m, len(times) - 1)
-        return self.result(rows_t, rows_g, rows_v, grid, events, status, message, warnings,
+        return self.result(rows, grid, events, status, message, warnings,
                            dict(nsteps=nsteps, nfev=nfev, nevents=len(events),
                                 seconds=_clock.perf_counter() - started),
                            t, y, z, m)
@@ -647,8 +644,8 @@ class _Simulation(Switching):
                                        f"at TIME = {window[-1]:.9g}")
         del recent[:-200]
 
-    def take_clean(self, stepper, m, z, seg_end, times, out_i, watch_idx, rows_t, rows_g,
-                   rows_v) -> tuple[int, list | None]:
+    def take_clean(self, stepper, m, z, seg_end, times, out_i, watch_idx, rows
+                   ) -> tuple[int, list | None]:
         """Record at once the pending odeint instants before the first one that needs
         a look (a surface crossed, a non-finite state, the segment's end), using
         the surface and output functions over NumPy columns. Returns how many were
@@ -686,9 +683,7 @@ class _Simulation(Switching):
         with np.errstate(all="ignore"):
             outs = self.c.out_v(T[:n], cols, m, z)
         table = np.column_stack([_column(v, n) for v in outs]) if outs else np.empty((n, 0))
-        rows_t.extend(T[:n].tolist())
-        rows_g.extend(range(out_i, out_i + n))
-        rows_v.extend(table.tolist())
+        rows.add_block(T[:n], np.arange(out_i, out_i + n), table)
         stepper.consume(n)
         return n, e_last
 
@@ -730,13 +725,11 @@ class _Simulation(Switching):
     def explain_failure(self, err: str, stepper) -> str:
         return err + self.fault_note()
 
-    def result(self, rows_t, rows_g, rows_v, grid, events, status, message, warnings, stats,
+    def result(self, rows, grid, events, status, message, warnings, stats,
                t, y, z, m) -> Run:
         names = self.c.out_names
-        times = np.asarray(rows_t, dtype=float)
-        table = np.asarray(rows_v, dtype=float).reshape(len(rows_t), len(names))
+        times, g, table = rows.arrays()
         values = {n: table[:, i].copy() for i, n in enumerate(names)}
-        g = np.asarray(rows_g, dtype=int)
         last = np.zeros(len(g), bool)
         if len(g):
             last[-1] = True  # the stop instant (FINISH, TERMT, failure) is always shown
@@ -762,6 +755,42 @@ class _Simulation(Switching):
             warnings=warnings, t_end=float(t),
             final_state={"t": float(t), "y": y.tolist(), "z": list(z), "m": list(m)},
         )
+
+
+class _Rows:
+    """The recorded output rows, in order: single rows from the step-by-step path,
+    whole blocks from an odeint chunk (kept as arrays, never split into lists)."""
+
+    def __init__(self, width: int) -> None:
+        self.width = width
+        self.blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        self.t: list[float] = []
+        self.g: list[int] = []
+        self.v: list[list[float]] = []
+        self.last_t: float | None = None
+
+    def add(self, t: float, g: int, values: list[float]) -> None:
+        self.t.append(t)
+        self.g.append(g)
+        self.v.append(values)
+        self.last_t = t
+
+    def _flush(self) -> None:
+        if self.t:
+            self.blocks.append((np.asarray(self.t, float), np.asarray(self.g, int),
+                                np.asarray(self.v, float).reshape(len(self.t), self.width)))
+            self.t, self.g, self.v = [], [], []
+
+    def add_block(self, t: np.ndarray, g: np.ndarray, values: np.ndarray) -> None:
+        self._flush()
+        self.blocks.append((t, g, values))
+        self.last_t = float(t[-1])
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        self._flush()
+        if not self.blocks:
+            return np.empty(0), np.empty(0, int), np.empty((0, self.width))
+        return tuple(np.concatenate(parts) for parts in zip(*self.blocks, strict=True))
 
 
 class _Failure(Exception):
