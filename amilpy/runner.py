@@ -373,7 +373,9 @@ class _Simulation(Switching):
                 max_step = min(self.timer["DELMAX"], max(self.timer["OUTDEL"],
                                                          self.timer["PRDEL"]))
                 checks = None
-                if self.fast:
+                # while a surface slides, step by step (LSODA's class): its exit is
+                # seen at the step it happens, with no chunk integrated past it
+                if self.fast and SLIDE not in m:
                     # the AUTO route steps from output instant to output instant
                     lo = bisect_right(times, t, out_i)
                     checks = times[lo:bisect_left(times, seg_end, lo)]
