@@ -105,6 +105,9 @@ class _Folder(py.NodeTransformer):
     def visit_BinOp(self, node):
         self.generic_visit(node)
         a, b = _const_value(node.left), _const_value(node.right)
+        if isinstance(node.op, py.Pow) and a is not None and isinstance(node.right, py.Constant):
+            v = safe_pow(a, float(node.right.value))
+            return py.copy_location(_num(v), node) if math.isfinite(v) else node
         if a is not None and b is not None and not isinstance(node.op, py.Pow):
             try:
                 if isinstance(node.op, py.Add):
