@@ -67,7 +67,7 @@ class Compiled:
     watched: list[int]  # surface indices surf() returns, in order
     const_modes: dict[int, float]  # surfaces fixed for the whole run
     modes_literal: object  # (t, y, z) -> list of literal modes of watched surfaces
-    affine_time: dict[int, tuple[float, float]]  # surface -> (value at 0, slope)
+    affine_time: set[int]  # surfaces affine in TIME: their roots are breakpoints
     impulses: list[tuple[float, float]]
     source: str
     tables: dict[str, tuple] = field(default_factory=dict)
@@ -563,13 +563,11 @@ class Compiler:
                 z0.append(-math.inf)
             elif mem.func == "DERIV":
                 z0.extend([0.0, 0.0, 0.0, 0.0, self.constant(mem.args[0], mem.span)])
-        affine = {}
-        for i in self.watched:
-            s = model.surfaces[i]
-            if s.depends == "time" and self.events and s.kind == "sign":
-                if _is_affine(s.expr, self.constants,
-                              {e.target: e.expr for e in model.dynamic}):
-                    affine[i] = (0.0, 0.0)
+        equations = {e.target: e.expr for e in model.dynamic}
+        affine = {i for i in self.watched
+                  if model.surfaces[i].depends == "time" and self.events
+                  and model.surfaces[i].kind == "sign"
+                  and _is_affine(model.surfaces[i].expr, self.constants, equations)}
         impulses = []
         for e in _all_exprs(model):
             for node in iter_nodes(e):

@@ -30,7 +30,7 @@ from . import ir
 from .codegen import Compiled, Compiler, evaluate_constant, initial_values
 from .diagnostics import AmilError, Diagnostic
 from .result import Event, Run, Status
-from .steppers import OdeintStepper, is_fixed, make_stepper
+from .steppers import OdeintStepper, make_stepper
 from .switching import SLIDE, Switching, _linear_gradient, _sign, _Surfaces
 
 DEFAULTS = {
@@ -845,6 +845,3 @@ def simulate(model: ir.Model, spec: ir.RunSpec, options: Options | None = None) 
                         model.path, model.source) from None
     return sim.run()
 
-
-def probe_is_fixed(route: str) -> bool:
-    return is_fixed(route)

@@ -416,6 +416,3 @@ def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float
         return FIXED[route](fun, t0, y0, t_bound, delt)
     return ScipyStepper(VARIABLE[route], fun, t0, y0, t_bound, rtol, atol, max_step, first_step)
 
-
-def is_fixed(route: str) -> bool:
-    return route in FIXED
