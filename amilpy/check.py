@@ -258,8 +258,7 @@ class _Checker:
                 "set the TIMER values with a TIMER statement",
             )
             return False
-        if lookup(name) is not None and FUNCTIONS[ALIASES.get(name, name)].kind != "math":
-            pass  # CSMP allows a variable named like a function; calls are told apart by '('
+        # a variable may be named like a function (CSMP allows it): calls have '('
         return True
 
     # ---------------------------------------------------------------- lowering

@@ -316,7 +316,7 @@ class _Simulation(Switching):
                 z[:] = c.mem(t0, y.tolist(), m, m, z)
             for k in range(n_watch):
                 if m[k] == SLIDE:
-                    self.note_slide(k, t0, warnings, slide_noted, events, 0.0)
+                    self.note_slide(k, t0, warnings, slide_noted)
             out_i = 0
             times = grid.times
 
@@ -413,7 +413,7 @@ class _Simulation(Switching):
                         if bad is not None:
                             err = f"{c.state_names[bad]} is no longer finite after TIME = " \
                                   f"{stepper.t:.9g}: {err}"
-                        raise _Failure(stepper.t, self.explain_failure(err, stepper))
+                        raise _Failure(stepper.t, err + self.fault_note())
                     ta, tb = stepper.t_old, stepper.t
                     yb = stepper.y
                     last_good = (tb, yb, m)
@@ -536,7 +536,7 @@ class _Simulation(Switching):
                                                     c.watched[k], m[k], new_m[k],
                                                     "level" if kind == "level" else kind))
                                 if new_m[k] == SLIDE:
-                                    self.note_slide(k, tb, warnings, slide_noted, events, m[k])
+                                    self.note_slide(k, tb, warnings, slide_noted)
                         if c.z0:
                             z[:] = c.mem(tb, yb.tolist(), m, new_m, z)
                         changed = new_m != m
@@ -627,7 +627,7 @@ class _Simulation(Switching):
                            t, y, z, m)
 
     # ---------------------------------------------------------------- helpers
-    def note_slide(self, k, t, warnings, noted, events, old) -> None:
+    def note_slide(self, k, t, warnings, noted) -> None:
         if k in noted:
             return
         noted.add(k)
@@ -723,9 +723,6 @@ class _Simulation(Switching):
         line = _fault_line(exc)
         where = f" (line {line})" if line else ""
         return f"; last arithmetic fault at TIME = {t:.9g}{where}: {exc}"
-
-    def explain_failure(self, err: str, stepper) -> str:
-        return err + self.fault_note()
 
     def result(self, rows, grid, events, status, message, warnings, stats,
                t, y, z, m) -> Run:
