@@ -304,6 +304,7 @@ class _Simulation(Switching):
         status, message = Status.FINISHED, ""
         rows = _Rows(len(c.out_names))
         warnings: list[str] = []
+        stiff_noted = False
         slide_noted: set[int] = set()
         watch_idx = [k for k in range(n_watch) if not self.sf.breakpoint_only[k]]
         try:
@@ -417,6 +418,13 @@ class _Simulation(Switching):
                     ta, tb = stepper.t_old, stepper.t
                     yb = stepper.y
                     last_good = (tb, yb, m)
+                    if stepper.stiff_at is not None and not stiff_noted:
+                        stiff_noted = True
+                        warnings.append(
+                            f"stiff from TIME = {stepper.stiff_at:.6g}: the steps of METHOD "
+                            f"{self.method} are limited by stability, not accuracy (h*|lambda| "
+                            f"= {stepper.h_lambda:.3g}): METHOD AUTO or STIFF needs far fewer "
+                            "steps")
                     if tb - ta < h_floor:
                         tiny_steps += 1
                         if tiny_steps >= 100:
