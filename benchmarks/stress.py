@@ -53,6 +53,26 @@ def stiffness(quick):
             row(f"stiff K={k:.0e} (ratio {C.stiffness_ratio(k):.0e})", method, r, dt, meas)
 
 
+def tolerance_ladder(quick):
+    """The stiffness sweep again at RELERR 1E-3 ... 1E-9 (ABSERR = RELERR/1000): where
+    the error per step that the variable-step methods control adds up to more than
+    10 tolerance units."""
+    model = amilpy.loads(C.TWO_MASS.format(fintim="1.0", outdel="0.01"))
+    ks = [1e0, 1e2, 1e4, 1e6] if quick else [1e0, 1e1, 3e1, 1e2, 3e2, 1e3, 1e4, 1e6, 1e8]
+    for k in ks:
+        for method in C.VARIABLE:
+            for rtol in [1e-3, 1e-6, 1e-9] if quick else [10.0 ** -e for e in range(3, 10)]:
+                t0 = time.perf_counter()
+                r, = model.run(method=method, K=k, rtol=rtol, atol=rtol * 1e-3,
+                               max_steps=200_000 if quick else 5_000_000, max_time=120)
+                dt = time.perf_counter() - t0
+                meas = "-"
+                if r.ok:
+                    err = C.scaled_error(r, C.two_mass_reference(k, r.t), r.rtol, r.atol)
+                    meas = f"{err:.3g} tol"
+                row(f"K={k:.0e} RELERR={rtol:.0e}", method, r, dt, meas)
+
+
 def backlash(quick):
     fintim = 20.0 if quick else 200.0
     model = amilpy.loads(C.DEAD_ZONE.format(fintim=fintim))
@@ -134,8 +154,8 @@ def extremes(quick):
             row(name, method, r, dt, meas)
 
 
-GROUPS = {"stiffness": stiffness, "backlash": backlash, "chatter": chatter,
-          "blowup": blow_up, "long": long_horizon, "extremes": extremes}
+GROUPS = {"stiffness": stiffness, "ladder": tolerance_ladder, "backlash": backlash,
+          "chatter": chatter, "blowup": blow_up, "long": long_horizon, "extremes": extremes}
 
 
 def main(argv=None) -> int:
