@@ -411,7 +411,15 @@ class _Simulation(Switching):
                     nsteps += 1
                     if err is not None:
                         bad = getattr(stepper, "bad_index", None)
-                        if bad is not None:
+                        unstable = getattr(stepper, "unstable", None)
+                        if unstable is not None:
+                            h_lambda, since = unstable
+                            safe = stepper.STABILITY_LIMIT / h_lambda * self.delt
+                            err = f"{c.state_names[bad]} grows without bound from TIME = " \
+                                  f"{since:.9g}: METHOD {self.method} is unstable with DELT " \
+                                  f"= {self.delt:g} ({err}); take DELT below {safe:.2g} or " \
+                                  "a variable-step method (METHOD AUTO)"
+                        elif bad is not None:
                             err = f"{c.state_names[bad]} is no longer finite after TIME = " \
                                   f"{stepper.t:.9g}: {err}"
                         raise _Failure(stepper.t, err + self.fault_note())

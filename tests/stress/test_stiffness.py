@@ -6,7 +6,7 @@ import pytest
 import amilpy
 from stress import cases as C
 
-KS = [1e0, 1e2, 1e4, 1e6, 1e8]
+KS = [1e0, 1e1, 1e2, 3e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8]  # every decade, and the worst K
 MAX_STEPS = 5000  # CI size: explicit methods on K = 1E8 need millions of steps
 
 @pytest.fixture(scope="module")
@@ -26,7 +26,8 @@ def test_stiff_drive(model, k, method):
     assert len(r.times) >= 1 and np.all(np.isfinite(r.values["W1"])), "no NaN tables"
     if method in C.FIXED:
         if not r.ok:
-            assert "TIME =" in r.message and "no longer finite" in r.message, r.message
+            assert "TIME =" in r.message, r.message
+            assert "grows without bound" in r.message or "no longer finite" in r.message
             assert r.t_end < 1.0
         else:
             ref = C.two_mass_reference(k, r.t)
@@ -95,3 +96,32 @@ def test_bdf_on_a_lightly_damped_mode(model, rtol):
     r, = model.run(method="BDF", K=1e2, rtol=rtol, atol=rtol * 1e-3)
     ref = C.two_mass_reference(1e2, r.t)
     assert r.ok and C.scaled_error(r, ref, r.rtol, r.atol) <= 10.0
+
+
+@pytest.mark.parametrize("method", C.FIXED)
+def test_fixed_step_instability_is_stopped_before_it_overflows(model, method):
+    """K = 1E6, DELT = 6.25E-4: h*|lambda| ~ 12 on the shaft mode, past every fixed-step
+    method's stability limit. The run stops within a few steps of the growth with
+    the variable, the TIME it began, and a DELT that would be stable; no row holds
+    an overflowing value."""
+    r, = model.run(method=method, K=1e6)
+    assert not r.ok and "grows without bound from TIME = " in r.message, r.message
+    assert f"METHOD {method} is unstable with DELT = 0.000625" in r.message
+    safe = float(r.message.split("take DELT below ")[1].split()[0])
+    assert 2e-5 < safe < 2.5e-4  # the limit over h*|lambda| = 2E4 1/s
+    assert r.t_end < 0.01 and np.all(np.abs(r["W1"]) < 1e20)
+
+
+def test_slow_instability_is_caught_too(model):
+    """K = 1E5 with ADAMS: h*|lambda| ~ 1.2 against AB2's limit of 1, a growth of 1.34
+    a step that used to finish the run with W1 = 5.7E149 in the last row."""
+    r, = model.run(method="ADAMS", K=1e5)
+    assert not r.ok and "grows without bound" in r.message and "W1" in r.message
+    assert np.all(np.abs(r["W1"]) < 1.0)
+
+
+@pytest.mark.parametrize("method", C.FIXED)
+def test_stable_fixed_step_runs_are_not_stopped(model, method):
+    """K = 1E4: h*|lambda| ~ 0.09 is stable for all four methods."""
+    r, = model.run(method=method, K=1e4)
+    assert r.ok, r.message
