@@ -94,6 +94,7 @@ class _Checker:
         data_spans: dict[str, Span] = {}
         data_kind: dict[str, str] = {}
         tables: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = {}
+        table_spans: dict[str, Span] = {}
         timer: dict[str, float] = {}
         method: str | None = None
         relerr = abserr = None
@@ -127,6 +128,7 @@ class _Checker:
                 elif isinstance(st, ast.Table):
                     self.check_table(st)
                     tables[st.name] = (st.xs, st.ys)
+                    table_spans.setdefault(st.name, st.span)
                 elif isinstance(st, ast.Timer):
                     for s in st.settings:
                         if s.name not in TIMER_KEYS:
@@ -226,6 +228,15 @@ class _Checker:
                 data[lname] = lists[lname][0]
         if not runs:
             self.rep.error("the listing has no statements", None)
+        # a value first given after an END exists only for the runs from there on
+        for name, span in [*data_spans.items(), *table_spans.items()]:
+            if runs and name not in runs[0].data and name not in runs[0].tables:
+                self.rep.error(
+                    f"{name} has no value in the first run: it is first given after an END",
+                    span,
+                    f"give {name} a value before the first END; a statement after END "
+                    "changes it for the runs that follow",
+                )
         self.tables = tables
         self.data_kind = data_kind
         return runs, list(data), data_spans

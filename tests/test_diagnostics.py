@@ -105,6 +105,25 @@ def test_afgen_needs_a_table():
     assert "needs a FUNCTION table" in d.message and "FT" in d.hint
 
 
+@pytest.mark.parametrize("late, column", [("PARAM T1 = 0.5", 7),
+                                           ("FUNCTION T1 = 0.0, 0.0, 1.0, 2.0", 1)])
+def test_value_first_given_after_end(late, column):
+    """Found by fuzzing (a line moved below END): the first run has no T1 at all, which
+    reached the generated code as a NameError."""
+    use = "AFGEN(T1, TIME)" if late.startswith("FUNCTION") else "FSW(TIME - T1, 0.0, 1.0, 1.0)"
+    d, _ = only(f"SW = {use}\nX = INTGRL(0.0, SW)\n" + TIMER + f"END\n{late}\nEND\n")
+    assert (d.span.line, d.span.column) == (5, column)
+    assert "T1 has no value in the first run" in d.message
+    assert "before the first END" in d.hint
+
+
+def test_a_value_changed_after_end_is_fine():
+    m = amilpy.loads("PARAM T1 = 0.2\nX = INTGRL(0.0, FSW(TIME - T1, 0.0, 1.0, 1.0))\n"
+                     + TIMER + "END\nPARAM T1 = 0.5\nEND\n")
+    a, b = m.run()
+    assert a["X"][-1] == pytest.approx(0.8) and b["X"][-1] == pytest.approx(0.5)
+
+
 def test_unknown_method():
     d, _ = only("X = 1.0\nMETHOD RUNGE\n" + TIMER)
     assert "unknown integration method RUNGE" in d.message
