@@ -30,7 +30,7 @@ from . import ir
 from .codegen import Compiled, Compiler, evaluate_constant, initial_values
 from .diagnostics import AmilError, Diagnostic
 from .result import Event, Run, Status
-from .steppers import OdeintStepper, make_stepper
+from .steppers import Hermite, OdeintStepper, make_stepper
 from .switching import SLIDE, Switching, _linear_gradient, _sign, _Surfaces
 
 DEFAULTS = {
@@ -507,8 +507,8 @@ class _Simulation(Switching):
                         if not np.all(np.isfinite(yo)) and np.all(np.isfinite(yb)):
                             # the dense output overflowed inside (DOP853's does near
                             # 1E300) while both ends are finite: a cubic through them
-                            yo = _hermite(to, ta, y, np.asarray(f(ta, y), float), tb, yb,
-                                          np.asarray(f(tb, yb), float))
+                            yo = Hermite(ta, y, np.asarray(f(ta, y), float), tb, yb,
+                                         np.asarray(f(tb, yb), float))(to)
                         if not np.all(np.isfinite(yo)):
                             bad = int(np.flatnonzero(~np.isfinite(yo))[0])
                             raise _Failure(ta, f"{c.state_names[bad]} is no longer finite "
@@ -820,14 +820,6 @@ def _column(v, n: int) -> np.ndarray:
     if isinstance(v, np.ndarray) and v.shape == (n,):
         return v
     return np.full(n, float(v))
-
-
-def _hermite(t, t0, y0, f0, t1, y1, f1) -> np.ndarray:
-    h = t1 - t0
-    s = (t - t0) / h
-    with np.errstate(all="ignore"):
-        return ((1 + 2 * s) * (1 - s) ** 2 * y0 + s * (1 - s) ** 2 * h * f0
-                + s * s * (3 - 2 * s) * y1 + s * s * (s - 1) * h * f1)
 
 
 def _fault_line(exc: BaseException) -> int | None:

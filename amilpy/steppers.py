@@ -47,21 +47,27 @@ class Stepper:
         self.t = t
 
 
-class _Hermite:
-    """The cubic through both ends of a step with their derivatives."""
+class Hermite:
+    """The cubic through both ends of a step with their derivatives: the dense
+    output of the fixed-step methods, and of a step whose own interpolant is not
+    to be trusted (stability-bound, or overflowing inside)."""
 
-    def __init__(self, t0, y0, f0, t1, y1, f1) -> None:
+    def __init__(self, t0: float, y0: np.ndarray, f0: np.ndarray, t1: float, y1: np.ndarray,
+                 f1: np.ndarray) -> None:
         self.t0, self.h = t0, t1 - t0
         self.y0, self.y1 = y0, y1
         self.f0, self.f1 = f0, f1
 
     def __call__(self, t: float) -> np.ndarray:
+        if self.h == 0:
+            return self.y1
         s = (t - self.t0) / self.h
         h00 = (1 + 2 * s) * (1 - s) ** 2
         h01 = s * s * (3 - 2 * s)
         h10 = s * (1 - s) ** 2
         h11 = s * s * (s - 1)
-        return h00 * self.y0 + h01 * self.y1 + self.h * (h10 * self.f0 + h11 * self.f1)
+        with np.errstate(all="ignore"):
+            return h00 * self.y0 + h01 * self.y1 + self.h * (h10 * self.f0 + h11 * self.f1)
 
 
 class ScipyStepper(Stepper):
@@ -173,8 +179,8 @@ class ScipyStepper(Stepper):
                 # a stability-limited step: its stage derivatives carry the stiff
                 # components undamped, so interpolate from the ends only
                 k = solver.K
-                self._dense = _Hermite(solver.t_old, solver.y_old, k[0].copy(), solver.t,
-                                       solver.y, k[-1].copy())
+                self._dense = Hermite(solver.t_old, solver.y_old, k[0].copy(), solver.t,
+                                      solver.y, k[-1].copy())
             else:
                 self._dense = solver.dense_output()
         return self._dense
@@ -287,20 +293,7 @@ class FixedStepper(Stepper):
         return None
 
     def interpolant(self):
-        t0, t1, y0, y1, f0, f1 = self.t_old, self.t, self.y_old, self.y, self.f_old, self.f
-        h = t1 - t0
-
-        def hermite(t: float) -> np.ndarray:
-            if h == 0:
-                return y1
-            s = (t - t0) / h
-            h00 = (1 + 2 * s) * (1 - s) ** 2
-            h10 = s * (1 - s) ** 2
-            h01 = s * s * (3 - 2 * s)
-            h11 = s * s * (s - 1)
-            return h00 * y0 + h10 * h * f0 + h01 * y1 + h11 * h * f1
-
-        return hermite
+        return Hermite(self.t_old, self.y_old, self.f_old, self.t, self.y, self.f)
 
     def truncate(self, t: float) -> None:
         """Redo the last step with the method itself, ending exactly at t."""
