@@ -413,8 +413,7 @@ class _Simulation(Switching):
                         bad = getattr(stepper, "bad_index", None)
                         unstable = getattr(stepper, "unstable", None)
                         if unstable is not None:
-                            h_lambda, since = unstable
-                            safe = stepper.STABILITY_LIMIT / h_lambda * self.delt
+                            since, safe = unstable
                             err = f"{c.state_names[bad]} grows without bound from TIME = " \
                                   f"{since:.9g}: METHOD {self.method} is unstable with DELT " \
                                   f"= {self.delt:g} ({err}); take DELT below {safe:.2g} or " \
