@@ -112,12 +112,9 @@ def _read(name: str) -> str:
 # ----------------------------------------------------------------- Exercise 4 (three models)
 
 
-def _ex4_friction(w1: float, mnet: float, mf: float) -> float:
-    if w1 > 0.0:
-        return mf
-    if w1 < 0.0:
-        return -mf
-    return mf if mnet > mf else (-mf if mnet < -mf else mnet)
+# The friction FSW is written out in each right-hand side below, as a hand-written
+# one would be: a helper call makes it 13% slower (0.16 -> 0.18 us, measured) and
+# would flatter amilpy in the ratios.
 
 
 def _ex4_elastic_segments():

@@ -38,18 +38,25 @@ def row(case, method, r, seconds, measure):
           flush=True)
 
 
+def _two_mass_run(model, k: float, method: str, quick: bool, **tolerances):
+    """One run of the two-mass drive: the run, its seconds, and its error in
+    tolerance units against the matrix exponential ("-" if it did not finish)."""
+    t0 = time.perf_counter()
+    r, = model.run(method=method, K=k, max_steps=200_000 if quick else 5_000_000,
+                   max_time=120, **tolerances)
+    dt = time.perf_counter() - t0
+    meas = "-"
+    if r.ok:
+        err = C.scaled_error(r, C.two_mass_reference(k, r.t), r.rtol, r.atol)
+        meas = f"{err:.3g} tol"
+    return r, dt, meas
+
+
 def stiffness(quick):
     model = amilpy.loads(C.TWO_MASS.format(fintim="1.0", outdel="0.01"))
     for k in [1e0, 1e2, 1e4, 1e6, 1e8]:
         for method in C.METHODS:
-            t0 = time.perf_counter()
-            r, = model.run(method=method, K=k, max_steps=200_000 if quick else 5_000_000,
-                           max_time=120)
-            dt = time.perf_counter() - t0
-            meas = "-"
-            if r.ok:
-                err = C.scaled_error(r, C.two_mass_reference(k, r.t), r.rtol, r.atol)
-                meas = f"{err:.3g} tol"
+            r, dt, meas = _two_mass_run(model, k, method, quick)
             row(f"stiff K={k:.0e} (ratio {C.stiffness_ratio(k):.0e})", method, r, dt, meas)
 
 
@@ -62,14 +69,8 @@ def tolerance_ladder(quick):
     for k in ks:
         for method in C.VARIABLE:
             for rtol in [1e-3, 1e-6, 1e-9] if quick else [10.0 ** -e for e in range(3, 10)]:
-                t0 = time.perf_counter()
-                r, = model.run(method=method, K=k, rtol=rtol, atol=rtol * 1e-3,
-                               max_steps=200_000 if quick else 5_000_000, max_time=120)
-                dt = time.perf_counter() - t0
-                meas = "-"
-                if r.ok:
-                    err = C.scaled_error(r, C.two_mass_reference(k, r.t), r.rtol, r.atol)
-                    meas = f"{err:.3g} tol"
+                r, dt, meas = _two_mass_run(model, k, method, quick, rtol=rtol,
+                                            atol=rtol * 1e-3)
                 row(f"K={k:.0e} RELERR={rtol:.0e}", method, r, dt, meas)
 
 
