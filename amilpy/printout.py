@@ -154,6 +154,15 @@ def format_runs(runs: list[Run], show_events: bool = True, ascii_plots: bool = F
 
 # ------------------------------------------------------------------ files
 
+def _file_mode(path: str) -> int:
+    try:
+        return os.stat(path).st_mode & 0o7777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
 def atomic_write(path: str, data: bytes) -> None:
     """Write a file so that it is either the old one or the complete new one."""
     directory = os.path.dirname(os.path.abspath(path)) or "."
@@ -164,6 +173,9 @@ def atomic_write(path: str, data: bytes) -> None:
             fh.write(data)
             fh.flush()
             os.fsync(fh.fileno())
+        # mkstemp makes the file private (0600); the result is an ordinary file,
+        # with the mode a plain open() would give it, or the one it had before
+        os.chmod(tmp, _file_mode(path))
         os.replace(tmp, path)
     except BaseException:
         try:

@@ -57,6 +57,23 @@ def test_plot_writes_png(model, tmp_path):
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_written_files_get_the_usual_mode(model, tmp_path):
+    """Files are written to a private temporary file and renamed: the CSV and PNG must
+    still come out as a plain open() would make them (they were 0600), and an
+    existing file keeps its mode."""
+    umask = os.umask(0o022)
+    try:
+        out = tmp_path / "figs"
+        assert main(["run", str(model), "--plot", "--out", str(out), "--quiet"]) == 0
+        assert (out / "decay.png").stat().st_mode & 0o777 == 0o644
+        assert (out / "decay.csv").stat().st_mode & 0o777 == 0o644
+        os.chmod(out / "decay.png", 0o640)
+        assert main(["run", str(model), "--plot", "--out", str(out), "--quiet"]) == 0
+        assert (out / "decay.png").stat().st_mode & 0o777 == 0o640
+    finally:
+        os.umask(umask)
+
+
 def test_show_python(model, capsys):
     assert main(["run", str(model), "--show-python", "--quiet"]) == 0
     out = capsys.readouterr().out
