@@ -13,17 +13,17 @@ from dataclasses import replace
 
 from . import ir
 from .result import Run
+from .routes import Route
 
-EXPLICIT = ("RK45", "DOP853")
 EXPENSIVE = 5_000  # right-hand-side evaluations before a probe is worth it
 RATIO = 5.0  # how many times cheaper the implicit method must be to say so
 
 
-def stiffness_advice(model: ir.Model, spec: ir.RunSpec, run: Run, route: str) -> str | None:
+def stiffness_advice(model: ir.Model, spec: ir.RunSpec, run: Run, route: Route) -> str | None:
     """A one-line note when METHOD STIFF would have been much cheaper, else None."""
     from .runner import Options, simulate
 
-    if route not in EXPLICIT or run.stats.get("nfev", 0) < EXPENSIVE:
+    if route.fixed or not route.explicit or run.stats.get("nfev", 0) < EXPENSIVE:
         return None
     window = 0.1 * spec.timer["FINTIM"]
     # outputs: one variable on a coarse grid; the work is the integration

@@ -14,9 +14,10 @@ from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from . import ir
-from .check import check, method_name
+from .check import check
 from .diagnostics import AmilError, Diagnostic, nearest
 from .parse import parse
+from .routes import route_for
 
 if TYPE_CHECKING:
     from .result import Run
@@ -87,7 +88,7 @@ class Model:
         given as keywords override the listing's for all of them."""
         from .runner import Options, simulate
 
-        if method is not None and method_name(method) is None:
+        if method is not None and route_for(method) is None:
             raise AmilError(f"unknown integration method {method}")
         for label, tol in (("rtol", rtol), ("atol", atol)):
             if tol is not None and not tol > 0:
@@ -110,7 +111,7 @@ class Model:
             if advice and not advised:
                 from .advice import stiffness_advice
 
-                run.advice = stiffness_advice(self.ir, spec, run, method_name(run.method))
+                run.advice = stiffness_advice(self.ir, spec, run, route_for(run.method))
                 advised = run.advice is not None  # say it once
             runs.append(run)
             if run.message.startswith("interrupted"):
@@ -125,7 +126,7 @@ class Model:
         """One run per value of data value `name` (see `amilpy.sweep.sweep`)."""
         from .sweep import sweep
 
-        if method is not None and method_name(method) is None:
+        if method is not None and route_for(method) is None:
             raise AmilError(f"unknown integration method {method}")
         return sweep(self, name, [float(v) for v in values], both_ways=both_ways,
                      carry_state=carry_state, settle=settle, measure=measure, method=method,

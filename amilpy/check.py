@@ -12,24 +12,12 @@ from dataclasses import replace
 from . import ir
 from . import syntax as ast
 from .diagnostics import Reporter, Span, nearest
+from .language import KNOWN_BEFORE_RUN, RESERVED, SETTINGS, TIME, TIMER_KEYS
 from .library import ALIASES, FUNCTIONS, MEMORY_SLOTS, lookup
-
-RESERVED = ("TIME", "DELT", "DELMIN", "DELMAX", "FINTIM", "PRDEL", "OUTDEL", "PI")
-TIMER_KEYS = ("FINTIM", "DELT", "PRDEL", "OUTDEL", "DELMIN", "DELMAX")
-METHODS = {
-    "AUTO": "AUTO", "RKS": "RK45", "RK45": "RK45", "RKSFX": "RK4", "RK4": "RK4", "SIMP": "RK4",
-    "RECT": "EULER", "EULER": "EULER", "TRAPZ": "TRAPZ", "HEUN": "TRAPZ", "ADAMS": "ADAMS",
-    "AB2": "ADAMS", "DOP853": "DOP853", "MILNE": "LSODA", "LSODA": "LSODA", "STIFF": "RADAU",
-    "RADAU": "RADAU", "BDF": "BDF", "GEAR": "BDF",
-}
+from .routes import method_names, route_for
 
 _DATA_STATEMENTS = (ast.Data, ast.Table, ast.Timer, ast.Method, ast.Tolerance, ast.Finish,
                     ast.Report, ast.Label, ast.Title)
-
-
-def method_name(name: str) -> str | None:
-    """The canonical integrator route for a METHOD name (or None if unknown)."""
-    return METHODS.get(name.upper())
 
 
 def check(program: ast.Program, name: str | None = None) -> ir.Model:
@@ -146,13 +134,13 @@ class _Checker:
                             self.rep.error(f"{s.name} must be positive (got {s.value:g})", s.span)
                         timer[s.name] = s.value
                 elif isinstance(st, ast.Method):
-                    if method_name(st.name) is None:
-                        hint = nearest(st.name, set(METHODS))
+                    if route_for(st.name) is None:
+                        hint = nearest(st.name, set(method_names()))
                         self.rep.error(
                             f"unknown integration method {st.name}",
                             st.span,
                             (f"did you mean {hint}? " if hint else "")
-                            + "known: " + ", ".join(sorted(METHODS)),
+                            + "known: " + ", ".join(method_names()),
                         )
                     method = st.name
                 elif isinstance(st, ast.Tolerance):
@@ -265,7 +253,7 @@ class _Checker:
             self.rep.error(
                 f"{name} is a reserved name and cannot be {what}",
                 span,
-                "TIME, DELT, DELMIN, DELMAX, FINTIM, PRDEL, OUTDEL and PI are read-only; "
+                ", ".join(RESERVED[:-1]) + f" and {RESERVED[-1]} are read-only; "
                 "set the TIMER values with a TIMER statement",
             )
             return False
@@ -362,8 +350,7 @@ class _Checker:
                         and id(node) not in table_args:
                     self.undefined(node, known)
 
-        initial_ok = self.data_names | self.initial_names | {"PI", "FINTIM", "DELT", "PRDEL",
-                                                             "OUTDEL", "DELMIN", "DELMAX", "TIME"}
+        initial_ok = self.data_names | self.initial_names | KNOWN_BEFORE_RUN
         for st in sections["INITIAL"]:
             for node in ast.walk(st.expr):
                 if isinstance(node, ast.Name) and node.name not in initial_ok \
@@ -394,11 +381,11 @@ class _Checker:
                         self.undefined(node, known)
 
         # reports and FINISH must name known quantities
-        report_known = known - {"DELT", "DELMIN", "DELMAX", "FINTIM", "PRDEL", "OUTDEL", "PI"}
+        report_known = known - SETTINGS
         for st in getattr(self, "_all_report_statements", []):
             for n, s in zip(st.names, st.name_spans, strict=True):
-                if n not in report_known and n != "TIME":
-                    hint = nearest(n, report_known - {"TIME"})
+                if n not in report_known and n != TIME:
+                    hint = nearest(n, report_known - {TIME})
                     self.rep.error(
                         f"{st.kind} names {n}, which the model never defines",
                         s,

@@ -13,6 +13,7 @@ import os
 import sys
 
 from .diagnostics import AmilError
+from .routes import methods_help
 
 EXIT_OK, EXIT_MODEL, EXIT_USAGE, EXIT_FAILED = 0, 1, 2, 3
 
@@ -34,8 +35,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--csv", metavar="PATH", help="write the OUTDEL-grid values as CSV")
     run.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
                      help="override a PARAM/CONST/INCON value (repeatable)")
-    run.add_argument("--method", help="integration method (AUTO, RKS, DOP853, LSODA, STIFF, "
-                                      "BDF, RK4, EULER, TRAPZ, ADAMS)")
+    run.add_argument("--method", metavar="NAME", help="integration method (as METHOD): "
+                     + methods_help())
     run.add_argument("--rtol", type=float, help="relative tolerance (RELERR)")
     run.add_argument("--atol", type=float, help="absolute tolerance (ABSERR)")
     run.add_argument("--show-python", action="store_true",

@@ -20,7 +20,7 @@ from typing import Any
 
 # Absolute imports: `pygmentize -x -l amilpy/highlight.py:AmilLexer` runs this
 # file outside its package, where relative imports fail.
-from amilpy.check import RESERVED
+from amilpy.language import RESERVED
 from amilpy.library import ALIASES, FUNCTIONS
 
 # Statement and section keywords (grammar/amil.lark, "keywords"). TITLE and

@@ -13,6 +13,7 @@ from importlib import resources
 
 from . import syntax as ast
 from .diagnostics import AmilError, Diagnostic, Span
+from .language import DATA_KEYWORDS, REPORT_KEYWORDS, SECTIONS
 
 # Friendly labels for parser states, matched by lark's `match_examples` against
 # small bad listings that end in the same parser state as the user's text.
@@ -215,14 +216,6 @@ def _describe_token(token) -> str:
 
 MAX_RUNS = 10_000  # value-list runs in one group: beyond this, a typo or a sweep
 
-_DATA_ALIASES = {
-    "PARAM": "PARAM", "PARAMETER": "PARAM", "CONST": "CONST", "CONSTANT": "CONST",
-    "INCON": "INCON",
-}
-_REPORT_ALIASES = {
-    "PRINT": "PRINT", "OUTPUT": "OUTPUT", "PRTPLT": "PRTPLT", "PLOT": "OUTPUT",
-    "RANGE": "RANGE", "PREPARE": "PREPARE",
-}
 _BINOPS = {"add": "+", "sub": "-", "mul": "*", "div": "/", "pow": "**"}
 
 
@@ -261,8 +254,7 @@ class _Builder:
         return ast.Label(text, self.span(node))
 
     def st_section(self, node) -> ast.Section:
-        word = str(node.children[0]).upper()
-        return ast.Section("DYNAMIC" if word == "DERIVATIVE" else word, self.span(node))
+        return ast.Section(SECTIONS[str(node.children[0]).upper()], self.span(node))
 
     def st_end(self, node) -> ast.End:
         return ast.End(self.span(node))
@@ -285,7 +277,7 @@ class _Builder:
         return _number(str(node.children[0]))
 
     def st_data(self, node) -> ast.Data:
-        keyword = _DATA_ALIASES[str(node.children[0]).upper()]
+        keyword = DATA_KEYWORDS[str(node.children[0]).upper()]
         items = []
         for item in node.children[1:]:
             name = str(item.children[0]).upper()
@@ -344,7 +336,7 @@ class _Builder:
         return ast.Termt(self.expr(node.children[0]), self.span(node))
 
     def st_report(self, node) -> ast.Report:
-        kind = _REPORT_ALIASES[str(node.children[0]).upper()]
+        kind = REPORT_KEYWORDS[str(node.children[0]).upper()]
         names = node.children[1:]
         return ast.Report(
             kind,

@@ -14,6 +14,7 @@ import tempfile
 import numpy as np
 
 from .result import Run, Status
+from .routes import route_for
 
 COLUMNS_PER_BLOCK = 7
 WIDTH = 14
@@ -101,7 +102,7 @@ def format_run(run: Run, index: int | None = None, total: int = 1,
     head = f"RUN {index}" if index is not None and total > 1 else "RUN"
     label = "" if run.label.startswith("RUN ") else f": {run.label}"
     out.write(f"{head}{label}   (METHOD {run.method}")
-    if run.method not in ("RK4", "RKSFX", "SIMP", "EULER", "RECT", "TRAPZ", "ADAMS"):
+    if route_for(run.method).uses_tolerances:
         out.write(f", RELERR {run.rtol:g}, ABSERR {run.atol:g}")
     out.write(")\n")
     names = printed_names(run)

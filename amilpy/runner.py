@@ -29,7 +29,9 @@ import numpy as np
 from . import ir
 from .codegen import Compiled, Compiler, evaluate_constant, initial_values
 from .diagnostics import AmilError, Diagnostic
+from .language import RESERVED
 from .result import Event, Run, Status
+from .routes import DEFAULT, route_for
 from .steppers import Hermite, OdeintStepper, make_stepper
 from .switching import SLIDE, Switching, _linear_gradient, _sign, _Surfaces
 
@@ -123,13 +125,11 @@ class _Simulation(Switching):
         self.model = model
         self.spec = spec
         self.opts = opts
-        from .check import method_name
-
-        requested = opts.method or spec.method or "AUTO"
-        route = method_name(requested)
+        requested = opts.method or spec.method or DEFAULT
+        route = route_for(requested)
         if route is None:
             raise AmilError(f"unknown integration method {requested}")
-        self.route = route
+        self.route = route.name
         self.method = requested.upper()
         self.timer = timer_values(spec, route, opts.fintim)
         reserved = {k: self.timer[k] for k in ("FINTIM", "DELT", "PRDEL", "OUTDEL", "DELMIN",
@@ -752,8 +752,6 @@ class _Simulation(Switching):
         prdel_mask = last.copy()
         outdel_mask[on_grid] |= grid.outdel[g[on_grid]]
         prdel_mask[on_grid] |= grid.prdel[g[on_grid]]
-        from .check import RESERVED
-
         final = {k: float(v) for k, v in self.constants.items() if k not in RESERVED}
         final.update({n: float(v[-1]) for n, v in values.items()} if len(times) else {})
         for i, n in enumerate(self.c.state_names):

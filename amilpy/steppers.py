@@ -11,7 +11,7 @@ A stepper integrates one smooth segment (modes frozen) from `t0` towards
 
 Event location, breakpoints and output sampling live in the runner and use only
 these, so a route can be added without touching them: subclass `Stepper`, add
-it to `ROUTES`.
+a row to `routes.ROUTES` (its `stepper` names the class).
 """
 
 from __future__ import annotations
@@ -22,6 +22,8 @@ import warnings
 from collections.abc import Callable
 
 import numpy as np
+
+from .routes import BY_NAME
 
 Rhs = Callable[[float, np.ndarray], np.ndarray]
 
@@ -522,24 +524,24 @@ class Clock(Stepper):
         return lambda t: np.zeros(0)
 
 
-VARIABLE = {"RK45": "RK45", "DOP853": "DOP853", "RADAU": "Radau", "BDF": "BDF",
-            "LSODA": "LSODA", "AUTO": "LSODA"}
-FIXED: dict[str, type[FixedStepper]] = {"RK4": RK4, "EULER": Euler, "TRAPZ": Heun,
-                                        "ADAMS": AdamsBashforth2}
+FIXED: dict[str, type[FixedStepper]] = {
+    cls.__name__: cls for cls in (RK4, Euler, Heun, AdamsBashforth2)}
 
 
 def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float, *,
                  rtol: float, atol, delt: float, max_step: float = math.inf,
                  first_step: float | None = None, checks=None, chunk: int = 16) -> Stepper:
-    """The stepper for a canonical route name (see check.METHODS). `checks` are
-    the instants the runner needs to look at (the output grid); only the AUTO
-    route, which steps from check to check, uses them."""
+    """The stepper for a canonical route name (see `routes.ROUTES`). `checks` are
+    the instants the runner needs to look at (the output grid); only the odeint
+    stepper, which steps from check to check, uses them (without them it runs on
+    SciPy's LSODA class, which sees every step)."""
+    r = BY_NAME[route]
     if len(y0) == 0:
-        return Clock(t0, t_bound, min(max_step, delt) if route in FIXED else max_step)
-    if route == "AUTO" and checks is not None:
+        return Clock(t0, t_bound, min(max_step, delt) if r.fixed else max_step)
+    if r.stepper == "odeint" and checks is not None:
         return OdeintStepper(fun, t0, y0, t_bound, checks, rtol, atol, max_step, first_step,
                              chunk)
-    if route in FIXED:
-        return FIXED[route](fun, t0, y0, t_bound, delt)
-    return ScipyStepper(VARIABLE[route], fun, t0, y0, t_bound, rtol, atol, max_step, first_step)
+    if r.fixed:
+        return FIXED[r.stepper](fun, t0, y0, t_bound, delt)
+    return ScipyStepper(r.scipy, fun, t0, y0, t_bound, rtol, atol, max_step, first_step)
 

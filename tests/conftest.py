@@ -9,7 +9,10 @@ import amilpy  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
-METHODS = ["AUTO", "RKS", "DOP853", "LSODA", "RADAU", "BDF", "RK4", "EULER", "TRAPZ", "ADAMS"]
+from amilpy.routes import ROUTES  # noqa: E402
+
+# one METHOD spelling per route, from the registry
+METHODS = [r.aliases[0] for r in ROUTES]
 
 
 def run1(text: str, **kw):

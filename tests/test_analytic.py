@@ -26,8 +26,10 @@ import numpy as np
 import pytest
 
 import amilpy
+from amilpy.routes import ROUTES
 
-METHODS = ["AUTO", "RKS", "DOP853", "LSODA", "RADAU", "BDF", "RK4", "EULER", "TRAPZ", "ADAMS"]
+# one METHOD spelling per route, from the registry
+METHODS = [r.aliases[0] for r in ROUTES]
 ORDER = {"RK4": 4, "EULER": 1, "TRAPZ": 2, "ADAMS": 2}  # the fixed-step methods
 VARIABLE = [m for m in METHODS if m not in ORDER]
 

@@ -140,7 +140,7 @@ def test_leading_blank_lines_are_kept_for_line_numbers():
 
 
 def test_names_come_from_the_library():
-    from amilpy.check import RESERVED
+    from amilpy.language import RESERVED
     from amilpy.library import ALIASES, FUNCTIONS
 
     assert set(BUILTIN_FUNCTIONS) == set(FUNCTIONS) | set(ALIASES)

@@ -9,11 +9,14 @@ import math
 
 import numpy as np
 
-METHODS = ["AUTO", "RKS", "DOP853", "LSODA", "RADAU", "BDF", "RK4", "EULER", "TRAPZ", "ADAMS"]
-VARIABLE = ["AUTO", "RKS", "DOP853", "LSODA", "RADAU", "BDF"]
-IMPLICIT = ["AUTO", "LSODA", "RADAU", "BDF"]  # stiff-capable routes
-EXPLICIT_VARIABLE = ["RKS", "DOP853"]
-FIXED = ["RK4", "EULER", "TRAPZ", "ADAMS"]
+from amilpy.routes import ROUTES
+
+# one METHOD spelling per route, from the registry
+METHODS = [r.aliases[0] for r in ROUTES]
+VARIABLE = [r.aliases[0] for r in ROUTES if not r.fixed]
+IMPLICIT = [r.aliases[0] for r in ROUTES if not r.explicit]  # stiff-capable routes
+EXPLICIT_VARIABLE = [r.aliases[0] for r in ROUTES if r.explicit and not r.fixed]
+FIXED = [r.aliases[0] for r in ROUTES if r.fixed]
 
 # --------------------------------------------------------------- stiffness
 # Two inertias J1, J2 joined by a shaft of stiffness K with a stiffness-

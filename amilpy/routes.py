@@ -1,0 +1,74 @@
+"""The integration routes: one row per route, every METHOD spelling that selects it.
+
+This table is the only list of methods. The checker validates METHOD against it,
+the command line's `--method` help is generated from it, the printout header asks
+it whether RELERR/ABSERR apply, the advice asks which routes are explicit, and the
+steppers build a route from its `stepper` name. Adding a SciPy solver is one row
+here plus, if it needs one, a stepper class.
+
+Stdlib only: `amilpy check` reads this at start-up.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Route:
+    name: str  # canonical name, as the printout header shows it
+    aliases: tuple[str, ...]  # every METHOD spelling that selects it (name included)
+    fixed: bool  # fixed step DELT (CSMP's rules); else variable step with RELERR/ABSERR
+    explicit: bool  # an explicit method: its step is bounded by stability on stiff models
+    stepper: str  # the stepper that runs it (see steppers.make_stepper)
+    scipy: str | None  # the SciPy OdeSolver class, for the routes built on one
+    summary: str  # one line for --help and the language reference
+
+    @property
+    def uses_tolerances(self) -> bool:
+        """RELERR/ABSERR apply (variable-step routes); DELT applies otherwise."""
+        return not self.fixed
+
+
+ROUTES: tuple[Route, ...] = (
+    Route("AUTO", ("AUTO",), False, False, "odeint", "LSODA",
+          "default: Fortran LSODA (odeint), stiff/non-stiff switching"),
+    Route("RK45", ("RKS", "RK45"), False, True, "scipy", "RK45",
+          "variable-step Runge-Kutta 4(5), SciPy RK45"),
+    Route("DOP853", ("DOP853",), False, True, "scipy", "DOP853",
+          "variable-step Dormand-Prince 8(5,3)"),
+    Route("LSODA", ("LSODA", "MILNE"), False, False, "scipy", "LSODA",
+          "SciPy's LSODA class, step by step"),
+    Route("RADAU", ("RADAU", "STIFF"), False, False, "scipy", "Radau",
+          "implicit Runge-Kutta Radau IIA, order 5 (stiff models)"),
+    Route("BDF", ("BDF", "GEAR"), False, False, "scipy", "BDF",
+          "backward differentiation formulas, orders 1-5 (stiff models)"),
+    Route("RK4", ("RK4", "RKSFX", "SIMP"), True, True, "RK4", None,
+          "fixed-step classic Runge-Kutta, order 4"),
+    Route("EULER", ("EULER", "RECT"), True, True, "Euler", None,
+          "fixed-step Euler (rectangular)"),
+    Route("TRAPZ", ("TRAPZ", "HEUN"), True, True, "Heun", None,
+          "fixed-step Heun (trapezoid predictor-corrector)"),
+    Route("ADAMS", ("ADAMS", "AB2"), True, True, "AdamsBashforth2", None,
+          "fixed-step 2nd-order Adams-Bashforth"),
+)
+
+BY_NAME: dict[str, Route] = {r.name: r for r in ROUTES}
+# Every METHOD spelling -> its route.
+METHODS: dict[str, Route] = {alias: r for r in ROUTES for alias in r.aliases}
+DEFAULT = "AUTO"
+
+
+def route_for(method: str | None) -> Route | None:
+    """The route a METHOD name selects (None: the default); None if unknown."""
+    return METHODS.get((method or DEFAULT).upper())
+
+
+def method_names() -> list[str]:
+    """Every accepted METHOD spelling, sorted."""
+    return sorted(METHODS)
+
+
+def methods_help() -> str:
+    """One line per route, its spellings first: the `--method` help text."""
+    return "; ".join(f"{'/'.join(r.aliases)}: {r.summary}" for r in ROUTES)
