@@ -31,17 +31,17 @@ from .library import (
     afgen,
     deriv,
     impulse_at,
-    level_of,
     lookup,
     nlfgen,
     safe_pow,
     vector_functions,
 )
+from .surfaces import is_affine, level, sign
 
 NAMESPACE: dict[str, object] = {f"_{k}": v for k, v in MATH.items()}
 NAMESPACE.update({
     "_AFGEN": afgen, "_NLFGEN": nlfgen, "_DERIV": deriv, "_IMPULS": impulse_at, "_POW": safe_pow,
-    "_LEVEL": level_of, "_SGN": lambda x: 1.0 if x > 0.0 else (-1.0 if x < 0.0 else 0.0),
+    "_LEVEL": level, "_SGN": sign,
     "_WHERE": lambda c, a, b: a if c else b, "_ALL": lambda *v: all(v),
     "_ANY": lambda *v: any(v),
 })
@@ -567,7 +567,7 @@ class Compiler:
         affine = {i for i in self.watched
                   if model.surfaces[i].depends == "time" and self.events
                   and model.surfaces[i].kind == "sign"
-                  and _is_affine(model.surfaces[i].expr, self.constants, equations)}
+                  and is_affine(model.surfaces[i].expr, self.constants, equations)}
         impulses = []
         for e in _all_exprs(model):
             for node in iter_nodes(e):
@@ -618,43 +618,6 @@ def _all_exprs(model: ir.Model):
         yield from m.args
     for s in model.surfaces:
         yield s.expr
-
-
-def _is_affine(expr, constants, equations: dict | None = None) -> bool:
-    """True if a time-only surface is affine in TIME (its root is then exact),
-    looking through the algebraic variables it reads."""
-    equations = equations or {}
-    memo: dict[str, int] = {}
-
-    def lin(e) -> int:  # 0 constant, 1 affine, 2 other
-        if isinstance(e, syn.Num):
-            return 0
-        if isinstance(e, syn.Name):
-            if e.name == "TIME":
-                return 1
-            if e.name in constants:
-                return 0
-            if e.name in equations:
-                if e.name not in memo:
-                    memo[e.name] = 2  # a cycle never reaches here; be safe anyway
-                    memo[e.name] = lin(equations[e.name])
-                return memo[e.name]
-            return 2
-        if isinstance(e, syn.Neg):
-            return lin(e.operand)
-        if isinstance(e, syn.BinOp):
-            a, b = lin(e.left), lin(e.right)
-            if e.op in "+-":
-                return max(a, b)
-            if e.op == "*":
-                return a + b if a + b <= 1 else 2
-            if e.op == "/":
-                return a if b == 0 else 2
-            return 0 if a == b == 0 else 2
-        if isinstance(e, syn.Call):
-            return 0 if all(lin(x) == 0 for x in e.args) else 2
-        return 2
-    return lin(expr) <= 1
 
 
 def _assert_closed(module: py.Module) -> None:

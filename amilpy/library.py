@@ -258,11 +258,6 @@ def impulse_at(t: float, start: float, period: float) -> float:
     return 1.0 if abs(start + k * period - t) <= 1e-9 * max(period, abs(t) * 1e-3) else 0.0
 
 
-def level_of(v: float) -> float:
-    """QNTZR level k with (k - 1/2) < v <= (k + 1/2) (round half down)."""
-    return float(math.ceil(v - 0.5))
-
-
 MATH: dict[str, object] = {
     "ABS": abs,
     "SQRT": safe_sqrt,

@@ -33,7 +33,8 @@ from .language import RESERVED
 from .result import Event, Run, Status
 from .routes import DEFAULT, route_for
 from .steppers import Hermite, OdeintStepper, make_stepper
-from .switching import SLIDE, Switching, _linear_gradient, _sign, _Surfaces
+from .surfaces import level, linear_gradient, sign
+from .switching import SLIDE, Switching, _Surfaces
 
 DEFAULTS = {
     "rtol": 1e-6,
@@ -149,8 +150,7 @@ class _Simulation(Switching):
                 const_modes[s.index] = 0.0
             if s.depends == "const":
                 value = evaluate_constant(model, s.expr, self.constants, spec.tables, s.span)
-                const_modes[s.index] = (math.ceil(value - 0.5) if s.kind == "level"
-                                        else _sign(value))
+                const_modes[s.index] = level(value) if s.kind == "level" else sign(value)
         if not opts.events:
             # event location off (for comparisons): every surface is still
             # evaluated, but crossings are only noticed at step ends
@@ -198,8 +198,9 @@ class _Simulation(Switching):
             kinds.append(s.kind)
             purposes.append(s.purpose)
             descs.append(s.description)
-            grads.append(_linear_gradient(s.expr, state_index, self.constants)
-                         if s.kind == "sign" else None)
+            g = linear_gradient(s.expr, state_index, self.constants) \
+                if s.kind == "sign" else None
+            grads.append(None if g is None else np.asarray(g))
             bp.append(i in c.affine_time)
         self.sf = _Surfaces(kinds, purposes, descs, grads, bp)
         # breakpoints known before the run: roots of surfaces affine in TIME
@@ -234,19 +235,19 @@ class _Simulation(Switching):
         t0 = self.t0
         e0, e1 = e(t0), e(self.fintim)
         slope = (e1 - e0) / (self.fintim - t0)
-        if slope == 0.0 or _sign(e0) == _sign(e1) and e1 != 0.0:
+        if slope == 0.0 or sign(e0) == sign(e1) and e1 != 0.0:
             return None
         r = t0 - e0 / slope
         # polish to the first float where the sign has changed (or is zero)
-        before = _sign(e0)
+        before = sign(e0)
         for _ in range(64):
-            if _sign(e(r)) == before and before != 0:
+            if sign(e(r)) == before and before != 0:
                 r = math.nextafter(r, math.inf)
             else:
                 break
         for _ in range(64):
             p = math.nextafter(r, -math.inf)
-            if _sign(e(p)) != before and p > t0:
+            if sign(e(p)) != before and p > t0:
                 r = p
             else:
                 break

@@ -20,11 +20,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .surfaces import sign
+
 SLIDE = 0.5  # not a sign (-1, 0, 1) nor a QNTZR level (an integer)
-
-
-def _sign(x: float) -> float:
-    return 1.0 if x > 0 else (-1.0 if x < 0 else 0.0)
 
 
 @dataclass
@@ -185,14 +183,14 @@ class Switching:
         gb = g(tb)
         if gb == 0.0:
             return tb
-        if ga == 0.0 or _sign(ga) == _sign(gb):
+        if ga == 0.0 or sign(ga) == sign(gb):
             # The step began on the surface (a restart there): find where it had
             # left to the consistent side, and bracket the crossing from there.
             ta_new = None
             for j in range(1, 33):
                 tj = ta + (tb - ta) * j / 32.0
                 gj = g(tj)
-                if gj != 0.0 and _sign(gj) != _sign(gb):
+                if gj != 0.0 and sign(gj) != sign(gb):
                     ta_new = tj
                 elif ta_new is not None:
                     break
@@ -228,71 +226,3 @@ class Switching:
             return tb
         return brentq(g, ta, tb, xtol=4 * np.finfo(float).eps * max(abs(tb), 1e-300),
                       maxiter=200)
-
-
-def _linear_gradient(expr, state_index: dict[str, int], constants) -> np.ndarray | None:
-    """d e/d y for a surface that is a constant-coefficient combination of states."""
-    from . import syntax as syn
-
-    n = len(state_index)
-
-    def lin(e) -> tuple[np.ndarray, bool] | None:
-        if isinstance(e, syn.Num):
-            return np.zeros(n), True
-        if isinstance(e, syn.Name):
-            if e.name in state_index:
-                g = np.zeros(n)
-                g[state_index[e.name]] = 1.0
-                return g, False
-            if e.name in constants:
-                return np.zeros(n), True
-            return None
-        if isinstance(e, syn.Neg):
-            r = lin(e.operand)
-            return None if r is None else (-r[0], r[1])
-        if isinstance(e, syn.BinOp):
-            a, b = lin(e.left), lin(e.right)
-            if a is None or b is None:
-                return None
-            if e.op in "+-":
-                return (a[0] + b[0] if e.op == "+" else a[0] - b[0]), a[1] and b[1]
-            if e.op == "*" and (a[1] or b[1]):
-                k = _const(e.left if a[1] else e.right, constants)
-                if k is None:
-                    return None
-                return (b[0] if a[1] else a[0]) * k, a[1] and b[1]
-            if e.op == "/" and b[1]:
-                k = _const(e.right, constants)
-                if k is None or k == 0:
-                    return None
-                return a[0] / k, a[1]
-            return None
-        return None
-
-    r = lin(expr)
-    if r is None or r[1]:
-        return None
-    return r[0]
-
-
-def _const(expr, constants) -> float | None:
-    from . import syntax as syn
-
-    if isinstance(expr, syn.Num):
-        return expr.value
-    if isinstance(expr, syn.Name) and expr.name in constants:
-        return constants[expr.name]
-    if isinstance(expr, syn.Neg):
-        v = _const(expr.operand, constants)
-        return None if v is None else -v
-    if isinstance(expr, syn.BinOp):
-        a, b = _const(expr.left, constants), _const(expr.right, constants)
-        if a is None or b is None:
-            return None
-        try:
-            return {"+": a + b, "-": a - b, "*": a * b}.get(expr.op) if expr.op != "/" else a / b
-        except ZeroDivisionError:
-            return None
-    return None
-
-
