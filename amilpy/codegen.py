@@ -74,6 +74,31 @@ class Compiled:
     # surf and out over NumPy columns: y is a list of arrays, t an array
     surf_v: object = None
     out_v: object = None
+    # some memory must be updated after every accepted step (HSTRSS, RST, DERIV);
+    # when False, memory changes only where a run restarts anyway (ZHOLD, PULSE)
+    memory_every_step: bool = False
+    # (z, t) -> instants after t at which memory makes the model switch (PULSE ends)
+    memory_times: object = None
+
+    def fault_line(self, exc: BaseException) -> int | None:
+        """The listing line of the generated statement that raised `exc`."""
+        return fault_line(exc)
+
+
+# the functions build() generates
+_GENERATED = ("rhs", "out", "surf", "mem", "modes", "surf_vec", "out_vec")
+
+
+def fault_line(exc: BaseException) -> int | None:
+    """The listing line of the generated statement that raised `exc`, if the fault
+    happened inside generated code."""
+    tb = exc.__traceback__
+    line = None
+    while tb is not None:
+        if tb.tb_frame.f_code.co_name in _GENERATED:
+            line = tb.tb_lineno
+        tb = tb.tb_next
+    return line
 
 
 def _num(v: float) -> py.expr:
@@ -582,7 +607,17 @@ class Compiler:
             modes_literal=namespace["modes"], affine_time=affine, impulses=impulses,
             source=source, tables=self.global_tables,
             surf_v=vector["surf_vec"], out_v=vector["out_vec"],
+            memory_every_step=any(m.func not in ("ZHOLD", "PULSE") for m in model.memories),
+            memory_times=self.memory_times(),
         )
+
+    def memory_times(self):
+        """PULSE holds its output until the instant kept in its slot."""
+        slots = [m.slot for m in self.model.memories if m.func == "PULSE"]
+
+        def times(z: list[float], t: float) -> list[float]:
+            return [z[s] for s in slots if z[s] > t]
+        return times
 
     def constant(self, expr, span: Span) -> float:
         return evaluate_constant(self.model, expr, self.constants, self.tables, span)

@@ -73,6 +73,7 @@ class Surface:
     depends: str
     span: Span
     description: str
+    text: str = ""  # the expression as the listing writes it ("W1", "TIME - T1")
 
 
 @dataclass(frozen=True)

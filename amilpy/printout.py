@@ -103,7 +103,7 @@ def format_run(run: Run, index: int | None = None, total: int = 1,
     label = "" if run.label.startswith("RUN ") else f": {run.label}"
     out.write(f"{head}{label}   (METHOD {run.method}")
     if route_for(run.method).uses_tolerances:
-        out.write(f", RELERR {run.rtol:g}, ABSERR {run.atol:g}")
+        out.write(f", {run.settings}")
     out.write(")\n")
     names = printed_names(run)
     table = run.printout

@@ -23,19 +23,39 @@ class Status(str, Enum):
         return self.value
 
 
+class EventKind(str, Enum):
+    """What happened at an event; the value is the word a printout may use."""
+
+    SWITCH = "switch"  # a sign surface changed branch
+    LEVEL = "level"  # QNTZR moved to another level
+    SLIDE = "slide"  # a surface began to slide (both branches push it to zero)
+    FINISH = "finish"  # a FINISH condition was met
+    TERMT = "termt"  # a TERMT condition turned true
+    BREAKPOINT = "breakpoint"  # a switch on TIME alone, at an instant known in advance
+
+    def __str__(self) -> str:
+        return self.value
+
+
 @dataclass(frozen=True)
 class Event:
-    """A switching instant: `old` -> `new` branch of one surface at `time`."""
+    """A switching instant: `old` -> `new` branch of one surface at `time`.
+
+    `switch` describes the switch for a reader (function, where it stands);
+    `text` is the surface's expression as the listing writes it (e.g. "W1",
+    "TIME - T1"), so a printout can say "W1 > 0 -> W1 < 0".
+    """
 
     time: float
     switch: str
     surface: int
     old: float
     new: float
-    kind: str = "switch"  # switch, slide, finish, termt, breakpoint
+    kind: EventKind = EventKind.SWITCH
+    text: str = ""
 
     def describe_branch(self, mode: float) -> str:
-        if self.kind == "level":
+        if self.kind == EventKind.LEVEL:
             return f"level {mode:g}"
         return {-1.0: "X<0", 0.0: "X=0", 1.0: "X>0", 0.5: "sliding"}.get(mode, f"{mode:g}")
 
@@ -78,6 +98,10 @@ class Run:
     t_end: float = 0.0
     final_state: dict = field(default_factory=dict)  # for continuing a run (sweeps)
     advice: str | None = None  # a note on the method (see advice.py)
+    # what the route ran with, for the printout header: "RELERR 1e-06, ABSERR 1e-09"
+    # for a variable-step route, "DELT 0.000625" for a fixed-step one
+    settings: str = ""
+    terminal: dict[str, float] = field(default_factory=dict)  # TERMINAL values, written order
 
     @property
     def t(self) -> np.ndarray:

@@ -27,10 +27,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import ir
-from .codegen import Compiled, Compiler, evaluate_constant, initial_values
-from .diagnostics import AmilError, Diagnostic
+from .codegen import Compiled, Compiler, evaluate_constant, fault_line, initial_values
+from .diagnostics import AmilError, Diagnostic, Span
 from .language import RESERVED
-from .result import Event, Run, Status
+from .result import Event, EventKind, Run, Status
 from .routes import DEFAULT, route_for
 from .steppers import Hermite, OdeintStepper, make_stepper
 from .surfaces import level, linear_gradient, sign
@@ -180,8 +180,7 @@ class _Simulation(Switching):
         # must see every accepted step, so a model with them takes the LSODA class.
         # ZHOLD and PULSE change their memory only where the run restarts anyway (an
         # event or a breakpoint), so they may too; the others need every step.
-        self.fast = self.route == "AUTO" and all(
-            mem.func in ("ZHOLD", "PULSE") for mem in model.memories)
+        self.fast = self.route == "AUTO" and not self.c.memory_every_step
         # a continued run (a sweep with carried state) goes on from its start TIME
         self.t0 = float(opts.start["t"]) if opts.start else 0.0
         self.fintim = self.t0 + self.timer["FINTIM"]
@@ -334,7 +333,7 @@ class _Simulation(Switching):
                                    and m[k] != SLIDE) else m[k] for k in range(n_watch)], 0)
         except (ArithmeticError, ValueError) as exc:
             # a fault in the switching surfaces at the start (QNTZR with P = 0, say)
-            line = _fault_line(exc)
+            line = self.c.fault_line(exc)
             where = f" (line {line})" if line else ""
             return self.result(_Rows(len(c.out_names)), grid, [], Status.FAILED,
                                f"cannot start at TIME = {t0:.9g}: {exc}{where}", [],
@@ -535,11 +534,12 @@ class _Simulation(Switching):
                             if new_m[k] != m[k]:
                                 if k not in triggered and self.silent(k, tb, yb, new_m, z):
                                     continue  # a branch nothing uses now: not an event
-                                kind = "slide" if new_m[k] == SLIDE else self.sf.kinds[k]
+                                kind = EventKind.SLIDE if new_m[k] == SLIDE else \
+                                    EventKind(self.sf.kinds[k].replace("sign", "switch"))
                                 if self.sf.purposes[k] in ("finish", "termt"):
-                                    kind = self.sf.purposes[k]
+                                    kind = EventKind(self.sf.purposes[k])
                                 if self.sf.breakpoint_only[k]:
-                                    kind = "breakpoint"
+                                    kind = EventKind.BREAKPOINT
                                 last = next((e for e in reversed(events)
                                              if e.surface == c.watched[k]), None)
                                 if last is not None and last.old == new_m[k] and \
@@ -549,8 +549,8 @@ class _Simulation(Switching):
                                     events.remove(last)
                                     continue
                                 events.append(Event(tb, self.sf.descriptions[k],
-                                                    c.watched[k], m[k], new_m[k],
-                                                    "level" if kind == "level" else kind))
+                                                    c.watched[k], m[k], new_m[k], kind,
+                                                    self.model.surfaces[c.watched[k]].text))
                                 if new_m[k] == SLIDE:
                                     self.note_slide(k, tb, warnings, slide_noted)
                         if c.z0:
@@ -630,7 +630,7 @@ class _Simulation(Switching):
             # arithmetic in generated code (surfaces, outputs) or SciPy refusing
             # non-finite values: the run ends here, with what it computed so far
             status = Status.FAILED
-            line = _fault_line(exc)
+            line = self.c.fault_line(exc)
             where = f" (line {line})" if line else ""
             message = f"integration failed at TIME = {t:.9g}: {exc}{where}"
         if stepper is not None:
@@ -706,13 +706,7 @@ class _Simulation(Switching):
         return n, e_last
 
     def pulse_ends(self, z, t) -> list[float]:
-        out = []
-        for mem in self.model.memories:
-            if mem.func == "PULSE":
-                end = z[mem.slot]
-                if t < end < self.fintim:
-                    out.append(end)
-        return out
+        return [e for e in self.c.memory_times(z, t) if e < self.fintim]
 
     def z_changes_breakpoints(self, z, t, seg_end) -> bool:
         return any(t < e < seg_end for e in self.pulse_ends(z, t))
@@ -736,7 +730,7 @@ class _Simulation(Switching):
         if not self.arith_faults:
             return ""
         t, exc = self.arith_faults[-1]
-        line = _fault_line(exc)
+        line = self.c.fault_line(exc)
         where = f" (line {line})" if line else ""
         return f"; last arithmetic fault at TIME = {t:.9g}{where}: {exc}"
 
@@ -764,6 +758,8 @@ class _Simulation(Switching):
             times=times, values=values, outdel_mask=outdel_mask, prdel_mask=prdel_mask,
             events=events, status=status, message=message, final=final, stats=stats,
             method=self.method, rtol=self.rtol, atol=self.atol_scalar,
+            settings=(f"RELERR {self.rtol:g}, ABSERR {self.atol_scalar:g}"
+                      if route_for(self.method).uses_tolerances else f"DELT {self.delt:g}"),
             titles=list(self.spec.titles), reports=list(self.spec.reports),
             warnings=warnings, t_end=float(t),
             final_state={"t": float(t), "y": y.tolist(), "z": list(z), "m": list(m)},
@@ -820,17 +816,6 @@ def _column(v, n: int) -> np.ndarray:
     return np.full(n, float(v))
 
 
-def _fault_line(exc: BaseException) -> int | None:
-    tb = exc.__traceback__
-    line = None
-    while tb is not None:
-        if tb.tb_frame.f_code.co_name in ("rhs", "out", "surf", "mem", "modes", "surf_vec",
-                                          "out_vec"):
-            line = tb.tb_lineno
-        tb = tb.tb_next
-    return line
-
-
 def simulate(model: ir.Model, spec: ir.RunSpec, options: Options | None = None) -> Run:
     """Integrate one run of a checked model. Faults in the data raise AmilError;
     a failing integration returns a Run with status FAILED and the rows so far."""
@@ -839,9 +824,7 @@ def simulate(model: ir.Model, spec: ir.RunSpec, options: Options | None = None) 
     except (ArithmeticError, ValueError) as exc:
         # set-up evaluates constant parts (breakpoint instants, fixed branches):
         # a fault there is in the listing's data, shown at its line
-        from .diagnostics import Span
-
-        line = _fault_line(exc)
+        line = fault_line(exc)
         raise AmilError([Diagnostic(f"cannot be evaluated before the run: {exc}",
                                     Span(line, 1) if line else None,
                                     "check the constant expressions on that line")],
