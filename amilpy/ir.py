@@ -125,6 +125,7 @@ class Report:
     label: str | None
     span: Span
     printer: bool = False  # PRTPLT: a figure and a line-printer plot in the printout
+    x: str | None = None  # OUTPUT Y1, Y2 VS X: plotted against X instead of TIME
 
 
 @dataclass
