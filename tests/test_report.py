@@ -10,7 +10,9 @@ import pytest
 from conftest import ROOT
 
 from amilpy.cli import main
-from amilpy.report import Report, make_report
+from amilpy.output.report import make_report
+from amilpy.output.report.document import build
+from amilpy.output.report.pdf import pages
 
 MODELS = sorted(glob.glob(os.path.join(ROOT, "models", "*.amil")))
 
@@ -33,13 +35,16 @@ def test_report_of_every_shipped_model(path, tmp_path):
     assert images and all(os.path.exists(tmp_path / i) for i in images)
     assert "| TIME |" in md
     tex = open(written["tex"], encoding="utf-8").read()
-    assert "\\toprule" in tex and "\\begin{document}" in tex and tex.endswith("\\end{document}\n")
-    # one page per 66 lines of text, then one per figure
+    assert "\\begin{document}" in tex and tex.endswith("\\end{document}\n")
+    body = (tmp_path / f"{stem}_report_body.tex").read_text(encoding="utf-8")
+    assert "\\toprule" in body and "\\documentclass" not in body
+    # the text pages, then one per figure
     from amilpy.api import load
 
     model = load(path)
-    report = Report(model, model.run(), images, path)
-    assert pdf_pages(written["pdf"]) == len(report.text_pages()) + len(images)
+    figures = [(str(tmp_path / i), "") for i in images]
+    doc = build(model, model.run(), figures, path, "en")
+    assert pdf_pages(written["pdf"]) == len(pages(doc)) + len(images)
     assert stem in written["md"]
 
 
@@ -53,7 +58,8 @@ def test_polish_title_in_every_format(tmp_path):
     out = tmp_path / "r"
     title = "Napęd z mikrosilnikiem — prędkość kątowa ω"
     assert f"# {title}" in (out / "napęd_report.md").read_text(encoding="utf-8")
-    assert title in (out / "napęd_report.tex").read_text(encoding="utf-8")
+    assert "Napęd z mikrosilnikiem — prędkość kątowa \\ensuremath{\\omega}" in (
+        out / "napęd_report_body.tex").read_text(encoding="utf-8")
     assert pdf_pages(str(out / "napęd_report.pdf")) == 2  # one text page, one figure
 
 
