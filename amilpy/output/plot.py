@@ -144,7 +144,7 @@ def draw(runs: Sequence[Run], spec: FigureSpec, labels: Sequence[str] | None = N
                 if (k, n) not in data:
                     continue
                 x, y = data[k, n]
-                colour = f"C{k % 10}" if several else f"C{names.index(n) % 10}"
+                colour = f"C{(numbers[k] - 1) % 10}" if several else f"C{names.index(n) % 10}"
                 ax.plot(x, y, color=colour, linestyle=style[n], linewidth=1.2,
                         label=n if not several else f"{n}, {labels[k]}")
         unit = W.unit_of(group, spec.label, notes)
@@ -155,20 +155,20 @@ def draw(runs: Sequence[Run], spec: FigureSpec, labels: Sequence[str] | None = N
         _mark_events(ax, runs, spec)
         if several and len(group) > 1:
             runs_legend = ax.legend(
-                [Line2D([], [], color=f"C{k % 10}") for k in range(len(runs))],
+                [Line2D([], [], color=f"C{(numbers[k] - 1) % 10}") for k in range(len(runs))],
                 labels, fontsize=8, loc="upper left", title=None)
             ax.add_artist(runs_legend)
             ax.legend([Line2D([], [], color="0.2", linestyle=style[n]) for n in group],
                       group, fontsize=8, loc="upper right")
         elif several:
-            ax.legend([Line2D([], [], color=f"C{k % 10}", linestyle=style[group[0]])
+            ax.legend([Line2D([], [], color=f"C{(numbers[k] - 1) % 10}", linestyle=style[group[0]])
                        for k in range(len(runs))], labels, fontsize=8)
         elif len(group) > 1:
             ax.legend(fontsize=8)
     axes[-1].set_xlabel(_x_label(spec, notes))
     title = spec.label or (runs[0].titles[0] if runs and runs[0].titles else ", ".join(names))
     if spec.zoom and spec.window is not None:
-        title = f"{title} (TIME {spec.window[0]:.6g} to {spec.window[1]:.6g} s)"
+        title = f"{title} (TIME {spec.window[0]:.4g} to {spec.window[1]:.4g} s)"
     axes[0].set_title(W.shorten(title, TITLE_CHARS), fontsize=10)
     partial = [f"run {numbers[k]} partial: TIME = {r.t_end:.6g}" if several
                else f"partial: TIME = {r.t_end:.6g}" for k, r in enumerate(runs) if not r.ok]
