@@ -20,7 +20,7 @@ from . import words as W
 
 WIDTH = 14  # the lab printout's column width
 COLUMNS_PER_BLOCK = 7  # value columns side by side in the printout
-CHUNK = 4096  # rows formatted at a time
+CHUNK = 1024  # rows formatted at a time
 
 
 class _Take:
