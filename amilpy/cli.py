@@ -270,9 +270,9 @@ def _finish(path: str, written: list[str], errors: list[str], quiet: bool,
         write_out(lambda out: out.write("\nwritten: " + ", ".join(written) + "\n"))
     for message in errors:
         print(f"amilpy: {message}", file=sys.stderr)
-    if signals.received:
-        print(f"amilpy: {path}: {signals.name()} received while writing: the files are "
-              "complete; stopped", file=sys.stderr)
+    if signals.held_back:
+        print(f"amilpy: {path}: {signals.name(signals.held_back)} received while writing: "
+              "the files are complete; stopped", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OUTPUT if errors else EXIT_OK
 
@@ -298,7 +298,7 @@ def cmd_run(args, path: str, signals: Signals) -> int:
     outputs = Outputs("run", stem, out_dir, runs, model=model, dialect=args.csv_dialect,
                       plot=plot)
     written, errors = _write_outputs(outputs, args, signals)
-    if not args.quiet:
+    if not args.quiet and not signals.held_back:
         from .output.printout import write_runs
 
         write_out(lambda out: write_runs(out, runs, ascii_plots=args.ascii))
@@ -319,7 +319,7 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
     try:
         name, values = parse_range(args.range)
     except AmilError as exc:
-        raise UsageError(f"{args.range}: {exc}") from None
+        raise UsageError(f"the sweep range {args.range}: {exc}") from None
     model = load(path)
     params = _parse_sets(args.set)
     _check_sets(model, params)
@@ -350,7 +350,7 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
     outputs = Outputs("sweep", stem, out_dir, sweep=result, model=model,
                       dialect=args.csv_dialect)
     written, errors = _write_outputs(outputs, args, signals)
-    if not args.quiet:
+    if not args.quiet and not signals.held_back:
         from .output.sweeps import format_sweep
 
         write_out(lambda out: out.write(format_sweep(result)))

@@ -27,13 +27,16 @@ class Signals:
     """Turns SIGINT/SIGTERM/SIGHUP into KeyboardInterrupt, or holds them back."""
 
     def __init__(self) -> None:
-        self.received: int | None = None
+        self.received: int | None = None  # the last signal, whenever it came
+        self.held_back: int | None = None  # one that came while files were written
         self.holding = False
         self.previous: dict[int, object] = {}
 
     def _handler(self, signum: int, frame) -> None:
         self.received = signum
-        if not self.holding:
+        if self.holding:
+            self.held_back = signum
+        else:
             raise KeyboardInterrupt
 
     def install(self) -> None:
@@ -57,8 +60,9 @@ class Signals:
         finally:
             self.holding = False
 
-    def name(self) -> str:
-        return signal.Signals(self.received).name if self.received else ""
+    @staticmethod
+    def name(signum: int) -> str:
+        return signal.Signals(signum).name
 
 
 def tolerant_streams() -> None:

@@ -107,12 +107,11 @@ def parse_range(text: str) -> tuple[str, list[float]]:
         start, stop, step = (float(x.replace("D", "E").replace("d", "e"))
                              for x in spec.split(":"))
     except ValueError:
-        raise AmilError(f"a sweep is NAME=START:STOP:STEP (e.g. W=60:80:0.5), got "
-                        f"{text!r}") from None
+        raise AmilError("write it NAME=START:STOP:STEP, e.g. W=60:80:0.5") from None
     if not name.strip().isidentifier():
-        raise AmilError(f"a sweep is NAME=START:STOP:STEP; {name.strip()!r} is not a name")
+        raise AmilError(f"{name.strip()!r} is not a name (NAME=START:STOP:STEP)")
     if not all(math.isfinite(x) for x in (start, stop, step)):
-        raise AmilError(f"START, STOP and STEP must be finite numbers, got {text!r}")
+        raise AmilError("START, STOP and STEP must be finite numbers")
     if step == 0 or (stop - start) / step < 0:
         raise AmilError(f"the step {step:g} does not lead from {start:g} to {stop:g}")
     count = (stop - start) / step

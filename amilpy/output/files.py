@@ -98,6 +98,7 @@ def atomic_open(path: str, text: bool = False, encoding: str = "utf-8",
                 newline: str | None = "") -> Iterator[IO]:
     """Open a temporary beside `path` for writing; on a clean exit it replaces
     `path` (binary unless `text`). Rows can be streamed into it."""
+    ensure_directory(os.path.dirname(os.path.abspath(path)))
     target = resolve_target(path)
     directory = ensure_directory(os.path.dirname(target) or ".")
     try:
