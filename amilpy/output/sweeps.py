@@ -39,7 +39,13 @@ def jump_lines(result: Sweep) -> list[str]:
     if result.carry_state and result.points:
         out.append(f"the first point ({name} = {result.points[0].value:g}) starts from the "
                    "listing's initial state, a transient: it is left out of the jump search")
-    for direction, jump in result.jumps().items():
+    jumps = result.jumps()
+    for direction in dict.fromkeys(p.direction for p in result.points):
+        if direction not in jumps:
+            out.append(f"sweeping {direction}: too few points to tell a jump (it takes 3, "
+                       "so that a change can be set against its neighbours')")
+            continue
+        jump = jumps[direction]
         if jump is None:
             out.append(f"no jump sweeping {direction}: no change of HALF P-P stands out "
                        f"{JUMP_FACTOR:g} times from those of the {NEIGHBOURS} steps each side")
