@@ -234,3 +234,18 @@ def test_latex_body_compiles_inside_a_wrapper(wide, tmp_path):
                            "wide_report.tex"], cwd=out, capture_output=True, text=True,
                           timeout=180)
     assert done.returncode == 0, done.stdout[-3000:]
+
+
+def test_golden_report(tmp_path, monkeypatch):
+    """The Markdown report of golden/clutch_breakpoint.amil, exactly (regenerate with
+    AMILPY_GOLDEN=update and read the diff, as for the golden printouts)."""
+    golden = os.path.join(ROOT, "tests", "golden")
+    monkeypatch.chdir(golden)
+    written = make_report("clutch_breakpoint.amil", str(tmp_path), ("md",), lang="en")
+    got = open(written["md"], encoding="utf-8").read()
+    path = os.path.join(golden, "clutch_breakpoint_report.md")
+    if os.environ.get("AMILPY_GOLDEN") == "update":
+        with open(path, "w", encoding="utf-8") as fh:
+            fh.write(got)
+    with open(path, encoding="utf-8") as fh:
+        assert got == fh.read()

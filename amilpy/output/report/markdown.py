@@ -4,16 +4,19 @@ figures as PNGs beside it."""
 from __future__ import annotations
 
 import os
+import re
 from typing import TextIO
 
 from .. import tables as T
 from .document import Code, Document, Figure, Heading, TableBlock, Text
 
-_SPECIAL = str.maketrans({c: "\\" + c for c in "\\*_`|<>[]"})
+# What Markdown would read as markup: emphasis, code, table cells, links, HTML tags.
+# An underscore inside a word (MC_MAX) and a lone < or > ("W1 < 0") are plain text.
+_SPECIAL = re.compile(r"[\\*`|\[\]]|(?<![A-Za-z0-9])_|_(?![A-Za-z0-9])|<(?=[A-Za-z/!])")
 
 
 def escape(text: str) -> str:
-    return text.translate(_SPECIAL)
+    return _SPECIAL.sub(lambda m: "\\" + m.group(0), text)
 
 
 def table(t: T.Table, out: TextIO) -> None:
