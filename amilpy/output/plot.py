@@ -221,7 +221,7 @@ def caption(spec: FigureSpec, runs: Sequence[Run], labels: Sequence[str],
     what = f"{', '.join(spec.names)} {words['against']} {spec.x or 'TIME'}"
     text = f"{base}: {what}" if base else what
     if spec.window is not None:
-        text += f", TIME {spec.window[0]:.6g} … {spec.window[1]:.6g} s"
+        text += f", TIME {spec.window[0]:.4g} to {spec.window[1]:.4g} s"
     if len(runs) > 1:
         text += "; " + "; ".join(labels)
     return text
