@@ -70,19 +70,41 @@ class Table:
 
     def rows(self, columns: Sequence[Column] | None = None) -> Iterator[list[str]]:
         """The formatted cells, row by row, a block of rows at a time."""
+        for block in self.blocks(columns):
+            yield from (list(r) for r in zip(*block, strict=True))
+
+    def blocks(self, columns: Sequence[Column] | None = None) -> Iterator[list[list[str]]]:
+        """The formatted cells a block of CHUNK rows at a time, column by column."""
         columns = self.columns if columns is None else columns
         n = len(self)
         for start in range(0, n, CHUNK):
             part = slice(start, min(start + CHUNK, n))
-            cols = [[cell(c.fmt, v) for v in _values(c.values[part])] for c in columns]
-            yield from (list(r) for r in zip(*cols, strict=True))
+            yield [cells(c.fmt, c.values[part]) for c in columns]
 
 
 def _values(chunk) -> list:
     return chunk.tolist() if isinstance(chunk, np.ndarray) else list(chunk)
 
 
+_SPECS = {"e": ".6E", "t": ".9g", "g": ".6g"}
+
+
+def cells(fmt: str, chunk, width: int = 0) -> list[str]:
+    """A column's values as text (see `cell`), formatted a whole block at once;
+    right-aligned in `width` characters if given."""
+    if fmt == "s":
+        return [str(v).rjust(width) for v in _values(chunk)]
+    x = np.asarray(_values(chunk), dtype=float)
+    spec = f">{width}{_SPECS[fmt]}" if width else _SPECS[fmt]
+    out = list(map(("{:" + spec + "}").format, x.tolist()))
+    for i in np.flatnonzero(~np.isfinite(x)).tolist():
+        out[i] = cell(fmt, x[i]).rjust(width)
+    return out
+
+
 def cell(fmt: str, v) -> str:
+    """One value as text: "e" 1.234560E+00, "t" an instant to 9 digits, "g" 6 digits,
+    "s" text; NaN and +Inf/-Inf as such."""
     if fmt == "s":
         return str(v)
     x = float(v)
@@ -90,7 +112,7 @@ def cell(fmt: str, v) -> str:
         return "NaN"
     if math.isinf(x):
         return "+Inf" if x > 0 else "-Inf"
-    return f"{x:.6E}" if fmt == "e" else f"{x:.9g}" if fmt == "t" else f"{x:.6g}"
+    return format(x, _SPECS[fmt])
 
 
 # ---------------------------------------------------------------- builders
@@ -230,7 +252,15 @@ def text_blocks(table: Table, max_chars: int | None = None,
         firsts = [True] + [False] * (len(cols) - 1)
         head = "".join(_fit(c.name, wj, c.left, f)
                        for c, wj, f in zip(cols, ws, firsts, strict=True))
-        rows = ("".join(_fit(v, wj, c.left, f)
-                        for v, c, wj, f in zip(r, cols, ws, firsts, strict=True)).rstrip()
-                for r in table.rows(cols))
-        yield head.rstrip(), rows
+        yield head.rstrip(), _lines(table, cols, ws, firsts)
+
+
+def _lines(table: Table, cols: list[Column], ws: list[int], firsts: list[bool]
+           ) -> Iterator[str]:
+    n = len(table)
+    for start in range(0, n, CHUNK):
+        part = slice(start, min(start + CHUNK, n))
+        padded = [cells(c.fmt, c.values[part], wj) if not c.left else
+                  [_fit(v, wj, True, f) for v in cells(c.fmt, c.values[part])]
+                  for c, wj, f in zip(cols, ws, firsts, strict=True)]
+        yield from ("".join(r).rstrip() for r in zip(*padded, strict=True))
