@@ -48,6 +48,17 @@ def write_csv_rows(path: str, header: Sequence[str], rows: Iterable[Sequence],
         write_csv_stream(fh, header, rows, dialect, comments)
 
 
+def outdel_rows(run: Run, names: Sequence[str]) -> Iterator[tuple[float, ...]]:
+    """(TIME, values of `names`) on the OUTDEL grid, read a block of rows at a time."""
+    index = np.flatnonzero(run.outdel_mask)
+    cols = [T.column_of(run, n, index) for n in names]
+    for start in range(0, len(index), T.CHUNK):
+        part = slice(start, start + T.CHUNK)
+        block = [run.times[index[part]].tolist()]
+        block += [[float(v) for v in T.values_of(c[part])] for c in cols]
+        yield from zip(*block, strict=True)
+
+
 def csv_names(runs: Sequence[Run]) -> list[str]:
     """The columns a CSV of these runs holds: PREPARE's names, else the printout's."""
     return T.report_names(runs[0], "PREPARE") or T.printed_names(runs[0])
@@ -64,14 +75,8 @@ def run_rows(runs: Sequence[Run], names: Sequence[str]) -> tuple[list[str], Iter
         for k, run in enumerate(runs, start=1):
             prefix = [k, *(float(run.params.get(n, math.nan)) for n in changed)] if lead \
                 else []
-            index = np.flatnonzero(run.outdel_mask)
-            cols = [T.column_of(run, n, index) for n in names]
-            for start in range(0, len(index), T.CHUNK):
-                part = slice(start, start + T.CHUNK)
-                block = [run.times[index[part]].tolist()]
-                block += [[float(v) for v in T._values(c[part])] for c in cols]
-                for r in zip(*block, strict=True):
-                    yield prefix + list(r)
+            for r in outdel_rows(run, names):
+                yield prefix + list(r)
 
     return lead + ["TIME", *names], rows()
 
@@ -102,14 +107,6 @@ def csv_text(runs: Sequence[Run], names: Sequence[str] | None = None,
 XLSX_ROWS = 1_048_576  # what one sheet holds
 
 
-def xlsx_available() -> bool:
-    try:
-        import xlsxwriter  # noqa: F401
-    except ImportError:
-        return False
-    return True
-
-
 def write_xlsx(path: str, runs: Sequence[Run], names: Sequence[str] | None = None) -> None:
     """One sheet per run (named by its changed values), TIME and the CSV's columns
     as numbers; a failed run's sheet starts with the PARTIAL note."""
@@ -135,14 +132,9 @@ def write_xlsx(path: str, runs: Sequence[Run], names: Sequence[str] | None = Non
                 raise OutputError(path, f"run {k} has {len(index)} rows; a sheet holds "
                                         f"{XLSX_ROWS - 1}: write CSV instead")
             sheet.write_row(row, 0, ["TIME", *names])
-            cols = [T.column_of(run, n, index) for n in names]
-            for start in range(0, len(index), T.CHUNK):
-                part = slice(start, start + T.CHUNK)
-                block = [run.times[index[part]].tolist()]
-                block += [[float(v) for v in T._values(c[part])] for c in cols]
-                for values in zip(*block, strict=True):
-                    row += 1
-                    sheet.write_row(row, 0, values)
+            for values in outdel_rows(run, names):
+                row += 1
+                sheet.write_row(row, 0, values)
         book.close()
 
 

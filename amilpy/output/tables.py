@@ -82,7 +82,7 @@ class Table:
             yield [cells(c.fmt, c.values[part]) for c in columns]
 
 
-def _values(chunk) -> list:
+def values_of(chunk) -> list:
     return chunk.tolist() if isinstance(chunk, np.ndarray) else list(chunk)
 
 
@@ -93,8 +93,8 @@ def cells(fmt: str, chunk, width: int = 0) -> list[str]:
     """A column's values as text (see `cell`), formatted a whole block at once;
     right-aligned in `width` characters if given."""
     if fmt == "s":
-        return [str(v).rjust(width) for v in _values(chunk)]
-    x = np.asarray(_values(chunk), dtype=float)
+        return [str(v).rjust(width) for v in values_of(chunk)]
+    x = np.asarray(values_of(chunk), dtype=float)
     spec = f">{width}{_SPECS[fmt]}" if width else _SPECS[fmt]
     out = list(map(("{:" + spec + "}").format, x.tolist()))
     for i in np.flatnonzero(~np.isfinite(x)).tolist():
