@@ -1,272 +1,458 @@
-"""The command line: `amilpy run`, `amilpy check`.
+"""The command line: `amilpy run`, `sweep`, `report`, `check`.
 
-Exit codes: 0 success, 1 a fault in the model (diagnostics on stderr),
-2 a usage error, 3 the integration failed (what was computed is still printed
-and written, marked partial). Errors are rendered here, once; no traceback
-reaches the user.
+Exit codes (the highest that applies, over every file given):
+  0  success
+  1  a fault in a listing (diagnostics on stderr, file:line:col)
+  2  a usage error (a bad option or value; the message names it)
+  3  a run failed or was interrupted (Ctrl-C, SIGTERM, SIGHUP): what it computed
+     is still printed and written, marked partial
+  4  an output could not be written (the path and the reason on stderr); the
+     other outputs are still written
+Errors are rendered here, once; no traceback reaches the user. Output files are
+written before the printout, so a closed or blocked stdout cannot lose them.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 
-from .diagnostics import AmilError
-from .routes import methods_help
+from . import __version__
+from .console import Progress, Signals, tolerant_streams, write_out
+from .diagnostics import AmilError, nearest
+from .output.files import OutputError
+from .output.writers import DIALECTS, WRITERS, Outputs, PlotOptions, dest, writers_for
+from .routes import method_names, methods_help, route_for
 
-EXIT_OK, EXIT_MODEL, EXIT_USAGE, EXIT_FAILED = 0, 1, 2, 3
+EXIT_OK, EXIT_MODEL, EXIT_USAGE, EXIT_FAILED, EXIT_OUTPUT = 0, 1, 2, 3, 4
+
+
+class UsageError(Exception):
+    """A bad command line: exit 2 with the message (and the file, when known)."""
+
+
+# ------------------------------------------------------------- value checks
+
+
+def _number(text: str) -> float:
+    try:
+        return float(text.replace("D", "E").replace("d", "e"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+
+
+def _checked(kind: str, test, cast=_number):
+    def parse(text: str):
+        value = cast(text)
+        if not (math.isfinite(value) and test(value)):
+            raise argparse.ArgumentTypeError(f"must be {kind}, got {text!r}")
+        return value
+
+    parse.__name__ = kind
+    return parse
+
+
+def _integer(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+
+
+POSITIVE = _checked("a positive number", lambda x: x > 0)
+NONNEGATIVE = _checked("a number >= 0", lambda x: x >= 0)
+FINITE = _checked("a finite number", lambda x: True)
+COUNT = _checked("a whole number >= 1", lambda x: x >= 1, _integer)
+
+
+def _method(text: str) -> str:
+    if route_for(text) is None:
+        raise argparse.ArgumentTypeError(
+            f"unknown method {text!r}; the methods are {', '.join(method_names())}")
+    return text.upper()
+
+
+def _runs(text: str) -> tuple[int, ...]:
+    try:
+        numbers = tuple(int(x) for x in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"takes run numbers like 1,3, got {text!r}") from None
+    if not numbers or min(numbers) < 1:
+        raise argparse.ArgumentTypeError(f"run numbers start at 1, got {text!r}")
+    return numbers
+
+
+# ------------------------------------------------------------------ parser
+
+
+def _model_options(p: argparse.ArgumentParser, run_limits: bool = True) -> None:
+    p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
+                   help="override a PARAM/CONST/INCON value for every run (repeatable)")
+    p.add_argument("--method", metavar="NAME", type=_method,
+                   help="integration method, instead of METHOD: " + methods_help())
+    p.add_argument("--rtol", type=POSITIVE, metavar="X", help="relative tolerance (RELERR)")
+    p.add_argument("--atol", type=POSITIVE, metavar="X", help="absolute tolerance (ABSERR)")
+    p.add_argument("--fintim", type=POSITIVE, metavar="S", help="run length instead of FINTIM")
+    if run_limits:
+        p.add_argument("--max-time", type=POSITIVE, metavar="S",
+                       help="wall-clock limit per run, seconds")
+        p.add_argument("--max-steps", type=COUNT, metavar="N",
+                       help="step limit per run (default 5000000)")
+        p.add_argument("--max-events", type=COUNT, metavar="N",
+                       help="event limit per run (default 200000)")
+
+
+def _plot_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("plots")
+    g.add_argument("--from", dest="t_from", type=FINITE, metavar="T1",
+                   help="plot from TIME = T1 on")
+    g.add_argument("--to", dest="t_to", type=FINITE, metavar="T2", help="plot up to TIME = T2")
+    g.add_argument("--zoom-events", action="store_true",
+                   help="also a figure of each OUTPUT statement around the first switching "
+                        "event after start-up (NAME_zoom.png)")
+    g.add_argument("--subplots", action="store_true",
+                   help="one axis per variable (done anyway when scales differ over 100x)")
+    g.add_argument("--runs", type=_runs, metavar="1,3", help="plot only these runs")
+
+
+def _writer_options(p: argparse.ArgumentParser, command: str) -> None:
+    for w in writers_for(command):
+        if w.flag is None:
+            continue
+        if w.takes_path:
+            p.add_argument(w.flag, dest=dest(w.flag), metavar="PATH", help=w.help)
+        else:
+            p.add_argument(w.flag, dest=dest(w.flag), action="store_true", help=w.help)
+
+
+def _csv_dialect(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--csv-dialect", choices=list(DIALECTS), default="plain",
+                   help="; ".join(f"{k}: {d.help}" for k, d in DIALECTS.items()))
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
-        prog="amilpy",
-        description="Run AMIL/CSMP-style simulation listings.",
-    )
-    sub = p.add_subparsers(dest="command", required=True)
+    from .output.report import FORMATS
+    from .output.words import LANGUAGES
 
-    run = sub.add_parser("run", help="run a listing: printout, plots, CSV")
-    run.add_argument("file")
-    run.add_argument("--plot", action="store_true", help="draw one figure per OUTPUT statement")
+    p = argparse.ArgumentParser(prog="amilpy", description="Run AMIL/CSMP-style simulation "
+                                "listings: printouts, plots, CSV, sweeps and lab reports.",
+                                epilog="Exit codes: 0 ok, 1 a fault in a listing, 2 a usage "
+                                "error, 3 a run failed or was interrupted (partial results "
+                                "kept), 4 an output could not be written.")
+    p.add_argument("--version", action="version", version=f"amilpy {__version__}")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    run = sub.add_parser("run", help="run listings: printout, plots, CSV")
+    run.add_argument("files", nargs="+", metavar="FILE", help="the listing(s) (.amil)")
+    run.add_argument("--out", metavar="DIR", help="where PREPARE's CSV and the PNGs go "
+                                                  "(default: next to each listing)")
+    _writer_options(run, "run")
+    _csv_dialect(run)
     run.add_argument("--ascii", action="store_true",
                      help="line-printer plots in the printout (as PRTPLT does)")
-    run.add_argument("--out", metavar="DIR", help="where PNG/CSV files go (default: next to "
-                                                  "the model)")
-    run.add_argument("--csv", metavar="PATH", help="write the OUTDEL-grid values as CSV")
-    run.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
-                     help="override a PARAM/CONST/INCON value (repeatable)")
-    run.add_argument("--method", metavar="NAME", help="integration method (as METHOD): "
-                     + methods_help())
-    run.add_argument("--rtol", type=float, help="relative tolerance (RELERR)")
-    run.add_argument("--atol", type=float, help="absolute tolerance (ABSERR)")
+    _model_options(run)
     run.add_argument("--show-python", action="store_true",
                      help="print the generated Python of the first run")
     run.add_argument("--quiet", action="store_true", help="no printout, only files and errors")
     run.add_argument("--no-advice", action="store_true",
                      help="do not probe for stiffness after an expensive explicit run")
-    run.add_argument("--max-time", type=float, metavar="S", help="wall-clock limit per run")
-    run.add_argument("--max-steps", type=int, help="step limit per run (default 5e6)")
-    run.add_argument("--max-events", type=int, help="event limit per run (default 2e5)")
-    run.add_argument("--fintim", type=float, metavar="S", help="run length instead of FINTIM")
+    _plot_options(run)
 
     sw = sub.add_parser("sweep", help="one run per value of a data value (amplitude-"
                                       "frequency characteristics)")
-    sw.add_argument("file")
-    sw.add_argument("range", metavar="NAME=START:STOP:STEP")
+    sw.add_argument("file", metavar="FILE", help="the listing (.amil)")
+    sw.add_argument("range", metavar="NAME=START:STOP:STEP",
+                    help="the data value swept and its values, STOP included")
     sw.add_argument("--both-ways", action="store_true", help="sweep up, then back down")
     sw.add_argument("--carry-state", action="store_true",
-                    help="each run continues from the previous run's final state")
-    sw.add_argument("--settle", type=float, default=0.0, metavar="S",
+                    help="each run continues from the previous run's final state (the "
+                         "first point, a transient, is then left out of the jump search)")
+    sw.add_argument("--settle", type=NONNEGATIVE, default=0.0, metavar="S",
                     help="measure only after S seconds of each run")
     sw.add_argument("--measure", metavar="VAR", help="the variable measured (default: the "
                                                      "first OUTPUT/PRINT variable)")
-    sw.add_argument("--fintim", type=float, metavar="S", help="length of each run")
-    sw.add_argument("--csv", metavar="PATH")
-    sw.add_argument("--plot", action="store_true")
-    sw.add_argument("--out", metavar="DIR")
-    sw.add_argument("--set", metavar="NAME=VALUE", action="append", default=[])
-    sw.add_argument("--method")
-    sw.add_argument("--rtol", type=float)
-    sw.add_argument("--atol", type=float)
-    sw.add_argument("--quiet", action="store_true")
+    sw.add_argument("--out", metavar="DIR", help="where the PNG goes (default: next to the "
+                                                 "listing)")
+    _writer_options(sw, "sweep")
+    _csv_dialect(sw)
+    _model_options(sw, run_limits=False)
+    sw.add_argument("--quiet", action="store_true", help="no table, only files and errors")
 
     rep = sub.add_parser("report", help="a lab-report document: listing, data, equations, "
                                         "printouts, events, plots")
-    rep.add_argument("file")
-    rep.add_argument("--out", metavar="DIR")
-    rep.add_argument("--format", default="md", help="comma-separated: md, pdf, tex "
-                                                    "(default md)")
-    rep.add_argument("--set", metavar="NAME=VALUE", action="append", default=[])
-    rep.add_argument("--method")
+    rep.add_argument("file", metavar="FILE", help="the listing (.amil)")
+    rep.add_argument("--out", metavar="DIR", help="where the report and its PNGs go "
+                                                  "(default: next to the listing)")
+    rep.add_argument("--format", default="md", metavar="LIST",
+                     help="comma-separated, of: " + "; ".join(
+                         f"{k}: {f.help}" for k, f in FORMATS.items()) + " (default md)")
+    rep.add_argument("--lang", choices=LANGUAGES,
+                     help="language of the headings (default: Polish when the TITLE/LABEL "
+                          "text is, else the locale's, else English)")
+    _model_options(rep)
+    _plot_options(rep)
 
-    chk = sub.add_parser("check", help="parse and check a listing, do not run it")
-    chk.add_argument("file")
+    chk = sub.add_parser("check", help="parse and check listings, do not run them")
+    chk.add_argument("files", nargs="+", metavar="FILE", help="the listing(s) (.amil)")
     return p
+
+
+# ---------------------------------------------------------------- commands
 
 
 def _parse_sets(items: list[str]) -> dict[str, float]:
     out = {}
     for item in items:
         if "=" not in item:
-            raise _Usage(f"--set takes NAME=VALUE, got {item!r}")
+            raise UsageError(f"--set takes NAME=VALUE, got {item!r}")
         name, value = item.split("=", 1)
         try:
-            out[name.strip().upper()] = float(value.replace("D", "E").replace("d", "e"))
+            number = float(value.replace("D", "E").replace("d", "e"))
         except ValueError:
-            raise _Usage(f"--set {name}: {value!r} is not a number") from None
+            raise UsageError(f"--set {name}: {value!r} is not a number") from None
+        if not math.isfinite(number):
+            raise UsageError(f"--set {name}: the value must be finite, got {value!r}")
+        out[name.strip().upper()] = number
     return out
 
 
-class _Usage(Exception):
-    pass
+def _check_sets(model, params: dict[str, float]) -> None:
+    known = set(model.ir.data_names)
+    for name in params:
+        if name not in known:
+            hint = nearest(name, known)
+            raise UsageError(f"--set {name}: not a PARAM/CONST/INCON value of this listing"
+                             + (f"; did you mean {hint}?" if hint else ""))
 
 
-def cmd_check(args) -> int:
+def _plot_choice(args, model) -> PlotOptions:
+    if args.t_from is not None and args.t_to is not None and args.t_from >= args.t_to:
+        raise UsageError(f"--from {args.t_from:g} must come before --to {args.t_to:g}")
+    if args.runs and max(args.runs) > len(model.ir.runs):
+        raise UsageError(f"--runs {max(args.runs)}: the listing has {len(model.ir.runs)} "
+                         "run(s)")
+    from .output.plot import can_show
+
+    show = getattr(args, "plot", False) and can_show()
+    return PlotOptions(args.t_from, args.t_to, args.zoom_events, args.subplots, args.runs,
+                       show)
+
+
+def _write_outputs(outputs: Outputs, args, signals: Signals) -> tuple[list[str], list[str]]:
+    """Every writer asked for, each on its own: (paths written, error messages)."""
+    written: list[str] = []
+    errors: list[str] = []
+    with signals.held():
+        for w in writers_for(outputs.command):
+            path = getattr(args, dest(w.flag), None) if w.flag else None
+            asked = (w.wanted(outputs) if w.wanted else bool(path))
+            if not asked:
+                continue
+            try:
+                written.extend(w.write(outputs, path if isinstance(path, str) else None))
+            except OutputError as exc:
+                if str(exc) not in errors:
+                    errors.append(str(exc))
+    return written, errors
+
+
+def _stem_and_dir(path: str, out: str | None) -> tuple[str, str]:
+    return (os.path.splitext(os.path.basename(path))[0],
+            out or os.path.dirname(os.path.abspath(path)))
+
+
+def _finish(path: str, written: list[str], errors: list[str], quiet: bool,
+            signals: Signals) -> int:
+    """Say what was written and what was not; the exit code of the outputs."""
+    if written and not quiet:
+        write_out(lambda out: out.write("\nwritten: " + ", ".join(written) + "\n"))
+    for message in errors:
+        print(f"amilpy: {message}", file=sys.stderr)
+    if signals.held_back:
+        print(f"amilpy: {path}: {signals.name(signals.held_back)} received while writing: "
+              "the files are complete; stopped", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OUTPUT if errors else EXIT_OK
+
+
+def cmd_run(args, path: str, signals: Signals) -> int:
     from .api import load
 
-    model = load(args.file)
-    ir = model.ir
-    print(f"{args.file}: ok — {len([s for s in ir.states if not s.hidden])} states, "
-          f"{len(ir.dynamic)} equations, {len(ir.switches)} switches, {len(ir.runs)} run(s)")
-    return EXIT_OK
-
-
-class Progress:
-    """A progress line on stderr for runs longer than about a second (TTY only)."""
-
-    def __init__(self, enabled: bool) -> None:
-        import time
-
-        self.enabled = enabled and sys.stderr.isatty()
-        self.clock = time.perf_counter
-        self.start = self.clock()
-        self.last = 0.0
-        self.shown = False
-
-    def __call__(self, t: float, fintim: float, events: int, steps: int) -> None:
-        if not self.enabled:
-            return
-        now = self.clock()
-        if now - self.start < 1.0 or now - self.last < 0.2:
-            return
-        self.last = now
-        rate = steps / max(now - self.start, 1e-9)
-        print(f"\rTIME {t:.6g} / {fintim:g}  ({100 * t / fintim:5.1f}%)  events {events}  "
-              f"{rate:,.0f} steps/s ", end="", file=sys.stderr, flush=True)
-        self.shown = True
-
-    def done(self) -> None:
-        if self.shown:
-            print("\r" + " " * 72 + "\r", end="", file=sys.stderr, flush=True)
-
-
-def cmd_run(args) -> int:
-    from .api import load
-    from .printout import format_runs, report_names, write_csv
-
-    model = load(args.file)
+    model = load(path)
     params = _parse_sets(args.set)
+    _check_sets(model, params)
+    plot = _plot_choice(args, model)
     if args.show_python:
-        print(model.python_source(**params))
+        write_out(lambda out: out.write(model.python_source(**params) + "\n"))
     progress = Progress(not args.quiet)
-    runs = model.run(method=args.method, rtol=args.rtol, atol=args.atol, progress=progress,
-                     max_time=args.max_time, max_steps=args.max_steps,
-                     max_events=args.max_events, fintim=args.fintim,
-                     advice=not args.no_advice, **params)
-    progress.done()
-    if not args.quiet:
-        sys.stdout.write(format_runs(runs, ascii_plots=args.ascii))
-        sys.stdout.flush()
-    stem = os.path.splitext(os.path.basename(args.file))[0]
-    out_dir = args.out or os.path.dirname(os.path.abspath(args.file))
-    written = []
-    if report_names(runs[0], "PREPARE"):
-        path = os.path.join(out_dir, f"{stem}.csv")
-        write_csv(path, runs)
-        written.append(path)
-    if args.csv:
-        write_csv(args.csv, runs)
-        written.append(args.csv)
-    if args.plot:
-        from .plot import display_available, plot_runs
+    try:
+        runs = model.run(method=args.method, rtol=args.rtol, atol=args.atol,
+                         progress=progress, max_time=args.max_time, max_steps=args.max_steps,
+                         max_events=args.max_events, fintim=args.fintim,
+                         advice=not args.no_advice, **params)
+    finally:
+        progress.done()
+    stem, out_dir = _stem_and_dir(path, args.out)
+    outputs = Outputs("run", stem, out_dir, runs, model=model, dialect=args.csv_dialect,
+                      plot=plot)
+    written, errors = _write_outputs(outputs, args, signals)
+    if not args.quiet and not signals.held_back:
+        from .output.printout import write_runs
 
-        written.extend(plot_runs(runs, out_dir, stem, show=display_available()))
-    if written and not args.quiet:
-        print("\nwritten: " + ", ".join(written))
+        write_out(lambda out: write_runs(out, runs, ascii_plots=args.ascii))
+    code = _finish(path, written, errors, args.quiet, signals)
     for r in runs:
         if r.advice and not args.quiet:
             print(f"amilpy: note: {r.advice}", file=sys.stderr)
     failed = [r for r in runs if not r.ok]
     for r in failed:
-        print(f"amilpy: {args.file}: run {r.label!r}: {r.message}", file=sys.stderr)
-    return EXIT_FAILED if failed else EXIT_OK
+        print(f"amilpy: {path}: run {r.label!r}: {r.message}", file=sys.stderr)
+    return max(code, EXIT_FAILED if failed else EXIT_OK)
 
 
-def cmd_sweep(args) -> int:
+def cmd_sweep(args, path: str, signals: Signals) -> int:
     from .api import load
-    from .printout import atomic_write
-    from .sweep import parse_range, plot_sweep
+    from .sweep import parse_range, sweep
 
-    model = load(args.file)
-    name, values = parse_range(args.range)
+    try:
+        name, values = parse_range(args.range)
+    except AmilError as exc:
+        raise UsageError(f"the sweep range {args.range}: {exc}") from None
+    model = load(path)
     params = _parse_sets(args.set)
+    _check_sets(model, params)
+    if name not in model.ir.data_names:
+        hint = nearest(name, set(model.ir.data_names))
+        raise UsageError(f"{name} is not a PARAM/CONST/INCON value of this listing"
+                         + (f"; did you mean {hint}?" if hint else ""))
+    if args.measure and args.measure.upper() not in model.ir.variables:
+        hint = nearest(args.measure, set(model.ir.variables))
+        raise UsageError(f"--measure {args.measure}: not a variable of this listing"
+                         + (f"; did you mean {hint}?" if hint else ""))
+    progress = Progress(not args.quiet)
+    total = 2 * len(values) - 1 if args.both_ways else len(values)
 
-    def progress(i, n, value):
-        if not args.quiet and sys.stderr.isatty():
-            print(f"\r{name} = {value:g} ({i}/{n})", end="", file=sys.stderr, flush=True)
+    def point(i: int, n: int, value: float) -> None:
+        progress.prefix = f"{name} point {min(i + 1, n)}/{n}  "
+        progress.line(f"{name} = {value:g} done ({i}/{n})")
 
-    result = model.sweep(name, values, both_ways=args.both_ways, carry_state=args.carry_state,
-                         settle=args.settle, measure=args.measure, method=args.method,
-                         rtol=args.rtol, atol=args.atol, fintim=args.fintim,
-                         progress=progress, **params)
-    if not args.quiet:
-        if sys.stderr.isatty():
-            print(file=sys.stderr)
-        sys.stdout.write(result.format())
-        for direction, (a, b) in result.jumps().items():
-            print(f"largest {'rise' if direction == 'up' else 'fall'} sweeping {direction}: "
-                  f"between {name} = {a:g} and {b:g}")
-    stem = os.path.splitext(os.path.basename(args.file))[0]
-    out_dir = args.out or os.path.dirname(os.path.abspath(args.file))
-    if args.csv:
-        atomic_write(args.csv, result.csv_text().encode("utf-8"))
-    if args.plot:
-        path = plot_sweep(result, os.path.join(out_dir, f"{stem}_sweep.png"))
-        if not args.quiet:
-            print(f"written: {path}")
+    progress.prefix = f"{name} point 1/{total}  "
+    try:
+        result = sweep(model, name, values, both_ways=args.both_ways,
+                       carry_state=args.carry_state, settle=args.settle, measure=args.measure,
+                       method=args.method, rtol=args.rtol, atol=args.atol, fintim=args.fintim,
+                       keep_runs=False, progress=point, run_progress=progress, **params)
+    finally:
+        progress.done()
+    stem, out_dir = _stem_and_dir(path, args.out)
+    outputs = Outputs("sweep", stem, out_dir, sweep=result, model=model,
+                      dialect=args.csv_dialect)
+    written, errors = _write_outputs(outputs, args, signals)
+    if not args.quiet and not signals.held_back:
+        from .output.sweeps import format_sweep
+
+        write_out(lambda out: out.write(format_sweep(result)))
+    code = _finish(path, written, errors, args.quiet, signals)
     failed = [p for p in result.points if p.status == "failed"]
     if failed:
-        print(f"amilpy: {args.file}: the run at {name} = {failed[0].value:g} failed; the "
+        print(f"amilpy: {path}: the run at {name} = {failed[0].value:g} failed; the "
               "sweep stopped there", file=sys.stderr)
-        return EXIT_FAILED
-    return EXIT_OK
+    return max(code, EXIT_FAILED if failed else EXIT_OK)
 
 
-def cmd_report(args) -> int:
-    from .report import FORMATS, make_report
+def cmd_report(args, path: str, signals: Signals) -> int:
+    from .api import load
+    from .output.report import FORMATS, write_report
 
     formats = [f.strip().lower() for f in args.format.split(",") if f.strip()]
     bad = [f for f in formats if f not in FORMATS]
     if bad or not formats:
-        raise _Usage(f"--format takes {', '.join(FORMATS)}; got {args.format!r}")
-    written = make_report(args.file, args.out, formats, method=args.method,
-                          **_parse_sets(args.set))
-    for fmt, path in written.items():
-        print(f"{fmt}: {path}")
+        raise UsageError(f"--format takes {', '.join(FORMATS)}; got {args.format!r}")
+    model = load(path)
+    params = _parse_sets(args.set)
+    _check_sets(model, params)
+    plot = _plot_choice(args, model)
+    runs = model.run(method=args.method, rtol=args.rtol, atol=args.atol, fintim=args.fintim,
+                     max_time=args.max_time, max_steps=args.max_steps,
+                     max_events=args.max_events, **params)
+    errors: list[OutputError] = []
+    with signals.held():
+        written = write_report(model, runs, path, args.out, formats, args.lang, plot, errors)
+    write_out(lambda out: out.write("".join(f"{fmt}: {', '.join(paths)}\n"
+                                            for fmt, paths in written.items())))
+    code = _finish(path, [], list(dict.fromkeys(str(e) for e in errors)), True, signals)
+    failed = [r for r in runs if not r.ok]
+    for r in failed:
+        print(f"amilpy: {path}: run {r.label!r}: {r.message}; the report is marked partial",
+              file=sys.stderr)
+    return max(code, EXIT_FAILED if failed else EXIT_OK)
+
+
+def cmd_check(args, path: str, signals: Signals) -> int:
+    from .api import load
+
+    ir = load(path).ir
+    write_out(lambda out: out.write(
+        f"{path}: ok — {len([s for s in ir.states if not s.hidden])} states, "
+        f"{len(ir.dynamic)} equations, {len(ir.switches)} switches, {len(ir.runs)} run(s)\n"))
     return EXIT_OK
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = _parser()
+COMMANDS = {"run": cmd_run, "sweep": cmd_sweep, "report": cmd_report, "check": cmd_check}
+
+
+def _one(command, args, path: str, signals: Signals) -> int:
     try:
-        args = parser.parse_args(argv)
-    except SystemExit as exc:  # argparse has printed the usage
-        return int(exc.code) if isinstance(exc.code, int) else EXIT_USAGE
-    try:
-        if args.command == "check":
-            return cmd_check(args)
-        if args.command == "sweep":
-            return cmd_sweep(args)
-        if args.command == "report":
-            return cmd_report(args)
-        return cmd_run(args)
-    except _Usage as exc:
-        print(f"amilpy: {exc}", file=sys.stderr)
+        return command(args, path, signals)
+    except UsageError as exc:
+        print(f"amilpy: {path}: {exc}", file=sys.stderr)
         return EXIT_USAGE
+    except OutputError as exc:
+        print(f"amilpy: {exc}", file=sys.stderr)
+        return EXIT_OUTPUT
     except AmilError as exc:
+        if exc.path is None:
+            exc.path = path  # an error from a stage that did not know the file
         print(exc.render(), file=sys.stderr)
         return EXIT_MODEL
     except KeyboardInterrupt:
-        print("amilpy: interrupted", file=sys.stderr)
+        print(f"amilpy: {path}: interrupted", file=sys.stderr)
         return EXIT_FAILED
-    except BrokenPipeError:
-        return EXIT_OK
     except MemoryError:
-        print("amilpy: out of memory", file=sys.stderr)
+        print(f"amilpy: {path}: out of memory", file=sys.stderr)
         return EXIT_FAILED
     except RecursionError:
-        print("amilpy: the listing is nested too deeply", file=sys.stderr)
+        print(f"amilpy: {path}: the listing is nested too deeply", file=sys.stderr)
         return EXIT_MODEL
+
+
+def main(argv: list[str] | None = None) -> int:
+    tolerant_streams()
+    parser = _parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # argparse has printed the usage (or --help, --version)
+        return int(exc.code) if isinstance(exc.code, int) else EXIT_USAGE
+    paths = getattr(args, "files", None) or [args.file]
+    several = [w.flag for w in WRITERS if w.takes_path and w.flag
+               and getattr(args, dest(w.flag), None)]
+    if len(paths) > 1 and several:
+        print(f"amilpy {args.command}: {several[0]} names one file; with several listings "
+              "run them one at a time", file=sys.stderr)
+        return EXIT_USAGE
+    signals = Signals()
+    signals.install()
+    try:
+        code = EXIT_OK
+        for path in paths:
+            code = max(code, _one(COMMANDS[args.command], args, path, signals))
+            if signals.received:
+                break  # an interrupt stops the files not yet started too
+        return code
+    finally:
+        signals.restore()
 
 
 if __name__ == "__main__":

@@ -1,7 +1,8 @@
 """What a run produces: sampled variables, events, RANGE, status.
 
-A `Run` is plain data (numpy arrays and lists); printing and plotting read it,
-nothing here computes dynamics.
+A `Run` is plain data (numpy arrays and lists); printing and plotting read it
+(amilpy.output), nothing here computes dynamics or draws: `Run.plot`, the
+notebook view and `str(event)` hand over to the output package.
 """
 
 from __future__ import annotations
@@ -55,13 +56,15 @@ class Event:
     text: str = ""
 
     def describe_branch(self, mode: float) -> str:
-        if self.kind == EventKind.LEVEL:
-            return f"level {mode:g}"
-        return {-1.0: "X<0", 0.0: "X=0", 1.0: "X>0", 0.5: "sliding"}.get(mode, f"{mode:g}")
+        """A branch in the listing's terms ("W1 > 0"); see amilpy.output.words."""
+        from .output.words import branch_text
+
+        return branch_text(self, mode)
 
     def __str__(self) -> str:
-        return (f"TIME = {self.time:.9g}: {self.switch}: {self.describe_branch(self.old)} -> "
-                f"{self.describe_branch(self.new)}")
+        from .output.words import event_line
+
+        return event_line(self)
 
 
 @dataclass
@@ -165,43 +168,16 @@ class Run:
         frame.attrs.update(label=self.label, status=str(self.status), message=self.message)
         return frame
 
-    def plot(self, *names: str, ax=None):
-        """Plot variables against TIME (all recorded ones if none are named);
-        returns the matplotlib axes."""
-        import matplotlib.pyplot as plt
+    def plot(self, *names: str, ax=None, label: str | None = None):
+        """Plot variables against TIME (all recorded ones if none are named) on `ax`;
+        returns the matplotlib axes. For several runs on one axes, use
+        `amilpy.output.plot.draw_runs(runs, *names)`, which labels each run by the
+        values that tell it from the others."""
+        from .output.plot import plot_run
 
-        if ax is None:
-            _, ax = plt.subplots(figsize=(7, 4))
-        for name in names or [n for n in self.values if "#" not in n]:
-            ax.plot(self.t, self[name], label=name.upper())
-        ax.set_xlabel("TIME")
-        ax.set_title(self.titles[0] if self.titles else self.label)
-        ax.grid(True, alpha=0.3)
-        ax.legend()
-        return ax
+        return plot_run(self, names, ax, label)
 
     def _repr_html_(self) -> str:
-        from html import escape
+        from .output.notebook import run_html
 
-        names = [n for n in self.values if "#" not in n][:8]
-        table = self.printout
-        rows = list(range(len(table.t)))
-        if len(rows) > 12:
-            rows = rows[:6] + [-1] + rows[-5:]
-        head = "".join(f"<th>{escape(n)}</th>" for n in ["TIME", *names])
-        body = []
-        for i in rows:
-            if i == -1:
-                body.append(f"<tr><td colspan='{len(names) + 1}'>&hellip;</td></tr>")
-                continue
-            cells = [table.t[i]] + [table.columns[n][i] for n in names]
-            body.append("<tr>" + "".join(f"<td>{v:.6g}</td>" for v in cells) + "</tr>")
-        colour = {"finished": "green", "stopped": "teal", "failed": "red"}[str(self.status)]
-        title = escape(self.titles[0]) + "<br>" if self.titles else ""
-        events = f", {len(self.events)} events" if self.events else ""
-        note = f"<br><i>{escape(self.message)}</i>" if self.message else ""
-        return (f"<div><b>{title}{escape(self.label)}</b> &mdash; "
-                f"<span style='color:{colour}'>{self.status}</span>, METHOD {self.method}, "
-                f"{self.stats.get('nsteps', 0)} steps{events}{note}"
-                f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody>"
-                f"</table></div>")
+        return run_html(self)

@@ -33,6 +33,26 @@ class SweepPoint:
         return 0.5 * (self.maximum - self.minimum)
 
 
+JUMP_FACTOR = 5.0  # a jump changes the amplitude this many times more than its neighbours
+NEIGHBOURS = 3  # steps each side whose changes measure the noise
+
+
+@dataclass(frozen=True)
+class Jump:
+    """A jump of the characteristic between two neighbouring values."""
+
+    direction: str  # the sweep's: "up" or "down"
+    start: float  # the value before the jump ...
+    stop: float  # ... and after it
+    before: float  # the amplitude at `start`
+    after: float  # ... and at `stop`
+    ratio: float  # the change over the typical change of the neighbouring steps
+
+    @property
+    def rise(self) -> bool:
+        return self.after > self.before
+
+
 @dataclass
 class Sweep:
     name: str
@@ -40,52 +60,64 @@ class Sweep:
     settle: float
     points: list[SweepPoint] = field(default_factory=list)
     runs: list[Run] = field(default_factory=list)
+    # with a carried state, the first point starts from the listing's initial state
+    # (a transient) and every later one from a settled state: it is left out of
+    # the jump search
+    carry_state: bool = False
 
     def branch(self, direction: str) -> tuple[np.ndarray, np.ndarray]:
         pts = [p for p in self.points if p.direction == direction]
         return (np.array([p.value for p in pts]), np.array([p.amplitude for p in pts]))
 
-    def jumps(self) -> dict[str, tuple[float, float]]:
-        """For each direction, the pair of neighbouring values with the largest
-        change of amplitude (up: largest rise, down: largest fall)."""
-        out = {}
-        for direction, pick in (("up", np.argmax), ("down", np.argmin)):
+    def jumps(self) -> dict[str, Jump | None]:
+        """For each direction swept, its jump: the largest change of amplitude
+        between neighbouring values, if it exceeds JUMP_FACTOR times the typical
+        (median) change of the NEIGHBOURS steps each side; else None. Directions
+        with fewer than three points to compare are left out (no noise to judge by)."""
+        out: dict[str, Jump | None] = {}
+        for direction in ("up", "down"):
             v, a = self.branch(direction)
-            if len(v) >= 2:
-                k = int(pick(np.diff(a)))
-                out[direction] = (float(v[k]), float(v[k + 1]))
+            if direction == "up" and self.carry_state and len(v):
+                v, a = v[1:], a[1:]
+            if len(v) < 3:
+                continue
+            d = np.diff(a)
+            best = None
+            for k in range(len(d)):
+                near = np.abs(np.delete(d[max(0, k - NEIGHBOURS): k + NEIGHBOURS + 1],
+                                        min(k, NEIGHBOURS)))
+                noise = max(float(np.median(near)), 1e-12 * float(np.max(np.abs(a))), 1e-300)
+                ratio = abs(float(d[k])) / noise
+                if ratio > JUMP_FACTOR and (best is None or abs(d[k]) > abs(d[best[0]])):
+                    best = (k, ratio)
+            out[direction] = None if best is None else Jump(
+                direction, float(v[best[0]]), float(v[best[0] + 1]), float(a[best[0]]),
+                float(a[best[0] + 1]), best[1])
         return out
 
-    def csv_text(self) -> str:
-        lines = [f"DIRECTION,{self.name},MIN_{self.measure},MAX_{self.measure},"
-                 f"HALF_PP_{self.measure},STATUS,TIME_START,TIME_END"]
-        for p in self.points:
-            lines.append(f"{p.direction},{p.value!r},{p.minimum!r},{p.maximum!r},"
-                         f"{p.amplitude!r},{p.status},{p.t_start!r},{p.t_end!r}")
-        return "\n".join(lines) + "\n"
 
-    def format(self) -> str:
-        head = (f"{'':6}{self.name:>14}{'MIN ' + self.measure:>16}{'MAX ' + self.measure:>16}"
-                f"{'HALF P-P':>16}")
-        rows = [f"SWEEP OF {self.name}, {self.measure} MEASURED AFTER {self.settle:g} S", head]
-        for p in self.points:
-            rows.append(f"{p.direction:6}{p.value:14.6g}{p.minimum:16.6E}{p.maximum:16.6E}"
-                        f"{p.amplitude:16.6E}" + ("" if p.status != "failed" else "  FAILED"))
-        return "\n".join(rows) + "\n"
+MAX_POINTS = 100_000
 
 
 def parse_range(text: str) -> tuple[str, list[float]]:
-    """NAME=START:STOP:STEP -> (NAME, values), STOP included."""
+    """NAME=START:STOP:STEP -> (NAME, values), STOP included. A malformed range
+    is an AmilError saying what to write (the command line makes it a usage error)."""
     try:
         name, spec = text.split("=", 1)
-        start, stop, step = (float(x) for x in spec.split(":"))
+        start, stop, step = (float(x.replace("D", "E").replace("d", "e"))
+                             for x in spec.split(":"))
     except ValueError:
-        raise AmilError(f"a sweep is NAME=START:STOP:STEP, got {text!r}") from None
+        raise AmilError("write it NAME=START:STOP:STEP, e.g. W=60:80:0.5") from None
+    if not name.strip().isidentifier():
+        raise AmilError(f"{name.strip()!r} is not a name (NAME=START:STOP:STEP)")
+    if not all(math.isfinite(x) for x in (start, stop, step)):
+        raise AmilError("START, STOP and STEP must be finite numbers")
     if step == 0 or (stop - start) / step < 0:
         raise AmilError(f"the step {step:g} does not lead from {start:g} to {stop:g}")
-    n = int(math.floor((stop - start) / step + 1e-9))
-    if n > 100_000:
-        raise AmilError(f"the sweep has {n + 1} points (limit 100000)")
+    count = (stop - start) / step
+    if not count < MAX_POINTS:
+        raise AmilError(f"the sweep has {count + 1:.3g} points (limit {MAX_POINTS})")
+    n = int(math.floor(count + 1e-9))
     values = [round(start + k * step, 12) for k in range(n + 1)]
     return name.strip().upper(), values
 
@@ -94,8 +126,10 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
           carry_state: bool = False, settle: float = 0.0, measure: str | None = None,
           method: str | None = None, rtol: float | None = None, atol: float | None = None,
           fintim: float | None = None, keep_runs: bool = False, progress=None,
-          **params: float) -> Sweep:
-    """Run `model` once per value of data value `name` and measure `measure`."""
+          run_progress=None, **params: float) -> Sweep:
+    """Run `model` once per value of data value `name` and measure `measure`.
+    `progress(i, n, value)` is called after each point, `run_progress` during each
+    run (as `Options.progress`)."""
     from .runner import Options, simulate
 
     name = name.upper()
@@ -112,12 +146,13 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
     sequence = [(v, "up") for v in values]
     if both_ways:
         sequence += [(v, "down") for v in reversed(values[:-1])]
-    result = Sweep(name, measure, settle)
+    result = Sweep(name, measure, settle, carry_state=carry_state)
     start = None
     for i, (value, direction) in enumerate(sequence):
         spec = model._specs({**params, name: value})[0]
         opts = Options(method=method, rtol=rtol, atol=atol,
-                       start=start if carry_state else None, fintim=fintim)
+                       start=start if carry_state else None, fintim=fintim,
+                       progress=run_progress)
         run = simulate(model.ir, spec, opts)
         t0 = float(run.times[0])
         keep = run.times >= t0 + settle
@@ -133,32 +168,3 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
             break  # what follows would start from a failed state
         start = run.final_state
     return result
-
-
-def plot_sweep(result: Sweep, path: str, title: str | None = None) -> str:
-    import io
-
-    import matplotlib
-
-    matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
-
-    from .printout import atomic_write
-
-    fig, ax = plt.subplots(figsize=(8, 4.8))
-    for direction, colour, marker in (("up", "tab:blue", "^"), ("down", "tab:red", "v")):
-        v, a = result.branch(direction)
-        if len(v):
-            ax.plot(v, a, color=colour, marker=marker, markersize=4, linewidth=1.2,
-                    label=f"sweep {direction}")
-    ax.set_xlabel(result.name)
-    ax.set_ylabel(f"half peak-to-peak of {result.measure}")
-    ax.set_title(title or f"{result.measure} against {result.name}")
-    ax.grid(True, alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    atomic_write(path, buf.getvalue())
-    return path

@@ -104,9 +104,12 @@ def test_bad_set_is_a_usage_error(model, capsys):
     assert main(["run", str(model), "--set", "K=abc"]) == 2
 
 
-def test_unknown_set_name_is_a_model_error(model, capsys):
-    assert main(["run", str(model), "--set", "KK=1"]) == 1
-    assert "did you mean K?" in capsys.readouterr().err
+def test_unknown_set_name_is_a_usage_error(model, capsys):
+    # a name on the command line that the listing does not have is the command
+    # line's mistake, not the listing's: exit 2, with the file and a hint
+    assert main(["run", str(model), "--set", "KK=1"]) == 2
+    err = capsys.readouterr().err
+    assert f"amilpy: {model}: --set KK:" in err and "did you mean K?" in err
 
 
 def test_missing_file(tmp_path, capsys):
@@ -164,3 +167,164 @@ def test_ctrl_c_keeps_the_rows_and_exits_3(tmp_path, capsys, monkeypatch):
     rows = (tmp_path / "long.csv").read_text().splitlines()
     assert rows[0].startswith("# PARTIAL (run 1): interrupted at TIME = ")
     assert rows[1] == "TIME,X" and len(rows) > 500  # one run only, cut after TIME 10
+
+
+# ------------------------------------------------------- usage, files, exit codes
+
+
+def test_version(capsys):
+    import amilpy
+
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out.strip() == f"amilpy {amilpy.__version__}"
+
+
+def test_every_option_is_described(capsys):
+    # every option and argument of every command has a help text
+    from amilpy.cli import _parser
+
+    parser = _parser()
+    sub = next(a for a in parser._actions if a.dest == "command")
+    for name, command in sub.choices.items():
+        for action in command._actions:
+            if action.dest != "help":
+                assert action.help, f"{name} {action.option_strings or action.dest}"
+
+
+@pytest.mark.parametrize("argv, option", [
+    (["--method", "RUNGE"], "--method"),
+    (["--max-time", "0"], "--max-time"), (["--max-time", "nan"], "--max-time"),
+    (["--max-time", "-1"], "--max-time"), (["--max-steps", "0"], "--max-steps"),
+    (["--max-steps", "1.5"], "--max-steps"), (["--max-events", "-3"], "--max-events"),
+    (["--rtol", "inf"], "--rtol"), (["--atol", "0"], "--atol"), (["--fintim", "-1"], "--fintim"),
+    (["--from", "nan"], "--from"), (["--runs", "0,2"], "--runs"),
+])
+def test_bad_values_are_usage_errors_naming_the_option(model, argv, option, capsys):
+    assert main(["run", str(model), *argv]) == 2
+    assert f"argument {option}:" in capsys.readouterr().err
+
+
+def test_bad_method_lists_the_methods(model, capsys):
+    from amilpy.routes import method_names
+
+    assert main(["run", str(model), "--method", "RUNGE"]) == 2
+    err = capsys.readouterr().err
+    assert all(name in err for name in method_names())
+
+
+@pytest.mark.parametrize("spec", ["K=nan:1:0.1", "K=0:inf:1", "K=0:1", "K=1:0:0.5", "K=0:1:0",
+                                  "K=0:1e9:1e-3"])
+def test_bad_sweep_ranges_are_usage_errors_with_the_file(model, spec, capsys):
+    assert main(["sweep", str(model), spec]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"amilpy: {model}: the sweep range {spec}:") and "<listing>" not in err
+
+
+def test_sweep_of_an_unknown_name_is_a_usage_error(model, capsys):
+    assert main(["sweep", str(model), "KK=0:1:0.5"]) == 2
+    assert "did you mean K?" in capsys.readouterr().err
+
+
+def test_several_files_for_check_and_run(tmp_path, capsys):
+    good = tmp_path / "g.amil"
+    good.write_text(DECAY)
+    bad = tmp_path / "b.amil"
+    bad.write_text("X = INTGRL(1.0, -KK*X)\nTIMER FINTIM = 1.0\n")
+    assert main(["check", str(good), str(bad), str(good)]) == 1  # the worst of the three
+    captured = capsys.readouterr()
+    assert captured.out.count(f"{good}: ok") == 2 and f"{bad}:1:18: error" in captured.err
+    assert main(["run", str(good), str(good), "--quiet"]) == 0
+    assert main(["run", str(good), str(good), "--csv", str(tmp_path / "x.csv")]) == 2
+
+
+def test_report_of_a_failed_run_is_written_partial_and_exits_3(tmp_path, capsys):
+    path = tmp_path / "blow.amil"
+    path.write_text("TITLE BLOW-UP\nX = INTGRL(1.0, X*X)\nTIMER FINTIM = 2.0, OUTDEL = 0.1\n"
+                    "PRINT X\nEND\n")
+    assert main(["report", str(path), "--out", str(tmp_path / "r"), "--format", "md"]) == 3
+    md = (tmp_path / "r" / "blow_report.md").read_text()
+    assert md.startswith("# BLOW-UP\n\n**PARTIAL REPORT")
+    assert "**Partial results: integration failed at TIME = " in md
+    assert "the report is marked partial" in capsys.readouterr().err
+
+
+def test_csv_dialect_on_the_command_line(model, tmp_path):
+    csv = tmp_path / "x.csv"
+    assert main(["run", str(model), "--csv", str(csv), "--csv-dialect", "excel-pl",
+                 "--quiet"]) == 0
+    assert csv.read_bytes().decode("utf-8-sig").split("\r\n")[:2] == ["TIME;X", "0,0;1,0"]
+
+
+# ------------------------------------------------------------ output faults
+
+
+def test_out_that_is_a_file_exits_4_and_writes_the_rest(model, tmp_path, capsys):
+    blocker = tmp_path / "afile"
+    blocker.write_text("")
+    csv = tmp_path / "ok.csv"
+    code = main(["run", str(model), "--out", str(blocker), "--plot", "--csv", str(csv)])
+    assert code == 4
+    captured = capsys.readouterr()
+    assert f"amilpy: cannot write {blocker}: it is not a directory" in captured.err
+    assert csv.read_text().startswith("TIME,X")  # the other output is written ...
+    assert "1.000000E+00" in captured.out  # ... and the rows are printed
+    assert blocker.read_text() == ""
+
+
+def test_out_dev_null_and_csv_directory_exit_4(model, tmp_path, capsys):
+    assert main(["run", str(model), "--out", "/dev/null", "--plot", "--quiet"]) == 4
+    assert "cannot write /dev/null: it is not a directory" in capsys.readouterr().err
+    folder = tmp_path / "adir"
+    folder.mkdir()
+    assert main(["run", str(model), "--csv", str(folder), "--quiet"]) == 4
+    assert f"cannot write {folder}: it is a directory" in capsys.readouterr().err
+    assert folder.is_dir() and not any(folder.iterdir())
+
+
+def test_a_fifo_at_the_output_path_is_never_replaced(model, tmp_path, capsys):
+    fifo = tmp_path / "pipe.csv"
+    os.mkfifo(fifo)
+    assert main(["run", str(model), "--csv", str(fifo), "--quiet"]) == 4
+    assert "it is a FIFO, not a regular file" in capsys.readouterr().err
+    import stat
+
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+
+def test_a_symbolic_link_is_written_through(model, tmp_path):
+    target = tmp_path / "data" / "x.csv"
+    target.parent.mkdir()
+    target.write_text("old\n")
+    link = tmp_path / "link.csv"
+    link.symlink_to(target)
+    assert main(["run", str(model), "--csv", str(link), "--quiet"]) == 0
+    assert link.is_symlink() and target.read_text().startswith("TIME,X")
+
+
+def test_a_read_only_folder_exits_4(model, tmp_path, capsys):
+    import subprocess
+    import sys
+
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    folder.chmod(0o555)
+    argv = ["run", str(model), "--csv", str(folder / "x.csv"), "--quiet"]
+    if os.geteuid() != 0:
+        assert main(argv) == 4
+        err = capsys.readouterr().err
+    else:  # root writes anywhere: run as nobody, in a folder nobody can read
+        import shutil
+
+        if shutil.which("setpriv") is None:
+            pytest.skip("running as root without setpriv to drop privileges")
+        for p in (tmp_path, tmp_path.parent, tmp_path.parent.parent):
+            p.chmod(p.stat().st_mode | 0o755)
+        model.chmod(0o644)
+        done = subprocess.run(["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups",
+                               sys.executable, "-m", "amilpy.cli", *argv],
+                              capture_output=True, text=True, timeout=120,
+                              env=dict(os.environ, MPLBACKEND="Agg"))
+        assert done.returncode == 4, done.stderr
+        err = done.stderr
+    assert f"cannot write {folder / 'x.csv'}: Permission denied" in err

@@ -24,7 +24,7 @@ def test_error_renders_as_html():
 def test_plot_returns_axes():
     ax = run1(LISTING).plot("x", "Y")
     assert [line.get_label() for line in ax.get_lines()] == ["X", "Y"]
-    assert ax.get_xlabel() == "TIME"
+    assert ax.get_xlabel() == "TIME [s]"
 
 
 def test_to_pandas():

@@ -5,7 +5,7 @@ import pytest
 
 import amilpy
 from amilpy import cli
-from amilpy.printout import format_run
+from amilpy.output.printout import format_run
 from amilpy.routes import METHODS, ROUTES, method_names, route_for
 from amilpy.steppers import FIXED
 

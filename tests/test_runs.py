@@ -8,7 +8,7 @@ import pytest
 from conftest import run1
 
 import amilpy
-from amilpy.printout import csv_text
+from amilpy.output.sheets import csv_text
 
 DECAY = "PARAM K = {k}\nX = INTGRL(1.0, -K*X)\nTIMER FINTIM = 1.0, OUTDEL = 0.5\n"
 
@@ -40,10 +40,11 @@ def test_keyword_overrides_apply_to_every_run():
 
 
 def test_csv_has_a_run_column_with_several_runs():
+    # each row says its run by number and by the value that changes (run 1's too)
     runs = amilpy.loads(DECAY.format(k="(1.0, 2.0)") + "PREPARE X\nEND\n").run()
     lines = csv_text(runs).splitlines()
-    assert lines[0] == "RUN,TIME,X"
-    assert [line.split(",")[0] for line in lines[1:]] == ["1"] * 3 + ["2"] * 3
+    assert lines[0] == "RUN,K,TIME,X"
+    assert [line.split(",")[:2] for line in lines[1:]] == [["1", "1.0"]] * 3 + [["2", "2.0"]] * 3
 
 
 def test_finish_stops_at_the_located_instant():

@@ -68,3 +68,63 @@ def test_carried_state_continues_time_and_phase():
     assert second["PH"][0] == pytest.approx(first["PH"][-1])  # the phase is continuous
     assert second["PH"][-1] == pytest.approx(1.0 + 2.0, rel=1e-6)
     assert list(second["Y"]) == [0.0, 1.0, 1.0]  # STEP(1.5) happens in the second run
+
+
+# ----------------------------------------------------------------- jumps
+
+
+def _sweep(values, amplitudes, directions=None, carry_state=False):
+    from amilpy.sweep import Sweep, SweepPoint
+
+    result = Sweep("W", "Y", 0.0, carry_state=carry_state)
+    directions = directions or ["up"] * len(values)
+    for v, a, d in zip(values, amplitudes, directions, strict=True):
+        result.points.append(SweepPoint(v, d, -a, a, "finished", 0.0, 1.0))
+    return result
+
+
+def test_no_jump_on_a_monotonic_characteristic():
+    # W=70:71:0.5 once reported "largest rise sweeping up: between 70.5 and 71" while
+    # the amplitude fell; a smooth fall, however steep, is not a jump
+    assert _sweep([70.0, 70.5, 71.0], [0.010, 0.008, 0.0055]).jumps() == {"up": None}
+    w = np.linspace(60, 80, 41)
+    assert _sweep(list(w), list(np.exp(-(w - 60) / 3))).jumps() == {"up": None}
+
+
+def test_a_jump_is_found_with_its_sign_where_it_stands_out():
+    rng = np.random.default_rng(1)
+    w = np.arange(66.0, 75.01, 0.5)
+    a = 0.004 + 0.0002 * (w - 66) + 1e-5 * rng.standard_normal(len(w))
+    a[w > 72.0] += 0.02  # the fold: up onto the large branch between 72 and 72.5
+    up = _sweep(list(w), list(a)).jumps()["up"]
+    assert (up.start, up.stop, up.rise) == (72.0, 72.5, True) and up.ratio > 20
+    down = _sweep(list(w[::-1]), list(a[::-1]), ["down"] * len(w)).jumps()["down"]
+    assert (down.start, down.stop, down.rise) == (72.5, 72.0, False)
+
+
+def test_the_first_point_of_a_carried_sweep_is_left_out():
+    # the first run starts from the listing's state: its amplitude is a transient's
+    values = [70.0, 70.5, 71.0, 71.5, 72.0]
+    amplitudes = [0.05, 0.010, 0.0101, 0.0102, 0.0103]
+    assert _sweep(values, amplitudes).jumps()["up"].stop == 70.5
+    assert _sweep(values, amplitudes, carry_state=True).jumps() == {"up": None}
+    from amilpy.output.sweeps import jump_lines
+
+    lines = jump_lines(_sweep(values, amplitudes, carry_state=True))
+    assert lines[0].startswith("the first point (W = 70) starts from the listing's initial "
+                               "state, a transient: it is left out of the jump search")
+    assert lines[1].startswith("no jump sweeping up")
+
+
+def test_sweep_plot_has_units_on_both_axes(tmp_path):
+    from amilpy.output.sweeps import plot_sweep
+
+    result = _sweep([1.0, 2.0, 3.0], [0.1, 0.2, 0.3])
+    path = plot_sweep(result, str(tmp_path / "s.png"), axis_units=("rad/s", "RAD"))
+    assert open(path, "rb").read(4) == b"\x89PNG"
+    from amilpy.output.sweeps import units
+
+    model = amilpy.loads("PARAM W = 1.0   ! [rad/s] excitation frequency\n"
+                         "Y = INTGRL(0.0, SIN(W*TIME))\nTIMER FINTIM = 1.0\nOUTPUT Y\n"
+                         "LABEL TWIST [RAD]\nEND\n")
+    assert units(model, result) == ("rad/s", "RAD")

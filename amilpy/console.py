@@ -1,0 +1,126 @@
+"""The command line's dealings with the process: signals, stdout and progress.
+
+- SIGTERM and SIGHUP are handled like Ctrl-C (SIGINT): during a run they become
+  an interrupt, which the runner turns into a partial run (the rows so far kept);
+  while output files are written they are held back until the files are
+  complete, so a signal never leaves a file half-written or unwritten.
+- A stdout that cannot encode a character (a cp1252 console, a redirect with
+  PYTHONIOENCODING=ascii) gets "?" for it instead of a UnicodeEncodeError.
+- A stdout closed by its reader (`amilpy run m.amil | head`) ends the printout
+  quietly; the files were written before it and the exit code is the run's.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import time
+from contextlib import contextmanager
+from typing import TextIO
+
+HANDLED = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP")
+                if hasattr(signal, name))
+
+
+class Signals:
+    """Turns SIGINT/SIGTERM/SIGHUP into KeyboardInterrupt, or holds them back."""
+
+    def __init__(self) -> None:
+        self.received: int | None = None  # the last signal, whenever it came
+        self.held_back: int | None = None  # one that came while files were written
+        self.holding = False
+        self.previous: dict[int, object] = {}
+
+    def _handler(self, signum: int, frame) -> None:
+        self.received = signum
+        if self.holding:
+            self.held_back = signum
+        else:
+            raise KeyboardInterrupt
+
+    def install(self) -> None:
+        for sig in HANDLED:
+            try:
+                self.previous[sig] = signal.signal(sig, self._handler)
+            except (ValueError, OSError):  # not the main thread (e.g. a test runner)
+                pass
+
+    def restore(self) -> None:
+        for sig, handler in self.previous.items():
+            signal.signal(sig, handler)
+        self.previous.clear()
+
+    @contextmanager
+    def held(self):
+        """Signals wait until the block is done (writing files)."""
+        self.holding = True
+        try:
+            yield
+        finally:
+            self.holding = False
+
+    @staticmethod
+    def name(signum: int) -> str:
+        return signal.Signals(signum).name
+
+
+def tolerant_streams() -> None:
+    """Characters the console cannot show become "?" instead of an error."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.reconfigure(errors="replace")
+        except (AttributeError, ValueError):  # not a TextIOWrapper, or closed
+            pass
+
+
+def write_out(text_writer, out: TextIO | None = None) -> bool:
+    """Run `text_writer(stream)` on stdout; False if the reader went away (a closed
+    pipe), after which stdout is sent to /dev/null so the exit is quiet."""
+    out = out or sys.stdout
+    try:
+        text_writer(out)
+        out.flush()
+    except BrokenPipeError:
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, out.fileno())
+        except (OSError, ValueError, AttributeError):
+            pass
+        return False
+    return True
+
+
+class Progress:
+    """A progress line on stderr for runs longer than about a second (TTY only).
+    `prefix` puts the sweep's point in front ("W = 70.5 (2/9)")."""
+
+    def __init__(self, enabled: bool) -> None:
+        self.enabled = enabled and sys.stderr.isatty()
+        self.clock = time.perf_counter
+        self.start = self.clock()
+        self.last = 0.0
+        self.shown = False
+        self.prefix = ""
+
+    def __call__(self, t: float, fintim: float, events: int, steps: int) -> None:
+        if not self.enabled:
+            return
+        now = self.clock()
+        if now - self.start < 1.0 or now - self.last < 0.2:
+            return
+        self.last = now
+        rate = steps / max(now - self.start, 1e-9)
+        share = 100 * t / fintim if fintim else 0.0
+        self.line(f"{self.prefix}TIME {t:.6g} / {fintim:g}  ({share:5.1f}%)  events {events}"
+                  f"  {rate:,.0f} steps/s")
+
+    def line(self, text: str) -> None:
+        if self.enabled:
+            print(f"\r{text[:100]:<72}", end="", file=sys.stderr, flush=True)
+            self.shown = True
+
+    def done(self) -> None:
+        if self.shown:
+            print("\r" + " " * 100 + "\r", end="", file=sys.stderr, flush=True)
+            self.shown = False

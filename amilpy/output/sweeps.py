@@ -1,0 +1,96 @@
+"""A sweep for a reader: its table, its jumps in words, its CSV and its plot."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+
+from ..sweep import JUMP_FACTOR, NEIGHBOURS, Sweep
+from . import words as W
+from .plot import save_png
+
+
+def units(model, result: Sweep) -> tuple[str, str]:
+    """The units of the swept value (its `!` comment) and of the measured variable
+    (an OUTPUT LABEL's bracket, else its `!` comment)."""
+    notes = W.name_notes(model.ir)
+    labels = [r.label for r in model.ir.runs[0].reports
+              if r.kind == "OUTPUT" and result.measure in r.names]
+    measured = W.unit_of([result.measure], labels[0] if labels else None, notes)
+    return notes.get(result.name, ("", ""))[0], measured
+
+
+def table_text(result: Sweep) -> str:
+    head = (f"{'':6}{result.name:>14}{'MIN ' + result.measure:>16}"
+            f"{'MAX ' + result.measure:>16}{'HALF P-P':>16}")
+    rows = [f"SWEEP OF {result.name}, {result.measure} MEASURED AFTER {result.settle:g} S",
+            head]
+    for p in result.points:
+        rows.append(f"{p.direction:6}{p.value:14.6g}{p.minimum:16.6E}{p.maximum:16.6E}"
+                    f"{p.amplitude:16.6E}" + ("" if p.status != "failed" else "  FAILED"))
+    return "\n".join(rows) + "\n"
+
+
+def jump_lines(result: Sweep) -> list[str]:
+    """The jumps in words, each with its sign and how far it stands out; why the
+    first point is left out, when it is."""
+    out = []
+    name = result.name
+    if result.carry_state and result.points:
+        out.append(f"the first point ({name} = {result.points[0].value:g}) starts from the "
+                   "listing's initial state, a transient: it is left out of the jump search")
+    jumps = result.jumps()
+    for direction in dict.fromkeys(p.direction for p in result.points):
+        if direction not in jumps:
+            out.append(f"sweeping {direction}: too few points to tell a jump (it takes 3, "
+                       "so that a change can be set against its neighbours')")
+            continue
+        jump = jumps[direction]
+        if jump is None:
+            out.append(f"no jump sweeping {direction}: no change of HALF P-P stands out "
+                       f"{JUMP_FACTOR:g} times from those of the {NEIGHBOURS} steps each side")
+            continue
+        out.append(f"jump {'up' if jump.rise else 'down'} sweeping {direction}: between "
+                   f"{name} = {jump.start:g} and {jump.stop:g}, HALF P-P "
+                   f"{jump.before:.4g} -> {jump.after:.4g} ({jump.ratio:.3g} times the "
+                   "neighbouring changes)")
+    return out
+
+
+def format_sweep(result: Sweep) -> str:
+    return table_text(result) + "".join(line + "\n" for line in jump_lines(result))
+
+
+def csv_rows(result: Sweep) -> tuple[list[str], Iterator[list]]:
+    m = result.measure
+    header = ["DIRECTION", result.name, f"MIN_{m}", f"MAX_{m}", f"HALF_PP_{m}", "STATUS",
+              "TIME_START", "TIME_END"]
+    rows = ([p.direction, p.value, p.minimum, p.maximum, p.amplitude, p.status, p.t_start,
+             p.t_end] for p in result.points)
+    return header, rows
+
+
+def plot_sweep(result: Sweep, path: str, title: str | None = None,
+               axis_units: tuple[str, str] = ("", "")) -> str:
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(8, 4.8))
+    ax = fig.subplots()
+    for direction, colour, marker in (("up", "tab:blue", "^"), ("down", "tab:red", "v")):
+        v, a = result.branch(direction)
+        if len(v):
+            ax.plot(v, a, color=colour, marker=marker, markersize=4, linewidth=1.2,
+                    label=f"sweep {direction}")
+    x_unit, y_unit = axis_units
+    ax.set_xlabel(result.name + (f" [{x_unit}]" if x_unit else ""))
+    ax.set_ylabel(f"half peak-to-peak of {result.measure}" + (f" [{y_unit}]" if y_unit else ""))
+    ax.set_title(W.shorten(title or f"{result.measure} against {result.name}", 90),
+                 fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    return save_png(fig, path)
+
+
+def sweep_png_path(out_dir: str, stem: str) -> str:
+    return os.path.join(out_dir, f"{stem}_sweep.png")

@@ -1,0 +1,155 @@
+"""The writer table: every file a command can write, one row each.
+
+The command line makes its options from this table (`flag`, `help`) and, after
+the runs, calls each writer that was asked for, before the printout, so that a
+closed or blocked stdout cannot lose a file. A writer that fails raises an
+`OutputError`; the others are still written. A new format (Parquet, HDF5, ...)
+is one row here and a function.
+
+Standard library only at import: the command line builds its options from this
+table before it knows whether it will need numpy.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from ..result import Run
+
+
+@dataclass(frozen=True)
+class Dialect:
+    delimiter: str
+    decimal: str
+    newline: str
+    encoding: str
+    help: str
+
+
+# `excel-pl`: what a spreadsheet set to a Polish (or German, French...) locale
+# reads as columns: `;` between fields and a decimal comma; the BOM tells it UTF-8.
+DIALECTS: dict[str, Dialect] = {
+    "plain": Dialect(",", ".", "\n", "utf-8", "comma-separated, decimal point (default)"),
+    "excel-pl": Dialect(";", ",", "\r\n", "utf-8-sig",
+                        "semicolons and a decimal comma, for a spreadsheet in a Polish locale"),
+}
+
+
+@dataclass(frozen=True)
+class PlotOptions:
+    """How figures are drawn (the command line's plot options)."""
+
+    start: float | None = None  # --from: the window's first TIME
+    stop: float | None = None  # --to
+    zoom_events: bool = False  # a figure around the first switching event too
+    subplots: bool = False  # one axis per variable whatever the scales
+    runs: tuple[int, ...] | None = None  # run numbers (1-based) to draw; None: all
+    show: bool = False  # open windows after saving
+
+
+@dataclass
+class Outputs:
+    """What a command hands its writers."""
+
+    command: str  # "run" or "sweep"
+    stem: str  # the listing's file name without .amil
+    out_dir: str  # --out, else the listing's folder
+    runs: list[Run] = field(default_factory=list)
+    sweep: object = None  # a sweep.Sweep
+    model: object = None  # the api.Model (units, labels)
+    dialect: str = "plain"  # --csv-dialect
+    plot: PlotOptions = field(default_factory=PlotOptions)
+
+
+@dataclass(frozen=True)
+class Writer:
+    name: str
+    command: str  # the command that offers it
+    flag: str | None  # the option asking for it; None: the listing asks (PREPARE)
+    takes_path: bool  # the option names the file; else the files go to --out
+    help: str
+    write: Callable[[Outputs, str | None], list[str]]  # (outputs, the option's path) -> paths
+    wanted: Callable[[Outputs], bool] | None = None  # for flag None: whether it is asked for
+
+
+def _prepare(o: Outputs, _path: str | None) -> list[str]:
+    from . import sheets
+
+    path = os.path.join(o.out_dir, f"{o.stem}.csv")
+    sheets.write_csv(path, o.runs, dialect=o.dialect)
+    return [path]
+
+
+def _csv(o: Outputs, path: str | None) -> list[str]:
+    from . import sheets
+
+    sheets.write_csv(path, o.runs, dialect=o.dialect)
+    return [path]
+
+
+def _xlsx(o: Outputs, path: str | None) -> list[str]:
+    from . import sheets
+
+    sheets.write_xlsx(path, o.runs)
+    return [path]
+
+
+def _png(o: Outputs, _path: str | None) -> list[str]:
+    from .plot import plot_runs
+    from .words import name_notes
+
+    notes = name_notes(o.model.ir) if o.model is not None else None
+    return plot_runs(o.runs, o.out_dir, o.stem, o.plot, notes)
+
+
+def _sweep_csv(o: Outputs, path: str | None) -> list[str]:
+    from . import sheets
+    from .sweeps import csv_rows
+
+    header, rows = csv_rows(o.sweep)
+    sheets.write_csv_rows(path, header, rows, o.dialect)
+    return [path]
+
+
+def _sweep_png(o: Outputs, _path: str | None) -> list[str]:
+    from .sweeps import plot_sweep, sweep_png_path, units
+
+    titles = o.model.ir.runs[0].titles if o.model is not None else []
+    title = titles[0] if titles else None
+    axis_units = units(o.model, o.sweep) if o.model is not None else ("", "")
+    return [plot_sweep(o.sweep, sweep_png_path(o.out_dir, o.stem), title, axis_units)]
+
+
+WRITERS: tuple[Writer, ...] = (
+    Writer("prepare", "run", None, False,
+           "PREPARE in the listing: its variables as NAME.csv in --out", _prepare,
+           wanted=lambda o: any(r.kind == "PREPARE" for r in o.runs[0].reports)
+           if o.runs else False),
+    Writer("csv", "run", "--csv", True,
+           "write the OUTDEL-grid values of every run as CSV (a RUN column and the "
+           "changed values first when there are several runs)", _csv),
+    Writer("xlsx", "run", "--xlsx", True,
+           "write them as an Excel workbook, one sheet per run (needs XlsxWriter: "
+           "pip install 'amilpy[xlsx]')", _xlsx),
+    Writer("png", "run", "--plot", False,
+           "draw one figure per OUTPUT statement, saved as PNG next to the model or in "
+           "--out (and shown when a display can)", _png),
+    Writer("sweep-csv", "sweep", "--csv", True,
+           "write the sweep's table (one row per value) as CSV", _sweep_csv),
+    Writer("sweep-png", "sweep", "--plot", False,
+           "draw the characteristic (half peak-to-peak against the value) as "
+           "NAME_sweep.png next to the model or in --out", _sweep_png),
+)
+
+
+def writers_for(command: str) -> list[Writer]:
+    return [w for w in WRITERS if w.command == command]
+
+
+def dest(flag: str) -> str:
+    """The argparse attribute of a flag: "--csv" -> "csv"."""
+    return flag.lstrip("-").replace("-", "_")
