@@ -15,6 +15,8 @@ from .diagnostics import Reporter, Span, nearest
 from .language import KNOWN_BEFORE_RUN, RESERVED, SETTINGS, TIME, TIMER_KEYS
 from .library import ALIASES, FUNCTIONS, MEMORY_SLOTS, lookup
 from .routes import method_names, route_for
+from .surfaces import classify
+from .syntax import Visitor
 
 _DATA_STATEMENTS = (ast.Data, ast.Table, ast.Timer, ast.Method, ast.Tolerance, ast.Finish,
                     ast.Report, ast.Label, ast.Title)
@@ -332,7 +334,6 @@ class _Checker:
                 terminal.append(ir.Equation(st.targets[0], self.lower_pure(st.expr), st.span))
 
         self.defined = defined
-        state_names = {s.name for s in self.states}
         known = set(defined) | self.data_names | set(RESERVED)
 
         # names used but never defined (a table name as AFGEN's first argument is fine)
@@ -419,7 +420,7 @@ class _Checker:
             memories=self.memories, runs=runs, data_names=data_names,
             spans={**data_spans, **defined}, data_kinds=dict(self.data_kind),
         )
-        self.classify_surfaces(model, state_names)
+        classify(model)
         return model
 
     def undefined(self, node: ast.Name, known: set[str]) -> None:
@@ -624,6 +625,20 @@ class _Checker:
                                         description))
         return index
 
+    def add_memory(self, expr: ast.Call, target: str | None) -> int:
+        func = lookup(expr.func)
+        args = tuple(self.lower_expr(a, target) for a in expr.args)
+        index = len(self.memories)
+        surfaces = tuple(
+            self.add_surface(_instantiate(t, args, expr.span), "sign", index, "memory",
+                             expr.span, f"{func.name} for {target} (line {expr.span.line})")
+            for t in func.surfaces)
+        slots = MEMORY_SLOTS[func.name]
+        self.memories.append(ir.Memory(index, func.name, args, self.nslots, slots,
+                                       surfaces, expr.span, target or "?", expr.func))
+        self.nslots += slots
+        return index
+
     def add_switch(self, call: ast.Call, target: str) -> int:
         func = lookup(call.func)
         args = tuple(self.lower_expr(a, target) for a in call.args)
@@ -637,60 +652,12 @@ class _Checker:
             surfaces.append(self.add_surface(expr, func.surface_kind, index, "switch",
                                              call.span, desc))
         self.switches.append(ir.Switch(index, func.name, args, tuple(surfaces), call.span,
-                                       target))
+                                       target, call.func))
         return index
 
     def lower_expr(self, expr: ast.Expr, target: str | None, literal: bool = False):
-        """Replace simulation-function calls by IR nodes, recursively."""
-        if isinstance(expr, (ast.Num, ast.Name)):
-            return expr
-        if isinstance(expr, ast.Neg):
-            return ast.Neg(self.lower_expr(expr.operand, target, literal), expr.span)
-        if isinstance(expr, ast.BinOp):
-            return ast.BinOp(expr.op, self.lower_expr(expr.left, target, literal),
-                             self.lower_expr(expr.right, target, literal), expr.span)
-        if isinstance(expr, ast.Call):
-            func = lookup(expr.func)
-            if func is None:
-                return expr
-            if func.kind == "math":
-                return ast.Call(func.name, tuple(self.lower_expr(a, target, literal)
-                                                 for a in expr.args), expr.span, expr.arg_spans)
-            if func.kind == "table":
-                name = expr.args[0].name if isinstance(expr.args[0], ast.Name) else "?"
-                return ir.TableLookup(name, self.lower_expr(expr.args[1], target, literal),
-                                      func.name == "NLFGEN", expr.span)
-            if literal:
-                if func.kind in ("switch", "time"):
-                    # INITIAL/TERMINAL: a switch is evaluated once, literally
-                    return ast.Call(func.name, tuple(self.lower_expr(a, target, literal)
-                                                     for a in expr.args), expr.span)
-                return expr
-            if func.kind == "state":
-                return self.lower_state_function(expr, None, owner=target)
-            if func.kind in ("switch", "time"):
-                if func.outputs == 2:
-                    self.rep.error("OUTSW gives two values: write Y1, Y2 = OUTSW(X, V)",
-                                   expr.span)
-                    return ast.Num(0.0, expr.span)
-                return ir.SwitchValue(self.add_switch(expr, target or "?"), expr.span)
-            if func.kind == "impulse":
-                return ir.Impulse(self.lower_expr(expr.args[0], target),
-                                  self.lower_expr(expr.args[1], target), expr.span)
-            if func.kind == "memory":
-                args = tuple(self.lower_expr(a, target) for a in expr.args)
-                index = len(self.memories)
-                surfaces = tuple(
-                    self.add_surface(_instantiate(t, args, expr.span), "sign", index, "memory",
-                                     expr.span, f"{func.name} for {target} (line "
-                                                f"{expr.span.line})")
-                    for t in func.surfaces)
-                slots = MEMORY_SLOTS[func.name]
-                self.memories.append(ir.Memory(index, func.name, args, self.nslots, slots,
-                                               surfaces, expr.span, target or "?"))
-                self.nslots += slots
-                return ir.MemoryValue(index, expr.span)
-        return expr
+        """Replace simulation-function calls by IR nodes."""
+        return _Lowerer(self, target, literal).visit(expr)
 
     # ----------------------------------------------------------------- sorting
     def sort(self, equations: list[ir.Equation], targets: set[str], section: str):
@@ -749,58 +716,6 @@ class _Checker:
             related=related,
         )
 
-    # --------------------------------------------------------- classification
-    def classify_surfaces(self, model: ir.Model, state_names: set[str]) -> None:
-        """Mark each surface const / time / state by what its expression reads."""
-        eq = {e.target: e.expr for e in model.dynamic}
-        memo: dict[str, str] = {}
-        rank = {"const": 0, "time": 1, "state": 2}
-
-        def of_expr(expr) -> str:
-            best = "const"
-            for node in iter_nodes(expr):
-                kind = "const"
-                if isinstance(node, ast.Name):
-                    kind = of_name(node.name)
-                elif isinstance(node, ir.MemoryValue):
-                    kind = "state"
-                elif isinstance(node, ir.SwitchValue):
-                    # a switch's value moves with its arguments and with its branch,
-                    # which moves with its surfaces (STEP's is TIME - P)
-                    sw = model.switches[node.switch]
-                    parts = list(sw.args) + [model.surfaces[i].expr for i in sw.surfaces]
-                    kind = max((of_expr(a) for a in parts), key=rank.get, default="const")
-                elif isinstance(node, ir.Impulse):
-                    kind = "time"
-                if rank[kind] > rank[best]:
-                    best = kind
-                    if best == "state":
-                        break
-            return best
-
-        def of_name(name: str) -> str:
-            if name == "TIME":
-                return "time"
-            if name in state_names:
-                return "state"
-            if name not in eq:
-                return "const"
-            if name in memo:
-                return memo[name]
-            memo[name] = "state"  # guards recursion on malformed input
-            memo[name] = of_expr(eq[name])
-            return memo[name]
-
-        def has_impulse(expr) -> bool:
-            return any(isinstance(n, ir.Impulse) for n in iter_nodes(expr))
-
-        for i, s in enumerate(model.surfaces):
-            # IMPULS is 1 only at its instants, which are breakpoints: a surface on
-            # it never changes sign between steps, so it is not watched
-            depends = "impulse" if has_impulse(s.expr) else of_expr(s.expr)
-            model.surfaces[i] = replace(s, depends=depends)
-
-
 def _instantiate(template: str, args: tuple, span: Span) -> ast.Expr:
     """Build a surface expression from a library template over arguments A, B, ..."""
     import ast as pyast
@@ -820,37 +735,92 @@ def _instantiate(template: str, args: tuple, span: Span) -> ast.Expr:
     return build(pyast.parse(template, mode="eval"))
 
 
-def iter_nodes(expr):
-    """All nodes of an IR expression (syntax nodes plus IR nodes), not descending
-    into switch/memory instances (their arguments live on the instance)."""
-    stack = [expr]
-    while stack:
-        node = stack.pop()
-        yield node
-        if isinstance(node, ast.BinOp):
-            stack.append(node.right)
-            stack.append(node.left)
-        elif isinstance(node, ast.Neg):
-            stack.append(node.operand)
-        elif isinstance(node, ast.Call):
-            stack.extend(node.args)
-        elif isinstance(node, ir.TableLookup):
-            stack.append(node.x)
-        elif isinstance(node, ir.Impulse):
-            stack.extend((node.start, node.period))
+class _Lowerer(Visitor):
+    """Lowers one expression: simulation-function calls become IR nodes."""
+
+    complete = ast.EXPRESSIONS
+
+    def __init__(self, checker: _Checker, target: str | None, literal: bool) -> None:
+        self.checker = checker
+        self.target = target
+        self.literal = literal
+
+    def visit_Num(self, expr: ast.Num):
+        return expr
+
+    def visit_Name(self, expr: ast.Name):
+        return expr
+
+    def visit_Neg(self, expr: ast.Neg):
+        return ast.Neg(self.visit(expr.operand), expr.span)
+
+    def visit_BinOp(self, expr: ast.BinOp):
+        return ast.BinOp(expr.op, self.visit(expr.left), self.visit(expr.right), expr.span)
+
+    def visit_Call(self, expr: ast.Call):
+        checker, target = self.checker, self.target
+        func = lookup(expr.func)
+        if func is None:
+            return expr
+        if func.kind == "math":
+            return ast.Call(expr.func, tuple(self.visit(a) for a in expr.args), expr.span,
+                            expr.arg_spans)
+        if func.kind == "table":
+            name = expr.args[0].name if isinstance(expr.args[0], ast.Name) else "?"
+            return ir.TableLookup(name, self.visit(expr.args[1]), func.name == "NLFGEN",
+                                  expr.span, expr.func)
+        if self.literal:
+            if func.kind in ("switch", "time"):
+                # INITIAL/TERMINAL: a switch is evaluated once, literally
+                return ast.Call(expr.func, tuple(self.visit(a) for a in expr.args), expr.span)
+            return expr
+        if func.kind == "state":
+            return checker.lower_state_function(expr, None, owner=target)
+        if func.kind in ("switch", "time"):
+            if func.outputs == 2:
+                checker.rep.error("OUTSW gives two values: write Y1, Y2 = OUTSW(X, V)",
+                                  expr.span)
+                return ast.Num(0.0, expr.span)
+            return ir.SwitchValue(checker.add_switch(expr, target or "?"), expr.span)
+        if func.kind == "impulse":
+            return ir.Impulse(self.visit(expr.args[0]), self.visit(expr.args[1]), expr.span)
+        if func.kind == "memory":
+            return ir.MemoryValue(checker.add_memory(expr, target), expr.span)
+        return expr
+
+
+class _Reads(Visitor):
+    """Collects the variable names an IR expression reads, through switch and memory
+    arguments (each instance entered once)."""
+
+    def __init__(self, checker: _Checker) -> None:
+        self.checker = checker
+        self.names: list[str] = []
+        self.pending: list = []
+        self.seen: set[tuple[str, int]] = set()
+
+    def generic(self, node) -> None:
+        pass
+
+    def visit_Name(self, node: ast.Name) -> None:
+        self.names.append(node.name)
+
+    def visit_SwitchValue(self, node: ir.SwitchValue) -> None:
+        if ("s", node.switch) not in self.seen:
+            self.seen.add(("s", node.switch))
+            self.pending.extend(self.checker.switches[node.switch].args)
+
+    def visit_MemoryValue(self, node: ir.MemoryValue) -> None:
+        if ("m", node.memory) not in self.seen:
+            self.seen.add(("m", node.memory))
+            self.pending.extend(self.checker.memories[node.memory].args)
 
 
 def names_in(expr, checker) -> list[str]:
     """Variable names an IR expression reads, including through switch/memory args."""
-    out: list[str] = []
-    stack = [expr]
-    while stack:
-        node = stack.pop()
-        for sub in iter_nodes(node):
-            if isinstance(sub, ast.Name):
-                out.append(sub.name)
-            elif isinstance(sub, ir.SwitchValue):
-                stack.extend(checker.switches[sub.switch].args)
-            elif isinstance(sub, ir.MemoryValue):
-                stack.extend(checker.memories[sub.memory].args)
-    return out
+    reads = _Reads(checker)
+    reads.pending.append(expr)
+    while reads.pending:
+        for node in ast.walk(reads.pending.pop()):
+            reads.visit(node)
+    return reads.names

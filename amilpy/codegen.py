@@ -23,7 +23,6 @@ from dataclasses import dataclass, field
 
 from . import ir
 from . import syntax as syn
-from .check import iter_nodes
 from .diagnostics import AmilError, Diagnostic, Span
 from .library import (
     FUNCTIONS,
@@ -37,6 +36,7 @@ from .library import (
     vector_functions,
 )
 from .surfaces import is_affine, level, sign
+from .syntax import Visitor
 
 NAMESPACE: dict[str, object] = {f"_{k}": v for k, v in MATH.items()}
 NAMESPACE.update({
@@ -197,12 +197,14 @@ def _local(name: str) -> str:
     return "v_" + name
 
 
-class _Emitter:
+class _Emitter(Visitor):
     """Emits Python expressions for IR expressions in one context.
 
     context: "rhs" (frozen modes, IMPULS = 0), "out" (frozen modes, IMPULS exact),
     "mem" (like out), "literal" (modes from the current signs: INITIAL/TERMINAL).
     """
+
+    complete = ir.EXPRESSIONS
 
     def __init__(self, model: ir.Model, constants: dict[str, float], const_modes,
                  context: str, mode_names: dict[int, str], tables) -> None:
@@ -237,61 +239,70 @@ class _Emitter:
         return py.IfExp(py.Compare(mode, [py.Gt()], [py.Constant(0.0)]), mode, literal)
 
     def emit(self, e) -> py.expr:
-        if isinstance(e, syn.Num):
-            return _num(e.value)
-        if isinstance(e, syn.Name):
-            if e.name == "TIME":
-                return py.Name("t", py.Load())
-            if e.name in self.constants:
-                return _num(self.constants[e.name])
-            return py.Name(_local(e.name), py.Load())
-        if isinstance(e, syn.Neg):
-            return py.UnaryOp(py.USub(), self.emit(e.operand))
-        if isinstance(e, syn.BinOp):
-            left, right = self.emit(e.left), self.emit(e.right)
-            if e.op == "**":
-                k = _const_value(right)
-                if k is not None and k.is_integer() and abs(k) <= 64:
-                    if k == 2.0:
-                        # x*x: exact and far cheaper than pow
-                        if isinstance(left, py.Name):
-                            return py.BinOp(left, py.Mult(), py.Name(left.id, py.Load()))
-                    return py.BinOp(left, py.Pow(), py.Constant(int(k)))
-                a = _const_value(left)
-                if a is not None and k is not None:
-                    return _num(safe_pow(a, k))
-                return py.Call(py.Name("_POW", py.Load()), [left, right], [])
-            return py.BinOp(left, _PYOPS[e.op](), right)
-        if isinstance(e, syn.Call):
-            func = lookup(e.func)
-            args = [self.emit(a) for a in e.args]
-            if func.kind in ("switch", "time"):  # literal use (INITIAL/TERMINAL)
-                return self.literal_switch(func, e.args)
-            values = [_const_value(a) for a in args]
-            if all(v is not None for v in values) and func.name != "FLOAT":
-                try:
-                    v = MATH[func.name](*values)
-                    return _num(float(v))
-                except (ArithmeticError, ValueError, TypeError):
-                    pass
-            return py.Call(py.Name("_" + func.name, py.Load()), args, [])
-        if isinstance(e, ir.TableLookup):
-            name = "_T_" + e.table
-            self.tables[name] = self.table_value(e.table)
-            fn = "_NLFGEN" if e.quadratic else "_AFGEN"
-            return py.Call(py.Name(fn, py.Load()), [py.Name(name, py.Load()), self.emit(e.x)], [])
-        if isinstance(e, ir.SwitchValue):
-            sw = self.model.switches[e.switch]
-            func = FUNCTIONS[sw.func]
-            return self.template(func.values[e.output], sw.args, sw.surfaces)
-        if isinstance(e, ir.MemoryValue):
-            return self.memory_value(self.model.memories[e.memory])
-        if isinstance(e, ir.Impulse):
-            if self.context == "rhs":
-                return py.Constant(0.0)
-            return py.Call(py.Name("_IMPULS", py.Load()),
-                           [py.Name("t", py.Load()), self.emit(e.start), self.emit(e.period)], [])
-        raise AssertionError(f"cannot emit {e!r}")
+        return self.visit(e)
+
+    def visit_Num(self, e: syn.Num) -> py.expr:
+        return _num(e.value)
+
+    def visit_Name(self, e: syn.Name) -> py.expr:
+        if e.name == "TIME":
+            return py.Name("t", py.Load())
+        if e.name in self.constants:
+            return _num(self.constants[e.name])
+        return py.Name(_local(e.name), py.Load())
+
+    def visit_Neg(self, e: syn.Neg) -> py.expr:
+        return py.UnaryOp(py.USub(), self.emit(e.operand))
+
+    def visit_BinOp(self, e: syn.BinOp) -> py.expr:
+        left, right = self.emit(e.left), self.emit(e.right)
+        if e.op == "**":
+            k = _const_value(right)
+            if k is not None and k.is_integer() and abs(k) <= 64:
+                if k == 2.0:
+                    # x*x: exact and far cheaper than pow
+                    if isinstance(left, py.Name):
+                        return py.BinOp(left, py.Mult(), py.Name(left.id, py.Load()))
+                return py.BinOp(left, py.Pow(), py.Constant(int(k)))
+            a = _const_value(left)
+            if a is not None and k is not None:
+                return _num(safe_pow(a, k))
+            return py.Call(py.Name("_POW", py.Load()), [left, right], [])
+        return py.BinOp(left, _PYOPS[e.op](), right)
+
+    def visit_Call(self, e: syn.Call) -> py.expr:
+        func = lookup(e.func)
+        if func.kind in ("switch", "time"):  # literal use (INITIAL/TERMINAL)
+            return self.literal_switch(func, e.args)
+        args = [self.emit(a) for a in e.args]
+        values = [_const_value(a) for a in args]
+        if all(v is not None for v in values) and func.name != "FLOAT":
+            try:
+                v = MATH[func.name](*values)
+                return _num(float(v))
+            except (ArithmeticError, ValueError, TypeError):
+                pass
+        return py.Call(py.Name("_" + func.name, py.Load()), args, [])
+
+    def visit_TableLookup(self, e: ir.TableLookup) -> py.expr:
+        name = "_T_" + e.table
+        self.tables[name] = self.table_value(e.table)
+        fn = "_NLFGEN" if e.quadratic else "_AFGEN"
+        return py.Call(py.Name(fn, py.Load()), [py.Name(name, py.Load()), self.emit(e.x)], [])
+
+    def visit_SwitchValue(self, e: ir.SwitchValue) -> py.expr:
+        sw = self.model.switches[e.switch]
+        func = FUNCTIONS[sw.func]
+        return self.template(func.values[e.output], sw.args, sw.surfaces)
+
+    def visit_MemoryValue(self, e: ir.MemoryValue) -> py.expr:
+        return self.memory_value(self.model.memories[e.memory])
+
+    def visit_Impulse(self, e: ir.Impulse) -> py.expr:
+        if self.context == "rhs":
+            return py.Constant(0.0)
+        return py.Call(py.Name("_IMPULS", py.Load()),
+                       [py.Name("t", py.Load()), self.emit(e.start), self.emit(e.period)], [])
 
     def table_value(self, name: str):
         return self.tables_source[name]
@@ -358,25 +369,46 @@ class _Emitter:
         raise AssertionError(mem.func)
 
 
-def _needs(model: ir.Model, roots: list, constants) -> list[ir.Equation]:
+class _Needs(Visitor):
+    """The algebraic variables some expressions read, transitively, through switch
+    and memory instances (each entered once: nesting depth N costs O(N))."""
+
+    def __init__(self, model: ir.Model) -> None:
+        self.model = model
+        self.equations = {e.target: e for e in model.dynamic}
+        self.need: set[str] = set()
+        self.seen: set[tuple[str, int]] = set()
+        self.pending: list = []
+
+    def generic(self, node) -> None:
+        pass
+
+    def visit_Name(self, node: syn.Name) -> None:
+        if node.name in self.equations and node.name not in self.need:
+            self.need.add(node.name)
+            self.pending.append(self.equations[node.name].expr)
+
+    def visit_SwitchValue(self, node: ir.SwitchValue) -> None:
+        if ("s", node.switch) not in self.seen:
+            self.seen.add(("s", node.switch))
+            sw = self.model.switches[node.switch]
+            self.pending.extend(sw.args)
+            self.pending.extend(self.model.surfaces[s].expr for s in sw.surfaces)
+
+    def visit_MemoryValue(self, node: ir.MemoryValue) -> None:
+        if ("m", node.memory) not in self.seen:
+            self.seen.add(("m", node.memory))
+            self.pending.extend(self.model.memories[node.memory].args)
+
+
+def _needs(model: ir.Model, roots: list) -> list[ir.Equation]:
     """The sorted algebraic equations that the given expressions read, transitively."""
-    eqs = {e.target: e for e in model.dynamic}
-    need: set[str] = set()
-    stack = list(roots)
-    while stack:
-        e = stack.pop()
-        for node in iter_nodes(e):
-            if isinstance(node, syn.Name) and node.name in eqs and node.name not in need:
-                need.add(node.name)
-                stack.append(eqs[node.name].expr)
-            elif isinstance(node, ir.SwitchValue):
-                sw = model.switches[node.switch]
-                stack.extend(sw.args)
-                stack.extend(model.surfaces[s].expr for s in sw.surfaces)
-            elif isinstance(node, ir.MemoryValue):
-                mem = model.memories[node.memory]
-                stack.extend(mem.args)
-    return [e for e in model.dynamic if e.target in need]
+    needs = _Needs(model)
+    needs.pending.extend(roots)
+    while needs.pending:
+        for node in syn.walk(needs.pending.pop()):
+            needs.visit(node)
+    return [e for e in model.dynamic if e.target in needs.need]
 
 
 def _assign(name: str, value: py.expr, line: int) -> py.stmt:
@@ -470,7 +502,7 @@ class Compiler:
 
     def algebra(self, roots, em: _Emitter) -> list[py.stmt]:
         return [_assign(_local(e.target), em.emit(e.expr), e.span.line)
-                for e in _needs(self.model, roots, self.constants)]
+                for e in _needs(self.model, roots)]
 
     def build(self) -> Compiled:
         model = self.model
@@ -593,12 +625,9 @@ class Compiler:
                   if model.surfaces[i].depends == "time" and self.events
                   and model.surfaces[i].kind == "sign"
                   and is_affine(model.surfaces[i].expr, self.constants, equations)}
-        impulses = []
-        for e in _all_exprs(model):
-            for node in iter_nodes(e):
-                if isinstance(node, ir.Impulse):
-                    impulses.append((self.constant(node.start, node.span),
-                                     self.constant(node.period, node.span)))
+        impulses = [(self.constant(node.start, node.span), self.constant(node.period, node.span))
+                    for e in _all_exprs(model) for node in syn.walk(e)
+                    if isinstance(node, ir.Impulse)]
         return Compiled(
             state_names=[s.name for s in model.states], y0=y0, z0=z0,
             out_names=list(out_names), constants=self.constants, rhs=namespace["rhs"],

@@ -1,0 +1,73 @@
+"""IR and syntax expressions written back in the listing's notation.
+
+The student's own spelling is kept: a function is printed under the name the
+listing wrote (FSW stays FSW, BOUND stays BOUND), numbers as written (1.5D-3),
+names folded to upper case as everywhere in amilpy's output. Reports print the
+equations with this; surfaces carry their text for events and messages.
+"""
+
+from __future__ import annotations
+
+from . import ir
+from . import syntax as syn
+from .syntax import Visitor
+
+_PREC = {"+": 1, "-": 1, "*": 2, "/": 2, "**": 4}
+_UNARY = 3  # unary minus binds looser than ** and tighter than * /
+
+
+class _Text(Visitor):
+    """The text of an expression; `parent` is the precedence around it."""
+
+    complete = ir.EXPRESSIONS
+
+    def __init__(self, model: ir.Model | None) -> None:
+        self.model = model
+
+    def call(self, func: str, args) -> str:
+        return f"{func}({', '.join(self.visit(a, 0) for a in args)})"
+
+    def visit_Num(self, e: syn.Num, parent: int) -> str:
+        return e.text or f"{e.value:g}"
+
+    def visit_Name(self, e: syn.Name, parent: int) -> str:
+        return e.name
+
+    def visit_Neg(self, e: syn.Neg, parent: int) -> str:
+        # unary minus binds tighter than * and / (Fortran reads -A*B as (-A)*B),
+        # looser than **: only a power's operand needs it in parentheses
+        inner = "-" + self.visit(e.operand, _UNARY)
+        return f"({inner})" if parent > _UNARY else inner
+
+    def visit_BinOp(self, e: syn.BinOp, parent: int) -> str:
+        p = _PREC[e.op]
+        # ** is right associative; - and / are not associative on the right
+        left_p = p + 1 if e.op == "**" else p
+        right_p = p if e.op == "**" else p + (1 if e.op in "-/" else 0)
+        op = e.op if e.op in ("*", "/", "**") else f" {e.op} "
+        text = f"{self.visit(e.left, left_p)}{op}{self.visit(e.right, right_p)}"
+        return f"({text})" if p < parent else text
+
+    def visit_Call(self, e: syn.Call, parent: int) -> str:
+        return self.call(e.func, e.args)
+
+    def visit_SwitchValue(self, e: ir.SwitchValue, parent: int) -> str:
+        sw = self.model.switches[e.switch]
+        text = self.call(sw.written or sw.func, sw.args)
+        return text + (f"[{e.output + 1}]" if sw.func == "OUTSW" else "")
+
+    def visit_MemoryValue(self, e: ir.MemoryValue, parent: int) -> str:
+        mem = self.model.memories[e.memory]
+        return self.call(mem.written or mem.func, mem.args)
+
+    def visit_TableLookup(self, e: ir.TableLookup, parent: int) -> str:
+        name = e.written or ("NLFGEN" if e.quadratic else "AFGEN")
+        return f"{name}({e.table}, {self.visit(e.x, 0)})"
+
+    def visit_Impulse(self, e: ir.Impulse, parent: int) -> str:
+        return self.call("IMPULS", (e.start, e.period))
+
+
+def expr_text(model: ir.Model | None, e: syn.Node) -> str:
+    """An expression (syntax or IR; IR nodes need the model) in the listing's notation."""
+    return _Text(model).visit(e, 0)
