@@ -13,10 +13,14 @@ from . import ir
 from . import syntax as ast
 from .diagnostics import Reporter, Span, nearest
 from .language import KNOWN_BEFORE_RUN, RESERVED, SETTINGS, TIME, TIMER_KEYS
-from .library import ALIASES, FUNCTIONS, MEMORY_SLOTS, lookup
+from .library import ALIASES, FUNCTIONS, Func, Kind, lookup
 from .routes import method_names, route_for
-from .surfaces import classify
+from .surfaces import classify, constant_value
 from .syntax import Visitor
+from .templates import ARGUMENTS, instantiate, template_names
+
+# the largest store a function's literal argument may ask for (DELAY's N points)
+MAX_STORE = 100_000
 
 _DATA_STATEMENTS = (ast.Data, ast.Table, ast.Timer, ast.Method, ast.Tolerance, ast.Finish,
                     ast.Report, ast.Label, ast.Title)
@@ -272,7 +276,8 @@ class _Checker:
         self.memories: list[ir.Memory] = []
         self.nslots = 0
         self.hidden_counts: dict[str, int] = {}
-        self.ic_exprs: list[ast.Expr] = []
+        # expressions that must be known before the run, with what they are
+        self.ic_exprs: list[tuple[ast.Expr, str]] = []
         defined: dict[str, Span] = {}
         self.defined_where: dict[str, str] = {}
 
@@ -368,15 +373,14 @@ class _Checker:
                         self.undefined(node, known)
         for st in sections["DYNAMIC"] + sections["TERMINAL"]:
             check_names(st.expr, known)
-        for st in self.ic_exprs:
-            for node in ast.walk(st):
+        for expr, what in self.ic_exprs:
+            for node in ast.walk(expr):
                 if isinstance(node, ast.Name) and node.name not in initial_ok:
                     if node.name in defined:
                         self.rep.error(
-                            f"the initial value uses {node.name}, which changes in time",
+                            f"{what} uses {node.name}, which changes in time",
                             node.span,
-                            "an initial condition must be a number, a data value or an "
-                            "INITIAL value",
+                            f"{what} must be a number, a data value or an INITIAL value",
                         )
                     else:
                         self.undefined(node, known)
@@ -456,17 +460,19 @@ class _Checker:
                     f"did you mean {hint}?" if hint else "see the function list in the manual",
                 )
                 continue
-            lo, hi = func.nargs
             n = len(node.args)
+            func = func.form(n)
+            lo, hi = func.nargs
             if n < lo or (hi is not None and n > hi):
                 want = f"{lo}" if hi == lo else (f"{lo} to {hi}" if hi else f"at least {lo}")
-                hint = None
                 comma = self.decimal_comma(node)
                 if comma:
                     hint = f"'{comma}' reads as two arguments; the decimal separator is a " \
                            f"point: write {comma.replace(',', '.')}"
                 elif n > (hi or n):
                     hint = "a decimal comma (1,5) splits a number into two arguments"
+                else:
+                    hint = f"write it as {lookup(node.func).signatures()}"
                 self.rep.error(
                     f"{node.func} takes {want} argument{'s' if want != '1' else ''}, "
                     f"got {n}",
@@ -474,6 +480,15 @@ class _Checker:
                     hint,
                 )
                 continue
+            for i in func.literal_args:
+                arg = node.args[i]
+                if not (isinstance(arg, ast.Num) and float(arg.value).is_integer()
+                        and 1 <= arg.value <= MAX_STORE):
+                    what = func.arg_names[i]
+                    self.rep.error(
+                        f"{what} of {node.func} must be a whole number written out, "
+                        f"from 1 to {MAX_STORE}",
+                        arg.span, f"e.g. {func.signature.replace(what, '100', 1)}")
             if allow is not None and func.kind not in allow:
                 self.rep.error(
                     f"{node.func} cannot be used in {section}",
@@ -511,9 +526,9 @@ class _Checker:
 
     def lower_dynamic(self, st: ast.Assign) -> list[ir.Equation]:
         expr = st.expr
+        func = lookup(expr.func, len(expr.args)) if isinstance(expr, ast.Call) else None
         if len(st.targets) == 2:
-            if not (isinstance(expr, ast.Call) and lookup(expr.func)
-                    and lookup(expr.func).outputs == 2):
+            if func is None or func.outputs != 2:
                 self.rep.error("only OUTSW gives two values", st.span,
                                "write one assignment per variable")
                 return []
@@ -524,19 +539,14 @@ class _Checker:
             self.rep.error("at most two variables can be assigned together (OUTSW)", st.span)
             return []
         target = st.targets[0]
-        if isinstance(expr, ast.Call):
-            func = lookup(expr.func)
-            if func is not None and func.kind == "state" and func.name in ("INTGRL", "INTEG"):
-                self.make_state(target, expr, hidden=False)
+        if func is not None and func.kind == Kind.STATE:
+            # a state function as the whole right-hand side: its state carries
+            # the user's name where the output is the state (Y = REALPL(...))
+            value = self.lower_state_function(expr, target)
+            if isinstance(value, ast.Name) and value.name == target:
                 return []
-            if func is not None and func.kind == "state":
-                # REALPL/LEDLAG/CMPXPL/MODINT as the whole right-hand side: the
-                # state carries the user's name where the output is the state.
-                value = self.lower_state_function(expr, target)
-                if isinstance(value, ast.Name) and value.name == target:
-                    return []
-                return [ir.Equation(target, value, st.span)]
-        if isinstance(expr, ast.Call) and lookup(expr.func) and lookup(expr.func).outputs == 2:
+            return [ir.Equation(target, value, st.span)]
+        if func is not None and func.outputs == 2:
             self.rep.error("OUTSW gives two values: write Y1, Y2 = OUTSW(X, V)", st.span)
             return []
         return [ir.Equation(target, self.lower_expr(expr, target), st.span)]
@@ -549,107 +559,79 @@ class _Checker:
         self.hidden_counts[owner] = self.hidden_counts.get(owner, 0) + 1
         return f"{kind}#{owner}.{self.hidden_counts[owner]}"
 
-    def make_state(self, name: str, call: ast.Call, hidden: bool) -> str:
-        func = lookup(call.func)
-        if func.name == "INTEG":
-            deriv, ic = call.args
-        else:
-            ic, deriv = call.args
-        self.ic_exprs.append(ic)
-        self.states.append(ir.State(name, self.lower_expr(ic, name, literal=True),
-                                    self.lower_expr(deriv, name), call.span, hidden))
-        return name
+    def lower_args(self, call: ast.Call, owner: str | None, literal: set[int] = frozenset()
+                   ) -> tuple:
+        """The call's arguments lowered once (those in `literal` as initial values:
+        a switch there is evaluated once, at the start)."""
+        return tuple(self.lower_expr(a, owner, literal=i in literal)
+                     for i, a in enumerate(call.args))
+
+    def note_constants(self, func: Func, call: ast.Call) -> None:
+        """Arguments that must be known before the run are checked like initial values."""
+        for i in func.constant_args:
+            self.ic_exprs.append((call.args[i], f"{func.arg_names[i]} of {call.func}"))
 
     def lower_state_function(self, call: ast.Call, target: str | None,
                              owner: str | None = None) -> ast.Expr:
-        """REALPL, LEDLAG, CMPXPL, MODINT (and nested INTGRL) as states."""
-        func = lookup(call.func)
+        """INTGRL, REALPL, LEDLAG, CMPXPL, MODINT...: the states of the entry, named
+        after the assigned variable or hidden, and the call's value over them."""
+        func = lookup(call.func, len(call.args))
         sp = call.span
         owner = target or owner or "?"
-        if func.name in ("INTGRL", "INTEG"):
-            name = self.hidden("INTGRL", owner)
-            self.make_state(name, call, hidden=True)
-            return ast.Name(name, sp)
-        args = call.args
-        if func.name == "REALPL":
-            ic, p, x = args
-            name = target if target else self.hidden("REALPL", owner)
-            deriv = ast.BinOp("/", ast.BinOp("-", x, ast.Name(name, sp), sp), p, sp)
-            self.ic_exprs.append(ic)
-            self.states.append(ir.State(name, self.lower_expr(ic, owner, literal=True),
-                                        self.lower_expr(deriv, owner), sp, target is None))
-            return ast.Name(name, sp)
-        if func.name == "LEDLAG":
-            p1, p2, x = args
-            z = self.hidden("LEDLAG", owner)
-            zname = ast.Name(z, sp)
-            deriv = ast.BinOp("/", ast.BinOp("-", x, zname, sp), p2, sp)
-            self.states.append(ir.State(z, ast.Num(0.0, sp), self.lower_expr(deriv, owner),
-                                        sp, True))
-            # Y = z + P1/P2*(X - z)
-            out = ast.BinOp("+", zname, ast.BinOp("*", ast.BinOp("/", p1, p2, sp),
-                                                  ast.BinOp("-", x, zname, sp), sp), sp)
-            return self.lower_expr(out, owner)
-        if func.name == "CMPXPL":
-            ic1, ic2, p1, p2, x = args
-            name = target if target else self.hidden("CMPXPL", owner)
-            rate = self.hidden("CMPXPL'", owner)
-            y, yd = ast.Name(name, sp), ast.Name(rate, sp)
-            two = ast.Num(2.0, sp)
-            acc = ast.BinOp("-", ast.BinOp("-", x, ast.BinOp("*", ast.BinOp(
-                "*", ast.BinOp("*", two, p1, sp), p2, sp), yd, sp), sp),
-                ast.BinOp("*", ast.BinOp("*", p2, p2, sp), y, sp), sp)
-            self.ic_exprs.extend([ic1, ic2])
-            self.states.append(ir.State(name, self.lower_expr(ic1, owner, literal=True),
-                                        yd, sp, target is None))
-            self.states.append(ir.State(rate, self.lower_expr(ic2, owner, literal=True),
-                                        self.lower_expr(acc, owner), sp, True))
-            return ast.Name(name, sp)
-        if func.name == "MODINT":
-            ic, x1, x2, x3 = args
-            name = target if target else self.hidden("MODINT", owner)
-            s1 = self.add_surface(self.lower_expr(x1, owner), "sign", None, "switch", sp,
-                                  f"MODINT X1 for {owner}")
-            s2 = self.add_surface(self.lower_expr(x2, owner), "sign", None, "switch", sp,
-                                  f"MODINT X2 for {owner}")
-            self.ic_exprs.append(ic)
-            self.states.append(ir.State(name, self.lower_expr(ic, owner, literal=True),
-                                        self.lower_expr(x3, owner), sp, target is None,
-                                        reset_surfaces=(s1, s2)))
-            return ast.Name(name, sp)
-        raise AssertionError(func.name)
+        in_ic = {i for s in func.states for i in _arguments_of(s.ic)}
+        in_rest = {i for s in func.states for i in _arguments_of(s.deriv)}
+        in_rest |= {i for t in (*func.values, *func.surfaces) for i in _arguments_of(t)}
+        args = self.lower_args(call, owner, literal=in_ic - in_rest)
+        resets = tuple(
+            self.add_surface(instantiate(t, args, sp), func.surface_kind, None,
+                             ir.Purpose.SWITCH, sp, f"{call.func} surface {k + 1} for {owner}")
+            for k, t in enumerate(func.surfaces))
+        named = [k == 0 and bool(target) and s.named for k, s in enumerate(func.states)]
+        names = tuple(target if named[k] else self.hidden(s.tag, owner)
+                      for k, s in enumerate(func.states))
+        for k, spec in enumerate(func.states):
+            if _arguments_of(spec.ic):
+                self.ic_exprs.append((instantiate(spec.ic, call.args, sp), "the initial value"))
+            self.states.append(ir.State(
+                names[k], instantiate(spec.ic, args, sp, names),
+                instantiate(spec.deriv, args, sp, names), sp, not named[k],
+                reset_surfaces=resets if k == 0 else ()))
+        return instantiate(func.values[0], args, sp, names)
 
     def add_surface(self, expr, kind, owner, purpose, span, description) -> int:
         index = len(self.surfaces)
-        self.surfaces.append(ir.Surface(index, expr, kind, owner, purpose, "state", span,
+        self.surfaces.append(ir.Surface(index, expr, ir.SurfaceKind(kind), owner,
+                                        ir.Purpose(purpose), ir.Depends.STATE, span,
                                         description))
         return index
 
-    def add_memory(self, expr: ast.Call, target: str | None) -> int:
-        func = lookup(expr.func)
-        args = tuple(self.lower_expr(a, target) for a in expr.args)
+    def add_memory(self, call: ast.Call, target: str | None) -> int:
+        func = lookup(call.func, len(call.args))
+        self.note_constants(func, call)
+        args = self.lower_args(call, target)
         index = len(self.memories)
         surfaces = tuple(
-            self.add_surface(_instantiate(t, args, expr.span), "sign", index, "memory",
-                             expr.span, f"{func.name} for {target} (line {expr.span.line})")
+            self.add_surface(instantiate(t, args, call.span), func.surface_kind, index,
+                             ir.Purpose.MEMORY, call.span,
+                             f"{call.func} for {target} (line {call.span.line})")
             for t in func.surfaces)
-        slots = MEMORY_SLOTS[func.name]
-        self.memories.append(ir.Memory(index, func.name, args, self.nslots, slots,
-                                       surfaces, expr.span, target or "?", expr.func))
-        self.nslots += slots
+        nslots = int(constant_value(instantiate(func.memory.slots, call.args, call.span), {}))
+        self.memories.append(ir.Memory(index, func.name, args, self.nslots, nslots, surfaces,
+                                       call.span, target or "?", call.func))
+        self.nslots += nslots
         return index
 
     def add_switch(self, call: ast.Call, target: str) -> int:
-        func = lookup(call.func)
-        args = tuple(self.lower_expr(a, target) for a in call.args)
+        func = lookup(call.func, len(call.args))
+        args = self.lower_args(call, target)
         index = len(self.switches)
         surfaces = []
         for k, template in enumerate(func.surfaces):
-            expr = _instantiate(template, args, call.span)
             desc = f"{call.func} for {target} (line {call.span.line})"
             if len(func.surfaces) > 1:
                 desc += f", surface {k + 1}"
-            surfaces.append(self.add_surface(expr, func.surface_kind, index, "switch",
+            surfaces.append(self.add_surface(instantiate(template, args, call.span),
+                                             func.surface_kind, index, ir.Purpose.SWITCH,
                                              call.span, desc))
         self.switches.append(ir.Switch(index, func.name, args, tuple(surfaces), call.span,
                                        target, call.func))
@@ -716,23 +698,10 @@ class _Checker:
             related=related,
         )
 
-def _instantiate(template: str, args: tuple, span: Span) -> ast.Expr:
-    """Build a surface expression from a library template over arguments A, B, ..."""
-    import ast as pyast
-
-    def build(node):
-        if isinstance(node, pyast.Expression):
-            return build(node.body)
-        if isinstance(node, pyast.Name):
-            if node.id == "TIME":
-                return ast.Name("TIME", span)
-            return args["ABCDEFGH".index(node.id)]
-        if isinstance(node, pyast.BinOp):
-            op = {pyast.Sub: "-", pyast.Add: "+", pyast.Div: "/", pyast.Mult: "*"}[type(node.op)]
-            return ast.BinOp(op, build(node.left), build(node.right), span)
-        raise AssertionError(template)
-
-    return build(pyast.parse(template, mode="eval"))
+def _arguments_of(template: str) -> set[int]:
+    """The argument positions a template reads."""
+    return {ARGUMENTS.index(c) for c in template_names(template) if len(c) == 1
+            and c in ARGUMENTS}
 
 
 class _Lowerer(Visitor):
@@ -759,7 +728,7 @@ class _Lowerer(Visitor):
 
     def visit_Call(self, expr: ast.Call):
         checker, target = self.checker, self.target
-        func = lookup(expr.func)
+        func = lookup(expr.func, len(expr.args))
         if func is None:
             return expr
         if func.kind == "math":
@@ -767,8 +736,8 @@ class _Lowerer(Visitor):
                             expr.arg_spans)
         if func.kind == "table":
             name = expr.args[0].name if isinstance(expr.args[0], ast.Name) else "?"
-            return ir.TableLookup(name, self.visit(expr.args[1]), func.name == "NLFGEN",
-                                  expr.span, expr.func)
+            return ir.TableLookup(name, self.visit(expr.args[1]), func.lookup, expr.span,
+                                  expr.func)
         if self.literal:
             if func.kind in ("switch", "time"):
                 # INITIAL/TERMINAL: a switch is evaluated once, literally

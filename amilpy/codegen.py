@@ -21,30 +21,29 @@ import ast as py
 import math
 from dataclasses import dataclass, field
 
-from . import ir
+from . import ir, templates
 from . import syntax as syn
 from .diagnostics import AmilError, Diagnostic, Span
-from .library import (
-    FUNCTIONS,
-    MATH,
-    afgen,
-    deriv,
-    impulse_at,
-    lookup,
-    nlfgen,
-    safe_pow,
-    vector_functions,
-)
-from .surfaces import is_affine, level, sign
+from .library import Func, lookup, math_functions, runtime_name, vector_functions
+from .runtime import HELPERS, safe_pow
+from .surfaces import is_affine
 from .syntax import Visitor
+from .templates import ARGUMENTS
 
-NAMESPACE: dict[str, object] = {f"_{k}": v for k, v in MATH.items()}
-NAMESPACE.update({
-    "_AFGEN": afgen, "_NLFGEN": nlfgen, "_DERIV": deriv, "_IMPULS": impulse_at, "_POW": safe_pow,
-    "_LEVEL": level, "_SGN": sign,
-    "_WHERE": lambda c, a, b: a if c else b, "_ALL": lambda *v: all(v),
-    "_ANY": lambda *v: any(v),
-})
+
+def namespace() -> dict[str, object]:
+    """Every callable generated code can reach: the language's math functions and
+    the run-time helpers, each as _NAME (read from the library at each build, so an
+    entry registered later is there too)."""
+    out: dict[str, object] = {f"_{k}": v for k, v in math_functions().items()}
+    out.update({f"_{k}": v for k, v in HELPERS.items()})
+    return out
+
+
+NAMESPACE = namespace()  # as the library stands at import (benchmarks read it)
+
+# models with more memory slots than this read them from z instead of unpacking
+MAX_UNPACKED_SLOTS = 32
 
 # Names the generated code reads, and which a model name can never produce
 # (model names become v_NAME, hidden states h_N): the compiler's own vocabulary.
@@ -207,7 +206,9 @@ class _Emitter(Visitor):
     complete = ir.EXPRESSIONS
 
     def __init__(self, model: ir.Model, constants: dict[str, float], const_modes,
-                 context: str, mode_names: dict[int, str], tables) -> None:
+                 context: str, mode_names: dict[int, str], tables,
+                 unpacked_z: bool = True) -> None:
+        self.unpacked_z = unpacked_z
         self.model = model
         self.constants = constants
         self.const_modes = const_modes
@@ -271,29 +272,29 @@ class _Emitter(Visitor):
         return py.BinOp(left, _PYOPS[e.op](), right)
 
     def visit_Call(self, e: syn.Call) -> py.expr:
-        func = lookup(e.func)
+        func = lookup(e.func, len(e.args))
         if func.kind in ("switch", "time"):  # literal use (INITIAL/TERMINAL)
             return self.literal_switch(func, e.args)
         args = [self.emit(a) for a in e.args]
         values = [_const_value(a) for a in args]
-        if all(v is not None for v in values) and func.name != "FLOAT":
+        if all(v is not None for v in values):
             try:
-                v = MATH[func.name](*values)
-                return _num(float(v))
+                return _num(float(func.scalar(*values)))
             except (ArithmeticError, ValueError, TypeError):
-                pass
-        return py.Call(py.Name("_" + func.name, py.Load()), args, [])
+                pass  # left to the run, which reports it where it happens
+        return py.Call(py.Name("_" + runtime_name(func), py.Load()), args, [])
 
     def visit_TableLookup(self, e: ir.TableLookup) -> py.expr:
         name = "_T_" + e.table
         self.tables[name] = self.table_value(e.table)
-        fn = "_NLFGEN" if e.quadratic else "_AFGEN"
-        return py.Call(py.Name(fn, py.Load()), [py.Name(name, py.Load()), self.emit(e.x)], [])
+        return py.Call(py.Name("_" + e.func, py.Load()), [py.Name(name, py.Load()),
+                                                          self.emit(e.x)], [])
 
     def visit_SwitchValue(self, e: ir.SwitchValue) -> py.expr:
         sw = self.model.switches[e.switch]
-        func = FUNCTIONS[sw.func]
-        return self.template(func.values[e.output], sw.args, sw.surfaces)
+        func = lookup(sw.func, len(sw.args))
+        return self.fill(func.values[e.output], [self.emit(a) for a in sw.args],
+                         [self.mode(s) for s in sw.surfaces])
 
     def visit_MemoryValue(self, e: ir.MemoryValue) -> py.expr:
         return self.memory_value(self.model.memories[e.memory])
@@ -307,66 +308,69 @@ class _Emitter(Visitor):
     def table_value(self, name: str):
         return self.tables_source[name]
 
-    def literal_switch(self, func, args):
+    def literal_switch(self, func: Func, args) -> py.expr:
         """A switch in INITIAL/TERMINAL: evaluate its surfaces' signs on the spot."""
-        lowered = tuple(args)
-        from .check import _instantiate
+        fn = "_LEVEL" if func.surface_kind == ir.SurfaceKind.LEVEL else "_SGN"
+        modes = [py.Call(py.Name(fn, py.Load()),
+                         [self.emit(templates.instantiate(t, tuple(args), Span(0, 0)))], [])
+                 for t in func.surfaces]
+        return self.fill(func.values[0], [self.emit(a) for a in args], modes)
 
-        modes = []
-        for template in func.surfaces:
-            expr = _instantiate(template, lowered, Span(0, 0))
-            fn = "_LEVEL" if func.surface_kind == "level" else "_SGN"
-            modes.append(py.Call(py.Name(fn, py.Load()), [self.emit(expr)], []))
-        return self.template_with(func.values[0], [self.emit(a) for a in args], modes)
+    def fill(self, text: str, args: list[py.expr], modes=(), new_modes=(),
+             memory: ir.Memory | None = None, value: py.expr | None = None) -> py.expr:
+        """A library template as Python, its placeholders replaced."""
+        return _Fill(self, args, modes, new_modes, memory, value).visit(templates.tree(text))
 
-    def template(self, text: str, args, surfaces) -> py.expr:
-        return self.template_with(text, [self.emit(a) for a in args],
-                                  [self.mode(s) for s in surfaces])
-
-    @staticmethod
-    def template_with(text: str, args: list[py.expr], modes: list[py.expr]) -> py.expr:
-        tree = py.parse(text, mode="eval").body
-
-        class Sub(py.NodeTransformer):
-            def visit_Name(self, node):
-                if node.id == "TIME":
-                    return py.Name("t", py.Load())
-                if node.id.startswith("M") and node.id[1:].isdigit():
-                    return modes[int(node.id[1:])]
-                if len(node.id) == 1:
-                    return args["ABCDEFGH".index(node.id)]
-                return node
-
-            def visit_Call(self, node):
-                self.generic_visit(node)
-                node.func = py.Name("_" + node.func.id, py.Load())
-                return node
-
-        return Sub().visit(tree)
+    def slot(self, k: int) -> py.expr:
+        """Memory slot k: a local unpacked from z, or read from z where the store
+        is large (DELAY's history)."""
+        if self.unpacked_z:
+            return py.Name(f"z{k}", py.Load())
+        return py.Subscript(py.Name("z", py.Load()), py.Constant(k), py.Load())
 
     def memory_value(self, mem: ir.Memory) -> py.expr:
-        a = [self.emit(x) for x in mem.args]
-        z = [py.Name(f"z{mem.slot + k}", py.Load()) for k in range(mem.nslots)]
-        modes = [self.memory_mode(s) for s in mem.surfaces]
-        t = py.Name("t", py.Load())
-        if mem.func == "HSTRSS":
-            ic, p1, p2, x = a
-            return py.Call(py.Name("_AMIN1", py.Load()), [
-                py.BinOp(x, py.Sub(), p1),
-                py.Call(py.Name("_AMAX1", py.Load()), [py.BinOp(x, py.Sub(), p2), z[0]], []),
-            ], [])
-        if mem.func == "ZHOLD":
-            return py.IfExp(py.Compare(modes[0], [py.Gt()], [py.Constant(0.0)]), a[1], z[0])
-        if mem.func == "RST":
-            return self.template_with(
-                "(0.0 if M0 > 0 else (1.0 if M1 > 0 else ((1.0 - A) if M2 > 0 else B)))",
-                [z[0], py.Name(z[0].id, py.Load())], modes)
-        if mem.func == "PULSE":
-            return py.IfExp(py.Compare(t, [py.Lt()], [z[0]]), py.Constant(1.0),
-                            py.Constant(0.0))
-        if mem.func == "DERIV":
-            return py.Call(py.Name("_DERIV", py.Load()), [a[1], t] + z, [])
-        raise AssertionError(mem.func)
+        func = lookup(mem.func, len(mem.args))
+        return self.fill(func.memory.value, [self.emit(x) for x in mem.args],
+                         [self.memory_mode(s) for s in mem.surfaces], memory=mem)
+
+
+class _Fill(py.NodeTransformer):
+    """Replaces a template's placeholders (see `library`) by generated code."""
+
+    def __init__(self, em: _Emitter, args, modes, new_modes, memory, value) -> None:
+        self.em = em
+        self.args = args
+        self.modes = modes
+        self.new_modes = new_modes
+        self.memory = memory
+        self.value = value
+
+    def visit_Name(self, node: py.Name) -> py.expr:
+        name = node.id
+        if name == "TIME":
+            return py.Name("t", py.Load())
+        if name == "INF":
+            return _num(math.inf)
+        if name == "VALUE":
+            return self.value
+        if name == "Z":
+            return py.Name("z", py.Load())
+        if name == "OFFSET":
+            return py.Constant(self.memory.slot)
+        if len(name) == 1:
+            return self.args[ARGUMENTS.index(name)]
+        k = int(name[1:])
+        if name[0] == "M":
+            return self.modes[k]
+        if name[0] == "N":
+            return self.new_modes[k]
+        return self.em.slot(self.memory.slot + k)  # Zk
+
+    def visit_Call(self, node: py.Call) -> py.expr:
+        # the callee is a function's name, not a placeholder
+        node.args = [self.visit(a) for a in node.args]
+        node.func = py.Name("_" + node.func.id, py.Load())
+        return node
 
 
 class _Needs(Visitor):
@@ -469,11 +473,14 @@ class Compiler:
         self.mode_names = {s: f"m{k}" for k, s in enumerate(self.watched)}
         self.mode_names_new = {s: f"n{k}" for k, s in enumerate(self.watched)}
         self.global_tables: dict[str, tuple] = {}
+        self.entries = [lookup(m.func, len(m.args)) for m in model.memories]
+        # a few slots are unpacked into locals; a large store (DELAY) is read from z
+        self.unpacked_z = sum(m.nslots for m in model.memories) <= MAX_UNPACKED_SLOTS
 
     def emitter(self, context: str, new_modes: bool = False) -> _Emitter:
         names = self.mode_names_new if new_modes else self.mode_names
         em = _Emitter(self.model, self.constants, self.const_modes, context, names,
-                      self.global_tables)
+                      self.global_tables, self.unpacked_z)
         em.tables_source = self.tables
         return em
 
@@ -493,7 +500,7 @@ class Compiler:
             body.append(py.Assign([py.Tuple(names, py.Store())], src) if len(names) > 1 else
                         py.Assign([names[0]], py.Subscript(src, py.Constant(0), py.Load())))
         nz = sum(m.nslots for m in self.model.memories)
-        if mem and nz:
+        if mem and nz and self.unpacked_z:
             names = [py.Name(f"z{k}", py.Store()) for k in range(nz)]
             body.append(py.Assign([py.Tuple(names, py.Store())], py.Name("z", py.Load()))
                         if nz > 1 else py.Assign([names[0]], py.Subscript(
@@ -567,24 +574,14 @@ class Compiler:
                                   if self.watched else [])
         body += self.algebra(mem_roots, em_m)
         new: list[py.expr] = []
-        for mem in model.memories:
+        for mem, func in zip(model.memories, self.entries, strict=True):
+            args = [em_m.emit(a) for a in mem.args]
+            modes = [em_m.memory_mode(s) for s in mem.surfaces]
+            new_modes = [em_new.memory_mode(s) for s in mem.surfaces]
             value = em_m.memory_value(mem)
-            z = [py.Name(f"z{mem.slot + k}", py.Load()) for k in range(mem.nslots)]
-            if mem.func in ("HSTRSS", "ZHOLD", "RST"):
-                new.append(value)
-            elif mem.func == "PULSE":
-                p = em_m.emit(mem.args[0])
-                trigger = py.BoolOp(py.And(), [
-                    py.Compare(em_new.memory_mode(mem.surfaces[0]), [py.Gt()],
-                               [py.Constant(0.0)]),
-                    py.Compare(py.Name("t", py.Load()), [py.GtE()], [z[0]]),
-                ])
-                new.append(py.IfExp(trigger, py.BinOp(py.Name("t", py.Load()), py.Add(), p),
-                                    z[0]))
-            elif mem.func == "DERIV":
-                # (x1, t1) the newest point, (x2, t2) the one before, then the value
-                new.extend([em_m.emit(mem.args[1]), py.Name("t", py.Load()),
-                            py.Name(z[0].id, py.Load()), py.Name(z[1].id, py.Load()), value])
+            for text in func.memory.update:
+                e = em_m.fill(text, args, modes, new_modes, mem, value)
+                new.append(py.Starred(e, py.Load()) if templates.spread(text) else e)
         body.append(py.Return(py.List(new, py.Load())))
         fns.append(_function("mem", ("t", "y", "m", "mn", "z"), body))
 
@@ -599,10 +596,10 @@ class Compiler:
         _assert_closed(module)
         source = py.unparse(module)
         code = compile(module, model.path or model.name, "exec")
-        namespace: dict[str, object] = {"__builtins__": {}}
-        namespace.update(NAMESPACE)
-        namespace.update(self.global_tables)
-        exec(code, namespace)  # noqa: S102 - compiler-built tree, closed namespace
+        scalar: dict[str, object] = {"__builtins__": {}}
+        scalar.update(namespace())
+        scalar.update(self.global_tables)
+        exec(code, scalar)  # noqa: S102 - compiler-built tree, closed namespace
         vector: dict[str, object] = {"__builtins__": {}}
         vector.update({f"_{k}": v for k, v in vector_functions().items()})
         vector.update(self.global_tables)
@@ -610,16 +607,8 @@ class Compiler:
 
         # initial values -------------------------------------------------------------
         y0 = [self.constant(s.ic, s.span) for s in model.states]
-        z0: list[float] = []
-        for mem in model.memories:
-            if mem.func == "HSTRSS":
-                z0.append(self.constant(mem.args[0], mem.span))
-            elif mem.func in ("ZHOLD", "RST"):
-                z0.append(0.0)
-            elif mem.func == "PULSE":
-                z0.append(-math.inf)
-            elif mem.func == "DERIV":
-                z0.extend([0.0, 0.0, 0.0, 0.0, self.constant(mem.args[0], mem.span)])
+        z0 = [v for mem, func in zip(model.memories, self.entries, strict=True)
+              for text in func.memory.initial for v in self.initial_slots(text, mem)]
         equations = {e.target: e.expr for e in model.dynamic}
         affine = {i for i in self.watched
                   if model.surfaces[i].depends == "time" and self.events
@@ -630,19 +619,30 @@ class Compiler:
                     if isinstance(node, ir.Impulse)]
         return Compiled(
             state_names=[s.name for s in model.states], y0=y0, z0=z0,
-            out_names=list(out_names), constants=self.constants, rhs=namespace["rhs"],
-            surf=namespace["surf"], out=namespace["out"], mem=namespace["mem"],
+            out_names=list(out_names), constants=self.constants, rhs=scalar["rhs"],
+            surf=scalar["surf"], out=scalar["out"], mem=scalar["mem"],
             watched=self.watched, const_modes=self.const_modes,
-            modes_literal=namespace["modes"], affine_time=affine, impulses=impulses,
+            modes_literal=scalar["modes"], affine_time=affine, impulses=impulses,
             source=source, tables=self.global_tables,
             surf_v=vector["surf_vec"], out_v=vector["out_vec"],
-            memory_every_step=any(m.func not in ("ZHOLD", "PULSE") for m in model.memories),
+            memory_every_step=any(f.memory.every_step for f in self.entries),
             memory_times=self.memory_times(),
         )
 
+    def initial_slots(self, text: str, mem: ir.Memory) -> list[float]:
+        """The initial values a memory template gives (one, or several with `*`)."""
+        em = _Emitter(self.model, self.constants, {}, "literal", {}, {})
+        em.tables_source = self.tables
+        args = [em.emit(a) for a in mem.args]
+        value = _evaluate(self.model, em.fill(text, args, memory=mem), em.tables, mem.span)
+        return [float(v) for v in value] if templates.spread(text) else [float(value)]
+
     def memory_times(self):
-        """PULSE holds its output until the instant kept in its slot."""
-        slots = [m.slot for m in self.model.memories if m.func == "PULSE"]
+        """Memory that holds a future instant at which the model switches (PULSE
+        holds its output until the instant kept in its slot)."""
+        slots = [m.slot + f.memory.wakes for m, f in zip(self.model.memories, self.entries,
+                                                        strict=True)
+                 if f.memory.wakes is not None]
 
         def times(z: list[float], t: float) -> list[float]:
             return [z[s] for s in slots if z[s] > t]
@@ -686,7 +686,7 @@ def _all_exprs(model: ir.Model):
 
 def _assert_closed(module: py.Module) -> None:
     """Generated code reads only the compiler's names: no attributes, no builtins."""
-    allowed = set(NAMESPACE) | set(_ARGS)
+    allowed = set(namespace()) | set(_ARGS)
     for node in py.walk(module):
         if isinstance(node, (py.Attribute, py.Import, py.ImportFrom, py.Global, py.Lambda)):
             raise AssertionError(f"generated code contains {type(node).__name__}")
@@ -706,17 +706,23 @@ def evaluate_constant(model: ir.Model, expr, constants: dict[str, float], tables
     em = _Emitter(model, constants, {}, "literal", {}, comp_tables)
     em.tables_source = tables
     try:
-        tree = py.Expression(em.emit(expr))
+        tree = em.emit(expr)
     except KeyError as exc:  # a name that is not a constant
         raise AmilError([Diagnostic(f"{exc.args[0]} is not known before the run starts",
                                     span)], model.path, model.source) from None
+    return float(_evaluate(model, tree, comp_tables, span))
+
+
+def _evaluate(model: ir.Model, body: py.expr, tables: dict[str, tuple], span: Span):
+    """The value of a generated expression of constants; a fault is an AmilError at span."""
+    tree = py.Expression(body)
     py.fix_missing_locations(tree)
     _assert_closed(py.Module(body=[py.Expr(tree.body)], type_ignores=[]))
-    namespace: dict[str, object] = {"__builtins__": {}}
-    namespace.update(NAMESPACE)
-    namespace.update(comp_tables)
+    scope: dict[str, object] = {"__builtins__": {}}
+    scope.update(namespace())
+    scope.update(tables)
     try:
-        value = eval(compile(tree, model.path or model.name, "eval"), namespace)  # noqa: S307
+        return eval(compile(tree, model.path or model.name, "eval"), scope)  # noqa: S307
     except ZeroDivisionError:
         raise AmilError([Diagnostic("division by zero", span,
                                     "check the data values this expression uses")],
@@ -734,7 +740,6 @@ def evaluate_constant(model: ir.Model, expr, constants: dict[str, float], tables
             f"{name.removeprefix('v_')} is not known before the run starts", span,
             "an initial value or INITIAL statement can use numbers, data values and INITIAL "
             "values only")], model.path, model.source) from None
-    return float(value)
 
 
 def initial_values(model: ir.Model, data: dict[str, float], tables,

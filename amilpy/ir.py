@@ -77,7 +77,7 @@ class TableLookup(Node):
 
     table: str
     x: Expr
-    quadratic: bool
+    func: str  # the run-time interpolation (library entry's `lookup`: AFGEN, NLFGEN)
     span: Span
     written: str = ""  # the function's name as the listing writes it
     child_fields: ClassVar[tuple[str, ...]] = ("x",)

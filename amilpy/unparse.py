@@ -61,7 +61,7 @@ class _Text(Visitor):
         return self.call(mem.written or mem.func, mem.args)
 
     def visit_TableLookup(self, e: ir.TableLookup, parent: int) -> str:
-        name = e.written or ("NLFGEN" if e.quadratic else "AFGEN")
+        name = e.written or e.func
         return f"{name}({e.table}, {self.visit(e.x, 0)})"
 
     def visit_Impulse(self, e: ir.Impulse, parent: int) -> str:

@@ -36,7 +36,8 @@ def test_the_complete_visitors_of_amilpy_are_checked_complete():
     # every module with a complete visitor imports cleanly (else the import fails)
     from amilpy import codegen, surfaces, unparse  # noqa: F401
 
-    complete = [v for v in _all_subclasses(Visitor) if v.complete]
+    complete = [v for v in _all_subclasses(Visitor)
+                if v.complete and v.__module__.startswith("amilpy")]
     assert len(complete) >= 5
     for v in complete:
         for node in v.complete:
@@ -82,7 +83,7 @@ def test_walk_is_iterative_and_in_source_order():
 def test_children_of_ir_nodes_do_not_enter_instances():
     # a switch's arguments live on the instance: its value node has no children
     assert ir.SwitchValue(0, SP).children() == ()
-    look = ir.TableLookup("F", syntax.Name("X", SP), False, SP)
+    look = ir.TableLookup("F", syntax.Name("X", SP), "AFGEN", SP)
     assert look.children() == (syntax.Name("X", SP),)
 
 
