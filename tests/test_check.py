@@ -1,0 +1,84 @@
+"""The checker: faults it reports with their place, and the shape of the IR it builds."""
+
+import pytest
+
+import amilpy
+from amilpy.diagnostics import AmilError
+
+
+def fault(text: str) -> AmilError:
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text, name="m.amil")
+    return err.value
+
+
+@pytest.mark.parametrize("section", ["INITIAL", "TERMINAL"])
+def test_termt_outside_dynamic_is_a_located_error(section):
+    # it used to end in "'Termt' object has no attribute 'targets'"
+    text = f"{section}\n TERMT(TIME - 1.0)\nDYNAMIC\n X = INTGRL(0.0, 1.0)\nTIMER FINTIM = 2\nEND\n"
+    err = fault(text)
+    assert (err.line, err.column) == (2, 2)
+    assert f"TERMT cannot stand in {section}" in err.render()
+    assert "put it in DYNAMIC" in err.render()
+
+
+def test_fintim_missing_points_at_the_timer_statement():
+    err = fault("X = INTGRL(0.0, 1.0)\nTIMER PRDEL = 0.1\nEND\n")
+    assert err.diagnostics[0].message == "FINTIM is not given"
+    assert err.line == 2
+    assert "add FINTIM to this TIMER statement" in err.render()
+
+
+def test_fintim_missing_without_timer_has_no_place():
+    err = fault("X = INTGRL(0.0, 1.0)\nEND\n")
+    assert err.diagnostics[0].span is None and "add a TIMER statement" in err.render()
+
+
+@pytest.mark.parametrize("kind", ["RELERR", "ABSERR"])
+def test_a_tolerance_for_an_unknown_name_is_an_error(kind):
+    # it used to be ignored (ABSERR) or to tighten every state (RELERR)
+    err = fault(f"POS = INTGRL(1.0, VEL)\nVEL = INTGRL(0.0, -POS)\n"
+                f"{kind} POS = 1E-3, VELO = 1E-9\nTIMER FINTIM = 1\nEND\n")
+    assert (err.line, err.column) == (3, 20)
+    assert f"{kind} names VELO, which is not a variable of the model" in err.render()
+    assert "did you mean VEL?" in err.render()
+
+
+def test_a_tolerance_for_an_algebraic_variable_names_the_states():
+    err = fault("X = INTGRL(1.0, -X)\nW = 2*X\nRELERR W = 1E-3\nTIMER FINTIM = 1\nEND\n")
+    assert "RELERR names W, which is not a state" in err.render()
+    assert "applies to a state (an INTGRL output): X" in err.render()
+
+
+def test_tolerances_for_states_are_kept_per_state():
+    m = amilpy.loads("X = INTGRL(1.0, -X)\nY = INTGRL(1.0, -Y)\nRELERR X = 1E-3\n"
+                     "ABSERR Y = 1E-12\nTIMER FINTIM = 1\nEND\n")
+    spec = m.ir.runs[0]
+    assert spec.relerr_each == {"X": 1e-3} and spec.abserr_each == {"Y": 1e-12}
+
+
+def test_switches_on_one_surface_share_it():
+    # issue 15: X' = -FSW(X, ...) and Y' = FSW(X, ...) must slide on one surface
+    m = amilpy.loads("X = INTGRL(1.0, -FSW(X, -1.0, 0.0, 1.0))\n"
+                     "Y = INTGRL(0.0, FSW(X, -1.0, 0.0, 1.0))\n"
+                     "Z = INTGRL(0.0, FSW( x , -1.0, 0.0, 1.0) + INSW(X, 0.0, 1.0))\n"
+                     "TIMER FINTIM = 3\nEND\n").ir
+    assert len(m.switches) == 4
+    assert {sw.surfaces for sw in m.switches} == {(0,)}
+    assert len(m.surfaces) == 1
+
+
+def test_different_surfaces_stay_apart():
+    m = amilpy.loads("X = INTGRL(1.0, -FSW(X, -1.0, 0.0, 1.0))\n"
+                     "Y = INTGRL(0.0, FSW(X - 0.5, -1.0, 0.0, 1.0) + QNTZR(1.0, X))\n"
+                     "FINISH X = 0.0\nTIMER FINTIM = 3\nEND\n").ir
+    # X, X - 0.5, QNTZR's X/1.0 (a level surface) and FINISH's X - 0.0
+    assert len(m.surfaces) == 4
+    assert [str(s.purpose) for s in m.surfaces] == ["switch", "switch", "switch", "finish"]
+
+
+def test_limit_shares_its_surfaces_with_a_dead_zone_on_the_same_input():
+    m = amilpy.loads("X = INTGRL(1.0, -X)\nA = LIMIT(-0.5, 0.5, X)\nB = DEADSP(-0.5, 0.5, X)\n"
+                     "TIMER FINTIM = 1\nEND\n").ir
+    assert m.switches[0].surfaces == m.switches[1].surfaces
+    assert len(m.surfaces) == 2
