@@ -317,7 +317,7 @@ register(Func("HSTRSS", Kind.MEMORY, "HSTRSS(IC, P1, P2, X)",
               memory=MemorySpec("1", ("A",), _HSTRSS, ("VALUE",))))
 register(Func("ZHOLD", Kind.MEMORY, "ZHOLD(X1, X2)", "X2 while X1>0 else prev",
               surfaces=("A",),
-              memory=MemorySpec("1", ("0.0",), "(B if M0 > 0 else Z0)", ("VALUE",),
+              memory=MemorySpec("1", ("0.0",), "(B if M0 > 0.0 else Z0)", ("VALUE",),
                                 every_step=False)))
 register(Func("RST", Kind.MEMORY, "RST(X1, X2, X3)", "reset-set flip-flop",
               surfaces=("A", "B", "C"),
@@ -329,7 +329,7 @@ register(Func("PULSE", Kind.MEMORY, "PULSE(P, X)", "Y=1 for at least P from X>0"
               surfaces=("B",),
               # Z0 is the instant the pulse ends; a trigger starts a new one
               memory=MemorySpec("1", ("-INF",), "(1.0 if TIME < Z0 else 0.0)",
-                                ("((TIME + A) if (N0 > 0 and TIME >= Z0) else Z0)",),
+                                ("((TIME + A) if (N0 > 0.0 and TIME >= Z0) else Z0)",),
                                 every_step=False, wakes=0)))
 register(Func("DERIV", Kind.MEMORY, "DERIV(IC, X)", "dX/dt, Y(0)=IC", constant_args=(0,),
               # (x1, t1) the newest accepted point, (x2, t2) the one before, the value
