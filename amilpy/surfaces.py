@@ -18,7 +18,7 @@ from dataclasses import replace
 
 from . import ir
 from . import syntax as syn
-from .syntax import Visitor
+from .syntax import Visitor, deep_enough
 
 
 def sign(x: float) -> float:
@@ -72,6 +72,7 @@ class _Constant(Visitor):
     visit_TableLookup = visit_Impulse = _unknown
 
 
+@deep_enough()
 def constant_value(expr: syn.Node, constants: dict[str, float]) -> float | None:
     """The value of an expression of numbers and known constants, else None."""
     return _Constant(constants).visit(expr)
@@ -129,6 +130,7 @@ class _Linear(Visitor):
     visit_TableLookup = visit_Impulse = _nonlinear
 
 
+@deep_enough()
 def linear_gradient(expr: syn.Node, state_index: dict[str, int],
                     constants: dict[str, float]) -> list[float] | None:
     """d e/d y for a surface that is a constant-coefficient combination of states
@@ -191,6 +193,7 @@ class _Affine(Visitor):
     visit_SwitchValue = visit_MemoryValue = visit_TableLookup = visit_Impulse = _other
 
 
+@deep_enough()
 def is_affine(expr: syn.Node, constants: dict[str, float], equations: dict | None = None
               ) -> bool:
     """True if a time-only surface is affine in TIME (its root is then exact),
@@ -268,6 +271,7 @@ class _Dependence(Visitor):
         return ir.Depends.TIME
 
 
+@deep_enough()
 def classify(model: ir.Model) -> None:
     """Mark each surface of the model const / time / state / impulse by what its
     expression reads (in place: `model.surfaces[i].depends`)."""

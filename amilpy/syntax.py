@@ -14,7 +14,9 @@ family, so adding a node fails at import wherever it is not handled.
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -22,6 +24,27 @@ from .diagnostics import Span
 
 # every node class, by name: what a visit_X method may name
 NODES: dict[str, type[Node]] = {}
+
+# The deepest expression a listing may hold (a sum of 1000 terms is 1000 deep):
+# the reader refuses deeper ones with a located error, and every stage that walks
+# expressions recursively makes room for this depth (`deep_enough`).
+MAX_DEPTH = 1500
+_FRAMES_PER_LEVEL = 40  # the deepest recursive walk (copying Python trees) with margin
+
+
+@contextmanager
+def deep_enough() -> Iterator[None]:
+    """Python's recursion limit raised (for the block) to what walking an expression
+    of MAX_DEPTH levels needs."""
+    old = sys.getrecursionlimit()
+    need = MAX_DEPTH * _FRAMES_PER_LEVEL + 1000
+    if old < need:
+        sys.setrecursionlimit(need)
+    try:
+        yield
+    finally:
+        if old < need:
+            sys.setrecursionlimit(old)
 
 
 class Node:
@@ -91,7 +114,9 @@ class Visitor:
             method = getattr(type(self), "visit_" + type(node).__name__, None) \
                 or type(self).generic
             table[type(node)] = method
-        return method(self, node, *args)
+        # a plain call when there are no extra arguments: CPython runs it without
+        # a C stack frame, so deep expressions cost Python frames only
+        return method(self, node, *args) if args else method(self, node)
 
     def generic(self, node: Node, *args: Any) -> Any:
         raise TypeError(f"{type(self).__qualname__} cannot visit {type(node).__name__}")
@@ -227,6 +252,8 @@ class Report(Node):
     names: tuple[str, ...]
     name_spans: tuple[Span, ...]
     span: Span
+    x: str | None = None  # OUTPUT Y1, Y2 VS X: the variable on the horizontal axis
+    x_span: Span | None = None
 
 
 @dataclass(frozen=True)

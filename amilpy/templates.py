@@ -135,3 +135,10 @@ def instantiate(text: str, args: tuple, span: Span, states: tuple[str, ...] = ()
 def template_names(text: str) -> frozenset[str]:
     """Every name a template reads (placeholders and called helpers)."""
     return frozenset(n.id for n in py.walk(_parsed(text)) if isinstance(n, py.Name))
+
+
+@cache
+def argument_uses(text: str) -> tuple[str, ...]:
+    """The argument placeholders of a template, once per use ("C", "C" for DEADSP)."""
+    return tuple(n.id for n in py.walk(_parsed(text)) if isinstance(n, py.Name)
+                 and len(n.id) == 1 and n.id in ARGUMENTS)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from . import ir
 from . import syntax as syn
-from .syntax import Visitor
+from .syntax import Visitor, deep_enough
 
 _PREC = {"+": 1, "-": 1, "*": 2, "/": 2, "**": 4}
 _UNARY = 3  # unary minus binds looser than ** and tighter than * /
@@ -68,6 +68,7 @@ class _Text(Visitor):
         return self.call("IMPULS", (e.start, e.period))
 
 
+@deep_enough()
 def expr_text(model: ir.Model | None, e: syn.Node) -> str:
     """An expression (syntax or IR; IR nodes need the model) in the listing's notation."""
     return _Text(model).visit(e, 0)

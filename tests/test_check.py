@@ -82,3 +82,41 @@ def test_limit_shares_its_surfaces_with_a_dead_zone_on_the_same_input():
                      "TIMER FINTIM = 1\nEND\n").ir
     assert m.switches[0].surfaces == m.switches[1].surfaces
     assert len(m.surfaces) == 2
+
+
+def _work(listing: str) -> tuple[int, int]:
+    """(visits of syntax/IR nodes, characters of generated code) for check + compile."""
+    from amilpy.codegen import Compiler
+    from amilpy.syntax import Visitor
+
+    calls = [0]
+    visit = Visitor.visit
+
+    def counting(self, node, *args):
+        calls[0] += 1
+        return visit(self, node, *args)
+
+    Visitor.visit = counting
+    try:
+        model = amilpy.loads(listing).ir
+        c = Compiler(model, {}, {}, {}).build()
+    finally:
+        Visitor.visit = visit
+    return calls[0], len(c.source)
+
+
+@pytest.mark.parametrize("func", ["LIMIT(-1.0, 1.0, ", "DEADSP(-0.1, 0.1, ", "ZHOLD(X, ",
+                                  "FSW(X - 0.5, 0.0, 1.0, "])
+def test_nesting_depth_n_costs_order_n(func):
+    """Issue 15: 16 nested LIMITs took 100 s (each level tripled the work). Doubling
+    the depth must at most double the work of checking and compiling (counted in
+    node visits and generated characters, not seconds), also in INITIAL."""
+    def listing(n):
+        e = func * n + "X" + ")" * n
+        initial = e.replace("X", "0.3") if "ZHOLD" not in func else "0.3"
+        return (f"X = INTGRL(1.0, -X)\nY = {e}\nINITIAL\nA = {initial}\nDYNAMIC\n"
+                "TIMER FINTIM = 1\nEND\n")
+
+    (v16, s16), (v32, s32), (v64, s64) = (_work(listing(n)) for n in (16, 32, 64))
+    assert v32 / v16 < 2.3 and v64 / v32 < 2.3
+    assert s32 / s16 < 2.3 and s64 / s32 < 2.3

@@ -17,6 +17,7 @@ from .. import ir
 from .. import syntax as ast
 from ..diagnostics import Reporter
 from ..surfaces import classify
+from ..syntax import deep_enough
 from . import order
 from .groups import RunGroups, reject_late_equations, sections, split_groups
 from .lower import Lowering
@@ -25,6 +26,7 @@ from .names import PURE, Names
 __all__ = ["check"]
 
 
+@deep_enough()
 def check(program: ast.Program, name: str | None = None) -> ir.Model:
     """The checked, sorted model of a parsed listing; raises AmilError with every
     fault found."""

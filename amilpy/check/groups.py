@@ -13,7 +13,7 @@ from dataclasses import dataclass, field, replace
 from .. import ir
 from .. import syntax as ast
 from ..diagnostics import Reporter, Span, nearest
-from ..language import RESERVED, TIMER_KEYS
+from ..language import RESERVED, TIME, TIMER_KEYS
 from ..routes import method_names, route_for
 from ..syntax import Visitor
 
@@ -280,8 +280,13 @@ class RunGroups(Visitor):
 
     def visit_Report(self, st: ast.Report) -> None:
         kind = "OUTPUT" if st.kind == "PRTPLT" else st.kind
+        if st.x is not None and kind != "OUTPUT":
+            self.rep.error(f"{st.kind} has no horizontal axis: VS {st.x} belongs to a figure",
+                           st.x_span, f"write OUTPUT {', '.join(st.names)} VS {st.x}")
+        # VS TIME is the default axis
+        x = st.x if st.x != TIME and kind == "OUTPUT" else None
         target = self.group.reports if self.group.reports is not None else self.reports
-        target.append(ir.Report(kind, st.names, None, st.span, st.kind == "PRTPLT"))
+        target.append(ir.Report(kind, st.names, None, st.span, st.kind == "PRTPLT", x))
         self.all_reports.append(st)
 
     def visit_Label(self, st: ast.Label) -> None:

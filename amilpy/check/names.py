@@ -175,7 +175,10 @@ class Names:
         """Reports and FINISH name known quantities; RELERR/ABSERR X=... name states."""
         report_known = known - SETTINGS
         for st in self.data.reports:
-            for n, s in zip(st.names, st.name_spans, strict=True):
+            named = list(zip(st.names, st.name_spans, strict=True))
+            if st.x is not None:
+                named.append((st.x, st.x_span))
+            for n, s in named:
                 if n not in report_known and n != TIME:
                     hint = nearest(n, report_known - {TIME})
                     self.rep.error(f"{st.kind} names {n}, which the model never defines", s,

@@ -18,6 +18,7 @@ from .. import syntax as syn
 from ..diagnostics import Span
 from ..library import lookup, vector_functions
 from ..surfaces import is_affine
+from ..syntax import deep_enough
 from .consts import evaluate_constant, initial_slots
 from .emit import Emitter, needs
 from .faults import STATEMENTS, FaultReport, Statement, explain, statement_of
@@ -161,6 +162,17 @@ class Compiler:
                         self.line("equation", e.target, e.span, e.expr))
                 for e in needs(self.model, roots)]
 
+    def surface_algebra(self, em: Emitter) -> list[py.stmt]:
+        """What the watched surfaces read: the algebra, then the switch values they
+        read outright, each computed once."""
+        roots = [self.model.surfaces[i].expr for i in self.watched]
+        body = self.algebra(roots, em)
+        for name, value, sw in em.hoist(roots):
+            line = self.line("switch", f"{sw.written or sw.func} at line {sw.span.line}",
+                             sw.span)
+            body.append(on_line(py.Assign([py.Name(name, py.Store())], value), line))
+        return body
+
     def state_line(self, s: ir.State) -> int:
         target = s.name
         if s.hidden:  # "INTGRL#W2.1" is the INTGRL inside W2's statement
@@ -192,7 +204,7 @@ class Compiler:
     def surfaces(self) -> py.FunctionDef:
         em = self.emitter("rhs")
         model = self.model
-        body = self.prologue() + self.algebra([model.surfaces[i].expr for i in self.watched], em)
+        body = self.prologue() + self.surface_algebra(em)
         values = []
         for i in self.watched:
             s = model.surfaces[i]
@@ -210,7 +222,7 @@ class Compiler:
         """The literal modes of the watched surfaces (the restart rule starts there)."""
         em = self.emitter("rhs")
         model = self.model
-        body = self.prologue() + self.algebra([model.surfaces[i].expr for i in self.watched], em)
+        body = self.prologue() + self.surface_algebra(em)
         values = [on_line(em.literal_mode(model.surfaces[i].kind, em.emit(model.surfaces[i].expr)),
                           self.surface_line(i)) for i in self.watched]
         body.append(py.Return(py.List(values, py.Load())))
@@ -231,12 +243,21 @@ class Compiler:
         body = self.prologue() + (self.prologue(used_states=False, modes="mn", mem=False)
                                   if self.watched else [])
         body += self.algebra([a for m in model.memories for a in m.args], em)
+        # a memory whose update reads its value computes it anyway: once, into a
+        # local that the memories nested in it read too (innermost first)
+        for mem, func in zip(model.memories, self.entries, strict=True):
+            if any("VALUE" in templates.template_names(t) for t in func.memory.update):
+                name = f"w{next(self.names)}"
+                body.append(on_line(py.Assign([py.Name(name, py.Store())],
+                                              em.memory_value(mem)),
+                                    self.line("memory", mem.target, mem.span)))
+                em.hoisted_memory[mem.index] = name
         new: list[py.expr] = []
         for mem, func in zip(model.memories, self.entries, strict=True):
             args = [em.emit(a) for a in mem.args]
             modes = em.memory_modes(mem, func, args)
             new_modes = em_new.memory_modes(mem, func, args)
-            value = em.memory_value(mem)
+            value = em.emit(ir.MemoryValue(mem.index, mem.span))
             line = self.line("memory", mem.target, mem.span)
             for text in func.memory.update:
                 e = on_line(em.fill(text, args, modes, new_modes, mem, value), line)
@@ -245,6 +266,7 @@ class Compiler:
         body.append(py.Return(py.List(new, py.Load())))
         return function("mem", ("t", "y", "m", "mn", "z"), body)
 
+    @deep_enough()
     def build(self) -> Compiled:
         model = self.model
         out_names = self.outputs if self.outputs is not None else model.variables

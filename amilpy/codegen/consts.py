@@ -12,6 +12,7 @@ import math
 
 from .. import ir, templates
 from ..diagnostics import AmilError, Diagnostic, Span
+from ..syntax import deep_enough
 from .emit import Emitter
 from .pytree import assert_closed, namespace
 
@@ -20,6 +21,7 @@ def _emitter(model: ir.Model, constants: dict[str, float], tables) -> Emitter:
     return Emitter(model, constants, {}, "literal", {}, {}, tables)
 
 
+@deep_enough()
 def evaluate_constant(model: ir.Model, expr, constants: dict[str, float], tables,
                       span: Span) -> float:
     """Evaluate an expression of constants (INITIAL, initial conditions)."""
@@ -36,8 +38,10 @@ def initial_slots(model: ir.Model, text: str, mem: ir.Memory, constants: dict[st
                   tables) -> list[float]:
     """The initial values a memory template gives (one, or several with `*`)."""
     em = _emitter(model, constants, tables)
-    value = evaluate(model, em.fill(text, [em.emit(a) for a in mem.args], memory=mem),
-                     em.tables, mem.span)
+    used = templates.template_names(text)  # only these arguments are evaluated
+    args = [em.emit(a) if templates.ARGUMENTS[i] in used else None
+            for i, a in enumerate(mem.args)]
+    value = evaluate(model, em.fill(text, args, memory=mem), em.tables, mem.span)
     return [float(v) for v in value] if templates.spread(text) else [float(value)]
 
 
@@ -70,6 +74,7 @@ def evaluate(model: ir.Model, body: py.expr, tables: dict[str, tuple], span: Spa
             "values only")], model.path, model.source) from None
 
 
+@deep_enough()
 def initial_values(model: ir.Model, data: dict[str, float], tables,
                    reserved: dict[str, float]) -> dict[str, float]:
     """Data values, TIMER values and the INITIAL section, evaluated in sorted order."""

@@ -19,10 +19,11 @@ from itertools import count
 
 from .. import ir
 from .. import syntax as syn
+from ..diagnostics import Span
 from ..library import Func, Kind, lookup, runtime_name
 from ..runtime import safe_pow
 from ..syntax import Visitor
-from ..templates import ARGUMENTS, tree
+from ..templates import ARGUMENTS, argument_uses, tree
 from .pytree import const_value, local, number
 
 _PYOPS = {"+": py.Add, "-": py.Sub, "*": py.Mult, "/": py.Div}
@@ -45,6 +46,24 @@ class Emitter(Visitor):
         self.source_tables = source_tables  # the run's FUNCTION tables
         self.unpacked_z = unpacked_z
         self.names = names if names is not None else count(1)  # for bound arguments
+        # switch values already computed into a local, by (switch, output)
+        self.hoisted: dict[tuple[int, int], str] = {}
+        self.hoisted_memory: dict[int, str] = {}  # memory values likewise, by instance
+
+    def hoist(self, roots: list[syn.Node]) -> list[tuple[str, py.expr, ir.Switch]]:
+        """(local, value, switch) for every switch value the roots read outright (not
+        inside another switch's branch), innermost first: these are evaluated
+        whenever the roots are, so computing each once changes nothing but the
+        size of the code (nested LIMITs' surfaces read the switch inside)."""
+        keys = sorted({(n.switch, n.output) for r in roots for n in syn.walk(r)
+                       if isinstance(n, ir.SwitchValue)})
+        out = []
+        for key in keys:
+            value = self.visit(ir.SwitchValue(key[0], Span(0, 0), key[1]))
+            name = f"w{next(self.names)}"
+            self.hoisted[key] = name
+            out.append((name, value, self.model.switches[key[0]]))
+        return out
 
     def emit(self, e: syn.Node) -> py.expr:
         out = self.visit(e)
@@ -127,6 +146,8 @@ class Emitter(Visitor):
                                                           self.emit(e.x)], [])
 
     def visit_SwitchValue(self, e: ir.SwitchValue) -> py.expr:
+        if (e.switch, e.output) in self.hoisted:
+            return py.Name(self.hoisted[e.switch, e.output], py.Load())
         sw = self.model.switches[e.switch]
         func = lookup(sw.func, len(sw.args))
         text = func.values[e.output]
@@ -134,6 +155,8 @@ class Emitter(Visitor):
         return self.bound(bindings, self.fill(text, args, [self.mode(s) for s in sw.surfaces]))
 
     def visit_MemoryValue(self, e: ir.MemoryValue) -> py.expr:
+        if e.memory in self.hoisted_memory:
+            return py.Name(self.hoisted_memory[e.memory], py.Load())
         return self.memory_value(self.model.memories[e.memory])
 
     def visit_Impulse(self, e: ir.Impulse) -> py.expr:
@@ -170,8 +193,7 @@ class Emitter(Visitor):
              ) -> tuple[list[py.expr], list[py.NamedExpr]]:
         """Arguments the templates read more than once, unless a name or a number,
         become names bound once."""
-        uses = Counter(n.id for t in texts for n in py.walk(tree(t))
-                       if isinstance(n, py.Name) and len(n.id) == 1 and n.id in ARGUMENTS)
+        uses = Counter(n for t in texts for n in argument_uses(t))
         bindings: list[py.NamedExpr] = []
         out = list(args)
         for i, arg in enumerate(args):

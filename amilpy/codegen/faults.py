@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 from .. import ir
 from ..diagnostics import Span
+from ..syntax import deep_enough
 from ..unparse import expr_text
 
 # the key under which generated code's globals hold its statement table (a name
@@ -163,6 +164,7 @@ def _checking_function(compiled, name: str):
     return compiled.checking[name]
 
 
+@deep_enough()
 def explain(compiled, exc: BaseException, t: float, y, m, z) -> FaultReport | None:
     """The statement that raised `exc` and the operation that failed (see
     `Compiled.explain_fault`)."""
