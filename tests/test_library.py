@@ -140,3 +140,19 @@ def test_every_entry_documents_itself():
         assert func.signature.startswith(name + "("), name
         if func.kind != Kind.MATH:
             assert func.doc, name
+
+
+@pytest.mark.parametrize("func", ["AFGEN", "NLFGEN"])
+def test_a_table_lookup_of_nan_is_nan(func):
+    # issue 15: an IndexError off the end of the table
+    from amilpy import runtime
+
+    table = ((0.0, 1.0, 2.0), (0.0, 1.0, 4.0))
+    assert np.isnan(getattr(runtime, func.lower())(table, float("nan")))
+    r = run1(f"FUNCTION F = 0.0, 0.0, 1.0, 1.0, 2.0, 4.0\nPARAM Z = 0.0\n"
+             f"Y = {func}(F, SQRT(TIME - 0.5) + Z)\nTIMER FINTIM = 1.0, OUTDEL = 0.25\nEND\n",
+             method="RK4")
+    # the table is y = x*x at its points: linear between them, exact quadratically
+    x = np.sqrt(0.5)
+    assert np.isnan(r["Y"][0]) and r["Y"][-1] == pytest.approx(
+        x if func == "AFGEN" else x * x, rel=1e-12)

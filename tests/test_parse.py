@@ -129,3 +129,52 @@ def test_output_vs_is_checked(statement, message, column):
     err = fault(f"X = INTGRL(1.0, V)\nV = INTGRL(0.0, -X)\n{statement}\n" + TIMER)
     assert err.diagnostics[0].message == message
     assert (err.line, err.column) == (3, column)
+
+
+# ------------------------------------------------------------ property-based
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+LOOKALIKES = ["\u017f", "\u0131", "\u0130", "\u0410", "\u0415", "\u041e", "\u0440", "\uff21",
+              "\uff10", "\u09ea", "\u0665", "\u2212", "\u212a", "\u00b5", "\u00e9", "\u03bf"]
+VALID = ("PARAM K = 2.0, D = 0.5\nINITIAL\nA = 2*K\nDYNAMIC\nX = INTGRL(1.0, -K*X + D)\n"
+         "Y = LIMIT(-1.0, 1.0, X)\nTIMER FINTIM = 1.0, PRDEL = 0.1\nPRINT X, Y\nEND\n")
+
+
+@settings(max_examples=150, deadline=None, derandomize=True)
+@given(st.integers(0, len(VALID) - 1), st.sampled_from(LOOKALIKES))
+def test_a_lookalike_anywhere_in_code_is_named_where_it_stands(pos, char):
+    if not VALID[pos].isalnum():
+        return
+    text = VALID[:pos] + char + VALID[pos + 1:]
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text)
+    d = err.value.diagnostics[0]
+    line = VALID.count("\n", 0, pos) + 1
+    column = pos - (VALID.rfind("\n", 0, pos) + 1) + 1
+    assert (d.span.line, d.span.column) == (line, column)
+    assert d.message.startswith(f"character {char!r} is not allowed here: U+")
+
+
+NESTED = ["LIMIT(-1.0, 1.0, {})", "DEADSP(-0.1, 0.1, {})", "FSW({}, 0.0, 1.0, X)",
+          "ZHOLD(X - 0.5, {})", "INSW({}, -1.0, {})", "QNTZR(0.5, {})", "REALPL(0.0, 0.1, {})",
+          "DELAY(10, 0.1, {})", "({} + {})", "SIN({})", "AFGEN(F, {})"]
+
+
+@settings(max_examples=80, deadline=None, derandomize=True)
+@given(st.lists(st.sampled_from(NESTED), min_size=1, max_size=12), st.booleans())
+def test_nested_functions_check_and_compile(wraps, initial):
+    """Any nesting of switches, memory, states and tables checks and compiles, or
+    is a model error (never another exception)."""
+    expr = "X"
+    for w in wraps:
+        expr = w.format(*([expr] * w.count("{}")))
+    section = f"INITIAL\nB = {expr.replace('X', '0.3')}\nDYNAMIC\n" if initial else ""
+    text = (f"FUNCTION F = 0.0, 0.0, 1.0, 2.0\n{section}X = INTGRL(1.0, -X)\nY = {expr}\n"
+            "TIMER FINTIM = 1.0\nEND\n")
+    try:
+        source = amilpy.loads(text).python_source()
+    except AmilError as exc:
+        assert exc.render()
+        return
+    assert "def rhs" in source
