@@ -17,12 +17,21 @@ _UNARY = 3  # unary minus binds looser than ** and tighter than * /
 
 
 class _Text(Visitor):
-    """The text of an expression; `parent` is the precedence around it."""
+    """The text of an expression; `parent` is the precedence around it. With a
+    `limit`, a part that would run past it is written "..." (and not walked)."""
 
     complete = ir.EXPRESSIONS
 
-    def __init__(self, model: ir.Model | None) -> None:
+    def __init__(self, model: ir.Model | None, limit: int | None = None) -> None:
         self.model = model
+        self.left = limit
+
+    def visit(self, node, *args):
+        if self.left is not None:
+            if self.left <= 0:
+                return "..."
+            self.left -= 1  # a node writes at least one character
+        return super().visit(node, *args)
 
     def call(self, func: str, args) -> str:
         return f"{func}({', '.join(self.visit(a, 0) for a in args)})"
@@ -41,9 +50,10 @@ class _Text(Visitor):
 
     def visit_BinOp(self, e: syn.BinOp, parent: int) -> str:
         p = _PREC[e.op]
-        # ** is right associative; - and / are not associative on the right
+        # ** groups to the right, the others to the left; an operand grouped the
+        # other way keeps its parentheses (X + (Y + Z) is not X + Y + Z in floats)
         left_p = p + 1 if e.op == "**" else p
-        right_p = p if e.op == "**" else p + (1 if e.op in "-/" else 0)
+        right_p = p if e.op == "**" else p + 1
         op = e.op if e.op in ("*", "/", "**") else f" {e.op} "
         text = f"{self.visit(e.left, left_p)}{op}{self.visit(e.right, right_p)}"
         return f"({text})" if p < parent else text
@@ -69,6 +79,10 @@ class _Text(Visitor):
 
 
 @deep_enough()
-def expr_text(model: ir.Model | None, e: syn.Node) -> str:
-    """An expression (syntax or IR; IR nodes need the model) in the listing's notation."""
-    return _Text(model).visit(e, 0)
+def expr_text(model: ir.Model | None, e: syn.Node, limit: int | None = None) -> str:
+    """An expression (syntax or IR; IR nodes need the model) in the listing's notation;
+    with `limit`, about that many characters at most (the rest "...")."""
+    text = _Text(model, limit).visit(e, 0)
+    if limit is not None and len(text) > limit:
+        text = text[:max(limit - 3, 1)] + "..."
+    return text

@@ -117,6 +117,34 @@ def test_nesting_depth_n_costs_order_n(func):
         return (f"X = INTGRL(1.0, -X)\nY = {e}\nINITIAL\nA = {initial}\nDYNAMIC\n"
                 "TIMER FINTIM = 1\nEND\n")
 
-    (v16, s16), (v32, s32), (v64, s64) = (_work(listing(n)) for n in (16, 32, 64))
-    assert v32 / v16 < 2.3 and v64 / v32 < 2.3
-    assert s32 / s16 < 2.3 and s64 / s32 < 2.3
+    (v1, s1), (v2, s2), (v4, s4) = (_work(listing(n)) for n in (32, 64, 128))
+    assert v2 / v1 < 2.3 and v4 / v2 < 2.3
+    assert s2 / s1 < 2.3 and s4 / s2 < 2.3
+
+
+def test_surfaces_carry_their_text_and_a_readable_description():
+    m = amilpy.loads("PARAM T1 = 0.5, P1 = -1.0, P2 = 1.0\nW1 = INTGRL(1.0, -W1)\n"
+                     "S = FSW(W1, 0.0, 1.0, 2.0) + fcnsw(time - t1, 0.0, 1.0, 1.0)\n"
+                     "L = BOUND(P1, P2, X)\nX = W1*2.0\nZ = ZHOLD(W1 - 0.5, W1)\n"
+                     "FINISH W1 = 0.1\nTERMT(W1 - 2.0)\nTIMER FINTIM = 1\nEND\n").ir
+    assert [(s.text, s.description) for s in m.surfaces] == [
+        ("W1", "FSW(W1, ...) at line 3"),
+        ("TIME - T1", "FCNSW(TIME - T1, ...) at line 3"),
+        ("X - P1", "BOUND(P1, ...) at line 4"),
+        ("X - P2", "BOUND(P1, ...) at line 4"),
+        ("W1 - 0.5", "ZHOLD(W1 - 0.5, ...) at line 6"),
+        ("W1 - 0.1", "FINISH W1=0.1"),
+        ("W1 - 2.0", "TERMT(W1 - 2.0) at line 8"),
+    ]
+    # the written name is kept (FSW stays FSW, BOUND stays BOUND)
+    assert [sw.written for sw in m.switches] == ["FSW", "FCNSW", "BOUND"]
+
+
+def test_a_long_surface_text_is_shortened():
+    long = " + ".join(f"W{k}" for k in range(40))
+    m = amilpy.loads(f"W0 = INTGRL(1.0, -W0)\nY = FSW({long}, 0.0, 1.0, 2.0)\n"
+                     + "".join(f"W{k} = {k}*W0\n" for k in range(1, 40))
+                     + "TIMER FINTIM = 1\nEND\n").ir
+    s = m.surfaces[0]
+    assert s.text.startswith("W0 + W1 + W2") and s.text.endswith("...")
+    assert len(s.text) <= 60 and len(s.description) < 90

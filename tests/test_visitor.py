@@ -96,3 +96,41 @@ def test_equations_print_in_the_listing_notation():
     text = dict((line.split(" = ")[0], line) for _, line in equation_lines(m.ir))
     assert text["X"] == "X = FSW(Y, 1.0, 2.0, BOUND(0.0, 1.0, Y))"
     assert text["dY/dt"].startswith("dY/dt = -X**2/(A - B) - (C - D)")
+
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+
+def _exprs():
+    leaf = st.sampled_from(["X", "K", "TIME", "1.0", "2.", ".5", "1.5D-3", "3"])
+    return st.recursive(leaf, lambda sub: st.one_of(
+        st.tuples(sub, st.sampled_from(["+", "-", "*", "/", "**"]), sub).map(
+            lambda t: f"({t[0]}){t[1]}({t[2]})"),
+        sub.map(lambda s: f"-({s})"),
+        st.tuples(st.sampled_from(["SIN", "AMAX1", "FSW"]), st.lists(sub, min_size=1,
+                                                                      max_size=3)).map(
+            lambda t: f"{t[0]}({', '.join(t[1])})")), max_leaves=12)
+
+
+def _shape(e):
+    """The structure of an expression, spans aside."""
+    if isinstance(e, syntax.Num):
+        return e.value
+    if isinstance(e, syntax.Name):
+        return e.name
+    return (type(e).__name__, getattr(e, "op", getattr(e, "func", "")),
+            *map(_shape, e.children()))
+
+
+@settings(max_examples=200, deadline=None, derandomize=True)
+@given(_exprs())
+def test_text_reads_back_as_the_same_expression(text):
+    """unparse(parse(e)) parses to the same tree: the text is the listing's notation,
+    with no parenthesis missing (and its precedence rules are Fortran's)."""
+    from amilpy.parse import parse
+    from amilpy.unparse import expr_text
+
+    first = parse(f"Y = {text}\n").statements[0].expr
+    again = parse(f"Y = {expr_text(None, first)}\n").statements[0].expr
+    assert _shape(again) == _shape(first)

@@ -16,6 +16,24 @@ from ..library import Func, Kind, lookup
 from ..surfaces import constant_value
 from ..syntax import Visitor
 from ..templates import ARGUMENTS, instantiate, template_names
+from ..unparse import expr_text
+
+# the longest surface text or argument text a description holds
+TEXT_LIMIT = 60
+
+
+def surface_text(template: str, call: ast.Call) -> str:
+    """A surface as the listing writes it: the template over the call's own
+    arguments ("W1", "TIME - T1", "X - P2")."""
+    return expr_text(None, instantiate(template, call.args, call.span), TEXT_LIMIT)
+
+
+def describe(call: ast.Call) -> str:
+    """A switch for a reader: `FSW(W1, ...) at line 57` (the function and its first
+    argument as written)."""
+    first = expr_text(None, call.args[0], TEXT_LIMIT) if call.args else ""
+    more = ", ..." if len(call.args) > 1 else ""
+    return f"{call.func}({first}{more}) at line {call.span.line}"
 
 
 def arguments_of(template: str) -> set[int]:
@@ -151,9 +169,9 @@ class Lowering:
                                                         for i in arguments_of(t)})
         # a state function's surfaces are its first state's modes (MODINT's hold/reset)
         resets = tuple(self.surface(instantiate(t, args, sp), func.surface_kind, None,
-                                    ir.Purpose.SWITCH, sp,
-                                    f"{call.func} surface {k + 1} for {owner}")
-                       for k, t in enumerate(func.surfaces))
+                                    ir.Purpose.SWITCH, sp, describe(call),
+                                    surface_text(t, call))
+                       for t in func.surfaces)
         named = [k == 0 and bool(target) and s.named for k, s in enumerate(func.states)]
         names = tuple(target if named[k] else self.hidden(s.tag, owner)
                       for k, s in enumerate(func.states))
@@ -168,8 +186,9 @@ class Lowering:
         return instantiate(func.values[0], args, sp, names)
 
     def surface(self, expr: ast.Node, kind: ir.SurfaceKind, owner: int | None,
-                purpose: ir.Purpose, span: Span, description: str) -> int:
-        """The index of the surface `expr` (a new one, or the one it shares)."""
+                purpose: ir.Purpose, span: Span, description: str, text: str) -> int:
+        """The index of the surface `expr` (a new one, or the one it shares);
+        `text` is the expression as the listing writes it."""
         key = None
         if purpose in (ir.Purpose.SWITCH, ir.Purpose.MEMORY):
             key = (kind, purpose, self.shapes.shape(expr))
@@ -177,7 +196,7 @@ class Lowering:
                 return self.interned[key]
         index = len(self.surfaces)
         self.surfaces.append(ir.Surface(index, expr, kind, owner, purpose, ir.Depends.STATE,
-                                        span, description))
+                                        span, description, text))
         if key is not None:
             self.interned[key] = index
         return index
@@ -189,8 +208,7 @@ class Lowering:
         index = len(self.memories)
         surfaces = tuple(
             self.surface(instantiate(t, args, call.span), func.surface_kind, index,
-                         ir.Purpose.MEMORY, call.span,
-                         f"{call.func} for {target} (line {call.span.line})")
+                         ir.Purpose.MEMORY, call.span, describe(call), surface_text(t, call))
             for t in func.surfaces)
         nslots = int(constant_value(instantiate(func.memory.slots, call.args, call.span), {}))
         self.memories.append(ir.Memory(index, func.name, args, self.nslots, nslots, surfaces,
@@ -202,14 +220,10 @@ class Lowering:
         func = lookup(call.func, len(call.args))
         args = self.args(call, target)
         index = len(self.switches)
-        surfaces = []
-        for k, template in enumerate(func.surfaces):
-            desc = f"{call.func} for {target} (line {call.span.line})"
-            if len(func.surfaces) > 1:
-                desc += f", surface {k + 1}"
-            surfaces.append(self.surface(instantiate(template, args, call.span),
-                                         func.surface_kind, index, ir.Purpose.SWITCH,
-                                         call.span, desc))
+        surfaces = [self.surface(instantiate(t, args, call.span), func.surface_kind, index,
+                                 ir.Purpose.SWITCH, call.span, describe(call),
+                                 surface_text(t, call))
+                    for t in func.surfaces]
         self.switches.append(ir.Switch(index, func.name, args, tuple(surfaces), call.span,
                                        target, call.func))
         return index
@@ -218,12 +232,13 @@ class Lowering:
         """FINISH X = value: the run ends where X - value changes sign."""
         expr = ast.BinOp("-", ast.Name(s.name, s.span), ast.Num(s.value, s.span), s.span)
         self.surface(expr, ir.SurfaceKind.SIGN, None, ir.Purpose.FINISH, s.span,
-                     f"FINISH {s.name}={s.value:g}")
+                     f"FINISH {s.name}={s.value:g}", f"{s.name} - {s.value:g}")
 
     def termt(self, st: ast.Termt) -> None:
         """TERMT(expr): the run ends where expr turns positive."""
+        text = expr_text(None, st.expr, TEXT_LIMIT)
         self.surface(self.expr(st.expr, "TERMT"), ir.SurfaceKind.SIGN, None,
-                     ir.Purpose.TERMT, st.span, "TERMT")
+                     ir.Purpose.TERMT, st.span, f"TERMT({text}) at line {st.span.line}", text)
 
 
 class _Lowerer(Visitor):
