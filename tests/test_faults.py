@@ -99,3 +99,18 @@ def test_an_exception_from_elsewhere_is_not_explained():
     except ZeroDivisionError as exc:
         assert c.explain_fault(exc, 0.0, c.y0, [0.0], c.z0) is None
         assert fault_line(exc) is None
+
+
+def test_a_compiler_that_cannot_nest_so_deep_gives_a_located_error(monkeypatch):
+    # CPython 3.12+ bounds the compiler's nesting by its C stack: the error is the model's
+    import builtins
+
+    def shallow_compile(*args, **kw):
+        raise RecursionError("maximum recursion depth exceeded during compilation")
+
+    model = amilpy.loads("X = INTGRL(0.0, 1.0)\nY = ((X + 1.0)*2.0 - 3.0)/4.0\n"
+                         "TIMER FINTIM = 1\nEND\n").ir
+    monkeypatch.setattr(builtins, "compile", shallow_compile)
+    with pytest.raises(amilpy.AmilError) as err:
+        Compiler(model, {}, {}, {}).build()
+    assert err.value.line == 2 and "nested too deeply to compile" in err.value.render()

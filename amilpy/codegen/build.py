@@ -15,7 +15,7 @@ from itertools import count
 
 from .. import ir, templates
 from .. import syntax as syn
-from ..diagnostics import Span
+from ..diagnostics import AmilError, Diagnostic, Span
 from ..library import lookup, vector_functions
 from ..surfaces import is_affine
 from ..syntax import deep_enough
@@ -82,6 +82,21 @@ class Compiled:
         e.g. "W2 (line 16): division by zero: JL = 0". None if the fault did not
         happen in this model's generated code."""
         return explain(self, exc, t, y, m, z)
+
+
+def _deepest(model: ir.Model) -> Span | None:
+    """The span of the most deeply nested statement of a model."""
+    best, where = 0, None
+    statements = [(e.expr, e.span) for e in model.dynamic + model.initial]
+    statements += [(s.deriv, s.span) for s in model.states]
+    for expr, span in statements:
+        stack = [(expr, 1)]
+        while stack:
+            node, depth = stack.pop()
+            if depth > best:
+                best, where = depth, span
+            stack.extend((c, depth + 1) for c in node.children())
+    return where
 
 
 def fault_line(exc: BaseException) -> int | None:
@@ -268,6 +283,18 @@ class Compiler:
 
     @deep_enough()
     def build(self) -> Compiled:
+        try:
+            return self._build()
+        except RecursionError:
+            # the reader bounds nesting (syntax.MAX_DEPTH); a Python whose compiler
+            # allows less than that still ends in a located model error
+            span = _deepest(self.model)
+            raise AmilError([Diagnostic(
+                "expression nested too deeply to compile", span,
+                "split it into several assignments")], self.model.path,
+                self.model.source) from None
+
+    def _build(self) -> Compiled:
         model = self.model
         out_names = self.outputs if self.outputs is not None else model.variables
         fns = [self.rhs(), self.surfaces(), self.modes(), self.outputs_function(out_names),
