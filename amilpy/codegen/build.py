@@ -259,9 +259,12 @@ class Compiler:
                                   if self.watched else [])
         body += self.algebra([a for m in model.memories for a in m.args], em)
         # a memory whose update reads its value computes it anyway: once, into a
-        # local that the memories nested in it read too (innermost first)
+        # local, when memories nested around it read it too (innermost first)
+        nested = {n.memory for m in model.memories for a in m.args for n in syn.walk(a)
+                  if isinstance(n, ir.MemoryValue)}
         for mem, func in zip(model.memories, self.entries, strict=True):
-            if any("VALUE" in templates.template_names(t) for t in func.memory.update):
+            if mem.index in nested and any("VALUE" in templates.template_names(t)
+                                           for t in func.memory.update):
                 name = f"w{next(self.names)}"
                 body.append(on_line(py.Assign([py.Name(name, py.Store())],
                                               em.memory_value(mem)),
