@@ -82,8 +82,9 @@ def nan_on_domain(f: Callable[[float], float]) -> Callable[[float], float]:
 
 
 # ------------------------------------------------------------------- tables
-def afgen(table: Table, x: float) -> float:
-    """Linear interpolation; the end values hold outside the table; NaN for NaN."""
+def _outside(table: Table, x: float) -> float | None:
+    """A lookup's value where no interpolation is needed: NaN for NaN (never an
+    index off the table), the end values outside it."""
     xs, ys = table
     if x != x:
         return math.nan
@@ -91,6 +92,15 @@ def afgen(table: Table, x: float) -> float:
         return ys[0]
     if x >= xs[-1]:
         return ys[-1]
+    return None
+
+
+def afgen(table: Table, x: float) -> float:
+    """Linear interpolation; the end values hold outside the table; NaN for NaN."""
+    end = _outside(table, x)
+    if end is not None:
+        return end
+    xs, ys = table
     i = bisect.bisect_right(xs, x) - 1
     x0, x1 = xs[i], xs[i + 1]
     return ys[i] + (ys[i + 1] - ys[i]) * (x - x0) / (x1 - x0)
@@ -99,13 +109,10 @@ def afgen(table: Table, x: float) -> float:
 def nlfgen(table: Table, x: float) -> float:
     """Three-point Lagrange interpolation; the end values hold outside the table;
     NaN for NaN."""
+    end = _outside(table, x)
+    if end is not None:
+        return end
     xs, ys = table
-    if x != x:
-        return math.nan
-    if x <= xs[0]:
-        return ys[0]
-    if x >= xs[-1]:
-        return ys[-1]
     n = len(xs)
     if n < 3:
         return afgen(table, x)
