@@ -11,7 +11,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import ClassVar
 
 from . import syntax
 from .diagnostics import Span
@@ -80,7 +79,7 @@ class TableLookup(Node):
     func: str  # the run-time interpolation (library entry's `lookup`: AFGEN, NLFGEN)
     span: Span
     written: str = ""  # the function's name as the listing writes it
-    child_fields: ClassVar[tuple[str, ...]] = ("x",)
+    child_fields = ("x",)
 
 
 @dataclass(frozen=True)
@@ -90,7 +89,7 @@ class Impulse(Node):
     start: Expr
     period: Expr
     span: Span
-    child_fields: ClassVar[tuple[str, ...]] = ("start", "period")
+    child_fields = ("start", "period")
 
 
 # every expression node a later stage may meet

@@ -51,7 +51,8 @@ class Node:
     """Base of every syntax and IR node."""
 
     __slots__ = ()
-    # the fields that hold sub-nodes (a node or a tuple of nodes), in source order
+    # the fields that hold sub-nodes (a node or a tuple of nodes), in source order;
+    # node classes set it without an annotation, so no dataclass takes it for a field
     child_fields: ClassVar[tuple[str, ...]] = ()
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
@@ -145,7 +146,7 @@ class Call(Node):
     span: Span
     # Where the argument list sits, for the decimal-comma hint.
     arg_spans: tuple[Span, ...] = ()
-    child_fields: ClassVar[tuple[str, ...]] = ("args",)
+    child_fields = ("args",)
 
 
 @dataclass(frozen=True)
@@ -154,14 +155,14 @@ class BinOp(Node):
     left: Expr
     right: Expr
     span: Span
-    child_fields: ClassVar[tuple[str, ...]] = ("left", "right")
+    child_fields = ("left", "right")
 
 
 @dataclass(frozen=True)
 class Neg(Node):
     operand: Expr
     span: Span
-    child_fields: ClassVar[tuple[str, ...]] = ("operand",)
+    child_fields = ("operand",)
 
 
 Expr = Num | Name | Call | BinOp | Neg
@@ -179,7 +180,7 @@ class Assign(Node):
     target_spans: tuple[Span, ...]
     expr: Expr
     span: Span
-    child_fields: ClassVar[tuple[str, ...]] = ("expr",)
+    child_fields = ("expr",)
 
 
 @dataclass(frozen=True)
@@ -243,7 +244,7 @@ class Finish(Node):
 class Termt(Node):
     expr: Expr
     span: Span
-    child_fields: ClassVar[tuple[str, ...]] = ("expr",)
+    child_fields = ("expr",)
 
 
 @dataclass(frozen=True)
