@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from .language import split_lines
+
 
 @dataclass(frozen=True)
 class Span:
@@ -70,7 +72,7 @@ class AmilError(Exception):
 def _source_excerpt(source: str | None, span: Span) -> list[str]:
     if source is None:
         return []
-    lines = source.splitlines()
+    lines = split_lines(source)  # as the reader counts them (no U+2028, \f, ...)
     if not 1 <= span.line <= len(lines):
         return []
     text = lines[span.line - 1].expandtabs(1)

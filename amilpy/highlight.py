@@ -5,8 +5,8 @@ needs it; `highlight_listing` falls back to unhighlighted text without it.
 The lexer is registered for `pygmentize`, Sphinx and Jupyter through the
 `pygments.lexers` entry point (`amil = "amilpy.highlight:AmilLexer"`).
 
-The token rules follow grammar/amil.lark and amilpy/parse.py; the function and
-reserved names are read from amilpy.library and amilpy.check at import, so the
+The token rules follow grammar/amil.lark and amilpy/parse/; the function and
+reserved names are read from amilpy.library and amilpy.language at import, so the
 highlighter never disagrees with what the compiler accepts. The TextMate
 grammar in editors/vscode/ mirrors these rules (tests/test_highlight.py keeps
 the two lists of names in step).

@@ -1,23 +1,60 @@
 """The checked, sorted model that the compiler and the runner read.
 
-`check.py` builds it from the syntax; nothing here refers back to the listing's
+`check` builds it from the syntax; nothing here refers back to the listing's
 text except through spans (for messages). Expressions are `syntax` expressions
 plus the four node kinds below, which stand for the simulation functions whose
-value is not a plain function of their arguments.
+value is not a plain function of their arguments; `EXPRESSIONS` is the whole
+family a complete visitor of IR expressions handles.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import Enum
 
+from . import syntax
 from .diagnostics import Span
-from .syntax import Expr
+from .syntax import Expr, Node
+
+
+class SurfaceKind(str, Enum):
+    """How a surface's value selects a branch."""
+
+    SIGN = "sign"  # mode -1, 0 or +1
+    LEVEL = "level"  # QNTZR: mode is the integer level k, the surface is X/P
+
+    def __str__(self) -> str:
+        return self.value
+
+
+class Purpose(str, Enum):
+    """What a surface is for."""
+
+    SWITCH = "switch"  # selects a branch of a switch (or MODINT's mode)
+    MEMORY = "memory"  # a memory function's condition
+    FINISH = "finish"  # FINISH X = value: ends the run when crossed
+    TERMT = "termt"  # TERMT(expr): ends the run when it turns positive
+
+    def __str__(self) -> str:
+        return self.value
+
+
+class Depends(str, Enum):
+    """What a surface's value moves with (classified by `surfaces.classify`)."""
+
+    CONST = "const"  # fixed for the whole run: not watched
+    TIME = "time"  # TIME and constants only: breakpoints
+    STATE = "state"  # the states: an event to locate
+    IMPULSE = "impulse"  # reads IMPULS, which is nonzero only at breakpoints
+
+    def __str__(self) -> str:
+        return self.value
 
 # -------------------------------------------------- expression nodes of the IR
 
 
 @dataclass(frozen=True)
-class SwitchValue:
+class SwitchValue(Node):
     """The value of switch instance `switch` (output `output` for OUTSW)."""
 
     switch: int
@@ -26,7 +63,7 @@ class SwitchValue:
 
 
 @dataclass(frozen=True)
-class MemoryValue:
+class MemoryValue(Node):
     """The value of memory-function instance `memory` (HSTRSS, ZHOLD, ...)."""
 
     memory: int
@@ -34,22 +71,30 @@ class MemoryValue:
 
 
 @dataclass(frozen=True)
-class TableLookup:
+class TableLookup(Node):
     """AFGEN (linear) or NLFGEN (quadratic) interpolation in a FUNCTION table."""
 
     table: str
     x: Expr
-    quadratic: bool
+    func: str  # the run-time interpolation (library entry's `lookup`: AFGEN, NLFGEN)
     span: Span
+    written: str = ""  # the function's name as the listing writes it
+    child_fields = ("x",)
 
 
 @dataclass(frozen=True)
-class Impulse:
+class Impulse(Node):
     """IMPULS(P1, P2): 1 exactly at t = P1 + k*P2, else 0 (see library)."""
 
     start: Expr
     period: Expr
     span: Span
+    child_fields = ("start", "period")
+
+
+# every expression node a later stage may meet
+EXPRESSIONS: tuple[type[Node], ...] = syntax.EXPRESSIONS + (SwitchValue, MemoryValue,
+                                                            TableLookup, Impulse)
 
 
 # ---------------------------------------------------------------- instances
@@ -59,18 +104,16 @@ class Impulse:
 class Surface:
     """A continuous function of (TIME, states) whose sign selects a branch.
 
-    `kind` is "sign" (mode -1, 0 or +1) or "level" (QNTZR: mode is the integer
-    quantisation level k and the surface is X/P). `depends` is "const" (the
-    branch is fixed for the whole run, so it is not watched), "time" (only TIME
-    and constants: breakpoints) or "state" (an event to locate).
+    Switches whose surfaces are the same expression (and kind and purpose) share
+    one Surface: a run has one mode for it, whichever statement it stands in.
     """
 
     index: int
     expr: Expr
-    kind: str
-    owner: int | None  # switch or memory instance; None for FINISH/TERMT
-    purpose: str  # "switch", "memory", "finish", "termt"
-    depends: str
+    kind: SurfaceKind
+    owner: int | None  # the first switch or memory instance; None for FINISH/TERMT
+    purpose: Purpose
+    depends: Depends
     span: Span
     description: str
     text: str = ""  # the expression as the listing writes it ("W1", "TIME - T1")
@@ -85,6 +128,7 @@ class Switch:
     surfaces: tuple[int, ...]
     span: Span
     target: str
+    written: str = ""  # the name as the listing writes it (FSW for FCNSW)
 
 
 @dataclass(frozen=True)
@@ -97,6 +141,7 @@ class Memory:
     surfaces: tuple[int, ...]
     span: Span
     target: str
+    written: str = ""
 
 
 @dataclass(frozen=True)
@@ -106,8 +151,8 @@ class State:
     deriv: Expr
     span: Span
     hidden: bool = False
-    # MODINT: while surface `hold_surface[0]` <= 0 and `hold_surface[1]` > 0 the
-    # state is held at its IC.
+    # MODINT: while surface `reset_surfaces[0]` <= 0 the state is held (its
+    # derivative is 0); the reset to IC while `reset_surfaces[1]` > 0 is the runner's.
     reset_surfaces: tuple[int, ...] = ()
 
 

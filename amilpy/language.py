@@ -8,6 +8,8 @@ and the highlighter read it at start-up.
 
 from __future__ import annotations
 
+import re
+
 # Read-only names a listing may use in expressions and never assign.
 TIMER_KEYS: tuple[str, ...] = ("FINTIM", "DELT", "PRDEL", "OUTDEL", "DELMIN", "DELMAX")
 TIME = "TIME"
@@ -47,3 +49,13 @@ REPORT_KEYWORDS: dict[str, str] = {
 }
 
 TOLERANCE_KEYWORDS: tuple[str, ...] = ("RELERR", "ABSERR")
+
+# What a line is, for the reader and for every message that quotes one: a line
+# ends at \n, \r\n or \r, and nowhere else (not at U+2028, U+0085, a form feed
+# or a vertical tab, where str.splitlines would also break).
+LINE_BREAK = re.compile(r"\r\n|\r|\n")
+
+
+def split_lines(text: str) -> list[str]:
+    """The lines of a listing, numbered as diagnostics and the parser number them."""
+    return LINE_BREAK.split(text)

@@ -1,318 +1,350 @@
-"""The functions a listing may call: their arity, kind, value and switching surfaces.
+"""The functions a listing may call, each described once: one `Func` entry holds
+its signature and documentation (for messages), kind, arity, value, switching
+surfaces, states, memory slots with their initial values and their update after
+an accepted step, and its run-time function. The checker lowers a call and the
+compiler emits it by reading the entry; nothing else knows a function by name.
 
 Kinds (the contract's section 5):
   math    a plain function of its arguments (ABS, SIN, AMAX1, ...)
   state   introduces states (INTGRL, REALPL, LEDLAG, CMPXPL, MODINT)
   switch  a branch selected by the sign of one or more surfaces (FSW, LIMIT, ...)
   time    a switch whose surface is TIME minus a constant (STEP, RAMP, SINE)
-  memory  keeps a value from the last accepted step (HSTRSS, ZHOLD, RST, PULSE, DERIV)
+  memory  keeps values from the last accepted step (HSTRSS, ZHOLD, RST, PULSE, DERIV,
+          DELAY)
   impulse IMPULS: 1 at t = P1 + k*P2, else 0
   table   AFGEN / NLFGEN interpolation in a FUNCTION table
 
-Switch values are written as small Python templates over their arguments (`A`,
-`B`, ...) and the frozen modes of their surfaces (`M0`, `M1`, ...). A template is
-compiler text, parsed once; the compiler substitutes syntax trees built from the
-model for the placeholders, so no model text is ever pasted into source.
+Values, surfaces, states and memory updates are small templates in a Python
+subset (`templates.py` parses and checks them once, at import). A name means:
+A, B, ... the call's arguments; M0, M1, ... the modes of its surfaces (memory:
+its conditions as the step saw them; N0, ... as they stand from now on); Y0,
+Y1, ... its own states; Z0, Z1, ... its memory slots (Z: the whole memory
+vector, OFFSET: its first slot, VALUE: its value); TIME; INF; and calls of the
+language's functions or of `runtime.HELPERS`. A template whose text starts with
+`*` gives several slots at once.
 """
 
 from __future__ import annotations
 
-import bisect
 import math
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any
+
+from . import runtime as rt
+from .ir import SurfaceKind
+from .templates import check_template
+
+
+class Kind(str, Enum):
+    MATH = "math"
+    STATE = "state"
+    SWITCH = "switch"
+    TIME = "time"
+    MEMORY = "memory"
+    IMPULSE = "impulse"
+    TABLE = "table"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+@dataclass(frozen=True)
+class StateSpec:
+    """One state a function introduces: its initial value and derivative as
+    templates, and the stem of its name when the listing does not name it."""
+
+    ic: str
+    deriv: str
+    tag: str
+    # the first state takes the assigned variable's name when the call is the
+    # whole right-hand side (Y = REALPL(...)); LEDLAG's inside state never does
+    named: bool = True
+
+
+@dataclass(frozen=True)
+class MemorySpec:
+    """Values kept from the last accepted step, in slots of the memory vector z."""
+
+    slots: str  # how many: a template over the (literal) arguments, e.g. "1" or "A + 6"
+    initial: tuple[str, ...]  # one template per slot (or one `*` template for all)
+    value: str  # the function's value from its slots and conditions
+    update: tuple[str, ...]  # the slots after an accepted step
+    # False: the slots change only where a run restarts anyway (an event), so a
+    # chunked integrator need not stop at every step for them
+    every_step: bool = True
+    # the slot that holds a future instant at which the model switches (PULSE's end)
+    wakes: int | None = None
 
 
 @dataclass(frozen=True)
 class Func:
     name: str
-    kind: str
-    nargs: tuple[int, int | None]  # min, max (None: any number >= min)
-    # For switches: one template per output, and the surfaces as templates over
-    # the arguments; "level" marks a QNTZR surface.
+    kind: Kind
+    signature: str  # "FCNSW(X, A, B, C)"; "AMAX1(X1, X2, ...)": any number from 2
+    doc: str = ""
+    aliases: tuple[str, ...] = ()
+    # switches: one value template per output; surfaces as templates
     values: tuple[str, ...] = ()
     surfaces: tuple[str, ...] = ()
-    surface_kind: str = "sign"
-    outputs: int = 1
-    doc: str = ""
+    surface_kind: SurfaceKind = SurfaceKind.SIGN
+    states: tuple[StateSpec, ...] = ()
+    memory: MemorySpec | None = None
+    # math: the function on floats, and on NumPy arrays (a NumPy attribute name,
+    # or a factory given the numpy module)
+    scalar: Callable | None = None
+    vector: str | Callable[[Any], Callable] | None = None
+    # tables: the run-time interpolation (a `runtime.HELPERS` name)
+    lookup: str = ""
+    literal_args: tuple[int, ...] = ()  # positive integer literals (DELAY's N)
+    constant_args: tuple[int, ...] = ()  # known before the run (initial values, DELAY's P)
+    # other forms of the same name, told apart by their number of arguments
+    variants: tuple[Func, ...] = field(default=())
 
+    @property
+    def arg_names(self) -> tuple[str, ...]:
+        """The arguments' names in the signature ("X", "A", ...)."""
+        inner = self.signature[self.signature.index("(") + 1:-1]
+        return tuple(a.strip() for a in inner.split(",") if a.strip() not in ("", "..."))
 
-def _f(name, kind, nargs, values=(), surfaces=(), **kw) -> Func:
-    return Func(name, kind, nargs, tuple(values), tuple(surfaces), **kw)
+    @property
+    def nargs(self) -> tuple[int, int | None]:
+        """(min, max) arguments, from the signature (max None: any number)."""
+        n = len(self.arg_names)
+        return (n, None) if self.signature.endswith("...)") else (n, n)
+
+    @property
+    def outputs(self) -> int:
+        return max(1, len(self.values)) if self.kind in (Kind.SWITCH, Kind.TIME) else 1
+
+    def form(self, nargs: int) -> Func:
+        """The variant that takes `nargs` arguments (itself if none does)."""
+        for f in (self, *self.variants):
+            lo, hi = f.nargs
+            if lo <= nargs and (hi is None or nargs <= hi):
+                return f
+        return self
+
+    def signatures(self) -> str:
+        return " or ".join(f.signature for f in (self, *self.variants))
 
 
 FUNCTIONS: dict[str, Func] = {}
 ALIASES: dict[str, str] = {}
 
 
-def _register(func: Func, *aliases: str) -> None:
+def register(func: Func) -> Func:
+    """Add an entry (its templates are checked here: a bad one fails at import)."""
+    for f in (func, *func.variants):
+        check_template_set(f)
     FUNCTIONS[func.name] = func
-    for alias in aliases:
+    for alias in func.aliases:
         ALIASES[alias] = func.name
+    return func
+
+
+def lookup(name: str, nargs: int | None = None) -> Func | None:
+    """The entry for a name as written (aliases too); with `nargs`, the form that
+    takes that many arguments."""
+    func = FUNCTIONS.get(ALIASES.get(name, name))
+    if func is not None and nargs is not None:
+        return func.form(nargs)
+    return func
+
+
+def check_template_set(f: Func) -> None:
+    lo, hi = f.nargs
+    n = hi if hi is not None else max(lo, 8)
+    nstates, nsurf = len(f.states), len(f.surfaces)
+    calls = frozenset(rt.HELPERS) | {n for n, g in FUNCTIONS.items() if g.kind is Kind.MATH}
+
+    def check(text: str, **kw: Any) -> None:
+        check_template(text, f.name, args=n, calls=calls, **kw)
+
+    for t in f.surfaces:
+        check(t, arithmetic=True)
+    for s in f.states:
+        check(s.ic, arithmetic=True)
+        check(s.deriv, states=nstates, arithmetic=True)
+    for v in f.values:
+        check(v, modes=nsurf, states=nstates, arithmetic=f.kind is Kind.STATE)
+    if f.memory is not None:
+        mem = f.memory
+        check(mem.slots, arithmetic=True)
+        for t in mem.initial:
+            check(t)
+        check(mem.value, modes=nsurf, slots=True)
+        for t in mem.update:
+            check(t, modes=nsurf, slots=True, update=True)
+
+
+def runtime_name(func: Func) -> str:
+    """The name generated code calls a math form by: its own, or NAME_n for the
+    variant of n arguments."""
+    return func.name if FUNCTIONS.get(func.name) is func else f"{func.name}_{func.nargs[0]}"
+
+
+def _math_forms():
+    for entry in FUNCTIONS.values():
+        for f in (entry, *entry.variants):
+            if f.kind is Kind.MATH:
+                yield runtime_name(f), f
+
+
+def math_functions() -> dict[str, Callable]:
+    """Run-time name -> the function on floats, for every math form."""
+    return {name: f.scalar for name, f in _math_forms()}
+
+
+def vector_functions() -> dict[str, Callable]:
+    """Every function generated code calls, elementwise on NumPy arrays."""
+    import numpy as np
+
+    out: dict[str, Callable] = {
+        name: getattr(np, f.vector) if isinstance(f.vector, str) else f.vector(np)
+        for name, f in _math_forms()}
+    out.update(rt.vector_helpers())
+    return out
+
+
+def _vector_sign(np):
+    return lambda a, b: np.where(np.asarray(b) >= 0.0, np.abs(a), -np.abs(a))
+
+
+def _vector_many(ufunc: str):
+    import functools
+
+    return lambda np: (lambda *args: functools.reduce(getattr(np, ufunc), args))
 
 
 # --- mathematical (Fortran meanings) -----------------------------------------
-for _name in ("ABS", "SQRT", "EXP", "ALOG", "ALOG10", "SIN", "COS", "TAN", "ASIN", "ACOS",
-              "ATAN", "SINH", "COSH", "TANH", "AINT", "FLOAT"):
-    _register(_f(_name, "math", (1, 1)))
-ALIASES.update({"LOG": "ALOG", "LOG10": "ALOG10", "INT": "AINT"})
-for _name in ("ATAN2", "AMOD", "SIGN"):
-    _register(_f(_name, "math", (2, 2)))
-ALIASES["MOD"] = "AMOD"
-_register(_f("AMAX1", "math", (2, None)), "MAX", "AMAX0", "MAX1")
-_register(_f("AMIN1", "math", (2, None)), "MIN", "AMIN0", "MIN1")
+def _math(signature: str, scalar: Callable, vector, *aliases: str, doc: str = "") -> None:
+    register(Func(signature[:signature.index("(")], Kind.MATH, signature, doc, aliases,
+                  scalar=scalar, vector=vector))
+
+
+_math("ABS(X)", abs, "abs")
+_math("SQRT(X)", rt.safe_sqrt, "sqrt", doc="NaN below 0")
+_math("EXP(X)", rt.safe_exp, "exp")
+_math("ALOG(X)", rt.safe_log, "log", "LOG", doc="natural logarithm")
+_math("ALOG10(X)", rt.safe_log10, "log10", "LOG10")
+# raw math functions: a domain fault (SIN of an infinity, ASIN(2)) raises
+# ValueError, which the runner turns into a rejected step or a failure with the
+# statement, and the constant evaluator into an error at the listing's line
+_math("SIN(X)", math.sin, "sin")
+_math("COS(X)", math.cos, "cos")
+_math("TAN(X)", math.tan, "tan")
+_math("ASIN(X)", math.asin, "arcsin")
+_math("ACOS(X)", math.acos, "arccos")
+_math("ATAN(X)", math.atan, "arctan")
+_math("SINH(X)", rt.nan_on_domain(math.sinh), "sinh")
+_math("COSH(X)", rt.nan_on_domain(math.cosh), "cosh")
+_math("TANH(X)", math.tanh, "tanh")
+_math("AINT(X)", rt.fortran_aint, "trunc", "INT", doc="truncation toward 0")
+_math("FLOAT(X)", float, lambda np: (lambda x: np.asarray(x, dtype=float)))
+_math("ATAN2(Y, X)", math.atan2, "arctan2")
+_math("AMOD(A, B)", rt.fortran_amod, "fmod", "MOD", doc="remainder with the sign of A")
+_math("SIGN(A, B)", rt.fortran_sign, _vector_sign, doc="|A| with the sign of B")
+_math("AMAX1(X1, X2, ...)", max, _vector_many("maximum"), "MAX", "AMAX0", "MAX1")
+_math("AMIN1(X1, X2, ...)", min, _vector_many("minimum"), "MIN", "AMIN0", "MIN1")
 
 # --- states -------------------------------------------------------------------
-_register(_f("INTGRL", "state", (2, 2), doc="Y = IC + integral of X"))
-_register(_f("INTEG", "state", (2, 2), doc="ACSL order: INTEG(X, IC)"))
-_register(_f("REALPL", "state", (3, 3), doc="P*Y' + Y = X, Y(0) = IC"))
-_register(_f("LEDLAG", "state", (3, 3), doc="(P1*s + 1)/(P2*s + 1) applied to X"))
-_register(_f("CMPXPL", "state", (5, 5), doc="Y'' + 2*P1*P2*Y' + P2**2*Y = X"))
-_register(_f("MODINT", "state", (4, 4), surfaces=("B", "C"),
-             doc="X1>0: integrate X3; else X2>0: reset to IC; else hold"))
+register(Func("INTGRL", Kind.STATE, "INTGRL(IC, X)", "Y = IC + integral of X",
+              states=(StateSpec("A", "B", "INTGRL"),), values=("Y0",)))
+register(Func("INTEG", Kind.STATE, "INTEG(X, IC)", "ACSL order: INTEG(X, IC)",
+              states=(StateSpec("B", "A", "INTGRL"),), values=("Y0",)))
+register(Func("REALPL", Kind.STATE, "REALPL(IC, P, X)", "P*Y' + Y = X, Y(0) = IC",
+              states=(StateSpec("A", "(C - Y0)/B", "REALPL"),), values=("Y0",)))
+register(Func("LEDLAG", Kind.STATE, "LEDLAG(P1, P2, X)", "(P1*s + 1)/(P2*s + 1) applied to X",
+              # the state z lags X by P2; the output is z + P1/P2*(X - z)
+              states=(StateSpec("0.0", "(C - Y0)/B", "LEDLAG", named=False),),
+              values=("Y0 + A/B*(C - Y0)",)))
+register(Func("CMPXPL", Kind.STATE, "CMPXPL(IC1, IC2, P1, P2, X)",
+              "Y'' + 2*P1*P2*Y' + P2**2*Y = X",
+              states=(StateSpec("A", "Y1", "CMPXPL"),
+                      StateSpec("B", "E - 2.0*C*D*Y1 - D*D*Y0", "CMPXPL'", named=False)),
+              values=("Y0",)))
+register(Func("MODINT", Kind.STATE, "MODINT(IC, X1, X2, X3)",
+              "X1>0: integrate X3; else X2>0: reset to IC; else hold",
+              # the state is held while surface 0 <= 0; the runner resets it to IC
+              # while surface 1 > 0 (ir.State.reset_surfaces)
+              states=(StateSpec("A", "D", "MODINT"),), surfaces=("B", "C"), values=("Y0",)))
 
 # --- switches -----------------------------------------------------------------
-_register(_f("FCNSW", "switch", (4, 4),
-             values=("(B if M0 < 0 else (D if M0 > 0 else C))",), surfaces=("A",),
-             doc="A if X<0; B if X=0; C if X>0"), "FSW")
-_register(_f("INSW", "switch", (3, 3), values=("(B if M0 < 0 else C)",), surfaces=("A",),
-             doc="A if X<0; B if X>=0"))
-_register(_f("OUTSW", "switch", (2, 2), values=("(B if M0 < 0 else 0.0)", "(0.0 if M0 < 0 else B)"),
-             surfaces=("A",), outputs=2, doc="X<0: (V, 0); X>=0: (0, V)"))
-_register(_f("COMPAR", "switch", (2, 2), values=("(0.0 if M0 < 0 else 1.0)",),
-             surfaces=("A - B",), doc="0 if X1<X2; 1 if X1>=X2"))
-_register(_f("LIMIT", "switch", (3, 3), values=("(A if M0 < 0 else (B if M1 > 0 else C))",),
-             surfaces=("C - A", "C - B"), doc="min(P2, max(P1, X))"), "BOUND")
-_register(_f("DEADSP", "switch", (3, 3),
-             values=("((C - B) if M1 > 0 else ((C - A) if M0 < 0 else 0.0))",),
-             surfaces=("C - A", "C - B"), doc="0 if P1<=X<=P2; X-P2 above; X-P1 below"), "DEAD")
-_register(_f("QNTZR", "switch", (2, 2), values=("(M0 * A)",), surfaces=("B / A",),
-             surface_kind="level", doc="P*k for (k-1/2)P < X <= (k+1/2)P"))
-for _name, _value in (
-    ("AND", "(1.0 if (M0 > 0 and M1 > 0) else 0.0)"),
-    ("IOR", "(1.0 if (M0 > 0 or M1 > 0) else 0.0)"),
-    ("NOR", "(0.0 if (M0 > 0 or M1 > 0) else 1.0)"),
-    ("NAND", "(0.0 if (M0 > 0 and M1 > 0) else 1.0)"),
-    ("EOR", "(1.0 if ((M0 > 0) != (M1 > 0)) else 0.0)"),
-    ("EQUIV", "(1.0 if ((M0 > 0) == (M1 > 0)) else 0.0)"),
+register(Func("FCNSW", Kind.SWITCH, "FCNSW(X, A, B, C)", "A if X<0; B if X=0; C if X>0",
+              ("FSW",), values=("(B if M0 < 0 else (D if M0 > 0 else C))",), surfaces=("A",)))
+register(Func("INSW", Kind.SWITCH, "INSW(X, A, B)", "A if X<0; B if X>=0",
+              values=("(B if M0 < 0 else C)",), surfaces=("A",)))
+register(Func("OUTSW", Kind.SWITCH, "OUTSW(X, V)", "X<0: (V, 0); X>=0: (0, V)",
+              values=("(B if M0 < 0 else 0.0)", "(0.0 if M0 < 0 else B)"), surfaces=("A",)))
+register(Func("COMPAR", Kind.SWITCH, "COMPAR(X1, X2)", "0 if X1<X2; 1 if X1>=X2",
+              values=("(0.0 if M0 < 0 else 1.0)",), surfaces=("A - B",)))
+register(Func("LIMIT", Kind.SWITCH, "LIMIT(P1, P2, X)", "min(P2, max(P1, X))", ("BOUND",),
+              values=("(A if M0 < 0 else (B if M1 > 0 else C))",), surfaces=("C - A", "C - B")))
+register(Func("DEADSP", Kind.SWITCH, "DEADSP(P1, P2, X)",
+              "0 if P1<=X<=P2; X-P2 above; X-P1 below", ("DEAD",),
+              values=("((C - B) if M1 > 0 else ((C - A) if M0 < 0 else 0.0))",),
+              surfaces=("C - A", "C - B")))
+register(Func("QNTZR", Kind.SWITCH, "QNTZR(P, X)", "P*k for (k-1/2)P < X <= (k+1/2)P",
+              values=("(M0 * A)",), surfaces=("B / A",), surface_kind=SurfaceKind.LEVEL))
+for _name, _value, _doc in (
+    ("AND", "(1.0 if (M0 > 0 and M1 > 0) else 0.0)", "1 if X1>0 and X2>0, else 0"),
+    ("IOR", "(1.0 if (M0 > 0 or M1 > 0) else 0.0)", "1 if X1>0 or X2>0, else 0"),
+    ("NOR", "(0.0 if (M0 > 0 or M1 > 0) else 1.0)", "0 if X1>0 or X2>0, else 1"),
+    ("NAND", "(0.0 if (M0 > 0 and M1 > 0) else 1.0)", "0 if X1>0 and X2>0, else 1"),
+    ("EOR", "(1.0 if ((M0 > 0) != (M1 > 0)) else 0.0)", "1 if exactly one of X1, X2 > 0"),
+    ("EQUIV", "(1.0 if ((M0 > 0) == (M1 > 0)) else 0.0)", "1 if both or neither > 0"),
 ):
-    _register(_f(_name, "switch", (2, 2), values=(_value,), surfaces=("A", "B")))
-_register(_f("NOT", "switch", (1, 1), values=("(0.0 if M0 > 0 else 1.0)",), surfaces=("A",)))
+    register(Func(_name, Kind.SWITCH, f"{_name}(X1, X2)", _doc, values=(_value,),
+                  surfaces=("A", "B")))
+register(Func("NOT", Kind.SWITCH, "NOT(X)", "0 if X>0, else 1",
+              values=("(0.0 if M0 > 0 else 1.0)",), surfaces=("A",)))
 
 # --- time switches (surface TIME - P: breakpoints known before the run) --------
-_register(_f("STEP", "time", (1, 1), values=("(0.0 if M0 < 0 else 1.0)",),
-             surfaces=("TIME - A",), doc="0 for t<P; 1 for t>=P"))
-_register(_f("RAMP", "time", (1, 1), values=("(0.0 if M0 < 0 else TIME - A)",),
-             surfaces=("TIME - A",), doc="0 for t<P; t-P after"))
-_register(_f("SINE", "time", (3, 3), values=("(0.0 if M0 < 0 else SIN(B*(TIME - A) + C))",),
-             surfaces=("TIME - A",), doc="0 for t<P1; sin(P2(t-P1)+P3) after"))
-_register(_f("IMPULS", "impulse", (2, 2), doc="1 at t = P1 + k*P2"))
+register(Func("STEP", Kind.TIME, "STEP(P)", "0 for t<P; 1 for t>=P",
+              values=("(0.0 if M0 < 0 else 1.0)",), surfaces=("TIME - A",)))
+register(Func("RAMP", Kind.TIME, "RAMP(P)", "0 for t<P; t-P after",
+              values=("(0.0 if M0 < 0 else TIME - A)",), surfaces=("TIME - A",)))
+register(Func("SINE", Kind.TIME, "SINE(P1, P2, P3)", "0 for t<P1; sin(P2(t-P1)+P3) after",
+              values=("(0.0 if M0 < 0 else SIN(B*(TIME - A) + C))",), surfaces=("TIME - A",)))
+register(Func("IMPULS", Kind.IMPULSE, "IMPULS(P1, P2)", "1 at t = P1 + k*P2"))
 
 # --- memory (updated only on accepted steps) ------------------------------------
-_register(_f("HSTRSS", "memory", (4, 4), doc="Y = min(X-P1, max(X-P2, prev)), Y(0)=IC"))
-_register(_f("ZHOLD", "memory", (2, 2), surfaces=("A",), doc="X2 while X1>0 else prev"))
-_register(_f("RST", "memory", (3, 3), surfaces=("A", "B", "C"), doc="reset-set flip-flop"))
-_register(_f("PULSE", "memory", (2, 2), surfaces=("B",), doc="Y=1 for at least P from X>0"))
-_register(_f("DERIV", "memory", (2, 2), doc="dX/dt, Y(0)=IC"))
+_HSTRSS = "AMIN1(D - B, AMAX1(D - C, Z0))"
+register(Func("HSTRSS", Kind.MEMORY, "HSTRSS(IC, P1, P2, X)",
+              "Y = min(X-P1, max(X-P2, prev)), Y(0)=IC", constant_args=(0,),
+              memory=MemorySpec("1", ("A",), _HSTRSS, ("VALUE",))))
+register(Func("ZHOLD", Kind.MEMORY, "ZHOLD(X1, X2)", "X2 while X1>0 else prev",
+              surfaces=("A",),
+              memory=MemorySpec("1", ("0.0",), "(B if M0 > 0.0 else Z0)", ("VALUE",),
+                                every_step=False)))
+register(Func("RST", Kind.MEMORY, "RST(X1, X2, X3)", "reset-set flip-flop",
+              surfaces=("A", "B", "C"),
+              memory=MemorySpec(
+                  "1", ("0.0",),
+                  "(0.0 if M0 > 0 else (1.0 if M1 > 0 else ((1.0 - Z0) if M2 > 0 else Z0)))",
+                  ("VALUE",))))
+register(Func("PULSE", Kind.MEMORY, "PULSE(P, X)", "Y=1 for at least P from X>0",
+              surfaces=("B",),
+              # Z0 is the instant the pulse ends; a trigger starts a new one
+              memory=MemorySpec("1", ("-INF",), "(1.0 if TIME < Z0 else 0.0)",
+                                ("((TIME + A) if (N0 > 0.0 and TIME >= Z0) else Z0)",),
+                                every_step=False, wakes=0)))
+register(Func("DERIV", Kind.MEMORY, "DERIV(IC, X)", "dX/dt, Y(0)=IC", constant_args=(0,),
+              # (x1, t1) the newest accepted point, (x2, t2) the one before, the value
+              memory=MemorySpec("5", ("0.0", "0.0", "0.0", "0.0", "A"),
+                                "DERIV(B, TIME, Z0, Z1, Z2, Z3, Z4)",
+                                ("B", "TIME", "Z0", "Z1", "VALUE"))))
+register(Func("DELAY", Kind.MEMORY, "DELAY(N, P, X)",
+              "X(t0) for t < t0+P, else X(t-P) from N points stored over P, interpolated",
+              literal_args=(0,), constant_args=(1,),
+              memory=MemorySpec("A + 6", ("*DELAY_INIT(A)",),
+                                "DELAY(TIME, B, C, Z, OFFSET, A)",
+                                ("*DELAY_STORE(TIME, B, C, Z, OFFSET, A)",))))
 
 # --- tables ----------------------------------------------------------------------
-_register(_f("AFGEN", "table", (2, 2), doc="linear interpolation in a FUNCTION table"))
-_register(_f("NLFGEN", "table", (2, 2), doc="quadratic interpolation in a FUNCTION table"))
-
-MEMORY_SLOTS = {"HSTRSS": 1, "ZHOLD": 1, "RST": 1, "PULSE": 1, "DERIV": 5}
-
-
-def lookup(name: str) -> Func | None:
-    return FUNCTIONS.get(ALIASES.get(name, name))
-
-
-# ------------------------------------------------------------ run-time helpers
-# These are the only callables generated code can reach (see codegen.NAMESPACE).
-
-
-def fortran_sign(a: float, b: float) -> float:
-    return abs(a) if b >= 0.0 else -abs(a)
-
-
-def fortran_aint(x: float) -> float:
-    return float(math.trunc(x))
-
-
-def fortran_amod(a: float, b: float) -> float:
-    """Fortran MOD: the remainder with the sign of a (NaN for b = 0)."""
-    try:
-        return math.fmod(a, b)
-    except ValueError:
-        return math.nan
-
-
-def safe_exp(x: float) -> float:
-    try:
-        return math.exp(x)
-    except OverflowError:
-        return math.inf
-
-
-def safe_pow(a: float, b: float) -> float:
-    try:
-        r = a**b
-    except OverflowError:
-        return math.inf
-    except ZeroDivisionError:
-        return math.inf
-    if isinstance(r, complex):
-        return math.nan
-    return r
-
-
-def safe_div(a: float, b: float) -> float:
-    try:
-        return a / b
-    except ZeroDivisionError:
-        if a == 0.0 or a != a:
-            return math.nan
-        return math.copysign(math.inf, a) * math.copysign(1.0, b)
-
-
-def safe_sqrt(x: float) -> float:
-    return math.sqrt(x) if x >= 0.0 else math.nan
-
-
-def safe_log(x: float) -> float:
-    if x > 0.0:
-        return math.log(x)
-    return -math.inf if x == 0.0 else math.nan
-
-
-def safe_log10(x: float) -> float:
-    if x > 0.0:
-        return math.log10(x)
-    return -math.inf if x == 0.0 else math.nan
-
-
-def _domain(f):
-    def g(x: float) -> float:
-        try:
-            return f(x)
-        except (ValueError, OverflowError):
-            return math.nan
-
-    g.__name__ = f.__name__
-    return g
-
-
-def afgen(table: tuple[tuple[float, ...], tuple[float, ...]], x: float) -> float:
-    """Linear interpolation; the end values hold outside the table."""
-    xs, ys = table
-    if x <= xs[0]:
-        return ys[0]
-    if x >= xs[-1]:
-        return ys[-1]
-    i = bisect.bisect_right(xs, x) - 1
-    x0, x1 = xs[i], xs[i + 1]
-    return ys[i] + (ys[i + 1] - ys[i]) * (x - x0) / (x1 - x0)
-
-
-def nlfgen(table: tuple[tuple[float, ...], tuple[float, ...]], x: float) -> float:
-    """Three-point Lagrange interpolation; the end values hold outside the table."""
-    xs, ys = table
-    if x <= xs[0]:
-        return ys[0]
-    if x >= xs[-1]:
-        return ys[-1]
-    n = len(xs)
-    if n < 3:
-        return afgen(table, x)
-    i = bisect.bisect_right(xs, x) - 1
-    # the three points nearest x: i-1, i, i+1 (shifted inside the table)
-    j = min(max(i - 1 if (x - xs[i]) < (xs[i + 1] - x) else i, 0), n - 3)
-    x0, x1, x2 = xs[j], xs[j + 1], xs[j + 2]
-    y0, y1, y2 = ys[j], ys[j + 1], ys[j + 2]
-    return (y0 * (x - x1) * (x - x2) / ((x0 - x1) * (x0 - x2))
-            + y1 * (x - x0) * (x - x2) / ((x1 - x0) * (x1 - x2))
-            + y2 * (x - x0) * (x - x1) / ((x2 - x0) * (x2 - x1)))
-
-
-def deriv(x: float, t: float, x1: float, t1: float, x2: float, t2: float,
-          previous: float) -> float:
-    """DERIV: dX/dt from the last two accepted points and the current one.
-
-    Second order (exact for a quadratic in time) once two earlier points are
-    known; a plain difference after a start; the last value at a step end.
-    """
-    if not t > t1:
-        return previous
-    if t2 < t1:
-        return (x2 * (t - t1) / ((t2 - t1) * (t2 - t))
-                + x1 * (t - t2) / ((t1 - t2) * (t1 - t))
-                + x * ((t - t2) + (t - t1)) / ((t - t2) * (t - t1)))
-    return (x - x1) / (t - t1)
-
-
-def impulse_at(t: float, start: float, period: float) -> float:
-    """1.0 when t is (to rounding) one of start + k*period, k >= 0; else 0.0."""
-    if t < start - 1e-12 * max(1.0, abs(start)):
-        return 0.0
-    if period <= 0.0:
-        return 1.0 if abs(t - start) <= 1e-12 * max(1.0, abs(t)) else 0.0
-    k = round((t - start) / period)
-    return 1.0 if abs(start + k * period - t) <= 1e-9 * max(period, abs(t) * 1e-3) else 0.0
-
-
-MATH: dict[str, object] = {
-    "ABS": abs,
-    "SQRT": safe_sqrt,
-    "EXP": safe_exp,
-    "ALOG": safe_log,
-    "ALOG10": safe_log10,
-    # raw math functions: a domain fault (SIN of an infinity, ASIN(2)) raises
-    # ValueError, which the runner turns into a rejected step or a failure with
-    # the line, and the constant evaluator into an error at the listing's line
-    "SIN": math.sin,
-    "COS": math.cos,
-    "TAN": math.tan,
-    "ASIN": math.asin,
-    "ACOS": math.acos,
-    "ATAN": math.atan,
-    "SINH": _domain(math.sinh),
-    "COSH": _domain(math.cosh),
-    "TANH": math.tanh,
-    "AINT": fortran_aint,
-    "FLOAT": float,
-    "ATAN2": math.atan2,
-    "AMOD": fortran_amod,
-    "SIGN": fortran_sign,
-    "AMAX1": max,
-    "AMIN1": min,
-}
-
-
-def vector_functions() -> dict[str, object]:
-    """The same functions on NumPy arrays, elementwise: the runner evaluates the
-    generated surface and output functions over a whole chunk of output instants
-    at once (the same code object, run with these in its namespace)."""
-    import functools
-
-    import numpy as np
-
-    def sign(a, b):
-        return np.where(np.asarray(b) >= 0.0, np.abs(a), -np.abs(a))
-
-    def many(f):
-        return lambda *args: functools.reduce(f, args)
-
-    def each(f):
-        return np.vectorize(f, otypes=[float])
-
-    return {
-        "ABS": np.abs, "SQRT": np.sqrt, "EXP": np.exp, "ALOG": np.log, "ALOG10": np.log10,
-        "SIN": np.sin, "COS": np.cos, "TAN": np.tan, "ASIN": np.arcsin, "ACOS": np.arccos,
-        "ATAN": np.arctan, "SINH": np.sinh, "COSH": np.cosh, "TANH": np.tanh,
-        "AINT": np.trunc, "FLOAT": lambda x: np.asarray(x, dtype=float),
-        "ATAN2": np.arctan2, "AMOD": np.fmod, "SIGN": sign,
-        "AMAX1": many(np.maximum), "AMIN1": many(np.minimum),
-        "AFGEN": lambda table, x: np.interp(x, table[0], table[1]),
-        "NLFGEN": lambda table, x: each(lambda v: nlfgen(table, v))(x),
-        "DERIV": each(deriv), "IMPULS": each(impulse_at), "POW": np.power,
-        "LEVEL": lambda v: np.ceil(np.asarray(v) - 0.5), "SGN": np.sign,
-        "WHERE": np.where, "ALL": many(np.logical_and), "ANY": many(np.logical_or),
-    }
+register(Func("AFGEN", Kind.TABLE, "AFGEN(F, X)", "linear interpolation in a FUNCTION table",
+              lookup="AFGEN"))
+register(Func("NLFGEN", Kind.TABLE, "NLFGEN(F, X)",
+              "quadratic interpolation in a FUNCTION table", lookup="NLFGEN"))

@@ -7,14 +7,18 @@ selects a branch and what a surface expression depends on.
 - `is_affine`: whether a surface on TIME alone is affine in it (its root is then
   a breakpoint, found exactly before the run).
 
-Pure functions over IR expressions; stdlib only (the checker imports this).
+Pure functions over IR expressions, each a complete visitor of `ir.EXPRESSIONS`
+(a new node must say what it means here); stdlib only (the checker imports this).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
+from . import ir
 from . import syntax as syn
+from .syntax import Visitor, deep_enough
 
 
 def sign(x: float) -> float:
@@ -27,106 +31,256 @@ def level(v: float) -> float:
     return float(math.ceil(v - 0.5))
 
 
-def constant_value(expr, constants: dict[str, float]) -> float | None:
+def _arith(op: str, a: float, b: float) -> float | None:
+    """a op b for + - * / (None for a division by zero or another operator)."""
+    try:
+        if op == "/":
+            return a / b
+        return {"+": a + b, "-": a - b, "*": a * b}.get(op)
+    except ZeroDivisionError:
+        return None
+
+
+class _Constant(Visitor):
     """The value of an expression of numbers and known constants, else None."""
-    if isinstance(expr, syn.Num):
-        return expr.value
-    if isinstance(expr, syn.Name):
-        return constants.get(expr.name)
-    if isinstance(expr, syn.Neg):
-        v = constant_value(expr.operand, constants)
+
+    complete = ir.EXPRESSIONS
+
+    def __init__(self, constants: dict[str, float]) -> None:
+        self.constants = constants
+
+    def visit_Num(self, e: syn.Num) -> float | None:
+        return e.value
+
+    def visit_Name(self, e: syn.Name) -> float | None:
+        return self.constants.get(e.name)
+
+    def visit_Neg(self, e: syn.Neg) -> float | None:
+        v = self.visit(e.operand)
         return None if v is None else -v
-    if isinstance(expr, syn.BinOp):
-        a, b = constant_value(expr.left, constants), constant_value(expr.right, constants)
+
+    def visit_BinOp(self, e: syn.BinOp) -> float | None:
+        a, b = self.visit(e.left), self.visit(e.right)
+        return None if a is None or b is None else _arith(e.op, a, b)
+
+    def _unknown(self, e) -> None:
+        # a function, a switch, a memory or a table: not folded here (the
+        # compiler's constant evaluator handles what is constant among them)
+        return None
+
+    visit_Call = visit_SwitchValue = visit_MemoryValue = _unknown
+    visit_TableLookup = visit_Impulse = _unknown
+
+
+@deep_enough()
+def constant_value(expr: syn.Node, constants: dict[str, float]) -> float | None:
+    """The value of an expression of numbers and known constants, else None."""
+    return _Constant(constants).visit(expr)
+
+
+class _Linear(Visitor):
+    """(gradient, is constant) of an expression linear in the states, else None."""
+
+    complete = ir.EXPRESSIONS
+
+    def __init__(self, state_index: dict[str, int], constants: dict[str, float]) -> None:
+        self.state_index = state_index
+        self.constants = constants
+        self.n = len(state_index)
+
+    def visit_Num(self, e):
+        return [0.0] * self.n, True
+
+    def visit_Name(self, e):
+        if e.name in self.state_index:
+            g = [0.0] * self.n
+            g[self.state_index[e.name]] = 1.0
+            return g, False
+        if e.name in self.constants:
+            return [0.0] * self.n, True
+        return None  # TIME or an algebraic variable
+
+    def visit_Neg(self, e):
+        r = self.visit(e.operand)
+        return None if r is None else ([-v for v in r[0]], r[1])
+
+    def visit_BinOp(self, e):
+        a, b = self.visit(e.left), self.visit(e.right)
         if a is None or b is None:
             return None
-        try:
-            if expr.op == "/":
-                return a / b
-            return {"+": a + b, "-": a - b, "*": a * b}.get(expr.op)
-        except ZeroDivisionError:
-            return None
-    return None
+        if e.op in "+-":
+            s = 1.0 if e.op == "+" else -1.0
+            return [p + s * q for p, q in zip(a[0], b[0], strict=True)], a[1] and b[1]
+        if e.op == "*" and (a[1] or b[1]):
+            k = constant_value(e.left if a[1] else e.right, self.constants)
+            if k is None:
+                return None
+            return [k * v for v in (b[0] if a[1] else a[0])], a[1] and b[1]
+        if e.op == "/" and b[1]:
+            k = constant_value(e.right, self.constants)
+            if k is None or k == 0:
+                return None
+            return [v / k for v in a[0]], a[1]
+        return None
+
+    def _nonlinear(self, e) -> None:
+        return None  # a function of the states: no exact gradient
+
+    visit_Call = visit_SwitchValue = visit_MemoryValue = _nonlinear
+    visit_TableLookup = visit_Impulse = _nonlinear
 
 
-def linear_gradient(expr, state_index: dict[str, int],
+@deep_enough()
+def linear_gradient(expr: syn.Node, state_index: dict[str, int],
                     constants: dict[str, float]) -> list[float] | None:
     """d e/d y for a surface that is a constant-coefficient combination of states
     (None otherwise, or when it reads no state at all)."""
-    n = len(state_index)
-
-    def lin(e) -> tuple[list[float], bool] | None:  # (gradient, is constant)
-        if isinstance(e, syn.Num):
-            return [0.0] * n, True
-        if isinstance(e, syn.Name):
-            if e.name in state_index:
-                g = [0.0] * n
-                g[state_index[e.name]] = 1.0
-                return g, False
-            if e.name in constants:
-                return [0.0] * n, True
-            return None
-        if isinstance(e, syn.Neg):
-            r = lin(e.operand)
-            return None if r is None else ([-v for v in r[0]], r[1])
-        if isinstance(e, syn.BinOp):
-            a, b = lin(e.left), lin(e.right)
-            if a is None or b is None:
-                return None
-            if e.op in "+-":
-                s = 1.0 if e.op == "+" else -1.0
-                return [p + s * q for p, q in zip(a[0], b[0], strict=True)], a[1] and b[1]
-            if e.op == "*" and (a[1] or b[1]):
-                k = constant_value(e.left if a[1] else e.right, constants)
-                if k is None:
-                    return None
-                return [k * v for v in (b[0] if a[1] else a[0])], a[1] and b[1]
-            if e.op == "/" and b[1]:
-                k = constant_value(e.right, constants)
-                if k is None or k == 0:
-                    return None
-                return [v / k for v in a[0]], a[1]
-            return None
-        return None
-
-    r = lin(expr)
+    r = _Linear(state_index, constants).visit(expr)
     if r is None or r[1]:
         return None
     return r[0]
 
 
-def is_affine(expr, constants: dict[str, float], equations: dict | None = None) -> bool:
+CONSTANT, AFFINE, OTHER = 0, 1, 2
+
+
+class _Affine(Visitor):
+    """CONSTANT, AFFINE or OTHER in TIME, looking through algebraic variables."""
+
+    complete = ir.EXPRESSIONS
+
+    def __init__(self, constants: dict[str, float], equations: dict) -> None:
+        self.constants = constants
+        self.equations = equations
+        self.memo: dict[str, int] = {}
+
+    def visit_Num(self, e) -> int:
+        return CONSTANT
+
+    def visit_Name(self, e) -> int:
+        if e.name == "TIME":
+            return AFFINE
+        if e.name in self.constants:
+            return CONSTANT
+        if e.name not in self.equations:
+            return OTHER
+        if e.name not in self.memo:
+            self.memo[e.name] = OTHER  # a cycle never reaches here; be safe anyway
+            self.memo[e.name] = self.visit(self.equations[e.name])
+        return self.memo[e.name]
+
+    def visit_Neg(self, e) -> int:
+        return self.visit(e.operand)
+
+    def visit_BinOp(self, e) -> int:
+        a, b = self.visit(e.left), self.visit(e.right)
+        if e.op in "+-":
+            return max(a, b)
+        if e.op == "*":
+            return a + b if a + b <= AFFINE else OTHER
+        if e.op == "/":
+            return a if b == CONSTANT else OTHER
+        return CONSTANT if a == b == CONSTANT else OTHER  # **
+
+    def visit_Call(self, e) -> int:
+        return CONSTANT if all(self.visit(x) == CONSTANT for x in e.args) else OTHER
+
+    def _other(self, e) -> int:
+        # a switch's value jumps, a memory's moves with the states, a table
+        # is not affine, IMPULS is a train of instants
+        return OTHER
+
+    visit_SwitchValue = visit_MemoryValue = visit_TableLookup = visit_Impulse = _other
+
+
+@deep_enough()
+def is_affine(expr: syn.Node, constants: dict[str, float], equations: dict | None = None
+              ) -> bool:
     """True if a time-only surface is affine in TIME (its root is then exact),
     looking through the algebraic variables it reads."""
-    equations = equations or {}
-    memo: dict[str, int] = {}
+    return _Affine(constants, equations or {}).visit(expr) <= AFFINE
 
-    def lin(e) -> int:  # 0 constant, 1 affine, 2 other
-        if isinstance(e, syn.Num):
-            return 0
-        if isinstance(e, syn.Name):
-            if e.name == "TIME":
-                return 1
-            if e.name in constants:
-                return 0
-            if e.name in equations:
-                if e.name not in memo:
-                    memo[e.name] = 2  # a cycle never reaches here; be safe anyway
-                    memo[e.name] = lin(equations[e.name])
-                return memo[e.name]
-            return 2
-        if isinstance(e, syn.Neg):
-            return lin(e.operand)
-        if isinstance(e, syn.BinOp):
-            a, b = lin(e.left), lin(e.right)
-            if e.op in "+-":
-                return max(a, b)
-            if e.op == "*":
-                return a + b if a + b <= 1 else 2
-            if e.op == "/":
-                return a if b == 0 else 2
-            return 0 if a == b == 0 else 2
-        if isinstance(e, syn.Call):
-            return 0 if all(lin(x) == 0 for x in e.args) else 2
-        return 2
-    return lin(expr) <= 1
+
+_RANK = {ir.Depends.CONST: 0, ir.Depends.TIME: 1, ir.Depends.STATE: 2}
+
+
+class _Dependence(Visitor):
+    """What an IR expression's value moves with: CONST, TIME or STATE (memoised per
+    variable and per switch, so a switch nested N deep is classified in O(N))."""
+
+    complete = ir.EXPRESSIONS
+
+    def __init__(self, model: ir.Model) -> None:
+        self.model = model
+        self.states = {s.name for s in model.states}
+        self.equations = {e.target: e.expr for e in model.dynamic}
+        self.names: dict[str, ir.Depends] = {}
+        self.switches: dict[int, ir.Depends] = {}
+
+    def most(self, exprs) -> ir.Depends:
+        best = ir.Depends.CONST
+        for e in exprs:
+            d = self.visit(e)
+            if _RANK[d] > _RANK[best]:
+                best = d
+                if best is ir.Depends.STATE:
+                    break
+        return best
+
+    def visit_Num(self, e) -> ir.Depends:
+        return ir.Depends.CONST
+
+    def visit_Name(self, e) -> ir.Depends:
+        if e.name == "TIME":
+            return ir.Depends.TIME
+        if e.name in self.states:
+            return ir.Depends.STATE
+        if e.name not in self.equations:
+            return ir.Depends.CONST
+        if e.name not in self.names:
+            self.names[e.name] = ir.Depends.STATE  # guards recursion on malformed input
+            self.names[e.name] = self.visit(self.equations[e.name])
+        return self.names[e.name]
+
+    def visit_Neg(self, e) -> ir.Depends:
+        return self.visit(e.operand)
+
+    def visit_BinOp(self, e) -> ir.Depends:
+        return self.most((e.left, e.right))
+
+    def visit_Call(self, e) -> ir.Depends:
+        return self.most(e.args)
+
+    def visit_TableLookup(self, e) -> ir.Depends:
+        return self.visit(e.x)
+
+    def visit_SwitchValue(self, e) -> ir.Depends:
+        # a switch's value moves with its arguments and with its branch, which
+        # moves with its surfaces (STEP's is TIME - P)
+        if e.switch not in self.switches:
+            sw = self.model.switches[e.switch]
+            self.switches[e.switch] = ir.Depends.STATE
+            self.switches[e.switch] = self.most(
+                [*sw.args, *(self.model.surfaces[i].expr for i in sw.surfaces)])
+        return self.switches[e.switch]
+
+    def visit_MemoryValue(self, e) -> ir.Depends:
+        return ir.Depends.STATE
+
+    def visit_Impulse(self, e) -> ir.Depends:
+        return ir.Depends.TIME
+
+
+@deep_enough()
+def classify(model: ir.Model) -> None:
+    """Mark each surface of the model const / time / state / impulse by what its
+    expression reads (in place: `model.surfaces[i].depends`)."""
+    dependence = _Dependence(model)
+    for i, s in enumerate(model.surfaces):
+        # IMPULS is 1 only at its instants, which are breakpoints: a surface on
+        # it never changes sign between steps, so it is not watched
+        if any(isinstance(n, ir.Impulse) for n in syn.walk(s.expr)):
+            depends = ir.Depends.IMPULSE
+        else:
+            depends = dependence.visit(s.expr)
+        model.surfaces[i] = replace(s, depends=depends)

@@ -1,85 +1,190 @@
-"""The abstract syntax of a listing: small frozen dataclasses that carry source spans.
+"""The abstract syntax of a listing: small frozen dataclasses that carry source spans,
+and the checked visitor every later stage uses to walk them.
 
 `parse.py` is the only module that builds these from lark trees; every later
-stage reads only these.
+stage reads only these (and the IR nodes of `ir.py`, which join the same family).
+
+Every node class registers itself by name (`NODES`). `children()` lists the
+sub-nodes a plain walk descends into, so `walk` needs no ladder. A `Visitor`
+dispatches on the class name (`visit_Num`, `visit_BinOp`, ...); when a visitor
+class is defined, each of its `visit_X` must name a registered node class, and a
+visitor that declares `complete = SOME_FAMILY` must handle every class of that
+family, so adding a node fails at import wherever it is not handled.
 """
 
 from __future__ import annotations
 
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
+from typing import Any, ClassVar
 
 from .diagnostics import Span
+
+# every node class, by name: what a visit_X method may name
+NODES: dict[str, type[Node]] = {}
+
+# The deepest expression a listing may hold (a sum of 1000 terms is 1000 deep):
+# the reader refuses deeper ones with a located error, and every stage that walks
+# expressions recursively makes room for this depth (`deep_enough`).
+MAX_DEPTH = 1500
+_FRAMES_PER_LEVEL = 40  # the deepest recursive walk (copying Python trees) with margin
+
+
+@contextmanager
+def deep_enough() -> Iterator[None]:
+    """Python's recursion limit raised (for the block) to what walking an expression
+    of MAX_DEPTH levels needs."""
+    old = sys.getrecursionlimit()
+    need = MAX_DEPTH * _FRAMES_PER_LEVEL + 1000
+    if old < need:
+        sys.setrecursionlimit(need)
+    try:
+        yield
+    finally:
+        if old < need:
+            sys.setrecursionlimit(old)
+
+
+class Node:
+    """Base of every syntax and IR node."""
+
+    __slots__ = ()
+    # the fields that hold sub-nodes (a node or a tuple of nodes), in source order;
+    # node classes set it without an annotation, so no dataclass takes it for a field
+    child_fields: ClassVar[tuple[str, ...]] = ()
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        name = cls.__name__
+        if name in NODES and NODES[name] is not cls and NODES[name].__module__ != cls.__module__:
+            raise TypeError(f"two node classes named {name}: visitors dispatch on the name")
+        NODES[name] = cls
+
+    def children(self) -> tuple[Node, ...]:
+        out: list[Node] = []
+        for f in self.child_fields:
+            value = getattr(self, f)
+            if isinstance(value, tuple):
+                out.extend(value)
+            else:
+                out.append(value)
+        return tuple(out)
+
+
+def walk(node: Node) -> Iterator[Node]:
+    """Every node under `node`, parents before children, left to right (iterative:
+    any depth). IR instances (a switch's arguments) are not entered: they live on
+    the instance, not under the node that reads its value."""
+    stack = [node]
+    while stack:
+        n = stack.pop()
+        yield n
+        stack.extend(reversed(n.children()))
+
+
+class Visitor:
+    """Dispatch on the class name: `visit(node, ...)` calls `visit_<Class>(node, ...)`.
+
+    A class without a `visit_X` for a node goes to `generic(node, ...)`, which
+    raises unless the subclass overrides it. Checked when a subclass is defined:
+    every `visit_X` names a node class, and `complete` (a tuple of node classes)
+    is handled in full.
+    """
+
+    complete: ClassVar[tuple[type[Node], ...]] = ()
+    _table: ClassVar[dict[type, Any]] = {}
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        for attr in dir(cls):
+            if attr.startswith("visit_") and attr[6:] not in NODES:
+                raise TypeError(f"{cls.__qualname__}.{attr} names no node class "
+                                f"(known: {', '.join(sorted(NODES))})")
+        missing = [c.__name__ for c in cls.complete if not hasattr(cls, "visit_" + c.__name__)]
+        if missing:
+            raise TypeError(f"{cls.__qualname__} is declared complete but does not visit "
+                            + ", ".join(missing))
+        cls._table = {}
+
+    def visit(self, node: Node, *args: Any) -> Any:
+        table = type(self)._table
+        method = table.get(type(node))
+        if method is None:
+            method = getattr(type(self), "visit_" + type(node).__name__, None) \
+                or type(self).generic
+            table[type(node)] = method
+        # a plain call when there are no extra arguments: CPython runs it without
+        # a C stack frame, so deep expressions cost Python frames only
+        return method(self, node, *args) if args else method(self, node)
+
+    def generic(self, node: Node, *args: Any) -> Any:
+        raise TypeError(f"{type(self).__qualname__} cannot visit {type(node).__name__}")
+
 
 # ----------------------------------------------------------------- expressions
 
 
 @dataclass(frozen=True)
-class Num:
+class Num(Node):
     value: float
     span: Span
-    text: str = ""
+    text: str = ""  # as written ("1.5D-3"), for messages and reports
 
 
 @dataclass(frozen=True)
-class Name:
+class Name(Node):
     name: str  # folded to upper case
     span: Span
 
 
 @dataclass(frozen=True)
-class Call:
-    func: str  # folded to upper case
+class Call(Node):
+    func: str  # as written, folded to upper case (an alias stays an alias)
     args: tuple[Expr, ...]
     span: Span
     # Where the argument list sits, for the decimal-comma hint.
     arg_spans: tuple[Span, ...] = ()
+    child_fields = ("args",)
 
 
 @dataclass(frozen=True)
-class BinOp:
+class BinOp(Node):
     op: str  # one of + - * / **
     left: Expr
     right: Expr
     span: Span
+    child_fields = ("left", "right")
 
 
 @dataclass(frozen=True)
-class Neg:
+class Neg(Node):
     operand: Expr
     span: Span
+    child_fields = ("operand",)
 
 
 Expr = Num | Name | Call | BinOp | Neg
-
-
-def walk(expr: Expr):
-    """Every node of an expression, parents before children."""
-    stack = [expr]
-    while stack:
-        node = stack.pop()
-        yield node
-        if isinstance(node, BinOp):
-            stack.append(node.right)
-            stack.append(node.left)
-        elif isinstance(node, Neg):
-            stack.append(node.operand)
-        elif isinstance(node, Call):
-            stack.extend(reversed(node.args))
+# the expression nodes of the syntax: a visitor of syntax expressions declares
+# `complete = EXPRESSIONS` (ir.EXPRESSIONS adds the IR's own)
+EXPRESSIONS: tuple[type[Node], ...] = (Num, Name, Call, BinOp, Neg)
 
 
 # ------------------------------------------------------------------ statements
 
 
 @dataclass(frozen=True)
-class Assign:
+class Assign(Node):
     targets: tuple[str, ...]
     target_spans: tuple[Span, ...]
     expr: Expr
     span: Span
+    child_fields = ("expr",)
 
 
 @dataclass(frozen=True)
-class DataItem:
+class DataItem(Node):
     name: str
     values: tuple[float, ...]  # more than one: one run per value
     span: Span
@@ -87,14 +192,14 @@ class DataItem:
 
 
 @dataclass(frozen=True)
-class Data:
+class Data(Node):
     keyword: str  # PARAM, CONST, INCON (aliases folded)
     items: tuple[DataItem, ...]
     span: Span
 
 
 @dataclass(frozen=True)
-class Table:
+class Table(Node):
     name: str
     xs: tuple[float, ...]
     ys: tuple[float, ...]
@@ -103,26 +208,26 @@ class Table:
 
 
 @dataclass(frozen=True)
-class Setting:
+class Setting(Node):
     name: str
     value: float
     span: Span
 
 
 @dataclass(frozen=True)
-class Timer:
+class Timer(Node):
     settings: tuple[Setting, ...]
     span: Span
 
 
 @dataclass(frozen=True)
-class Method:
+class Method(Node):
     name: str
     span: Span
 
 
 @dataclass(frozen=True)
-class Tolerance:
+class Tolerance(Node):
     kind: str  # RELERR or ABSERR
     default: float | None
     settings: tuple[Setting, ...]
@@ -130,50 +235,53 @@ class Tolerance:
 
 
 @dataclass(frozen=True)
-class Finish:
+class Finish(Node):
     settings: tuple[Setting, ...]
     span: Span
 
 
 @dataclass(frozen=True)
-class Termt:
+class Termt(Node):
     expr: Expr
     span: Span
+    child_fields = ("expr",)
 
 
 @dataclass(frozen=True)
-class Report:
+class Report(Node):
     kind: str  # PRINT, OUTPUT, PRTPLT, RANGE, PREPARE (PLOT folded into OUTPUT)
     names: tuple[str, ...]
     name_spans: tuple[Span, ...]
     span: Span
+    x: str | None = None  # OUTPUT Y1, Y2 VS X: the variable on the horizontal axis
+    x_span: Span | None = None
 
 
 @dataclass(frozen=True)
-class Label:
+class Label(Node):
     text: str
     span: Span
 
 
 @dataclass(frozen=True)
-class Title:
+class Title(Node):
     text: str
     span: Span
 
 
 @dataclass(frozen=True)
-class Section:
+class Section(Node):
     name: str  # INITIAL, DYNAMIC, TERMINAL
     span: Span
 
 
 @dataclass(frozen=True)
-class End:
+class End(Node):
     span: Span
 
 
 @dataclass(frozen=True)
-class Stop:
+class Stop(Node):
     span: Span
 
 
@@ -181,6 +289,8 @@ Statement = (
     Assign | Data | Table | Timer | Method | Tolerance | Finish | Termt | Report | Label
     | Title | Section | End | Stop
 )
+STATEMENTS: tuple[type[Node], ...] = (Assign, Data, Table, Timer, Method, Tolerance, Finish,
+                                      Termt, Report, Label, Title, Section, End, Stop)
 
 
 @dataclass(frozen=True)

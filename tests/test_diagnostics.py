@@ -158,7 +158,7 @@ def test_all_faults_of_the_stage_at_once():
     ("X = A B\n", "two values with no operator", 1, 7),
     ("X = A)\n", "unmatched ')'", 1, 6),
     ("PARAM K\n", "a data statement takes NAME = number", 1, 8),
-    ("X = 1.0\nY = 2.0 $\n Z = = 3\n", "unexpected '='", 3, 6),
+    ("X = 1.0\nY = 2.0 $\n Z = = 3\n", "missing expression after '='", 3, 6),
     ("X = Ł\n", "character 'Ł' is not allowed here", 1, 5),
 ])
 def test_syntax_errors(text, message, line, column):

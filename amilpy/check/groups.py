@@ -1,0 +1,302 @@
+"""Run groups and data: END splits a listing into groups, each giving one or more runs
+(a value list gives one run per value); data and control statements become the
+`RunSpec`s. Every TIMER key, METHOD and tolerance value is checked here; the names
+that reports, FINISH and per-variable tolerances mention are kept for `names`,
+which knows the model's variables.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+from .. import ir
+from .. import syntax as ast
+from ..diagnostics import Reporter, Span, nearest
+from ..language import RESERVED, TIME, TIMER_KEYS
+from ..routes import method_names, route_for
+from ..syntax import Visitor
+
+# what may stand in a run group after the first END
+DATA_STATEMENTS = (ast.Data, ast.Table, ast.Timer, ast.Method, ast.Tolerance, ast.Finish,
+                   ast.Report, ast.Label, ast.Title)
+
+Table = tuple[tuple[float, ...], tuple[float, ...]]
+
+
+@dataclass
+class Data:
+    """What the data and control statements of all run groups give."""
+
+    runs: list[ir.RunSpec]
+    names: list[str]  # PARAM/CONST/INCON names, in the order first given
+    spans: dict[str, Span]
+    kinds: dict[str, str]
+    tables: dict[str, Table]
+    finish: list[ast.Setting]  # FINISH items of the first group
+    reports: list[ast.Report]  # every report statement, for the name checks
+    tolerances: list[tuple[str, ast.Setting]]  # (RELERR or ABSERR, NAME = value)
+
+
+def split_groups(program: ast.Program) -> list[list[ast.Node]]:
+    """The statements of each run group (END ends one, STOP the file)."""
+    groups: list[list[ast.Node]] = [[]]
+    for st in program.statements:
+        if isinstance(st, ast.Stop):
+            break
+        if isinstance(st, ast.End):
+            groups.append([])
+            continue
+        groups[-1].append(st)
+    if len(groups) > 1 and all(isinstance(s, ast.Title) for s in groups[-1]):
+        groups.pop()  # a final END (or END followed by STOP) opens no new run
+    return groups
+
+
+def sections(group: list[ast.Node], rep: Reporter) -> dict[str, list[ast.Node]]:
+    """The equations of the first group by section (none: DYNAMIC); TERMT stands in
+    DYNAMIC only."""
+    out: dict[str, list[ast.Node]] = {"INITIAL": [], "DYNAMIC": [], "TERMINAL": []}
+    current = "DYNAMIC"
+    for st in group:
+        if isinstance(st, ast.Section):
+            current = st.name
+        elif isinstance(st, ast.Termt) and current != "DYNAMIC":
+            rep.error(f"TERMT cannot stand in {current}", st.span,
+                      "TERMT(expr) ends the run when expr turns positive: put it in DYNAMIC")
+        elif isinstance(st, (ast.Assign, ast.Termt)):
+            out[current].append(st)
+    return out
+
+
+def reject_late_equations(groups: list[list[ast.Node]], rep: Reporter) -> None:
+    for later in groups[1:]:
+        for st in later:
+            if not isinstance(st, DATA_STATEMENTS):
+                rep.error(
+                    "only data and control statements may follow the first END",
+                    st.span,
+                    "a later run group may change PARAM, TIMER, METHOD, PRINT ...; "
+                    "equations belong before the first END",
+                )
+
+
+def check_assignable(name: str, span: Span, what: str, rep: Reporter) -> bool:
+    if name in RESERVED:
+        rep.error(
+            f"{name} is a reserved name and cannot be {what}",
+            span,
+            ", ".join(RESERVED[:-1]) + f" and {RESERVED[-1]} are read-only; "
+            "set the TIMER values with a TIMER statement",
+        )
+        return False
+    # a variable may be named like a function (CSMP allows it): calls have '('
+    return True
+
+
+@dataclass
+class _Group:
+    """What one run group changes; reports and titles replace the inherited ones
+    when the group has any."""
+
+    index: int
+    lists: dict[str, tuple[float, ...]] = field(default_factory=dict)
+    reports: list[ir.Report] | None = None
+    titles: list[str] | None = None
+
+
+class RunGroups(Visitor):
+    """Reads every run group's data and control statements into RunSpecs."""
+
+    complete = DATA_STATEMENTS
+
+    def __init__(self, rep: Reporter) -> None:
+        self.rep = rep
+        self.data: dict[str, float] = {}
+        self.spans: dict[str, Span] = {}
+        self.kinds: dict[str, str] = {}
+        self.tables: dict[str, Table] = {}
+        self.table_spans: dict[str, Span] = {}
+        self.timer: dict[str, float] = {}
+        self.timer_span: Span | None = None  # the first group's first TIMER statement
+        self.method: str | None = None
+        self.tolerance: dict[str, float | None] = {"RELERR": None, "ABSERR": None}
+        self.each: dict[str, dict[str, float]] = {"RELERR": {}, "ABSERR": {}}
+        self.reports: list[ir.Report] = []
+        self.titles: list[str] = []
+        self.finish: list[ast.Setting] = []
+        self.all_reports: list[ast.Report] = []
+        self.all_tolerances: list[tuple[str, ast.Setting]] = []
+        self.runs: list[ir.RunSpec] = []
+        self.base: dict[str, float] | None = None
+        self.group = _Group(0)
+
+    def read(self, groups: list[list[ast.Node]]) -> Data:
+        finish_first: list[ast.Setting] = []
+        for gi, group in enumerate(groups):
+            self.group = _Group(
+                gi, reports=[] if any(isinstance(s, ast.Report) for s in group) else None,
+                titles=[] if any(isinstance(s, ast.Title) for s in group) else None)
+            for st in group:
+                if isinstance(st, DATA_STATEMENTS):
+                    self.visit(st)
+            if self.group.reports is not None:
+                self.reports = self.group.reports
+            if self.group.titles is not None:
+                self.titles = self.group.titles
+            if gi == 0:
+                finish_first = list(self.finish)
+                if "FINTIM" not in self.timer:
+                    self.rep.error(
+                        "FINTIM is not given", self.timer_span,
+                        "add FINTIM to this TIMER statement, e.g. FINTIM = 1.0"
+                        if self.timer_span else
+                        "add a TIMER statement, e.g. TIMER FINTIM = 1.0, PRDEL = 0.01")
+            self.add_runs()
+        if not self.runs:
+            self.rep.error("the listing has no statements", None)
+        # a value first given after an END exists only for the runs from there on
+        for name, span in [*self.spans.items(), *self.table_spans.items()]:
+            if self.runs and name not in self.runs[0].data and name not in self.runs[0].tables:
+                self.rep.error(
+                    f"{name} has no value in the first run: it is first given after an END",
+                    span,
+                    f"give {name} a value before the first END; a statement after END "
+                    "changes it for the runs that follow",
+                )
+        return Data(self.runs, list(self.data), self.spans, dict(self.kinds), self.tables,
+                    finish_first, self.all_reports, self.all_tolerances)
+
+    def add_runs(self) -> None:
+        """The runs of the group just read: one per value of its value lists."""
+        lists = self.group.lists
+        lengths = {len(v) for v in lists.values()}
+        if len(lengths) > 1:
+            first = next(iter(lists))
+            self.rep.error(
+                "value lists in one run group must have the same length",
+                self.spans.get(first),
+                ", ".join(f"{k} has {len(v)}" for k, v in lists.items()),
+            )
+        for k in range(max(lengths) if lengths else 1):
+            values = dict(self.data)
+            for lname, lvalues in lists.items():
+                values[lname] = lvalues[min(k, len(lvalues) - 1)]
+            if self.base is None:
+                self.base = dict(values)
+            changed = {n: v for n, v in values.items() if self.base.get(n) != v}
+            if lists:
+                changed.update({n: values[n] for n in lists})
+            label = ", ".join(f"{n} = {v:g}" for n, v in changed.items())
+            self.runs.append(ir.RunSpec(
+                label=label or ("RUN 1" if self.group.index == 0 else f"RUN {len(self.runs) + 1}"),
+                data=values, changed=changed, tables=dict(self.tables), timer=dict(self.timer),
+                method=self.method, relerr=self.tolerance["RELERR"],
+                abserr=self.tolerance["ABSERR"], relerr_each=dict(self.each["RELERR"]),
+                abserr_each=dict(self.each["ABSERR"]), reports=list(self.reports),
+                titles=list(self.titles),
+            ))
+        # a later group inherits everything; value lists collapse to their first value
+        for lname in lists:
+            self.data[lname] = lists[lname][0]
+
+    # statements ----------------------------------------------------------------
+    def visit_Data(self, st: ast.Data) -> None:
+        for item in st.items:
+            check_assignable(item.name, item.span, "a data value", self.rep)
+            if self.group.index == 0 and item.name in self.spans and self.kinds.get(item.name):
+                self.rep.error(
+                    f"{item.name} is given a value twice",
+                    item.span,
+                    f"first given at line {self.spans[item.name].line}",
+                )
+            self.spans.setdefault(item.name, item.span)
+            self.kinds[item.name] = st.keyword
+            self.data[item.name] = item.values[0]
+            if item.is_list:
+                self.group.lists[item.name] = item.values
+
+    def visit_Table(self, st: ast.Table) -> None:
+        if st.odd_count:
+            self.rep.error(
+                f"FUNCTION {st.name} has an odd number of values",
+                st.span,
+                "a table is pairs x1,y1, x2,y2, ...; a decimal comma (1,5) splits a number in two",
+            )
+        for i in range(1, len(st.xs)):
+            if not st.xs[i] > st.xs[i - 1]:
+                self.rep.error(
+                    f"FUNCTION {st.name}: x values must increase strictly "
+                    f"(x{i} = {st.xs[i - 1]:g}, x{i + 1} = {st.xs[i]:g})",
+                    st.span,
+                    "write the points in order of increasing x",
+                )
+                break
+        if len(st.xs) < 2:
+            self.rep.error(f"FUNCTION {st.name} needs at least two points", st.span)
+        self.tables[st.name] = (st.xs, st.ys)
+        self.table_spans.setdefault(st.name, st.span)
+
+    def visit_Timer(self, st: ast.Timer) -> None:
+        if self.group.index == 0 and self.timer_span is None:
+            self.timer_span = st.span
+        for s in st.settings:
+            if s.name not in TIMER_KEYS:
+                hint = nearest(s.name, set(TIMER_KEYS))
+                self.rep.error(
+                    f"unknown TIMER setting {s.name}",
+                    s.span,
+                    f"did you mean {hint}?" if hint else "TIMER takes " + ", ".join(TIMER_KEYS),
+                )
+            elif not math.isfinite(s.value):
+                self.rep.error(f"{s.name} must be a finite number (got {s.value:g})", s.span)
+            elif s.value <= 0 and s.name != "DELMIN":
+                self.rep.error(f"{s.name} must be positive (got {s.value:g})", s.span)
+            self.timer[s.name] = s.value
+
+    def visit_Method(self, st: ast.Method) -> None:
+        if route_for(st.name) is None:
+            hint = nearest(st.name, set(method_names()))
+            self.rep.error(
+                f"unknown integration method {st.name}",
+                st.span,
+                (f"did you mean {hint}? " if hint else "") + "known: " + ", ".join(method_names()),
+            )
+        self.method = st.name
+
+    def visit_Tolerance(self, st: ast.Tolerance) -> None:
+        if st.default is not None:
+            if not st.default > 0:
+                self.rep.error(f"{st.kind} must be positive", st.span)
+            self.tolerance[st.kind] = st.default
+        for s in st.settings:
+            if not s.value > 0:
+                self.rep.error(f"{st.kind} must be positive", s.span)
+            self.each[st.kind][s.name] = s.value
+            self.all_tolerances.append((st.kind, s))
+
+    def visit_Finish(self, st: ast.Finish) -> None:
+        self.finish.extend(st.settings)
+
+    def visit_Report(self, st: ast.Report) -> None:
+        kind = "OUTPUT" if st.kind == "PRTPLT" else st.kind
+        if st.x is not None and kind != "OUTPUT":
+            self.rep.error(f"{st.kind} has no horizontal axis: VS {st.x} belongs to a figure",
+                           st.x_span, f"write OUTPUT {', '.join(st.names)} VS {st.x}")
+        # VS TIME is the default axis
+        x = st.x if st.x != TIME and kind == "OUTPUT" else None
+        target = self.group.reports if self.group.reports is not None else self.reports
+        target.append(ir.Report(kind, st.names, None, st.span, st.kind == "PRTPLT", x))
+        self.all_reports.append(st)
+
+    def visit_Label(self, st: ast.Label) -> None:
+        # the title of the latest OUTPUT figure; with none yet, a title
+        target = self.group.reports if self.group.reports is not None else self.reports
+        outs = [i for i, r in enumerate(target) if r.kind == "OUTPUT"]
+        if outs:
+            target[outs[-1]] = replace(target[outs[-1]], label=st.text)
+        else:
+            self.visit_Title(st)
+
+    def visit_Title(self, st: ast.Title | ast.Label) -> None:
+        (self.group.titles if self.group.titles is not None else self.titles).append(st.text)

@@ -1,0 +1,293 @@
+"""Lowering: calls of simulation functions become IR, as their library entries say.
+
+A state function gives states (named after the assigned variable, or hidden
+names taken from the statement it stands in, so that statement order changes no
+name); a switch, a memory function or IMPULS gives an instance and a value node.
+Surfaces are interned: two with the same expression (spans aside), kind and
+purpose are one `ir.Surface`, so a run has one mode for it wherever it stands.
+"""
+
+from __future__ import annotations
+
+from .. import ir
+from .. import syntax as ast
+from ..diagnostics import Reporter, Span
+from ..library import Func, Kind, lookup
+from ..surfaces import constant_value
+from ..syntax import Visitor
+from ..templates import ARGUMENTS, instantiate, template_names
+from ..unparse import expr_text
+
+# the longest surface text or argument text a description holds
+TEXT_LIMIT = 60
+
+
+def surface_text(template: str, call: ast.Call) -> str:
+    """A surface as the listing writes it: the template over the call's own
+    arguments ("W1", "TIME - T1", "X - P2")."""
+    return expr_text(None, instantiate(template, call.args, call.span), TEXT_LIMIT)
+
+
+def describe(call: ast.Call) -> str:
+    """A switch for a reader: `FSW(W1, ...) at line 57` (the function and its first
+    argument as written)."""
+    first = expr_text(None, call.args[0], TEXT_LIMIT) if call.args else ""
+    more = ", ..." if len(call.args) > 1 else ""
+    return f"{call.func}({first}{more}) at line {call.span.line}"
+
+
+def arguments_of(template: str) -> set[int]:
+    """The argument positions a template reads."""
+    return {ARGUMENTS.index(c) for c in template_names(template) if len(c) == 1
+            and c in ARGUMENTS}
+
+
+class _Shape(Visitor):
+    """A number per distinct expression structure (spans ignored; a function by its
+    canonical name), memoised per node: shared subtrees are shaped once."""
+
+    complete = ir.EXPRESSIONS
+
+    def __init__(self) -> None:
+        self.ids: dict[tuple, int] = {}
+        self.memo: dict[int, tuple[ast.Node, int]] = {}
+
+    def shape(self, node: ast.Node) -> int:
+        hit = self.memo.get(id(node))
+        if hit is not None and hit[0] is node:
+            return hit[1]
+        key = self.visit(node)
+        number = self.ids.setdefault(key, len(self.ids))
+        self.memo[id(node)] = (node, number)  # the node is kept: its id stays its own
+        return number
+
+    def visit_Num(self, e: ast.Num) -> tuple:
+        return ("Num", e.value.hex() if isinstance(e.value, float) else e.value)
+
+    def visit_Name(self, e: ast.Name) -> tuple:
+        return ("Name", e.name)
+
+    def visit_Call(self, e: ast.Call) -> tuple:
+        func = lookup(e.func)
+        return ("Call", func.name if func else e.func, *map(self.shape, e.args))
+
+    def visit_BinOp(self, e: ast.BinOp) -> tuple:
+        return ("BinOp", e.op, self.shape(e.left), self.shape(e.right))
+
+    def visit_Neg(self, e: ast.Neg) -> tuple:
+        return ("Neg", self.shape(e.operand))
+
+    def visit_SwitchValue(self, e: ir.SwitchValue) -> tuple:
+        return ("Switch", e.switch, e.output)
+
+    def visit_MemoryValue(self, e: ir.MemoryValue) -> tuple:
+        return ("Memory", e.memory)
+
+    def visit_TableLookup(self, e: ir.TableLookup) -> tuple:
+        return ("Table", e.table, e.func, self.shape(e.x))
+
+    def visit_Impulse(self, e: ir.Impulse) -> tuple:
+        return ("Impulse", self.shape(e.start), self.shape(e.period))
+
+
+class Lowering:
+    """The IR instances of one model, built while its statements are lowered."""
+
+    def __init__(self, rep: Reporter) -> None:
+        self.rep = rep
+        self.states: list[ir.State] = []
+        self.switches: list[ir.Switch] = []
+        self.surfaces: list[ir.Surface] = []
+        self.memories: list[ir.Memory] = []
+        self.nslots = 0
+        self.hidden_counts: dict[str, int] = {}
+        # expressions needed before the run (initial values, DELAY's P), with what they are
+        self.before_run: list[tuple[ast.Node, str]] = []
+        self.shapes = _Shape()
+        self.interned: dict[tuple, int] = {}
+
+    def expr(self, expr: ast.Node, target: str | None, literal: bool = False) -> ast.Node:
+        """An expression with its simulation-function calls lowered (`literal`: in
+        INITIAL/TERMINAL or an initial value, where a switch is evaluated once)."""
+        return _Lowerer(self, target, literal).visit(expr)
+
+    def statement(self, st: ast.Assign) -> list[ir.Equation]:
+        """The equations of one DYNAMIC assignment (none when it names a state)."""
+        expr = st.expr
+        func = lookup(expr.func, len(expr.args)) if isinstance(expr, ast.Call) else None
+        if len(st.targets) == 2:
+            if func is None or func.outputs != 2:
+                self.rep.error("only OUTSW gives two values", st.span,
+                               "write one assignment per variable")
+                return []
+            index = self.switch(expr, st.targets[0])
+            return [ir.Equation(t, ir.SwitchValue(index, expr.span, k), st.span)
+                    for k, t in enumerate(st.targets)]
+        if len(st.targets) > 2:
+            self.rep.error("at most two variables can be assigned together (OUTSW)", st.span)
+            return []
+        target = st.targets[0]
+        if func is not None and func.kind == Kind.STATE:
+            # a state function as the whole right-hand side: its state carries
+            # the user's name where the output is the state (Y = REALPL(...))
+            value = self.state_function(expr, target)
+            if isinstance(value, ast.Name) and value.name == target:
+                return []
+            return [ir.Equation(target, value, st.span)]
+        if func is not None and func.outputs == 2:
+            self.rep.error("OUTSW gives two values: write Y1, Y2 = OUTSW(X, V)", st.span)
+            return []
+        return [ir.Equation(target, self.expr(expr, target), st.span)]
+
+    def hidden(self, kind: str, owner: str | None) -> str:
+        """A name for a state the listing does not name (a nested INTGRL, the
+        inside of LEDLAG...): from the statement it sits in, so that the order of
+        statements does not change the names (nor the order of the states)."""
+        owner = owner or "?"
+        self.hidden_counts[owner] = self.hidden_counts.get(owner, 0) + 1
+        return f"{kind}#{owner}.{self.hidden_counts[owner]}"
+
+    def args(self, call: ast.Call, owner: str | None, literal: set[int] = frozenset()) -> tuple:
+        """The call's arguments lowered once (those in `literal` as initial values)."""
+        return tuple(self.expr(a, owner, literal=i in literal) for i, a in enumerate(call.args))
+
+    def note_before_run(self, func: Func, call: ast.Call) -> None:
+        """Arguments that must be known before the run are checked like initial values."""
+        for i in func.constant_args:
+            self.before_run.append((call.args[i], f"{func.arg_names[i]} of {call.func}"))
+
+    def state_function(self, call: ast.Call, target: str | None,
+                       owner: str | None = None) -> ast.Node:
+        """INTGRL, REALPL, LEDLAG, CMPXPL, MODINT...: the states of the entry, named
+        after the assigned variable or hidden, and the call's value over them."""
+        func = lookup(call.func, len(call.args))
+        sp = call.span
+        owner = target or owner or "?"
+        in_ic = {i for s in func.states for i in arguments_of(s.ic)}
+        others = (*(s.deriv for s in func.states), *func.values, *func.surfaces)
+        args = self.args(call, owner, literal=in_ic - {i for t in others
+                                                        for i in arguments_of(t)})
+        # a state function's surfaces are its first state's modes (MODINT's hold/reset)
+        resets = tuple(self.surface(instantiate(t, args, sp), func.surface_kind, None,
+                                    ir.Purpose.SWITCH, sp, describe(call),
+                                    surface_text(t, call))
+                       for t in func.surfaces)
+        named = [k == 0 and bool(target) and s.named for k, s in enumerate(func.states)]
+        names = tuple(target if named[k] else self.hidden(s.tag, owner)
+                      for k, s in enumerate(func.states))
+        for k, spec in enumerate(func.states):
+            if arguments_of(spec.ic):
+                self.before_run.append((instantiate(spec.ic, call.args, sp),
+                                        "the initial value"))
+            self.states.append(ir.State(
+                names[k], instantiate(spec.ic, args, sp, names),
+                instantiate(spec.deriv, args, sp, names), sp, not named[k],
+                reset_surfaces=resets if k == 0 else ()))
+        return instantiate(func.values[0], args, sp, names)
+
+    def surface(self, expr: ast.Node, kind: ir.SurfaceKind, owner: int | None,
+                purpose: ir.Purpose, span: Span, description: str, text: str) -> int:
+        """The index of the surface `expr` (a new one, or the one it shares);
+        `text` is the expression as the listing writes it."""
+        key = None
+        if purpose in (ir.Purpose.SWITCH, ir.Purpose.MEMORY):
+            key = (kind, purpose, self.shapes.shape(expr))
+            if key in self.interned:
+                return self.interned[key]
+        index = len(self.surfaces)
+        self.surfaces.append(ir.Surface(index, expr, kind, owner, purpose, ir.Depends.STATE,
+                                        span, description, text))
+        if key is not None:
+            self.interned[key] = index
+        return index
+
+    def memory(self, call: ast.Call, target: str | None) -> int:
+        func = lookup(call.func, len(call.args))
+        self.note_before_run(func, call)
+        args = self.args(call, target)
+        index = len(self.memories)
+        surfaces = tuple(
+            self.surface(instantiate(t, args, call.span), func.surface_kind, index,
+                         ir.Purpose.MEMORY, call.span, describe(call), surface_text(t, call))
+            for t in func.surfaces)
+        nslots = int(constant_value(instantiate(func.memory.slots, call.args, call.span), {}))
+        self.memories.append(ir.Memory(index, func.name, args, self.nslots, nslots, surfaces,
+                                       call.span, target or "?", call.func))
+        self.nslots += nslots
+        return index
+
+    def switch(self, call: ast.Call, target: str) -> int:
+        func = lookup(call.func, len(call.args))
+        args = self.args(call, target)
+        index = len(self.switches)
+        surfaces = [self.surface(instantiate(t, args, call.span), func.surface_kind, index,
+                                 ir.Purpose.SWITCH, call.span, describe(call),
+                                 surface_text(t, call))
+                    for t in func.surfaces]
+        self.switches.append(ir.Switch(index, func.name, args, tuple(surfaces), call.span,
+                                       target, call.func))
+        return index
+
+    def finish(self, s: ast.Setting) -> None:
+        """FINISH X = value: the run ends where X - value changes sign."""
+        expr = ast.BinOp("-", ast.Name(s.name, s.span), ast.Num(s.value, s.span), s.span)
+        self.surface(expr, ir.SurfaceKind.SIGN, None, ir.Purpose.FINISH, s.span,
+                     f"FINISH {s.name}={s.value:g}", f"{s.name} - {s.value:g}")
+
+    def termt(self, st: ast.Termt) -> None:
+        """TERMT(expr): the run ends where expr turns positive."""
+        text = expr_text(None, st.expr, TEXT_LIMIT)
+        self.surface(self.expr(st.expr, "TERMT"), ir.SurfaceKind.SIGN, None,
+                     ir.Purpose.TERMT, st.span, f"TERMT({text}) at line {st.span.line}", text)
+
+
+class _Lowerer(Visitor):
+    """Lowers one expression: simulation-function calls become IR nodes."""
+
+    complete = ast.EXPRESSIONS
+
+    def __init__(self, lowering: Lowering, target: str | None, literal: bool) -> None:
+        self.lowering = lowering
+        self.target = target
+        self.literal = literal
+
+    def visit_Num(self, expr: ast.Num) -> ast.Node:
+        return expr
+
+    def visit_Name(self, expr: ast.Name) -> ast.Node:
+        return expr
+
+    def visit_Neg(self, expr: ast.Neg) -> ast.Node:
+        return ast.Neg(self.visit(expr.operand), expr.span)
+
+    def visit_BinOp(self, expr: ast.BinOp) -> ast.Node:
+        return ast.BinOp(expr.op, self.visit(expr.left), self.visit(expr.right), expr.span)
+
+    def visit_Call(self, expr: ast.Call) -> ast.Node:
+        low, target = self.lowering, self.target
+        func = lookup(expr.func, len(expr.args))
+        if func is None:
+            return expr
+        kind = func.kind
+        if kind == Kind.MATH or (self.literal and kind in (Kind.SWITCH, Kind.TIME)):
+            # a function of its arguments; INITIAL/TERMINAL evaluate a switch once
+            return ast.Call(expr.func, tuple(self.visit(a) for a in expr.args), expr.span,
+                            expr.arg_spans)
+        if kind == Kind.TABLE:
+            name = expr.args[0].name if isinstance(expr.args[0], ast.Name) else "?"
+            return ir.TableLookup(name, self.visit(expr.args[1]), func.lookup, expr.span,
+                                  expr.func)
+        if self.literal:
+            return expr  # refused by the call checks (no states or memory here)
+        if kind == Kind.STATE:
+            return low.state_function(expr, None, owner=target)
+        if kind in (Kind.SWITCH, Kind.TIME):
+            if func.outputs == 2:
+                low.rep.error("OUTSW gives two values: write Y1, Y2 = OUTSW(X, V)", expr.span)
+                return ast.Num(0.0, expr.span)
+            return ir.SwitchValue(low.switch(expr, target or "?"), expr.span)
+        if kind == Kind.IMPULSE:
+            return ir.Impulse(self.visit(expr.args[0]), self.visit(expr.args[1]), expr.span)
+        if kind == Kind.MEMORY:
+            return ir.MemoryValue(low.memory(expr, target), expr.span)
+        raise AssertionError(f"no lowering for {kind} functions")

@@ -1,0 +1,212 @@
+"""Names and calls: one definition per name, known functions with the right arguments,
+and every name a statement, an initial value, a report, FINISH or a per-variable
+tolerance reads known where it is read (a misspelt one gets the nearest known name)."""
+
+from __future__ import annotations
+
+from .. import syntax as ast
+from ..diagnostics import Reporter, Span, nearest
+from ..language import KNOWN_BEFORE_RUN, RESERVED, SETTINGS, TIME, split_lines
+from ..library import ALIASES, FUNCTIONS, Kind, lookup
+from .groups import Data, check_assignable
+
+# the largest store a function's literal argument may ask for (DELAY's N points)
+MAX_STORE = 100_000
+
+# what each section may call
+PURE = (Kind.MATH, Kind.TABLE, Kind.SWITCH, Kind.TIME)  # INITIAL, TERMINAL: evaluated once
+
+
+class Names:
+    """Definitions and references of one listing."""
+
+    def __init__(self, rep: Reporter, program: ast.Program, data: Data) -> None:
+        self.rep = rep
+        self.source_lines = split_lines(program.source or "")
+        self.data = data
+        self.data_names = set(data.names)
+        self.table_names = set(data.tables)
+        self.defined: dict[str, Span] = {}
+        self.where: dict[str, str] = {}  # name -> the section that computes it
+
+    # definitions -----------------------------------------------------------------
+    def define(self, target: str, span: Span, where: str) -> bool:
+        if not check_assignable(target, span, "assigned", self.rep):
+            return False
+        if target in self.defined:
+            first = self.defined[target]
+            self.rep.error(
+                f"{target} is defined twice",
+                span,
+                f"first defined at line {first.line}; a name has one definition",
+                related=((first, f"{target} first defined here"),),
+            )
+            return False
+        if target in self.data_names:
+            self.rep.error(
+                f"{target} is both a data value and computed",
+                span,
+                f"it is given a value at line {self.data.spans[target].line}; drop one of them",
+            )
+            return False
+        self.defined[target] = span
+        self.where[target] = where
+        return True
+
+    # calls -----------------------------------------------------------------------
+    def check_calls(self, expr: ast.Node, allow: tuple[Kind, ...] | None, section: str) -> bool:
+        """Report unknown functions, wrong argument counts and misplaced functions;
+        False if any."""
+        before = len(self.rep.diagnostics)
+        for node in ast.walk(expr):
+            if isinstance(node, ast.Call):
+                self.check_call(node, allow, section)
+        return len(self.rep.diagnostics) == before
+
+    def check_call(self, node: ast.Call, allow, section: str) -> None:
+        entry = lookup(node.func)
+        if entry is None:
+            hint = nearest(node.func, set(FUNCTIONS) | set(ALIASES))
+            self.rep.error(f"unknown function {node.func}", node.span,
+                           f"did you mean {hint}?" if hint else
+                           "see the function list in the manual")
+            return
+        n = len(node.args)
+        func = entry.form(n)
+        lo, hi = func.nargs
+        if n < lo or (hi is not None and n > hi):
+            want = f"{lo}" if hi == lo else (f"{lo} to {hi}" if hi else f"at least {lo}")
+            comma = self.decimal_comma(node)
+            if comma:
+                hint = f"'{comma}' reads as two arguments; the decimal separator is a " \
+                       f"point: write {comma.replace(',', '.')}"
+            elif n > (hi or n):
+                hint = "a decimal comma (1,5) splits a number into two arguments"
+            else:
+                hint = f"write it as {entry.signatures()}"
+            self.rep.error(f"{node.func} takes {want} argument{'s' if want != '1' else ''}, "
+                           f"got {n}", node.span, hint)
+            return
+        for i in func.literal_args:
+            arg = node.args[i]
+            if not (isinstance(arg, ast.Num) and float(arg.value).is_integer()
+                    and 1 <= arg.value <= MAX_STORE):
+                what = func.arg_names[i]
+                self.rep.error(f"{what} of {node.func} must be a whole number written out, "
+                               f"from 1 to {MAX_STORE}", arg.span,
+                               f"e.g. {func.signature.replace(what, '100', 1)}")
+        if allow is not None and func.kind not in allow:
+            self.rep.error(f"{node.func} cannot be used in {section}", node.span,
+                           "states, memory functions and IMPULS belong in DYNAMIC")
+        if func.kind == Kind.TABLE:
+            self.check_table_argument(node)
+
+    def check_table_argument(self, node: ast.Call) -> None:
+        first = node.args[0]
+        if isinstance(first, ast.Name) and first.name in self.table_names:
+            return
+        label = first.name if isinstance(first, ast.Name) else "its first argument"
+        hint = nearest(label, self.table_names) if isinstance(first, ast.Name) else None
+        self.rep.error(
+            f"{node.func} needs a FUNCTION table as first argument; {label} is not one",
+            first.span,
+            f"did you mean {hint}?" if hint else "define it with FUNCTION NAME = x1,y1, x2,y2, ...",
+        )
+
+    def decimal_comma(self, node: ast.Call) -> str | None:
+        """`1,5` where the listing meant 1.5: two number arguments one comma apart."""
+        for a, b in zip(node.args, node.args[1:], strict=False):
+            if isinstance(a, ast.Num) and isinstance(b, ast.Num):
+                sa, sb = a.span, b.span
+                if sa.end_line == sb.line and sa.end_column == sb.column - 1 \
+                        and 1 <= sa.line <= len(self.source_lines):
+                    line = self.source_lines[sa.line - 1]
+                    if line[sa.end_column - 1: sb.column - 1] == ",":
+                        return line[sa.column - 1: sb.end_column - 1]
+        return None
+
+    # references ------------------------------------------------------------------
+    def check_references(self, sections: dict[str, list[ast.Node]],
+                         before_run: list[tuple[ast.Node, str]], states: set[str]) -> None:
+        """Every name read is known: in DYNAMIC and TERMINAL anything defined; in
+        INITIAL and in values needed before the run (`before_run`, with what they are)
+        only data and INITIAL values. Then the names of reports, FINISH and tolerances."""
+        known = set(self.defined) | self.data_names | set(RESERVED)
+        initial_names = {t for st in sections["INITIAL"] for t in st.targets}
+        initial_ok = self.data_names | initial_names | KNOWN_BEFORE_RUN
+        # a table name as AFGEN's first argument is no value
+        table_args = {id(node.args[0]) for section in sections.values() for st in section
+                      for node in ast.walk(st.expr)
+                      if isinstance(node, ast.Call) and node.args
+                      and getattr(lookup(node.func), "kind", None) == Kind.TABLE}
+
+        def names_of(expr):
+            return (node for node in ast.walk(expr)
+                    if isinstance(node, ast.Name) and id(node) not in table_args)
+
+        for st in sections["INITIAL"]:
+            for node in names_of(st.expr):
+                if node.name in initial_ok:
+                    continue
+                if node.name in self.defined:
+                    self.rep.error(
+                        f"INITIAL uses {node.name}, which is computed in "
+                        f"{self.where[node.name]}", node.span,
+                        "INITIAL runs once before the dynamics; it can use data values and "
+                        "other INITIAL values only")
+                else:
+                    self.undefined(node, known)
+        for st in sections["DYNAMIC"] + sections["TERMINAL"]:
+            for node in names_of(st.expr):
+                if node.name not in known:
+                    self.undefined(node, known)
+        for expr, what in before_run:
+            for node in names_of(expr):
+                if node.name in initial_ok:
+                    continue
+                if node.name in self.defined:
+                    self.rep.error(f"{what} uses {node.name}, which changes in time", node.span,
+                                   f"{what} must be a number, a data value or an INITIAL value")
+                else:
+                    self.undefined(node, known)
+        self.check_named(known, states)
+
+    def check_named(self, known: set[str], states: set[str]) -> None:
+        """Reports and FINISH name known quantities; RELERR/ABSERR X=... name states."""
+        report_known = known - SETTINGS
+        for st in self.data.reports:
+            named = list(zip(st.names, st.name_spans, strict=True))
+            if st.x is not None:
+                named.append((st.x, st.x_span))
+            for n, s in named:
+                if n not in report_known and n != TIME:
+                    hint = nearest(n, report_known - {TIME})
+                    self.rep.error(f"{st.kind} names {n}, which the model never defines", s,
+                                   f"did you mean {hint}?" if hint else None)
+        for s in self.data.finish:
+            if s.name not in known:
+                hint = nearest(s.name, known)
+                self.rep.error(f"FINISH names {s.name}, which the model never defines", s.span,
+                               f"did you mean {hint}?" if hint else None)
+        for kind, s in self.data.tolerances:
+            if s.name in states:
+                continue
+            what = "is not a state" if s.name in known else "is not a variable of the model"
+            hint = nearest(s.name, states)
+            self.rep.error(
+                f"{kind} names {s.name}, which {what}", s.span,
+                (f"did you mean {hint}? " if hint else "")
+                + "a per-variable tolerance applies to a state (an INTGRL output)"
+                + ("" if hint or not states else ": " + ", ".join(sorted(states)[:8])))
+
+    def undefined(self, node: ast.Name, known: set[str]) -> None:
+        if node.name in self.table_names:
+            self.rep.error(f"{node.name} is a FUNCTION table, not a value", node.span,
+                           f"look it up with AFGEN({node.name}, X)")
+            return
+        hint = nearest(node.name, known - {"DELMIN", "DELMAX"})
+        self.rep.error(
+            f"{node.name} is used but never defined", node.span,
+            (f"did you mean {hint}? " if hint else "")
+            + "give it a value with PARAM/CONST/INCON or an equation",
+        )

@@ -1,0 +1,32 @@
+"""IR -> Python syntax tree -> code object, once per run.
+
+The model's data and INITIAL values are folded into the code as constants, so
+the hot functions are straight-line float arithmetic. Generated code is built as
+an `ast` tree (model text is never pasted into source) and its globals are only
+the names the compiler puts there (`pytree.namespace`), with empty builtins: no
+imports, no attributes. Each statement has its own line in the code object, so a
+fault names its statement (`faults`).
+
+Functions made for one run (all take plain lists of floats):
+  rhs(t, y, m, z)              state derivatives under frozen modes m
+  surf(t, y, m, z)             the watched switching surfaces
+  out(t, y, m, z)              every recorded variable, only at output instants
+  mem(t, y, m, mn, z)          memory values after an accepted step (m: the modes
+                               the step was taken with, mn: the modes from now on)
+
+Modules: `emit` (IR expressions -> Python expressions), `build` (the functions,
+`Compiler` and `Compiled`), `consts` (values known before the run), `faults`
+(where a fault happened and what it was), `pytree` (helpers on Python trees).
+"""
+
+from __future__ import annotations
+
+from .build import Compiled, Compiler, fault_line
+from .consts import evaluate_constant, initial_values
+from .faults import FaultReport
+from .pytree import namespace
+
+NAMESPACE = namespace()  # as the library stands at import (benchmarks read it)
+
+__all__ = ["Compiled", "Compiler", "FaultReport", "NAMESPACE", "evaluate_constant",
+           "fault_line", "initial_values", "namespace"]

@@ -1,0 +1,368 @@
+"""The generated functions of one run, built as a Python syntax tree and compiled.
+
+Every statement of the generated code (an algebraic equation, a state's
+derivative, a surface, a memory update) gets its own line in the code object;
+`Compiled.statements` maps the line back to the IR statement, its target and its
+span, so a fault is located from the code's own line table (see `faults`).
+"""
+
+from __future__ import annotations
+
+import ast as py
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from itertools import count
+
+from .. import ir, templates
+from .. import syntax as syn
+from ..diagnostics import AmilError, Diagnostic, Span
+from ..library import lookup, vector_functions
+from ..surfaces import is_affine
+from ..syntax import deep_enough
+from .consts import evaluate_constant, initial_slots
+from .emit import Emitter, needs
+from .faults import STATEMENTS, FaultReport, Statement, explain, statement_of
+from .pytree import (
+    Folder,
+    assert_closed,
+    function,
+    local,
+    namespace,
+    on_line,
+    place,
+    vectorised,
+)
+
+# models with more memory slots than this read them from z instead of unpacking
+MAX_UNPACKED_SLOTS = 32
+
+
+@dataclass
+class Compiled:
+    """The callables and constants of one run of one model."""
+
+    state_names: list[str]
+    y0: list[float]
+    z0: list[float]
+    out_names: list[str]
+    constants: dict[str, float]
+    rhs: Callable
+    surf: Callable
+    out: Callable
+    mem: Callable
+    watched: list[int]  # surface indices surf() returns, in order
+    const_modes: dict[int, float]  # surfaces fixed for the whole run
+    modes_literal: Callable  # (t, y, m, z) -> list of literal modes of watched surfaces
+    affine_time: set[int]  # surfaces affine in TIME: their roots are breakpoints
+    impulses: list[tuple[float, float]]
+    source: str
+    tables: dict[str, tuple] = field(default_factory=dict)
+    # surf and out over NumPy columns: y is a list of arrays, t an array
+    surf_v: Callable | None = None
+    out_v: Callable | None = None
+    # some memory must be updated after every accepted step (HSTRSS, RST, DERIV,
+    # DELAY); when False, memory changes only where a run restarts anyway (ZHOLD, PULSE)
+    memory_every_step: bool = False
+    # (z, t) -> instants after t at which memory makes the model switch (PULSE ends)
+    memory_times: Callable | None = None
+    # line k of the generated code is statements[k - 1] (None: scaffolding)
+    statements: list[Statement | None] = field(default_factory=list)
+    model: ir.Model | None = field(default=None, repr=False)
+    module: py.Module | None = field(default=None, repr=False)  # the scalar functions' tree
+    namespace: dict = field(default_factory=dict, repr=False)
+    checking: dict = field(default_factory=dict, repr=False)  # built on the first fault
+
+    def fault_line(self, exc: BaseException) -> int | None:
+        """The listing line of the generated statement that raised `exc`."""
+        return fault_line(exc)
+
+    def explain_fault(self, exc: BaseException, t: float, y, m, z) -> FaultReport | None:
+        """What `exc`, raised by generated code evaluated at (t, y, m, z), did where:
+        the statement (its target and span) and the operation with its operand values,
+        e.g. "W2 (line 16): division by zero: JL = 0". None if the fault did not
+        happen in this model's generated code."""
+        return explain(self, exc, t, y, m, z)
+
+
+def _deepest(model: ir.Model) -> Span | None:
+    """The span of the most deeply nested statement of a model."""
+    best, where = 0, None
+    statements = [(e.expr, e.span) for e in model.dynamic + model.initial]
+    statements += [(s.deriv, s.span) for s in model.states]
+    for expr, span in statements:
+        stack = [(expr, 1)]
+        while stack:
+            node, depth = stack.pop()
+            if depth > best:
+                best, where = depth, span
+            stack.extend((c, depth + 1) for c in node.children())
+    return where
+
+
+def fault_line(exc: BaseException) -> int | None:
+    """The listing line of the generated statement that raised `exc`, if the fault
+    happened inside generated code."""
+    found = statement_of(exc)
+    if found is None or found[0] is None or found[0].span is None:
+        return None
+    return found[0].span.line
+
+
+class Compiler:
+    """Builds the `Compiled` functions of one run from the IR and its constants."""
+
+    def __init__(self, model: ir.Model, constants: dict[str, float], tables,
+                 const_modes: dict[int, float], outputs: list[str] | None = None,
+                 events: bool = True) -> None:
+        self.model = model
+        self.constants = constants
+        self.tables = tables
+        self.const_modes = const_modes
+        self.outputs = outputs
+        self.events = events
+        self.watched = [s.index for s in model.surfaces if s.index not in const_modes]
+        if not events:
+            # only FINISH/TERMT stay watched: they stop the run, they switch nothing
+            self.watched = [i for i in self.watched
+                            if model.surfaces[i].purpose in ("finish", "termt")]
+        self.mode_names = {s: f"m{k}" for k, s in enumerate(self.watched)}
+        self.mode_names_new = {s: f"n{k}" for k, s in enumerate(self.watched)}
+        self.global_tables: dict[str, tuple] = {}
+        self.entries = [lookup(m.func, len(m.args)) for m in model.memories]
+        # a few slots are unpacked into locals; a large store (DELAY) is read from z
+        self.unpacked_z = sum(m.nslots for m in model.memories) <= MAX_UNPACKED_SLOTS
+        self.names = count(1)  # bound template arguments, unique over the module
+        self.statements: list[Statement | None] = [None]  # line 1: scaffolding
+        self.lines: dict[tuple[str, str], int] = {}
+
+    def emitter(self, context: str, new_modes: bool = False) -> Emitter:
+        names = self.mode_names_new if new_modes else self.mode_names
+        return Emitter(self.model, self.constants, self.const_modes, context, names,
+                       self.global_tables, self.tables, self.unpacked_z, self.names)
+
+    def line(self, kind: str, target: str, span: Span | None, expr=None) -> int:
+        """The generated line of one IR statement (the same in every function)."""
+        key = (kind, target)
+        if key not in self.lines:
+            self.statements.append(Statement(kind, target, span, expr))
+            self.lines[key] = len(self.statements)
+        return self.lines[key]
+
+    def prologue(self, used_states: bool = True, modes: str = "m", mem: bool = True):
+        body: list[py.stmt] = []
+        n = len(self.model.states)
+        if used_states and n:
+            targets = [py.Name(local(s.name), py.Store()) for s in self.model.states]
+            body.append(py.Assign([py.Tuple(targets, py.Store()) if n > 1 else targets[0]],
+                                  py.Name("y", py.Load()) if n > 1 else
+                                  py.Subscript(py.Name("y", py.Load()), py.Constant(0),
+                                               py.Load())))
+        if self.watched:
+            prefix = "m" if modes == "m" else "n"
+            names = [py.Name(f"{prefix}{k}", py.Store()) for k in range(len(self.watched))]
+            src = py.Name(modes, py.Load())
+            body.append(py.Assign([py.Tuple(names, py.Store())], src) if len(names) > 1 else
+                        py.Assign([names[0]], py.Subscript(src, py.Constant(0), py.Load())))
+        nz = sum(m.nslots for m in self.model.memories)
+        if mem and nz and self.unpacked_z:
+            names = [py.Name(f"z{k}", py.Store()) for k in range(nz)]
+            body.append(py.Assign([py.Tuple(names, py.Store())], py.Name("z", py.Load()))
+                        if nz > 1 else py.Assign([names[0]], py.Subscript(
+                            py.Name("z", py.Load()), py.Constant(0), py.Load())))
+        return body
+
+    def algebra(self, roots, em: Emitter) -> list[py.stmt]:
+        """The algebraic equations the roots read, in sorted order, one line each."""
+        return [on_line(py.Assign([py.Name(local(e.target), py.Store())], em.emit(e.expr)),
+                        self.line("equation", e.target, e.span, e.expr))
+                for e in needs(self.model, roots)]
+
+    def surface_algebra(self, em: Emitter) -> list[py.stmt]:
+        """What the watched surfaces read: the algebra, then the switch values they
+        read outright, each computed once."""
+        roots = [self.model.surfaces[i].expr for i in self.watched]
+        body = self.algebra(roots, em)
+        for name, value, sw in em.hoist(roots):
+            line = self.line("switch", f"{sw.written or sw.func} at line {sw.span.line}",
+                             sw.span)
+            body.append(on_line(py.Assign([py.Name(name, py.Store())], value), line))
+        return body
+
+    def state_line(self, s: ir.State) -> int:
+        target = s.name
+        if s.hidden:  # "INTGRL#W2.1" is the INTGRL inside W2's statement
+            kind, _, owner = s.name.partition("#")
+            target = f"{kind.rstrip(chr(39))} in {owner.rsplit('.', 1)[0]}"
+        return self.line("derivative", target, s.span, s.deriv)
+
+    def surface_line(self, i: int) -> int:
+        s = self.model.surfaces[i]
+        return self.line("surface", s.description, s.span, s.expr)
+
+    # the generated functions -----------------------------------------------------
+    def rhs(self) -> py.FunctionDef:
+        # Without events (for comparisons only) switches are read literally at
+        # every evaluation, as a naive integrator would, and nothing is watched.
+        em = self.emitter("rhs" if self.events else "literal")
+        states = self.model.states
+        body = self.prologue() + self.algebra([s.deriv for s in states], em)
+        values = []
+        for s in states:
+            value = em.emit(s.deriv)
+            if s.reset_surfaces:  # MODINT: held while its first surface is <= 0
+                value = py.IfExp(py.Compare(em.mode(s.reset_surfaces[0]), [py.Gt()],
+                                            [py.Constant(0.0)]), value, py.Constant(0.0))
+            values.append(on_line(value, self.state_line(s)))
+        body.append(py.Return(py.List(values, py.Load())))
+        return function("rhs", ("t", "y", "m", "z"), body)
+
+    def surfaces(self) -> py.FunctionDef:
+        em = self.emitter("rhs")
+        model = self.model
+        body = self.prologue() + self.surface_algebra(em)
+        values = []
+        for i in self.watched:
+            s = model.surfaces[i]
+            v = em.emit(s.expr)
+            if s.kind == ir.SurfaceKind.LEVEL:
+                # distance to the edges of the current level's band, in units of P
+                k = py.Name(self.mode_names[i], py.Load())
+                v = py.BinOp(py.Constant(0.5), py.Sub(),
+                             py.Call(py.Name("_ABS", py.Load()), [py.BinOp(v, py.Sub(), k)], []))
+            values.append(on_line(v, self.surface_line(i)))
+        body.append(py.Return(py.List(values, py.Load())))
+        return function("surf", ("t", "y", "m", "z"), body)
+
+    def modes(self) -> py.FunctionDef:
+        """The literal modes of the watched surfaces (the restart rule starts there)."""
+        em = self.emitter("rhs")
+        model = self.model
+        body = self.prologue() + self.surface_algebra(em)
+        values = [on_line(em.literal_mode(model.surfaces[i].kind, em.emit(model.surfaces[i].expr)),
+                          self.surface_line(i)) for i in self.watched]
+        body.append(py.Return(py.List(values, py.Load())))
+        return function("modes", ("t", "y", "m", "z"), body)
+
+    def outputs_function(self, out_names: list[str]) -> py.FunctionDef:
+        em = self.emitter("out" if self.events else "literal")
+        roots = [syn.Name(n, Span(0, 0)) for n in out_names]
+        body = self.prologue() + self.algebra(roots, em)
+        body.append(py.Return(py.List([em.emit(r) for r in roots], py.Load())))
+        return function("out", ("t", "y", "m", "z"), body)
+
+    def memory(self) -> py.FunctionDef:
+        """Every memory slot after an accepted step (m: the modes the step was taken
+        with, mn: the modes from now on)."""
+        model = self.model
+        em, em_new = self.emitter("mem"), self.emitter("mem", new_modes=True)
+        body = self.prologue() + (self.prologue(used_states=False, modes="mn", mem=False)
+                                  if self.watched else [])
+        body += self.algebra([a for m in model.memories for a in m.args], em)
+        # a memory whose update reads its value computes it anyway: once, into a
+        # local, when memories nested around it read it too (innermost first)
+        nested = {n.memory for m in model.memories for a in m.args for n in syn.walk(a)
+                  if isinstance(n, ir.MemoryValue)}
+        for mem, func in zip(model.memories, self.entries, strict=True):
+            if mem.index in nested and any("VALUE" in templates.template_names(t)
+                                           for t in func.memory.update):
+                name = f"w{next(self.names)}"
+                body.append(on_line(py.Assign([py.Name(name, py.Store())],
+                                              em.memory_value(mem)),
+                                    self.line("memory", mem.target, mem.span)))
+                em.hoisted_memory[mem.index] = name
+        new: list[py.expr] = []
+        for mem, func in zip(model.memories, self.entries, strict=True):
+            args = [em.emit(a) for a in mem.args]
+            modes = em.memory_modes(mem, func, args)
+            new_modes = em_new.memory_modes(mem, func, args)
+            value = em.emit(ir.MemoryValue(mem.index, mem.span))
+            line = self.line("memory", mem.target, mem.span)
+            for text in func.memory.update:
+                e = on_line(em.fill(text, args, modes, new_modes, mem, value), line)
+                new.append(on_line(py.Starred(e, py.Load()), line) if templates.spread(text)
+                           else e)
+        body.append(py.Return(py.List(new, py.Load())))
+        return function("mem", ("t", "y", "m", "mn", "z"), body)
+
+    @deep_enough()
+    def build(self) -> Compiled:
+        try:
+            return self._build()
+        except RecursionError:
+            # the reader bounds nesting (syntax.MAX_DEPTH); a Python whose compiler
+            # allows less than that still ends in a located model error
+            span = _deepest(self.model)
+            raise AmilError([Diagnostic(
+                "expression nested too deeply to compile", span,
+                "split it into several assignments")], self.model.path,
+                self.model.source) from None
+
+    def _build(self) -> Compiled:
+        model = self.model
+        out_names = self.outputs if self.outputs is not None else model.variables
+        fns = [self.rhs(), self.surfaces(), self.modes(), self.outputs_function(out_names),
+               self.memory()]
+        # surf and out once more for NumPy columns: a condition there may be an array
+        # (a memory function reading its condition), so if/else becomes a where()
+        fns += [vectorised(fns[1], "surf_vec"), vectorised(fns[3], "out_vec")]
+        module = Folder().visit(py.Module(body=fns, type_ignores=[]))
+        place(module)
+        py.fix_missing_locations(module)
+        assert_closed(module)
+        source = py.unparse(module)
+        code = compile(module, model.path or model.name, "exec")
+        scalar: dict[str, object] = {"__builtins__": {}, **namespace(), **self.global_tables,
+                                     STATEMENTS: self.statements}
+        exec(code, scalar)  # noqa: S102 - compiler-built tree, closed namespace
+        vector: dict[str, object] = {"__builtins__": {}, STATEMENTS: self.statements}
+        vector.update({f"_{k}": v for k, v in vector_functions().items()})
+        vector.update(self.global_tables)
+        exec(code, vector)  # noqa: S102 - the same code, elementwise functions
+        return Compiled(
+            state_names=[s.name for s in model.states],
+            y0=[self.constant(s.ic, s.span) for s in model.states],
+            z0=[v for mem, func in zip(model.memories, self.entries, strict=True)
+                for text in func.memory.initial
+                for v in initial_slots(model, text, mem, self.constants, self.tables)],
+            out_names=list(out_names), constants=self.constants, rhs=scalar["rhs"],
+            surf=scalar["surf"], out=scalar["out"], mem=scalar["mem"],
+            watched=self.watched, const_modes=self.const_modes,
+            modes_literal=scalar["modes"], affine_time=self.affine(),
+            impulses=self.impulses(), source=source, tables=self.global_tables,
+            surf_v=vector["surf_vec"], out_v=vector["out_vec"],
+            memory_every_step=any(f.memory.every_step for f in self.entries),
+            memory_times=self.memory_times(), statements=self.statements, model=model,
+            module=module, namespace=scalar,
+        )
+
+    def affine(self) -> set[int]:
+        """Time surfaces affine in TIME: their roots are breakpoints found exactly."""
+        model = self.model
+        equations = {e.target: e.expr for e in model.dynamic}
+        return {i for i in self.watched
+                if model.surfaces[i].depends == ir.Depends.TIME and self.events
+                and model.surfaces[i].kind == ir.SurfaceKind.SIGN
+                and is_affine(model.surfaces[i].expr, self.constants, equations)}
+
+    def impulses(self) -> list[tuple[float, float]]:
+        model = self.model
+        exprs = [e.expr for e in model.dynamic] + [s.deriv for s in model.states]
+        exprs += [a for sw in model.switches for a in sw.args]
+        exprs += [a for m in model.memories for a in m.args]
+        exprs += [s.expr for s in model.surfaces]
+        return [(self.constant(node.start, node.span), self.constant(node.period, node.span))
+                for e in exprs for node in syn.walk(e) if isinstance(node, ir.Impulse)]
+
+    def memory_times(self) -> Callable[[list[float], float], list[float]]:
+        """Memory that holds a future instant at which the model switches (PULSE
+        holds its output until the instant kept in its slot)."""
+        slots = [m.slot + f.memory.wakes for m, f in zip(self.model.memories, self.entries,
+                                                        strict=True)
+                 if f.memory.wakes is not None]
+
+        def times(z: list[float], t: float) -> list[float]:
+            return [z[s] for s in slots if z[s] > t]
+        return times
+
+    def constant(self, expr, span: Span) -> float:
+        return evaluate_constant(self.model, expr, self.constants, self.tables, span)

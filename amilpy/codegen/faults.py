@@ -1,0 +1,225 @@
+"""Faults in generated code, located and explained.
+
+Every generated statement has its own line in the code object, and the code's
+globals hold the table of those statements (`STATEMENTS`), so the statement
+that raised is found from the traceback alone: the frame's instruction offset
+(tb_lasti) through the code's own line table (co_lines) to the line, and the
+line to the IR statement. Explaining it re-runs the same function once, in a
+checking copy where each division, power and function call is a helper that
+reports its operands: only when a fault has happened, never on the hot path.
+"""
+
+from __future__ import annotations
+
+import ast as py
+import copy
+from dataclasses import dataclass
+
+from .. import ir
+from ..diagnostics import Span
+from ..syntax import deep_enough
+from ..unparse import expr_text
+
+# the key under which generated code's globals hold its statement table (a name
+# generated code never reads: it reads only the compiler's names)
+STATEMENTS = "__amilpy_statements__"
+
+
+@dataclass(frozen=True)
+class Statement:
+    """One statement of the generated code."""
+
+    kind: str  # "equation", "derivative", "surface", "memory"
+    target: str  # the variable it assigns, the state, or the surface's description
+    span: Span | None
+    expr: object = None  # the IR expression it evaluates
+
+
+@dataclass(frozen=True)
+class FaultReport:
+    """Where a fault in generated code happened and what the operation was."""
+
+    span: Span | None  # the listing's statement
+    target: str  # the variable it assigns (W2), or what it computes
+    text: str  # the operation with its operand values: "division by zero: JL = 0"
+
+    def __str__(self) -> str:
+        where = f" (line {self.span.line})" if self.span else ""
+        return f"{self.target}{where}: {self.text}"
+
+
+def line_at(code, lasti: int) -> int | None:
+    """The line of the instruction at byte offset `lasti`, from the line table."""
+    for start, end, line in code.co_lines():
+        if start <= lasti < end:
+            return line
+    return None
+
+
+def statement_of(exc: BaseException) -> tuple[Statement | None, str, list] | None:
+    """The innermost generated statement in `exc`'s traceback: (statement or None
+    for scaffolding, the generated function's name, the statement table)."""
+    found = None
+    tb = exc.__traceback__
+    while tb is not None:
+        table = tb.tb_frame.f_globals.get(STATEMENTS)
+        if table is not None:
+            line = line_at(tb.tb_frame.f_code, tb.tb_lasti)
+            stmt = table[line - 1] if line is not None and 1 <= line <= len(table) else None
+            found = (stmt, tb.tb_frame.f_code.co_name, table)
+        tb = tb.tb_next
+    return found
+
+
+class _Fault(Exception):
+    def __init__(self, site: int, values: tuple, exc: BaseException) -> None:
+        super().__init__(site)
+        self.site = site
+        self.values = values
+        self.exc = exc
+
+
+def _check_div(a, b, site):
+    try:
+        return a / b
+    except ArithmeticError as exc:
+        raise _Fault(site, (a, b), exc) from None
+
+
+def _check_pow(a, b, site):
+    try:
+        return a**b
+    except ArithmeticError as exc:
+        raise _Fault(site, (a, b), exc) from None
+
+
+def _check_call(site, f, *args):
+    try:
+        return f(*args)
+    except (ArithmeticError, ValueError) as exc:
+        raise _Fault(site, args, exc) from None
+
+
+_HELPERS = {"_CHECK_DIV": _check_div, "_CHECK_POW": _check_pow, "_CHECK_CALL": _check_call}
+_UNCHECKED = {"_WHERE", "_ALL", "_ANY", "_SGN", "_LEVEL"}
+
+
+@dataclass(frozen=True)
+class _Site:
+    """A checked operation: its node (for the line and the operator) and the source
+    of the node and of its operands, taken before the operands were rewritten."""
+
+    node: py.AST
+    source: object
+    operands: tuple
+
+
+class _Checking(py.NodeTransformer):
+    """Divisions, powers and calls become helpers that report their operands."""
+
+    def __init__(self) -> None:
+        self.sites: list[_Site] = []
+
+    def site(self, node: py.AST, operands: list[py.AST]) -> py.Constant:
+        self.sites.append(_Site(node, _source(node), tuple(map(_source, operands))))
+        return py.Constant(len(self.sites) - 1)
+
+    def visit_BinOp(self, node: py.BinOp) -> py.expr:
+        helper = {py.Div: "_CHECK_DIV", py.Pow: "_CHECK_POW"}.get(type(node.op))
+        site = self.site(node, [node.left, node.right]) if helper else None
+        self.generic_visit(node)
+        if helper is None:
+            return node
+        return py.Call(py.Name(helper, py.Load()), [node.left, node.right, site], [])
+
+    def visit_Call(self, node: py.Call) -> py.expr:
+        name = node.func.id if isinstance(node.func, py.Name) else ""
+        checked = name.startswith("_") and name not in _UNCHECKED and not any(
+            isinstance(a, py.Constant) and isinstance(a.value, str) for a in node.args)
+        site = self.site(node, node.args) if checked else None
+        self.generic_visit(node)
+        if not checked:
+            return node
+        return py.Call(py.Name("_CHECK_CALL", py.Load()), [site, node.func, *node.args], [])
+
+
+def _source(node: py.AST) -> object:
+    """The IR node an emitted node came from, else its Python text."""
+    return getattr(node, "amil_src", None) or py.unparse(node)
+
+
+def _checking_function(compiled, name: str):
+    """The checking copy of one generated function (built once, on the first fault)."""
+    if name not in compiled.checking:
+        fn = next(f for f in compiled.module.body if f.name == name)
+        # the IR nodes the tree remembers are shared, not copied
+        memo = {id(n.amil_src): n.amil_src for n in py.walk(fn) if hasattr(n, "amil_src")}
+        checking = _Checking()
+        tree = py.Module(body=[checking.visit(copy.deepcopy(fn, memo))], type_ignores=[])
+        py.fix_missing_locations(tree)
+        scope = dict(compiled.namespace)
+        scope.update(_HELPERS)
+        exec(compile(tree, "<amilpy checking>", "exec"), scope)  # noqa: S102 - our own tree
+        compiled.checking[name] = (scope[name], checking.sites)
+    return compiled.checking[name]
+
+
+@deep_enough()
+def explain(compiled, exc: BaseException, t: float, y, m, z) -> FaultReport | None:
+    """The statement that raised `exc` and the operation that failed (see
+    `Compiled.explain_fault`)."""
+    found = statement_of(exc)
+    if found is None or found[2] is not compiled.statements:
+        return None
+    statement, name, table = found
+    if name not in ("rhs", "surf", "out", "mem", "modes"):
+        return None
+    fn, sites = _checking_function(compiled, name)
+    args = (t, list(y), list(m), list(m), list(z)) if name == "mem" else \
+        (t, list(y), list(m), list(z))
+    try:
+        fn(*args)
+    except _Fault as fault:
+        site = sites[fault.site]
+        line = getattr(site.node, "lineno", 1)
+        at = table[line - 1] if 1 <= line <= len(table) else None
+        statement = at or statement
+        text = _describe(compiled.model, site, fault)
+    except (ArithmeticError, ValueError) as again:
+        text = str(again)
+    else:
+        text = str(exc)  # not reproduced with these values: say what was raised
+    if statement is None:
+        return FaultReport(None, "generated code", text)
+    return FaultReport(statement.span, statement.target, text)
+
+
+def _text(model: ir.Model, source: object) -> str:
+    return source if isinstance(source, str) else expr_text(model, source)
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _describe(model: ir.Model, site: _Site, fault: _Fault) -> str:
+    """The failed operation in the listing's notation, with its operand values."""
+    what = {ZeroDivisionError: "division by zero", OverflowError: "overflow"}.get(
+        type(fault.exc), "math domain error")
+    texts = [_text(model, s) for s in site.operands]
+    if isinstance(site.node, py.BinOp):
+        (a, b), (left, right) = fault.values, texts
+        if isinstance(site.node.op, py.Div):
+            return f"{what}: {left}/{right}" if _is_number(right) else \
+                f"{what}: {right} = {b:g}"
+        if isinstance(fault.exc, ZeroDivisionError):
+            return f"0 raised to a negative power: {left} = {a:g}, {right} = {b:g}"
+        return f"{what}: {left}**{right} with {left} = {a:g}"
+    named = [(n, v) for n, v in zip(texts, fault.values, strict=False)
+             if not _is_number(n) and isinstance(v, float)]
+    values = ", ".join(f"{n} = {v:g}" for n, v in named)
+    return f"{what}: {_text(model, site.source)}" + (f" with {values}" if values else "")

@@ -1,0 +1,142 @@
+"""Source text -> abstract syntax (`syntax.Program`).
+
+The only package that sees lark: the grammar is `grammar/amil.lark` (shipped as
+`amilpy.grammar`), the parser is LALR with lark's cache so a start does not
+rebuild the tables. A syntax fault does not end the reading: the statement it
+stands in is skipped and the text after it is read on, so every fault of the
+file is reported at once (up to `MAX_ERRORS`).
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from importlib import resources
+
+from .. import syntax as ast
+from ..diagnostics import AmilError, Diagnostic, Span
+from ..language import split_lines
+from ..syntax import MAX_DEPTH
+from .build import Builder
+from .errors import syntax_diagnostic
+
+__all__ = ["MAX_DEPTH", "MAX_ERRORS", "blank_comment_lines", "parse"]
+
+MAX_ERRORS = 20  # syntax faults reported from one file
+
+
+@lru_cache(maxsize=1)
+def _parser():
+    from lark import Lark
+
+    grammar = resources.files("amilpy.grammar").joinpath("amil.lark").read_text("utf-8")
+    return Lark(
+        grammar,
+        parser="lalr",
+        lexer="contextual",
+        propagate_positions=True,
+        maybe_placeholders=True,
+        cache=True,
+    )
+
+
+def _continues(line: str) -> bool:
+    """A line whose code ends in a continuation mark (`...` or `&`)."""
+    code = line.strip().split("!", 1)[0].rstrip()
+    return code.endswith("...") or code.endswith("&")
+
+
+def blank_comment_lines(text: str) -> str:
+    """Blank every `*` comment line, keeping line and column numbers intact.
+
+    A line that follows a continuation mark is part of an expression even when
+    it starts with `*`, so it is kept.
+    """
+    out = []
+    continued = False
+    for line in text.split("\n"):
+        if not continued and line.strip().startswith("*"):
+            out.append("")
+            continue
+        out.append(line)
+        continued = _continues(line)
+    return "\n".join(out)
+
+
+def parse(text: str, path: str | None = None) -> ast.Program:
+    """Parse a listing. Raises `AmilError` with every syntax fault located."""
+    from lark.exceptions import UnexpectedInput
+
+    if text.startswith("\ufeff"):
+        text = text[1:]
+    # one definition of a line (language.split_lines), for the reader and messages
+    prepared = blank_comment_lines("\n".join(split_lines(text)))
+    if not prepared.endswith("\n"):
+        prepared += "\n"
+    parser = _parser()
+    lines = prepared.split("\n")
+    errors: list[Diagnostic] = []
+    offset = 0  # lines of the file before the part being read
+    tree = None
+    while True:
+        part = prepared if offset == 0 else "\n".join(lines[offset:])
+        try:
+            tree = parser.parse(part)
+        except UnexpectedInput as exc:
+            errors.append(_diagnose(exc, part, lines, offset, parser))
+            resume = _after_statement(lines, offset, getattr(exc, "line", None))
+            if len(errors) >= MAX_ERRORS or resume is None:
+                if resume is not None:
+                    errors.append(Diagnostic(
+                        f"stopped reading after {MAX_ERRORS} syntax errors", None,
+                        "fix these and run again", severity="note"))
+                break
+            offset = resume
+            continue
+        break
+    if errors:
+        raise AmilError(errors, path, text)
+    statements = Builder(text, path).statements(tree)
+    return ast.Program(tuple(statements), path, text)
+
+
+def _diagnose(exc, part: str, lines: list[str], offset: int, parser) -> Diagnostic:
+    """The diagnostic of a fault, found again in its statement read alone: the
+    friendly labels are matched against a statement at the start of a file."""
+    from lark.exceptions import UnexpectedInput
+
+    line = getattr(exc, "line", None)
+    if isinstance(line, int) and 1 <= line and offset + line - 1 < len(lines):
+        first = last = offset + line - 1
+        while first > offset and _continues(lines[first - 1]):
+            first -= 1
+        while last + 1 < len(lines) and _continues(lines[last]):
+            last += 1
+        alone = "\n".join(lines[first:last + 1]) + "\n"
+        try:
+            parser.parse(alone)
+        except UnexpectedInput as again:
+            if getattr(again, "line", None) == line - (first - offset):
+                return _shifted(syntax_diagnostic(again, alone, parser), first)
+    return _shifted(syntax_diagnostic(exc, part, parser), offset)
+
+
+def _after_statement(lines: list[str], offset: int, line: int | None) -> int | None:
+    """The index of the first line after the statement holding line `line` of the
+    part that starts at `offset` (None: nothing left to read)."""
+    if not isinstance(line, int) or line < 1:
+        return None
+    k = offset + line - 1
+    while k < len(lines) and _continues(lines[k]):
+        k += 1
+    k += 1
+    return k if k < len(lines) and any(s.strip() for s in lines[k:]) else None
+
+
+def _shifted(d: Diagnostic, lines: int) -> Diagnostic:
+    """A diagnostic found in a later part of the file, at its place in the file."""
+    if d.span is None or lines == 0:
+        return d
+    s = d.span
+    span = Span(s.line + lines, s.column, None if s.end_line is None else s.end_line + lines,
+                s.end_column)
+    return Diagnostic(d.message, span, d.hint, d.severity, d.related)

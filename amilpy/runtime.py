@@ -1,0 +1,269 @@
+"""The run-time helpers generated code calls, on floats and (for the chunked paths)
+elementwise on NumPy arrays.
+
+These are the only callables generated code can reach besides the language's
+mathematical functions (`library` lists both; `codegen` puts them in the code's
+namespace under a leading underscore). Stdlib only at import: NumPy is imported
+when the vector table is first asked for.
+"""
+
+from __future__ import annotations
+
+import bisect
+import functools
+import math
+from collections.abc import Callable
+
+from .surfaces import level, sign
+
+Table = tuple[tuple[float, ...], tuple[float, ...]]
+
+
+# ----------------------------------------------------- Fortran meanings, no faults
+def fortran_sign(a: float, b: float) -> float:
+    return abs(a) if b >= 0.0 else -abs(a)
+
+
+def fortran_aint(x: float) -> float:
+    return float(math.trunc(x))
+
+
+def fortran_amod(a: float, b: float) -> float:
+    """Fortran MOD: the remainder with the sign of a (NaN for b = 0)."""
+    try:
+        return math.fmod(a, b)
+    except ValueError:
+        return math.nan
+
+
+def safe_exp(x: float) -> float:
+    try:
+        return math.exp(x)
+    except OverflowError:
+        return math.inf
+
+
+def safe_pow(a: float, b: float) -> float:
+    try:
+        r = a**b
+    except (OverflowError, ZeroDivisionError):
+        return math.inf
+    if isinstance(r, complex):
+        return math.nan
+    return r
+
+
+def safe_sqrt(x: float) -> float:
+    return math.sqrt(x) if x >= 0.0 else math.nan
+
+
+def safe_log(x: float) -> float:
+    if x > 0.0:
+        return math.log(x)
+    return -math.inf if x == 0.0 else math.nan
+
+
+def safe_log10(x: float) -> float:
+    if x > 0.0:
+        return math.log10(x)
+    return -math.inf if x == 0.0 else math.nan
+
+
+def nan_on_domain(f: Callable[[float], float]) -> Callable[[float], float]:
+    """f, with NaN instead of a ValueError/OverflowError (SINH, COSH)."""
+    def g(x: float) -> float:
+        try:
+            return f(x)
+        except (ValueError, OverflowError):
+            return math.nan
+
+    g.__name__ = f.__name__
+    return g
+
+
+# ------------------------------------------------------------------- tables
+def _outside(table: Table, x: float) -> float | None:
+    """A lookup's value where no interpolation is needed: NaN for NaN (never an
+    index off the table), the end values outside it."""
+    xs, ys = table
+    if x != x:
+        return math.nan
+    if x <= xs[0]:
+        return ys[0]
+    if x >= xs[-1]:
+        return ys[-1]
+    return None
+
+
+def afgen(table: Table, x: float) -> float:
+    """Linear interpolation; the end values hold outside the table; NaN for NaN."""
+    end = _outside(table, x)
+    if end is not None:
+        return end
+    xs, ys = table
+    i = bisect.bisect_right(xs, x) - 1
+    x0, x1 = xs[i], xs[i + 1]
+    return ys[i] + (ys[i + 1] - ys[i]) * (x - x0) / (x1 - x0)
+
+
+def nlfgen(table: Table, x: float) -> float:
+    """Three-point Lagrange interpolation; the end values hold outside the table;
+    NaN for NaN."""
+    end = _outside(table, x)
+    if end is not None:
+        return end
+    xs, ys = table
+    n = len(xs)
+    if n < 3:
+        return afgen(table, x)
+    i = bisect.bisect_right(xs, x) - 1
+    # the three points nearest x: i-1, i, i+1 (shifted inside the table)
+    j = min(max(i - 1 if (x - xs[i]) < (xs[i + 1] - x) else i, 0), n - 3)
+    x0, x1, x2 = xs[j], xs[j + 1], xs[j + 2]
+    y0, y1, y2 = ys[j], ys[j + 1], ys[j + 2]
+    return (y0 * (x - x1) * (x - x2) / ((x0 - x1) * (x0 - x2))
+            + y1 * (x - x0) * (x - x2) / ((x1 - x0) * (x1 - x2))
+            + y2 * (x - x0) * (x - x1) / ((x2 - x0) * (x2 - x1)))
+
+
+# ------------------------------------------------------------ memory functions
+def deriv(x: float, t: float, x1: float, t1: float, x2: float, t2: float,
+          previous: float) -> float:
+    """DERIV: dX/dt from the last two accepted points and the current one.
+
+    Second order (exact for a quadratic in time) once two earlier points are
+    known; a plain difference after a start; the last value at a step end.
+    """
+    if not t > t1:
+        return previous
+    if t2 < t1:
+        return (x2 * (t - t1) / ((t2 - t1) * (t2 - t))
+                + x1 * (t - t2) / ((t1 - t2) * (t1 - t))
+                + x * ((t - t2) + (t - t1)) / ((t - t2) * (t - t1)))
+    return (x - x1) / (t - t1)
+
+
+def impulse_at(t: float, start: float, period: float) -> float:
+    """1.0 when t is (to rounding) one of start + k*period, k >= 0; else 0.0."""
+    if t < start - 1e-12 * max(1.0, abs(start)):
+        return 0.0
+    if period <= 0.0:
+        return 1.0 if abs(t - start) <= 1e-12 * max(1.0, abs(t)) else 0.0
+    k = round((t - start) / period)
+    return 1.0 if abs(start + k * period - t) <= 1e-9 * max(period, abs(t) * 1e-3) else 0.0
+
+
+# DELAY(N, P, X) keeps X on a grid of N + 1 instants spaced P/N (CSMP's store of N
+# points over the delay) in N + 6 memory slots from `o`:
+#   o: 1.0 once started   o+1: t0   o+2, o+3: the last accepted (t, X)
+#   o+4: the index j of the next grid instant t0 + j*P/N to record
+#   o+5 ...: the ring of the last N + 1 grid values (value j at j mod (N + 1))
+_STARTED, _T0, _TLAST, _XLAST, _NEXT, _RING = range(6)
+
+
+def delay_init(n: float) -> list[float]:
+    """The slots of a DELAY store that has not started (started at the first
+    accepted instant, t0, with X(t0) as the whole history)."""
+    return [0.0] * (int(n) + 6)
+
+
+def delay(t: float, p: float, x: float, z, o: int, n: float) -> float:
+    """X(t - P) from the store (linear between grid values, then to the last accepted
+    point); X(t0) before t0 + P; the current X before the store has started."""
+    if z[o + _STARTED] == 0.0:
+        return x
+    n = int(n)
+    t0 = z[o + _T0]
+    s = t - p
+    ring = o + _RING
+    if not s > t0:
+        return z[ring]
+    h = p / n
+    j_next = int(z[o + _NEXT])
+    u = (s - t0) / h
+    j = int(u)
+    if j + 1 < j_next:
+        # both ends recorded; a grid value older than the ring holds (the store is full)
+        j = max(j, j_next - n - 1)
+        a, b = z[ring + j % (n + 1)], z[ring + (j + 1) % (n + 1)]
+        f = min(max(u - j, 0.0), 1.0)
+        return a + (b - a) * f
+    # between the last grid value and the last accepted point (or after it: held)
+    g = t0 + (j_next - 1) * h
+    a = z[ring + (j_next - 1) % (n + 1)]
+    t_last, x_last = z[o + _TLAST], z[o + _XLAST]
+    if not t_last > g or s >= t_last:
+        return x_last if s >= t_last else a
+    return a + (x_last - a) * (s - g) / (t_last - g)
+
+
+def delay_store(t: float, p: float, x: float, z, o: int, n: float) -> list[float]:
+    """The store after an accepted step ending at (t, X): every grid instant the
+    step passed is recorded, linear between the step's ends."""
+    n = int(n)
+    slots = list(z[o:o + n + 6])
+    ring = _RING
+    if slots[_STARTED] == 0.0:
+        slots[_STARTED], slots[_T0], slots[_TLAST], slots[_XLAST] = 1.0, t, t, x
+        slots[_NEXT] = 1.0
+        slots[ring:] = [x] * (n + 1)
+        return slots
+    t0, t_last, x_last = slots[_T0], slots[_TLAST], slots[_XLAST]
+    if not t > t_last:
+        slots[_XLAST] = x
+        return slots
+    h = p / n
+    j = int(slots[_NEXT])
+    # only the last N + 1 instants matter: skip the ones a long step overwrites
+    j = max(j, int((t - t0) / h) - n)
+    while t0 + j * h <= t:
+        g = t0 + j * h
+        slots[ring + j % (n + 1)] = x_last + (x - x_last) * (g - t_last) / (t - t_last)
+        j += 1
+    slots[_NEXT] = float(j)
+    slots[_TLAST], slots[_XLAST] = t, x
+    return slots
+
+
+# ------------------------------------------------- helpers of the generated code
+def _where(c, a, b):
+    return a if c else b
+
+
+def _all(*v) -> bool:
+    return all(v)
+
+
+def _any(*v) -> bool:
+    return any(v)
+
+
+# name -> the callable; generated code reads it as `_NAME`
+HELPERS: dict[str, Callable] = {
+    "AFGEN": afgen, "NLFGEN": nlfgen, "DERIV": deriv, "IMPULS": impulse_at, "POW": safe_pow,
+    "DELAY": delay, "DELAY_STORE": delay_store, "DELAY_INIT": delay_init,
+    "SGN": sign, "LEVEL": level, "WHERE": _where, "ALL": _all, "ANY": _any,
+}
+
+
+@functools.lru_cache(maxsize=1)
+def vector_helpers() -> dict[str, Callable]:
+    """HELPERS elementwise on NumPy arrays: the runner evaluates the generated surface
+    and output functions over a whole chunk of output instants at once (the same
+    code object, run with these in its namespace)."""
+    import numpy as np
+
+    def many(f):
+        return lambda *args: functools.reduce(f, args)
+
+    def each(f, **kw):
+        return np.vectorize(f, otypes=[float], **kw)
+
+    return {
+        "AFGEN": lambda table, x: np.interp(x, table[0], table[1]),
+        "NLFGEN": lambda table, x: each(lambda v: nlfgen(table, v))(x),
+        "DERIV": each(deriv), "IMPULS": each(impulse_at), "POW": np.power,
+        "DELAY": each(delay, excluded={3, 4, 5}),
+        "LEVEL": lambda v: np.ceil(np.asarray(v) - 0.5), "SGN": np.sign,
+        "WHERE": np.where, "ALL": many(np.logical_and), "ANY": many(np.logical_or),
+    }
