@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import ast as py
 import copy
+import math
 from dataclasses import dataclass
 
 from .. import ir
@@ -206,6 +207,13 @@ def _is_number(text: str) -> bool:
     return True
 
 
+def _value(v: float) -> str:
+    """An operand as short as %g when that is exact, else every digit it takes:
+    ASIN's argument 1.0000000000000002 must not read as 1, which is in range."""
+    short = f"{v:g}"
+    return short if float(short) == v or not math.isfinite(v) else repr(v)
+
+
 def _describe(model: ir.Model, site: _Site, fault: _Fault) -> str:
     """The failed operation in the listing's notation, with its operand values."""
     what = {ZeroDivisionError: "division by zero", OverflowError: "overflow"}.get(
@@ -215,11 +223,11 @@ def _describe(model: ir.Model, site: _Site, fault: _Fault) -> str:
         (a, b), (left, right) = fault.values, texts
         if isinstance(site.node.op, py.Div):
             return f"{what}: {left}/{right}" if _is_number(right) else \
-                f"{what}: {right} = {b:g}"
+                f"{what}: {right} = {_value(b)}"
         if isinstance(fault.exc, ZeroDivisionError):
-            return f"0 raised to a negative power: {left} = {a:g}, {right} = {b:g}"
-        return f"{what}: {left}**{right} with {left} = {a:g}"
+            return f"0 raised to a negative power: {left} = {_value(a)}, {right} = {_value(b)}"
+        return f"{what}: {left}**{right} with {left} = {_value(a)}"
     named = [(n, v) for n, v in zip(texts, fault.values, strict=False)
              if not _is_number(n) and isinstance(v, float)]
-    values = ", ".join(f"{n} = {v:g}" for n, v in named)
+    values = ", ".join(f"{n} = {_value(v)}" for n, v in named)
     return f"{what}: {_text(model, site.source)}" + (f" with {values}" if values else "")
