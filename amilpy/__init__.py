@@ -1,7 +1,7 @@
 """amilpy: AMIL/CSMP-style continuous-simulation listings, run by SciPy.
 
 Pipeline, one module per stage: parse (text -> syntax) -> check (-> IR) ->
-codegen (-> Python callables) -> runner (steppers, events) -> result -> printout/plot.
+codegen (-> Python callables) -> run (steppers, events) -> result -> printout/plot.
 """
 
 from .api import Model, load, loads

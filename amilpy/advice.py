@@ -4,7 +4,8 @@ worked much harder than an implicit one would have (a stiff model).
 The probe integrates the first tenth of the run with the explicit method and
 with Radau, discarding outputs, and compares right-hand-side evaluations
 (Radau's include those of its finite-difference Jacobians). It runs only when
-the explicit run was expensive, so a cheap run pays nothing.
+the explicit run finished and was expensive, so a cheap run pays nothing, and
+within the run's own limits: the wall-clock time the run left, and its steps.
 """
 
 from __future__ import annotations
@@ -13,27 +14,38 @@ from dataclasses import replace
 
 from . import ir
 from .result import Run
-from .routes import Route
+from .routes import route_for
+from .run import Cache, Options, simulate
 
 EXPENSIVE = 5_000  # right-hand-side evaluations before a probe is worth it
 RATIO = 5.0  # how many times cheaper the implicit method must be to say so
+PROBE_STEPS = 200_000
 
 
-def stiffness_advice(model: ir.Model, spec: ir.RunSpec, run: Run, route: Route) -> str | None:
+def stiffness_advice(model: ir.Model, spec: ir.RunSpec, run: Run, opts: Options,
+                     cache: Cache | None = None) -> str | None:
     """A one-line note when METHOD STIFF would have been much cheaper, else None."""
-    from .runner import Options, simulate
-
-    if route.fixed or not route.explicit or run.stats.get("nfev", 0) < EXPENSIVE:
+    route = route_for(run.method)
+    if route.fixed or not route.explicit or not run.ok or \
+            run.stats.get("nfev", 0) < EXPENSIVE:
         return None
+    left = None
+    if opts.max_time is not None:
+        left = opts.max_time - run.stats.get("seconds", 0.0)
+        if left <= 0:
+            return None
     window = 0.1 * spec.timer["FINTIM"]
     # outputs: one variable on a coarse grid; the work is the integration
-    probe_spec = replace(spec, timer={**spec.timer, "OUTDEL": window, "PRDEL": window})
-    explicit = simulate(model, probe_spec, Options(method=run.method, rtol=run.rtol,
-                                                   atol=run.atol, fintim=window,
-                                                   max_steps=200_000))
-    implicit = simulate(model, probe_spec, Options(method="RADAU", rtol=run.rtol,
-                                                   atol=run.atol, fintim=window,
-                                                   max_steps=200_000))
+    probe_spec = replace(spec, timer={**spec.timer, "OUTDEL": window, "PRDEL": window},
+                         reports=[])
+    probe = replace(opts, method=run.method, fintim=window, start=None, progress=None,
+                    max_steps=min(PROBE_STEPS, opts.max_steps), max_time=left)
+    explicit = simulate(model, probe_spec, probe, cache)
+    if left is not None:
+        left -= explicit.stats["seconds"]
+        if left <= 0:
+            return None
+    implicit = simulate(model, probe_spec, replace(probe, method="RADAU", max_time=left), cache)
     if not (explicit.ok and implicit.ok) or implicit.stats["nfev"] == 0:
         return None
     ratio = explicit.stats["nfev"] / implicit.stats["nfev"]

@@ -21,13 +21,24 @@ from .routes import route_for
 
 if TYPE_CHECKING:
     from .result import Run
+    from .run import Cache, Flow
 
 
 class Model:
-    """A checked listing, ready to run any number of times."""
+    """A checked listing, ready to run any number of times. It keeps what its runs
+    share (compiled functions, INITIAL values, output grids) in `cache`."""
 
     def __init__(self, model: ir.Model) -> None:
         self.ir = model
+        self._cache: Cache | None = None
+
+    @property
+    def cache(self) -> Cache:
+        if self._cache is None:  # the run package (NumPy) loads on the first run
+            from .run import Cache
+
+            self._cache = Cache()
+        return self._cache
 
     @property
     def name(self) -> str:
@@ -47,10 +58,20 @@ class Model:
 
     def python_source(self, **params: float) -> str:
         """The generated Python of the first run (what `--show-python` prints)."""
-        from .runner import Options, _Simulation
+        from .run import prepare
 
-        spec = self._specs(params)[0]
-        return _Simulation(self.ir, spec, Options()).c.source
+        return prepare(self.ir, self._specs(params)[0], cache=self.cache).compiled.source
+
+    def flow(self, method: str | None = None, rtol: float | None = None,
+             atol: float | None = None, run: int = 0, **params: float) -> Flow:
+        """The flow map of run `run` (its data, with `params` overriding): see
+        `amilpy.run.flow` for `advance`, its events and its sensitivity."""
+        from .run import Flow, Options
+
+        if method is not None and route_for(method) is None:
+            raise AmilError(f"unknown integration method {method}")
+        spec = self._specs(params)[run]
+        return Flow(self.ir, spec, Options(method=method, rtol=rtol, atol=atol), self.cache)
 
     def _specs(self, params: dict[str, float]) -> list[ir.RunSpec]:
         known = set(self.ir.data_names)
@@ -86,7 +107,7 @@ class Model:
             **params: float) -> list[Run]:
         """Run every run of the listing (value lists, END groups); data values
         given as keywords override the listing's for all of them."""
-        from .runner import Options, simulate
+        from .run import Options, simulate
 
         if method is not None and route_for(method) is None:
             raise AmilError(f"unknown integration method {method}")
@@ -107,11 +128,11 @@ class Model:
         runs = []
         advised = False
         for spec in self._specs(params):
-            run = simulate(self.ir, spec, opts)
+            run = simulate(self.ir, spec, opts, self.cache)
             if advice and not advised:
                 from .advice import stiffness_advice
 
-                run.advice = stiffness_advice(self.ir, spec, run, route_for(run.method))
+                run.advice = stiffness_advice(self.ir, spec, run, opts, self.cache)
                 advised = run.advice is not None  # say it once
             runs.append(run)
             if run.message.startswith("interrupted"):

@@ -93,8 +93,8 @@ class Run:
     final: dict[str, float]
     stats: dict[str, float]
     method: str
-    rtol: float
-    atol: float
+    rtol: float  # RELERR for every state not named in a per-state RELERR
+    atol: float  # likewise ABSERR
     titles: list[str] = field(default_factory=list)
     reports: list = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
@@ -105,6 +105,9 @@ class Run:
     # for a variable-step route, "DELT 0.000625" for a fixed-step one
     settings: str = ""
     terminal: dict[str, float] = field(default_factory=dict)  # TERMINAL values, written order
+    # name -> (min, time of min, max, time of max) located on the integrator's dense
+    # output (the RANGE variables; see run.record.Extrema)
+    extrema: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
 
     @property
     def t(self) -> np.ndarray:
@@ -133,14 +136,18 @@ class Run:
 
     @property
     def range(self) -> dict[str, tuple[float, float, float, float]]:
-        """name -> (min, time of min, max, time of max) over the recorded instants."""
+        """name -> (min, time of min, max, time of max): located between the output
+        instants for the RANGE variables, over the recorded instants for the others."""
         out = {}
         for name, v in self.values.items():
-            if v.size == 0 or not np.any(np.isfinite(v)):
+            if name in self.extrema:
+                out[name] = self.extrema[name]
+            elif v.size == 0 or not np.any(np.isfinite(v)):
                 out[name] = (np.nan, np.nan, np.nan, np.nan)
-                continue
-            i, j = int(np.nanargmin(v)), int(np.nanargmax(v))
-            out[name] = (float(v[i]), float(self.times[i]), float(v[j]), float(self.times[j]))
+            else:
+                i, j = int(np.nanargmin(v)), int(np.nanargmax(v))
+                out[name] = (float(v[i]), float(self.times[i]), float(v[j]),
+                             float(self.times[j]))
         return out
 
     @property

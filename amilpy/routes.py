@@ -2,9 +2,10 @@
 
 This table is the only list of methods. The checker validates METHOD against it,
 the command line's `--method` help is generated from it, the printout header asks
-it whether RELERR/ABSERR apply, the advice asks which routes are explicit, and the
-steppers build a route from its `stepper` name. Adding a SciPy solver is one row
-here plus, if it needs one, a stepper class.
+it whether RELERR/ABSERR apply, the advice asks which routes are explicit, and
+`steppers.make_stepper` builds a route from its `stepper` name with the row's own
+constants (the stability limit of an explicit method, a local tolerance). Adding
+a SciPy solver is one row here plus, if it needs one, a stepper class.
 
 Stdlib only: `amilpy check` reads this at start-up.
 """
@@ -23,6 +24,12 @@ class Route:
     stepper: str  # the stepper that runs it (see steppers.make_stepper)
     scipy: str | None  # the SciPy OdeSolver class, for the routes built on one
     summary: str  # one line for --help and the language reference
+    # explicit methods: |h*lambda| where the stability region ends on the negative real
+    # axis. A variable-step pair past it is bound by stability (Hairer's stiffness test);
+    # a fixed-step method past it on a decaying mode makes that mode grow.
+    stability_limit: float | None = None
+    # the solver's own tolerance as a fraction of RELERR/ABSERR (see BDF's row)
+    local_tolerance: float = 1.0
 
     @property
     def uses_tolerances(self) -> bool:
@@ -33,24 +40,31 @@ class Route:
 ROUTES: tuple[Route, ...] = (
     Route("AUTO", ("AUTO",), False, False, "odeint", "LSODA",
           "default: Fortran LSODA (odeint), stiff/non-stiff switching"),
+    # Hairer's thresholds for DOPRI5 and DOP853: each pair's stability boundary
     Route("RK45", ("RKS", "RK45"), False, True, "scipy", "RK45",
-          "variable-step Runge-Kutta 4(5), SciPy RK45"),
+          "variable-step Runge-Kutta 4(5), SciPy RK45", stability_limit=3.25),
     Route("DOP853", ("DOP853",), False, True, "scipy", "DOP853",
-          "variable-step Dormand-Prince 8(5,3)"),
+          "variable-step Dormand-Prince 8(5,3)", stability_limit=6.1),
     Route("LSODA", ("LSODA", "MILNE"), False, False, "scipy", "LSODA",
           "SciPy's LSODA class, step by step"),
     Route("RADAU", ("RADAU", "STIFF"), False, False, "scipy", "Radau",
           "implicit Runge-Kutta Radau IIA, order 5 (stiff models)"),
+    # BDF advances with the solution whose error it estimates (no local extrapolation,
+    # unlike RK45, DOP853 and Radau), so on a lightly damped mode its errors per step
+    # add up: 25 tolerance units on the two-mass drive at K = 1E2, RELERR 1E-6, 77 at
+    # 1E-9. A decade tighter locally keeps it within 4 (12 at 1E-9) for 15-40% more
+    # evaluations; see docs/robustness.md.
     Route("BDF", ("BDF", "GEAR"), False, False, "scipy", "BDF",
-          "backward differentiation formulas, orders 1-5 (stiff models)"),
+          "backward differentiation formulas, orders 1-5 (stiff models)",
+          local_tolerance=0.1),
     Route("RK4", ("RK4", "RKSFX", "SIMP"), True, True, "RK4", None,
-          "fixed-step classic Runge-Kutta, order 4"),
+          "fixed-step classic Runge-Kutta, order 4", stability_limit=2.785),
     Route("EULER", ("EULER", "RECT"), True, True, "Euler", None,
-          "fixed-step Euler (rectangular)"),
+          "fixed-step Euler (rectangular)", stability_limit=2.0),
     Route("TRAPZ", ("TRAPZ", "HEUN"), True, True, "Heun", None,
-          "fixed-step Heun (trapezoid predictor-corrector)"),
+          "fixed-step Heun (trapezoid predictor-corrector)", stability_limit=2.0),
     Route("ADAMS", ("ADAMS", "AB2"), True, True, "AdamsBashforth2", None,
-          "fixed-step 2nd-order Adams-Bashforth"),
+          "fixed-step 2nd-order Adams-Bashforth", stability_limit=1.0),
 )
 
 BY_NAME: dict[str, Route] = {r.name: r for r in ROUTES}

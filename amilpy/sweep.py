@@ -130,7 +130,7 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
     """Run `model` once per value of data value `name` and measure `measure`.
     `progress(i, n, value)` is called after each point, `run_progress` during each
     run (as `Options.progress`)."""
-    from .runner import Options, simulate
+    from .run import Options, simulate
 
     name = name.upper()
     if name not in model.ir.data_names:
@@ -153,7 +153,7 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
         opts = Options(method=method, rtol=rtol, atol=atol,
                        start=start if carry_state else None, fintim=fintim,
                        progress=run_progress)
-        run = simulate(model.ir, spec, opts)
+        run = simulate(model.ir, spec, opts, model.cache)
         t0 = float(run.times[0])
         keep = run.times >= t0 + settle
         v = run.values[measure][keep]

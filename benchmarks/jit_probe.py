@@ -25,7 +25,7 @@ import numpy as np  # noqa: E402
 from scipy.integrate import odeint  # noqa: E402
 
 import amilpy  # noqa: E402
-from amilpy.runner import Options, _Simulation  # noqa: E402
+from amilpy.run import prepare  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -45,23 +45,24 @@ def main(path: str | None = None) -> None:
         return
     path = path or os.path.join(ROOT, "models", "ex4_torque_meter.amil")
     model = amilpy.load(path)
-    sim = _Simulation(model.ir, model.ir.runs[0], Options())
-    source = sim.c.source.split("def surf")[0]
+    prepared = prepare(model.ir, model.ir.runs[0])
+    compiled = prepared.compiled
+    source = compiled.source.split("def surf")[0]
     # the same function returning an array, for numba (compiler text, not model text)
     head, ret = source.rsplit("return [", 1)
     namespace = {"np": np}
     exec(head + "return np.array([" + ret.rstrip() + ")", namespace)  # noqa: S102
     jitted = numba.njit(namespace["rhs"])
-    n = len(sim.c.y0)
-    y0 = np.asarray(sim.c.y0, dtype=float)
-    modes = tuple(1.0 for _ in sim.c.watched)
-    z0 = tuple(sim.c.z0)
+    n = len(compiled.y0)
+    y0 = np.asarray(compiled.y0, dtype=float)
+    modes = tuple(1.0 for _ in compiled.watched)
+    z0 = tuple(compiled.z0)
     jitted(0.0, y0, modes, z0)
-    plain = sim.c.rhs
+    plain = compiled.rhs
     print(f"{os.path.basename(path)}: {n} states")
     print(f"one call: python {per_call(lambda: plain(0.0, y0.tolist(), modes, z0)):.3f} us, "
           f"numba {per_call(lambda: jitted(0.0, y0, modes, z0)):.3f} us")
-    fintim = sim.timer["FINTIM"]
+    fintim = prepared.plan.timer["FINTIM"]
     grid = np.linspace(0.0, fintim, 1001)
     print(f"{'rtol':>8} {'python ms':>10} {'numba ms':>10} {'gain':>6}")
     for rtol in (1e-3, 1e-6, 1e-9):

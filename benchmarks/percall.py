@@ -4,10 +4,10 @@
 
 For each case:
 
-* ``rhs raw``: amilpy's generated ``rhs(t, ylist, modes, z)`` (``_Simulation(...).c.rhs``)
+* ``rhs raw``: amilpy's generated ``rhs(t, ylist, modes, z)`` (``run.prepare(...).compiled.rhs``)
   against the hand-written ``f(t, ylist)``, both on Python floats;
 * ``rhs as solver sees it``: the function a stepper calls with a NumPy array: amilpy's
-  ``_Simulation.rhs_for(modes, z)`` wrapper (``y.tolist()`` + try/except) against
+  ``run.Flow.field(state)`` (``y.tolist()`` + try/except, as the run loop builds it) against
   ``lambda t, y: f(t, y.tolist())`` and against ``f(t, y)`` on the array itself (NumPy
   scalars: what a naive hand-written function pays);
 * ``step``: one ``step()`` of SciPy's RK45 and LSODA classes driving each function
@@ -70,13 +70,12 @@ def measure(case, number: int = 20000, n_steps: int = 300) -> dict:
     from scipy.integrate import LSODA, RK45, odeint, solve_ivp
 
     import amilpy
-    from amilpy.runner import Options, _Simulation
+    from amilpy.run import Flow, State
     from amilpy.steppers import make_stepper
 
     model = amilpy.loads(case.text, case.name)
-    sim = _Simulation(model.ir, model.ir.runs[0], Options())
-    sim.arith_faults = []
-    c = sim.c
+    flow = Flow(model.ir, model.ir.runs[0])
+    c = flow.compiled
     t, named = _sample_state(case)
     ylist = [named[n] for n in c.state_names]
     yarr = np.array(ylist)
@@ -89,7 +88,7 @@ def measure(case, number: int = 20000, n_steps: int = 300) -> dict:
     def hand_wrapped(tt, y):
         return f_hand(tt, y.tolist())
 
-    ami = sim.rhs_for(modes, z)
+    ami = flow.field(State(yarr, tuple(modes), tuple(z)), t)
     row = {"case": case.name, "states": len(ylist)}
     row["rhs_amilpy_raw_us"] = _per_call(lambda: c.rhs(t, ylist, modes, z), number) * 1e6
     row["rhs_hand_raw_us"] = _per_call(lambda: f_hand(t, hl), number) * 1e6

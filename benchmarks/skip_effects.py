@@ -94,7 +94,7 @@ def _fn_source(src: str, name: str) -> str:
 
 def effect_a(repeats: int) -> tuple[list[str], dict]:
     import amilpy
-    from amilpy.runner import Options, _Simulation
+    from amilpy.run import Options, prepare
 
     m = amilpy.loads(many_outputs_listing(), "many_outputs")
     m.run()
@@ -107,8 +107,8 @@ def effect_a(repeats: int) -> tuple[list[str], dict]:
         res[method] = (t_all, t_few)
     src = m.python_source()
     rhs, out = _fn_source(src, "rhs"), _fn_source(src, "out")
-    sim = _Simulation(m.ir, m.ir.runs[0], Options(outputs=["X"]))
-    out_few = _fn_source(sim.c.source, "out")
+    few = prepare(m.ir, m.ir.runs[0], Options(outputs=["X"])).compiled
+    out_few = _fn_source(few.source, "out")
     lines = [f"### (a) unneeded equations: oscillator + {N_ALG} algebraic outputs "
              "(A0 .. A{N-1}, each SIN/EXP of the previous)", "",
              f"* generated `rhs`: {len(rhs.splitlines())} lines, mentions an algebraic output: "
@@ -125,6 +125,7 @@ def effect_a(repeats: int) -> tuple[list[str], dict]:
 
 def effect_b() -> tuple[list[str], list]:
     import amilpy
+    from amilpy.run import prepare
 
     rows = []
     for path in ("models/machine_unit.amil", "models/ex4_clutch.amil"):
@@ -132,7 +133,7 @@ def effect_b() -> tuple[list[str], list]:
         m.run()
         for method in ("AUTO", "RKS", "RADAU"):
             calls = [0]
-            for c in m.ir.compiled.values():
+            for c in [prepare(m.ir, spec, cache=m.cache).compiled for spec in m.ir.runs]:
                 if not getattr(c.out, "_counted", False):
                     orig = c.out
 
@@ -160,21 +161,22 @@ def effect_b() -> tuple[list[str], list]:
 
 def effect_c(repeats: int) -> tuple[list[str], list]:
     import amilpy
-    from amilpy.runner import Options, _Simulation
+    from amilpy.run import prepare
 
     rows = []
     for label, text in (("FSW(const) + STEP(T1)", SWITCH_TIME),
                         ("same on states", SWITCH_STATE)):
         m = amilpy.loads(text, label)
-        sim = _Simulation(m.ir, m.ir.runs[0], Options())
+        prepared = prepare(m.ir, m.ir.runs[0])
         for method in ("AUTO", "RKS"):
             r = m.run(method=method, rtol=1e-8, atol=1e-10)[0]
             t = _median(lambda m=m, method=method: m.run(method=method, rtol=1e-8, atol=1e-10),
                         repeats)
             err = float(np.max(np.abs(r["X"] - _switch_exact(r.t))))
             kinds = sorted({e.kind for e in r.events})
-            rows.append((label, method, len(m.ir.surfaces), len(sim.c.watched),
-                         sum(sim.sf.breakpoint_only), len(r.events), ",".join(kinds),
+            rows.append((label, method, len(m.ir.surfaces), len(prepared.compiled.watched),
+                         sum(w.breakpoint_only for w in prepared.plan.watched), len(r.events),
+                         ",".join(kinds),
                          r.stats["nsteps"], r.stats["nfev"], t * 1e3, err))
     lines = ["### (c) switches that cannot change branch / switches on TIME", "",
              "| listing | method | surfaces | watched | of them breakpoints | events | event kinds "
@@ -189,11 +191,11 @@ def effect_c(repeats: int) -> tuple[list[str], list]:
 def effect_d() -> tuple[list[str], dict]:
     import amilpy
     from amilpy import codegen
-    from amilpy.runner import Options, _Simulation
+    from amilpy.run import prepare
 
     m = amilpy.load(os.path.join(ROOT, "models", "ex4_clutch.amil"))
-    sim = _Simulation(m.ir, m.ir.runs[0], Options())
-    rhs_src = _fn_source(sim.c.source, "rhs")
+    compiled = prepare(m.ir, m.ir.runs[0]).compiled
+    rhs_src = _fn_source(compiled.source, "rhs")
     # the same function with every float literal turned into a global name
     lits: dict[str, float] = {}
 
@@ -211,8 +213,8 @@ def effect_d() -> tuple[list[str], dict]:
     ns_u.update(lits)
     exec(compile(unfolded, "<unfolded>", "exec"), ns_u)
     y = [0.3, 1e-3, 500.0, 499.0]
-    modes = [1.0] * len(sim.c.watched)
-    z = list(sim.c.z0)
+    modes = [1.0] * len(compiled.watched)
+    z = list(compiled.z0)
     n = 100000
     tf = min(timeit.repeat(lambda: ns_f["rhs"](0.1, y, modes, z), number=n, repeat=5)) / n
     tu = min(timeit.repeat(lambda: ns_u["rhs"](0.1, y, modes, z), number=n, repeat=5)) / n
@@ -221,8 +223,8 @@ def effect_d() -> tuple[list[str], dict]:
     lines = ["### (d) constants folded (ex4_clutch)", "", "Listing:", "", "```",
              *[ln.rstrip() for ln in listing], "```", "", "Generated `rhs`:", "",
              "```python", rhs_src.strip(), "```", "",
-             f"`KE = KEN*30/PI` became `{sim.c.constants.get('KE', float('nan'))!r}`, "
-             f"`MOBC = 0.25*KT*U/R` became `{sim.c.constants.get('MOBC', float('nan'))!r}`; "
+             f"`KE = KEN*30/PI` became `{compiled.constants.get('KE', float('nan'))!r}`, "
+             f"`MOBC = 0.25*KT*U/R` became `{compiled.constants.get('MOBC', float('nan'))!r}`; "
              f"T1 = 5*TAUM is the literal in the switch. {len(lits)} literals in `rhs`.", "",
              f"Time of one `rhs` call: folded literals {tf * 1e6:.3f} µs, same code with the "
              f"literals as global names {tu * 1e6:.3f} µs "

@@ -5,8 +5,6 @@ import math
 import pytest
 from conftest import run1
 
-import amilpy
-
 
 def value(expr: str, **data) -> float:
     """The value of an expression in DYNAMIC, at TIME = 0."""
@@ -86,9 +84,27 @@ def test_initial_section_is_sorted_and_feeds_dynamic():
     assert r.constants["A"] == 3.0
 
 
-def test_terminal_is_accepted():
-    m = amilpy.loads("X = INTGRL(0.0, 1.0)\nTERMINAL\n Y = 2.0\nTIMER FINTIM = 1.0\nEND\n")
-    assert m.run()[0].ok
+def test_terminal_runs_once_at_the_end_in_written_order():
+    # each statement sees the constants, the final states and DYNAMIC values, TIME
+    # at the end and the TERMINAL values above it: X(1) = 2, V = 4, Y = 8, Z = 9
+    r = run1("PARAM K = 2.0\nX = INTGRL(0.0, K)\nV = X*X\nTERMINAL\n Y = 2.0*X + V\n"
+             " Z = Y + TIME\n W = FSW(Y - 5.0, -1.0, 0.0, 1.0)\nTIMER FINTIM = 1.0\n"
+             "PRINT X, Y\nEND\n")
+    assert r.ok
+    assert list(r.terminal) == ["Y", "Z", "W"]
+    assert r.terminal == pytest.approx({"Y": 8.0, "Z": 9.0, "W": 1.0}, rel=1e-6)
+    assert r.final["Y"] == r.terminal["Y"] and r.final["Z"] == r.terminal["Z"]
+
+
+def test_terminal_follows_a_stopped_run_and_its_fault_is_reported():
+    # FINISH stops at X = 0.5 (TIME 0.25): TERMINAL sees that instant
+    r = run1("X = INTGRL(0.0, 2.0)\nTERMINAL\n T = TIME\nTIMER FINTIM = 1.0\n"
+             "FINISH X = 0.5\nEND\n")
+    assert r.status == "stopped" and r.terminal["T"] == pytest.approx(0.25, rel=1e-12)
+    r = run1("PARAM K = 0.0\nX = INTGRL(0.0, 1.0)\nTERMINAL\n Y = 1.0/K\n"
+             "TIMER FINTIM = 1.0\nEND\n")
+    assert r.status == "failed" and "TERMINAL" in r.message and "line 4" in r.message
+    assert r.t[-1] == 1.0  # the rows are all there
 
 
 def test_reserved_names_are_readable():

@@ -38,11 +38,11 @@ def test_generated_code_is_closed():
 
 
 def test_generated_functions_have_no_builtins():
-    from amilpy.runner import Options, _Simulation
+    from amilpy.run import prepare
 
     m = amilpy.loads("X = INTGRL(1.0, -X)\nTIMER FINTIM = 1.0\nEND\n")
-    sim = _Simulation(m.ir, m.ir.runs[0], Options())
-    assert sim.c.rhs.__globals__["__builtins__"] == {}
+    compiled = prepare(m.ir, m.ir.runs[0]).compiled
+    assert compiled.rhs.__globals__["__builtins__"] == {}
 
 
 @pytest.mark.parametrize("text", [

@@ -102,7 +102,7 @@ class Emitter(Visitor):
         return number(e.value)
 
     def visit_Name(self, e: syn.Name) -> py.expr:
-        if e.name == "TIME":
+        if e.name == "TIME" and "TIME" not in self.constants:  # TERMINAL knows TIME
             return py.Name("t", py.Load())
         if e.name in self.constants:
             return number(self.constants[e.name])

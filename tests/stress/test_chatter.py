@@ -1,7 +1,5 @@
 """Chattering: Coulomb friction (stick-slip) and relays written with FSW."""
 
-import time
-
 import numpy as np
 import pytest
 
@@ -35,11 +33,9 @@ def test_stick_slip_against_closed_form(stick_slip, method):
     stuck = (r.t > t1 + 0.1) & (r.t < t2 - 0.1)
     assert np.allclose(r["F"][stuck], r["X"][stuck], atol=X_TOL[method] * 10)
     assert np.allclose(r["V"][stuck], 0.1, atol=X_TOL[method])
-    # the warning: once, naming the switch and when it slid
-    assert len(r.warnings) == 1, r.warnings
-    w = r.warnings[0]
-    assert "sliding" in w and "FSW" in w and "line 5" in w
-    assert f"{slides[0].time:.6g}" in w
+    # the slide is an event naming the switch (the printout words it); no NOTE
+    assert "FSW" in slides[0].switch and "line 5" in slides[0].switch
+    assert not r.warnings, r.warnings
     assert len(r.events) <= 10
 
 
@@ -50,7 +46,7 @@ def test_relay_on_integrator_slides(method):
     assert abs(r.events[0].time - 1.0) <= 1e-6 and r.events[0].kind == "slide"
     after = r.t > 1.0 + 1e-6
     assert np.max(np.abs(r["X"][after])) <= 1e-9
-    assert len(r.warnings) == 1
+    assert not r.warnings
 
 
 @pytest.mark.parametrize("method", C.METHODS)
@@ -60,21 +56,20 @@ def test_relay_sliding_line(method):
     x, tr = C.relay_sliding_exact(r.t)
     tol = 5e-3 if method == "EULER" else 1e-4
     assert np.max(np.abs(r["X"] - x)) <= tol
-    assert len(r.events) <= 4 and len(r.warnings) == 1
+    assert len(r.events) <= 4 and not r.warnings
+    assert [e.kind for e in r.events].count("slide") == 1
 
 
 @pytest.mark.parametrize("method", C.METHODS)
 def test_relay_with_lag_is_bounded(method):
     """A relay through a lag switches ever faster (Zeno); the run must end in
-    bounded events and time with a clear message, or finish."""
-    started = time.perf_counter()
+    bounded events (and, by its limit, time) with a clear message, or finish. (How
+    long it takes is the harness's to bound, not an assertion's.)"""
     r, = amilpy.loads(C.RELAY_LAG).run(method=method, max_events=2000, max_time=20)
-    elapsed = time.perf_counter() - started
-    assert elapsed < 15
     assert len(r.events) <= 2001
     if not r.ok:
         assert "TIME =" in r.message
-        assert any(s in r.message for s in ("chatters", "switching events", "step size")), \
-            r.message
+        assert any(s in r.message for s in ("chatters", "switching events", "step size",
+                                            "wall-clock limit")), r.message
         assert len(r.times) > 100  # the rows before are kept
     assert np.all(np.isfinite(r["X"]))

@@ -1,0 +1,24 @@
+"""Running a checked model: the run as a flow map.
+
+    prepare.py   constants, compiled functions and the plan of one run; the Cache
+    plan.py      RunPlan: route, TIMER values, Tolerances, grid, watched surfaces,
+                 breakpoints (plain data, decided once)
+    watch.py     SurfaceWatch: branches, crossings located on the dense output,
+                 the branch to enter, sliding (slide.py: several surfaces at once)
+    loop.py      Integrator: segments, steps, events, restarts, limits
+    record.py    rows on the output grid, RANGE brackets, the Run
+    simulate.py  simulate(): one run from start to Run, RANGE located, TERMINAL
+    flow.py      Flow.advance(): the loop as a function, with its sensitivity
+    faults.py    the one phrasing of an arithmetic fault in generated code
+
+The documented internal API: `simulate`, `Options`, `prepare` (with `Cache`
+and `Prepared`), `Flow` and `State`.
+"""
+
+from .flow import Flow, State
+from .plan import DEFAULTS, Options, RunPlan, Tolerances
+from .prepare import Cache, Prepared, prepare
+from .simulate import simulate
+
+__all__ = ["DEFAULTS", "Cache", "Flow", "Options", "Prepared", "RunPlan", "State",
+           "Tolerances", "prepare", "simulate"]

@@ -1,0 +1,501 @@
+"""The integration loop: segments between breakpoints, steps, events, restarts.
+
+`Integrator.integrate` takes a state (TIME, states, modes, memory) to an end
+time. A segment runs from a restart to the next breakpoint with the branches
+frozen; after each accepted step the watch looks for crossings, locates the
+first, cuts the step there and the segment ends with a restart in the new
+branches (`_restart`). Output rows go to a `Recorder` when one is given; a
+failure raises `Stop` with its outcome kind and data (`outcome.MESSAGES`).
+"""
+
+from __future__ import annotations
+
+import math
+import time as _clock
+from bisect import bisect_left, bisect_right
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import ir
+from ..codegen import Compiled
+from ..outcome import Failure
+from ..result import Event
+from ..steppers import Chunked, Hermite, StepFailure, Stepper, first_bad, make_stepper
+from .faults import Fault, fault_text
+from .plan import SLIDE, Options, Purpose, RunPlan, SurfaceKind, time_breakpoints
+from .record import Recorder
+from .watch import SurfaceWatch, TooManySlides, wrong_side
+
+# (ta, tb, dense output, modes, memory) of every accepted step, for analyses
+Observer = Callable[[float, float, Callable, list, list], None]
+
+
+class Stop(Exception):
+    """The run ends here, for `kind`, with the data its message needs."""
+
+    def __init__(self, kind: Failure, t: float, **fields: object) -> None:
+        super().__init__(kind.value)
+        self.kind = kind
+        self.t = t
+        self.fields = fields
+
+
+@dataclass
+class Cursor:
+    """Where the integration stands. `m` is shared with the segment's vector field
+    (a silent switch changes it in place)."""
+
+    t: float
+    y: np.ndarray
+    m: list[float]
+    z: list[float]
+
+
+@dataclass
+class _Step:
+    """What the watch found in one accepted step."""
+
+    tb: float
+    yb: np.ndarray
+    triggered: set[int]  # located at zero at tb
+    departed: set[int]  # left a zero it sat on
+    exits: dict[int, float]  # sliding surfaces leaving, to which side
+    truncated: bool
+    e_b: list[float]  # the watched surfaces at tb
+
+
+class Integrator:
+    """Integrates one run's model under its plan; keeps the run's events, warnings
+    and counts across calls of `integrate`."""
+
+    def __init__(self, model: ir.Model, plan: RunPlan, c: Compiled, watch: SurfaceWatch,
+                 opts: Options, started: float | None = None) -> None:
+        self.model, self.plan, self.c, self.watch, self.opts = model, plan, c, watch, opts
+        self.started = _clock.perf_counter() if started is None else started
+        self.deadline = self.started + opts.max_time if opts.max_time else None
+        self.events: list[Event] = []
+        self.warnings: list[str] = []
+        self.nsteps = 0
+        self.nfev = 0
+        self.faults: list[Fault] = []  # arithmetic faults the integration has not passed
+        self.last_good: tuple[float, np.ndarray, list[float]] | None = None
+        self.stop_reason: int | None = None  # the FINISH/TERMT surface that ended the run
+        self._stiff_noted = False
+        self._recent: list[float] = []  # restart instants (chatter)
+        self._last_step: float | None = None
+        self._tiny = 0
+        self._iterations = 0
+        self.breakpoints, self.roots = plan.breakpoints, plan.roots
+        self.check_times = plan.grid.times  # where AUTO looks at the surfaces
+
+    # ------------------------------------------------------------------ public
+    def first_step(self, h: float) -> None:
+        """The first step to try (a restart takes the length of the step before)."""
+        self._last_step = h
+
+    def window(self, t0: float, t1: float) -> None:
+        """Breakpoints and check instants for an integration outside the run's own
+        [t0, FINTIM] (check instants every output interval, as on the grid)."""
+        plan = self.plan
+        if t0 < plan.t0 or t1 > plan.fintim:
+            self.roots, points = time_breakpoints(self.c, list(plan.watched), t0, t1)
+            self.breakpoints = tuple(points)
+            step = min(plan.timer["OUTDEL"], plan.timer["PRDEL"])
+            k0, k1 = math.floor((t0 - plan.t0) / step), math.ceil((t1 - plan.t0) / step)
+            self.check_times = plan.t0 + step * np.arange(k0, k1 + 1)
+
+    def integrate(self, cur: Cursor, t_end: float, rec: Recorder | None = None,
+                  stop_at_event: bool = False, observer: Observer | None = None) -> Cursor:
+        """Integrate from `cur` to `t_end`, a FINISH/TERMT, or (stop_at_event) the
+        first event; rows go to `rec`. Raises Stop when the run cannot go on."""
+        bad = first_bad(cur.y)
+        if bad is not None:
+            raise Stop(Failure.INITIAL_NOT_FINITE, cur.t, name=self.c.state_names[bad],
+                       value=cur.y[bad])
+        n_events = len(self.events)
+        while cur.t < t_end and self.stop_reason is None:
+            if stop_at_event and len(self.events) > n_events:
+                break
+            seg_end = self._segment_end(cur, t_end)
+            stepper, f = self._start_segment(cur, seg_end, rec, observer is not None)
+            try:
+                self._segment(cur, stepper, f, seg_end, t_end, rec, observer, stop_at_event)
+            finally:
+                self.nfev += stepper.nfev
+                self.nsteps += stepper.nstep
+        return cur
+
+    # ---------------------------------------------------------------- segments
+    def _segment_end(self, cur: Cursor, t_end: float) -> float:
+        k = bisect_right(self.breakpoints, cur.t * (1 + 1e-15) + 1e-300)
+        seg_end = t_end
+        if k < len(self.breakpoints):
+            seg_end = min(seg_end, self.breakpoints[k])
+        for end in self._pulse_ends(cur.z, cur.t):
+            seg_end = min(seg_end, end)
+        return seg_end
+
+    def _pulse_ends(self, z, t: float) -> list[float]:
+        return [e for e in self.c.memory_times(z, t) if e < self.plan.fintim]
+
+    def vector_field(self, cur: Cursor) -> Callable[[float, np.ndarray], list]:
+        """The segment's vector field for the steppers. An arithmetic fault gives
+        NaN (the solver shortens its step) and is kept for the message. A point
+        exactly on a surface (the segment's start, say) may be where the branch in
+        force has no value (X/P at P = 0 in X/FCNSW(P, P, 1., P)): there the
+        function's own branch at zero is taken, as it is defined."""
+        m, z, faults, n = cur.m, cur.z, self.faults, len(cur.y)
+        deadline, calls = self.deadline, [0]
+        rhs, sliding, field = self.c.rhs, SLIDE in m, self.watch.field
+
+        def f(t, y):
+            if deadline is not None:
+                calls[0] += 1
+                if calls[0] % 256 == 0 and _clock.perf_counter() > deadline:
+                    raise Stop(Failure.TIME_LIMIT, t, limit=self.opts.max_time)
+            try:
+                # no surface slides: the compiled derivatives themselves (the hot path)
+                return field(t, y, m, z) if sliding else rhs(t, y.tolist(), m, z)
+            except (ArithmeticError, ValueError) as exc:
+                try:
+                    on = self.watch.at_zero(t, y, m, z)
+                    if on != m:
+                        return field(t, y, on, z)
+                except (ArithmeticError, ValueError):
+                    pass
+                faults.append(Fault(exc, t, y.tolist(), list(m), list(z)))
+                return [math.nan] * n
+            except TooManySlides as exc:
+                raise Stop(Failure.SLIDES, t, count=exc.count, limit=6) from None
+        return f
+
+    def _start_segment(self, cur: Cursor, seg_end: float, rec: Recorder | None,
+                       dense: bool = False) -> tuple[Stepper, Callable]:
+        """The segment's stepper. `dense`: an observer wants every step's dense
+        output, which AUTO's LSODA class gives as it steps (odeint's chunks would
+        integrate every interval again for it)."""
+        plan = self.plan
+        f = self.vector_field(cur)
+        if len(cur.y):
+            # a derivative that is not finite where a segment starts can never give
+            # an accepted step: say so instead of shrinking the step forever
+            f0 = np.asarray(f(cur.t, cur.y), dtype=float)
+            bad = first_bad(f0)
+            if bad is not None:
+                raise self.fault_or(Stop(Failure.DERIVATIVE_NOT_FINITE, cur.t,
+                                          name=self.c.state_names[bad], value=f0[bad]))
+        checks = None
+        # while a surface slides, step by step (LSODA's class): its exit is seen at
+        # the step it happens, with no chunk integrated past it
+        if plan.chunked and SLIDE not in cur.m and not dense:
+            # the AUTO route steps from output instant to output instant
+            times = self.check_times
+            lo = bisect_right(times, cur.t, rec.out_i if rec else 0)
+            checks = times[lo:bisect_left(times, seg_end, lo)]
+        # with nothing to watch nothing is thrown away after a chunk: one odeint call
+        # per segment (a FINISH would throw away the rest of the run)
+        chunk = 16 if plan.watch_idx else 1 << 30
+        stepper = make_stepper(
+            plan.route.name, f, cur.t, cur.y, seg_end, rtol=plan.tol.rtol, atol=plan.tol.atol,
+            delt=plan.timer["DELT"], max_step=plan.max_step, first_step=self._last_step,
+            checks=checks, chunk=chunk, max_steps=self.opts.max_steps - self.nsteps)
+        return stepper, f
+
+    def _segment(self, cur: Cursor, stepper: Stepper, f, seg_end: float, t_end: float,
+                 rec: Recorder | None, observer: Observer | None, stop_at_event: bool) -> None:
+        """Step until the segment ends: its bound, a restart, or a stop."""
+        c, plan = self.c, self.plan
+        e_prev = c.surf(cur.t, cur.y.tolist(), cur.m, cur.z) if plan.watch_idx else []
+        seg_start = cur.t
+        bulk = isinstance(stepper, Chunked) and SLIDE not in cur.m and rec is not None
+        while True:
+            if bulk:
+                e_prev = self._take_clean(stepper, cur, seg_end, rec, e_prev)
+            self._check_limits(cur.t, stepper)
+            failure = stepper.step()
+            if failure is not None:
+                raise self._stop_for(failure, stepper)
+            ta, step = stepper.t_old, self._accepted(stepper, cur, e_prev, seg_start)
+            e_prev = step.e_b
+            if rec is not None:
+                self._rows_inside(rec, stepper, f, ta, cur.y, step.tb, step.yb, cur)
+            if observer is not None:
+                observer(ta, step.tb, stepper.interpolant(), list(cur.m), list(cur.z))
+            tb, yb = step.tb, step.yb
+            at_output = rec is not None and rec.out_i < len(plan.grid.times) and \
+                plan.grid.times[rec.out_i] <= tb * (1 + 4e-16)
+            at_boundary = tb >= seg_end
+            if at_boundary and tb < t_end:
+                # a breakpoint: the surfaces on TIME that reach zero here decide anew
+                step.triggered |= {k for k, root in self.roots.items() if root == tb}
+            if step.triggered or step.departed or (at_boundary and tb < t_end):
+                if self._restart(cur, step, ta, at_output, at_boundary, rec, stop_at_event):
+                    return
+                at_output = False  # recorded by the restart, in the new branches
+            elif c.z0:
+                cur.z[:] = c.mem(tb, yb.tolist(), cur.m, cur.m, cur.z)
+            if at_output:
+                rec.grid_row(tb, yb, cur.m, cur.z)
+            cur.t, cur.y = tb, yb
+            if at_boundary:
+                return
+            if self.opts.progress is not None and self._iterations % 200 == 0:
+                self.opts.progress(cur.t, plan.fintim, len(self.events),
+                                   self.nsteps + stepper.nstep)
+            if any(cur.t < e < seg_end for e in self._pulse_ends(cur.z, cur.t)):
+                return
+
+    def _check_limits(self, t: float, stepper: Stepper) -> None:
+        self._iterations += 1
+        if self.nsteps + stepper.nstep >= self.opts.max_steps:
+            raise Stop(Failure.STEPS, t, limit=self.opts.max_steps)
+        if self.deadline is not None and _clock.perf_counter() > self.deadline:
+            raise Stop(Failure.TIME_LIMIT, t, limit=self.opts.max_time)
+
+    # ------------------------------------------------------------------- steps
+    def _accepted(self, stepper: Stepper, cur: Cursor, e_prev, seg_start: float):
+        """Checks of an accepted step, then the watch: crossings located, the step
+        cut at the first."""
+        ta, tb, yb = stepper.t_old, stepper.t, stepper.y
+        self.last_good = (tb, yb, list(cur.m))
+        if stepper.stiff is not None and not self._stiff_noted:
+            self._stiff_noted = True
+            self.warnings.append(
+                f"stiff from TIME = {stepper.stiff.t:.6g}: the steps of METHOD "
+                f"{self.plan.method} are limited by stability, not accuracy (h*|lambda| = "
+                f"{stepper.stiff.h_lambda:.3g}): METHOD AUTO or STIFF needs far fewer steps")
+        if tb - ta < self.plan.h_floor:
+            self._tiny += 1
+            if self._tiny >= 100:
+                big = int(np.argmax(np.abs(yb)))
+                raise Stop(Failure.STEP_UNDERFLOW, tb, floor=self.plan.h_floor,
+                           origin=self.plan.floor_origin, name=self.c.state_names[big],
+                           value=yb[big])
+        else:
+            self._tiny = 0
+        bad = first_bad(yb)
+        if bad is not None:
+            raise self.fault_or(Stop(Failure.NOT_FINITE, ta, name=self.c.state_names[bad],
+                                      detail=""))
+        self._passed(tb)
+        return self._watch_step(stepper, cur, ta, tb, yb, e_prev, seg_start)
+
+    def _watch_step(self, stepper: Stepper, cur: Cursor, ta: float, tb: float,
+                    yb: np.ndarray, e_prev, seg_start: float) -> _Step:
+        c, watch, m, z = self.c, self.watch, cur.m, cur.z
+        step = _Step(tb, yb, set(), set(), {}, False, e_prev)
+        if not self.plan.watch_idx:
+            return step
+        e_b = c.surf(tb, yb.tolist(), m, z)
+        hits, silent = [], []
+        for k in self.plan.watch_idx:
+            if m[k] != SLIDE and watch.crossed(k, m[k], e_b[k]):
+                # a branch that feeds nothing the states see now (a switch inside an
+                # unused branch): follow its sign, no need to stop and restart
+                (silent if watch.silent(k, tb, yb, m, z) else hits).append(k)
+        slide_exit = watch.slide_exits(m, tb, yb, z)
+        if hits or slide_exit:
+            interp = stepper.interpolant()
+            roots = {}
+            for k in hits:
+                tk = watch.locate(k, m, z, interp, ta, tb, seg_start)
+                if tk is None:
+                    step.departed.add(k)  # no crossing to bracket: sign at tb
+                else:
+                    roots[k] = tk
+            for k, side in slide_exit:
+                roots[k] = watch.locate_slide_exit(k, side, m, z, interp, ta, tb)
+            t_star = min(roots.values(), default=tb)
+            if t_star < tb:
+                # the solver has moved past t_star: it must restart
+                stepper.truncate(t_star)
+                step.tb, step.yb, step.truncated = stepper.t, stepper.y, True
+            e_b = c.surf(step.tb, step.yb.tolist(), m, z)
+            close = 8 * np.finfo(float).eps * max(abs(step.tb), 1e-300)
+            step.triggered = {k for k, tk in roots.items() if tk - t_star <= close}
+            # leaving a sliding motion: the side it leaves to is known
+            step.exits = {k: side for k, side in slide_exit if k in step.triggered}
+        if silent and not step.truncated:
+            lit = c.modes_literal(step.tb, step.yb.tolist(), m, z)
+            for k in silent:
+                m[k] = lit[k]
+            e_b = c.surf(step.tb, step.yb.tolist(), m, z)
+        # a surface sitting at zero (mode 0) that has moved off it
+        for k in self.plan.watch_idx:
+            if m[k] == 0.0 and self.plan.watched[k].kind is SurfaceKind.SIGN and \
+                    abs(e_b[k]) > 1e-12 * (1 + abs(e_prev[k])) and e_b[k] != 0:
+                step.departed.add(k)
+        step.e_b = e_b
+        return step
+
+    def _rows_inside(self, rec: Recorder, stepper: Stepper, f, ta: float, ya: np.ndarray,
+                     tb: float, yb: np.ndarray, cur: Cursor) -> None:
+        """Rows at the grid instants inside (ta, tb); the one at tb waits for the
+        new modes."""
+        times = self.plan.grid.times
+        while rec.out_i < len(times) and times[rec.out_i] < tb * (1 - 4e-16):
+            to = float(times[rec.out_i])
+            yo = np.asarray(stepper.interpolant()(to), dtype=float)
+            if not np.isfinite(yo).all():
+                if first_bad(yb) is None:
+                    # the dense output overflowed inside (DOP853's does near 1E300)
+                    # while both ends are finite: a cubic through them
+                    yo = Hermite(ta, ya, np.asarray(f(ta, ya), float), tb, yb,
+                                 np.asarray(f(tb, yb), float))(to)
+                bad = first_bad(yo)
+                if bad is not None:
+                    raise Stop(Failure.NOT_FINITE, ta, name=self.c.state_names[bad],
+                               detail="")
+            rec.grid_row(to, yo, cur.m, cur.z)
+
+    # ----------------------------------------------------------------- restarts
+    def _restart(self, cur: Cursor, step: _Step, ta: float, at_output: bool,
+                 at_boundary: bool, rec: Recorder | None, stop_at_event: bool) -> bool:
+        """New branches at step.tb, their events, memory and resets. True if the
+        segment ends here (a restart, or the run stops)."""
+        c, watch, m, z = self.c, self.watch, cur.m, cur.z
+        tb, yb = step.tb, step.yb
+        new_m = watch.choose_modes(tb, yb, z, m, step.triggered, forced=step.exits)
+        for k in step.triggered:
+            purpose = self.plan.watched[k].purpose
+            if (purpose is Purpose.TERMT and new_m[k] > 0) or \
+                    (purpose is Purpose.FINISH and new_m[k] != m[k]):
+                self.stop_reason = k
+        n_events = len(self.events)
+        self.record_changes(tb, yb, m, new_m, z, step.triggered)
+        if c.z0:
+            z[:] = c.mem(tb, yb.tolist(), m, new_m, z)
+        changed = new_m != m
+        m[:] = new_m
+        y = watch.apply_resets(yb, m)
+        cur.t, cur.y = tb, y
+        if rec is not None:
+            rec.restarted(tb, y, m, z)
+        if at_output:
+            rec.grid_row(tb, y, m, z, shown=rec.shown_modes(tb, y, m, z))
+        if self.stop_reason is not None:
+            if rec is not None and rec.last_t != tb:
+                rec.row(tb, y, m, z)
+            return True
+        if stop_at_event and len(self.events) > n_events:
+            return True
+        if changed or at_boundary or step.truncated or not np.array_equal(y, yb):
+            self._recent.append(tb)
+            if len(self.events) > self.opts.max_events:
+                raise Stop(Failure.EVENTS, tb, limit=self.opts.max_events)
+            self._check_chatter()
+            self._last_step = max(tb - ta, 1e-12 * max(abs(tb), 1.0))
+            return True
+        return False
+
+    def record_changes(self, t: float, y: np.ndarray, m, new_m, z, at_zero: set[int]) -> None:
+        """An event for every watched surface whose branch changes at t."""
+        for k, w in enumerate(self.plan.watched):
+            if new_m[k] == m[k]:
+                continue
+            if k not in at_zero and self.watch.silent(k, t, y, new_m, z):
+                continue  # a branch nothing uses now: not an event
+            last = next((e for e in reversed(self.events) if e.surface == w.surface), None)
+            if last is not None and last.old == new_m[k] and \
+                    abs(last.time - t) <= 1e-12 * max(abs(t), 1e-300):
+                # switched and switched back at one instant (noise at a tangential
+                # crossing): nothing happened
+                self.events.remove(last)
+                continue
+            self.events.append(Event(t, w.description, w.surface, m[k], new_m[k],
+                                     w.event_kind(new_m[k]), w.text))
+
+    def _check_chatter(self) -> None:
+        recent = self._recent
+        if len(recent) < 200:
+            return
+        window = recent[-200:]
+        span = window[-1] - window[0]
+        if span <= 1e-9 * max(self.plan.fintim, abs(window[-1])):
+            what = f"{self.events[-1].switch} chatters" if self.events else \
+                "the run makes no progress"
+            raise Stop(Failure.CHATTER, window[-1], what=what, span=span)
+        del recent[:-200]
+
+    # ------------------------------------------------------------- the AUTO path
+    def _take_clean(self, stepper: Chunked, cur: Cursor, seg_end: float, rec: Recorder,
+                    e_prev):
+        """Record at once the pending odeint instants before the first one that needs
+        a look (a surface crossed, a non-finite state, the segment's end), using the
+        surface and output functions over NumPy columns. Returns the surfaces at the
+        last instant taken (or e_prev)."""
+        T, Y = stepper.pending()
+        n = len(T)
+        times = self.plan.grid.times
+        if n and T[-1] >= seg_end:
+            n -= 1  # the segment's end is a breakpoint: the step-by-step path ends it
+        if n == 0 or rec.out_i + n > len(times) or T[0] != times[rec.out_i]:
+            return e_prev
+        T, Y = T[:n], Y[:n]
+        finite = np.isfinite(Y).all(axis=1)
+        if not finite.all():
+            n = int(np.argmin(finite))
+        cols = list(Y[:n].T)
+        m, z, e_last = cur.m, cur.z, e_prev
+        if n and self.plan.watch_idx:
+            with np.errstate(all="ignore"):
+                E = [column(v, n) for v in self.c.surf_v(T[:n], cols, m, z)]
+                bad = wrong_side(self.plan, E, m)
+            if bad.any():
+                n = int(np.argmax(bad))
+                cols = [col[:n] for col in cols]
+            e_last = [float(e[n - 1]) for e in E] if n else e_prev
+        if n == 0:
+            return e_prev
+        with np.errstate(all="ignore"):
+            outs = self.c.out_v(T[:n], cols, m, z)
+        table = np.column_stack([column(v, n) for v in outs]) if outs else np.empty((n, 0))
+        rec.block(T[:n], Y[:n], table, m, z)
+        stepper.consume(n)
+        self._passed(stepper.t)
+        cur.t, cur.y = stepper.t, stepper.y
+        if self.deadline is not None and _clock.perf_counter() > self.deadline:
+            raise Stop(Failure.TIME_LIMIT, cur.t, limit=self.opts.max_time)
+        if self.opts.progress is not None:
+            self.opts.progress(cur.t, self.plan.fintim, len(self.events),
+                               self.nsteps + stepper.nstep)
+        return e_last
+
+    # ------------------------------------------------------------------ failures
+    def _passed(self, t: float) -> None:
+        """Faults before an accepted TIME were at trial points the solver stepped
+        around; those at or after it may still be the run's end."""
+        self.faults[:] = [f for f in self.faults if f.t >= t]
+
+    def fault_or(self, stop: Stop) -> Stop:
+        """A non-finite value or a solver's failure that follows an arithmetic fault
+        is that fault's doing: report the fault (the statement that failed), not the
+        symptom in some state."""
+        if not self.faults:
+            return stop
+        fault = self.faults[-1]
+        return Stop(Failure.FAULT, fault.t, detail=fault_text(self.model, self.c, fault))
+
+    def _stop_for(self, failure: StepFailure, stepper: Stepper) -> Stop:
+        """The outcome of a step that failed."""
+        name = self.c.state_names[failure.index] if failure.index is not None else None
+        if failure.kind is Failure.UNSTABLE:
+            return Stop(Failure.UNSTABLE, stepper.t, name=name, since=failure.since,
+                        method=self.plan.method, delt=self.plan.timer["DELT"],
+                        detail=failure.detail, safe=failure.safe_delt)
+        if failure.kind is Failure.STEPS:
+            return Stop(Failure.STEPS, failure.t, limit=self.opts.max_steps)
+        if failure.kind is Failure.NOT_FINITE and name is not None:
+            return self.fault_or(Stop(Failure.NOT_FINITE, stepper.t, name=name,
+                                       detail=f": {failure.detail}"))
+        return self.fault_or(Stop(Failure.SOLVER, stepper.t, detail=failure.detail))
+
+
+
+def column(v, n: int) -> np.ndarray:
+    """A vector function's result as n values (a constant comes back as a float)."""
+    if isinstance(v, np.ndarray) and v.shape == (n,):
+        return v
+    return np.full(n, float(v))

@@ -1,0 +1,338 @@
+"""The run plan: everything a run decides before its first step, as plain data.
+
+`make_plan` reads the run spec, the options and the compiled functions once and
+gives a `RunPlan`: the route, the TIMER values, per-state tolerances
+(`Tolerances`), the output grid, the watched surfaces with their bookkeeping,
+and the breakpoints (roots of surfaces affine in TIME, IMPULS instants). The
+loop reads the plan and never the spec or the options' raw values.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from enum import Enum
+
+import numpy as np
+
+from .. import ir
+from ..codegen import Compiled
+from ..diagnostics import AmilError
+from ..result import EventKind
+from ..routes import DEFAULT, Route, route_for
+from ..surfaces import linear_gradient, sign
+
+DEFAULTS = {
+    "rtol": 1e-6,
+    "atol": 1e-9,
+    "max_steps": 5_000_000,
+    "max_events": 200_000,
+    "max_rows": 2_000_000,
+}
+
+SLIDE = 0.5  # the mode of a sliding surface: not a sign (-1, 0, 1) nor a QNTZR level
+
+
+@dataclass
+class Options:
+    """How to run, from outside the listing (command line, API); None: the listing's."""
+
+    method: str | None = None
+    rtol: float | None = None  # replaces the listing's RELERR, per-state values included
+    atol: float | None = None  # likewise ABSERR
+    events: bool = True
+    outputs: list[str] | None = None
+    max_steps: int = DEFAULTS["max_steps"]
+    max_events: int = DEFAULTS["max_events"]
+    max_rows: int = DEFAULTS["max_rows"]
+    max_time: float | None = None  # wall-clock seconds
+    start: dict | None = None  # continue from a previous run's final_state
+    fintim: float | None = None  # run length instead of the listing's FINTIM
+    progress: Callable | None = None  # callable(t, fintim, events, steps) or None
+
+
+class SurfaceKind(str, Enum):
+    """How a surface's value selects its branch."""
+
+    SIGN = "sign"  # mode -1, 0 or +1 from the sign
+    LEVEL = "level"  # QNTZR: the mode is the quantisation level
+
+
+class Purpose(str, Enum):
+    """What a surface is for."""
+
+    SWITCH = "switch"
+    MEMORY = "memory"
+    FINISH = "finish"
+    TERMT = "termt"
+
+    @property
+    def stops(self) -> bool:
+        return self in (Purpose.FINISH, Purpose.TERMT)
+
+
+@dataclass(frozen=True)
+class Watched:
+    """A surface the run watches, with what the loop needs to know about it."""
+
+    surface: int  # index in ir.Model.surfaces
+    kind: SurfaceKind
+    purpose: Purpose
+    description: str  # the switch for a reader ("FSW for MFR (line 57)")
+    text: str  # the surface as the listing writes it ("W1", "TIME - T1")
+    gradient: np.ndarray | None  # d e/d y when the surface is linear in the states
+    breakpoint_only: bool  # affine in TIME: handled as breakpoints
+
+    def event_kind(self, new_mode: float) -> EventKind:
+        """What entering `new_mode` on this surface is, as an event."""
+        if self.breakpoint_only:
+            return EventKind.BREAKPOINT
+        if self.purpose.stops:
+            return EventKind(self.purpose.value)
+        if new_mode == SLIDE:
+            return EventKind.SLIDE
+        return EventKind.LEVEL if self.kind is SurfaceKind.LEVEL else EventKind.SWITCH
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """RELERR and ABSERR per state, as the variable-step routes take them.
+
+    `relerr`/`abserr` apply to every state not named; `relerr_each`/`abserr_each`
+    hold the listing's per-state values that applied (states of this model only).
+    An option from outside (`--rtol`, `rtol=`) replaces the listing's values,
+    per-state ones included.
+    """
+
+    rtol: np.ndarray
+    atol: np.ndarray
+    relerr: float
+    abserr: float
+    relerr_each: dict[str, float] = field(default_factory=dict)
+    abserr_each: dict[str, float] = field(default_factory=dict)
+
+    @classmethod
+    def build(cls, spec: ir.RunSpec, opts: Options, states: list[str]) -> Tolerances:
+        def side(option, scalar, each, default):
+            base = option or scalar or default
+            named = {} if option else {n: v for n, v in each.items() if n in states}
+            vector = np.array([named.get(n, base) for n in states], dtype=float)
+            return base, named, vector
+
+        relerr, r_each, rtol = side(opts.rtol, spec.relerr, spec.relerr_each, DEFAULTS["rtol"])
+        abserr, a_each, atol = side(opts.atol, spec.abserr, spec.abserr_each, DEFAULTS["atol"])
+        return cls(rtol, atol, relerr, abserr, r_each, a_each)
+
+    def describe(self) -> str:
+        """For the printout header: "RELERR 1e-06 (X 0.001), ABSERR 1e-09"."""
+        def one(word, base, each):
+            named = ", ".join(f"{n} {v:g}" for n, v in each.items())
+            return f"{word} {base:g}" + (f" ({named})" if named else "")
+        return f"{one('RELERR', self.relerr, self.relerr_each)}, " \
+               f"{one('ABSERR', self.abserr, self.abserr_each)}"
+
+
+@dataclass(frozen=True)
+class Grid:
+    """The output instants (the union of the OUTDEL and PRDEL grids) and which
+    grid each belongs to."""
+
+    times: np.ndarray
+    outdel: np.ndarray
+    prdel: np.ndarray
+
+
+@dataclass(frozen=True)
+class Reset:
+    """MODINT: state `state` is held at its initial value while surface 1 is <= 0
+    and surface 2 > 0 (each a watched position or a mode fixed for the run)."""
+
+    state: int
+    first: int | float  # int: a watched position; float: a constant mode
+    second: int | float
+
+
+@dataclass(frozen=True)
+class RunPlan:
+    route: Route
+    method: str  # as the listing or the caller spelled it
+    timer: dict[str, float]  # FINTIM, DELT, PRDEL, OUTDEL, DELMIN, DELMAX as applied
+    t0: float
+    fintim: float  # TIME at the end of the run
+    tol: Tolerances
+    grid: Grid
+    watched: tuple[Watched, ...]
+    watch_idx: tuple[int, ...]  # the watched positions that are not breakpoint-only
+    breakpoints: tuple[float, ...]
+    roots: dict[int, float]  # watched position -> its breakpoint
+    resets: tuple[Reset, ...]
+    chunked: bool  # AUTO drives odeint over chunks of output instants
+    max_step: float  # never step over more than an output interval
+    h_floor: float  # steps shorter than this make no progress
+    floor_origin: str  # where h_floor comes from, for the message
+    lookahead_h: float  # the step of a look-ahead (the branch the motion takes)
+    events: bool  # locate events (False: comparisons only)
+
+    @property
+    def settings(self) -> str:
+        """What the route ran with: tolerances or the fixed step."""
+        return self.tol.describe() if self.route.uses_tolerances else \
+            f"DELT {self.timer['DELT']:g}"
+
+
+def timer_values(spec: ir.RunSpec, fintim: float | None = None,
+                 max_rows: int = DEFAULTS["max_rows"]) -> dict[str, float]:
+    """CSMP TIMER defaults: OUTDEL = FINTIM/100 and PRDEL = OUTDEL when neither is
+    given; one given, the other takes its value; DELT divides the output interval."""
+    t = dict(spec.timer)
+    if fintim is not None:
+        if not fintim > 0:
+            raise AmilError(f"FINTIM must be positive (got {fintim:g})")
+        t["FINTIM"] = fintim
+    fintim = t["FINTIM"]
+    if "OUTDEL" not in t and "PRDEL" not in t:
+        t["OUTDEL"] = fintim / 100.0
+        t["PRDEL"] = t["OUTDEL"]
+    elif "OUTDEL" not in t:
+        t["OUTDEL"] = t["PRDEL"]
+    elif "PRDEL" not in t:
+        t["PRDEL"] = t["OUTDEL"]
+    interval = min(t["OUTDEL"], t["PRDEL"], fintim)
+    for name in ("FINTIM", "OUTDEL", "PRDEL"):
+        if not (math.isfinite(t[name]) and t[name] > 0.0):
+            raise AmilError(f"{name} = {t[name]:g} is not a usable time (FINTIM = {fintim:g})")
+    rows = fintim / interval
+    if not rows <= max_rows:
+        raise AmilError(f"FINTIM/{'OUTDEL' if t['OUTDEL'] <= t['PRDEL'] else 'PRDEL'} = "
+                        f"{rows:.3g} output rows (limit {max_rows}): raise OUTDEL/PRDEL")
+    if "DELT" in t:
+        n = max(1, math.ceil(interval / t["DELT"] - 1e-9))
+        t["DELT"] = interval / n
+    else:
+        t["DELT"] = interval / 16.0
+    t.setdefault("DELMIN", 0.0)
+    t.setdefault("DELMAX", math.inf)
+    return t
+
+
+def reserved_values(timer: dict[str, float]) -> dict[str, float]:
+    """The TIMER values a listing may read (DELT, FINTIM, ...)."""
+    return {k: timer[k] for k in ("FINTIM", "DELT", "PRDEL", "OUTDEL", "DELMIN", "DELMAX")}
+
+
+def _grid(t0: float, fintim: float, step: float) -> np.ndarray:
+    n = int(math.floor((fintim - t0) / step * (1 + 1e-12) + 1e-9))
+    g = t0 + step * np.arange(n + 1)
+    if fintim - g[-1] > 1e-9 * step:
+        g = np.append(g, fintim)
+    else:
+        g[-1] = fintim
+    return g
+
+
+def make_grid(t0: float, fintim: float, outdel: float, prdel: float) -> Grid:
+    go = _grid(t0, fintim, outdel)
+    gp = _grid(t0, fintim, prdel)
+    times = np.union1d(go, gp)
+    return Grid(times, np.isin(times, go), np.isin(times, gp))
+
+
+def resolve_route(spec: ir.RunSpec, opts: Options) -> tuple[Route, str]:
+    """The route a run takes and the METHOD name as spelled."""
+    requested = opts.method or spec.method or DEFAULT
+    route = route_for(requested)
+    if route is None:
+        raise AmilError(f"unknown integration method {requested}")
+    return route, requested.upper()
+
+
+def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: Compiled,
+              timer: dict[str, float], grid: Grid) -> RunPlan:
+    """The plan of one run, from its compiled functions (breakpoints need them)."""
+    route, method = resolve_route(spec, opts)
+    t0 = float(opts.start["t"]) if opts.start else 0.0
+    fintim = t0 + timer["FINTIM"]
+    state_index = {n: i for i, n in enumerate(c.state_names)}
+    watched = []
+    for i in c.watched:
+        s = model.surfaces[i]
+        kind = SurfaceKind(s.kind)
+        g = linear_gradient(s.expr, state_index, c.constants) \
+            if kind is SurfaceKind.SIGN else None
+        watched.append(Watched(i, kind, Purpose(s.purpose), s.description, s.text,
+                               None if g is None else np.asarray(g), i in c.affine_time))
+    roots, breakpoints = time_breakpoints(c, watched, t0, fintim)
+    pos = {i: k for k, i in enumerate(c.watched)}
+    resets = []
+    for si, s in enumerate(model.states):
+        if s.reset_surfaces:
+            s1, s2 = s.reset_surfaces
+            resets.append(Reset(si, *(pos[x] if x in pos else c.const_modes.get(x, 0.0)
+                                      for x in (s1, s2))))
+    floor_given = timer.get("DELMIN", 0.0) > 0.0
+    # steps this short make no progress: FINTIM*1e-12 is ~4000 ulps of FINTIM
+    return RunPlan(
+        route=route, method=method, timer=timer, t0=t0, fintim=fintim,
+        tol=Tolerances.build(spec, opts, c.state_names), grid=grid,
+        watched=tuple(watched),
+        watch_idx=tuple(k for k, w in enumerate(watched) if not w.breakpoint_only),
+        breakpoints=tuple(breakpoints), roots=roots, resets=tuple(resets),
+        chunked=route.stepper == "odeint" and not c.memory_every_step,
+        max_step=min(timer["DELMAX"], max(timer["OUTDEL"], timer["PRDEL"])),
+        h_floor=timer["DELMIN"] if floor_given else 1e-12 * (fintim - t0),
+        floor_origin="TIMER DELMIN" if floor_given else
+        "the default floor FINTIM*1E-12; TIMER DELMIN lowers it",
+        lookahead_h=1e-8 * max(fintim - t0, abs(t0) * 1e-8),
+        events=opts.events,
+    )
+
+
+def time_breakpoints(c: Compiled, watched: list[Watched], t0: float, t1: float
+                     ) -> tuple[dict[int, float], list[float]]:
+    """The breakpoints in (t0, t1): roots of the surfaces affine in TIME (by watched
+    position) and the instants of IMPULS trains, sorted."""
+    roots: dict[int, float] = {}
+    for k, w in enumerate(watched):
+        if w.breakpoint_only:
+            root = _affine_root(c, k, t0, t1)
+            if root is not None and t0 < root < t1:
+                roots[k] = root
+    points = list(roots.values())
+    for start, period in c.impulses:
+        if period > 0:
+            k0 = max(0, math.ceil((t0 - start) / period))
+            n = int(min((t1 - start) / period, k0 + 1_000_000))
+            points.extend(start + k * period for k in range(k0, max(n, -1) + 1)
+                          if t0 < start + k * period < t1)
+        elif t0 < start < t1:
+            points.append(start)
+    return roots, sorted(set(points))
+
+
+def _affine_root(c: Compiled, k: int, t0: float, t1: float) -> float | None:
+    """The first float at which an affine time surface reaches zero in [t0, t1]."""
+    y, z, m = list(c.y0), list(c.z0), [0.0] * len(c.watched)
+
+    def e(t: float) -> float:
+        return c.surf(t, y, m, z)[k]
+
+    e0, e1 = e(t0), e(t1)
+    slope = (e1 - e0) / (t1 - t0)
+    if slope == 0.0 or sign(e0) == sign(e1) and e1 != 0.0:
+        return None
+    r = t0 - e0 / slope
+    # polish to the first float where the sign has changed (or is zero)
+    before = sign(e0)
+    for _ in range(64):
+        if sign(e(r)) == before and before != 0:
+            r = math.nextafter(r, math.inf)
+        else:
+            break
+    for _ in range(64):
+        p = math.nextafter(r, -math.inf)
+        if sign(e(p)) != before and p > t0:
+            r = p
+        else:
+            break
+    return r

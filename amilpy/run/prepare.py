@@ -1,0 +1,97 @@
+"""From a checked model and a run spec to what a run needs: the run's constants
+(data, TIMER and INITIAL values), its compiled functions and its plan.
+
+`prepare` is the documented way in for anything that wants a run's compiled
+functions without running it (`--show-python`, benchmarks, tests). A `Cache`
+keeps compiled functions, INITIAL values and grids between the runs of one model;
+`api.Model` owns one, so the IR holds no caches.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TypeVar
+
+from .. import ir
+from ..codegen import Compiled, Compiler, evaluate_constant, fault_line, initial_values
+from ..diagnostics import AmilError, Diagnostic, Span
+from ..surfaces import level, sign
+from .plan import Options, RunPlan, make_grid, make_plan, reserved_values, timer_values
+
+T = TypeVar("T")
+
+
+class Cache:
+    """Values a model's runs share, by the data that determines them: INITIAL
+    values per set of data, compiled functions per set of constants, output grids
+    per timer. Each table is cleared when it grows past its limit (a long sweep)."""
+
+    LIMITS = {"initial": 256, "compiled": 64, "grid": 64}
+
+    def __init__(self) -> None:
+        self._tables: dict[str, dict] = {name: {} for name in self.LIMITS}
+
+    def get(self, table: str, key, make: Callable[[], T]) -> T:
+        entries = self._tables[table]
+        if key not in entries:
+            if len(entries) > self.LIMITS[table]:
+                entries.clear()
+            entries[key] = make()
+        return entries[key]
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """One run, ready to integrate."""
+
+    constants: dict[str, float]  # data, TIMER and INITIAL values
+    compiled: Compiled
+    plan: RunPlan
+
+
+def prepare(model: ir.Model, spec: ir.RunSpec, opts: Options | None = None,
+            cache: Cache | None = None) -> Prepared:
+    """Constants, compiled functions and plan of one run. A fault while evaluating
+    the constant parts (INITIAL, fixed branches, breakpoint instants) is an
+    AmilError at the listing's line."""
+    opts = opts or Options()
+    cache = cache or Cache()
+    try:
+        return _prepare(model, spec, opts, cache)
+    except (ArithmeticError, ValueError) as exc:
+        line = fault_line(exc)
+        raise AmilError([Diagnostic(f"cannot be evaluated before the run: {exc}",
+                                    Span(line, 1) if line else None,
+                                    "check the constant expressions on that line")],
+                        model.path, model.source) from None
+
+
+def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> Prepared:
+    timer = timer_values(spec, opts.fintim, opts.max_rows)
+    reserved = reserved_values(timer)
+    tables = repr(sorted(spec.tables.items()))
+    ikey = (tuple(sorted(spec.data.items())), tuple(sorted(reserved.items())), tables)
+    constants = dict(cache.get("initial", ikey, lambda: initial_values(
+        model, spec.data, spec.tables, reserved)))
+    const_modes = {}
+    for s in model.surfaces:
+        if s.depends == "impulse":
+            const_modes[s.index] = 0.0
+        if s.depends == "const":
+            value = evaluate_constant(model, s.expr, constants, spec.tables, s.span)
+            const_modes[s.index] = level(value) if s.kind == "level" else sign(value)
+    ckey = (tuple(sorted(constants.items())), tables,
+            tuple(opts.outputs) if opts.outputs is not None else None, opts.events)
+    compiled = cache.get("compiled", ckey, lambda: Compiler(
+        model, constants, spec.tables, const_modes, opts.outputs, opts.events).build())
+    t0 = float(opts.start["t"]) if opts.start else 0.0
+    fintim = t0 + timer["FINTIM"]
+    gkey = (t0, fintim, timer["OUTDEL"], timer["PRDEL"])
+    grid = cache.get("grid", gkey, lambda: make_grid(t0, fintim, timer["OUTDEL"],
+                                                     timer["PRDEL"]))
+    if len(grid.times) > opts.max_rows:
+        raise AmilError([Diagnostic(
+            f"the run would print {len(grid.times)} rows (limit {opts.max_rows})",
+            None, "raise OUTDEL/PRDEL")], model.path, model.source)
+    return Prepared(constants, compiled, make_plan(model, spec, opts, compiled, timer, grid))

@@ -1,0 +1,347 @@
+"""What a run records: output rows on the grid, RANGE candidates, and the `Run`.
+
+`Recorder` takes rows from the loop (one at a time from the step-by-step path,
+whole blocks from an odeint chunk) and keeps them as arrays. `shown_modes` is
+the one rule for what a row at a switching instant shows. `Extrema` watches the
+RANGE variables' rows for the brackets where their minimum and maximum may lie;
+`simulate.locate_range` zooms into them. `Recorder.run` assembles the `Run`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..codegen import Compiled
+from ..language import RESERVED
+from ..result import Event, Run, Status
+from .plan import RunPlan
+from .watch import SurfaceWatch
+
+
+class Rows:
+    """The recorded output rows, in order: single rows from the step-by-step path,
+    whole blocks from an odeint chunk (kept as arrays, never split into lists)."""
+
+    def __init__(self, width: int) -> None:
+        self.width = width
+        self.blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        self.t: list[float] = []
+        self.g: list[int] = []
+        self.v: list[list[float]] = []
+        self.last_t: float | None = None
+
+    def add(self, t: float, g: int, values: list[float]) -> None:
+        self.t.append(t)
+        self.g.append(g)
+        self.v.append(values)
+        self.last_t = t
+
+    def _flush(self) -> None:
+        if self.t:
+            self.blocks.append((np.asarray(self.t, float), np.asarray(self.g, int),
+                                np.asarray(self.v, float).reshape(len(self.t), self.width)))
+            self.t, self.g, self.v = [], [], []
+
+    def add_block(self, t: np.ndarray, g: np.ndarray, values: np.ndarray) -> None:
+        self._flush()
+        self.blocks.append((t, g, values))
+        self.last_t = float(t[-1])
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        self._flush()
+        if not self.blocks:
+            return np.empty(0), np.empty(0, int), np.empty((0, self.width))
+        return tuple(np.concatenate(parts) for parts in zip(*self.blocks, strict=True))
+
+
+@dataclass(frozen=True)
+class Bracket:
+    """An interval that may hold an extremum, and the state where it starts."""
+
+    ta: float
+    tb: float
+    y: np.ndarray
+    m: tuple[float, ...]
+    z: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """Where a variable's maximum (or, negated, minimum) may lie."""
+
+    score: float  # the vertex of the parabola through three rows (at an edge: the row)
+    t: float  # where the score is
+    sample: float  # the middle row's own value
+    bracket: Bracket
+    edge: Bracket | None = None  # the run's first or last row, when the candidate is it
+    middle: Bracket | None = None  # the middle row (ta: its TIME), for a local maximum
+
+
+class Extrema:
+    """Brackets of each RANGE variable's minimum and maximum, from its rows.
+
+    A row whose value is at least its neighbours' is a local maximum of the
+    samples; the true one lies between the neighbours. Its score is the vertex
+    of the parabola through the three rows; the KEEP best-scoring candidates are
+    kept (with the state where their bracket starts), so a peak between two rows
+    that rises above the sampled maximum is found whatever OUTDEL is, as long as
+    the variable turns at most once between two rows. The first and the last
+    row are candidates of the interval next to them. Rows are buffered and
+    scanned with NumPy a batch at a time, every variable at once. Columns: each
+    variable's maximum, then each one's minimum (of the negated values).
+    """
+
+    KEEP = 1
+    BATCH = 8192
+
+    def __init__(self, names: list[str], columns: list[int]) -> None:
+        self.names = names
+        self.columns = columns
+        k = 2 * len(names)
+        self.best = np.full(k, -np.inf)
+        self.best_t = np.full(k, np.nan)
+        self.candidates: list[list[Candidate]] = [[] for _ in range(k)]
+        self.parts: list[tuple] = []  # (T, values, Y, modes, memory) not scanned yet
+        self.single: list[tuple[float, np.ndarray, np.ndarray, tuple, tuple]] = []
+        self.buffered = 0
+        self._starts = np.zeros(1, int)  # where each part begins in a scan
+        self.started = False
+
+    def add(self, t: float, values: list[float], y: np.ndarray, m, z) -> None:
+        """One row (y is kept, not copied: the loop never changes a state in place)."""
+        if self.names:
+            self.single.append((t, values, y, tuple(m), tuple(z)))
+            self.buffered += 1
+            if self.buffered >= self.BATCH:
+                self._scan_buffer()
+
+    def add_many(self, T: np.ndarray, V: np.ndarray, Y: np.ndarray, m, z) -> None:
+        """Rows T (values V, states Y), all taken with modes m and memory z."""
+        if self.names and len(T):
+            self._gather()
+            self.parts.append((T, V[:, self.columns], Y, tuple(m), tuple(z)))
+            self._grow(len(T))
+
+    def _grow(self, n: int) -> None:
+        self.buffered += n
+        if self.buffered >= self.BATCH:
+            self._scan_buffer()
+
+    def _gather(self) -> None:
+        """Single rows become one part (their modes and memory kept per row)."""
+        if self.single:
+            rows, self.single = self.single, []
+            values = np.array([r[1] for r in rows], dtype=float)[:, self.columns]
+            self.parts.append((np.array([r[0] for r in rows]), values,
+                               np.array([r[2] for r in rows], dtype=float),
+                               [r[3] for r in rows], [r[4] for r in rows]))
+
+    def _state(self, i: int) -> Bracket:
+        """Row i of the buffered parts, as the start of a bracket."""
+        starts = self._starts
+        k = int(np.searchsorted(starts, i, side="right")) - 1
+        T, _, Y, m, z = self.parts[k]
+        j = i - starts[k]
+        many = isinstance(m, list)
+        return Bracket(float(T[j]), math.nan, np.array(Y[j], float), m[j] if many else m,
+                       z[j] if many else z)
+
+    def _scan_buffer(self) -> None:
+        """Scan the buffered rows; keep the last two (their neighbours come later)."""
+        self._gather()
+        if not self.parts:
+            return
+        ts = np.concatenate([p[0] for p in self.parts])
+        vs = np.vstack([p[1] for p in self.parts])
+        self._starts = np.cumsum([0] + [len(p[0]) for p in self.parts])
+        self._scan(ts, vs)
+        keep = max(0, len(ts) - 2)
+        tail = [self._state(i) for i in range(keep, len(ts))]
+        self.parts = [(ts[keep:], vs[keep:], np.array([b.y for b in tail]),
+                       [b.m for b in tail], [b.z for b in tail])]
+        self._starts = np.array([0, len(tail)])
+        self.buffered = len(tail)
+
+    def _scan(self, ts: np.ndarray, vs: np.ndarray) -> None:
+        """Offer the local maxima and minima of every variable that are not at an
+        end (those wait for their next row), and the run's first row."""
+        n, nv = vs.shape
+        cols = np.arange(nv)
+        hi, lo = vs, vs
+        if not np.isfinite(vs).all():
+            hi, lo = np.where(np.isnan(vs), -np.inf, vs), np.where(np.isnan(vs), np.inf, vs)
+        for j, i in ((cols, hi.argmax(axis=0)), (cols + nv, lo.argmin(axis=0))):
+            v = vs[i, cols] if j[0] == 0 else -vs[i, cols]
+            better = v > self.best[j]
+            self.best[j[better]] = v[better]
+            self.best_t[j[better]] = ts[i[better]]
+        if not self.started and n >= 2:
+            self.started = True
+            first = self._state(0)
+            for j in range(2 * nv):
+                v0, v1 = (vs[0, j], vs[1, j]) if j < nv else (-vs[0, j - nv], -vs[1, j - nv])
+                if v0 >= v1:
+                    self._offer(j, Candidate(float(v0), float(ts[0]), float(v0),
+                                             replace(first, tb=float(ts[1])), first))
+        if n < 3:
+            return
+        a, b, c = vs[:-2], vs[1:-1], vs[2:]
+        for mask, sign, shift in (((b >= a) & (b >= c), 1.0, 0), ((b <= a) & (b <= c), -1.0, nv)):
+            for j in np.flatnonzero(mask.any(axis=0)):
+                self._peaks(int(j) + shift, ts, sign * vs[:, j], np.flatnonzero(mask[:, j]) + 1)
+
+    def _peaks(self, j: int, ts: np.ndarray, v: np.ndarray, mid: np.ndarray) -> None:
+        """Offer the best of the local maxima `mid` of column j (values v)."""
+        kept = self.candidates[j]
+        floor = max(kept[-1].score if len(kept) >= self.KEEP else -math.inf, self.best[j])
+        # A parabola through three rows rises above its middle one by at most the
+        # middle one's rise over the lower neighbour (for equal spacing, a quarter of
+        # it): rows that cannot reach the best sampled value need no vertex.
+        rise = v[mid] - np.minimum(v[mid - 1], v[mid + 1])
+        mid = mid[v[mid] + 2.0 * rise >= floor]
+        if not mid.size:
+            return
+        scores, times = vertices(ts, v, mid)
+        good = np.flatnonzero(scores > floor)
+        for g in good[np.argsort(-scores[good])][:self.KEEP]:
+            i = int(mid[g])
+            self._offer(j, Candidate(float(scores[g]), float(times[g]), float(v[i]),
+                                     replace(self._state(i - 1), tb=float(ts[i + 1])),
+                                     middle=replace(self._state(i), tb=float(ts[i + 1]))))
+
+    def _offer(self, j: int, c: Candidate) -> None:
+        kept = self.candidates[j]
+        if not math.isfinite(c.score) or (len(kept) >= self.KEEP and c.score <= kept[-1].score):
+            return
+        kept.append(c)
+        kept.sort(key=lambda k: -k.score)
+        del kept[self.KEEP:]
+
+    def close(self) -> None:
+        """Scan what is left; the last row is a candidate too when it is the larger
+        of the last two."""
+        self._scan_buffer()
+        if not self.parts or len(self.parts[0][0]) < 2:
+            return
+        ts, vs = self.parts[0][0], self.parts[0][1]
+        before, last = self._state(len(ts) - 2), self._state(len(ts) - 1)
+        v = np.concatenate([vs[-2:], -vs[-2:]], axis=1)
+        for j in np.flatnonzero(v[1] >= v[0]):
+            self._offer(j, Candidate(float(v[1, j]), float(ts[-1]), float(v[1, j]),
+                                     replace(before, tb=float(ts[-1])),
+                                     replace(last, tb=float(ts[-1]))))
+
+    def sampled(self) -> dict[str, tuple[float, float, float, float]]:
+        """name -> (min, time, max, time) over the rows."""
+        n = len(self.names)
+        return {name: (float(-self.best[n + j]), float(self.best_t[n + j]),
+                       float(self.best[j]), float(self.best_t[j]))
+                for j, name in enumerate(self.names)}
+
+
+def vertices(t: np.ndarray, v: np.ndarray, mid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For each row i in mid, the largest value within [t[i-1], t[i+1]] of the
+    parabola through rows i-1, i, i+1, and where it is."""
+    t0, t1, t2 = t[mid - 1], t[mid], t[mid + 1]
+    v0, v1, v2 = v[mid - 1], v[mid], v[mid + 1]
+    with np.errstate(all="ignore"):
+        d1 = (v1 - v0) / (t1 - t0)
+        a = ((v2 - v1) / (t2 - t1) - d1) / (t2 - t0)
+        ts = np.clip(0.5 * (t0 + t1) - d1 / (2.0 * a), t0, t2)
+        top = v0 + d1 * (ts - t0) + a * (ts - t0) * (ts - t1)
+    use = (a < 0.0) & (top > v1)
+    return np.where(use, top, v1), np.where(use, ts, t1)
+
+
+class Recorder:
+    """The rows of one run, and the `Run` made of them."""
+
+    def __init__(self, plan: RunPlan, c: Compiled, watch: SurfaceWatch,
+                 range_names: list[str]) -> None:
+        self.plan = plan
+        self.c = c
+        self.watch = watch
+        self.times = plan.grid.times
+        self.rows = Rows(len(c.out_names))
+        self.out_i = 0  # the next grid instant to record
+        index = {n: i for i, n in enumerate(c.out_names)}
+        named = [n for n in dict.fromkeys(range_names) if n in index]
+        self.extrema = Extrema(named, [index[n] for n in named])
+        # the state after every restart, where a RANGE variable may have a kink
+        self.restarts: list[Bracket] = []
+
+    @property
+    def last_t(self) -> float | None:
+        return self.rows.last_t
+
+    def outputs(self, t: float, y: np.ndarray, m, z) -> list[float]:
+        try:
+            return self.watch.outputs(t, y, m, z)
+        except (ArithmeticError, ValueError):
+            return [math.nan] * len(self.c.out_names)
+
+    def shown_modes(self, t: float, y: np.ndarray, m, z) -> list[float]:
+        """At a switching instant a row shows the branch in force from then on; a
+        sign surface exactly at zero shows its X = 0 branch (FSW's B), as the
+        function is defined there (`SurfaceWatch.at_zero`)."""
+        return self.watch.at_zero(t, y, m, z)
+
+    def row(self, t: float, y: np.ndarray, m, z, g: int = -1, shown=None) -> None:
+        """One row at t (grid instant g, or -1), in modes m (shown: as displayed)."""
+        if g >= 0 and abs(t - self.times[g]) <= 1e-12 * max(abs(t), 1e-300):
+            t = float(self.times[g])  # print the grid instant, not a float next to it
+        values = self.outputs(t, y, m if shown is None else shown, z)
+        self.rows.add(t, g, values)
+        self.extrema.add(t, values, y, m, z)
+
+    def restarted(self, t: float, y: np.ndarray, m, z) -> None:
+        """The run restarts at t in modes m (kept when there is RANGE to locate)."""
+        if self.extrema.names:
+            self.restarts.append(Bracket(t, math.nan, np.array(y, float), tuple(m), tuple(z)))
+
+    def grid_row(self, t: float, y: np.ndarray, m, z, shown=None) -> None:
+        """The row of the next grid instant."""
+        self.row(t, y, m, z, self.out_i, shown)
+        self.out_i += 1
+
+    def block(self, T: np.ndarray, Y: np.ndarray, table: np.ndarray, m, z) -> None:
+        """Rows for the next len(T) grid instants at once."""
+        n = len(T)
+        self.rows.add_block(T, np.arange(self.out_i, self.out_i + n), table)
+        self.extrema.add_many(T, table, Y, m, z)
+        self.out_i += n
+
+    def run(self, spec, constants: dict[str, float], events: list[Event], status: Status,
+            message: str, warnings: list[str], stats: dict, t: float, y: np.ndarray, z, m,
+            terminal: dict[str, float], extrema: dict[str, tuple]) -> Run:
+        names = self.c.out_names
+        grid = self.plan.grid
+        times, g, table = self.rows.arrays()
+        values = {n: table[:, i].copy() for i, n in enumerate(names)}
+        last = np.zeros(len(g), bool)
+        if len(g):
+            last[-1] = True  # the stop instant (FINISH, TERMT, failure) is always shown
+        on_grid = g >= 0
+        outdel_mask = last.copy()
+        prdel_mask = last.copy()
+        outdel_mask[on_grid] |= grid.outdel[g[on_grid]]
+        prdel_mask[on_grid] |= grid.prdel[g[on_grid]]
+        final = {k: float(v) for k, v in constants.items() if k not in RESERVED}
+        final.update({n: float(v[-1]) for n, v in values.items()} if len(times) else {})
+        for i, n in enumerate(self.c.state_names):
+            if "#" not in n:
+                final[n] = float(y[i])
+        final.update(terminal)
+        plan = self.plan
+        return Run(
+            label=spec.label, params=dict(spec.data), constants=dict(constants),
+            times=times, values=values, outdel_mask=outdel_mask, prdel_mask=prdel_mask,
+            events=events, status=status, message=message, final=final, stats=stats,
+            method=plan.method, rtol=plan.tol.relerr, atol=plan.tol.abserr,
+            settings=plan.settings, titles=list(spec.titles), reports=list(spec.reports),
+            warnings=warnings, t_end=float(t), terminal=dict(terminal), extrema=extrema,
+            final_state={"t": float(t), "y": y.tolist(), "z": list(z), "m": list(m)},
+        )

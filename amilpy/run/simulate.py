@@ -1,0 +1,159 @@
+"""One run of a checked model, from its start to its `Run`.
+
+`simulate` prepares the run (constants, compiled functions, plan), starts it
+(`start`: the branches in force at t0, MODINT resets, memory, the first row),
+integrates it to FINISH, TERMT or a failure, locates the RANGE extrema
+(`locate_range`), evaluates TERMINAL in written order, and assembles the `Run`.
+A failing integration is a `Run` with status FAILED and every row computed; a
+fault in the data is an AmilError.
+"""
+
+from __future__ import annotations
+
+import time as _clock
+
+import numpy as np
+
+from .. import ir
+from ..codegen import Compiled, evaluate_constant
+from ..diagnostics import AmilError
+from ..outcome import Failure, message
+from ..result import Event, EventKind, Run, Status
+from .faults import Fault, fault_text
+from .loop import Cursor, Integrator, Stop
+from .peaks import Context, locate_range
+from .plan import SLIDE, Options, RunPlan
+from .prepare import Cache, Prepared, prepare
+from .record import Recorder
+from .watch import SurfaceWatch, TooManySlides
+
+
+def simulate(model: ir.Model, spec: ir.RunSpec, options: Options | None = None,
+             cache: Cache | None = None) -> Run:
+    """Integrate one run of a checked model. Faults in the data raise AmilError;
+    a failing integration returns a Run with status FAILED and the rows so far.
+    `cache` (an `api.Model`'s) keeps compiled functions between runs."""
+    opts = options or Options()
+    started = _clock.perf_counter()
+    return _Run(model, spec, opts, prepare(model, spec, opts, cache), started).run()
+
+
+def start_cursor(c: Compiled, plan: RunPlan, watch: SurfaceWatch, opts: Options,
+                 y: np.ndarray, z: list[float], m: list[float] | None) -> Cursor:
+    """The state a run (or a flow) starts from: the branches in force at t0 (given,
+    or chosen the way the dynamics go), MODINT resets and memory applied."""
+    t0 = plan.t0
+    if m is None or len(m) != len(plan.watched):
+        m = watch.choose_modes(t0, y, z, [0.0] * len(plan.watched), set(), first=True)
+    y = watch.apply_resets(y, m)
+    if c.z0:
+        z = c.mem(t0, y.tolist(), m, m, z)
+    return Cursor(t0, y, list(m), list(z))
+
+
+class _Run:
+    def __init__(self, model: ir.Model, spec: ir.RunSpec, opts: Options, prepared: Prepared,
+                 started: float) -> None:
+        self.model, self.spec, self.opts = model, spec, opts
+        self.constants, self.c, self.plan = prepared.constants, prepared.compiled, prepared.plan
+        self.watch = SurfaceWatch(self.c, self.plan)
+        ranged = [n for r in spec.reports if r.kind == "RANGE" for n in r.names]
+        self.rec = Recorder(self.plan, self.c, self.watch, ranged)
+        self.integ = Integrator(model, self.plan, self.c, self.watch, opts, started)
+        self.started = started
+
+    def run(self) -> Run:
+        c, plan, opts, rec, integ = self.c, self.plan, self.opts, self.rec, self.integ
+        start = opts.start
+        y = np.array(start["y"] if start else c.y0, dtype=float)
+        z = list(start["z"]) if start else list(c.z0)
+        m = [0.0] * len(plan.watched)
+        cur = Cursor(plan.t0, y, m, z)
+        try:
+            cur = start_cursor(c, plan, self.watch, opts, y, z, start and start.get("m"))
+            for k, w in enumerate(plan.watched):
+                if cur.m[k] == SLIDE:  # sliding from the start is an event too
+                    integ.events.append(Event(plan.t0, w.description, w.surface, 0.0, SLIDE,
+                                              EventKind.SLIDE, w.text))
+            rec.grid_row(cur.t, cur.y, cur.m, cur.z,
+                         shown=rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
+        except (ArithmeticError, ValueError) as exc:
+            # a fault in the switching surfaces at the start (QNTZR with P = 0, say)
+            text = fault_text(self.model, c, Fault(exc, cur.t, y.tolist(), m, z))
+            integ.events.clear()
+            return self.finish(Status.FAILED, message(Failure.CANNOT_START, t=plan.t0,
+                                                      detail=text), cur, {})
+        status, text = Status.FINISHED, ""
+        try:
+            integ.integrate(cur, plan.fintim, rec)
+            if integ.stop_reason is not None:
+                status = Status.STOPPED
+                text = message(Status.STOPPED, t=cur.t,
+                               what=plan.watched[integ.stop_reason].description)
+        except Stop as stop:
+            status, text = Status.FAILED, message(stop.kind, t=stop.t, **stop.fields)
+            cur.t = stop.t
+            self._keep_last_good(cur)
+        except KeyboardInterrupt:
+            status, text = Status.FAILED, message(Failure.INTERRUPTED, t=cur.t)
+            return self.finish(status, text, cur, {})
+        except TooManySlides as exc:
+            status, text = Status.FAILED, message(Failure.SLIDES, t=cur.t, count=exc.count,
+                                                  limit=6)
+        except (ArithmeticError, ValueError) as exc:
+            # arithmetic in generated code (surfaces, outputs), or SciPy refusing the
+            # non-finite values an earlier fault gave: the run ends here, with what it
+            # computed so far, and the fault that really happened
+            status = Status.FAILED
+            stop = Stop(Failure.FAULT, cur.t, detail=fault_text(
+                self.model, c, Fault(exc, cur.t, cur.y.tolist(), cur.m, cur.z)))
+            if c.fault_line(exc) is None:
+                stop = integ.fault_or(stop)
+            text = message(stop.kind, t=stop.t, **stop.fields)
+            self._keep_last_good(cur)
+        if status == Status.FINISHED and rec.out_i < len(plan.grid.times):
+            rec.row(plan.fintim, cur.y, cur.m, cur.z, len(plan.grid.times) - 1)
+        ctx = Context(self.model, plan, c, self.watch, opts, self.started)
+        return self.finish(status, text, cur, locate_range(ctx, rec.extrema, rec.restarts))
+
+    def _keep_last_good(self, cur: Cursor) -> None:
+        """The last accepted state is the final row (everything computed)."""
+        last = self.integ.last_good
+        if last is not None and (self.rec.last_t is None or last[0] > self.rec.last_t) \
+                and np.all(np.isfinite(last[1])):
+            self.rec.row(last[0], np.asarray(last[1], float), last[2], cur.z)
+            cur.t, cur.y = last[0], np.asarray(last[1], float)
+
+    def finish(self, status: Status, text: str, cur: Cursor, extrema: dict) -> Run:
+        integ = self.integ
+        terminal: dict[str, float] = {}
+        run = self.rec.run(
+            self.spec, self.constants, integ.events, status, text, integ.warnings,
+            dict(nsteps=integ.nsteps, nfev=integ.nfev, nevents=len(integ.events),
+                 seconds=_clock.perf_counter() - self.started),
+            cur.t, cur.y, cur.z, cur.m, terminal, extrema)
+        if status != Status.FAILED and self.model.terminal:
+            try:
+                terminal.update(evaluate_terminal(self.model, self.spec, self.constants,
+                                                  run.final, cur.t))
+            except AmilError as err:
+                d = err.diagnostics[0]
+                where = f" (line {d.span.line})" if d.span else ""
+                run.status = Status.FAILED
+                run.message = message(Failure.TERMINAL, t=cur.t, detail=d.message + where)
+            run.terminal = dict(terminal)
+            run.final.update(terminal)
+        return run
+
+
+def evaluate_terminal(model: ir.Model, spec: ir.RunSpec, constants: dict[str, float],
+                      final: dict[str, float], t_end: float) -> dict[str, float]:
+    """TERMINAL, once, in written order: each statement sees the run's constants,
+    the final values of the states and DYNAMIC variables, TIME at the end, and the
+    TERMINAL values before it."""
+    values = {**constants, **final, "TIME": t_end}
+    out: dict[str, float] = {}
+    for eq in model.terminal:
+        out[eq.target] = values[eq.target] = evaluate_constant(model, eq.expr, values,
+                                                               spec.tables, eq.span)
+    return out

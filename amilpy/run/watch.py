@@ -1,0 +1,324 @@
+"""The surface watch: which branch each watched surface is in, where it changes,
+and the motion while surfaces slide.
+
+A `SurfaceWatch` works from explicit inputs only: the compiled functions and the
+plan's table of watched surfaces (kinds, purposes, gradients, the look-ahead
+step). It never steps; the loop hands it states, modes and dense outputs.
+
+- `field`, `outputs`: the vector field and the recorded variables under given
+  modes, with sliding surfaces resolved (`slide.py`);
+- `choose_modes`: the branches in force from an instant on. A surface at zero
+  there goes the way the dynamics take it (`direction`: the sign of its rate in
+  each branch); both branches pushing it back to zero means sliding;
+- `crossed`, `locate`: whether a step crossed a surface, and where (Brent's
+  method on the dense output); `slide_exits`, `locate_slide_exit` likewise for
+  the end of a slide;
+- `silent`: whether a surface's branch changes the derivatives at all now.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..codegen import Compiled
+from ..surfaces import sign
+from .plan import SLIDE, RunPlan, SurfaceKind
+from .slide import MAX_SLIDING, combine, corner_modes, slide_weights
+
+_XTOL = 4 * np.finfo(float).eps
+
+
+class SurfaceWatch:
+    def __init__(self, c: Compiled, plan: RunPlan) -> None:
+        self.c = c
+        self.watched = plan.watched
+        self.resets = plan.resets
+        self.lookahead_h = plan.lookahead_h
+        self.events = plan.events
+        self.y0 = c.y0
+
+    # ------------------------------------------------------------ vector fields
+    @staticmethod
+    def sliding(m) -> list[int]:
+        return [k for k, v in enumerate(m) if v == SLIDE]
+
+    def field(self, t: float, y: np.ndarray, m, z) -> np.ndarray:
+        """The derivatives under modes m; sliding surfaces take the Filippov
+        combination of their branches that keeps them at zero."""
+        if SLIDE not in m:
+            return self.c.rhs(t, y.tolist(), m, z)
+        modes, fields, weights = self._mix(t, y, m, z, self.sliding(m))
+        return combine(weights, fields)
+
+    def outputs(self, t: float, y: np.ndarray, m, z) -> list[float]:
+        """The recorded variables, weighted like the field while surfaces slide."""
+        if SLIDE not in m:
+            return self.c.out(t, y.tolist(), m, z)
+        modes, _, weights = self._mix(t, y, m, z, self.sliding(m))
+        columns = [np.asarray(self.c.out(t, y.tolist(), mc, z), dtype=float) for mc in modes]
+        return combine(weights, columns).tolist()
+
+    def _mix(self, t, y, m, z, slides, with_rates: bool = False):
+        """The corners (every sliding surface in either branch), their fields, and
+        the weight of each corner (and the sliding surfaces' rates at each)."""
+        if len(slides) > MAX_SLIDING:
+            raise TooManySlides(len(slides))
+        yl = y.tolist()
+        modes = corner_modes(m, slides)
+        fields = [np.asarray(self.c.rhs(t, yl, mc, z), dtype=float) for mc in modes]
+        rates = np.array([[self.surface_rate(k, t, y, f, mc, z) for k in slides]
+                          for f, mc in zip(fields, modes, strict=True)])
+        if with_rates:
+            return modes, fields, slide_weights(rates), rates
+        return modes, fields, slide_weights(rates)
+
+    def branch_rates(self, k: int, t: float, y: np.ndarray, m, z):
+        """Both branches of surface k (other sliding surfaces resolved): their vector
+        fields f+ and f-, and the surface's rate along each (d+, d-)."""
+        mp, mm = list(m), list(m)
+        mp[k], mm[k] = 1.0, -1.0
+        fp = np.asarray(self.field(t, y, mp, z), dtype=float)
+        fm = np.asarray(self.field(t, y, mm, z), dtype=float)
+        return (fp, fm, self.surface_rate(k, t, y, fp, mp, z),
+                self.surface_rate(k, t, y, fm, mm, z))
+
+    def surface_rate(self, k: int, t: float, y: np.ndarray, f: np.ndarray, m, z) -> float:
+        """d e_k/dt along f: exact for surfaces linear in the states, else a difference."""
+        g = self.watched[k].gradient
+        if g is not None:
+            return float(g @ f)
+        h = self.lookahead_h
+        e0 = self.c.surf(t, y.tolist(), m, z)[k]
+        e1 = self.c.surf(t + h, (y + h * f).tolist(), m, z)[k]
+        return (e1 - e0) / h
+
+    # ------------------------------------------------------------------ restart
+    def choose_modes(self, t: float, y: np.ndarray, z, m: list[float], at_zero: set[int],
+                     first: bool = False, forced: dict[int, float] | None = None
+                     ) -> list[float]:
+        """Modes in force from t on.
+
+        Surfaces known to be at zero here (a located crossing, a breakpoint, or
+        exactly zero at the start) go the way the dynamics take them; every other
+        surface takes the sign it has now (it may have jumped with a switch it
+        depends on).
+        """
+        new = list(m)
+        decided: set[int] = set(forced or ())
+        for k, mode in (forced or {}).items():
+            new[k] = mode
+        # A surface may depend on another switch's value (MODINT on STEP, say):
+        # settle the signs again with the new branches until nothing moves.
+        for _ in range(len(new) + 1):
+            before = list(new)
+            lit = self.c.modes_literal(t, y.tolist(), new, z)
+            for k in range(len(new)):
+                if self.watched[k].kind is SurfaceKind.LEVEL:
+                    if k not in decided and (k in at_zero or first or lit[k] != new[k]):
+                        new[k] = self.level_ahead(k, t, y, new, z)
+                        decided.add(k)
+                    continue
+                landed = lit[k] == 0.0 and new[k] not in (0.0, SLIDE)
+                if k in at_zero or (first and lit[k] == 0.0) or landed:
+                    # at zero: located there, started there, or jumped onto it with
+                    # a switch it depends on
+                    if k not in decided:
+                        new[k] = self.direction(k, t, y, new, z, old=None if first else m[k])
+                        decided.add(k)
+                elif lit[k] != 0.0 and new[k] != SLIDE and lit[k] != new[k]:
+                    new[k] = lit[k]
+            if new == before:
+                break
+        return new
+
+    def direction(self, k: int, t: float, y: np.ndarray, m, z, old) -> float:
+        """Which side of surface k the motion goes to from a point on it."""
+        try:
+            _, _, dp, dm = self.branch_rates(k, t, y, m, z)
+        except (ArithmeticError, ValueError):
+            # A branch may have no value on the surface itself (X/P at P = 0 in
+            # X/FCNSW(P, P, 1., P)); there each function selects its X = 0 branch,
+            # so the motion leaves the way those branches take it.
+            m0 = self.at_zero(t, y, m, z)
+            m0[k] = 0.0
+            f0 = np.asarray(self.field(t, y, m0, z), dtype=float)
+            return sign(self.surface_rate(k, t, y, f0, m0, z))
+        tiny = 1e-300
+        scale = max(abs(dp), abs(dm))
+        if scale <= tiny or (abs(dp) <= 1e-13 * scale and abs(dm) <= 1e-13 * scale):
+            # Neither branch moves the surface. With other surfaces sliding, that is
+            # their compensation (two friction terms on one velocity): this one
+            # slides with them and the joint weights decide; else it stays at zero.
+            others = any(v == SLIDE for j, v in enumerate(m) if j != k)
+            return SLIDE if others and self.events else 0.0
+        # noise level of a rate computed by differences
+        eps = 0.0 if self.watched[k].gradient is not None else 1e-9 * scale
+        up, down = dp > eps, dm < -eps
+        if up and down:  # repelling: keep going the way it was going
+            if old is not None and old != 0.0 and old != SLIDE:
+                return -old
+            return 1.0 if dp >= -dm else -1.0
+        if up:
+            return 1.0
+        if down:
+            return -1.0
+        if dp < -eps and dm > eps and self.events:
+            return SLIDE
+        return 0.0
+
+    def at_zero(self, t: float, y: np.ndarray, m, z) -> list[float]:
+        """m with every sign surface that is exactly zero at (t, y) in its X = 0
+        branch (FSW's B), the branch the function is defined to take there: what a
+        row at a switching instant shows, and what is evaluated on the surface
+        when the branch in force has no value there."""
+        lit = self.c.modes_literal(t, y.tolist(), m, z)
+        return [0.0 if lit[k] == 0.0 and w.kind is SurfaceKind.SIGN and m[k] != SLIDE
+                else m[k] for k, w in enumerate(self.watched)]
+
+    def level_ahead(self, k: int, t: float, y: np.ndarray, m, z) -> float:
+        """QNTZR: the level the argument is at just after t."""
+        lit = self.c.modes_literal(t, y.tolist(), m, z)[k]
+        f = np.asarray(self.c.rhs(t, y.tolist(), m, z), dtype=float)
+        h = self.lookahead_h
+        ahead = self.c.modes_literal(t + h, (y + h * f).tolist(), m, z)[k]
+        return ahead if abs(ahead - lit) <= 1 else lit
+
+    def silent(self, k: int, t: float, y: np.ndarray, m, z) -> bool:
+        """True if surface k's branch does not change the derivatives here."""
+        w = self.watched[k]
+        if w.purpose.stops or w.kind is not SurfaceKind.SIGN:
+            return False
+        mp, mm = list(m), list(m)
+        mp[k], mm[k] = 1.0, -1.0
+        yl = y.tolist()
+        try:
+            return self.c.rhs(t, yl, mp, z) == self.c.rhs(t, yl, mm, z) and \
+                self.c.rhs(t, yl, [*m[:k], 0.0, *m[k + 1:]], z) == self.c.rhs(t, yl, mp, z)
+        except (ArithmeticError, ValueError):
+            return False
+
+    def apply_resets(self, y: np.ndarray, m: list[float]) -> np.ndarray:
+        """MODINT: hold the state at its IC while X1 <= 0 and X2 > 0."""
+        for r in self.resets:
+            m1 = m[r.first] if isinstance(r.first, int) else r.first
+            m2 = m[r.second] if isinstance(r.second, int) else r.second
+            if m1 <= 0 and m2 > 0:
+                y = y.copy()
+                y[r.state] = self.y0[r.state]
+        return y
+
+    # -------------------------------------------------------------- along a step
+    def crossed(self, k: int, mode: float, e_b: float) -> bool:
+        """Whether surface k, in `mode`, is on the wrong side at the step's end."""
+        if self.watched[k].kind is SurfaceKind.LEVEL or mode > 0:
+            return e_b < 0.0
+        if mode < 0:
+            return e_b > 0.0
+        return False
+
+    def locate(self, k: int, m, z, interp, ta: float, tb: float, segment_start: float
+               ) -> float | None:
+        """Where in [ta, tb] surface k crossed, or None when the step began on the
+        surface and was on the wrong side all along (nothing to bracket: the
+        caller takes the surface's sign at tb instead of stopping at ta again)."""
+        from scipy.optimize import brentq
+
+        def g(t):
+            return self.c.surf(t, list(map(float, interp(t))), m, z)[k]
+
+        ga = g(ta)
+        gb = g(tb)
+        if gb == 0.0:
+            return tb
+        if ga == 0.0 or sign(ga) == sign(gb):
+            # The step began on the surface (a restart there): find where it had
+            # left to the consistent side, and bracket the crossing from there.
+            ta_new = None
+            for j in range(1, 33):
+                tj = ta + (tb - ta) * j / 32.0
+                gj = g(tj)
+                if gj != 0.0 and sign(gj) != sign(gb):
+                    ta_new = tj
+                elif ta_new is not None:
+                    break
+            if ta_new is None:
+                # on zero at ta and on the wrong side after: a crossing at ta, unless
+                # ta is where the run just restarted (then stopping there again
+                # would make no progress)
+                return ta if ta > segment_start else None
+            ta = ta_new
+        return brentq(g, ta, tb, xtol=_XTOL * max(abs(tb), 1e-300), rtol=_XTOL, maxiter=200)
+
+    def slide_exits(self, m, t: float, y: np.ndarray, z) -> list[tuple[int, float]]:
+        """The sliding surfaces whose motion leaves them here, and to which side.
+
+        With one surface sliding, the rates in its two branches are the surface's
+        own and their signs are exact. With several, the others compensate, and a
+        rate that they hold at zero comes out as rounding noise: a rate counts
+        when it exceeds 1E-9 of the largest rate of any corner."""
+        out = []
+        for k in self.sliding(m):
+            _, _, dp, dm = self.branch_rates(k, t, y, m, z)
+            noise = self._rate_noise(k, t, y, m, z)
+            if dp > noise:
+                out.append((k, 1.0))
+            elif dm < -noise:
+                out.append((k, -1.0))
+        return out
+
+    def _rate_noise(self, k: int, t: float, y: np.ndarray, m, z) -> float:
+        """Below this, a sliding surface's branch rate is the others' compensation."""
+        slides = self.sliding(m)
+        if len(slides) < 2:
+            return 0.0
+        rates = self._mix(t, y, m, z, slides, with_rates=True)[3]
+        return 1e-9 * float(np.max(np.abs(rates[:, slides.index(k)])))
+
+    def locate_slide_exit(self, k: int, side: float, m, z, interp, ta: float, tb: float
+                          ) -> float:
+        from scipy.optimize import brentq
+
+        noise = self._rate_noise(k, tb, np.asarray(interp(tb), dtype=float), m, z)
+
+        def g(t):
+            _, _, dp, dm = self.branch_rates(k, t, np.asarray(interp(t), dtype=float), m, z)
+            return (dp if side > 0 else -dm) - noise
+
+        ga, gb = g(ta), g(tb)
+        if ga > 0 or gb <= 0:
+            return tb
+        return brentq(g, ta, tb, xtol=_XTOL * max(abs(tb), 1e-300), maxiter=200)
+
+
+def crossings(plan: RunPlan, surfaces: list[np.ndarray], m) -> dict[int, np.ndarray]:
+    """For each watched surface, at which of the instants given as columns (arrays
+    of one length) it is on the other side of its mode: the rule of `crossed` over
+    NumPy columns. Only the surfaces that cross somewhere are listed."""
+    out = {}
+    for k in plan.watch_idx:
+        e = surfaces[k]
+        if plan.watched[k].kind is SurfaceKind.LEVEL or m[k] > 0:
+            bad = e < 0.0
+        elif m[k] < 0:
+            bad = e > 0.0
+        else:
+            bad = e != 0.0
+        if bad.any():
+            out[k] = bad
+    return out
+
+
+def wrong_side(plan: RunPlan, surfaces: list[np.ndarray], m) -> np.ndarray:
+    """Which of the instants given as columns have any surface crossed."""
+    bad = np.zeros(len(surfaces[0]) if surfaces else 0, bool)
+    for mask in crossings(plan, surfaces, m).values():
+        bad |= mask
+    return bad
+
+
+class TooManySlides(Exception):
+    """More surfaces slide at once than the corner combination allows."""
+
+    def __init__(self, count: int) -> None:
+        super().__init__(count)
+        self.count = count

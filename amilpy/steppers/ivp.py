@@ -1,0 +1,132 @@
+"""SciPy's `OdeSolver` classes (RK45, DOP853, Radau, BDF, LSODA) as steppers."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..outcome import Failure
+from .base import Hermite, Rhs, StepFailure, Stepper, Stiffness
+
+
+def solver_tolerance(v: np.ndarray | float) -> np.ndarray | float:
+    """A tolerance as a solver takes it: a float when every state has the same one
+    (so a run without per-state values computes exactly as before), else the vector."""
+    a = np.asarray(v, dtype=float)
+    if a.ndim == 0 or a.size == 0 or np.all(a == a.flat[0]):
+        return float(a.flat[0]) if a.size else 0.0
+    return a
+
+
+class ScipyStepper(Stepper):
+    """One of SciPy's `OdeSolver` classes, step by step.
+
+    Tolerances are per state. Radau and BDF derive their Newton tolerance from a
+    scalar RELERR, so they are built with the smallest RELERR (the stricter Newton
+    test) and then measure their error against the vector, which is all their
+    step control reads afterwards.
+
+    An explicit pair (a route with a `stability_limit`) also runs Hairer's
+    stiffness test on its steps. A step beyond the pair's stability boundary is
+    limited by stability, not by accuracy, and there the solver's dense output is
+    not to be trusted: its polynomial is built from stage derivatives that carry
+    the stiff components undamped. DOP853's is 20 tolerance units off on the
+    two-mass drive at h*|lambda| ~ 6, where its step ends are within one. Such a
+    step is interpolated from its two ends only (a cubic Hermite): it is short,
+    since stability made it so, and the ends lie on the slow motion.
+    """
+
+    STIFF_STEPS = 15  # positive tests before the run is told (Hairer's)
+    CALM_STEPS = 6  # negative tests in a row that start the count again (Hairer's)
+    TEST_EVERY = 4  # steps between tests while none is positive
+
+    def __init__(self, name: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float, *,
+                 rtol: np.ndarray | float, atol: np.ndarray | float, max_step: float,
+                 first_step: float | None, stability_limit: float | None = None) -> None:
+        from scipy import integrate
+
+        cls = getattr(integrate, name)
+        rtol, atol = solver_tolerance(rtol), solver_tolerance(atol)
+        vector_rtol = isinstance(rtol, np.ndarray) and name in ("Radau", "BDF")
+        options = {"rtol": float(np.min(rtol)) if vector_rtol else rtol, "atol": atol,
+                   "max_step": max_step}
+        if first_step is not None:
+            options["first_step"] = min(first_step, abs(t_bound - t0))
+        self.solver = cls(fun, t0, y0, t_bound, **options)
+        if vector_rtol:
+            self.solver.rtol = rtol
+        self.t = self.t_old = t0
+        self.y = np.asarray(y0, dtype=float)
+        self._dense = None
+        self._steps = 0
+        self._limit = stability_limit
+        if self._limit is not None:
+            # the last stage's row of the Butcher tableau: its argument is at c = 1
+            self._a_last = self.solver.A[self.solver.n_stages - 1, :self.solver.n_stages - 1]
+        self._positive = 0  # positive stiffness tests
+        self._calm = 0  # negative ones since the last positive
+        self._h_lambda = 0.0  # the last estimate of h*|lambda|
+
+    @property
+    def nfev(self) -> int:
+        return self.solver.nfev
+
+    @property
+    def nstep(self) -> int:
+        return self._steps
+
+    def step(self) -> StepFailure | None:
+        solver = self.solver
+        msg = solver.step()
+        if solver.status == "failed":
+            return StepFailure(Failure.SOLVER, self.t, msg or "the integrator failed")
+        self._steps += 1
+        self.t_old = solver.t_old
+        self.t = solver.t
+        self.y = solver.y
+        self._dense = None
+        if self._limit is not None:
+            self._stiffness_test()
+        return None
+
+    def _stiffness_test(self) -> None:
+        """h*|lambda| from two evaluations at t+h: the last stage (c = 1) and the
+        new point (Hairer, DOPRI5/DOP853): |f(y1) - f(y_s)| / |y1 - y_s|. Tested at
+        every step while positive, else at every TEST_EVERY-th (Hairer's codes test
+        every 1000th), which keeps its cost at about 2 us a step."""
+        if self._positive == 0 and self._steps % self.TEST_EVERY:
+            return
+        solver = self.solver
+        s = solver.n_stages
+        k = solver.K
+        h = solver.h_previous
+        d = solver.y - solver.y_old - h * (self._a_last @ k[:s - 1])
+        den = float(d @ d)
+        if not 0.0 < den < math.inf:
+            return
+        g = k[s] - k[s - 1]
+        self._h_lambda = abs(h) * math.sqrt(float(g @ g) / den)
+        if self._h_lambda > self._limit:
+            self._calm = 0
+            self._positive += 1
+            if self._positive == self.STIFF_STEPS and self.stiff is None:
+                self.stiff = Stiffness(self.t, self._h_lambda)
+        else:
+            self._calm += 1
+            if self._calm == self.CALM_STEPS:
+                self._positive = 0
+
+    def interpolant(self):
+        if self._dense is None:
+            solver = self.solver
+            if self._limit is not None and self._positive >= self.STIFF_STEPS and \
+                    self._h_lambda > self._limit:
+                # a stability-limited step: its stage derivatives carry the stiff
+                # components undamped, so interpolate from the ends only
+                k = solver.K
+                self._dense = Hermite(solver.t_old, solver.y_old, k[0].copy(), solver.t,
+                                      solver.y, k[-1].copy())
+            else:
+                self._dense = solver.dense_output()
+        return self._dense

@@ -1,0 +1,199 @@
+"""AUTO: Fortran LSODA (`odeint`) over chunks of check instants."""
+
+from __future__ import annotations
+
+import bisect
+import math
+import warnings
+
+import numpy as np
+
+from ..outcome import Failure
+from .base import Chunked, Rhs, StepFailure
+from .ivp import ScipyStepper, solver_tolerance
+
+MXSTEP = 1_000_000  # odeint's steps per output interval when no limit is nearer
+UNLIMITED = 2**62
+
+
+class OdeintStepper(Chunked):
+    """One `odeint` call integrates through many check instants with no Python
+    between its internal steps (only the right-hand side is Python), which is
+    what makes it several times faster than driving a solver step by step. Its
+    "steps" for the loop are the check instants (the output grid): the loop looks
+    at the switching surfaces there. Where a surface has crossed, `interpolant()`
+    integrates that one interval again with SciPy's LSODA class, whose dense
+    output is accurate to the tolerance, so the crossing is located as precisely
+    as with any other route. A chunk grows geometrically after each start, so
+    the work thrown away after an event stays small.
+
+    `max_steps` bounds the internal steps this stepper may take: odeint's
+    per-interval limit is set to what is left, a chunk is sized from the steps an
+    instant has taken so far, and instants past the budget are dropped, so a run
+    stops near its step limit instead of finishing a chunk of 4096 instants.
+    """
+
+    def __init__(self, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float, checks, *,
+                 rtol: np.ndarray | float, atol: np.ndarray | float, max_step: float,
+                 first_step: float | None, chunk: int = 16,
+                 max_steps: int = UNLIMITED) -> None:
+        self.fun = fun
+        self.t = self.t_old = t0
+        self.y = np.asarray(y0, dtype=float)
+        self.y_old = self.y
+        self.t_bound = t_bound
+        # the loop passes the instants strictly inside (t0, t_bound), in order
+        self.checks = np.append(np.asarray(checks, dtype=float), t_bound)
+        self.rtol, self.atol = solver_tolerance(rtol), solver_tolerance(atol)
+        self.max_step = max_step
+        self.first_step = first_step
+        self.T = np.empty(0)  # the check instants integrated so far ...
+        self.Y = np.empty((0, len(self.y)))  # ... their states ...
+        self.pos = 0  # ... and how many of them the loop has taken
+        self.next_check = 0
+        self.chunk = chunk
+        self.max_steps = max_steps
+        self._nfev = 0
+        self._steps = 0  # internal steps of the chunks so far
+        self._instants = 0  # check instants those steps covered
+        self._dense = None
+        self._failure: StepFailure | None = None
+        self.fallback: ScipyStepper | None = None
+
+    @property
+    def nfev(self) -> int:
+        return self._nfev + (self.fallback.nfev if self.fallback is not None else 0)
+
+    @property
+    def nstep(self) -> int:
+        return self._steps + (self.fallback.nstep if self.fallback is not None else 0)
+
+    def _chunk_size(self, left: int) -> int:
+        n = self.chunk
+        self.chunk = min(self.chunk * 4, 4096)
+        if self._instants:
+            per_instant = max(self._steps / self._instants, 1.0)
+            n = min(n, max(1, int(left / per_instant)))
+        return n
+
+    def _fill(self) -> None:
+        from scipy.integrate import odeint
+
+        left = self.max_steps - self._steps
+        if left <= 0:
+            self._failure = StepFailure(Failure.STEPS, self.t)
+            return
+        ts = self.checks[self.next_check:self.next_check + self._chunk_size(left)]
+        grid = np.concatenate(([self.t], ts))
+        options = {"rtol": self.rtol, "atol": self.atol, "tfirst": True, "full_output": True,
+                   "mxstep": min(MXSTEP, left)}
+        if math.isfinite(self.max_step):
+            options["hmax"] = self.max_step
+        if self.first_step:
+            options["h0"] = min(self.first_step, ts[0] - self.t)
+        if ts[-1] >= self.t_bound:
+            options["tcrit"] = np.array([self.t_bound])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # a failure is handled below, not printed
+            ys, info = odeint(self.fun, self.y, grid, **options)
+        if info["message"] != "Integration successful.":
+            self._keep_passed(ts, ys, info, left)
+            return
+        self._nfev += int(info["nfe"][-1])
+        self.first_step = float(info["hu"][-1])
+        nst = np.asarray(info["nst"])
+        good = len(ts) if nst[-1] <= left else int(np.searchsorted(nst, left, side="right"))
+        self.T, self.Y, self.pos = ts[:good], ys[1:good + 1], 0
+        self._steps += int(nst[good - 1]) if good else left
+        self._instants += good
+        self.next_check += good
+        if good < len(ts):
+            self._failure = StepFailure(Failure.STEPS, float(ts[good - 1]) if good else self.t)
+
+    def _keep_passed(self, ts, ys, info, left: int) -> None:
+        """Keep the instants LSODA really passed; then, if the step budget ran out,
+        that is the failure, else SciPy's LSODA class takes over from the last of
+        them: it fails (or not) with a clear message."""
+        tcur = np.asarray(info["tcur"])
+        good = 0
+        while (good < len(ts) and good < len(tcur) and tcur[good] >= ts[good]
+               and np.all(np.isfinite(ys[good + 1]))):
+            good += 1
+        self.T, self.Y, self.pos = ts[:good], ys[1:good + 1], 0
+        # odeint fills its counts up to the interval that failed; past it, not at all
+        last = min(good, len(info["nst"]) - 1)
+        self._nfev += int(info["nfe"][last])
+        self._steps += int(info["nst"][last])
+        self._instants += good
+        if left < MXSTEP and info["message"].startswith("Excess work"):
+            self._failure = StepFailure(Failure.STEPS, float(ts[good - 1]) if good else self.t)
+            return
+        t_last, y_last = (ts[good - 1], ys[good]) if good else (self.t, self.y)
+        self.fallback = ScipyStepper("LSODA", self.fun, float(t_last), y_last, self.t_bound,
+                                     rtol=self.rtol, atol=self.atol, max_step=self.max_step,
+                                     first_step=None)
+
+    def pending(self) -> tuple[np.ndarray, np.ndarray]:
+        """The integrated check instants the loop has not taken yet (integrating the
+        next chunk if there are none); empty once LSODA's class has taken over."""
+        if self.pos >= len(self.T) and self.fallback is None and self._failure is None:
+            self._fill()
+        return self.T[self.pos:], self.Y[self.pos:]
+
+    def consume(self, n: int) -> None:
+        last = self.pos + n - 1
+        if n >= 2:
+            self.t_old, self.y_old = float(self.T[last - 1]), self.Y[last - 1]
+        else:
+            self.t_old, self.y_old = self.t, self.y
+        self.t, self.y = float(self.T[last]), self.Y[last]
+        self.pos += n
+        self._dense = None
+
+    def step(self) -> StepFailure | None:
+        if self.pos >= len(self.T) and self.fallback is None and self._failure is None:
+            self._fill()
+        if self.pos >= len(self.T):
+            if self._failure is not None:
+                return self._failure
+            if self.fallback is not None:
+                failure = self.fallback.step()
+                self.t_old, self.t = self.fallback.t_old, self.fallback.t
+                self.y = self.fallback.y
+                self._dense = None
+                return failure
+        self.consume(1)
+        return None
+
+    def interpolant(self):
+        if self.fallback is not None and self.pos >= len(self.T) and \
+                self.t == self.fallback.t:
+            return self.fallback.interpolant()
+        if self._dense is None:
+            from scipy.integrate import LSODA
+
+            # Integrate the interval once more with dense output. Tighter than the
+            # run: the state at the located crossing starts the next segment, and
+            # a run with many switches must not add a tolerance's worth at each.
+            rtol = np.maximum(np.asarray(self.rtol, dtype=float) * 0.01, 1e-13)
+            atol = np.maximum(np.asarray(self.atol, dtype=float) * 0.01, 1e-300)
+            solver = LSODA(self.fun, self.t_old, self.y_old, self.t,
+                           rtol=solver_tolerance(rtol), atol=atol)
+            pieces = []
+            while solver.status == "running":
+                solver.step()
+                if solver.status == "failed":
+                    break
+                pieces.append((solver.t_old, solver.t, solver.dense_output()))
+            self._nfev += solver.nfev
+            end_y = solver.y
+
+            ends = [b for _, b, _ in pieces]
+
+            def dense(t: float) -> np.ndarray:
+                k = bisect.bisect_left(ends, t)
+                return pieces[k][2](t) if k < len(pieces) else end_y
+
+            self._dense = dense
+            self.y = end_y  # consistent with the dense output at the interval's end
+        return self._dense

@@ -1,0 +1,64 @@
+"""RANGE: each variable's minimum and maximum, with their times, located between
+the output instants on the integrator's dense output, so they are right whatever
+OUTDEL is (issue 13 item 1)."""
+
+import math
+import os
+
+import numpy as np
+import pytest
+from conftest import METHODS, ROOT, run1
+
+import amilpy
+from amilpy.routes import route_for
+
+W, Z = 2.0, 0.1  # X'' + 2 Z W X' + W^2 X = 0, X(0) = 1, X'(0) = 0
+DAMPED = f"""PARAM W = {W}, Z = {Z}
+X = INTGRL(1.0, V)
+V = INTGRL(0.0, -2.0*Z*W*V - W*W*X)
+TIMER FINTIM = 10.0, OUTDEL = 0.37
+RANGE X, V
+END
+"""
+WD = W * math.sqrt(1.0 - Z * Z)
+T_MIN = math.pi / WD  # the first (and lowest) minimum, where V = 0
+X_MIN = -math.exp(-Z * W * T_MIN)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_damped_oscillator_first_minimum_with_a_coarse_outdel(method):
+    # OUTDEL = 0.37 puts no row near T_MIN = 1.5787: the rows' minimum is -0.7149,
+    # the true one -0.72925
+    r = run1(DAMPED, method=method, advice=False)
+    lo, t_lo, hi, t_hi = r.range["X"]
+    rows = float(np.min(r["X"]))
+    assert (hi, t_hi) == (1.0, 0.0)  # the start, where X turns down at once
+    if route_for(method).uses_tolerances or method == "RK4":
+        assert rows > X_MIN + 0.01
+        # RELERR 1E-6 (RK4: DELT = OUTDEL/16 gives 1E-7): 1E-5 relative is ten
+        # tolerance units; the time of an extremum is a square root less sharp
+        # than its value, but the turn of the rate is solved directly
+        assert lo == pytest.approx(X_MIN, rel=1e-5)
+        assert t_lo == pytest.approx(T_MIN, rel=1e-5)
+    else:
+        # a low-order method's own trajectory has its own minimum: located between
+        # the rows, it is below them, within the output interval around the lowest
+        i = int(np.argmin(r["X"]))
+        assert lo <= rows and r.t[i - 1] < t_lo < r.t[i + 1]
+
+
+def test_range_only_locates_what_the_rows_cannot_show():
+    # a fine OUTDEL: the parabola through the rows is already within 1E-9, so the
+    # vertex is taken (no integration again); the minimum still to RELERR
+    r = run1(DAMPED.replace("OUTDEL = 0.37", "OUTDEL = 0.001"), advice=False)
+    lo, t_lo, _, _ = r.range["X"]
+    assert lo == pytest.approx(X_MIN, rel=1e-5) and t_lo == pytest.approx(T_MIN, rel=1e-4)
+
+
+def test_clutch_peaks_are_the_located_ones():
+    # issue 13: RANGE said W1 min -142.29 and MC max 0.2681 off the OUTDEL grid; the
+    # located values are -147.92 and 0.2717 (docs/models.md says about -148)
+    model = amilpy.load(os.path.join(ROOT, "models", "ex4_clutch.amil"))
+    run, = model.run(advice=False)
+    assert run.range["W1"][0] == pytest.approx(-147.92, abs=0.01)
+    assert run.range["MC"][2] == pytest.approx(0.2717, abs=1e-4)

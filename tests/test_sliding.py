@@ -1,0 +1,89 @@
+"""Sliding per surface and on several surfaces at once (issue 15): the convex
+combination on the intersection of the sliding surfaces, on every method,
+against exact solutions."""
+
+import numpy as np
+import pytest
+from conftest import METHODS, run1
+
+RELAY = "FSW(X, -1.0, 0.0, 1.0)"
+
+
+@pytest.mark.parametrize("shared", [False, True], ids=["two_switches", "shared_variable"])
+@pytest.mark.parametrize("method", METHODS)
+def test_switches_on_one_surface_slide_together(method, shared):
+    # X' = -s, Y' = s with s the relay on X: X reaches 0 at TIME 1 and slides there,
+    # where s = 0 keeps it; so Y(3) = Y(1) = 1 exactly. Written with the relay twice,
+    # the second switch flipped at the slide and gave Y(3) = 3.
+    body = (f"S = {RELAY}\nX = INTGRL(1.0, -S)\nY = INTGRL(0.0, S)\n" if shared else
+            f"X = INTGRL(1.0, -{RELAY})\nY = INTGRL(0.0, {RELAY})\n")
+    r = run1(body + "TIMER FINTIM = 3.0, OUTDEL = 0.1\nEND\n", method=method, advice=False)
+    assert r.status == "finished", r.message
+    assert r["Y"][-1] == pytest.approx(1.0, abs=1e-9)
+    assert r["X"][-1] == pytest.approx(0.0, abs=1e-9)
+    assert all(e.kind == "slide" and e.time == pytest.approx(1.0) for e in r.events)
+
+
+TWO_RELAYS = """X = INTGRL(1.0, -FSW(X, -1.0, 0.0, 1.0) - 0.5*FSW(Y, -1.0, 0.0, 1.0))
+Y = INTGRL(1.0, -FSW(Y, -1.0, 0.0, 1.0) + 0.5*FSW(X, -1.0, 0.0, 1.0))
+TIMER FINTIM = 4.0, OUTDEL = 0.1
+END
+"""
+
+TWO_RELAYS_SHARED = """SX = FSW(X, -1.0, 0.0, 1.0)
+SY = FSW(Y, -1.0, 0.0, 1.0)
+X = INTGRL(1.0, -SX - 0.5*SY)
+Y = INTGRL(1.0, -SY + 0.5*SX)
+TIMER FINTIM = 4.0, OUTDEL = 0.1
+END
+"""
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_two_relays_slide_to_the_origin(method):
+    # Both relays end sliding at X = Y = 0 (both surfaces at once: the weights solve
+    # X' = Y' = 0, each relay reading 0). The exact Y(4) is 0; it used to end at
+    # -4.53 or -1.20 depending on the method.
+    r = run1(TWO_RELAYS, method=method, advice=False)
+    assert r.status == "finished", r.message
+    assert abs(r["X"][-1]) <= 1e-9 and abs(r["Y"][-1]) <= 1e-9
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_two_relays_trajectory(method):
+    # X' = -1.5, Y' = -0.5 until X = 0 at 2/3 (Y = 2/3); then X slides (SX = -0.5
+    # keeps X' = 0) and Y' = -1.25 until Y = 0 at 1.2; then both slide at the origin.
+    # Piecewise linear: every method is exact up to where the slides are located.
+    r = run1(TWO_RELAYS_SHARED, method=method, advice=False)
+    t = r.t
+    x = np.where(t < 2 / 3, 1.0 - 1.5 * t, 0.0)
+    y = np.where(t < 2 / 3, 1.0 - 0.5 * t, np.maximum(2 / 3 - 1.25 * (t - 2 / 3), 0.0))
+    assert np.max(np.abs(r["X"] - x)) <= 1e-9 and np.max(np.abs(r["Y"] - y)) <= 1e-9
+    slides = [e.time for e in r.events if e.kind == "slide"]
+    assert slides == pytest.approx([2 / 3, 1.2], abs=1e-9)
+
+
+TWO_FRICTIONS = """PARAM K = 1.0, F1 = 0.3, F2 = 0.2, VB = 1.0, M = 1.0
+X = INTGRL(0.0, V)
+V = INTGRL(1.0, (FSW(V - VB, F1, 0.0, -F1) + FSW(V - VB, F2, 0.0, -F2) - K*X)/M)
+TIMER FINTIM = 1.5, OUTDEL = 0.1
+END
+"""
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_stick_slip_with_two_friction_terms_on_one_velocity(method):
+    # A block on a belt (speed VB) held by a spring, with two dry-friction terms on
+    # the same slip velocity: it sticks (both surfaces slide together) until K*X
+    # reaches F1 + F2 = 0.5 at TIME 0.5, then slips: X = 0.5 + sin(TIME - 0.5).
+    # One term alone cannot hold past K*X = F1 = 0.3: a per-switch slide let go there.
+    # Both terms stand on one surface (V - VB), so the stick ends in one event.
+    r = run1(TWO_FRICTIONS, method=method, advice=False)
+    assert r.status == "finished", r.message
+    t = r.t
+    x = np.where(t <= 0.5, t, 0.5 + np.sin(t - 0.5))
+    # ten RELERR units over the slip arc; the fixed steps at DELT = OUTDEL/16
+    tol = {"EULER": 5e-3, "TRAPZ": 1e-5, "ADAMS": 1e-5}.get(method, 1e-5)
+    assert np.max(np.abs(r["X"] - x)) <= tol
+    leave = [e.time for e in r.events if e.old == 0.5]
+    assert leave == pytest.approx([0.5], abs=1e-6)
