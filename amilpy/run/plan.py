@@ -50,6 +50,9 @@ class Options:
     start: dict | None = None  # continue from a previous run's final_state
     fintim: float | None = None  # run length instead of the listing's FINTIM
     progress: Callable | None = None  # callable(t, fintim, events, steps) or None
+    # variables whose minimum and maximum are located like RANGE's (a sweep's measure)
+    extrema: tuple[str, ...] = ()
+    settle: float = 0.0  # RANGE and `extrema` count the rows from t0 + settle on
 
 
 class SurfaceKind(str, Enum):
