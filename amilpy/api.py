@@ -125,9 +125,11 @@ class Model:
             opts.max_steps = max_steps
         if max_events:
             opts.max_events = max_events
+        specs = self._specs(params)
+        self._check_memory(specs, outputs, fintim)
         runs = []
         advised = False
-        for spec in self._specs(params):
+        for spec in specs:
             run = simulate(self.ir, spec, opts, self.cache)
             if advice and not advised:
                 from .advice import stiffness_advice
@@ -138,6 +140,20 @@ class Model:
             if run.message.startswith("interrupted"):
                 break  # Ctrl-C: keep what was computed, start nothing new
         return runs
+
+    def _check_memory(self, specs: list[ir.RunSpec], outputs: list[str] | None,
+                      fintim: float | None) -> None:
+        """Refuse, before the first run, runs whose rows together would not fit."""
+        from .run.plan import DEFAULTS, stored_values
+
+        columns = len(outputs) if outputs is not None else len(self.ir.variables)
+        total = sum(stored_values(spec, columns, fintim) for spec in specs)
+        limit = DEFAULTS["max_values"]
+        if total > limit:
+            raise AmilError(
+                f"the {len(specs)} run(s) would keep {total:.3g} values ({columns} variables "
+                f"on every output row; limit {limit:.0e}, about {8 * limit / 1e9:.1f} GB): "
+                "raise OUTDEL/PRDEL, shorten FINTIM, or run fewer values at a time")
 
     def sweep(self, name: str, values, *, both_ways: bool = False, carry_state: bool = False,
               settle: float = 0.0, measure: str | None = None, method: str | None = None,
