@@ -76,7 +76,8 @@ def time_limit(seconds: float | None):
     checking and compiling a listing is one long call into lark and the code
     generator with no place to look at a clock, so SIGALRM does it; where there
     is none (Windows, a thread other than the main one) the block is not bounded."""
-    if not seconds or not hasattr(signal, "setitimer"):
+    # a limit of over a year is no limit (and past time_t, setitimer overflows)
+    if not seconds or seconds > 3e7 or not hasattr(signal, "setitimer"):
         yield
         return
 
