@@ -351,4 +351,4 @@ def test_max_time_bounds_reading_checking_and_compiling(tmp_path, capsys):
 
 def test_a_max_time_past_any_timer_is_no_limit(model, capsys):
     # --max-time 1E308 once overflowed setitimer's time_t (found by the fuzzer)
-    assert main(["run", model, "--max-time", "1e308", "--quiet"]) == 0
+    assert main(["run", str(model), "--max-time", "1e308", "--quiet"]) == 0
