@@ -68,8 +68,7 @@ class Model:
         `amilpy.run.flow` for `advance`, its events and its sensitivity."""
         from .run import Flow, Options
 
-        if method is not None and route_for(method) is None:
-            raise AmilError(f"unknown integration method {method}")
+        _check_method(method)
         spec = self._specs(params)[run]
         return Flow(self.ir, spec, Options(method=method, rtol=rtol, atol=atol), self.cache)
 
@@ -109,8 +108,7 @@ class Model:
         given as keywords override the listing's for all of them."""
         from .run import Options, simulate
 
-        if method is not None and route_for(method) is None:
-            raise AmilError(f"unknown integration method {method}")
+        _check_method(method)
         for label, tol in (("rtol", rtol), ("atol", atol)):
             if tol is not None and not tol > 0:
                 raise AmilError(f"{label} must be positive, got {tol}")
@@ -163,8 +161,7 @@ class Model:
         """One run per value of data value `name` (see `amilpy.sweep.sweep`)."""
         from .sweep import sweep
 
-        if method is not None and route_for(method) is None:
-            raise AmilError(f"unknown integration method {method}")
+        _check_method(method)
         return sweep(self, name, [float(v) for v in values], both_ways=both_ways,
                      carry_state=carry_state, settle=settle, measure=measure, method=method,
                      rtol=rtol, atol=atol, fintim=fintim, keep_runs=keep_runs,
@@ -199,3 +196,10 @@ def load(path: str | os.PathLike) -> Model:
         raise AmilError([Diagnostic("the file is not valid UTF-8", Span(line, col),
                                     "save the listing as UTF-8")], path) from None
     return loads(text, path)
+
+
+def _check_method(method: str | None) -> None:
+    """The API's METHOD names are the listing's (routes.ROUTES)."""
+    if method is not None and route_for(method) is None:
+        raise AmilError(f"unknown integration method {method}")
+
