@@ -162,6 +162,16 @@ class Func:
     def signatures(self) -> str:
         return " or ".join(f.signature for f in (self, *self.variants))
 
+    def counts(self) -> str:
+        """How many arguments the forms take, for a message: "3", "2 to 4", "at least
+        2", "3, 4 or 5"."""
+        forms = [f.nargs for f in (self, *self.variants)]
+        if len(forms) == 1 or any(hi is None for _, hi in forms):
+            lo, hi = forms[0]
+            return f"{lo}" if hi == lo else (f"{lo} to {hi}" if hi else f"at least {lo}")
+        n = sorted({k for lo, hi in forms for k in range(lo, hi + 1)})
+        return str(n[0]) if len(n) == 1 else ", ".join(map(str, n[:-1])) + f" or {n[-1]}"
+
 
 def _names(inner: str) -> tuple[str, ...]:
     inner = inner.replace("[", "").replace("]", "")

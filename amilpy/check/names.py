@@ -78,7 +78,7 @@ class Names:
         func = entry.form(n)
         lo, hi = func.nargs
         if n < lo or (hi is not None and n > hi):
-            want = f"{lo}" if hi == lo else (f"{lo} to {hi}" if hi else f"at least {lo}")
+            want = entry.counts()
             comma = self.decimal_comma(node)
             if comma:
                 hint = f"'{comma}' reads as two arguments; the decimal separator is a " \

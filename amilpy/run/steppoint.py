@@ -57,10 +57,14 @@ def timer(model: ir.Model, spec: ir.RunSpec, timer: dict[str, float], method: st
     the TIMER line that says what to write)."""
     t = dict(timer)
     delt = t["DELT"] = spec.timer.get("DELT", timer["DELT"])
-    for name in ("PRDEL", "OUTDEL"):
+    # an interval the listing gave must be a multiple; a default one is made one
+    for name in sorted(("PRDEL", "OUTDEL"), key=lambda n: n not in spec.timer):
         r = t[name] / delt
         k = round(r)
         if k >= 1 and abs(r - k) <= 1e-9 * r:
+            continue
+        if name not in spec.timer:
+            t[name] = max(1, k) * delt
             continue
         near = sorted({v for v in (math.floor(r) * delt, math.ceil(r) * delt) if v > 0})
         span = spec.timer_spans.get(name) or spec.timer_spans.get("DELT")
