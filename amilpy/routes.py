@@ -76,16 +76,6 @@ METHODS: dict[str, Route] = {alias: r for r in ROUTES for alias in r.aliases}
 DEFAULT = "AUTO"
 
 
-STEP_POINT = (
-    "step-point mode: the classic fixed-step translators' loop, reproduced exactly. "
-    "On the grid t_k = t0 + k*DELT, at each t_k: the events due, the sorted code with the "
-    "states at t_k (every switch read there, memory updated there), a row on the PRDEL "
-    "grid or at the end, FINISH/TERMT tested (true: the run stops with this row), then "
-    "states += DELT*rates (or the method's step with its stages, where the switches are "
-    "read at each stage point). No breakpoints, no location: STEP(2.5) with DELT = 1 "
-    "switches at t = 3.")
-
-
 class StepPointError(ValueError):
     """Step-point mode asked of a variable-step route."""
 

@@ -334,3 +334,24 @@ def test_a_read_only_folder_exits_4(model, tmp_path, capsys):
         assert done.returncode == 4, done.stderr
         err = done.stderr
     assert f"cannot write {folder / 'x.csv'}: Permission denied" in err
+
+
+def test_step_point_and_seed_options(model, tmp_path, capsys):
+    """--step-point puts a fixed-step method in step-point mode (the header says so),
+    is refused with a variable-step one, and --seed makes the random streams a
+    function of it alone."""
+    assert main(["run", str(model), "--method", "RK4", "--step-point", "--quiet",
+                 "--csv", str(tmp_path / "a.csv")]) == 0
+    assert main(["run", str(model), "--method", "RK4", "--step-point"]) == 0
+    assert "(METHOD RK4, DELT 0.00625, step-point mode)" in capsys.readouterr().out
+    assert main(["run", str(model), "--method", "RKS", "--step-point"]) == 1
+    err = capsys.readouterr().err
+    assert "step-point mode needs a fixed-step method" in err and "METHOD RKS" in err
+    noisy = tmp_path / "noise.amil"
+    noisy.write_text("G = GAUSS(0.0, 1.0)\nTIMER FINTIM = 1.0, OUTDEL = 0.1\nEND\n")
+    out = {}
+    for seed in ("3", "3", "4"):
+        path = tmp_path / f"g{len(out)}.csv"
+        assert main(["run", str(noisy), "--seed", seed, "--quiet", "--csv", str(path)]) == 0
+        out[len(out)] = path.read_text()
+    assert out[0] == out[1] != out[2]

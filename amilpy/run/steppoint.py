@@ -148,17 +148,19 @@ class StepPoint:
         c, plan = self.c, self.plan
         self.due(t, cur)
         y = cur.y
+        yl = y.tolist()
         if plan.resets:
-            y = self.watch.apply_resets(y, c.modes_literal(t, y.tolist(), cur.m, cur.z))
+            y = self.watch.apply_resets(y, c.modes_literal(t, yl, cur.m, cur.z))
+            yl = y.tolist()
         if c.z0:
-            cur.z[:] = c.mem(t, y.tolist(), cur.m, cur.m, cur.z)
-        stop = False
+            cur.z[:] = c.mem(t, yl, cur.m, cur.m, cur.z)
+        stop, m = False, cur.m
         if plan.watched:
-            m = c.modes_literal(t, y.tolist(), cur.m, cur.z)
+            m = c.modes_literal(t, yl, cur.m, cur.z)
             stop = self._changes(t, cur.m, m)
             cur.m[:] = m
         cur.t, cur.y = t, y
-        self.last_good = (t, y, list(cur.m))
+        self.last_good = (t, y, m)  # m is not changed in place later
         self._points += 1
         if rec is not None:
             times = plan.grid.times
@@ -172,22 +174,25 @@ class StepPoint:
 
     def _changes(self, t: float, old: list[float], new: list[float]) -> bool:
         """Events for the branches that changed since the last step point; True if a
-        FINISH was reached or passed, or a TERMT condition holds."""
+        TERMT condition holds (t0 included) or a FINISH was reached or passed."""
         first = self._points == 0
+        if new == old and not first:
+            return False  # nothing changed (a TERMT true here would have stopped before)
         stop = None
         for k, w in enumerate(self.plan.watched):
+            was, now = old[k], new[k]
             if w.purpose is Purpose.TERMT:
-                hit = new[k] > 0
+                hit = now > 0
             elif w.purpose is Purpose.FINISH:
-                hit = not first and (new[k] == 0.0 or new[k] * old[k] < 0)
+                hit = not first and now != was and (now == 0.0 or now * was < 0)
             else:
-                if not first and new[k] != old[k]:
-                    self._event(Event(t, w.description, w.surface, old[k], new[k],
-                                      w.event_kind(new[k]), w.text))
+                if not first and now != was:
+                    self._event(Event(t, w.description, w.surface, was, now,
+                                      w.event_kind(now), w.text))
                 continue
             if hit and stop is None:
                 stop = k
-                self.events.append(Event(t, w.description, w.surface, old[k], new[k],
+                self.events.append(Event(t, w.description, w.surface, was, now,
                                          EventKind(w.purpose.value), w.text))
         self.stop_reason = stop
         return stop is not None
@@ -216,7 +221,7 @@ class StepPoint:
     # the step to the next point ----------------------------------------------------------
     def _rates(self, t: float, y: np.ndarray, cur: Cursor) -> np.ndarray:
         try:
-            return np.asarray(self.c.rhs(t, y.tolist(), cur.m, cur.z), dtype=float)
+            return np.array(self.c.rhs(t, y.tolist(), cur.m, cur.z), dtype=float)
         except (ArithmeticError, ValueError) as exc:
             raise Stop(Failure.FAULT, t, detail=fault_text(
                 self.model, self.c, Fault(exc, t, y.tolist(), list(cur.m), list(cur.z)))
@@ -224,7 +229,8 @@ class StepPoint:
 
     def _step(self, cur: Cursor, h: float) -> None:
         """From the step point cur.t to the next, h later."""
-        self._check_limits(cur.t)
+        if self.nsteps % 256 == 0 or self.nsteps >= self.opts.max_steps - 1:
+            self._check_limits(cur.t)
         self.nsteps += 1
         if not len(cur.y):
             return
@@ -251,10 +257,10 @@ class StepPoint:
         cur.y = y
 
     def _check_limits(self, t: float) -> None:
+        """Every 256 steps (and at the step limit): limits, deadline, progress."""
         if self.nsteps >= self.opts.max_steps:
             raise Stop(Failure.STEPS, t, limit=self.opts.max_steps)
-        if self.deadline is not None and self.nsteps % 256 == 0 and \
-                _clock.perf_counter() > self.deadline:
+        if self.deadline is not None and _clock.perf_counter() > self.deadline:
             raise Stop(Failure.TIME_LIMIT, t, limit=self.opts.max_time)
-        if self.opts.progress is not None and self.nsteps % 2000 == 0:
+        if self.opts.progress is not None and self.nsteps % 2048 == 0:
             self.opts.progress(t, self.plan.fintim, len(self.events), self.nsteps)
