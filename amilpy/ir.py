@@ -158,6 +158,9 @@ class State:
     # `modes`, M0, M1, ...), else its derivative is 0: MODINT's hold, LIMINT's bounds
     modes: tuple[int, ...] = ()
     runs: str = ""
+    # (value, when): the runner puts the state on value while `when` (a template over
+    # the modes of `modes`) holds, at each restart and step point (LIMINT's bounds)
+    onto: tuple[tuple[Expr, str], ...] = ()
 
 
 @dataclass(frozen=True)

@@ -72,6 +72,10 @@ class StateSpec:
     runs: str = ""
     # MODINT: the runner resets the state to IC while surface 1 > 0 and surface 0 <= 0
     resets: bool = False
+    # where the runner puts the state while it is held there: (value over the
+    # arguments, when over the modes), at each restart and step point (LIMINT's
+    # bounds: a held state sits exactly on its bound, never a rounding beside it)
+    onto: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -220,6 +224,9 @@ def check_template_set(f: Func) -> None:
         check(s.deriv, states=nstates, arithmetic=True)
         if s.runs:
             check(s.runs, modes=nsurf)
+        for value, when in s.onto:
+            check(value, states=nstates, arithmetic=True)
+            check(when, modes=nsurf)
     for v in f.values:
         check(v, modes=nsurf, states=nstates, arithmetic=f.kind is Kind.STATE)
     if f.memory is not None:
@@ -332,7 +339,9 @@ register(Func("LIMINT", Kind.STATE, "LIMINT(YD, IC, BB, TB)",
               # surfaces Y - BB, Y - TB (the bounds, located) and YD; the state stops
               # while (Y <= BB and YD < 0) or (Y >= TB and YD > 0)
               states=(StateSpec("B", "A", "LIMINT",
-                                runs="((M0 > 0 or M2 >= 0) and (M1 < 0 or M2 <= 0))"),),
+                                runs="((M0 > 0 or M2 >= 0) and (M1 < 0 or M2 <= 0))",
+                                onto=(("C", "(M0 <= 0 and M2 < 0)"),
+                                      ("D", "(M1 >= 0 and M2 > 0)"))),),
               surfaces=("Y0 - C", "Y0 - D", "A"), values=("Y0",)))
 
 # --- switches -----------------------------------------------------------------

@@ -149,11 +149,42 @@ def test_limint_against_the_clipped_integral():
     assert max(r["Y"]) <= 0.5 + 1e-12 and min(r["Y"]) >= -0.5 - 1e-12
 
 
-def test_limint_starting_beyond_a_bound_is_held_until_yd_turns():
+def test_limint_starting_beyond_a_bound_is_put_on_it_until_yd_turns():
+    """IC = 2 above TB = 1 while YD > 0: the state is held within [BB, TB], on TB;
+    from t = 0.5 (YD turns) it falls by (t - 0.5)**2/2, until BB = 0 at 0.5 + sqrt 2."""
     r = probe("Y = LIMINT(0.5 - TIME, 2.0, 0.0, 1.0)", fintim=2.0, outdel=0.25, **TIGHT)
-    # held at IC = 2 while YD > 0; from t = 0.5 it falls by (t - 0.5)**2/2
-    assert r["Y"] == pytest.approx(np.where(r.t < 0.5, 2.0, 2.0 - (r.t - 0.5) ** 2 / 2),
-                                   abs=1e-9)
+    fall = np.maximum(1.0 - (r.t - 0.5) ** 2 / 2, 0.0)
+    assert r["Y"] == pytest.approx(np.where(r.t < 0.5, 1.0, fall), abs=1e-9)
+
+
+def test_a_held_limint_sits_exactly_on_its_bound_through_other_restarts():
+    """Other switches restart the run while LIMINT is held (a PULSE train here): the
+    state stays exactly on the bound, and no restart lets it go (each bound is
+    reached once, each turn of YD once)."""
+    r = probe("Y = LIMINT(COS(3.0*TIME), 0.0, -0.2, 0.2)\nP = PULSE(0.0, 0.01, 0.005)\n"
+              "X = INTGRL(0.0, P)", fintim=3.0, outdel=0.01)
+    held = (r.t > 0.22) & (r.t < 0.52)
+    assert np.all(r["Y"][held] == 0.2)
+    limint = [e for e in r.events if "LIMINT" in e.switch]
+    assert [e.text for e in limint] == ["Y - 0.2", "COS(3.0*TIME)", "Y - -0.2",
+                                        "COS(3.0*TIME)", "Y - 0.2", "COS(3.0*TIME)"]
+
+
+def test_limint_in_step_point_mode_is_held_on_the_bound():
+    """Euler: the state is put on the bound at the first step point past it (no
+    overshoot), and stays while YD pushes out: the recurrence clipped."""
+    r = run1("Y = LIMINT(1.0 - TIME, 0.0, -1.0, 0.35)\nTIMER FINTIM = 3.0, DELT = 0.1, "
+             "PRDEL = 0.1\nMETHOD EULER\nEND\n")
+    y, ys = 0.0, []
+    for k in range(31):
+        t = k * 0.1
+        yd = 1.0 - t
+        if (y <= -1.0 and yd < 0) or (y >= 0.35 and yd > 0):
+            y = -1.0 if y <= -1.0 else 0.35
+        ys.append(y)
+        held = (y <= -1.0 and yd < 0) or (y >= 0.35 and yd > 0)
+        y = y if held else y + 0.1 * yd
+    assert np.max(np.abs(r["Y"] - np.array(ys))) <= 1e-14
 
 
 # ------------------------------------------------------------- DELAY (ACSL form)

@@ -184,7 +184,8 @@ class Lowering:
                 names[k], instantiate(spec.ic, args, sp, names),
                 instantiate(spec.deriv, args, sp, names), sp, not named[k],
                 reset_surfaces=modes if spec.resets else (),
-                modes=modes if spec.runs else (), runs=spec.runs))
+                modes=modes if spec.runs or spec.onto else (), runs=spec.runs,
+                onto=tuple((instantiate(v, args, sp, names), when) for v, when in spec.onto)))
         return instantiate(func.values[0], args, sp, names)
 
     def surface(self, expr: ast.Node, kind: ir.SurfaceKind, owner: int | None,

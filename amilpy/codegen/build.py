@@ -68,6 +68,9 @@ class Compiled:
     memory_times: Callable | None = None
     # line k of the generated code is statements[k - 1] (None: scaffolding)
     statements: list[Statement | None] = field(default_factory=list)
+    # (t, y, m, z) -> the states put where their function holds them (LIMINT's
+    # bounds), or None when no state is
+    settle: Callable | None = None
     # time switches whose surfaces change sign only at first + k*period (PULSE's
     # train): those instants are breakpoints, and these surfaces are not located
     trains: list[tuple[float, float]] = field(default_factory=list)
@@ -304,6 +307,22 @@ class Compiler:
                                                 f"{func.signature}: {func.doc}")],
                                     model.path, model.source)
 
+    def settle(self) -> py.FunctionDef:
+        """The states put on the values their functions hold them at (LIMINT at a
+        bound), the others as they are."""
+        em = self.emitter("rhs")
+        states = self.model.states
+        body = self.prologue() + self.algebra([v for s in states for v, _ in s.onto], em)
+        values = []
+        for s in states:
+            value: py.expr = py.Name(local(s.name), py.Load())
+            for target, when in reversed(s.onto):
+                value = py.IfExp(em.fill(when, [], [em.mode(i) for i in s.modes]),
+                                 em.emit(target), value)
+            values.append(on_line(value, self.state_line(s)))
+        body.append(py.Return(py.List(values, py.Load())))
+        return function("settle", ("t", "y", "m", "z"), body)
+
     @deep_enough()
     def build(self) -> Compiled:
         try:
@@ -323,6 +342,9 @@ class Compiler:
         out_names = self.outputs if self.outputs is not None else model.variables
         fns = [self.rhs(), self.surfaces(), self.modes(), self.outputs_function(out_names),
                self.memory()]
+        settles = any(s.onto for s in model.states)
+        if settles:
+            fns.append(self.settle())
         # surf and out once more for NumPy columns: a condition there may be an array
         # (a memory function reading its condition), so if/else becomes a where()
         fns += [vectorised(fns[1], "surf_vec"), vectorised(fns[3], "out_vec")]
@@ -355,6 +377,7 @@ class Compiler:
             memory_every_step=any(f.memory.every_step for f in self.entries),
             memory_times=self.memory_times(), statements=self.statements, model=model,
             module=module, namespace=scalar, trains=trains, train_surfaces=train_surfaces,
+            settle=scalar["settle"] if settles else None,
         )
 
     def trains(self) -> tuple[list[tuple[float, float]], set[int]]:

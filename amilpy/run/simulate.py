@@ -47,7 +47,7 @@ def start_cursor(c: Compiled, plan: RunPlan, watch: SurfaceWatch, opts: Options,
     t0 = plan.t0
     if m is None or len(m) != len(plan.watched):
         m = watch.choose_modes(t0, y, z, [0.0] * len(plan.watched), set(), first=True)
-    y = watch.apply_resets(y, m)
+    y = watch.apply_resets(y, m, t0, z)
     if c.z0:
         z = c.mem(t0, y.tolist(), m, m, z)
     return Cursor(t0, y, list(m), list(z))

@@ -149,8 +149,8 @@ class StepPoint:
         self.due(t, cur)
         y = cur.y
         yl = y.tolist()
-        if plan.resets:
-            y = self.watch.apply_resets(y, c.modes_literal(t, yl, cur.m, cur.z))
+        if plan.resets or c.settle is not None:
+            y = self.watch.apply_resets(y, c.modes_literal(t, yl, cur.m, cur.z), t, cur.z)
             yl = y.tolist()
         if c.z0:
             cur.z[:] = c.mem(t, yl, cur.m, cur.m, cur.z)
