@@ -103,6 +103,7 @@ class StepPoint:
         self.last_good: tuple[float, np.ndarray, list[float]] | None = None
         self.stop_reason: int | None = None
         self.extrema: dict[str, list[float]] = {}  # RANGE over every step point
+        self._purposes = [(w, w.purpose) for w in plan.watched]
         self._stepper = None
         self._own = 0  # rates evaluated here (the stepper counts its own stages)
         self._points = 0  # step points processed (the first one has no events)
@@ -179,11 +180,11 @@ class StepPoint:
         if new == old and not first:
             return False  # nothing changed (a TERMT true here would have stopped before)
         stop = None
-        for k, w in enumerate(self.plan.watched):
+        for k, (w, purpose) in enumerate(self._purposes):
             was, now = old[k], new[k]
-            if w.purpose is Purpose.TERMT:
+            if purpose is Purpose.TERMT:
                 hit = now > 0
-            elif w.purpose is Purpose.FINISH:
+            elif purpose is Purpose.FINISH:
                 hit = not first and now != was and (now == 0.0 or now * was < 0)
             else:
                 if not first and now != was:
@@ -193,7 +194,7 @@ class StepPoint:
             if hit and stop is None:
                 stop = k
                 self.events.append(Event(t, w.description, w.surface, was, now,
-                                         EventKind(w.purpose.value), w.text))
+                                         EventKind(purpose.value), w.text))
         self.stop_reason = stop
         return stop is not None
 
