@@ -445,6 +445,11 @@ def main(argv: list[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse has printed the usage (or --help, --version)
         return int(exc.code) if isinstance(exc.code, int) else EXIT_USAGE
+    method = getattr(args, "method", None) and route_for(args.method)
+    if getattr(args, "step_point", None) and method and method.uses_tolerances:
+        print(f"amilpy {args.command}: --step-point needs a fixed-step method; --method "
+              f"{args.method} chooses its own steps", file=sys.stderr)
+        return EXIT_USAGE
     paths = getattr(args, "files", None) or [args.file]
     several = [w.flag for w in WRITERS if w.takes_path and w.flag
                and getattr(args, dest(w.flag), None)]

@@ -344,7 +344,12 @@ def test_step_point_and_seed_options(model, tmp_path, capsys):
                  "--csv", str(tmp_path / "a.csv")]) == 0
     assert main(["run", str(model), "--method", "RK4", "--step-point"]) == 0
     assert "(METHOD RK4, DELT 0.00625, step-point mode)" in capsys.readouterr().out
-    assert main(["run", str(model), "--method", "RKS", "--step-point"]) == 1
+    assert main(["run", str(model), "--method", "RKS", "--step-point"]) == 2  # usage
+    assert "--step-point needs a fixed-step method; --method RKS" in capsys.readouterr().err
+    # the listing's own variable-step METHOD: a fault in the listing's run
+    auto = tmp_path / "auto.amil"
+    auto.write_text(DECAY.replace("PRINT X", "METHOD RKS\nPRINT X"))
+    assert main(["run", str(auto), "--step-point"]) == 1
     err = capsys.readouterr().err
     assert "step-point mode needs a fixed-step method" in err and "METHOD RKS" in err
     noisy = tmp_path / "noise.amil"
