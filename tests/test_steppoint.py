@@ -4,9 +4,11 @@ fixed-step method in it.
 
 At each step point t_k = t0 + k*DELT: the sorted code with the states at t_k (every
 switch read there, memory updated there), a row on the PRDEL grid or at the end,
-FINISH/TERMT tested, then the step. The references below are that loop written out
-in plain Python/NumPy, independently of amilpy; they agree to round-off (the
-generated code adds the same terms, possibly in another order: 1e-14).
+FINISH/TERMT tested, then the step (y += DELT*rates with DELT itself). The
+references below are that loop written out in plain Python/NumPy, independently of
+amilpy. They agree bit for bit today (the generated code adds the same terms in the
+same order); the bound is round-off, 1e-14, so that a compiler folding constants in
+another order is not mistaken for a fault.
 """
 
 import math

@@ -122,7 +122,8 @@ class StepPoint:
     def integrate(self, cur: Cursor, t_end: float, rec: Recorder | None = None,
                   stop_at_event: bool = False, observer=None) -> Cursor:
         """The step points from cur.t (processed too) to t_end, on the grid cur.t +
-        k*DELT; rows go to `rec`. Raises Stop when the run cannot go on."""
+        k*DELT; rows go to `rec`. Raises Stop when the run cannot go on. (`observer`,
+        for the located loop's dense output, has nothing to observe here.)"""
         bad = first_bad(cur.y)
         if bad is not None:
             raise Stop(Failure.INITIAL_NOT_FINITE, cur.t, name=self.c.state_names[bad],
@@ -136,7 +137,7 @@ class StepPoint:
                 break
             if k == n or (stop_at_event and len(self.events) > n_events):
                 break
-            self._step(cur, t0 + (k + 1) * delt - t)
+            self._step(cur, delt)  # DELT itself, as the classic loop adds it
         return cur
 
     # one step point -------------------------------------------------------------------

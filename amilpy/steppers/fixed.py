@@ -92,9 +92,10 @@ class FixedStepper(Stepper):
         """One step of the method from (t, y) with rates f the caller took there, for
         step-point mode (memory and events change at each step point before its rates
         are taken; the stages call `fun` as `advance` does); the new state is `y`.
-        Adams keeps its history as `step` keeps it. The step that ended at t is tested
-        for stability as `step` tests it (now that its end's rates are known)."""
-        if self.steps_taken and t == self.t:
+        Adams keeps its history as `step` keeps it. Each call continues from where the
+        last one ended; the step that ended at t is tested for stability as `step`
+        tests it (now that its end's rates are known)."""
+        if self.steps_taken:
             self.y, self.f = y, f
             if self._beyond or self._steps % self.TEST_EVERY == 0:
                 failure = self._stability_test(t - self.t_old)
