@@ -103,9 +103,15 @@ class Model:
             outputs: list[str] | None = None, max_steps: int | None = None,
             max_events: int | None = None, max_time: float | None = None,
             fintim: float | None = None, progress=None, advice: bool = True,
+            step_point: bool | None = None, seed: float | None = None,
             **params: float) -> list[Run]:
         """Run every run of the listing (value lists, END groups); data values
-        given as keywords override the listing's for all of them."""
+        given as keywords override the listing's for all of them.
+
+        `step_point=True` runs a fixed-step method in step-point mode (the classic
+        translators' loop: switches read at the step points, nothing located), False
+        takes METHOD EULER/RECT out of it; None: the listing's choice. `seed` seeds
+        the random streams (GAUSS, UNIF, OU...) instead of the listing's RNSEED."""
         from .run import Options, simulate
 
         _check_method(method)
@@ -118,7 +124,8 @@ class Model:
             if unknown:
                 raise AmilError(f"{unknown[0]} is not a variable of the model")
         opts = Options(method=method, rtol=rtol, atol=atol, events=events, outputs=outputs,
-                       max_time=max_time, progress=progress, fintim=fintim)
+                       max_time=max_time, progress=progress, fintim=fintim,
+                       step_point=step_point, seed=_seed(seed))
         if max_steps:
             opts.max_steps = max_steps
         if max_events:
@@ -157,6 +164,7 @@ class Model:
               settle: float = 0.0, measure: str | None = None, method: str | None = None,
               rtol: float | None = None, atol: float | None = None,
               fintim: float | None = None, keep_runs: bool = False, progress=None,
+              step_point: bool | None = None, seed: float | None = None,
               **params: float):
         """One run per value of data value `name` (see `amilpy.sweep.sweep`)."""
         from .sweep import sweep
@@ -165,11 +173,24 @@ class Model:
         return sweep(self, name, [float(v) for v in values], both_ways=both_ways,
                      carry_state=carry_state, settle=settle, measure=measure, method=method,
                      rtol=rtol, atol=atol, fintim=fintim, keep_runs=keep_runs,
-                     progress=progress, **params)
+                     progress=progress, step_point=step_point, seed=_seed(seed), **params)
 
     def __repr__(self) -> str:
         return f"<amilpy.Model {self.name!r}: {len(self.ir.states)} states, " \
                f"{len(self.ir.runs)} runs>"
+
+
+def _seed(seed) -> float | None:
+    """A seed as given (a whole number is usual; any finite number is a seed)."""
+    if seed is None:
+        return None
+    try:
+        value = float(seed)
+    except (TypeError, ValueError):
+        raise AmilError(f"seed must be a number, got {seed!r}") from None
+    if value != value or value in (float("inf"), float("-inf")):
+        raise AmilError(f"seed must be a finite number, got {seed!r}")
+    return value
 
 
 def loads(text: str, name: str = "<listing>") -> Model:

@@ -95,6 +95,13 @@ def _model_options(p: argparse.ArgumentParser, run_limits: bool = True) -> None:
     p.add_argument("--rtol", type=POSITIVE, metavar="X", help="relative tolerance (RELERR)")
     p.add_argument("--atol", type=POSITIVE, metavar="X", help="absolute tolerance (ABSERR)")
     p.add_argument("--fintim", type=POSITIVE, metavar="S", help="run length instead of FINTIM")
+    p.add_argument("--step-point", action="store_true", default=None,
+                   help="run a fixed-step method in step-point mode, as the classic "
+                        "translators did: switches read at the step points, nothing "
+                        "located (METHOD EULER/RECT always is)")
+    p.add_argument("--seed", type=FINITE, metavar="N",
+                   help="seed of the random streams (GAUSS, UNIF, OU...), instead of "
+                        "the listing's RNSEED (default 1)")
     if run_limits:
         p.add_argument("--max-time", type=POSITIVE, metavar="S",
                        help="wall-clock limit per run, seconds (reading, checking and "
@@ -301,7 +308,8 @@ def cmd_run(args, path: str, signals: Signals) -> int:
         runs = model.run(method=args.method, rtol=args.rtol, atol=args.atol,
                          progress=progress, max_time=args.max_time, max_steps=args.max_steps,
                          max_events=args.max_events, fintim=args.fintim,
-                         advice=not args.no_advice, **params)
+                         advice=not args.no_advice, step_point=args.step_point,
+                         seed=args.seed, **params)
     finally:
         progress.done()
     stem, out_dir = _stem_and_dir(path, args.out)
@@ -350,7 +358,8 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
         result = sweep(model, name, values, both_ways=args.both_ways,
                        carry_state=args.carry_state, settle=args.settle, measure=args.measure,
                        method=args.method, rtol=args.rtol, atol=args.atol, fintim=args.fintim,
-                       keep_runs=False, progress=point, run_progress=progress, **params)
+                       keep_runs=False, progress=point, run_progress=progress,
+                       step_point=args.step_point, seed=args.seed, **params)
     finally:
         progress.done()
     stem, out_dir = _stem_and_dir(path, args.out)
@@ -380,7 +389,8 @@ def cmd_report(args, path: str, signals: Signals) -> int:
     plot = _plot_choice(args, model)
     runs = model.run(method=args.method, rtol=args.rtol, atol=args.atol, fintim=args.fintim,
                      max_time=args.max_time, max_steps=args.max_steps,
-                     max_events=args.max_events, **params)
+                     max_events=args.max_events, step_point=args.step_point, seed=args.seed,
+                     **params)
     errors: list[OutputError] = []
     with signals.held():
         written = write_report(model, runs, path, args.out, formats, args.lang, plot, errors)
@@ -443,6 +453,11 @@ def main(argv: list[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse has printed the usage (or --help, --version)
         return int(exc.code) if isinstance(exc.code, int) else EXIT_USAGE
+    method = getattr(args, "method", None) and route_for(args.method)
+    if getattr(args, "step_point", None) and method and method.uses_tolerances:
+        print(f"amilpy {args.command}: --step-point needs a fixed-step method; --method "
+              f"{args.method} chooses its own steps", file=sys.stderr)
+        return EXIT_USAGE
     paths = getattr(args, "files", None) or [args.file]
     several = [w.flag for w in WRITERS if w.takes_path and w.flag
                and getattr(args, dest(w.flag), None)]

@@ -151,9 +151,16 @@ class State:
     deriv: Expr
     span: Span
     hidden: bool = False
-    # MODINT: while surface `reset_surfaces[0]` <= 0 the state is held (its
-    # derivative is 0); the reset to IC while `reset_surfaces[1]` > 0 is the runner's.
+    # MODINT: the reset to IC while `reset_surfaces[1]` > 0 (and `reset_surfaces[0]`
+    # <= 0) is the runner's.
     reset_surfaces: tuple[int, ...] = ()
+    # the state integrates while `runs` holds (a library template over the modes of
+    # `modes`, M0, M1, ...), else its derivative is 0: MODINT's hold, LIMINT's bounds
+    modes: tuple[int, ...] = ()
+    runs: str = ""
+    # (value, when): the runner puts the state on value while `when` (a template over
+    # the modes of `modes`) holds, at each restart and step point (LIMINT's bounds)
+    onto: tuple[tuple[Expr, str], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -189,6 +196,10 @@ class RunSpec:
     abserr_each: dict[str, float] = field(default_factory=dict)
     reports: list[Report] = field(default_factory=list)
     titles: list[str] = field(default_factory=list)
+    # step-point mode as the listing asks it (ALGORITHM IALG = 3, DRIVER = 'EUDRIV');
+    # None: the method's default (routes.step_point_mode)
+    step_point: bool | None = None
+    timer_spans: dict[str, Span] = field(default_factory=dict)  # where each TIMER key is
 
 
 @dataclass

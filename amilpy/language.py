@@ -20,6 +20,10 @@ KNOWN_BEFORE_RUN: frozenset[str] = frozenset(RESERVED)
 # Reserved names that are settings, not quantities: never a column of a printout.
 SETTINGS: frozenset[str] = frozenset(set(RESERVED) - {TIME})
 
+# The data value that seeds the random streams (GAUSS, UNIF, OU, ...) when the run is
+# not given a seed (--seed, seed=): ACSL's system variable of that name. Default 1.
+SEED_NAME = "RNSEED"
+
 # Sections of the CSMP form, with the spellings that open them.
 SECTIONS: dict[str, str] = {
     "INITIAL": "INITIAL",

@@ -126,7 +126,8 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
           carry_state: bool = False, settle: float = 0.0, measure: str | None = None,
           method: str | None = None, rtol: float | None = None, atol: float | None = None,
           fintim: float | None = None, keep_runs: bool = False, progress=None,
-          run_progress=None, **params: float) -> Sweep:
+          run_progress=None, step_point: bool | None = None, seed: float | None = None,
+          **params: float) -> Sweep:
     """Run `model` once per value of data value `name` and measure `measure`.
     `progress(i, n, value)` is called after each point, `run_progress` during each
     run (as `Options.progress`)."""
@@ -152,7 +153,8 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
         spec = model._specs({**params, name: value})[0]
         opts = Options(method=method, rtol=rtol, atol=atol,
                        start=start if carry_state else None, fintim=fintim,
-                       progress=run_progress, extrema=(measure,), settle=settle)
+                       progress=run_progress, extrema=(measure,), settle=settle,
+                       step_point=step_point, seed=seed)
         run = simulate(model.ir, spec, opts, model.cache)
         t0 = float(run.times[0])
         # located between the output instants, like RANGE: the peak of a lightly

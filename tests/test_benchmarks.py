@@ -87,3 +87,12 @@ def test_startup_runs(tmp_path):
     assert all(r["rc"] == 0 for r in res["rows"])
     assert "amilpy" in res["imports_check"]
     assert (tmp_path / "startup.md").stat().st_size > 0
+
+
+def test_steppoint_runs(tmp_path):
+    import steppoint
+
+    rows = steppoint.main(steps=2000, repeats=1, out_dir=str(tmp_path))
+    # the same loop written by hand: the rows agree to round-off
+    assert all(r["max_diff"] <= 1e-12 for r in rows)
+    assert (tmp_path / "steppoint.md").stat().st_size > 0

@@ -352,3 +352,29 @@ def test_max_time_bounds_reading_checking_and_compiling(tmp_path, capsys):
 def test_a_max_time_past_any_timer_is_no_limit(model, capsys):
     # --max-time 1E308 once overflowed setitimer's time_t (found by the fuzzer)
     assert main(["run", str(model), "--max-time", "1e308", "--quiet"]) == 0
+
+
+def test_step_point_and_seed_options(model, tmp_path, capsys):
+    """--step-point puts a fixed-step method in step-point mode (the header says so),
+    is refused with a variable-step one, and --seed makes the random streams a
+    function of it alone."""
+    assert main(["run", str(model), "--method", "RK4", "--step-point", "--quiet",
+                 "--csv", str(tmp_path / "a.csv")]) == 0
+    assert main(["run", str(model), "--method", "RK4", "--step-point"]) == 0
+    assert "(METHOD RK4, DELT 0.00625, step-point mode)" in capsys.readouterr().out
+    assert main(["run", str(model), "--method", "RKS", "--step-point"]) == 2  # usage
+    assert "--step-point needs a fixed-step method; --method RKS" in capsys.readouterr().err
+    # the listing's own variable-step METHOD: a fault in the listing's run
+    auto = tmp_path / "auto.amil"
+    auto.write_text(DECAY.replace("PRINT X", "METHOD RKS\nPRINT X"))
+    assert main(["run", str(auto), "--step-point"]) == 1
+    err = capsys.readouterr().err
+    assert "step-point mode needs a fixed-step method" in err and "METHOD RKS" in err
+    noisy = tmp_path / "noise.amil"
+    noisy.write_text("G = GAUSS(0.0, 1.0)\nTIMER FINTIM = 1.0, OUTDEL = 0.1\nEND\n")
+    out = {}
+    for seed in ("3", "3", "4"):
+        path = tmp_path / f"g{len(out)}.csv"
+        assert main(["run", str(noisy), "--seed", seed, "--quiet", "--csv", str(path)]) == 0
+        out[len(out)] = path.read_text()
+    assert out[0] == out[1] != out[2]

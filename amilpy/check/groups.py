@@ -118,6 +118,7 @@ class RunGroups(Visitor):
         self.tables: dict[str, Table] = {}
         self.table_spans: dict[str, Span] = {}
         self.timer: dict[str, float] = {}
+        self.timer_spans: dict[str, Span] = {}
         self.timer_span: Span | None = None  # the first group's first TIMER statement
         self.method: str | None = None
         self.tolerance: dict[str, float | None] = {"RELERR": None, "ABSERR": None}
@@ -194,7 +195,7 @@ class RunGroups(Visitor):
                 method=self.method, relerr=self.tolerance["RELERR"],
                 abserr=self.tolerance["ABSERR"], relerr_each=dict(self.each["RELERR"]),
                 abserr_each=dict(self.each["ABSERR"]), reports=list(self.reports),
-                titles=list(self.titles),
+                titles=list(self.titles), timer_spans=dict(self.timer_spans),
             ))
         # a later group inherits everything; value lists collapse to their first value
         for lname in lists:
@@ -253,6 +254,7 @@ class RunGroups(Visitor):
             elif s.value <= 0 and s.name != "DELMIN":
                 self.rep.error(f"{s.name} must be positive (got {s.value:g})", s.span)
             self.timer[s.name] = s.value
+            self.timer_spans[s.name] = s.span
 
     def visit_Method(self, st: ast.Method) -> None:
         if route_for(st.name) is None:

@@ -22,10 +22,10 @@ from ..unparse import expr_text
 TEXT_LIMIT = 60
 
 
-def surface_text(template: str, call: ast.Call) -> str:
+def surface_text(template: str, call: ast.Call, states: tuple[str, ...] = ()) -> str:
     """A surface as the listing writes it: the template over the call's own
     arguments ("W1", "TIME - T1", "X - P2")."""
-    return expr_text(None, instantiate(template, call.args, call.span), TEXT_LIMIT)
+    return expr_text(None, instantiate(template, call.args, call.span, states), TEXT_LIMIT)
 
 
 def describe(call: ast.Call) -> str:
@@ -167,14 +167,15 @@ class Lowering:
         others = (*(s.deriv for s in func.states), *func.values, *func.surfaces)
         args = self.args(call, owner, literal=in_ic - {i for t in others
                                                         for i in arguments_of(t)})
-        # a state function's surfaces are its first state's modes (MODINT's hold/reset)
-        resets = tuple(self.surface(instantiate(t, args, sp), func.surface_kind, None,
-                                    ir.Purpose.SWITCH, sp, describe(call),
-                                    surface_text(t, call))
-                       for t in func.surfaces)
         named = [k == 0 and bool(target) and s.named for k, s in enumerate(func.states)]
         names = tuple(target if named[k] else self.hidden(s.tag, owner)
                       for k, s in enumerate(func.states))
+        # a state function's surfaces (over its arguments and its own states) are
+        # what its states' `runs` read (MODINT's hold and reset, LIMINT's bounds)
+        modes = tuple(self.surface(instantiate(t, args, sp, names), func.surface_kind, None,
+                                   ir.Purpose.SWITCH, sp, describe(call),
+                                   surface_text(t, call, names))
+                      for t in func.surfaces)
         for k, spec in enumerate(func.states):
             if arguments_of(spec.ic):
                 self.before_run.append((instantiate(spec.ic, call.args, sp),
@@ -182,7 +183,9 @@ class Lowering:
             self.states.append(ir.State(
                 names[k], instantiate(spec.ic, args, sp, names),
                 instantiate(spec.deriv, args, sp, names), sp, not named[k],
-                reset_surfaces=resets if k == 0 else ()))
+                reset_surfaces=modes if spec.resets else (),
+                modes=modes if spec.runs or spec.onto else (), runs=spec.runs,
+                onto=tuple((instantiate(v, args, sp, names), when) for v, when in spec.onto)))
         return instantiate(func.values[0], args, sp, names)
 
     def surface(self, expr: ast.Node, kind: ir.SurfaceKind, owner: int | None,
@@ -218,6 +221,7 @@ class Lowering:
 
     def switch(self, call: ast.Call, target: str) -> int:
         func = lookup(call.func, len(call.args))
+        self.note_before_run(func, call)
         args = self.args(call, target)
         index = len(self.switches)
         surfaces = [self.surface(instantiate(t, args, call.span), func.surface_kind, index,

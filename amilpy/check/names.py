@@ -4,10 +4,13 @@ tolerance reads known where it is read (a misspelt one gets the nearest known na
 
 from __future__ import annotations
 
+import math
+
 from .. import syntax as ast
 from ..diagnostics import Reporter, Span, nearest
 from ..language import KNOWN_BEFORE_RUN, RESERVED, SETTINGS, TIME, split_lines
 from ..library import ALIASES, FUNCTIONS, Kind, lookup
+from ..surfaces import constant_value
 from .groups import Data, check_assignable
 
 # the largest store a function's literal argument may ask for (DELAY's N points)
@@ -75,7 +78,7 @@ class Names:
         func = entry.form(n)
         lo, hi = func.nargs
         if n < lo or (hi is not None and n > hi):
-            want = f"{lo}" if hi == lo else (f"{lo} to {hi}" if hi else f"at least {lo}")
+            want = entry.counts()
             comma = self.decimal_comma(node)
             if comma:
                 hint = f"'{comma}' reads as two arguments; the decimal separator is a " \
@@ -95,11 +98,24 @@ class Names:
                 self.rep.error(f"{what} of {node.func} must be a whole number written out, "
                                f"from 1 to {MAX_STORE}", arg.span,
                                f"e.g. {func.signature.replace(what, '100', 1)}")
+        self.check_argument_values(node, func)
         if allow is not None and func.kind not in allow:
             self.rep.error(f"{node.func} cannot be used in {section}", node.span,
                            "states, memory functions and IMPULS belong in DYNAMIC")
         if func.kind == Kind.TABLE:
             self.check_table_argument(node)
+
+    def check_argument_values(self, node: ast.Call, func) -> None:
+        """Arguments that must be positive (PULSE's P) or not negative, where their
+        value is known from the data (else the run checks them)."""
+        for i in (*func.positive_args, *func.nonnegative_args):
+            for spec in self.data.runs:
+                value = constant_value(node.args[i], {**spec.data, "PI": math.pi})
+                fault = None if value is None else func.argument_fault(i, value)
+                if fault:
+                    self.rep.error(fault, node.args[i].span,
+                                   f"{func.signature}: {func.doc}")
+                    break
 
     def check_table_argument(self, node: ast.Call) -> None:
         first = node.args[0]

@@ -19,8 +19,9 @@ from ..diagnostics import AmilError, Diagnostic, Span
 from ..library import lookup, vector_functions
 from ..surfaces import is_affine
 from ..syntax import deep_enough
+from ..templates import instantiate
 from .consts import evaluate_constant, initial_slots
-from .emit import Emitter, needs
+from .emit import Emitter, Setting, needs
 from .faults import STATEMENTS, FaultReport, Statement, explain, statement_of
 from .pytree import (
     Folder,
@@ -67,6 +68,13 @@ class Compiled:
     memory_times: Callable | None = None
     # line k of the generated code is statements[k - 1] (None: scaffolding)
     statements: list[Statement | None] = field(default_factory=list)
+    # (t, y, m, z) -> the states put where their function holds them (LIMINT's
+    # bounds), or None when no state is
+    settle: Callable | None = None
+    # time switches whose surfaces change sign only at first + k*period (PULSE's
+    # train): those instants are breakpoints, and these surfaces are not located
+    trains: list[tuple[float, float]] = field(default_factory=list)
+    train_surfaces: set[int] = field(default_factory=set)
     model: ir.Model | None = field(default=None, repr=False)
     module: py.Module | None = field(default=None, repr=False)  # the scalar functions' tree
     namespace: dict = field(default_factory=dict, repr=False)
@@ -113,8 +121,9 @@ class Compiler:
 
     def __init__(self, model: ir.Model, constants: dict[str, float], tables,
                  const_modes: dict[int, float], outputs: list[str] | None = None,
-                 events: bool = True) -> None:
+                 events: bool = True, setting: Setting | None = None) -> None:
         self.model = model
+        self.setting = setting or Setting()
         self.constants = constants
         self.tables = tables
         self.const_modes = const_modes
@@ -138,7 +147,8 @@ class Compiler:
     def emitter(self, context: str, new_modes: bool = False) -> Emitter:
         names = self.mode_names_new if new_modes else self.mode_names
         return Emitter(self.model, self.constants, self.const_modes, context, names,
-                       self.global_tables, self.tables, self.unpacked_z, self.names)
+                       self.global_tables, self.tables, self.unpacked_z, self.names,
+                       self.setting)
 
     def line(self, kind: str, target: str, span: Span | None, expr=None) -> int:
         """The generated line of one IR statement (the same in every function)."""
@@ -209,9 +219,9 @@ class Compiler:
         values = []
         for s in states:
             value = em.emit(s.deriv)
-            if s.reset_surfaces:  # MODINT: held while its first surface is <= 0
-                value = py.IfExp(py.Compare(em.mode(s.reset_surfaces[0]), [py.Gt()],
-                                            [py.Constant(0.0)]), value, py.Constant(0.0))
+            if s.runs:  # MODINT holds, LIMINT stops at a bound: the derivative is 0
+                value = py.IfExp(em.fill(s.runs, [], [em.mode(i) for i in s.modes]), value,
+                                 py.Constant(0.0))
             values.append(on_line(value, self.state_line(s)))
         body.append(py.Return(py.List(values, py.Load())))
         return function("rhs", ("t", "y", "m", "z"), body)
@@ -284,6 +294,35 @@ class Compiler:
         body.append(py.Return(py.List(new, py.Load())))
         return function("mem", ("t", "y", "m", "mn", "z"), body)
 
+    def check_arguments(self) -> None:
+        """Constant arguments that must be positive or not negative (PULSE's P and W),
+        now that the run's constants are known; a fault is located at the call."""
+        model = self.model
+        for inst in (*model.switches, *model.memories):
+            func = lookup(inst.func, len(inst.args))
+            for i in (*func.positive_args, *func.nonnegative_args):
+                fault = func.argument_fault(i, self.constant(inst.args[i], inst.span))
+                if fault:
+                    raise AmilError([Diagnostic(fault, inst.span,
+                                                f"{func.signature}: {func.doc}")],
+                                    model.path, model.source)
+
+    def settle(self) -> py.FunctionDef:
+        """The states put on the values their functions hold them at (LIMINT at a
+        bound), the others as they are."""
+        em = self.emitter("rhs")
+        states = self.model.states
+        body = self.prologue() + self.algebra([v for s in states for v, _ in s.onto], em)
+        values = []
+        for s in states:
+            value: py.expr = py.Name(local(s.name), py.Load())
+            for target, when in reversed(s.onto):
+                value = py.IfExp(em.fill(when, [], [em.mode(i) for i in s.modes]),
+                                 em.emit(target), value)
+            values.append(on_line(value, self.state_line(s)))
+        body.append(py.Return(py.List(values, py.Load())))
+        return function("settle", ("t", "y", "m", "z"), body)
+
     @deep_enough()
     def build(self) -> Compiled:
         try:
@@ -299,9 +338,13 @@ class Compiler:
 
     def _build(self) -> Compiled:
         model = self.model
+        self.check_arguments()
         out_names = self.outputs if self.outputs is not None else model.variables
         fns = [self.rhs(), self.surfaces(), self.modes(), self.outputs_function(out_names),
                self.memory()]
+        settles = any(s.onto for s in model.states)
+        if settles:
+            fns.append(self.settle())
         # surf and out once more for NumPy columns: a condition there may be an array
         # (a memory function reading its condition), so if/else becomes a where()
         fns += [vectorised(fns[1], "surf_vec"), vectorised(fns[3], "out_vec")]
@@ -318,6 +361,7 @@ class Compiler:
         vector.update({f"_{k}": v for k, v in vector_functions().items()})
         vector.update(self.global_tables)
         exec(code, vector)  # noqa: S102 - the same code, elementwise functions
+        trains, train_surfaces = self.trains()
         return Compiled(
             state_names=[s.name for s in model.states],
             y0=[self.constant(s.ic, s.span) for s in model.states],
@@ -332,8 +376,24 @@ class Compiler:
             surf_v=vector["surf_vec"], out_v=vector["out_vec"],
             memory_every_step=any(f.memory.every_step for f in self.entries),
             memory_times=self.memory_times(), statements=self.statements, model=model,
-            module=module, namespace=scalar,
+            module=module, namespace=scalar, trains=trains, train_surfaces=train_surfaces,
+            settle=scalar["settle"] if settles else None,
         )
+
+    def trains(self) -> tuple[list[tuple[float, float]], set[int]]:
+        """The (first instant, period) of the time switches that declare their
+        breakpoints (PULSE's train), and their watched surfaces."""
+        if not self.events or self.setting.step is not None:
+            return [], set()
+        trains, surfaces = [], set()
+        for sw in self.model.switches:
+            func = lookup(sw.func, len(sw.args))
+            watched = [i for i in sw.surfaces if i in self.watched]
+            if func.breaks and watched:
+                surfaces.update(watched)
+                trains.extend(tuple(self.constant(instantiate(t, sw.args, sw.span), sw.span)
+                                    for t in pair) for pair in func.breaks)
+        return trains, surfaces
 
     def affine(self) -> set[int]:
         """Time surfaces affine in TIME: their roots are breakpoints found exactly."""
@@ -341,6 +401,7 @@ class Compiler:
         equations = {e.target: e.expr for e in model.dynamic}
         return {i for i in self.watched
                 if model.surfaces[i].depends == ir.Depends.TIME and self.events
+                and self.setting.step is None
                 and model.surfaces[i].kind == ir.SurfaceKind.SIGN
                 and is_affine(model.surfaces[i].expr, self.constants, equations)}
 

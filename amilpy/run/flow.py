@@ -12,7 +12,8 @@
 `advance` integrates exactly as a run does (same route, tolerances, breakpoints,
 event location, sliding and restarts; on the run's own [t0, FINTIM] the AUTO
 route checks its surfaces at the same output instants, so a flow from t0 to
-FINTIM ends where the run ends) and records no rows. A failure raises
+FINTIM ends where the run ends; in step-point mode the classic loop, on the
+grid t0 + k*DELT from the flow's t0) and records no rows. A failure raises
 AmilError with the run's message.
 
 Sensitivity. `sensitivity=True` also gives M = d(final state)/d(initial state),
@@ -50,6 +51,7 @@ from .loop import Cursor, Integrator, Stop
 from .plan import Options
 from .prepare import Cache, prepare
 from .simulate import start_cursor
+from .steppoint import StepPoint
 from .watch import SurfaceWatch, TooManySlides
 
 
@@ -111,8 +113,18 @@ class Flow:
         cur = self._start(np.array(y, dtype=float), z, None if modes is None else list(modes))
         return State(cur.y, tuple(cur.m), tuple(cur.z), cur.t)
 
+    def _integrator(self) -> Integrator | StepPoint:
+        cls = StepPoint if self.plan.step_point else Integrator
+        return cls(self.model, self.plan, self.c, self.watch, self.opts)
+
     def _start(self, y: np.ndarray, z: list[float], m) -> Cursor:
         try:
+            if self.plan.step_point:
+                # the branches as they read at t0; memory is updated at each step point,
+                # the first one included, when the flow advances
+                m = self.c.modes_literal(self.plan.t0, y.tolist(), [0.0] * len(
+                    self.plan.watched), z) if m is None else m
+                return Cursor(self.plan.t0, y, list(m), list(z))
             return start_cursor(self.c, self.plan, self.watch, self.opts, y, z, m)
         except (ArithmeticError, ValueError) as exc:
             raise AmilError(f"cannot start at TIME = {self.plan.t0:g}: {exc}") from None
@@ -130,7 +142,7 @@ class Flow:
 
     def _advance(self, y: np.ndarray, state: State, t0: float, t1: float,
                  stop_at_event: bool) -> tuple[State, list[Event]]:
-        integ = Integrator(self.model, self.plan, self.c, self.watch, self.opts)
+        integ = self._integrator()
         integ.window(t0, t1)
         cur = Cursor(t0, y, list(state.modes), list(state.memory))
         try:

@@ -369,7 +369,7 @@ class Integrator:
             z[:] = c.mem(tb, yb.tolist(), m, new_m, z)
         changed = new_m != m
         m[:] = new_m
-        y = watch.apply_resets(yb, m)
+        y = watch.apply_resets(yb, m, tb, z)
         cur.t, cur.y = tb, y
         if rec is not None:
             rec.restarted(tb, y, m, z)

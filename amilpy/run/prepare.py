@@ -14,10 +14,28 @@ from dataclasses import dataclass
 from typing import TypeVar
 
 from .. import ir
-from ..codegen import Compiled, Compiler, evaluate_constant, fault_line, initial_values
+from ..codegen import (
+    Compiled,
+    Compiler,
+    Setting,
+    evaluate_constant,
+    fault_line,
+    initial_values,
+)
 from ..diagnostics import AmilError, Diagnostic, Span
+from ..language import SEED_NAME
 from ..surfaces import level, sign
-from .plan import Options, RunPlan, make_grid, make_plan, reserved_values, timer_values
+from . import steppoint
+from .plan import (
+    Options,
+    RunPlan,
+    make_grid,
+    make_plan,
+    reserved_values,
+    resolve_route,
+    resolve_step_point,
+    timer_values,
+)
 
 T = TypeVar("T")
 
@@ -69,6 +87,10 @@ def prepare(model: ir.Model, spec: ir.RunSpec, opts: Options | None = None,
 
 def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> Prepared:
     timer = timer_values(spec, opts.fintim, opts.max_rows)
+    route, method = resolve_route(spec, opts)
+    step_point = resolve_step_point(spec, opts)
+    if step_point:
+        timer = steppoint.timer(model, spec, timer, method)
     reserved = reserved_values(timer)
     tables = repr(sorted(spec.tables.items()))
     ikey = (tuple(sorted(spec.data.items())), tuple(sorted(reserved.items())), tables)
@@ -76,22 +98,38 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
         model, spec.data, spec.tables, reserved)))
     const_modes = {}
     for s in model.surfaces:
-        if s.depends == "impulse":
+        if s.depends == "impulse" and not step_point:
+            # IMPULS is 1 only at breakpoints; step-point mode reads it at each point
             const_modes[s.index] = 0.0
         if s.depends == "const":
             value = evaluate_constant(model, s.expr, constants, spec.tables, s.span)
             const_modes[s.index] = level(value) if s.kind == "level" else sign(value)
+    setting = Setting(seed=random_seed(opts, constants),
+                      # a random draw is held for an output interval, DELT with a fixed step
+                      hold=timer["DELT"] if route.fixed else min(timer["OUTDEL"],
+                                                                 timer["PRDEL"]),
+                      step=timer["DELT"] if step_point else None)
     ckey = (tuple(sorted(constants.items())), tables,
-            tuple(opts.outputs) if opts.outputs is not None else None, opts.events)
+            tuple(opts.outputs) if opts.outputs is not None else None, opts.events, setting)
     compiled = cache.get("compiled", ckey, lambda: Compiler(
-        model, constants, spec.tables, const_modes, opts.outputs, opts.events).build())
+        model, constants, spec.tables, const_modes, opts.outputs, opts.events,
+        setting).build())
     t0 = float(opts.start["t"]) if opts.start else 0.0
     fintim = t0 + timer["FINTIM"]
-    gkey = (t0, fintim, timer["OUTDEL"], timer["PRDEL"])
-    grid = cache.get("grid", gkey, lambda: make_grid(t0, fintim, timer["OUTDEL"],
-                                                     timer["PRDEL"]))
+    gkey = (t0, fintim, timer["OUTDEL"], timer["PRDEL"], step_point and timer["DELT"])
+    grid = cache.get("grid", gkey, lambda: steppoint.grid(t0, timer) if step_point else
+                     make_grid(t0, fintim, timer["OUTDEL"], timer["PRDEL"]))
     if len(grid.times) > opts.max_rows:
         raise AmilError([Diagnostic(
             f"the run would print {len(grid.times)} rows (limit {opts.max_rows})",
             None, "raise OUTDEL/PRDEL")], model.path, model.source)
-    return Prepared(constants, compiled, make_plan(model, spec, opts, compiled, timer, grid))
+    return Prepared(constants, compiled, make_plan(model, spec, opts, compiled, timer, grid,
+                                                   step_point))
+
+
+def random_seed(opts: Options, constants: dict[str, float]) -> float:
+    """The seed of a run's random streams: the option (--seed, seed=), else the
+    listing's RNSEED, else 1."""
+    if opts.seed is not None:
+        return float(opts.seed)
+    return float(constants.get(SEED_NAME, 1.0))

@@ -19,12 +19,14 @@ from ..codegen import Compiled, evaluate_constant
 from ..diagnostics import AmilError
 from ..outcome import Failure, message
 from ..result import Event, EventKind, Run, Status
+from ..runtime import table_warnings
 from .faults import Fault, fault_text
 from .loop import Cursor, Integrator, Stop
 from .peaks import Context, locate_range
 from .plan import SLIDE, Options, RunPlan
 from .prepare import Cache, Prepared, prepare
 from .record import Recorder
+from .steppoint import StepPoint
 from .watch import SurfaceWatch, TooManySlides
 
 
@@ -45,7 +47,7 @@ def start_cursor(c: Compiled, plan: RunPlan, watch: SurfaceWatch, opts: Options,
     t0 = plan.t0
     if m is None or len(m) != len(plan.watched):
         m = watch.choose_modes(t0, y, z, [0.0] * len(plan.watched), set(), first=True)
-    y = watch.apply_resets(y, m)
+    y = watch.apply_resets(y, m, t0, z)
     if c.z0:
         z = c.mem(t0, y.tolist(), m, m, z)
     return Cursor(t0, y, list(m), list(z))
@@ -60,32 +62,45 @@ class _Run:
         ranged = [n for r in spec.reports if r.kind == "RANGE" for n in r.names]
         self.rec = Recorder(self.plan, self.c, self.watch, ranged + list(opts.extrema),
                             self.plan.t0 + opts.settle if opts.settle > 0 else None)
-        self.integ = Integrator(model, self.plan, self.c, self.watch, opts, started)
+        # step-point mode runs the classic loop (steppoint.py) instead of the located one
+        self.integ = (StepPoint if self.plan.step_point else Integrator)(
+            model, self.plan, self.c, self.watch, opts, started)
         self.started = started
 
     def run(self) -> Run:
-        c, plan, opts, rec, integ = self.c, self.plan, self.opts, self.rec, self.integ
-        start = opts.start
+        c, plan, integ, start = self.c, self.plan, self.integ, self.opts.start
         y = np.array(start["y"] if start else c.y0, dtype=float)
         z = list(start["z"]) if start else list(c.z0)
         m = [0.0] * len(plan.watched)
         cur = Cursor(plan.t0, y, m, z)
+        table_warnings(c.tables)  # LINT's notes start afresh
+        if not plan.step_point:  # (in step-point mode t0 is the loop's first point)
+            try:
+                cur = self._start(y, z)
+            except (ArithmeticError, ValueError) as exc:
+                # a fault in the switching surfaces at the start (QNTZR with P = 0, say)
+                text = fault_text(self.model, c, Fault(exc, cur.t, y.tolist(), m, z))
+                integ.events.clear()
+                return self.finish(Status.FAILED, message(Failure.CANNOT_START, t=plan.t0,
+                                                          detail=text), cur, {})
+        return self._integrate(cur)
+
+    def _start(self, y: np.ndarray, z: list[float]) -> Cursor:
+        """The branches in force at t0, and the first row."""
+        c, plan, rec, integ, start = self.c, self.plan, self.rec, self.integ, self.opts.start
+        cur = start_cursor(c, plan, self.watch, self.opts, y, z, start and start.get("m"))
+        for k, w in enumerate(plan.watched):
+            if cur.m[k] == SLIDE:  # sliding from the start is an event too
+                integ.events.append(Event(plan.t0, w.description, w.surface, 0.0, SLIDE,
+                                          EventKind.SLIDE, w.text))
+        rec.grid_row(cur.t, cur.y, cur.m, cur.z,
+                     shown=rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
+        return cur
+
+    def _integrate(self, cur: Cursor) -> Run:
+        c, plan, rec, integ = self.c, self.plan, self.rec, self.integ
         try:
-            cur = start_cursor(c, plan, self.watch, opts, y, z, start and start.get("m"))
-            for k, w in enumerate(plan.watched):
-                if cur.m[k] == SLIDE:  # sliding from the start is an event too
-                    integ.events.append(Event(plan.t0, w.description, w.surface, 0.0, SLIDE,
-                                              EventKind.SLIDE, w.text))
-            rec.grid_row(cur.t, cur.y, cur.m, cur.z,
-                         shown=rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
-        except (ArithmeticError, ValueError) as exc:
-            # a fault in the switching surfaces at the start (QNTZR with P = 0, say)
-            text = fault_text(self.model, c, Fault(exc, cur.t, y.tolist(), m, z))
-            integ.events.clear()
-            return self.finish(Status.FAILED, message(Failure.CANNOT_START, t=plan.t0,
-                                                      detail=text), cur, {})
-        status, text = Status.FINISHED, ""
-        try:
+            status, text = Status.FINISHED, ""
             integ.integrate(cur, plan.fintim, rec)
             if integ.stop_reason is not None:
                 status = Status.STOPPED
@@ -114,7 +129,10 @@ class _Run:
             self._keep_last_good(cur)
         if status == Status.FINISHED and rec.out_i < len(plan.grid.times):
             rec.row(plan.fintim, cur.y, cur.m, cur.z, len(plan.grid.times) - 1)
-        ctx = Context(self.model, plan, c, self.watch, opts, self.started)
+        integ.warnings.extend(table_warnings(c.tables))
+        if plan.step_point:
+            return self.finish(status, text, cur, integ.range_values())
+        ctx = Context(self.model, plan, c, self.watch, self.opts, self.started)
         return self.finish(status, text, cur, locate_range(ctx, rec.extrema, rec.restarts))
 
     def _keep_last_good(self, cur: Cursor) -> None:

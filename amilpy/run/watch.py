@@ -197,8 +197,14 @@ class SurfaceWatch:
         except (ArithmeticError, ValueError):
             return False
 
-    def apply_resets(self, y: np.ndarray, m: list[float]) -> np.ndarray:
-        """MODINT: hold the state at its IC while X1 <= 0 and X2 > 0."""
+    def apply_resets(self, y: np.ndarray, m: list[float], t: float | None = None,
+                     z=None) -> np.ndarray:
+        """MODINT: hold the state at its IC while X1 <= 0 and X2 > 0. Given (t, z):
+        also put each state where its function holds it (LIMINT on a bound)."""
+        if self.c.settle is not None and t is not None:
+            settled = np.array(self.c.settle(t, y.tolist(), m, z), dtype=float)
+            if not np.array_equal(settled, y):
+                y = settled
         for r in self.resets:
             m1 = m[r.first] if isinstance(r.first, int) else r.first
             m2 = m[r.second] if isinstance(r.second, int) else r.second
