@@ -7,7 +7,7 @@ from __future__ import annotations
 from .. import syntax as ast
 from ..diagnostics import Reporter, Span, nearest
 from ..language import KNOWN_BEFORE_RUN, RESERVED, SETTINGS, TIME, split_lines
-from ..library import ALIASES, FUNCTIONS, Kind, lookup
+from ..library import Kind, callable_names, lookup
 from .groups import Data, check_assignable
 
 # the largest store a function's literal argument may ask for (DELAY's N points)
@@ -66,7 +66,7 @@ class Names:
     def check_call(self, node: ast.Call, allow, section: str) -> None:
         entry = lookup(node.func)
         if entry is None:
-            hint = nearest(node.func, set(FUNCTIONS) | set(ALIASES))
+            hint = nearest(node.func, callable_names())
             self.rep.error(f"unknown function {node.func}", node.span,
                            f"did you mean {hint}?" if hint else
                            "see the function list in the manual")

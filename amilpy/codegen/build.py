@@ -22,6 +22,7 @@ from ..syntax import deep_enough
 from .consts import evaluate_constant, initial_slots
 from .emit import Emitter, needs
 from .faults import STATEMENTS, FaultReport, Statement, explain, statement_of
+from .written import Statements, start
 from .pytree import (
     Folder,
     assert_closed,
@@ -67,6 +68,10 @@ class Compiled:
     memory_times: Callable | None = None
     # line k of the generated code is statements[k - 1] (None: scaffolding)
     statements: list[Statement | None] = field(default_factory=list)
+    # ACSL form: the names written-order code keeps (z after the memory slots), and
+    # that code by function name: (its IR, fn(t, y, m, z, ev) -> (y, z, values))
+    kept: list[str] = field(default_factory=list)
+    code: dict[str, tuple[ir.Code, Callable]] = field(default_factory=dict)
     model: ir.Model | None = field(default=None, repr=False)
     module: py.Module | None = field(default=None, repr=False)  # the scalar functions' tree
     namespace: dict = field(default_factory=dict, repr=False)
@@ -113,9 +118,16 @@ class Compiler:
 
     def __init__(self, model: ir.Model, constants: dict[str, float], tables,
                  const_modes: dict[int, float], outputs: list[str] | None = None,
-                 events: bool = True) -> None:
+                 events: bool = True, kept: dict[str, float] | None = None,
+                 priors: dict[str, float] | None = None) -> None:
         self.model = model
         self.constants = constants
+        # ACSL form: the names written-order code keeps between instants (memory
+        # slots after the memory functions', in z) with their starting values, and
+        # the INITIAL values of names DERIVATIVE computes again (a unit's output
+        # keeps that value on a path that does not assign it)
+        self.kept = dict(kept or {})
+        self.priors = dict(priors or {})
         self.tables = tables
         self.const_modes = const_modes
         self.outputs = outputs
@@ -142,7 +154,7 @@ class Compiler:
 
     def line(self, kind: str, target: str, span: Span | None, expr=None) -> int:
         """The generated line of one IR statement (the same in every function)."""
-        key = (kind, target)
+        key = (kind, target, span)
         if key not in self.lines:
             self.statements.append(Statement(kind, target, span, expr))
             self.lines[key] = len(self.statements)
@@ -166,16 +178,42 @@ class Compiler:
         nz = sum(m.nslots for m in self.model.memories)
         if mem and nz and self.unpacked_z:
             names = [py.Name(f"z{k}", py.Store()) for k in range(nz)]
-            body.append(py.Assign([py.Tuple(names, py.Store())], py.Name("z", py.Load()))
+            source = py.Name("z", py.Load()) if not self.kept else py.Subscript(
+                py.Name("z", py.Load()), py.Slice(None, py.Constant(nz)), py.Load())
+            body.append(py.Assign([py.Tuple(names, py.Store())], source)
                         if nz > 1 else py.Assign([names[0]], py.Subscript(
                             py.Name("z", py.Load()), py.Constant(0), py.Load())))
+        if mem and self.kept:
+            for k, n in enumerate(self.kept):
+                body.append(py.Assign([py.Name(local(n), py.Store())], py.Subscript(
+                    py.Name("z", py.Load()), py.Constant(nz + k), py.Load())))
         return body
 
     def algebra(self, roots, em: Emitter) -> list[py.stmt]:
-        """The algebraic equations the roots read, in sorted order, one line each."""
-        return [on_line(py.Assign([py.Name(local(e.target), py.Store())], em.emit(e.expr)),
-                        self.line("equation", e.target, e.span, e.expr))
-                for e in needs(self.model, roots)]
+        """The algebraic equations the roots read, in sorted order, one line each; a
+        sorting unit's statements where its first output is needed."""
+        out: list[py.stmt] = []
+        done: set[int] = set()
+        for e in needs(self.model, roots):
+            if isinstance(e.expr, ir.UnitValue):
+                if e.expr.unit not in done:
+                    done.add(e.expr.unit)
+                    out.extend(self.unit(self.model.units[e.expr.unit], em))
+                continue
+            out.append(on_line(py.Assign([py.Name(local(e.target), py.Store())],
+                                         em.emit(e.expr)),
+                               self.line("equation", e.target, e.span, e.expr)))
+        return out
+
+    def unit(self, unit: ir.Unit, em: Emitter) -> list[py.stmt]:
+        """An IF or PROCEDURAL unit: its outputs' values before it, then its body."""
+        first = start(unit.outputs, set(self.kept), self.priors)
+        for st in first:
+            on_line(st, self.line("code", f"{unit.kind} at line {unit.span.line}", unit.span))
+        return first + self.statements(em).block(unit.body)
+
+    def statements(self, em: Emitter) -> Statements:
+        return Statements(em, self.line, lambda: f"w{next(self.names)}")
 
     def surface_algebra(self, em: Emitter) -> list[py.stmt]:
         """What the watched surfaces read: the algebra, then the switch values they
@@ -281,8 +319,47 @@ class Compiler:
                 e = on_line(em.fill(text, args, modes, new_modes, mem, value), line)
                 new.append(on_line(py.Starred(e, py.Load()), line) if templates.spread(text)
                            else e)
+        if self.kept:  # the names written-order code keeps: unchanged by a step
+            nz = sum(m.nslots for m in model.memories)
+            new.append(py.Starred(py.Subscript(py.Name("z", py.Load()),
+                                               py.Slice(py.Constant(nz), None), py.Load()),
+                                  py.Load()))
         body.append(py.Return(py.List(new, py.Load())))
         return function("mem", ("t", "y", "m", "mn", "z"), body)
+
+    def section(self, fname: str, code: ir.Code) -> py.FunctionDef:
+        """Written-order code as `fname(t, y, m, z, ev)` -> (states, z, values of the
+        names it assigns); DERIVATIVE's values it reads are computed first."""
+        model = self.model
+        em = self.emitter("out")
+        em.constants = {k: v for k, v in self.constants.items() if k not in code.assigned}
+        known = set(self.kept) | {st.name for st in model.states}
+        body = self.prologue()
+        first = start(code.assigned, known, self.constants)
+        for st in first:
+            on_line(st, self.line("code", code.section, code.span))
+        body += first
+        reads = [n for st in code.body for n in syn.walk(st) if isinstance(n, syn.Name)]
+        body += self.algebra(reads, em)
+        body += self.statements(em).block(code.body)
+        nz = sum(m.nslots for m in model.memories)
+        states = py.List([py.Name(local(st.name), py.Load()) for st in model.states], py.Load())
+        kept = py.List([py.Starred(py.Subscript(py.Name("z", py.Load()), py.Slice(
+            None, py.Constant(nz)), py.Load()), py.Load())]
+            + [py.Name(local(n), py.Load()) for n in self.kept], py.Load())
+        values = py.List([py.Name(local(n), py.Load()) for n in code.assigned], py.Load())
+        body.append(py.Return(py.Tuple([states, kept, values], py.Load())))
+        return function(fname, ("t", "y", "m", "z", "ev"), body)
+
+    def sections(self) -> dict[str, ir.Code]:
+        """The ACSL form's written-order code run during a run, by function name."""
+        acsl = self.model.acsl
+        if acsl is None:
+            return {}
+        out = {"dynamic": acsl.dynamic}
+        out.update({f"discrete_{k}": d.code for k, d in enumerate(acsl.discretes.values())})
+        out.update({f"terminal_{k}": c for k, c in enumerate(acsl.terminal)})
+        return out
 
     @deep_enough()
     def build(self) -> Compiled:
@@ -302,9 +379,11 @@ class Compiler:
         out_names = self.outputs if self.outputs is not None else model.variables
         fns = [self.rhs(), self.surfaces(), self.modes(), self.outputs_function(out_names),
                self.memory()]
+        sections = self.sections()
+        extra = [self.section(fname, c) for fname, c in sections.items()]
         # surf and out once more for NumPy columns: a condition there may be an array
         # (a memory function reading its condition), so if/else becomes a where()
-        fns += [vectorised(fns[1], "surf_vec"), vectorised(fns[3], "out_vec")]
+        fns += [vectorised(fns[1], "surf_vec"), vectorised(fns[3], "out_vec")] + extra
         module = Folder().visit(py.Module(body=fns, type_ignores=[]))
         place(module)
         py.fix_missing_locations(module)
@@ -323,7 +402,8 @@ class Compiler:
             y0=[self.constant(s.ic, s.span) for s in model.states],
             z0=[v for mem, func in zip(model.memories, self.entries, strict=True)
                 for text in func.memory.initial
-                for v in initial_slots(model, text, mem, self.constants, self.tables)],
+                for v in initial_slots(model, text, mem, self.constants, self.tables)]
+            + list(self.kept.values()),
             out_names=list(out_names), constants=self.constants, rhs=scalar["rhs"],
             surf=scalar["surf"], out=scalar["out"], mem=scalar["mem"],
             watched=self.watched, const_modes=self.const_modes,
@@ -332,7 +412,8 @@ class Compiler:
             surf_v=vector["surf_vec"], out_v=vector["out_vec"],
             memory_every_step=any(f.memory.every_step for f in self.entries),
             memory_times=self.memory_times(), statements=self.statements, model=model,
-            module=module, namespace=scalar,
+            module=module, namespace=scalar, kept=list(self.kept),
+            code={fname: (sections[fname], scalar[fname]) for fname in sections},
         )
 
     def affine(self) -> set[int]:
@@ -347,6 +428,7 @@ class Compiler:
     def impulses(self) -> list[tuple[float, float]]:
         model = self.model
         exprs = [e.expr for e in model.dynamic] + [s.deriv for s in model.states]
+        exprs += [n for u in model.units for st in u.body for n in syn.walk(st)]
         exprs += [a for sw in model.switches for a in sw.args]
         exprs += [a for m in model.memories for a in m.args]
         exprs += [s.expr for s in model.surfaces]
