@@ -315,6 +315,9 @@ class Acsl:
     stores: dict[str, str] = field(default_factory=dict)  # declared INTEGER / LOGICAL
     functions: dict[str, object] = field(default_factory=dict)  # FUNCTION definitions
     bounded: bool = False  # a TERMT or TIMER FINTIM bounds the run
+    # ALGORITHM, NSTEPS, MAXTERVAL, MINTERVAL -> the constant that holds its value
+    controls: dict[str, str] = field(default_factory=dict)
+    control_spans: dict[str, Span] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -362,6 +365,7 @@ class Model:
     runs: list[RunSpec]
     data_names: list[str]
     units: list[Unit] = field(default_factory=list)  # IF/PROCEDURAL blocks of DYNAMIC
+    terminal_code: list[Code] = field(default_factory=list)  # TERMINAL with IF/DO blocks
     acsl: Acsl | None = None  # the ACSL form's sections and events
     # notes for the listing (read before any value, == tested pointwise, ...)
     warnings: list = field(default_factory=list)

@@ -83,6 +83,8 @@ class CodeLowering:
         self.names = names
         self.stores = stores or {}
         self.termts: list[tuple[ast.Termt, ast.Node]] = []  # DERIVATIVE TERMTs found in units
+        # TERMTs of written-order code (TermtIf.index points here)
+        self.terminations: list[ir.Termination] = []
 
     # ---------------------------------------------------------- written order
     def written(self, body, section: str, span: Span | None = None) -> ir.Code:
@@ -129,7 +131,10 @@ class CodeLowering:
                 return None
             return ir.ScheduleAt(st.section, self.expr(st.expr, None, section), st.span)
         if isinstance(st, ast.Termt):
-            return ir.TermtIf(self.expr(st.expr, None, section), -1, st.span)
+            text = self.low.written(st.expr.span) or ""
+            self.terminations.append(ir.Termination(section, text, st.message, st.span))
+            return ir.TermtIf(self.expr(st.expr, None, section), len(self.terminations) - 1,
+                              st.span)
         self.rep.error(f"{type(st).__name__.upper()} cannot stand in {section}", st.span)
         return None
 
@@ -244,6 +249,31 @@ class _Unit:
                 self.code.rep.error(f"{what} cannot stand inside an IF or PROCEDURAL block "
                                     f"of {self.section}", st.span)
         return out
+
+
+def condition_surface(e: ast.Node) -> ast.Node:
+    """A condition as a continuous surface that is positive where the condition
+    holds (TERMT, FINISH relations): `A > B` is A - B, `A .AND. B` the smaller of
+    the two surfaces, `A .OR. B` the larger, `.NOT. A` its negative, a number
+    itself. Where no such surface exists (==, .EQV.), the truth minus 1/2."""
+    span = e.span
+    if isinstance(e, ast.BinOp):
+        if e.op in (">", ">="):
+            return ast.BinOp("-", e.left, e.right, span)
+        if e.op in ("<", "<="):
+            return ast.BinOp("-", e.right, e.left, span)
+        if e.op == "/=":
+            return ast.Call("ABS", (ast.BinOp("-", e.left, e.right, span),), span)
+        if e.op in ("AND", "OR"):
+            return ast.Call("AMIN1" if e.op == "AND" else "AMAX1",
+                            (condition_surface(e.left), condition_surface(e.right)), span)
+    if isinstance(e, ast.Not):
+        return ast.Neg(condition_surface(e.operand), span)
+    if isinstance(e, ast.Num) and ast.is_logical(e):
+        return ast.Num(1.0 if e.value > 0 else -1.0, span, e.text)
+    if ast.is_logical(e):
+        return ast.BinOp("-", e, ast.Num(0.5, span, "0.5"), span)
+    return e
 
 
 def _as_condition(expr: ast.Node) -> ast.Node:

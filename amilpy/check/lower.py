@@ -247,10 +247,11 @@ class Lowering:
         text = self.written(e.span) or expr_text(None, e, TEXT_LIMIT)
         index = len(self.switches)
         description = f"{text} at line {e.span.line}"
+        zero = isinstance(e.right, ast.Num) and e.right.value == 0.0
+        shown = e.left if zero else ast.BinOp("-", e.left, e.right, e.span)
         surface = self.surface(instantiate(func.surfaces[0], args, e.span), func.surface_kind,
                                index, ir.Purpose.SWITCH, e.span, description,
-                               expr_text(None, ast.BinOp("-", e.left, e.right, e.span),
-                                         TEXT_LIMIT))
+                               expr_text(None, shown, TEXT_LIMIT))
         self.switches.append(ir.Switch(index, func.name, args, (surface,), e.span,
                                        target or "?", e.op))
         return index
@@ -264,11 +265,17 @@ class Lowering:
         self.surface(expr, ir.SurfaceKind.SIGN, None, ir.Purpose.FINISH, s.span,
                      f"FINISH {s.name}={s.value:g}", f"{s.name} - {s.value:g}")
 
-    def termt(self, st: ast.Termt) -> None:
-        """TERMT(expr): the run ends where expr turns positive."""
-        text = expr_text(None, st.expr, TEXT_LIMIT)
-        self.surface(self.expr(st.expr, "TERMT"), ir.SurfaceKind.SIGN, None,
-                     ir.Purpose.TERMT, st.span, f"TERMT({text}) at line {st.span.line}", text)
+    def termt(self, st: ast.Termt, cond: ast.Node | None = None) -> int:
+        """TERMT(c [, 'message']): the run ends where c turns true (`cond`: c as the
+        surface reads it, when that differs from what the listing wrote)."""
+        from .code import condition_surface
+
+        cond = st.expr if cond is None else cond
+        text = self.written(st.expr.span) or expr_text(None, st.expr, TEXT_LIMIT)
+        where = f"TERMT({text}) at line {st.span.line}"
+        description = f"{st.message} ({where})" if st.message else where
+        return self.surface(self.expr(condition_surface(cond), "TERMT"), ir.SurfaceKind.SIGN,
+                            None, ir.Purpose.TERMT, st.span, description, text)
 
 
 class _Lowerer(Visitor):

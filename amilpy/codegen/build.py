@@ -104,6 +104,20 @@ def _deepest(model: ir.Model) -> Span | None:
     return where
 
 
+def by_rows(fn: Callable) -> Callable:
+    """fn over NumPy columns (t an array, y a list of arrays), a row at a time."""
+    import numpy as np
+
+    def columns(t, y, m, z):
+        times = np.atleast_1d(np.asarray(t, dtype=float))
+        rows = np.column_stack([np.broadcast_to(c, times.shape) for c in y]) if y else \
+            np.empty((times.size, 0))
+        out = [fn(float(times[i]), rows[i].tolist(), m, z) for i in range(times.size)]
+        width = len(out[0]) if out else 0
+        return [np.array([r[j] for r in out], dtype=float) for j in range(width)]
+    return columns
+
+
 def fault_line(exc: BaseException) -> int | None:
     """The listing line of the generated statement that raised `exc`, if the fault
     happened inside generated code."""
@@ -136,7 +150,7 @@ class Compiler:
         if not events:
             # only FINISH/TERMT stay watched: they stop the run, they switch nothing
             self.watched = [i for i in self.watched
-                            if model.surfaces[i].purpose in ("finish", "termt")]
+                            if model.surfaces[i].purpose in ("finish", "termt", "schedule")]
         self.mode_names = {s: f"m{k}" for k, s in enumerate(self.watched)}
         self.mode_names_new = {s: f"n{k}" for k, s in enumerate(self.watched)}
         self.global_tables: dict[str, tuple] = {}
@@ -210,9 +224,9 @@ class Compiler:
         first = start(unit.outputs, set(self.kept), self.priors)
         for st in first:
             on_line(st, self.line("code", f"{unit.kind} at line {unit.span.line}", unit.span))
-        return first + self.statements(em).block(unit.body)
+        return first + self.code_emitter(em).block(unit.body)
 
-    def statements(self, em: Emitter) -> Statements:
+    def code_emitter(self, em: Emitter) -> Statements:
         return Statements(em, self.line, lambda: f"w{next(self.names)}")
 
     def surface_algebra(self, em: Emitter) -> list[py.stmt]:
@@ -341,7 +355,7 @@ class Compiler:
         body += first
         reads = [n for st in code.body for n in syn.walk(st) if isinstance(n, syn.Name)]
         body += self.algebra(reads, em)
-        body += self.statements(em).block(code.body)
+        body += self.code_emitter(em).block(code.body)
         nz = sum(m.nslots for m in model.memories)
         states = py.List([py.Name(local(st.name), py.Load()) for st in model.states], py.Load())
         kept = py.List([py.Starred(py.Subscript(py.Name("z", py.Load()), py.Slice(
@@ -352,13 +366,15 @@ class Compiler:
         return function(fname, ("t", "y", "m", "z", "ev"), body)
 
     def sections(self) -> dict[str, ir.Code]:
-        """The ACSL form's written-order code run during a run, by function name."""
+        """Written-order code run during a run (the ACSL form's DYNAMIC, DISCRETE and
+        TERMINAL; a CSMP TERMINAL with IF or DO blocks), by function name."""
         acsl = self.model.acsl
-        if acsl is None:
-            return {}
-        out = {"dynamic": acsl.dynamic}
-        out.update({f"discrete_{k}": d.code for k, d in enumerate(acsl.discretes.values())})
-        out.update({f"terminal_{k}": c for k, c in enumerate(acsl.terminal)})
+        out: dict[str, ir.Code] = {}
+        if acsl is not None:
+            out["dynamic"] = acsl.dynamic
+            out.update({f"discrete_{k}": d.code for k, d in enumerate(acsl.discretes.values())})
+        terminal = acsl.terminal if acsl is not None else self.model.terminal_code
+        out.update({f"terminal_{k}": c for k, c in enumerate(terminal)})
         return out
 
     @deep_enough()
@@ -397,6 +413,10 @@ class Compiler:
         vector.update({f"_{k}": v for k, v in vector_functions().items()})
         vector.update(self.global_tables)
         exec(code, vector)  # noqa: S102 - the same code, elementwise functions
+        if model.units:
+            # statements (IF, loops) cannot run on columns: one row at a time
+            vector["surf_vec"], vector["out_vec"] = by_rows(scalar["surf"]), \
+                by_rows(scalar["out"])
         return Compiled(
             state_names=[s.name for s in model.states],
             y0=[self.constant(s.ic, s.span) for s in model.states],

@@ -155,6 +155,10 @@ class Emitter(Visitor):
     def visit_Call(self, e: syn.Call) -> py.expr:
         func = lookup(e.func, len(e.args))
         if func is None:  # a FUNCTION the listing defines (ACSL form)
+            from .written import user_callable
+
+            self.tables[user_function(e.func)] = user_callable(
+                self.model, e.func, self.constants, self.source_tables)
             return py.Call(py.Name(user_function(e.func), py.Load()),
                            [self.emit(a) for a in e.args], [])
         if func.kind in (Kind.SWITCH, Kind.TIME):  # literal use (INITIAL/TERMINAL)

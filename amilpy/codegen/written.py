@@ -110,3 +110,81 @@ def start(outputs, known: set[str], values: dict[str, float]) -> list[py.stmt]:
         value = values.get(n, 0.0)
         out.append(py.Assign([name(n, True)], number(float(value))))
     return out
+
+
+def compile_code(model: ir.Model, name_: str, codes, constants: dict[str, float], tables,
+                 starts: dict[str, float], params: tuple[str, ...] = (),
+                 result: str | None = None) -> Callable:
+    """Written-order code compiled on its own, before the run's functions exist: the
+    ACSL form's INITIAL (`name_(t, y, m, z, ev)` -> values of the names it assigns,
+    then of `starts`' names), or a FUNCTION (`name_(*params)` -> its result). Names
+    the code assigns or reads that are not constants start at `starts` or 0."""
+    from ..syntax import walk
+    from .faults import STATEMENTS, Statement
+    from .pytree import Folder, assert_closed, function, namespace, place
+
+    assigned = list(dict.fromkeys(n for c in codes for n in c.assigned))
+    read = [n.name for c in codes for st in c.body for n in walk(st)
+            if isinstance(n, syntax_name())]
+    own = set(assigned) | set(starts) | set(params)
+    em = Emitter(model, {k: v for k, v in constants.items() if k not in own}, {}, "literal",
+                 {}, {}, tables)
+    table: list = [None]
+    lines: dict = {}
+
+    def line(kind: str, target: str, span) -> int:
+        key = (kind, target, span)
+        if key not in lines:
+            table.append(Statement(kind, target, span))
+            lines[key] = len(table)
+        return lines[key]
+
+    counter = iter(range(1, 1 << 30))
+    locals_ = [n for n in dict.fromkeys([*assigned, *starts, *read])
+               if n not in params and (n in own or n not in constants)]
+    body = start(locals_, set(), starts)
+    for c in codes:
+        body += Statements(em, line, lambda: f"w{next(counter)}").block(c.body)
+    if result is not None:
+        body.append(py.Return(name(result)))
+        fn = function(name_, tuple(local(p) for p in params), body)
+    else:
+        names = [*assigned, *(n for n in starts if n not in assigned)]
+        body.append(py.Return(py.List([name(n) for n in names], py.Load())))
+        fn = function(name_, ("t", "y", "m", "z", "ev"), body)
+    module = Folder().visit(py.Module(body=[fn], type_ignores=[]))
+    place(module)
+    py.fix_missing_locations(module)
+    assert_closed(module)
+    scope = {"__builtins__": {}, **namespace(), **em.tables, STATEMENTS: table}
+    exec(compile(module, model.path or model.name, "exec"), scope)  # noqa: S102
+    fn = scope[name_]
+    if result is None:
+        fn.amil_names = names  # what the returned values are
+    return fn
+
+
+def syntax_name():
+    from ..syntax import Name
+
+    return Name
+
+
+def user_callable(model: ir.Model, func: str, constants: dict[str, float], tables
+                  ) -> Callable:
+    """A FUNCTION the listing defines, compiled with the run's constants (once per
+    set of constants), callable on floats and, elementwise, on NumPy arrays."""
+    key = ("function", func, tuple(sorted(constants.items())))
+    if key not in model.memo:
+        params, result, code = model.acsl.functions[func]
+        scalar = compile_code(model, f"_U_{func}", [code], constants, tables, {}, params,
+                              result)
+
+        def call(*args):
+            if any(hasattr(a, "shape") for a in args):
+                import numpy as np
+
+                return np.vectorize(scalar, otypes=[float])(*args)
+            return scalar(*args)
+        model.memo[key] = call
+    return model.memo[key]

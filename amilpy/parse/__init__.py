@@ -14,12 +14,12 @@ from importlib import resources
 
 from .. import syntax as ast
 from ..diagnostics import AmilError, Diagnostic, Span
-from ..language import split_lines
+from ..language import ACSL_HEADS, split_lines
 from ..syntax import MAX_DEPTH
 from .blocks import Nester
 from .build import Builder
 from .errors import syntax_diagnostic
-from .lexical import blank_comment_lines, continues, prepare
+from .lexical import blank_comment_lines, code_end, continues, prepare
 
 __all__ = ["MAX_DEPTH", "MAX_ERRORS", "blank_comment_lines", "parse"]
 
@@ -76,6 +76,8 @@ def parse(text: str, path: str | None = None) -> ast.Program:
             continue
         break
     if errors:
+        if is_acsl(prepared):
+            errors = [_array_list(d) for d in errors]
         raise AmilError(errors, path, text)
     builder = Builder(text, path)
     items = builder.statements(tree)
@@ -83,6 +85,27 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     if builder.errors:
         raise AmilError(sorted(builder.errors, key=_where), path, text)
     return ast.Program(tuple(statements), path, text, form, name)
+
+
+def is_acsl(prepared: str) -> bool:
+    """The file is in ACSL form: its first statement is PROGRAM or MODEL."""
+    import re
+
+    for line in prepared.split("\n"):
+        code = line[:code_end(line)].strip()
+        if code:
+            word = re.match(r"[A-Za-z]+", code)
+            return word is not None and word.group().upper() in ACSL_HEADS
+    return False
+
+
+def _array_list(d: Diagnostic) -> Diagnostic:
+    """In ACSL form `CONSTANT X = 1, 2, 3` is an array, not a decimal comma."""
+    if not d.message.startswith("a decimal comma in a data statement"):
+        return d
+    return Diagnostic("a list of values for one name (an array) is not supported", d.span,
+                      "write one CONSTANT per value (X1 = ..., X2 = ...)", d.severity,
+                      d.related)
 
 
 def _where(d: Diagnostic) -> tuple[int, int]:

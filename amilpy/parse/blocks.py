@@ -21,7 +21,7 @@ _NAMES = {"IF": "IF", "FOR": "FOR loop", "DO": "DO loop", "PROCEDURAL": "PROCEDU
           "FUNCTION": "FUNCTION", "DISCRETE": "DISCRETE", "PROGRAM": "PROGRAM",
           "INITIAL": "INITIAL", "DYNAMIC": "DYNAMIC", "DERIVATIVE": "DERIVATIVE",
           "TERMINAL": "TERMINAL"}
-ACSL_ONLY = ("FOR", "PROCEDURAL", "FUNCTION", "DISCRETE")
+ACSL_ONLY = ("FOR", "PROCEDURAL", "FUNCTION", "DISCRETE", "INCLUDED")
 
 
 @dataclass
@@ -124,7 +124,12 @@ class Nester:
                     top = list(self.block(done))
                     closed = item.span
                     continue
-                (stack[-1].body if stack else top).append(self.block(done))
+                built = self.block(done)
+                into = stack[-1].body if stack else top
+                if done.head.kind == "INCLUDED":  # its statements stand where it stands
+                    into.extend(built)
+                else:
+                    into.append(built)
             else:
                 target.append(item)
         for opened in reversed(stack):
@@ -160,7 +165,7 @@ class Nester:
     def block(self, opened: _Open):
         head = opened.head
         body = tuple(opened.body)
-        if head.kind == "PROGRAM":
+        if head.kind in ("PROGRAM", "INCLUDED"):
             return body
         if head.kind == "IF":
             return ast.If(tuple(ast.Branch(cond, tuple(b), span)

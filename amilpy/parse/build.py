@@ -113,6 +113,9 @@ class Builder:
         name = node.children[0]
         return Head("DISCRETE", self.span(node), str(name).upper() if name else None)
 
+    def st_included(self, node) -> Head:
+        return Head("INCLUDED", self.span(node))
+
     def st_procedural(self, node) -> Head:
         outputs: tuple[str, ...] = ()
         inputs: tuple[str, ...] = ()
@@ -242,6 +245,12 @@ class Builder:
             return -_number(str(node.children[0]))
         if node.data == "truth":
             return 1.0 if str(node.children[0]).upper() == ".TRUE." else 0.0
+        if node.data == "string":
+            self.errors.append(Diagnostic(
+                f"the string {node.children[0]} cannot be a value", self.span(node),
+                "strings are TERMT messages, WEATHER/TRANSLATION values and comments; put "
+                "the text in a TERMT message or a comment"))
+            return 0.0
         return _number(str(node.children[0]))
 
     def st_data(self, node) -> ast.Data:
