@@ -11,10 +11,12 @@ elsewhere is tested when its code runs.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from .. import ir
 from .. import syntax as ast
 from ..diagnostics import Reporter, Span, nearest
-from ..language import CONTROL_KEYWORDS, DEFAULT_CINT, TIME
+from ..language import DEFAULT_CINT, TIME
 from ..library import Kind, lookup
 from ..surfaces import classify
 from ..syntax import deep_enough
@@ -109,6 +111,12 @@ class _Check:
                       "add TERMT(T >= TSTOP, 'time limit') to DERIVATIVE")
         low.states.sort(key=lambda s: (s.hidden, s.name))
         self.tolerances(states)
+        for spec in data.runs:  # no PRINT or OUTPUT: T and every state
+            if not any(r.kind in ("PRINT", "OUTPUT") for r in spec.reports):
+                spec.reports.append(ir.Report("PRINT", tuple(s.name for s in low.states
+                                                             if not s.hidden), None,
+                                              self.program.statements[0].span
+                                              if self.program.statements else Span(1, 1)))
         model = ir.Model(
             name=name or "<listing>", path=self.program.path, source=self.program.source,
             initial=[], dynamic=dynamic, terminal=[], states=low.states,
@@ -129,6 +137,7 @@ class _Check:
         names, low = self.names, self.low
         for st in self.parts.derivative:
             if isinstance(st, ast.Assign):
+                st = stored(st, self.code.stores)
                 ok = all([names.define(t, s, "DERIVATIVE")
                           for t, s in zip(st.targets, st.target_spans, strict=True)])
                 if names.check_calls(st.expr, None, "DERIVATIVE") and ok:
@@ -305,4 +314,13 @@ class _Check:
         return Diagnostic(message, span, hint, "warning")
 
 
-CONTROLS = CONTROL_KEYWORDS  # ALGORITHM ... XERROR, read by the run's preparation
+def stored(st: ast.Assign, stores: dict[str, str]) -> ast.Assign:
+    """An assignment of sorted code to an INTEGER (truncated toward 0) or LOGICAL (1 or
+    0) name, as the value it keeps."""
+    kind = stores.get(st.targets[0]) if len(st.targets) == 1 else None
+    if kind == "INTEGER":
+        return replace(st, expr=ast.Call("AINT", (st.expr,), st.expr.span))
+    if kind == "LOGICAL" and not ast.is_logical(st.expr):
+        return replace(st, expr=ast.BinOp(">", st.expr, ast.Num(0.0, st.span, "0"), st.span))
+    return st
+

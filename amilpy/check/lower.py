@@ -247,17 +247,21 @@ class Lowering:
         text = self.written(e.span) or expr_text(None, e, TEXT_LIMIT)
         index = len(self.switches)
         description = f"{text} at line {e.span.line}"
+        left, right = (self.written(x.span) or expr_text(None, x, TEXT_LIMIT)
+                       for x in (e.left, e.right))
+        if not isinstance(e.right, (ast.Num, ast.Name, ast.Call)):
+            right = f"({right})"
         zero = isinstance(e.right, ast.Num) and e.right.value == 0.0
-        shown = e.left if zero else ast.BinOp("-", e.left, e.right, e.span)
         surface = self.surface(instantiate(func.surfaces[0], args, e.span), func.surface_kind,
                                index, ir.Purpose.SWITCH, e.span, description,
-                               expr_text(None, shown, TEXT_LIMIT))
+                               left if zero else f"{left} - {right}")
         self.switches.append(ir.Switch(index, func.name, args, (surface,), e.span,
                                        target or "?", e.op))
         return index
 
     def warn(self, message: str, span: Span, hint: str | None = None) -> None:
-        self.warnings.append(Diagnostic(message, span, hint, "warning"))
+        if not any(w.span == span and w.message == message for w in self.warnings):
+            self.warnings.append(Diagnostic(message, span, hint, "warning"))
 
     def finish(self, s: ast.Setting) -> None:
         """FINISH X = value: the run ends where X - value changes sign."""
@@ -306,6 +310,14 @@ class _Lowerer(Visitor):
             return ast.BinOp(op, left, right, expr.span)
         if op in RELATIONS and not self.literal:
             return ir.SwitchValue(self.lowering.relational(expr, self.target), expr.span)
+        if op == "/" and all(isinstance(x, ast.Num) and x.text.isdigit()
+                             for x in (expr.left, expr.right)):
+            self.lowering.warn(
+                f"{expr.left.text}/{expr.right.text} is a division of whole numbers: it is "
+                f"{expr.left.value / expr.right.value:g} here (Fortran would give "
+                f"{int(expr.left.value / expr.right.value) if expr.right.value else 0})",
+                expr.span, "write the numbers with a point (1./2.) to say a real division is "
+                "meant")
         if op in ("==", "/=") and not self.literal and _reads_names(expr):
             self.lowering.warn(
                 f"{self.lowering.written(expr.span) or op} is tested where it is "

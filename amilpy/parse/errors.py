@@ -118,7 +118,7 @@ def syntax_diagnostic(exc, text: str, parser) -> Diagnostic:
             msg, hint = f"unexpected character {ch!r}", None
             if ch and not ch.isprintable():
                 msg = f"unexpected character {ch!r} ({character_name(ch)})"
-        if ch == ",":
+        if ch == "," and _between_digits(text, exc.pos_in_stream):
             hint = "a decimal separator is a point: write 1.5, not 1,5"
         return Diagnostic(msg, span, hint)
     token = getattr(exc, "token", None)
@@ -140,9 +140,16 @@ def syntax_diagnostic(exc, text: str, parser) -> Diagnostic:
     expected = sorted(getattr(exc, "expected", None) or getattr(exc, "allowed", ()) or ())
     names = list(dict.fromkeys(_TERMINALS.get(e, "a keyword") for e in expected))
     hint = f"expected {', '.join(names[:8])}" if names else None
-    if token is not None and str(token) == ",":
+    if token is not None and str(token) == "," and \
+            _between_digits(text, getattr(token, "start_pos", None)):
         hint = (hint + "; " if hint else "") + "a decimal separator is a point, not a comma"
     return Diagnostic(f"unexpected {shown}", span, hint)
+
+
+def _between_digits(text: str, pos: int | None) -> bool:
+    """A comma with a digit on both sides: a decimal comma is plausible there."""
+    return pos is not None and 0 < pos < len(text) - 1 and text[pos - 1].isdigit() \
+        and text[pos + 1].isdigit()
 
 
 def _label(exc, parser) -> str | None:

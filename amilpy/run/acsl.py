@@ -330,6 +330,28 @@ class AcslRun(_Run):
         if on_grid:
             self.rec.grid_row(cur.t, cur.y, cur.m, cur.z,
                               shown=self.rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
+        if changed and self.acsl.cint_name in self.c.kept:
+            self.regrid(cur.t, self.value(cur, self.acsl.cint_name))
+
+    def regrid(self, t: float, cint: float) -> None:
+        """CINT assigned during the run: rows every new CINT from this instant on."""
+        plan = self.plan
+        if cint == plan.timer["OUTDEL"]:
+            return
+        if not (math.isfinite(cint) and cint > 0):
+            raise Stop(Failure.FAULT, t, detail=f"{self.acsl.cint_name} = {cint:g}: the "
+                       "output interval must be positive")
+        done = plan.grid.times[:self.rec.out_i]
+        later = make_grid(t, plan.fintim, cint, cint).times
+        times = np.concatenate([done, later[later > (done[-1] if done.size else -math.inf)]])
+        every = np.ones(times.size, bool)
+        timer = dict(plan.timer, OUTDEL=cint, PRDEL=cint)
+        if route_for(plan.method) is not None and route_for(plan.method).fixed:
+            timer["DELT"] = cint / max(1, math.ceil(cint / plan.timer["DELT"] - 1e-9))
+        self.plan = replace(plan, grid=Grid(times, every, every), timer=timer,
+                            max_step=min(timer["DELMAX"], cint))
+        self.rec.plan = self.integ.plan = self.plan
+        self.rec.times = self.integ.check_times = times
 
     # ---------------------------------------------------------------- _Run hooks
     def first_row(self, cur: Cursor) -> None:

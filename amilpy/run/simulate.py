@@ -148,8 +148,10 @@ class _Run:
     def finish(self, status: Status, text: str, cur: Cursor, extrema: dict) -> Run:
         integ = self.integ
         terminal: dict[str, float] = {}
+        notes = [f"line {d.span.line}: {d.message}" if d.span else d.message
+                 for d in self.model.warnings]
         run = self.rec.run(
-            self.spec, self.constants, integ.events, status, text, integ.warnings,
+            self.spec, self.constants, integ.events, status, text, notes + integ.warnings,
             dict(nsteps=integ.nsteps, nfev=integ.nfev, nevents=len(integ.events),
                  seconds=_clock.perf_counter() - self.started),
             cur.t, cur.y, cur.z, cur.m, terminal, extrema)
