@@ -34,7 +34,7 @@ from ..result import Event, EventKind
 from ..routes import IALG_METHODS, route_for
 from ..surfaces import level, sign
 from .loop import Cursor, Stop
-from .plan import Grid, Options, Purpose, make_grid, make_plan
+from .plan import Grid, Options, Purpose, SurfaceKind, make_grid, make_plan
 from .prepare import Cache, Prepared
 from .simulate import _Run
 
@@ -295,8 +295,16 @@ class AcslRun(_Run):
         return float(self.constants.get(name, 0.0))
 
     def restart(self, cur: Cursor) -> None:
-        """The branches in force after code changed states or kept names."""
-        new = self.watch.choose_modes(cur.t, cur.y, cur.z, cur.m, set())
+        """The branches in force after code changed states or kept names. A surface
+        at zero to rounding (a crossing just located) goes the way the motion takes
+        it, not by the sign of its rounding error."""
+        near: set[int] = set()
+        if self.plan.watch_idx:
+            e = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z)
+            scale = 1e-12 * max(1.0, float(np.max(np.abs(cur.y))) if len(cur.y) else 1.0)
+            near = {k for k in self.plan.watch_idx if abs(e[k]) <= scale
+                    and self.plan.watched[k].kind is SurfaceKind.SIGN}
+        new = self.watch.choose_modes(cur.t, cur.y, cur.z, cur.m, near)
         self.integ.record_changes(cur.t, cur.y, cur.m, new, cur.z, set())
         cur.m[:] = new
         cur.y = self.watch.apply_resets(cur.y, cur.m)

@@ -131,10 +131,12 @@ class _Run:
 
     def terminal(self, run: Run, cur: Cursor) -> dict[str, float]:
         """TERMINAL's values, in written order."""
-        if self.model.terminal_code:
+        codes = self.model.terminal_code or (self.model.acsl.terminal if self.model.acsl
+                                             else [])
+        if codes:
             from .acsl import run_terminal
 
-            return run_terminal(self.c, self.model.terminal_code, cur)
+            return run_terminal(self.c, codes, cur)
         return evaluate_terminal(self.model, self.spec, self.constants, run.final, cur.t)
 
     def _keep_last_good(self, cur: Cursor) -> None:
