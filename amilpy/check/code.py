@@ -130,6 +130,8 @@ class CodeLowering:
                                f"SCHEDULE {st.section} .AT. T + delay")
                 return None
             return ir.ScheduleAt(st.section, self.expr(st.expr, None, section), st.span)
+        if isinstance(st, ast.Declare):  # a FUNCTION's declarations: scalars
+            return None
         if isinstance(st, ast.Termt):
             text = self.low.written(st.expr.span) or ""
             self.terminations.append(ir.Termination(section, text, st.message, st.span))

@@ -41,6 +41,8 @@ class Parts:
     declarations: list = field(default_factory=list)
     functions: list[ast.FunctionDef] = field(default_factory=list)
     sections: bool = False  # any section keyword at all
+    derivatives: int = 0  # DERIVATIVE sections (they merge into one)
+    algorithms: list[tuple[ast.Control, str]] = field(default_factory=list)  # and where
 
     @classmethod
     def read(cls, program: ast.Program, rep: Reporter) -> Parts:
@@ -52,6 +54,12 @@ class Parts:
                           "put it in INITIAL, DYNAMIC, DERIVATIVE, DISCRETE or TERMINAL")
         elif top:
             parts.derivative = top  # no section keyword at all: all is DERIVATIVE
+        if len(parts.algorithms) > 1 or (parts.derivatives > 1 and any(
+                where == "DERIVATIVE" for _, where in parts.algorithms)):
+            st = parts.algorithms[-1][0]
+            rep.error(f"a per-section ALGORITHM (line {st.span.line}) is not supported",
+                      st.span, "every DERIVATIVE section is one sorted block run by one "
+                      "method: keep one ALGORITHM statement")
         return parts
 
     def walk(self, body, where: str, rep: Reporter) -> list:
@@ -62,6 +70,8 @@ class Parts:
                 self.block(st, where, rep)
             elif isinstance(st, DECLARATIONS):
                 self.declarations.append(st)
+                if isinstance(st, ast.Control) and st.keyword == "ALGORITHM":
+                    self.algorithms.append((st, where))
             elif isinstance(st, ast.Interval):
                 if not where.startswith("DISCRETE "):
                     rep.error("INTERVAL stands in a DISCRETE section", st.span,
@@ -94,6 +104,7 @@ class Parts:
         elif kind == "DYNAMIC":
             self.dynamic.extend(self.walk(st.body, "DYNAMIC", rep))
         elif kind == "DERIVATIVE":
+            self.derivatives += 1
             self.derivative.extend(self.walk(st.body, "DERIVATIVE", rep))
         elif kind == "TERMINAL":
             self.terminal.append((self.walk(st.body, "TERMINAL", rep), st.span))
