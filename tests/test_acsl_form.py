@@ -242,7 +242,7 @@ def test_timer_fintim_bounds_a_run_without_termt():
     ("PROGRAM p\nDERIVATIVE\nX = INTEG(1.0, 0.0)\nTERMT(T >= 1.0)\n",
      "DERIVATIVE opened at line 2 is never closed"),
     ("PROGRAM p\nDERIVATIVE\nIF (T > 1.0) THEN\nX = 1.0\nEND DO\nEND\nEND\n",
-     "END DO closes an DO, but the innermost open block is the IF of line 3"),
+     "END DO closes a DO loop, but the innermost open block is the IF of line 3"),
     ("PROGRAM p\nDERIVATIVE\nX = INTEG(1.0, 0.0)\nTERMT(T >= 1.0)\nEND\nEND\nY = 2.0\n",
      "only comments may follow the program's END"),
     ("PROGRAM p\nDERIVATIVE\nX = INTEG(1.0, 0.0)\nTERMT(T >= 1.0)\nEND\nEND\nEND\n",

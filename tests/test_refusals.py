@@ -115,4 +115,4 @@ END
     with pytest.raises(AmilError) as err:
         amilpy.loads(text, "molly.csl")
     messages = [d.message for d in err.value.diagnostics]
-    assert messages == ["a list of values for one name (an array) is not supported"]
+    assert messages == ["a list of values for one name (an array): not supported"]

@@ -111,6 +111,9 @@ class _Check:
                       "add TERMT(T >= TSTOP, 'time limit') to DERIVATIVE")
         low.states.sort(key=lambda s: (s.hidden, s.name))
         self.tolerances(states)
+        for spec in data.runs:
+            if not spec.titles and self.program.name:
+                spec.titles = [f"{self.program.name}"]
         for spec in data.runs:  # no PRINT or OUTPUT: T and every state
             if not any(r.kind in ("PRINT", "OUTPUT") for r in spec.reports):
                 spec.reports.append(ir.Report("PRINT", tuple(s.name for s in low.states

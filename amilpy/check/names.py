@@ -116,7 +116,7 @@ class Names:
     def unknown_function(self, node: ast.Call) -> None:
         if node.func in REFUSED_FUNCTIONS:
             what, hint = REFUSED_FUNCTIONS[node.func]
-            self.rep.error(f"{what} (line {node.span.line}) is not supported", node.span, hint)
+            self.rep.error(f"{what} (line {node.span.line}): not supported", node.span, hint)
             return
         if node.func in self.defined or node.func in self.data_names:
             self.rep.error(f"{node.func} is a variable, not a function: subscripts "

@@ -57,7 +57,7 @@ class Parts:
         if len(parts.algorithms) > 1 or (parts.derivatives > 1 and any(
                 where == "DERIVATIVE" for _, where in parts.algorithms)):
             st = parts.algorithms[-1][0]
-            rep.error(f"a per-section ALGORITHM (line {st.span.line}) is not supported",
+            rep.error(f"a per-section ALGORITHM (line {st.span.line}): not supported",
                       st.span, "every DERIVATIVE section is one sorted block run by one "
                       "method: keep one ALGORITHM statement")
         return parts

@@ -103,7 +103,7 @@ def _array_list(d: Diagnostic) -> Diagnostic:
     """In ACSL form `CONSTANT X = 1, 2, 3` is an array, not a decimal comma."""
     if not d.message.startswith("a decimal comma in a data statement"):
         return d
-    return Diagnostic("a list of values for one name (an array) is not supported", d.span,
+    return Diagnostic("a list of values for one name (an array): not supported", d.span,
                       "write one CONSTANT per value (X1 = ..., X2 = ...)", d.severity,
                       d.related)
 

@@ -154,7 +154,8 @@ class Nester:
         kind = stack[-1].head.kind
         want = {"ENDIF": "IF", "ENDDO": "DO"}.get(item.kind)
         if want is not None and kind != want:
-            self.error(f"{'END IF' if want == 'IF' else 'END DO'} closes an {want}, but the "
+            self.error(f"{'END IF' if want == 'IF' else 'END DO'} closes "
+                       f"{'an IF' if want == 'IF' else 'a DO loop'}, but the "
                        f"innermost open block is the {_describe(kind)} of line "
                        f"{stack[-1].head.span.line}", item.span,
                        f"close that {_describe(kind)} first with "

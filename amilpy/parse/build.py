@@ -56,7 +56,7 @@ class Builder:
 
     def refuse(self, construct: str, span: Span, hint: str) -> None:
         """A construct amilpy does not run (contract section 14)."""
-        self.errors.append(Diagnostic(f"{construct} (line {span.line}) is not supported",
+        self.errors.append(Diagnostic(f"{construct} (line {span.line}): not supported",
                                       span, hint))
 
     @staticmethod

@@ -159,5 +159,5 @@ def test_molly_stops_with_refusals_that_name_the_constructs():
         amilpy.load(listing("molly3.csl"))
     first = err.value.diagnostics[0]
     assert first.span.line == 806  # Constant InitCond = 1.0,550,3.5,1,4, & ...
-    assert first.message == "a list of values for one name (an array) is not supported"
+    assert first.message == "a list of values for one name (an array): not supported"
     assert "one CONSTANT per value" in first.hint
