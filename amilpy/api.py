@@ -60,7 +60,12 @@ class Model:
         """The generated Python of the first run (what `--show-python` prints)."""
         from .run import prepare
 
-        return prepare(self.ir, self._specs(params)[0], cache=self.cache).compiled.source
+        spec = self._specs(params)[0]
+        if self.ir.acsl is not None:
+            from .run.acsl import prepare_acsl
+
+            return prepare_acsl(self.ir, spec, cache=self.cache).compiled.source
+        return prepare(self.ir, spec, cache=self.cache).compiled.source
 
     def flow(self, method: str | None = None, rtol: float | None = None,
              atol: float | None = None, run: int = 0, **params: float) -> Flow:
@@ -70,6 +75,10 @@ class Model:
 
         if method is not None and route_for(method) is None:
             raise AmilError(f"unknown integration method {method}")
+        if self.ir.acsl is not None:
+            raise AmilError("a flow map is not available for a program in ACSL form: its "
+                            "DISCRETE sections and DYNAMIC statements run between the "
+                            "integrator's steps", self.ir.path)
         spec = self._specs(params)[run]
         return Flow(self.ir, spec, Options(method=method, rtol=rtol, atol=atol), self.cache)
 

@@ -392,7 +392,6 @@ def cmd_report(args, path: str, signals: Signals) -> int:
 
 def cmd_check(args, path: str, signals: Signals) -> int:
     from .api import load
-
     from .diagnostics import render
 
     ir = load(path).ir

@@ -77,8 +77,15 @@ def test_mutation_fuzz_bounded():
 
 def test_mutation_setting_fintim_to_infinity():
     # a mutation once set FINTIM = 1E999 in machine_unit.amil: an OverflowError traceback
-    cases = [c for c in mutate.generate(MUTATIONS, seed=0) if c[0] == "machine_unit-s0-96"]
-    r, = target.run_cases(cases, timeout=CASE_TIMEOUT, mem_mb=MEM_MB)
+    # (made here directly: which mutation number does it depends on the corpus)
+    import re
+
+    path = os.path.join(os.path.dirname(__file__), "..", "models", "machine_unit.amil")
+    with open(path, "rb") as fh:
+        data = re.sub(rb"FINTIM *= *[0-9.Ee+-]+", b"FINTIM = 1E999", fh.read(), count=1)
+    assert b"1E999" in data
+    r, = target.run_cases([("machine_unit-fintim-inf", data, "FINTIM = 1E999")],
+                          timeout=CASE_TIMEOUT, mem_mb=MEM_MB)
     assert r.ok, r.detail
 
 

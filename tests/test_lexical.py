@@ -3,12 +3,12 @@ operators that win over decimal points, `!=` against `!` comments, `&&`/`||`, `;
 between the items of data, TIMER and FINISH lines, text after STOP."""
 
 import pytest
+from conftest import run1
 
 import amilpy
 from amilpy.diagnostics import AmilError
 from amilpy.parse import parse
 from amilpy.parse.lexical import prepare
-from conftest import run1
 
 END = "TIMER FINTIM = 1.0\nEND\n"
 

@@ -7,11 +7,11 @@ import math
 
 import numpy as np
 import pytest
+from conftest import run1
 from scipy.integrate import solve_ivp
 
 import amilpy
 from amilpy.diagnostics import AmilError
-from conftest import run1
 
 END = "TIMER FINTIM = 1.0\nEND\n"
 

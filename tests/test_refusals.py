@@ -4,10 +4,10 @@ instead, never a bare "unexpected token"; no parser token name reaches a user (t
 conftest fixture scans every diagnostic any test makes)."""
 
 import pytest
+from conftest import leaked_token
 
 import amilpy
 from amilpy.diagnostics import AmilError
-from conftest import leaked_token
 
 PROGRAM = "PROGRAM p\n{line}\nDERIVATIVE\nX = INTEG(1.0, 0.0)\nTERMT(T >= 1.0)\nEND\nEND\n"
 DERIV = "PROGRAM p\nDERIVATIVE\nX = INTEG(1.0, 0.0)\n{line}\nTERMT(T >= 1.0)\nEND\nEND\n"

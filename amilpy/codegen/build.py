@@ -22,7 +22,6 @@ from ..syntax import deep_enough
 from .consts import evaluate_constant, initial_slots
 from .emit import Emitter, needs
 from .faults import STATEMENTS, FaultReport, Statement, explain, statement_of
-from .written import Statements, start
 from .pytree import (
     Folder,
     assert_closed,
@@ -33,6 +32,7 @@ from .pytree import (
     place,
     vectorised,
 )
+from .written import Statements, start
 
 # models with more memory slots than this read them from z instead of unpacking
 MAX_UNPACKED_SLOTS = 32
