@@ -307,6 +307,8 @@ END
 
 
 @pytest.mark.parametrize("body, message", [
+    ("FUNCTION F = G(A)\nF = H(A)\nEND\nFUNCTION R = H(B)\nR = G(B)\nEND\n",
+     "FUNCTION G calls itself through other FUNCTIONs"),
     ("FUNCTION F = G(A)\nF = A + X\nEND\n", "FUNCTION G reads X"),
     ("FUNCTION F = G(A)\nF = G(A)\nEND\n", "FUNCTION G calls itself"),
     ("FUNCTION F = G(A)\nY = A\nEND\n", "FUNCTION G never assigns its result F"),
@@ -328,8 +330,9 @@ def test_integ_inside_if_is_refused():
     with pytest.raises(AmilError) as err:
         amilpy.loads("PROGRAM p\nDERIVATIVE\nIF (T > 1.0) THEN\nX = INTEG(1.0, 0.0)\n"
                      "END IF\nTERMT(T >= 2.0)\nEND\nEND\n", "p.csl")
-    assert "INTEG cannot be used in an IF or PROCEDURAL block" in \
-        err.value.diagnostics[0].message
+    d = err.value.diagnostics[0]
+    assert "INTEG cannot be used in an IF or PROCEDURAL block" in d.message
+    assert "outside" in d.hint
 
 
 def test_csmp_terminal_with_a_do_loop():

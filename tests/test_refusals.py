@@ -116,3 +116,19 @@ END
         amilpy.loads(text, "molly.csl")
     messages = [d.message for d in err.value.diagnostics]
     assert messages == ["a list of values for one name (an array): not supported"]
+
+
+@pytest.mark.parametrize("call, hint", [
+    # the signature, with what trips readers (INTGRL's order is not INTEG's)
+    ("INTGRL(1.0)", "write it as INTGRL(IC, X): the initial value comes first"),
+    ("INTGRL(A, B, C)", "write it as INTGRL(IC, X): the initial value comes first"),
+    ("INTEG(1.0)", "INTEG(X, IC): the derivative comes first"),
+    # a decimal comma only where a number stands on both sides of the comma
+    ("INTGRL(0.0, 1,5)", "'1,5' reads as two arguments; the decimal separator is a point"),
+])
+def test_argument_count_errors_show_the_signature(call, hint):
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(f"CONST A = 1.0, B = 2.0, C = 3.0\nX = {call}\nTIMER FINTIM = 1.0\n"
+                     "END\n")
+    d = err.value.diagnostics[0]
+    assert hint in d.hint and (("decimal" in d.hint) == ("1,5" in call))

@@ -70,6 +70,7 @@ class _Check:
         discretes = {k: self.discrete(k, b, s) for k, (b, s) in parts.discretes.items()}
         terminal = [code.written(b, "TERMINAL", s) for b, s in parts.terminal]
         functions = {f.name: self.function(f) for f in parts.functions}
+        self.recursion(functions)
         cint_name, cint = self.cinterval()
         presets = {cint_name} | {iv.name for iv in parts.intervals.values()}
         states = {s.name for s in low.states if not s.hidden}
@@ -187,6 +188,24 @@ class _Check:
         if f.result not in code.assigned:
             self.rep.error(f"FUNCTION {f.name} never assigns its result {f.result}", f.span)
         return (f.params, f.result, code)
+
+    def recursion(self, functions: dict) -> None:
+        """No FUNCTION may call itself through others (direct calls: `function`)."""
+        calls = {name: {n.func for st in code.body for n in ast.walk(st)
+                        if isinstance(n, ast.Call) and n.func in functions and n.func != name}
+                 for name, (_, _, code) in functions.items()}
+        for name in calls:
+            seen, todo = set(), list(calls[name])
+            while todo:
+                g = todo.pop()
+                if g == name:
+                    span = next(f.span for f in self.parts.functions if f.name == name)
+                    self.rep.error(f"FUNCTION {name} calls itself through other FUNCTIONs",
+                                   span, "recursion is not supported: write a loop")
+                    break
+                if g not in seen:
+                    seen.add(g)
+                    todo.extend(calls.get(g, ()))
 
     def cinterval(self) -> tuple[str, ast.Node]:
         given = [d for d in self.parts.declarations if isinstance(d, ast.Cinterval)]

@@ -109,7 +109,10 @@ class Names:
                                f"e.g. {func.signature.replace(what, '100', 1)}")
         if allow is not None and func.kind not in allow:
             self.rep.error(f"{node.func} cannot be used in {section}", node.span,
-                           "states, memory functions and IMPULS belong in DYNAMIC")
+                           "compute its argument in the block and put the call after it, "
+                           "outside" if section.startswith("an IF") else
+                           "states, memory functions and IMPULS belong in "
+                           + ("DERIVATIVE" if self.form == "ACSL" else "DYNAMIC"))
         if func.kind == Kind.TABLE:
             self.check_table_argument(node)
 
