@@ -289,3 +289,41 @@ def test_exact_exponential_on_a_finer_check():
     r = run(DECAY.replace("TSTOP = 2.0", "TSTOP = 1.9"))
     assert r.t[-1] == 1.9 and r.t[-2] == 1.75
     assert r["X"][-1] == pytest.approx(2.0 * math.exp(-0.95), rel=1e-6)
+
+
+def test_molly_style_punctuation_and_blocks_are_read():
+    # A12: `END; !OF DERIVATIVE`, `Discrete NewDay $!comment`, INCLUDED ... END (the
+    # text an ACSL INCLUDE brought in), Fortran's PARAMETER (N = v), `dimension integer i`
+    # and `Procedural()` with empty lists (SOURCES.md surprises 6, 9, 11: accepted)
+    r = run("""PROGRAM molly style
+  INITIAL
+    INCLUDED ! INCLUDE 'constants.csl'
+      Parameter (NFEED = 2)
+    END ! INCLUDE
+    dimension integer I
+    CINTERVAL CINT = 0.5
+  END
+  DERIVATIVE
+    Procedural()
+      Q = 1.0
+    END
+    Procedural(=X)
+      R = X
+    END
+    X = INTEG(Q*NFEED, 0.0)
+    Y = INTEG(R, 0.0)
+    TERMT(T >= 1.0)
+  END; !OF DERIVATIVE
+  Discrete NewDay                $!Schedules nothing
+    I = 1.9
+  END
+END
+""")
+    assert r["X"][-1] == pytest.approx(2.0) and r["Y"][-1] == pytest.approx(1.0)
+
+
+def test_pi_may_be_assigned_in_acsl_form():
+    # PI is no reserved name of ACSL (SOURCES.md surprise 10, in ACSL form)
+    r = run("PROGRAM p\nINITIAL\nPI = 3.0\nEND\nDERIVATIVE\nX = INTEG(PI, 0.0)\n"
+            "TERMT(T >= 1.0)\nEND\nEND\n")
+    assert r["X"][-1] == pytest.approx(3.0)
