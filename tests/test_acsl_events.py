@@ -327,3 +327,31 @@ END
                   method="DOP853", t_eval=run.t[run.t > 0.5], max_step=0.1)
     want = np.hstack([a.y, b.y])
     assert np.max(np.abs(want[0] - run["C1"])) < 1e-9
+
+
+def test_same_time_entries_run_in_the_order_they_were_scheduled():
+    # LOG records the order: B was scheduled before A, both for t = 1; A schedules C
+    # at its own instant (e = T runs at once, after the current code)
+    run, = amilpy.loads("""PROGRAM p
+  INITIAL
+    LOG = 0.0
+    SCHEDULE B .AT. 1.0
+    SCHEDULE A .AT. 1.0
+  END
+  DERIVATIVE
+    X = INTEG(1.0, 0.0)
+    TERMT(T >= 2.0)
+  END
+  DISCRETE A
+    LOG = 10.0*LOG + 1.0
+    SCHEDULE C .AT. T
+  END
+  DISCRETE B
+    LOG = 10.0*LOG + 2.0
+  END
+  DISCRETE C
+    LOG = 10.0*LOG + 3.0
+  END
+END
+""", "p.csl").run()
+    assert run["LOG"][-1] == 213.0
