@@ -115,3 +115,10 @@ def test_prepare_keeps_lines_and_columns():
     assert len(out) == len(text.split("\n"))  # same lines; kept lines keep their columns
     assert out[0] == "PARAM A = 1, B = 2 ! c; d"
     assert out[1] == "" and out[2] == "X = (A /= B)" and out[4] == ""
+
+
+def test_an_unclosed_string_is_named():
+    err = fault("PROGRAM p\nDERIVATIVE\nX = INTEG(1.0, 0.0)\nTERMT(T > 1.0, 'oops)\n"
+                "END\nEND\n", "p.csl")
+    d = err.diagnostics[0]
+    assert d.message == "a string that is not closed" and d.span.line == 4

@@ -110,7 +110,7 @@ class Builder:
         return Head("PROGRAM", self.span(node), text)
 
     def st_discrete(self, node) -> Head:
-        name = node.children[0]
+        name = node.children[0] if node.children else None
         return Head("DISCRETE", self.span(node), str(name).upper() if name else None)
 
     def st_included(self, node) -> Head:

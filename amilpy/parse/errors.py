@@ -119,6 +119,8 @@ def syntax_diagnostic(exc, text: str, parser) -> Diagnostic:
         ch = text[exc.pos_in_stream] if exc.pos_in_stream < len(text) else ""
         if ch and not ch.isascii():
             return not_ascii(ch, span)
+        if ch == "'":
+            return _unclosed(span)
         label = _label(exc, parser)
         if label:
             msg, hint = label, EXAMPLES[label][0]
@@ -139,6 +141,8 @@ def syntax_diagnostic(exc, text: str, parser) -> Diagnostic:
                           "remove it: code is ASCII letters, digits, operators and blanks")
     if isinstance(exc, UnexpectedToken) and token is not None and token.end_column:
         span = Span(line, column, token.end_line or line, token.end_column)
+    if first == "'" and "'" not in str(token)[1:]:
+        return _unclosed(span)
     label = _label(exc, parser)
     if label is None and token is not None:
         label = _fallback_label(token, text)
@@ -160,6 +164,11 @@ def _between_digits(text: str, pos: int | None) -> bool:
     """A comma with a digit on both sides: a decimal comma is plausible there."""
     return pos is not None and 0 < pos < len(text) - 1 and text[pos - 1].isdigit() \
         and text[pos + 1].isdigit()
+
+
+def _unclosed(span: Span) -> Diagnostic:
+    return Diagnostic("a string that is not closed", span,
+                      "end it with a quote on the same line ('text'; '' is one quote inside)")
 
 
 def _label(exc, parser) -> str | None:

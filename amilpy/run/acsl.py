@@ -280,6 +280,8 @@ class AcslRun(_Run):
             self.run_code(cur, self.fns[section], f"DISCRETE {section}")
             self.integ.events.append(Event(cur.t, f"DISCRETE {section}", -1, 0.0, 0.0,
                                            EventKind.DISCRETE, section))
+            if len(self.integ.events) > self.opts.max_events:
+                raise Stop(Failure.EVENTS, cur.t, limit=self.opts.max_events)
             d = self.acsl.discretes[section]
             if d.interval is not None:
                 gap = self.value(cur, d.interval)
