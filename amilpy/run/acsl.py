@@ -128,7 +128,9 @@ def _initial(model: ir.Model, spec: ir.RunSpec, cache: Cache):
 def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> AcslPrepared:
     acsl = model.acsl
     base, values, schedules, stop = _initial(model, spec, cache)
-    derived = {e.target for e in model.dynamic}
+    # what DERIVATIVE computes (its equations and states) is no constant, even where
+    # INITIAL gave it a value
+    derived = {e.target for e in model.dynamic} | {s.name for s in model.states}
     kept = {n: float(values.get(n, 0.0)) for n in acsl.discrete_vars}
     constants = {k: v for k, v in {**base, **values}.items()
                  if k not in kept and k not in derived}
