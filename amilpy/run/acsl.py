@@ -24,7 +24,7 @@ from itertools import count
 import numpy as np
 
 from .. import ir
-from ..codegen import Compiler, evaluate_constant, fault_line
+from ..codegen import Compiler, evaluate_constant
 from ..codegen.faults import statement_of
 from ..codegen.written import SCHEDULE, compile_code
 from ..diagnostics import AmilError, Diagnostic
@@ -32,10 +32,9 @@ from ..language import MAX_INTERVALS
 from ..outcome import Failure
 from ..result import Event, EventKind
 from ..routes import IALG_METHODS, route_for
-from ..surfaces import level, sign
 from .loop import Cursor, Stop
 from .plan import Grid, Options, Purpose, SurfaceKind, make_grid, make_plan
-from .prepare import Cache, Prepared
+from .prepare import Cache, Prepared, before_run, constant_modes
 from .simulate import _Run
 
 
@@ -89,20 +88,7 @@ def prepare_acsl(model: ir.Model, spec: ir.RunSpec, opts: Options | None = None,
     A fault in INITIAL or in a value needed before the run is an AmilError there."""
     opts = opts or Options()
     cache = cache or Cache()
-    try:
-        return _prepare(model, spec, opts, cache)
-    except (ArithmeticError, ValueError) as exc:
-        line = fault_line(exc)
-        raise AmilError([Diagnostic(f"cannot be evaluated before the run: "
-                                    f"{code_fault(exc)}", None if line is None else
-                                    _span(line), "check the values this statement uses")],
-                        model.path, model.source) from None
-
-
-def _span(line: int):
-    from ..diagnostics import Span
-
-    return Span(line, 1)
+    return before_run(model, lambda: _prepare(model, spec, opts, cache), code_fault)
 
 
 def _initial(model: ir.Model, spec: ir.RunSpec, cache: Cache):
@@ -142,11 +128,7 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
     method = _method(model, spec, opts, constants)
     spec = replace(spec, method=method)
     timer = _timer(model, spec, opts, constants, cint)
-    const_modes = {}
-    for s in model.surfaces:
-        if s.depends == "const":
-            value = evaluate_constant(model, s.expr, constants, spec.tables, s.span)
-            const_modes[s.index] = level(value) if s.kind == "level" else sign(value)
+    const_modes = constant_modes(model, constants, spec.tables)
     ckey = ("acsl", tuple(sorted(constants.items())), tuple(kept.items()),
             tuple(sorted(priors.items())), repr(sorted(spec.tables.items())),
             tuple(opts.outputs) if opts.outputs is not None else None, opts.events)
