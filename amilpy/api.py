@@ -73,8 +73,7 @@ class Model:
         `amilpy.run.flow` for `advance`, its events and its sensitivity."""
         from .run import Flow, Options
 
-        if method is not None and route_for(method) is None:
-            raise AmilError(f"unknown integration method {method}")
+        _check_method(method)
         if self.ir.acsl is not None:
             raise AmilError("a flow map is not available for a program in ACSL form: its "
                             "DISCRETE sections and DYNAMIC statements run between the "
@@ -118,8 +117,7 @@ class Model:
         given as keywords override the listing's for all of them."""
         from .run import Options, simulate
 
-        if method is not None and route_for(method) is None:
-            raise AmilError(f"unknown integration method {method}")
+        _check_method(method)
         for label, tol in (("rtol", rtol), ("atol", atol)):
             if tol is not None and not tol > 0:
                 raise AmilError(f"{label} must be positive, got {tol}")
@@ -134,9 +132,11 @@ class Model:
             opts.max_steps = max_steps
         if max_events:
             opts.max_events = max_events
+        specs = self._specs(params)
+        self._check_memory(specs, outputs, fintim)
         runs = []
         advised = False
-        for spec in self._specs(params):
+        for spec in specs:
             run = simulate(self.ir, spec, opts, self.cache)
             if advice and not advised:
                 from .advice import stiffness_advice
@@ -148,6 +148,24 @@ class Model:
                 break  # Ctrl-C: keep what was computed, start nothing new
         return runs
 
+    def _check_memory(self, specs: list[ir.RunSpec], outputs: list[str] | None,
+                      fintim: float | None) -> None:
+        """Refuse, before the first run, runs whose rows together would not fit. (In
+        ACSL form the rows follow CINT and TERMT, known only after INITIAL: a run is
+        capped at language.MAX_INTERVALS rows instead.)"""
+        from .run.plan import DEFAULTS, stored_values
+
+        if self.ir.acsl is not None:
+            return
+        columns = len(outputs) if outputs is not None else len(self.ir.variables)
+        total = sum(stored_values(spec, columns, fintim) for spec in specs)
+        limit = DEFAULTS["max_values"]
+        if total > limit:
+            raise AmilError(
+                f"the {len(specs)} run(s) would keep {total:.3g} values ({columns} variables "
+                f"on every output row; limit {limit:.0e}, about {8 * limit / 1e9:.1f} GB): "
+                "raise OUTDEL/PRDEL, shorten FINTIM, or run fewer values at a time")
+
     def sweep(self, name: str, values, *, both_ways: bool = False, carry_state: bool = False,
               settle: float = 0.0, measure: str | None = None, method: str | None = None,
               rtol: float | None = None, atol: float | None = None,
@@ -156,8 +174,7 @@ class Model:
         """One run per value of data value `name` (see `amilpy.sweep.sweep`)."""
         from .sweep import sweep
 
-        if method is not None and route_for(method) is None:
-            raise AmilError(f"unknown integration method {method}")
+        _check_method(method)
         return sweep(self, name, [float(v) for v in values], both_ways=both_ways,
                      carry_state=carry_state, settle=settle, measure=measure, method=method,
                      rtol=rtol, atol=atol, fintim=fintim, keep_runs=keep_runs,
@@ -192,3 +209,10 @@ def load(path: str | os.PathLike) -> Model:
         raise AmilError([Diagnostic("the file is not valid UTF-8", Span(line, col),
                                     "save the listing as UTF-8")], path) from None
     return loads(text, path)
+
+
+def _check_method(method: str | None) -> None:
+    """The API's METHOD names are the listing's (routes.ROUTES)."""
+    if method is not None and route_for(method) is None:
+        raise AmilError(f"unknown integration method {method}")
+

@@ -20,7 +20,7 @@ import os
 import sys
 
 from . import __version__
-from .console import Progress, Signals, tolerant_streams, write_out
+from .console import Progress, Signals, TimeLimit, time_limit, tolerant_streams, write_out
 from .diagnostics import AmilError, nearest
 from .output.files import OutputError
 from .output.writers import DIALECTS, WRITERS, Outputs, PlotOptions, dest, writers_for
@@ -97,7 +97,8 @@ def _model_options(p: argparse.ArgumentParser, run_limits: bool = True) -> None:
     p.add_argument("--fintim", type=POSITIVE, metavar="S", help="run length instead of FINTIM")
     if run_limits:
         p.add_argument("--max-time", type=POSITIVE, metavar="S",
-                       help="wall-clock limit per run, seconds")
+                       help="wall-clock limit per run, seconds (reading, checking and "
+                       "compiling the listing are bounded by it too)")
         p.add_argument("--max-steps", type=COUNT, metavar="N",
                        help="step limit per run (default 5000000)")
         p.add_argument("--max-events", type=COUNT, metavar="N",
@@ -277,12 +278,21 @@ def _finish(path: str, written: list[str], errors: list[str], quiet: bool,
     return EXIT_OUTPUT if errors else EXIT_OK
 
 
-def cmd_run(args, path: str, signals: Signals) -> int:
+def _load(args, path: str):
+    """The listing read, checked and its first run compiled (into the model's cache,
+    where the run finds it), within --max-time; and the --set values."""
     from .api import load
 
-    model = load(path)
-    params = _parse_sets(args.set)
-    _check_sets(model, params)
+    with time_limit(getattr(args, "max_time", None)):
+        model = load(path)
+        params = _parse_sets(args.set)
+        _check_sets(model, params)
+        model.python_source(**params)
+    return model, params
+
+
+def cmd_run(args, path: str, signals: Signals) -> int:
+    model, params = _load(args, path)
     plot = _plot_choice(args, model)
     if args.show_python:
         write_out(lambda out: out.write(model.python_source(**params) + "\n"))
@@ -313,16 +323,13 @@ def cmd_run(args, path: str, signals: Signals) -> int:
 
 
 def cmd_sweep(args, path: str, signals: Signals) -> int:
-    from .api import load
     from .sweep import parse_range, sweep
 
     try:
         name, values = parse_range(args.range)
     except AmilError as exc:
         raise UsageError(f"the sweep range {args.range}: {exc}") from None
-    model = load(path)
-    params = _parse_sets(args.set)
-    _check_sets(model, params)
+    model, params = _load(args, path)
     if name not in model.ir.data_names:
         hint = nearest(name, set(model.ir.data_names))
         raise UsageError(f"{name} is not a PARAM/CONST/INCON value of this listing"
@@ -363,16 +370,13 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
 
 
 def cmd_report(args, path: str, signals: Signals) -> int:
-    from .api import load
     from .output.report import FORMATS, write_report
 
     formats = [f.strip().lower() for f in args.format.split(",") if f.strip()]
     bad = [f for f in formats if f not in FORMATS]
     if bad or not formats:
         raise UsageError(f"--format takes {', '.join(FORMATS)}; got {args.format!r}")
-    model = load(path)
-    params = _parse_sets(args.set)
-    _check_sets(model, params)
+    model, params = _load(args, path)
     plot = _plot_choice(args, model)
     runs = model.run(method=args.method, rtol=args.rtol, atol=args.atol, fintim=args.fintim,
                      max_time=args.max_time, max_steps=args.max_steps,
@@ -422,6 +426,10 @@ def _one(command, args, path: str, signals: Signals) -> int:
         return EXIT_MODEL
     except KeyboardInterrupt:
         print(f"amilpy: {path}: interrupted", file=sys.stderr)
+        return EXIT_FAILED
+    except TimeLimit:
+        print(f"amilpy: {path}: reading, checking and compiling the listing took longer "
+              f"than --max-time {args.max_time:g} s", file=sys.stderr)
         return EXIT_FAILED
     except MemoryError:
         print(f"amilpy: {path}: out of memory", file=sys.stderr)

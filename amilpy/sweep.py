@@ -152,12 +152,12 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
         spec = model._specs({**params, name: value})[0]
         opts = Options(method=method, rtol=rtol, atol=atol,
                        start=start if carry_state else None, fintim=fintim,
-                       progress=run_progress)
+                       progress=run_progress, extrema=(measure,), settle=settle)
         run = simulate(model.ir, spec, opts, model.cache)
         t0 = float(run.times[0])
-        keep = run.times >= t0 + settle
-        v = run.values[measure][keep]
-        lo, hi = (float(np.min(v)), float(np.max(v))) if v.size else (math.nan, math.nan)
+        # located between the output instants, like RANGE: the peak of a lightly
+        # damped resonance falls between rows at any OUTDEL
+        lo, _, hi, _ = run.extrema.get(measure, (math.nan,) * 4)
         result.points.append(SweepPoint(value, direction, lo, hi, str(run.status), t0,
                                         float(run.t_end)))
         if keep_runs:

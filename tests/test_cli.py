@@ -334,3 +334,21 @@ def test_a_read_only_folder_exits_4(model, tmp_path, capsys):
         assert done.returncode == 4, done.stderr
         err = done.stderr
     assert f"cannot write {folder / 'x.csv'}: Permission denied" in err
+
+
+def test_max_time_bounds_reading_checking_and_compiling(tmp_path, capsys):
+    # 1400 nested LIMITs: each level is a switch whose surfaces and code are built
+    # in order, a few seconds of front end; --max-time 0.1 stops it there (exit 3,
+    # like a run stopped by a limit) instead of only once a run has started
+    text = "X = INTGRL(0.0, " + "LIMIT(-1.0, 1.0, " * 1400 + "TIME" + ")" * 1400 + ")\n"
+    listing = tmp_path / "nested.amil"
+    listing.write_text(text + "TIMER FINTIM = 1.0\nEND\n")
+    assert main(["run", str(listing), "--max-time", "0.1", "--quiet"]) == 3
+    err = capsys.readouterr().err
+    assert "reading, checking and compiling the listing took longer than --max-time 0.1 s" \
+        in err
+
+
+def test_a_max_time_past_any_timer_is_no_limit(model, capsys):
+    # --max-time 1E308 once overflowed setitimer's time_t (found by the fuzzer)
+    assert main(["run", str(model), "--max-time", "1e308", "--quiet"]) == 0

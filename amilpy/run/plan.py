@@ -29,6 +29,9 @@ DEFAULTS = {
     "max_steps": 5_000_000,
     "max_events": 200_000,
     "max_rows": 2_000_000,
+    # values all the runs of one call keep (rows x variables, summed over the runs):
+    # 2E8 float64 are 1.6 GB, what a laptop can spare for a printout
+    "max_values": 200_000_000,
 }
 
 SLIDE = 0.5  # the mode of a sliding surface: not a sign (-1, 0, 1) nor a QNTZR level
@@ -50,6 +53,9 @@ class Options:
     start: dict | None = None  # continue from a previous run's final_state
     fintim: float | None = None  # run length instead of the listing's FINTIM
     progress: Callable | None = None  # callable(t, fintim, events, steps) or None
+    # variables whose minimum and maximum are located like RANGE's (a sweep's measure)
+    extrema: tuple[str, ...] = ()
+    settle: float = 0.0  # RANGE and `extrema` count the rows from t0 + settle on
 
 
 class SurfaceKind(str, Enum):
@@ -188,6 +194,14 @@ class RunPlan:
         """What the route ran with: tolerances or the fixed step."""
         return self.tol.describe() if self.route.uses_tolerances else \
             f"DELT {self.timer['DELT']:g}"
+
+
+def stored_values(spec: ir.RunSpec, columns: int, fintim: float | None = None) -> float:
+    """The most values a run of `spec` keeps: its output rows (the OUTDEL and PRDEL
+    grids, both ends included) times `columns`."""
+    t = timer_values(spec, fintim)
+    rows = t["FINTIM"] / t["OUTDEL"] + t["FINTIM"] / t["PRDEL"] + 2.0
+    return rows * columns
 
 
 def timer_values(spec: ir.RunSpec, fintim: float | None = None,

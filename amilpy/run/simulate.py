@@ -63,7 +63,8 @@ class _Run:
         self.constants, self.c, self.plan = prepared.constants, prepared.compiled, prepared.plan
         self.watch = SurfaceWatch(self.c, self.plan)
         ranged = [n for r in spec.reports if r.kind == "RANGE" for n in r.names]
-        self.rec = Recorder(self.plan, self.c, self.watch, ranged)
+        self.rec = Recorder(self.plan, self.c, self.watch, ranged + list(opts.extrema),
+                            self.plan.t0 + opts.settle if opts.settle > 0 else None)
         self.integ = Integrator(model, self.plan, self.c, self.watch, opts, started)
         self.started = started
 
