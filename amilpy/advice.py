@@ -34,7 +34,9 @@ def stiffness_advice(model: ir.Model, spec: ir.RunSpec, run: Run, opts: Options,
         left = opts.max_time - run.stats.get("seconds", 0.0)
         if left <= 0:
             return None
-    window = 0.1 * spec.timer["FINTIM"]
+    # the run's length (ACSL form: a TERMT may end it, with no FINTIM given)
+    length = spec.timer.get("FINTIM", run.t_end - (float(run.t[0]) if len(run.t) else 0.0))
+    window = 0.1 * length
     # outputs: one variable on a coarse grid; the work is the integration
     probe_spec = replace(spec, timer={**spec.timer, "OUTDEL": window, "PRDEL": window},
                          reports=[])

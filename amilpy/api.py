@@ -60,7 +60,12 @@ class Model:
         """The generated Python of the first run (what `--show-python` prints)."""
         from .run import prepare
 
-        return prepare(self.ir, self._specs(params)[0], cache=self.cache).compiled.source
+        spec = self._specs(params)[0]
+        if self.ir.acsl is not None:
+            from .run.acsl import prepare_acsl
+
+            return prepare_acsl(self.ir, spec, cache=self.cache).compiled.source
+        return prepare(self.ir, spec, cache=self.cache).compiled.source
 
     def flow(self, method: str | None = None, rtol: float | None = None,
              atol: float | None = None, run: int = 0, **params: float) -> Flow:
@@ -69,6 +74,10 @@ class Model:
         from .run import Flow, Options
 
         _check_method(method)
+        if self.ir.acsl is not None:
+            raise AmilError("a flow map is not available for a program in ACSL form: its "
+                            "DISCRETE sections and DYNAMIC statements run between the "
+                            "integrator's steps", self.ir.path)
         spec = self._specs(params)[run]
         return Flow(self.ir, spec, Options(method=method, rtol=rtol, atol=atol), self.cache)
 
@@ -148,9 +157,13 @@ class Model:
 
     def _check_memory(self, specs: list[ir.RunSpec], outputs: list[str] | None,
                       fintim: float | None) -> None:
-        """Refuse, before the first run, runs whose rows together would not fit."""
+        """Refuse, before the first run, runs whose rows together would not fit. (In
+        ACSL form the rows follow CINT and TERMT, known only after INITIAL: a run is
+        capped at language.MAX_INTERVALS rows instead.)"""
         from .run.plan import DEFAULTS, stored_values
 
+        if self.ir.acsl is not None:
+            return
         columns = len(outputs) if outputs is not None else len(self.ir.variables)
         total = sum(stored_values(spec, columns, fintim) for spec in specs)
         limit = DEFAULTS["max_values"]

@@ -406,11 +406,14 @@ def cmd_report(args, path: str, signals: Signals) -> int:
 
 def cmd_check(args, path: str, signals: Signals) -> int:
     from .api import load
+    from .diagnostics import render
 
     ir = load(path).ir
     write_out(lambda out: out.write(
         f"{path}: ok — {len([s for s in ir.states if not s.hidden])} states, "
         f"{len(ir.dynamic)} equations, {len(ir.switches)} switches, {len(ir.runs)} run(s)\n"))
+    if ir.warnings:
+        print(render(ir.warnings, path, ir.source), file=sys.stderr)
     return EXIT_OK
 
 

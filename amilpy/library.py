@@ -112,6 +112,7 @@ class Func:
     vector: str | Callable[[Any], Callable] | None = None
     # tables: the run-time interpolation (a `runtime.HELPERS` name)
     lookup: str = ""
+    note: str = ""  # said with the signature when a call has the wrong arguments
     literal_args: tuple[int, ...] = ()  # positive integer literals (DELAY's N)
     constant_args: tuple[int, ...] = ()  # known before the run (initial values, DELAY's P)
     # constant arguments that must be > 0 / >= 0: checked with the data when the
@@ -194,6 +195,12 @@ def register(func: Func) -> Func:
     for alias in func.aliases:
         ALIASES[alias] = func.name
     return func
+
+
+def callable_names() -> set[str]:
+    """Every name a listing may call (canonical and aliases); the relational
+    switches the checker makes from `A > B` are not among them."""
+    return {n for n in (*FUNCTIONS, *ALIASES) if not n.startswith(".")}
 
 
 def lookup(name: str, nargs: int | None = None) -> Func | None:
@@ -313,9 +320,11 @@ _math("NOTNUL(X)", rt.notnul, lambda np: (lambda x: np.where(np.asarray(x) == 0.
 
 # --- states -------------------------------------------------------------------
 register(Func("INTGRL", Kind.STATE, "INTGRL(IC, X)", "Y = IC + integral of X",
-              states=(StateSpec("A", "B", "INTGRL"),), values=("Y0",)))
+              states=(StateSpec("A", "B", "INTGRL"),), values=("Y0",),
+              note="the initial value comes first"))
 register(Func("INTEG", Kind.STATE, "INTEG(X, IC)", "ACSL order: INTEG(X, IC)",
-              states=(StateSpec("B", "A", "INTGRL"),), values=("Y0",)))
+              states=(StateSpec("B", "A", "INTGRL"),), values=("Y0",),
+              note="the derivative comes first, the initial value second (ACSL order)"))
 register(Func("REALPL", Kind.STATE, "REALPL(IC, P, X)", "P*Y' + Y = X, Y(0) = IC",
               states=(StateSpec("A", "(C - Y0)/B", "REALPL"),), values=("Y0",)))
 register(Func("LEDLAG", Kind.STATE, "LEDLAG(P1, P2, X)", "(P1*s + 1)/(P2*s + 1) applied to X",
@@ -379,6 +388,13 @@ register(Func("NOT", Kind.SWITCH, "NOT(X)", "0 if X>0, else 1",
 # test (X > 0) is a switch whose value (1 or 0) is located where X crosses 0
 register(Func("RSW", Kind.SWITCH, "RSW(C, A, B)", "A if C is true (> 0), else B",
               values=("(B if M0 > 0 else C)",), surfaces=("A",)))
+
+# --- relational tests in sorted code (section 10): `A > B` is a switch on A - B ------
+# Their names cannot be written as a call; the checker makes them from the operators.
+RELATIONS: dict[str, str] = {"<": ".LT.", "<=": ".LE.", ">": ".GT.", ">=": ".GE."}
+for _op, _name in RELATIONS.items():
+    register(Func(_name, Kind.SWITCH, f"{_name}(A, B)", f"1 if A {_op} B, else 0",
+                  values=(f"(1.0 if M0 {_op} 0 else 0.0)",), surfaces=("A - B",)))
 
 # --- time switches (surface TIME - P: breakpoints known before the run) --------
 register(Func("STEP", Kind.TIME, "STEP(P)", "0 for t<P; 1 for t>=P",

@@ -75,6 +75,11 @@ BY_NAME: dict[str, Route] = {r.name: r for r in ROUTES}
 METHODS: dict[str, Route] = {alias: r for r in ROUTES for alias in r.aliases}
 DEFAULT = "AUTO"
 
+# ACSL's ALGORITHM IALG = n -> the METHOD it runs as (contract section 11). IALG 3 is
+# Euler in step-point mode (section 14): METHOD RECT here, the mode is the run's.
+IALG_METHODS: dict[int, str] = {1: "LSODA", 2: "BDF", 3: "RECT", 4: "TRAPZ", 5: "RK4",
+                                8: "RKS", 9: "RKS", 10: "BDF"}
+
 
 class StepPointError(ValueError):
     """Step-point mode asked of a variable-step route."""

@@ -386,11 +386,25 @@ def _any(*v) -> bool:
 
 
 # name -> the callable; generated code reads it as `_NAME`
+def loop_count(start: float, stop: float, step: float) -> int:
+    """How many times FOR/DO i = start, stop, step runs (Fortran's trip count), at
+    most language.MAX_LOOP."""
+    from .language import MAX_LOOP
+
+    if step == 0.0:
+        raise ValueError("a FOR/DO loop with step 0")
+    n = math.floor((stop - start + step) / step)
+    if n > MAX_LOOP:
+        raise ValueError(f"a FOR/DO loop of {n} iterations (at most {MAX_LOOP})")
+    return max(0, int(n))
+
+
 HELPERS: dict[str, Callable] = {
     "AFGEN": afgen, "NLFGEN": nlfgen, "DERIV": deriv, "IMPULS": impulse_at, "POW": safe_pow,
     "DELAY": delay, "DELAY_STORE": delay_store, "DELAY_INIT": delay_init,
     "LINT": lint, "PULSE_ON": pulse_on, "IMPULS_STEP": impulse_step, "DRAW": draw,
     "SGN": sign, "LEVEL": level, "WHERE": _where, "ALL": _all, "ANY": _any,
+    "NITER": loop_count, "RANGE": range,  # FOR/DO loops of procedural code
 }
 
 

@@ -33,6 +33,7 @@ from .pytree import (
     place,
     vectorised,
 )
+from .written import Statements, start
 
 # models with more memory slots than this read them from z instead of unpacking
 MAX_UNPACKED_SLOTS = 32
@@ -75,6 +76,10 @@ class Compiled:
     # train): those instants are breakpoints, and these surfaces are not located
     trains: list[tuple[float, float]] = field(default_factory=list)
     train_surfaces: set[int] = field(default_factory=set)
+    # ACSL form: the names written-order code keeps (z after the memory slots), and
+    # that code by function name: (its IR, fn(t, y, m, z, ev) -> (y, z, values))
+    kept: list[str] = field(default_factory=list)
+    code: dict[str, tuple[ir.Code, Callable]] = field(default_factory=dict)
     model: ir.Model | None = field(default=None, repr=False)
     module: py.Module | None = field(default=None, repr=False)  # the scalar functions' tree
     namespace: dict = field(default_factory=dict, repr=False)
@@ -107,6 +112,20 @@ def _deepest(model: ir.Model) -> Span | None:
     return where
 
 
+def by_rows(fn: Callable) -> Callable:
+    """fn over NumPy columns (t an array, y a list of arrays), a row at a time."""
+    import numpy as np
+
+    def columns(t, y, m, z):
+        times = np.atleast_1d(np.asarray(t, dtype=float))
+        rows = np.column_stack([np.broadcast_to(c, times.shape) for c in y]) if y else \
+            np.empty((times.size, 0))
+        out = [fn(float(times[i]), rows[i].tolist(), m, z) for i in range(times.size)]
+        width = len(out[0]) if out else 0
+        return [np.array([r[j] for r in out], dtype=float) for j in range(width)]
+    return columns
+
+
 def fault_line(exc: BaseException) -> int | None:
     """The listing line of the generated statement that raised `exc`, if the fault
     happened inside generated code."""
@@ -121,10 +140,18 @@ class Compiler:
 
     def __init__(self, model: ir.Model, constants: dict[str, float], tables,
                  const_modes: dict[int, float], outputs: list[str] | None = None,
-                 events: bool = True, setting: Setting | None = None) -> None:
+                 events: bool = True, setting: Setting | None = None,
+                 kept: dict[str, float] | None = None,
+                 priors: dict[str, float] | None = None) -> None:
         self.model = model
         self.setting = setting or Setting()
         self.constants = constants
+        # ACSL form: the names written-order code keeps between instants (memory
+        # slots after the memory functions', in z) with their starting values, and
+        # the INITIAL values of names DERIVATIVE computes again (a unit's output
+        # keeps that value on a path that does not assign it)
+        self.kept = dict(kept or {})
+        self.priors = dict(priors or {})
         self.tables = tables
         self.const_modes = const_modes
         self.outputs = outputs
@@ -133,7 +160,7 @@ class Compiler:
         if not events:
             # only FINISH/TERMT stay watched: they stop the run, they switch nothing
             self.watched = [i for i in self.watched
-                            if model.surfaces[i].purpose in ("finish", "termt")]
+                            if model.surfaces[i].purpose in ("finish", "termt", "schedule")]
         self.mode_names = {s: f"m{k}" for k, s in enumerate(self.watched)}
         self.mode_names_new = {s: f"n{k}" for k, s in enumerate(self.watched)}
         self.global_tables: dict[str, tuple] = {}
@@ -152,7 +179,7 @@ class Compiler:
 
     def line(self, kind: str, target: str, span: Span | None, expr=None) -> int:
         """The generated line of one IR statement (the same in every function)."""
-        key = (kind, target)
+        key = (kind, target, span)
         if key not in self.lines:
             self.statements.append(Statement(kind, target, span, expr))
             self.lines[key] = len(self.statements)
@@ -176,16 +203,42 @@ class Compiler:
         nz = sum(m.nslots for m in self.model.memories)
         if mem and nz and self.unpacked_z:
             names = [py.Name(f"z{k}", py.Store()) for k in range(nz)]
-            body.append(py.Assign([py.Tuple(names, py.Store())], py.Name("z", py.Load()))
+            source = py.Name("z", py.Load()) if not self.kept else py.Subscript(
+                py.Name("z", py.Load()), py.Slice(None, py.Constant(nz)), py.Load())
+            body.append(py.Assign([py.Tuple(names, py.Store())], source)
                         if nz > 1 else py.Assign([names[0]], py.Subscript(
                             py.Name("z", py.Load()), py.Constant(0), py.Load())))
+        if mem and self.kept:
+            for k, n in enumerate(self.kept):
+                body.append(py.Assign([py.Name(local(n), py.Store())], py.Subscript(
+                    py.Name("z", py.Load()), py.Constant(nz + k), py.Load())))
         return body
 
     def algebra(self, roots, em: Emitter) -> list[py.stmt]:
-        """The algebraic equations the roots read, in sorted order, one line each."""
-        return [on_line(py.Assign([py.Name(local(e.target), py.Store())], em.emit(e.expr)),
-                        self.line("equation", e.target, e.span, e.expr))
-                for e in needs(self.model, roots)]
+        """The algebraic equations the roots read, in sorted order, one line each; a
+        sorting unit's statements where its first output is needed."""
+        out: list[py.stmt] = []
+        done: set[int] = set()
+        for e in needs(self.model, roots):
+            if isinstance(e.expr, ir.UnitValue):
+                if e.expr.unit not in done:
+                    done.add(e.expr.unit)
+                    out.extend(self.unit(self.model.units[e.expr.unit], em))
+                continue
+            out.append(on_line(py.Assign([py.Name(local(e.target), py.Store())],
+                                         em.emit(e.expr)),
+                               self.line("equation", e.target, e.span, e.expr)))
+        return out
+
+    def unit(self, unit: ir.Unit, em: Emitter) -> list[py.stmt]:
+        """An IF or PROCEDURAL unit: its outputs' values before it, then its body."""
+        first = start(unit.outputs, set(self.kept), self.priors)
+        for st in first:
+            on_line(st, self.line("code", f"{unit.kind} at line {unit.span.line}", unit.span))
+        return first + self.code_emitter(em).block(unit.body)
+
+    def code_emitter(self, em: Emitter) -> Statements:
+        return Statements(em, self.line, lambda: f"w{next(self.names)}")
 
     def surface_algebra(self, em: Emitter) -> list[py.stmt]:
         """What the watched surfaces read: the algebra, then the switch values they
@@ -291,6 +344,11 @@ class Compiler:
                 e = on_line(em.fill(text, args, modes, new_modes, mem, value), line)
                 new.append(on_line(py.Starred(e, py.Load()), line) if templates.spread(text)
                            else e)
+        if self.kept:  # the names written-order code keeps: unchanged by a step
+            nz = sum(m.nslots for m in model.memories)
+            new.append(py.Starred(py.Subscript(py.Name("z", py.Load()),
+                                               py.Slice(py.Constant(nz), None), py.Load()),
+                                  py.Load()))
         body.append(py.Return(py.List(new, py.Load())))
         return function("mem", ("t", "y", "m", "mn", "z"), body)
 
@@ -322,6 +380,41 @@ class Compiler:
             values.append(on_line(value, self.state_line(s)))
         body.append(py.Return(py.List(values, py.Load())))
         return function("settle", ("t", "y", "m", "z"), body)
+    def section(self, fname: str, code: ir.Code) -> py.FunctionDef:
+        """Written-order code as `fname(t, y, m, z, ev)` -> (states, z, values of the
+        names it assigns); DERIVATIVE's values it reads are computed first."""
+        model = self.model
+        em = self.emitter("out")
+        em.constants = {k: v for k, v in self.constants.items() if k not in code.assigned}
+        known = set(self.kept) | {st.name for st in model.states}
+        body = self.prologue()
+        first = start(code.assigned, known, self.constants)
+        for st in first:
+            on_line(st, self.line("code", code.section, code.span))
+        body += first
+        reads = [n for st in code.body for n in syn.walk(st) if isinstance(n, syn.Name)]
+        body += self.algebra(reads, em)
+        body += self.code_emitter(em).block(code.body)
+        nz = sum(m.nslots for m in model.memories)
+        states = py.List([py.Name(local(st.name), py.Load()) for st in model.states], py.Load())
+        kept = py.List([py.Starred(py.Subscript(py.Name("z", py.Load()), py.Slice(
+            None, py.Constant(nz)), py.Load()), py.Load())]
+            + [py.Name(local(n), py.Load()) for n in self.kept], py.Load())
+        values = py.List([py.Name(local(n), py.Load()) for n in code.assigned], py.Load())
+        body.append(py.Return(py.Tuple([states, kept, values], py.Load())))
+        return function(fname, ("t", "y", "m", "z", "ev"), body)
+
+    def sections(self) -> dict[str, ir.Code]:
+        """Written-order code run during a run (the ACSL form's DYNAMIC, DISCRETE and
+        TERMINAL; a CSMP TERMINAL with IF or DO blocks), by function name."""
+        acsl = self.model.acsl
+        out: dict[str, ir.Code] = {}
+        if acsl is not None:
+            out["dynamic"] = acsl.dynamic
+            out.update({f"discrete_{k}": d.code for k, d in enumerate(acsl.discretes.values())})
+        terminal = acsl.terminal if acsl is not None else self.model.terminal_code
+        out.update({f"terminal_{k}": c for k, c in enumerate(terminal)})
+        return out
 
     @deep_enough()
     def build(self) -> Compiled:
@@ -345,9 +438,11 @@ class Compiler:
         settles = any(s.onto for s in model.states)
         if settles:
             fns.append(self.settle())
+        sections = self.sections()
+        extra = [self.section(fname, c) for fname, c in sections.items()]
         # surf and out once more for NumPy columns: a condition there may be an array
         # (a memory function reading its condition), so if/else becomes a where()
-        fns += [vectorised(fns[1], "surf_vec"), vectorised(fns[3], "out_vec")]
+        fns += [vectorised(fns[1], "surf_vec"), vectorised(fns[3], "out_vec")] + extra
         module = Folder().visit(py.Module(body=fns, type_ignores=[]))
         place(module)
         py.fix_missing_locations(module)
@@ -362,12 +457,17 @@ class Compiler:
         vector.update(self.global_tables)
         exec(code, vector)  # noqa: S102 - the same code, elementwise functions
         trains, train_surfaces = self.trains()
+        if model.units:
+            # statements (IF, loops) cannot run on columns: one row at a time
+            vector["surf_vec"], vector["out_vec"] = by_rows(scalar["surf"]), \
+                by_rows(scalar["out"])
         return Compiled(
             state_names=[s.name for s in model.states],
             y0=[self.constant(s.ic, s.span) for s in model.states],
             z0=[v for mem, func in zip(model.memories, self.entries, strict=True)
                 for text in func.memory.initial
-                for v in initial_slots(model, text, mem, self.constants, self.tables)],
+                for v in initial_slots(model, text, mem, self.constants, self.tables)]
+            + list(self.kept.values()),
             out_names=list(out_names), constants=self.constants, rhs=scalar["rhs"],
             surf=scalar["surf"], out=scalar["out"], mem=scalar["mem"],
             watched=self.watched, const_modes=self.const_modes,
@@ -377,7 +477,8 @@ class Compiler:
             memory_every_step=any(f.memory.every_step for f in self.entries),
             memory_times=self.memory_times(), statements=self.statements, model=model,
             module=module, namespace=scalar, trains=trains, train_surfaces=train_surfaces,
-            settle=scalar["settle"] if settles else None,
+            settle=scalar["settle"] if settles else None, kept=list(self.kept),
+            code={fname: (sections[fname], scalar[fname]) for fname in sections},
         )
 
     def trains(self) -> tuple[list[tuple[float, float]], set[int]]:
@@ -408,6 +509,7 @@ class Compiler:
     def impulses(self) -> list[tuple[float, float]]:
         model = self.model
         exprs = [e.expr for e in model.dynamic] + [s.deriv for s in model.states]
+        exprs += [n for u in model.units for st in u.body for n in syn.walk(st)]
         exprs += [a for sw in model.switches for a in sw.args]
         exprs += [a for m in model.memories for a in m.args]
         exprs += [s.expr for s in model.surfaces]

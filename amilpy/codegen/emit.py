@@ -25,9 +25,20 @@ from ..library import Func, Kind, lookup, runtime_name
 from ..runtime import Extending, safe_pow
 from ..syntax import Visitor
 from ..templates import ARGUMENTS, argument_uses, tree
-from .pytree import const_value, local, number
+from .pytree import const_value, local, number, user_function
 
 _PYOPS = {"+": py.Add, "-": py.Sub, "*": py.Mult, "/": py.Div}
+_PYCMP = {"<": py.Lt, "<=": py.LtE, ">": py.Gt, ">=": py.GtE, "==": py.Eq, "/=": py.NotEq}
+
+
+def truth(value: py.expr) -> py.expr:
+    """A number used as a condition: `value > 0`."""
+    return py.Compare(value, [py.Gt()], [py.Constant(0.0)])
+
+
+def as_number(test: py.expr, yes: float = 1.0, no: float = 0.0) -> py.expr:
+    """A truth used as a number: 1.0 or 0.0."""
+    return py.IfExp(test, py.Constant(yes), py.Constant(no))
 
 
 @dataclass(frozen=True)
@@ -128,8 +139,23 @@ class Emitter(Visitor):
     def visit_Neg(self, e: syn.Neg) -> py.expr:
         return py.UnaryOp(py.USub(), self.emit(e.operand))
 
+    def visit_Not(self, e: syn.Not) -> py.expr:
+        return as_number(truth(self.emit(e.operand)), 0.0, 1.0)
+
+    def visit_UnitValue(self, e: ir.UnitValue) -> py.expr:
+        # the unit's statements ran before (Compiler.algebra emits them first)
+        return py.Name(local(e.name), py.Load())
+
     def visit_BinOp(self, e: syn.BinOp) -> py.expr:
         left, right = self.emit(e.left), self.emit(e.right)
+        if e.op in _PYCMP:  # evaluated where it stands (sorted code lowers <, > to switches)
+            return as_number(py.Compare(left, [_PYCMP[e.op]()], [right]))
+        if e.op in ("AND", "OR"):
+            op = py.And() if e.op == "AND" else py.Or()
+            return as_number(py.BoolOp(op, [truth(left), truth(right)]))
+        if e.op in ("EQV", "NEQV"):
+            same = py.Eq() if e.op == "EQV" else py.NotEq()
+            return as_number(py.Compare(truth(left), [same], [truth(right)]))
         if e.op == "**":
             k = const_value(right)
             if k is not None and k.is_integer() and abs(k) <= 64:
@@ -145,6 +171,15 @@ class Emitter(Visitor):
 
     def visit_Call(self, e: syn.Call) -> py.expr:
         func = lookup(e.func, len(e.args))
+        acsl = self.model.acsl
+        if func is None and acsl is not None and e.func in acsl.functions:
+            # a FUNCTION the listing defines (ACSL form)
+            from .written import user_callable
+
+            self.tables[user_function(e.func)] = user_callable(
+                self.model, e.func, self.constants, self.source_tables)
+            return py.Call(py.Name(user_function(e.func), py.Load()),
+                           [self.emit(a) for a in e.args], [])
         if func is None:  # a run-time helper a library template calls (PULSE_ON)
             return py.Call(py.Name("_" + e.func, py.Load()), [self.emit(a) for a in e.args],
                            [])
@@ -324,6 +359,15 @@ class _Needs(Visitor):
         if ("m", node.memory) not in self.seen:
             self.seen.add(("m", node.memory))
             self.pending.extend(self.model.memories[node.memory].args)
+
+    def visit_UnitValue(self, node: ir.UnitValue) -> None:
+        if ("u", node.unit) not in self.seen:
+            self.seen.add(("u", node.unit))
+            unit = self.model.units[node.unit]
+            self.pending.extend(syn.Name(n, unit.span) for n in unit.inputs)
+            # the switches of its conditions: their surfaces read algebra too
+            self.pending.extend(n for st in unit.body for n in syn.walk(st)
+                                if isinstance(n, ir.SwitchValue))
 
 
 def needs(model: ir.Model, roots: list[syn.Node]) -> list[ir.Equation]:

@@ -13,7 +13,7 @@ from ..runtime import HELPERS, safe_pow
 
 # the arguments of every generated function; with the v_/h_ locals of model
 # names, the mN/nN/zN/wN locals and the _NAME callables, all generated code reads
-ARGS = ("t", "y", "m", "mn", "z")
+ARGS = ("t", "y", "m", "mn", "z", "ev")
 
 
 def namespace() -> dict[str, object]:
@@ -32,6 +32,11 @@ def local(name: str) -> str:
         # character as _XX so that no two names meet
         return "h_" + "".join(c if c.isalnum() else f"_{ord(c):02X}" for c in name)
     return "v_" + name
+
+
+def user_function(name: str) -> str:
+    """The Python name of a FUNCTION the listing defines (ACSL form)."""
+    return "_U_" + name
 
 
 def number(v: float) -> py.expr:
@@ -191,7 +196,7 @@ def assert_closed(module: py.Module) -> None:
         if isinstance(node, (py.Attribute, py.Import, py.ImportFrom, py.Global, py.Lambda)):
             raise AssertionError(f"generated code contains {type(node).__name__}")
         if isinstance(node, py.Name) and isinstance(node.ctx, py.Load):
-            ok = (node.id in allowed or node.id.startswith(("v_", "h_", "_T_"))
+            ok = (node.id in allowed or node.id.startswith(("v_", "h_", "_T_", "_U_"))
                   or (node.id[0] in "mnzw" and node.id[1:].isdigit()))
             if not ok:
                 raise AssertionError(f"generated code reads unknown name {node.id}")

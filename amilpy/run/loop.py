@@ -359,10 +359,11 @@ class Integrator:
         tb, yb = step.tb, step.yb
         new_m = watch.choose_modes(tb, yb, z, m, step.triggered, forced=step.exits)
         for k in step.triggered:
-            purpose = self.plan.watched[k].purpose
-            if (purpose is Purpose.TERMT and new_m[k] > 0) or \
-                    (purpose is Purpose.FINISH and new_m[k] != m[k]):
-                self.stop_reason = k
+            w = self.plan.watched[k]
+            if (w.purpose is Purpose.TERMT and new_m[k] > 0) or \
+                    (w.purpose is Purpose.FINISH and new_m[k] != m[k]) or \
+                    (w.purpose is Purpose.SCHEDULE and w.fires(m[k], new_m[k])):
+                self.stop_reason = k  # a SCHEDULE: the caller runs its DISCRETE, goes on
         n_events = len(self.events)
         self.record_changes(tb, yb, m, new_m, z, step.triggered)
         if c.z0:

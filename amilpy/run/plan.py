@@ -76,10 +76,11 @@ class Purpose(str, Enum):
     MEMORY = "memory"
     FINISH = "finish"
     TERMT = "termt"
+    SCHEDULE = "schedule"  # ACSL's SCHEDULE s .XP. e: the loop stops there for DISCRETE s
 
     @property
     def stops(self) -> bool:
-        return self in (Purpose.FINISH, Purpose.TERMT)
+        return self in (Purpose.FINISH, Purpose.TERMT, Purpose.SCHEDULE)
 
 
 @dataclass(frozen=True)
@@ -93,13 +94,21 @@ class Watched:
     text: str  # the surface as the listing writes it ("W1", "TIME - T1")
     gradient: np.ndarray | None  # d e/d y when the surface is linear in the states
     breakpoint_only: bool  # affine in TIME: handled as breakpoints
+    direction: int = 0  # SCHEDULE: +1 .XP., -1 .XN., 0 .XZ. (either way)
+
+    def fires(self, old: float, new: float) -> bool:
+        """Whether entering `new` from `old` is a crossing this SCHEDULE runs on:
+        from < 0 to >= 0 (XP), from > 0 to <= 0 (XN), or either (XZ)."""
+        up = old < 0 and new >= 0 and new != SLIDE
+        down = old > 0 and new <= 0
+        return up if self.direction > 0 else down if self.direction < 0 else up or down
 
     def event_kind(self, new_mode: float) -> EventKind:
         """What entering `new_mode` on this surface is, as an event."""
-        if self.breakpoint_only:
-            return EventKind.BREAKPOINT
         if self.purpose.stops:
             return EventKind(self.purpose.value)
+        if self.breakpoint_only:
+            return EventKind.BREAKPOINT
         if new_mode == SLIDE:
             return EventKind.SLIDE
         return EventKind.LEVEL if self.kind is SurfaceKind.LEVEL else EventKind.SWITCH
@@ -281,11 +290,13 @@ def resolve_step_point(spec: ir.RunSpec, opts: Options) -> bool:
 
 
 def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: Compiled,
-              timer: dict[str, float], grid: Grid, step_point: bool = False) -> RunPlan:
+              timer: dict[str, float], grid: Grid, step_point: bool = False,
+              t0: float | None = None) -> RunPlan:
     """The plan of one run, from its compiled functions (breakpoints need them).
     In step-point mode the run ends at the grid's last step point."""
     route, method = resolve_route(spec, opts)
-    t0 = float(opts.start["t"]) if opts.start else 0.0
+    if t0 is None:
+        t0 = float(opts.start["t"]) if opts.start else 0.0
     fintim = float(grid.times[-1]) if step_point else t0 + timer["FINTIM"]
     state_index = {n: i for i, n in enumerate(c.state_names)}
     watched = []
@@ -294,9 +305,11 @@ def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: Compiled,
         kind = SurfaceKind(s.kind)
         g = linear_gradient(s.expr, state_index, c.constants) \
             if kind is SurfaceKind.SIGN else None
+        crossing = model.acsl.crossings.get(i) if model.acsl is not None else None
         watched.append(Watched(i, kind, Purpose(s.purpose), s.description, s.text,
                                None if g is None else np.asarray(g),
-                               i in c.affine_time or i in c.train_surfaces))
+                               i in c.affine_time or i in c.train_surfaces,
+                               crossing[1] if crossing else 0))
     roots, breakpoints = time_breakpoints(c, watched, t0, fintim)
     pos = {i: k for k, i in enumerate(c.watched)}
     resets = []

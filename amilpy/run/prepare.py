@@ -75,14 +75,34 @@ def prepare(model: ir.Model, spec: ir.RunSpec, opts: Options | None = None,
     AmilError at the listing's line."""
     opts = opts or Options()
     cache = cache or Cache()
+    return before_run(model, lambda: _prepare(model, spec, opts, cache))
+
+
+def before_run(model: ir.Model, make: Callable[[], T], what=str) -> T:
+    """`make()`, with an arithmetic fault in it (in the constant parts of a run) an
+    AmilError at the listing's line; `what` words the fault."""
     try:
-        return _prepare(model, spec, opts, cache)
+        return make()
     except (ArithmeticError, ValueError) as exc:
         line = fault_line(exc)
-        raise AmilError([Diagnostic(f"cannot be evaluated before the run: {exc}",
+        raise AmilError([Diagnostic(f"cannot be evaluated before the run: {what(exc)}",
                                     Span(line, 1) if line else None,
                                     "check the constant expressions on that line")],
                         model.path, model.source) from None
+
+
+def constant_modes(model: ir.Model, constants: dict[str, float], tables,
+                   step_point: bool = False) -> dict[int, float]:
+    """The branches of the surfaces fixed for the whole run (IMPULS's: 0, except in
+    step-point mode, which reads it at each point)."""
+    const_modes = {}
+    for s in model.surfaces:
+        if s.depends == "impulse" and not step_point:
+            const_modes[s.index] = 0.0
+        if s.depends == "const":
+            value = evaluate_constant(model, s.expr, constants, tables, s.span)
+            const_modes[s.index] = level(value) if s.kind == "level" else sign(value)
+    return const_modes
 
 
 def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> Prepared:
@@ -96,14 +116,7 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
     ikey = (tuple(sorted(spec.data.items())), tuple(sorted(reserved.items())), tables)
     constants = dict(cache.get("initial", ikey, lambda: initial_values(
         model, spec.data, spec.tables, reserved)))
-    const_modes = {}
-    for s in model.surfaces:
-        if s.depends == "impulse" and not step_point:
-            # IMPULS is 1 only at breakpoints; step-point mode reads it at each point
-            const_modes[s.index] = 0.0
-        if s.depends == "const":
-            value = evaluate_constant(model, s.expr, constants, spec.tables, s.span)
-            const_modes[s.index] = level(value) if s.kind == "level" else sign(value)
+    const_modes = constant_modes(model, constants, spec.tables, step_point)
     setting = Setting(seed=random_seed(opts, constants),
                       # a random draw is held for an output interval, DELT with a fixed step
                       hold=timer["DELT"] if route.fixed else min(timer["OUTDEL"],

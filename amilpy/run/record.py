@@ -267,6 +267,8 @@ class Recorder:
         self.times = plan.grid.times
         self.rows = Rows(len(c.out_names))
         self.out_i = 0  # the next grid instant to record
+        # an instant whose row the caller takes itself, after its events (ACSL form)
+        self.hold: float | None = None
         index = {n: i for i, n in enumerate(c.out_names)}
         named = [n for n in dict.fromkeys(range_names) if n in index]
         self.extrema = Extrema(named, [index[n] for n in named])
@@ -307,7 +309,9 @@ class Recorder:
             self.restarts.append(Bracket(t, math.nan, np.array(y, float), tuple(m), tuple(z)))
 
     def grid_row(self, t: float, y: np.ndarray, m, z, shown=None) -> None:
-        """The row of the next grid instant."""
+        """The row of the next grid instant (none at the instant held for the caller)."""
+        if self.hold is not None and abs(t - self.hold) <= 1e-12 * max(abs(t), 1e-300):
+            return
         self.row(t, y, m, z, self.out_i, shown)
         self.out_i += 1
 

@@ -37,6 +37,11 @@ def simulate(model: ir.Model, spec: ir.RunSpec, options: Options | None = None,
     `cache` (an `api.Model`'s) keeps compiled functions between runs."""
     opts = options or Options()
     started = _clock.perf_counter()
+    if model.acsl is not None:
+        from .acsl import AcslRun, prepare_acsl
+
+        return AcslRun(model, spec, opts, prepare_acsl(model, spec, opts, cache),
+                       started).run()
     return _Run(model, spec, opts, prepare(model, spec, opts, cache), started).run()
 
 
@@ -87,25 +92,22 @@ class _Run:
 
     def _start(self, y: np.ndarray, z: list[float]) -> Cursor:
         """The branches in force at t0, and the first row."""
-        c, plan, rec, integ, start = self.c, self.plan, self.rec, self.integ, self.opts.start
+        c, plan, integ, start = self.c, self.plan, self.integ, self.opts.start
         cur = start_cursor(c, plan, self.watch, self.opts, y, z, start and start.get("m"))
         for k, w in enumerate(plan.watched):
             if cur.m[k] == SLIDE:  # sliding from the start is an event too
                 integ.events.append(Event(plan.t0, w.description, w.surface, 0.0, SLIDE,
                                           EventKind.SLIDE, w.text))
-        rec.grid_row(cur.t, cur.y, cur.m, cur.z,
-                     shown=rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
+        self.first_row(cur)
         return cur
 
     def _integrate(self, cur: Cursor) -> Run:
         c, plan, rec, integ = self.c, self.plan, self.rec, self.integ
         try:
             status, text = Status.FINISHED, ""
-            integ.integrate(cur, plan.fintim, rec)
-            if integ.stop_reason is not None:
-                status = Status.STOPPED
-                text = message(Status.STOPPED, t=cur.t,
-                               what=plan.watched[integ.stop_reason].description)
+            stopped = self.advance(cur)
+            if stopped is not None:
+                status, text = Status.STOPPED, message(Status.STOPPED, t=cur.t, what=stopped)
         except Stop as stop:
             status, text = Status.FAILED, message(stop.kind, t=stop.t, **stop.fields)
             cur.t = stop.t
@@ -135,6 +137,27 @@ class _Run:
         ctx = Context(self.model, plan, c, self.watch, self.opts, self.started)
         return self.finish(status, text, cur, locate_range(ctx, rec.extrema, rec.restarts))
 
+    def first_row(self, cur: Cursor) -> None:
+        """The row at t0 (the ACSL form runs the events due at t0 first)."""
+        self.rec.grid_row(cur.t, cur.y, cur.m, cur.z,
+                          shown=self.rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
+
+    def advance(self, cur: Cursor) -> str | None:
+        """Integrate to the end; what stopped the run early (FINISH, TERMT), if any."""
+        self.integ.integrate(cur, self.plan.fintim, self.rec)
+        reason = self.integ.stop_reason
+        return self.plan.watched[reason].description if reason is not None else None
+
+    def terminal(self, run: Run, cur: Cursor) -> dict[str, float]:
+        """TERMINAL's values, in written order."""
+        codes = self.model.terminal_code or (self.model.acsl.terminal if self.model.acsl
+                                             else [])
+        if codes:
+            from .acsl import run_terminal
+
+            return run_terminal(self.c, codes, cur)
+        return evaluate_terminal(self.model, self.spec, self.constants, run.final, cur.t)
+
     def _keep_last_good(self, cur: Cursor) -> None:
         """The last accepted state is the final row (everything computed)."""
         last = self.integ.last_good
@@ -146,15 +169,17 @@ class _Run:
     def finish(self, status: Status, text: str, cur: Cursor, extrema: dict) -> Run:
         integ = self.integ
         terminal: dict[str, float] = {}
+        notes = [f"line {d.span.line}: {d.message}" if d.span else d.message
+                 for d in self.model.warnings]
         run = self.rec.run(
-            self.spec, self.constants, integ.events, status, text, integ.warnings,
+            self.spec, self.constants, integ.events, status, text, notes + integ.warnings,
             dict(nsteps=integ.nsteps, nfev=integ.nfev, nevents=len(integ.events),
                  seconds=_clock.perf_counter() - self.started),
             cur.t, cur.y, cur.z, cur.m, terminal, extrema)
-        if status != Status.FAILED and self.model.terminal:
+        if status != Status.FAILED and (self.model.terminal or self.model.terminal_code
+                                        or (self.model.acsl and self.model.acsl.terminal)):
             try:
-                terminal.update(evaluate_terminal(self.model, self.spec, self.constants,
-                                                  run.final, cur.t))
+                terminal.update(self.terminal(run, cur))
             except AmilError as err:
                 d = err.diagnostics[0]
                 where = f" (line {d.span.line})" if d.span else ""
