@@ -23,10 +23,13 @@ from ..codegen import Compiled
 from ..outcome import Failure
 from ..result import Event
 from ..steppers import Chunked, Hermite, StepFailure, Stepper, first_bad, make_stepper
+from .edges import locate_crossings
 from .faults import Fault, fault_text
 from .plan import SLIDE, Options, Purpose, RunPlan, SurfaceKind, time_breakpoints
 from .record import Recorder
 from .watch import SurfaceWatch, TooManySlides, wrong_side
+
+_EPS = float(np.finfo(float).eps)
 
 # (ta, tb, dense output, modes, memory) of every accepted step, for analyses
 Observer = Callable[[float, float, Callable, list, list], None]
@@ -200,8 +203,19 @@ class Integrator:
         stepper = make_stepper(
             plan.route.name, f, cur.t, cur.y, seg_end, rtol=plan.tol.rtol, atol=plan.tol.atol,
             delt=plan.timer["DELT"], max_step=plan.max_step, first_step=self._last_step,
-            checks=checks, chunk=chunk, max_steps=self.opts.max_steps - self.nsteps)
+            checks=checks, chunk=chunk, max_steps=self.opts.max_steps - self.nsteps,
+            expect=self._expected_event(cur.t))
         return stepper, f
+
+    def _expected_event(self, t: float) -> float | None:
+        """How long after t the next event may come, when the recent events keep a
+        rhythm: events that alternate (contact, release) repeat their spacing every
+        other one, so the next gap is the one two back, if that one repeated too."""
+        recent = self._recent
+        if len(recent) < 5 or recent[-1] != t:
+            return None
+        gap, before = recent[-2] - recent[-3], recent[-4] - recent[-5]
+        return gap if abs(gap - before) <= 0.2 * gap else None
 
     def _segment(self, cur: Cursor, stepper: Stepper, f, seg_end: float, t_end: float,
                  rec: Recorder | None, observer: Observer | None, stop_at_event: bool) -> None:
@@ -297,14 +311,10 @@ class Integrator:
                 (silent if watch.silent(k, tb, yb, m, z) else hits).append(k)
         slide_exit = watch.slide_exits(m, tb, yb, z)
         if hits or slide_exit:
+            # departed: no crossing to bracket, sign at tb
+            roots, step.departed = locate_crossings(watch, stepper, hits, m, z, ta, tb,
+                                                    seg_start)
             interp = stepper.interpolant()
-            roots = {}
-            for k in hits:
-                tk = watch.locate(k, m, z, interp, ta, tb, seg_start)
-                if tk is None:
-                    step.departed.add(k)  # no crossing to bracket: sign at tb
-                else:
-                    roots[k] = tk
             for k, side in slide_exit:
                 roots[k] = watch.locate_slide_exit(k, side, m, z, interp, ta, tb)
             t_star = min(roots.values(), default=tb)
@@ -313,7 +323,7 @@ class Integrator:
                 stepper.truncate(t_star)
                 step.tb, step.yb, step.truncated = stepper.t, stepper.y, True
             e_b = c.surf(step.tb, step.yb.tolist(), m, z)
-            close = 8 * np.finfo(float).eps * max(abs(step.tb), 1e-300)
+            close = 8 * _EPS * max(abs(step.tb), 1e-300)
             step.triggered = {k for k, tk in roots.items() if tk - t_star <= close}
             # leaving a sliding motion: the side it leaves to is known
             step.exits = {k: side for k, side in slide_exit if k in step.triggered}

@@ -29,13 +29,14 @@ __all__ = ["Chunked", "Clock", "FIXED", "Hermite", "OdeintStepper", "Rhs", "Scip
 def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float, *,
                  rtol: np.ndarray, atol: np.ndarray, delt: float, max_step: float = math.inf,
                  first_step: float | None = None, checks=None, chunk: int = 16,
-                 max_steps: int = UNLIMITED) -> Stepper:
+                 max_steps: int = UNLIMITED, expect: float | None = None) -> Stepper:
     """The stepper for a canonical route name (see `routes.ROUTES`).
 
     `rtol`, `atol`: per-state tolerances (variable-step routes); `delt`: the fixed
     step; `checks`: the instants the loop looks at (the output grid), which only
     the odeint stepper uses (without them AUTO runs on SciPy's LSODA class, which
-    sees every step); `max_steps`: the steps the loop still allows.
+    sees every step); `max_steps`: the steps the loop still allows; `expect`: how
+    long after t0 the loop expects the next event (odeint sizes its first chunk so).
     """
     r = BY_NAME[route]
     if len(y0) == 0:
@@ -47,6 +48,6 @@ def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float
     if r.stepper == "odeint" and checks is not None:
         return OdeintStepper(fun, t0, y0, t_bound, checks, rtol=rtol, atol=atol,
                              max_step=max_step, first_step=first_step, chunk=chunk,
-                             max_steps=max_steps)
+                             max_steps=max_steps, expect=expect)
     return ScipyStepper(r.scipy, fun, t0, y0, t_bound, rtol=rtol, atol=atol, max_step=max_step,
                         first_step=first_step, stability_limit=r.stability_limit)
