@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import amilpy
-from amilpy.steppers.dense import Nodes, quintic_gap
+from amilpy.steppers.dense import Nodes, quintic_gap, quintic_terms
 from amilpy.steppers.odeint import OdeintStepper
 
 
@@ -38,9 +38,10 @@ def test_sharpened_nodes_are_exact_on_a_quintic():
     n = Nodes([t0, t1], [np.array([p(t0)]), np.array([p(t1)])],
               [np.array([dp(t0)]), np.array([dp(t1)])])
     cubic = n(0.7)[0]
-    gap = quintic_gap(t0, n.y[0], n.f[0], t1, n.y[1], n.f[1], t2, np.array([p(t2)]),
-                      np.array([dp(t2)]), 0.7)
-    n.sharpen(t2, np.array([p(t2)]), np.array([dp(t2)]))
+    terms = quintic_terms(t0, n.y[0], n.f[0], t1, n.y[1], n.f[1], t2, np.array([p(t2)]),
+                          np.array([dp(t2)]))
+    gap = quintic_gap(terms, 0.7)
+    n.sharpen(terms)
     for t in (0.3, 0.6, 0.9, 1.1):
         assert n(t)[0] == pytest.approx(p(t), abs=1e-13)
     assert gap[0] == pytest.approx(abs(p(0.7) - cubic), rel=1e-9)

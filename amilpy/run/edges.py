@@ -29,33 +29,36 @@ _XTOL = 4 * np.finfo(float).eps
 
 
 def locate_crossings(watch: SurfaceWatch, stepper, hits: list[int], m, z, ta: float,
-                     tb: float, segment_start: float) -> tuple[dict[int, float], set[int]]:
+                     tb: float, segment_start: float, ends=None
+                     ) -> tuple[dict[int, float], set[int]]:
     """The root in [ta, tb] of every crossed surface in `hits` (by watched position),
-    and those with nothing to bracket (they take their sign at tb)."""
+    and those with nothing to bracket (they take their sign at tb). `ends`: the
+    watched surfaces at ta and at tb, when the caller has them."""
     refines = hasattr(stepper, "refine")
     coarse = refines and not stepper.sharpen()
     interp = stepper.interpolant()
     roots, departed = _roots(watch, hits, m, z, interp, ta, tb, segment_start,
-                             COARSE * (tb - ta) if coarse else None)
+                             COARSE * (tb - ta) if coarse else None, ends)
     if not coarse or not roots:
         return roots, departed
     first = min(roots.values())
     interp = stepper.refine(first)
     hi = first + 2 * stepper.WINDOW * (tb - ta)
     better, _ = _roots(watch, [k for k, tk in roots.items() if tk <= hi], m, z, interp,
-                       ta, tb, segment_start, None)
+                       ta, tb, segment_start, None, ends)
     roots.update(better)
     return roots, departed
 
 
 def _roots(watch: SurfaceWatch, hits: list[int], m, z, interp, ta: float, tb: float,
-           segment_start: float, xtol: float | None) -> tuple[dict[int, float], set[int]]:
+           segment_start: float, xtol: float | None, ends
+           ) -> tuple[dict[int, float], set[int]]:
     roots: dict[int, float] = {}
     departed: set[int] = set()
     # linear surfaces first: their roots are cheap, and a nonlinear surface that
     # crosses with one of them (ABS(Y) - DH with Y - DH) is tried there first
     for k in sorted(hits, key=lambda k: watch.watched[k].gradient is None):
-        tk = _linear_root(watch, k, m, z, interp, ta, tb, xtol)
+        tk = _linear_root(watch, k, m, z, interp, ta, tb, xtol, ends)
         if tk is None:
             tk = _shared_root(watch, k, m, z, interp, roots.values(), ta, tb)
         if tk is None:
@@ -86,16 +89,18 @@ def _shared_root(watch: SurfaceWatch, k: int, m, z, interp, known, ta: float,
 
 
 def _linear_root(watch: SurfaceWatch, k: int, m, z, interp, ta: float, tb: float,
-                 xtol: float | None) -> float | None:
+                 xtol: float | None, ends) -> float | None:
     """The root of a surface linear in the states, on the projected dense output; None
     when this way does not apply (no gradient, no sign change, the check fails)."""
     g = watch.watched[k].gradient
-    if g is None or not hasattr(interp, "along"):
+    if g is None or not hasattr(interp, "along") or interp.t[0] != ta or interp.t[-1] != tb:
         return None
     surf = watch.c.surf
-    ya = interp.y[0] if interp.t[0] == ta else interp(ta)
-    yb = interp.y[-1] if interp.t[-1] == tb else interp(tb)
-    ea, eb = surf(ta, ya.tolist(), m, z)[k], surf(tb, yb.tolist(), m, z)[k]
+    ya, yb = interp.y[0], interp.y[-1]
+    if ends is not None:
+        ea, eb = ends[0][k], ends[1][k]
+    else:
+        ea, eb = surf(ta, ya.tolist(), m, z)[k], surf(tb, yb.tolist(), m, z)[k]
     if ea == 0.0 or eb == 0.0 or sign(ea) == sign(eb):
         return None
     # the part of the surface that is not g.y, linear across the step

@@ -313,7 +313,7 @@ class Integrator:
         if hits or slide_exit:
             # departed: no crossing to bracket, sign at tb
             roots, step.departed = locate_crossings(watch, stepper, hits, m, z, ta, tb,
-                                                    seg_start)
+                                                    seg_start, (e_prev, e_b))
             interp = stepper.interpolant()
             for k, side in slide_exit:
                 roots[k] = watch.locate_slide_exit(k, side, m, z, interp, ta, tb)

@@ -57,11 +57,10 @@ class Nodes:
             y = y + (u * u * (t - t1) ** 2) * (a + b * u)
         return y
 
-    def sharpen(self, t2: float, y2: np.ndarray, f2: np.ndarray) -> None:
-        """Make the single piece the quintic through a third instant (values and
-        derivatives) too."""
-        self.correction = quintic_terms(self.t[0], self.y[0], self.f[0], self.t[1], self.y[1],
-                                        self.f[1], t2, y2, f2)
+    def sharpen(self, terms) -> None:
+        """Make the single piece the quintic through a third instant: `terms` from
+        `quintic_terms` on this piece's ends."""
+        self.correction = terms
 
     def along(self, g: np.ndarray):
         """The dense output projected on g (g . y(t)), as a function of t on floats:
@@ -120,11 +119,10 @@ def quintic_terms(t0: float, y0, f0, t1: float, y1, f1, t2: float, y2, f2):
     return t0, t1, a, b
 
 
-def quintic_gap(t0: float, y0, f0, t1: float, y1, f1, t2: float, y2, f2,
-                at: float) -> np.ndarray:
-    """|Q(at) - C(at)| (see `quintic_terms`): an estimate of the cubic's error in
+def quintic_gap(terms, at: float) -> np.ndarray:
+    """|Q(at) - C(at)| for `quintic_terms`: an estimate of the cubic's error in
     [t0, t1] (Q is two orders better), per state."""
-    _, _, a, b = quintic_terms(t0, y0, f0, t1, y1, f1, t2, y2, f2)
+    t0, t1, a, b = terms
     u = at - t0
     with np.errstate(all="ignore"):
         gap = np.abs(u * u * (at - t1) ** 2 * (a + b * u))

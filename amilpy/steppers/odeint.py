@@ -10,7 +10,7 @@ import numpy as np
 
 from ..outcome import Failure
 from .base import Chunked, Rhs, StepFailure
-from .dense import Nodes, quintic_gap
+from .dense import Nodes, quintic_gap, quintic_terms
 from .ivp import ScipyStepper, solver_tolerance
 
 MXSTEP = 1_000_000  # odeint's steps per output interval when no limit is nearer
@@ -220,15 +220,13 @@ class OdeintStepper(Chunked):
             third = self._before
         if third is None:
             return False
-        f2 = self._deriv(*third)
-        mid = 0.5 * (self.t_old + self.t)
-        gap = quintic_gap(self.t_old, self.y_old, dense.f[0], self.t, self.y, dense.f[1],
-                          third[0], third[1], f2, mid)
-        scale = np.asarray(self.rtol) * np.abs(0.5 * (self.y_old + self.y)) + \
-            np.asarray(self.atol)
-        if not np.all(gap <= self.SHARP * scale):
+        terms = quintic_terms(self.t_old, self.y_old, dense.f[0], self.t, self.y, dense.f[1],
+                              third[0], third[1], self._deriv(*third))
+        gap = quintic_gap(terms, 0.5 * (self.t_old + self.t))
+        scale = self.rtol * np.abs(0.5 * (self.y_old + self.y)) + self.atol
+        if not (gap <= self.SHARP * scale).all():
             return False
-        dense.sharpen(third[0], third[1], f2)
+        dense.sharpen(terms)
         return True
 
     def refine(self, t: float):
