@@ -116,7 +116,8 @@ class Model:
                 raise AmilError(f"{label} must be positive, got {tol}")
         if outputs is not None:
             outputs = [o.upper() for o in outputs]
-            unknown = [o for o in outputs if o not in self.ir.variables]
+            known = set(self.ir.variables)
+            unknown = [o for o in outputs if o not in known]
             if unknown:
                 raise AmilError(f"{unknown[0]} is not a variable of the model")
         opts = Options(method=method, rtol=rtol, atol=atol, events=events, outputs=outputs,

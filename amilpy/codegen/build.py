@@ -71,6 +71,7 @@ class Compiled:
     module: py.Module | None = field(default=None, repr=False)  # the scalar functions' tree
     namespace: dict = field(default_factory=dict, repr=False)
     checking: dict = field(default_factory=dict, repr=False)  # built on the first fault
+    derived: dict = field(default_factory=dict, repr=False)  # built on first use (jacobian)
 
     def fault_line(self, exc: BaseException) -> int | None:
         """The listing line of the generated statement that raised `exc`."""

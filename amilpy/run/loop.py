@@ -20,9 +20,12 @@ import numpy as np
 
 from .. import ir
 from ..codegen import Compiled
+from ..codegen.jacobian import for_compiled as jacobian_for
+from ..codegen.rolled import for_compiled as rolled_rhs
 from ..outcome import Failure
 from ..result import Event
 from ..steppers import Chunked, Hermite, StepFailure, Stepper, first_bad, make_stepper
+from ..steppers.jacobian import SegmentJacobian
 from .edges import locate_crossings
 from .faults import Fault, fault_text
 from .plan import SLIDE, Options, Purpose, RunPlan, SurfaceKind, time_breakpoints
@@ -152,6 +155,7 @@ class Integrator:
         m, z, faults, n = cur.m, cur.z, self.faults, len(cur.y)
         deadline, calls = self.deadline, [0]
         rhs, sliding, field = self.c.rhs, SLIDE in m, self.watch.field
+        rolled = rolled_rhs(self.c)  # a large model's repeated equations on arrays
 
         def f(t, y):
             if deadline is not None:
@@ -160,7 +164,8 @@ class Integrator:
                     raise Stop(Failure.TIME_LIMIT, t, limit=self.opts.max_time)
             try:
                 # no surface slides: the compiled derivatives themselves (the hot path)
-                return field(t, y, m, z) if sliding else rhs(t, y.tolist(), m, z)
+                return field(t, y, m, z) if sliding else rolled(t, y, m, z) if rolled \
+                    else rhs(t, y.tolist(), m, z)
             except (ArithmeticError, ValueError) as exc:
                 try:
                     on = self.watch.at_zero(t, y, m, z)
@@ -204,8 +209,17 @@ class Integrator:
             plan.route.name, f, cur.t, cur.y, seg_end, rtol=plan.tol.rtol, atol=plan.tol.atol,
             delt=plan.timer["DELT"], max_step=plan.max_step, first_step=self._last_step,
             checks=checks, chunk=chunk, max_steps=self.opts.max_steps - self.nsteps,
-            expect=self._expected_event(cur.t))
+            expect=self._expected_event(cur.t), jac=self._jacobian(cur, f))
         return stepper, f
+
+    def _jacobian(self, cur: Cursor, f) -> SegmentJacobian | None:
+        """The segment's Jacobian from the model's equations, for the routes that use
+        one (built the first time a stepper asks for it); none while surfaces slide."""
+        route = self.plan.route
+        if route.fixed or route.explicit or SLIDE in cur.m or not len(cur.y):
+            return None
+        c = self.c
+        return SegmentJacobian(len(cur.y), lambda: jacobian_for(c), cur.m, cur.z, f)
 
     def _expected_event(self, t: float) -> float | None:
         """How long after t the next event may come, when the recent events keep a

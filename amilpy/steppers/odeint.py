@@ -12,6 +12,7 @@ from ..outcome import Failure
 from .base import Chunked, Rhs, StepFailure
 from .dense import Nodes, quintic_gap, quintic_terms
 from .ivp import ScipyStepper, solver_tolerance
+from .jacobian import DENSE_UP_TO, Banded, SegmentJacobian
 
 MXSTEP = 1_000_000  # odeint's steps per output interval when no limit is nearer
 UNLIMITED = 2**62
@@ -42,8 +43,11 @@ class OdeintStepper(Chunked):
     def __init__(self, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float, checks, *,
                  rtol: np.ndarray | float, atol: np.ndarray | float, max_step: float,
                  first_step: float | None, chunk: int = 16,
-                 max_steps: int = UNLIMITED, expect: float | None = None) -> None:
+                 max_steps: int = UNLIMITED, expect: float | None = None,
+                 jac: SegmentJacobian | None = None) -> None:
         self.fun = fun
+        self.jac = jac
+        self._banded: Banded | None = None
         self.t = self.t_old = t0
         self.y = np.asarray(y0, dtype=float)
         self.y_old = self.y
@@ -88,26 +92,45 @@ class OdeintStepper(Chunked):
             n = min(n, max(1, int(left / per_instant)))
         return n
 
-    def _fill(self) -> None:
+    def _odeint(self, y0: np.ndarray, grid, **options):
+        """odeint from y0 through grid, with the model's Jacobian when there is one
+        (dense for a small model, else banded in a renumbering that narrows the band);
+        the rows come back in the states' own order."""
         from scipy.integrate import odeint
 
+        fun = self.fun
+        if self.jac is not None:
+            if len(y0) <= DENSE_UP_TO:
+                options["Dfun"] = self.jac.dense
+            else:
+                if self._banded is None:
+                    self._banded = self.jac.banded()
+                b = self._banded
+                fun, y0 = b.wrap(fun), b.to_new(y0)
+                options.update(Dfun=b.dfun, ml=b.ml, mu=b.mu)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # a failure is handled by the caller
+            ys, info = odeint(fun, y0, grid, rtol=self.rtol, atol=self.atol, tfirst=True,
+                              full_output=True, **options)
+        if self._banded is not None:
+            ys = self._banded.to_old(ys)
+        return ys, info
+
+    def _fill(self) -> None:
         left = self.max_steps - self._steps
         if left <= 0:
             self._failure = StepFailure(Failure.STEPS, self.t)
             return
         ts = self.checks[self.next_check:self.next_check + self._chunk_size(left)]
         grid = np.concatenate(([self.t], ts))
-        options = {"rtol": self.rtol, "atol": self.atol, "tfirst": True, "full_output": True,
-                   "mxstep": min(MXSTEP, left)}
+        options = {"mxstep": min(MXSTEP, left)}
         if math.isfinite(self.max_step):
             options["hmax"] = self.max_step
         if self.first_step:
             options["h0"] = min(self.first_step, ts[0] - self.t)
         if ts[-1] >= self.t_bound:
             options["tcrit"] = np.array([self.t_bound])
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # a failure is handled below, not printed
-            ys, info = odeint(self.fun, self.y, grid, **options)
+        ys, info = self._odeint(self.y, grid, **options)
         if info["message"] != "Integration successful.":
             self._keep_passed(ts, ys, info, left)
             return
@@ -143,7 +166,7 @@ class OdeintStepper(Chunked):
         t_last, y_last = (ts[good - 1], ys[good]) if good else (self.t, self.y)
         self.fallback = ScipyStepper("LSODA", self.fun, float(t_last), y_last, self.t_bound,
                                      rtol=self.rtol, atol=self.atol, max_step=self.max_step,
-                                     first_step=None)
+                                     first_step=None, jac=self.jac)
 
     def pending(self) -> tuple[np.ndarray, np.ndarray]:
         """The integrated check instants the loop has not taken yet (integrating the
@@ -232,17 +255,12 @@ class OdeintStepper(Chunked):
     def refine(self, t: float):
         """Integrate from the interval's start to both ends of a narrow window around
         t (one odeint call) and make them nodes of the dense output; returns it."""
-        from scipy.integrate import odeint
-
         dense = self.interpolant()
         h = self.t - self.t_old
         lo, hi = max(self.t_old, t - self.WINDOW * h), min(self.t, t + self.WINDOW * h)
         grid = [self.t_old] + [x for x in (lo, hi) if self.t_old < x < self.t]
         if len(grid) > 1:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                ys, info = odeint(self.fun, self.y_old, grid, rtol=self.rtol, atol=self.atol,
-                                  tfirst=True, full_output=True, mxstep=MXSTEP)
+            ys, info = self._odeint(self.y_old, grid, mxstep=MXSTEP)
             self._nfev += int(info["nfe"][-1])
             if info["message"] == "Integration successful." and np.all(np.isfinite(ys)):
                 for x, yx in zip(grid[1:], ys[1:], strict=True):
