@@ -104,9 +104,17 @@ class Model:
             outputs: list[str] | None = None, max_steps: int | None = None,
             max_events: int | None = None, max_time: float | None = None,
             fintim: float | None = None, progress=None, advice: bool = True,
+            jobs: int = 1, scheduler: str | None = None, done=None,
             **params: float) -> list[Run]:
         """Run every run of the listing (value lists, END groups); data values
-        given as keywords override the listing's for all of them."""
+        given as keywords override the listing's for all of them.
+
+        `jobs`: worker processes for the runs, which are independent (the command
+        line uses every core); `scheduler`: the address of a Dask scheduler to run
+        them on instead (`amilpy[cluster]`). Either way the runs come back in their
+        order, the same as run one after the other, and a run whose data cannot be
+        evaluated comes back FAILED with its message (it does not stop the others).
+        `done(i, n)`: called as run i of n finishes."""
         from .run import Options, simulate
 
         if method is not None and route_for(method) is None:
@@ -128,8 +136,10 @@ class Model:
             opts.max_events = max_events
         runs = []
         advised = False
-        for spec in self._specs(params):
-            run = simulate(self.ir, spec, opts, self.cache)
+        specs = self._specs(params)
+        farmed = self._farm(specs, opts, jobs, scheduler, done)
+        for k, spec in enumerate(specs):
+            run = farmed[k] if farmed else simulate(self.ir, spec, opts, self.cache)
             if advice and not advised:
                 from .advice import stiffness_advice
 
@@ -138,14 +148,32 @@ class Model:
             runs.append(run)
             if run.message.startswith("interrupted"):
                 break  # Ctrl-C: keep what was computed, start nothing new
+            if done is not None and not farmed:
+                done(k, len(specs))
         return runs
+
+    def _farm(self, specs: list[ir.RunSpec], opts, jobs: int, scheduler: str | None,
+              done) -> list[Run] | None:
+        """The runs, farmed out (see `amilpy.farm`); None to run them here, one by one."""
+        if not scheduler and (jobs <= 1 or len(specs) <= 1):
+            return None
+        from .farm import failed_run, run_tasks
+        from .run.plan import resolve_route
+
+        outcomes = run_tasks(self.ir, specs, opts, jobs, scheduler, cache=self.cache,
+                             done=None if done is None else lambda i, _: done(i, len(specs)))
+        return [o.run if o.run is not None else failed_run(
+            spec, resolve_route(spec, opts)[1],
+            "interrupted before it finished" if o.interrupted else o.error or "not run")
+            for o, spec in zip(outcomes, specs, strict=True)]
 
     def sweep(self, name: str, values, *, both_ways: bool = False, carry_state: bool = False,
               settle: float = 0.0, measure: str | None = None, method: str | None = None,
               rtol: float | None = None, atol: float | None = None,
               fintim: float | None = None, keep_runs: bool = False, progress=None,
-              **params: float):
-        """One run per value of data value `name` (see `amilpy.sweep.sweep`)."""
+              jobs: int = 1, scheduler: str | None = None, **params: float):
+        """One run per value of data value `name` (see `amilpy.sweep.sweep`; `jobs`,
+        `scheduler` as for `run`, for a sweep that does not carry its state)."""
         from .sweep import sweep
 
         if method is not None and route_for(method) is None:
@@ -153,6 +181,7 @@ class Model:
         return sweep(self, name, [float(v) for v in values], both_ways=both_ways,
                      carry_state=carry_state, settle=settle, measure=measure, method=method,
                      rtol=rtol, atol=atol, fintim=fintim, keep_runs=keep_runs,
+                     jobs=jobs, scheduler=scheduler,
                      progress=progress, **params)
 
     def __repr__(self) -> str:
