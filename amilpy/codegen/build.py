@@ -9,6 +9,7 @@ span, so a fault is located from the code's own line table (see `faults`).
 from __future__ import annotations
 
 import ast as py
+import copy
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from itertools import count
@@ -29,6 +30,7 @@ from .pytree import (
     local,
     namespace,
     on_line,
+    parameter,
     place,
     vectorised,
 )
@@ -72,6 +74,17 @@ class Compiled:
     namespace: dict = field(default_factory=dict, repr=False)
     checking: dict = field(default_factory=dict, repr=False)  # built on the first fault
     derived: dict = field(default_factory=dict, repr=False)  # built on first use (jacobian)
+    # code built from `module` on first use, for every binding of it (see `rebound`)
+    shared: dict = field(default_factory=dict, repr=False)
+    binder: object = field(default=None, repr=False)  # the Compiler, for `rebound`
+
+    def rebound(self, constants: dict[str, float]) -> Compiled:
+        """These functions for a run whose constants differ from these only in the
+        parameters' values (`Compiler.parameters`): the same code, executed again
+        with the new values; no compilation."""
+        if constants == self.constants or self.binder is None:
+            return self
+        return self.binder.bind(constants)
 
     def fault_line(self, exc: BaseException) -> int | None:
         """The listing line of the generated statement that raised `exc`."""
@@ -114,9 +127,13 @@ class Compiler:
 
     def __init__(self, model: ir.Model, constants: dict[str, float], tables,
                  const_modes: dict[int, float], outputs: list[str] | None = None,
-                 events: bool = True) -> None:
+                 events: bool = True, parameters: frozenset[str] = frozenset()) -> None:
         self.model = model
         self.constants = constants
+        # constants the code reads as names (PARAM, INCON and what INITIAL derives
+        # from them), so that other values need no new code (`bind`)
+        self.parameters = frozenset(n for n in parameters if n in constants)
+        self.shared: dict = {}
         self.tables = tables
         self.const_modes = const_modes
         self.outputs = outputs
@@ -139,7 +156,8 @@ class Compiler:
     def emitter(self, context: str, new_modes: bool = False) -> Emitter:
         names = self.mode_names_new if new_modes else self.mode_names
         return Emitter(self.model, self.constants, self.const_modes, context, names,
-                       self.global_tables, self.tables, self.unpacked_z, self.names)
+                       self.global_tables, self.tables, self.unpacked_z, self.names,
+                       self.parameters)
 
     def line(self, kind: str, target: str, span: Span | None, expr=None) -> int:
         """The generated line of one IR statement (the same in every function)."""
@@ -310,30 +328,41 @@ class Compiler:
         place(module)
         py.fix_missing_locations(module)
         assert_closed(module)
-        source = py.unparse(module)
-        code = compile(module, model.path or model.name, "exec")
+        self.source = py.unparse(module)
+        self.code = compile(module, model.path or model.name, "exec")
+        self.module, self.out_names = module, list(out_names)
+        return self.bind(self.constants)
+
+    def bind(self, constants: dict[str, float]) -> Compiled:
+        """The built code for one run's constants: executed with its parameters' values
+        (cheap: it defines the functions), and the values that depend on them."""
+        model = self.model
+        binder = copy.copy(self)
+        binder.constants = constants
+        values = {parameter(n): float(constants[n]) for n in self.parameters}
         scalar: dict[str, object] = {"__builtins__": {}, **namespace(), **self.global_tables,
-                                     STATEMENTS: self.statements}
-        exec(code, scalar)  # noqa: S102 - compiler-built tree, closed namespace
+                                     STATEMENTS: self.statements, **values}
+        exec(self.code, scalar)  # noqa: S102 - compiler-built tree, closed namespace
         vector: dict[str, object] = {"__builtins__": {}, STATEMENTS: self.statements}
         vector.update({f"_{k}": v for k, v in vector_functions().items()})
         vector.update(self.global_tables)
-        exec(code, vector)  # noqa: S102 - the same code, elementwise functions
+        vector.update(values)
+        exec(self.code, vector)  # noqa: S102 - the same code, elementwise functions
         return Compiled(
             state_names=[s.name for s in model.states],
-            y0=[self.constant(s.ic, s.span) for s in model.states],
+            y0=[binder.constant(s.ic, s.span) for s in model.states],
             z0=[v for mem, func in zip(model.memories, self.entries, strict=True)
                 for text in func.memory.initial
-                for v in initial_slots(model, text, mem, self.constants, self.tables)],
-            out_names=list(out_names), constants=self.constants, rhs=scalar["rhs"],
+                for v in initial_slots(model, text, mem, constants, self.tables)],
+            out_names=list(self.out_names), constants=constants, rhs=scalar["rhs"],
             surf=scalar["surf"], out=scalar["out"], mem=scalar["mem"],
             watched=self.watched, const_modes=self.const_modes,
-            modes_literal=scalar["modes"], affine_time=self.affine(),
-            impulses=self.impulses(), source=source, tables=self.global_tables,
+            modes_literal=scalar["modes"], affine_time=binder.affine(),
+            impulses=binder.impulses(), source=self.source, tables=self.global_tables,
             surf_v=vector["surf_vec"], out_v=vector["out_vec"],
             memory_every_step=any(f.memory.every_step for f in self.entries),
             memory_times=self.memory_times(), statements=self.statements, model=model,
-            module=module, namespace=scalar,
+            module=self.module, namespace=scalar, shared=self.shared, binder=self,
         )
 
     def affine(self) -> set[int]:

@@ -24,7 +24,7 @@ from ..library import Func, Kind, lookup, runtime_name
 from ..runtime import safe_pow
 from ..syntax import Visitor
 from ..templates import ARGUMENTS, argument_uses, tree
-from .pytree import const_value, local, number
+from .pytree import const_value, local, number, parameter
 
 _PYOPS = {"+": py.Add, "-": py.Sub, "*": py.Mult, "/": py.Div}
 
@@ -36,9 +36,13 @@ class Emitter(Visitor):
 
     def __init__(self, model: ir.Model, constants: dict[str, float], const_modes,
                  context: str, mode_names: dict[int, str], tables: dict[str, tuple],
-                 source_tables: dict, unpacked_z: bool = True, names=None) -> None:
+                 source_tables: dict, unpacked_z: bool = True, names=None,
+                 parameters: frozenset[str] = frozenset()) -> None:
         self.model = model
         self.constants = constants
+        # constants read as names (p_NAME), not folded: a run with other values
+        # binds the same code to them (see `codegen.params`)
+        self.parameters = parameters
         self.const_modes = const_modes
         self.context = context
         self.mode_names = mode_names
@@ -104,6 +108,8 @@ class Emitter(Visitor):
     def visit_Name(self, e: syn.Name) -> py.expr:
         if e.name == "TIME" and "TIME" not in self.constants:  # TERMINAL knows TIME
             return py.Name("t", py.Load())
+        if e.name in self.parameters:
+            return py.Name(parameter(e.name), py.Load())
         if e.name in self.constants:
             return number(self.constants[e.name])
         return py.Name(local(e.name), py.Load())

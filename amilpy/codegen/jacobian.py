@@ -287,8 +287,26 @@ class ModelJacobian:
                           shape=(self.n, self.n))
 
 
-def build(module: py.Module, n: int, tables: dict | None = None) -> ModelJacobian:
-    """The Jacobian of the `rhs` function in a compiled module (`Compiled.module`)."""
+def build(module: py.Module, n: int, tables: dict | None = None,
+          values: dict | None = None) -> ModelJacobian:
+    """The Jacobian of the `rhs` function in a compiled module (`Compiled.module`);
+    `values`: the parameters' globals (p_NAME) it reads."""
+    return bind(code(module, n), tables, values)
+
+
+def bind(built: tuple, tables: dict | None = None, values: dict | None = None
+         ) -> ModelJacobian:
+    """The Jacobian's code (`code`) executed with one run's tables and parameters."""
+    compiled, n, rows, cols, constant, source = built
+    scope: dict[str, object] = {"__builtins__": {}, **namespace(), "_DIFF": _diff,
+                                "_SGN0": _sgn0, **(tables or {}), **(values or {})}
+    exec(compiled, scope)  # noqa: S102 - compiler-built tree, closed namespace
+    return ModelJacobian(n, rows, cols, constant, scope["jac"], source)
+
+
+def code(module: py.Module, n: int) -> tuple:
+    """The generated Jacobian of a module's `rhs`, compiled: (code, n, rows, cols,
+    constant entries, source)."""
     rhs = next(f for f in module.body if isinstance(f, py.FunctionDef) and f.name == "rhs")
     body = [_clone(s) for s in rhs.body]
     states: dict[str, int] = {}
@@ -342,18 +360,18 @@ def build(module: py.Module, n: int, tables: dict | None = None) -> ModelJacobia
     tree = py.Module(body=[fn], type_ignores=[])
     py.fix_missing_locations(tree)
     _closed(tree)
-    scope: dict[str, object] = {"__builtins__": {}, **namespace(), "_DIFF": _diff,
-                                "_SGN0": _sgn0, **(tables or {})}
-    exec(compile(tree, "<jacobian>", "exec"), scope)  # noqa: S102 - compiler-built tree
     rows = np.array([i for i, _, _ in entries], dtype=int)
     cols = np.array([j for _, j, _ in entries], dtype=int)
-    return ModelJacobian(n, rows, cols, constant, scope["jac"], py.unparse(tree))
+    return compile(tree, "<jacobian>", "exec"), n, rows, cols, constant, py.unparse(tree)
 
 
 def for_compiled(c) -> ModelJacobian:
     """The Jacobian of a run's compiled `rhs` (`codegen.Compiled`), built once."""
     if "jacobian" not in c.derived:
-        c.derived["jacobian"] = build(c.module, len(c.state_names), c.tables)
+        if "jacobian" not in c.shared:  # one code for every binding of the module
+            c.shared["jacobian"] = code(c.module, len(c.state_names))
+        values = {k: v for k, v in c.namespace.items() if k.startswith("p_")}
+        c.derived["jacobian"] = bind(c.shared["jacobian"], c.tables, values)
     return c.derived["jacobian"]
 
 

@@ -35,6 +35,11 @@ def local(name: str) -> str:
     return "v_" + name
 
 
+def parameter(name: str) -> str:
+    """The global a run's parameter is read from in generated code."""
+    return "p_" + name
+
+
 def number(v: float) -> py.expr:
     """A float constant (NaN and infinities through _FLOAT, -0.0 kept)."""
     if v != v:
@@ -193,7 +198,7 @@ def assert_closed(module: py.Module, also: Callable[[str], bool] | None = None) 
         if isinstance(node, (py.Attribute, py.Import, py.ImportFrom, py.Global, py.Lambda)):
             raise AssertionError(f"generated code contains {type(node).__name__}")
         if isinstance(node, py.Name) and isinstance(node.ctx, py.Load):
-            ok = (node.id in allowed or node.id.startswith(("v_", "h_", "_T_"))
+            ok = (node.id in allowed or node.id.startswith(("v_", "h_", "_T_", "p_"))
                   or (node.id[0] in "mnzw" and node.id[1:].isdigit())
                   or (also is not None and also(node.id)))
             if not ok:

@@ -22,6 +22,7 @@ from __future__ import annotations
 import ast as py
 from collections.abc import Callable
 from dataclasses import dataclass
+from types import FunctionType
 
 import numpy as np
 
@@ -193,7 +194,13 @@ def for_compiled(c) -> Callable | None:
     guarded (see the module docstring), built once; None for a model it does not pay
     for."""
     if "rolled" not in c.derived:
-        fn = build(c.module, len(c.state_names)) if c.module is not None else None
+        if "rolled" not in c.shared:  # one code for every binding of the module
+            c.shared["rolled"] = build(c.module, len(c.state_names)) \
+                if c.module is not None else None
+        fn = c.shared["rolled"]
+        if fn is not None:  # its own globals, with this run's parameters
+            values = {k: v for k, v in c.namespace.items() if k.startswith("p_")}
+            fn = FunctionType(fn.__code__, {**fn.__globals__, **values})
         c.derived["rolled"] = None if fn is None else _guarded(fn, c.rhs)
     return c.derived["rolled"]
 
