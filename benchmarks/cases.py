@@ -38,21 +38,7 @@ if ROOT not in sys.path:
 
 ATOL_SCALE = 1e-12  # floor of the per-state scale in the error metric
 
-
-@dataclass
-class Hybrid:
-    """A hand-written model with its switches on states as events.
-
-    `field(mode, segment)`: f(t, y) on floats in that branch and TIME segment;
-    `events(mode)`: [(g(t, y), direction)] that end the branch; `jump(mode, k, t, y)`:
-    the branch and state after event k (mode None: the run stops there);
-    `at_segment(mode, segment, y)`: the branch entering a new TIME segment."""
-
-    mode0: object
-    field: Callable[[object, int], Callable]
-    events: Callable[[object], list[tuple[Callable, float]]]
-    jump: Callable[[object, int, float, list], tuple[object, list]]
-    at_segment: Callable[[object, int, list], object] | None = None
+from hybrids import Hybrid, crank_hybrid, ex4_hybrid, hoist_hybrid  # noqa: E402
 
 
 @dataclass
@@ -240,88 +226,6 @@ def _ex4_meter_segments():
     return [(2.5, f)]
 
 
-def _ex4_hybrid(kind: str) -> Callable[[], Hybrid]:
-    """Stiction as a hand-written user would write it: slip +, slip - and stick, each
-    its own function; W1 = 0 ends a slip, |MNET| = MF ends a stick."""
-
-    def make() -> Hybrid:
-        from tests.references import ex4
-
-        U, R, L, KT, KE, MF = ex4.U, ex4.R, ex4.L, ex4.KT, ex4.KE, ex4.MF
-        J1, JOBC, MOBC, C, B = ex4.J_ROTOR, ex4.J_OBC, ex4.M_OBC, ex4.C_COUPLING, \
-            ex4.B_COUPLING
-        J2, CT, BT = ex4.J_METER_HALF, ex4.C_METER, ex4.B_METER
-        STICK = ex4.STICK
-
-        if kind == "meter":
-            def make_f(mode, seg):
-                mfr = mode * MF
-                moving = 1.0 if mode != STICK else 0.0
-
-                def f(t, y):
-                    ia, th12, th23, th34, w1, w2, w3, w4 = y
-                    m12 = C * th12 + B * (w1 - w2)
-                    m23 = CT * th23 + BT * (w2 - w3)
-                    m34 = C * th34 + B * (w3 - w4)
-                    return [(U - R * ia - KE * w1) / L, w1 - w2, w2 - w3, w3 - w4,
-                            moving * (KT * ia - m12 - mfr) / J1, (m12 - m23) / J2,
-                            (m23 - m34) / J2, (m34 - MOBC) / JOBC]
-                return f
-
-            def mnet(y):
-                return KT * y[0] - (C * y[1] + B * (y[4] - y[5]))
-            w1_index = 4
-        else:
-            def make_f(mode, seg):
-                mfr = mode * MF
-                moving = 1.0 if mode != STICK else 0.0
-                sw = 0.0 if kind == "clutch" and seg == 0 else 1.0
-
-                def f(t, y):
-                    ia, th, w1, w2 = y
-                    mc = sw * (C * th + B * (w1 - w2))
-                    return [(U - R * ia - KE * w1) / L, sw * (w1 - w2),
-                            moving * (KT * ia - mc - mfr) / J1, sw * (mc - MOBC) / JOBC]
-                return f
-
-            def mnet(y, sw=1.0):
-                return KT * y[0] - sw * (C * y[1] + B * (y[2] - y[3]))
-            w1_index = 2
-        segment = {"k": 0}
-
-        def field(mode, seg):
-            segment["k"] = seg
-            return make_f(mode, seg)
-
-        def net(y):
-            if kind == "clutch" and segment["k"] == 0:
-                return KT * y[0]
-            return mnet(y)
-
-        def events(mode):
-            if mode == STICK:
-                return [(lambda t, y: net(y) - MF, 1.0), (lambda t, y: net(y) + MF, -1.0)]
-            return [(lambda t, y: y[w1_index], -float(mode))]
-
-        def jump(mode, k, t, y):
-            if mode == STICK:
-                return (1 if k == 0 else -1), y
-            y = list(y)
-            y[w1_index] = 0.0
-            m = net(y)
-            return (STICK if abs(m) <= MF else (1 if m > 0 else -1)), y
-
-        def at_segment(mode, seg, y):
-            segment["k"] = seg
-            if mode == STICK and abs(net(y)) > MF:
-                return 1 if net(y) > 0 else -1
-            return mode
-
-        return Hybrid(STICK, field, events, jump, at_segment)
-
-    return make
-
-
 def _ex4_names(chain) -> list[str]:
     n = chain.n
     return ["IA"] + [f"W{k + 1}" for k in range(n)] + [f"TH{k + 1}" for k in range(n - 1)]
@@ -381,49 +285,6 @@ def _hoist_segments():
     return [(5.0, f)]
 
 
-def _hoist_hybrid() -> Hybrid:
-    """Backlash as a hand-written user would write it: gap, contact + and contact -,
-    each its own function; |Y| = DELTA/2 ends a branch."""
-    from tests.references import hoist
-
-    h = hoist.Hoist()
-    i1, i2, i3, c1, c2 = h.i1, h.i2, h.i3, h.c1, h.c2
-    d1, d2, e = h.beta * h.c1, h.beta * h.c2, h.half_gap
-    mn, m0, w = h.mn, h.m0, 70.0
-    sin = math.sin
-
-    def field(mode, seg):
-        if mode == 0:
-            def f(t, s):
-                x1, y, v1, v2, v3, ph = s
-                m1 = c1 * x1 + d1 * (v1 - v2)
-                return [v1 - v2, v2 - v3, (mn - m1) / i1, (m1 + m0 * sin(ph)) / i2, -mn / i3, w]
-            return f
-        off = mode * e
-
-        def f(t, s):
-            x1, y, v1, v2, v3, ph = s
-            yd = v2 - v3
-            t2 = c2 * (y - off) + d2 * yd
-            m1 = c1 * x1 + d1 * (v1 - v2)
-            return [v1 - v2, yd, (mn - m1) / i1, (m1 - t2 + m0 * sin(ph)) / i2, (t2 - mn) / i3,
-                    w]
-        return f
-
-    def events(mode):
-        if mode == 0:
-            return [(lambda t, s: s[1] - e, 1.0), (lambda t, s: s[1] + e, -1.0)]
-        return [(lambda t, s, off=mode * e: s[1] - off, -float(mode))]
-
-    def jump(mode, k, t, s):
-        s = list(s)
-        new = (1 if k == 0 else -1) if mode == 0 else 0
-        s[1] = (new if new else mode) * e
-        return new, s
-
-    return Hybrid(0, field, events, jump)
-
-
 def _hoist_reference(grid):
     """Exact between contact edges (exact.py)."""
     import exact
@@ -450,14 +311,6 @@ def _crank_segments():
 
     # without events a user integrates to FINTIM and keeps the rows before W = 10
     return [(3.0, crank_slider.rhs)]  # already a plain float function
-
-
-def _crank_hybrid() -> Hybrid:
-    """FINISH W = 10 as a terminal event."""
-    from tests.references import crank_slider
-
-    return Hybrid(0, lambda mode, seg: crank_slider.rhs, lambda mode: [
-        (lambda t, s: s[1] - 10.0, 1.0)], lambda mode, k, t, s: (None, s))
 
 
 _SMOOTH: dict[str, object] = {}
@@ -659,25 +512,25 @@ def all_cases() -> dict[str, Case]:
              [0.0] * 4, _ex4_elastic_segments,
              _ex4_reference("elastic_chain", 0.5, {"TH1": "TH"}), 5e-5, 0.5, True,
              check=_ex4_check("elastic_chain", 0.5, {"TH1": "TH"}),
-             hybrid=_ex4_hybrid("elastic"), **ex4_ref),
+             hybrid=ex4_hybrid("elastic"), **ex4_ref),
         Case("ex4_clutch", True, _read("ex4_clutch"), ["IA", "TH", "W1", "W2"],
              [0.0] * 4, _ex4_clutch_segments,
              _ex4_reference("clutch_chain", 0.5, {"TH1": "TH"}), 5e-5, 0.5, True,
              check=_ex4_check("clutch_chain", 0.5, {"TH1": "TH"}),
-             hybrid=_ex4_hybrid("clutch"), **ex4_ref),
+             hybrid=ex4_hybrid("clutch"), **ex4_ref),
         Case("ex4_torque_meter", True, _read("ex4_torque_meter"),
              ["IA", "TH12", "TH23", "TH34", "W1", "W2", "W3", "W4"], [0.0] * 8,
              _ex4_meter_segments, _ex4_reference("meter_chain", 2.5, meter), 2.5e-4, 2.5, True,
-             check=_ex4_check("meter_chain", 2.5, meter), hybrid=_ex4_hybrid("meter"),
+             check=_ex4_check("meter_chain", 2.5, meter), hybrid=ex4_hybrid("meter"),
              **ex4_ref),
         Case("hoist_backlash", True, _read("hoist_backlash"),
              ["X1", "Y", "V1", "V2", "V3", "PH"], [0.0] * 6, _hoist_segments,
-             _hoist_reference, 1e-3, 5.0, True, check=_hoist_check, hybrid=_hoist_hybrid,
+             _hoist_reference, 1e-3, 5.0, True, check=_hoist_check, hybrid=hoist_hybrid,
              **ex4_ref),
         Case("crank_slider_startup", True, _read("crank_slider_startup"), ["PHI", "W"],
              [0.0, 0.0], _crank_segments, _crank_reference, 1e-3, 3.0, False,
              end_time=_crank_end, check=lambda g: _crank_reference(g, "Radau"),
-             hybrid=_crank_hybrid, **smooth),
+             hybrid=crank_hybrid, **smooth),
         Case("machine_unit", True, _read("machine_unit"), ["PHI", "W", "AW"], [0.0] * 3,
              _machine_segments, _machine_reference, 1e-3, 10.0, False,
              check=lambda g: _machine_reference(g, "Radau"), **smooth),

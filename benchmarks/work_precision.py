@@ -49,6 +49,7 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from cases import ROOT, Case, all_cases, error_on_grid, with_delt  # noqa: E402
+from hybrids import hybrid_solve  # noqa: E402
 
 AMILPY_METHODS = ["AUTO", "RKS", "DOP853", "LSODA", "RADAU", "BDF"]
 FIXED_METHODS = ["RK4", "EULER", "TRAPZ"]
@@ -96,10 +97,19 @@ PROBE_METHODS = ["RKS", "DOP853"]  # the explicit routes the advice probes after
 
 def probe_cost(case: Case, rtol: float = 1e-6, repeats: int = 3) -> list[dict]:
     """What the stiffness-advice probe adds after a run of an explicit method: the run
-    alone and the probe alone (`advice.stiffness_advice`), each the median of repeats."""
+    alone and the probe alone (`advice.stiffness_advice`, made to run whatever the
+    run's length), each the median of repeats; `advice` whether it would run at all
+    (the run took `advice.SLOW` seconds or more)."""
     import amilpy
-    from amilpy.advice import stiffness_advice
+    from amilpy import advice as advice_module
     from amilpy.run import Options
+
+    def stiffness_advice(*args):
+        slow, advice_module.SLOW = advice_module.SLOW, 0.0
+        try:
+            return advice_module.stiffness_advice(*args)
+        finally:
+            advice_module.SLOW = slow
 
     model = amilpy.loads(case.text, case.name)
     model.run()
@@ -114,7 +124,9 @@ def probe_cost(case: Case, rtol: float = 1e-6, repeats: int = 3) -> list[dict]:
             model.ir, spec, r, o, model.cache), repeats)
         out.append({"case": case.name, "method": method, "rtol": rtol, "run_s": run_s,
                     "probe_s": probe_s, "nfev": runs[0].stats.get("nfev"),
-                    "advice": note is not None})
+                    "advice": note is not None,
+                    "probed": runs[0].stats.get("seconds", 0.0) >= advice_module.SLOW and
+                    runs[0].stats.get("nfev", 0) >= advice_module.EXPENSIVE})
         print(f"  probe {case.name} {method}: run {run_s * 1e3:.3g} ms, probe "
               f"{probe_s * 1e3:.3g} ms", flush=True)
     return out
@@ -289,53 +301,6 @@ def hand_solve(case: Case, route: str, rtol: float, atol: float):
         nsteps
 
 
-def hybrid_solve(case: Case, method: str, rtol: float, atol: float):
-    """The hand-written branches with `solve_ivp`: every switch on a state a terminal
-    event, a restart in the new branch after it; TIME segments as in `hand_solve`."""
-    from scipy.integrate import solve_ivp
-
-    hy = case.hybrid()
-    grid = case.grid()
-    n = len(case.y0)
-    rows = np.empty((len(grid), n))
-    rows[0] = case.y0
-    filled, nfev = 1, 0
-    t, y, mode = 0.0, np.array(case.y0, dtype=float), hy.mode0
-    for seg, (t_seg, _) in enumerate(case.segments()):
-        if seg and hy.at_segment is not None and mode is not None:
-            mode = hy.at_segment(mode, seg, y.tolist())
-        while t < t_seg and mode is not None:
-            f = hy.field(mode, seg)
-            events = []
-            for g, direction in hy.events(mode):
-                def ev(tt, yy, g=g):
-                    return g(tt, yy)
-                ev.terminal, ev.direction = True, direction
-                events.append(ev)
-            hi = int(np.searchsorted(grid, t_seg + 1e-9 * case.outdel, side="right"))
-            want = grid[filled:hi]
-            on_grid = len(want)
-            if not on_grid or abs(want[-1] - t_seg) > 1e-12 * max(t_seg, 1.0):
-                want = np.append(want, t_seg)
-            sol = solve_ivp(lambda tt, yy, f=f: f(tt, yy.tolist()), (t, t_seg), y,
-                            method=method, t_eval=want, events=events, rtol=rtol, atol=atol)
-            if sol.status < 0:
-                raise RuntimeError(sol.message)
-            nfev += sol.nfev
-            k = min(len(sol.t), on_grid)
-            if k:  # (an event before the first instant asked for gives no rows)
-                rows[filled:filled + k] = sol.y.T[:k]
-            filled += k
-            if sol.status == 1:
-                j = next(i for i, te in enumerate(sol.t_events) if len(te))
-                t = float(sol.t_events[j][0])
-                mode, ylist = hy.jump(mode, j, t, sol.y_events[j][0].tolist())
-                y = np.array(ylist, dtype=float)
-            else:
-                t, y = t_seg, sol.y[:, -1].copy()
-    return grid[:filled], {n: rows[:filled, i] for i, n in enumerate(case.states)}, nfev, 0
-
-
 # --------------------------------------------------------------------------- analysis
 
 def front(rows: list[dict]) -> list[tuple[float, float]]:
@@ -474,10 +439,11 @@ def markdown(rows, summary, firsts, refs=(), probes=(), load: str = "") -> str:
                          f"{_g(ratio, '{:.1f}')} |")
     if probes:
         lines += ["", "## The stiffness-advice probe (not in the times above)", "",
-                  "| case | method | rtol | run [ms] | probe [ms] | probe / run | advice given |",
-                  "|---|---|---|---|---|---|---|"]
+                  "| case | method | rtol | run [ms] | probe [ms] | probe / run | "
+                  "probed after this run | advice |", "|---|---|---|---|---|---|---|---|"]
         lines += [f"| {p['case']} | {p['method']} | {p['rtol']:.0e} | {_g(p['run_s'] * 1e3)} "
                   f"| {_g(p['probe_s'] * 1e3)} | {p['probe_s'] / p['run_s']:.0%} | "
+                  f"{'yes' if p.get('probed') else 'no (quicker than 1 s)'} | "
                   f"{'yes' if p['advice'] else 'no'} |" for p in probes]
     lines += ["", "## amilpy first-run cost (listing defaults)", "",
               "| case | parse+check [ms] | first run [ms] | steady run [ms] |", "|---|---|---|---|"]

@@ -28,6 +28,17 @@ COARSE = 1e-7  # the first pass stops within this share of the step (before a wi
 _XTOL = 4 * np.finfo(float).eps
 
 
+def expected_event(recent: list[float], t: float) -> float | None:
+    """How long after t (a restart) the next event may come, when the recent restarts
+    keep a rhythm: events that alternate (contact, release) repeat their spacing
+    every other one, so the next gap is the one two back, if that one repeated too.
+    The AUTO route sizes its first chunk so (little integrated past the event)."""
+    if len(recent) < 5 or recent[-1] != t:
+        return None
+    gap, before = recent[-2] - recent[-3], recent[-4] - recent[-5]
+    return gap if abs(gap - before) <= 0.2 * gap else None
+
+
 def locate_crossings(watch: SurfaceWatch, stepper, hits: list[int], m, z, ta: float,
                      tb: float, segment_start: float, ends=None
                      ) -> tuple[dict[int, float], set[int]]:

@@ -26,7 +26,7 @@ from ..outcome import Failure
 from ..result import Event
 from ..steppers import Chunked, Hermite, StepFailure, Stepper, first_bad, make_stepper
 from ..steppers.jacobian import SegmentJacobian
-from .edges import locate_crossings
+from .edges import expected_event, locate_crossings
 from .faults import Fault, fault_text
 from .plan import SLIDE, Options, Purpose, RunPlan, SurfaceKind, time_breakpoints
 from .record import Recorder
@@ -209,7 +209,7 @@ class Integrator:
             plan.route.name, f, cur.t, cur.y, seg_end, rtol=plan.tol.rtol, atol=plan.tol.atol,
             delt=plan.timer["DELT"], max_step=plan.max_step, first_step=self._last_step,
             checks=checks, chunk=chunk, max_steps=self.opts.max_steps - self.nsteps,
-            expect=self._expected_event(cur.t), jac=self._jacobian(cur, f))
+            expect=expected_event(self._recent, cur.t), jac=self._jacobian(cur, f))
         return stepper, f
 
     def _jacobian(self, cur: Cursor, f) -> SegmentJacobian | None:
@@ -220,16 +220,6 @@ class Integrator:
             return None
         c = self.c
         return SegmentJacobian(len(cur.y), lambda: jacobian_for(c), cur.m, cur.z, f)
-
-    def _expected_event(self, t: float) -> float | None:
-        """How long after t the next event may come, when the recent events keep a
-        rhythm: events that alternate (contact, release) repeat their spacing every
-        other one, so the next gap is the one two back, if that one repeated too."""
-        recent = self._recent
-        if len(recent) < 5 or recent[-1] != t:
-            return None
-        gap, before = recent[-2] - recent[-3], recent[-4] - recent[-5]
-        return gap if abs(gap - before) <= 0.2 * gap else None
 
     def _segment(self, cur: Cursor, stepper: Stepper, f, seg_end: float, t_end: float,
                  rec: Recorder | None, observer: Observer | None, stop_at_event: bool) -> None:
