@@ -28,11 +28,12 @@ ZETA = [round(0.002 * (k + 1), 6) for k in range(10)]
 
 
 def main(jobs=None, scheduler: str | None = None, out_dir: str | None = None,
-         fintim: float | None = None) -> dict:
+         fintim: float | None = None, w=None, zeta=None) -> dict:
     import amilpy
     from amilpy.farm import default_jobs
     from amilpy.sweep import sweep
 
+    w, zeta = w or W, zeta or ZETA
     cores = default_jobs()
     jobs = jobs or sorted({1, 2, cores})
     model = amilpy.load(os.path.join(ROOT, "models", "hoist_backlash.amil"))
@@ -43,7 +44,7 @@ def main(jobs=None, scheduler: str | None = None, out_dir: str | None = None,
         settings.append((f"Dask at {scheduler}", 1, scheduler))
     for label, j, address in settings:
         t0 = time.perf_counter()
-        result = sweep(model, "W", W, measure="Y", grid=("ZETA", ZETA), jobs=j,
+        result = sweep(model, "W", w, measure="Y", grid=("ZETA", zeta), jobs=j,
                        scheduler=address, fintim=fintim)
         seconds = time.perf_counter() - t0
         if reference is None:
@@ -55,7 +56,7 @@ def main(jobs=None, scheduler: str | None = None, out_dir: str | None = None,
               flush=True)
     base = rows[0]["seconds"]
     load = f"{load} before, {' '.join(f'{x:.2f}' for x in os.getloadavg())} after"
-    lines = [f"{len(W) * len(ZETA)} hoist runs (W x ZETA grid, FINTIM "
+    lines = [f"{len(w) * len(zeta)} hoist runs (W x ZETA grid, FINTIM "
              f"{fintim or 5.0:g} s), {cores} core(s); machine load (`uptime`): {load}", "",
              "| workers | wall time [s] | speed-up | points equal to one process's |",
              "|---|---|---|---|"]

@@ -104,12 +104,14 @@ def probe_cost(case: Case, rtol: float = 1e-6, repeats: int = 3) -> list[dict]:
     from amilpy import advice as advice_module
     from amilpy.run import Options
 
+    threshold = getattr(advice_module, "SLOW", 0.0)  # (no such threshold before)
+
     def stiffness_advice(*args):
-        slow, advice_module.SLOW = advice_module.SLOW, 0.0
+        advice_module.SLOW = 0.0
         try:
             return advice_module.stiffness_advice(*args)
         finally:
-            advice_module.SLOW = slow
+            advice_module.SLOW = threshold
 
     model = amilpy.loads(case.text, case.name)
     model.run()
@@ -125,7 +127,7 @@ def probe_cost(case: Case, rtol: float = 1e-6, repeats: int = 3) -> list[dict]:
         out.append({"case": case.name, "method": method, "rtol": rtol, "run_s": run_s,
                     "probe_s": probe_s, "nfev": runs[0].stats.get("nfev"),
                     "advice": note is not None,
-                    "probed": runs[0].stats.get("seconds", 0.0) >= advice_module.SLOW and
+                    "probed": runs[0].stats.get("seconds", 0.0) >= threshold and
                     runs[0].stats.get("nfev", 0) >= advice_module.EXPENSIVE})
         print(f"  probe {case.name} {method}: run {run_s * 1e3:.3g} ms, probe "
               f"{probe_s * 1e3:.3g} ms", flush=True)

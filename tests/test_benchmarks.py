@@ -87,6 +87,26 @@ def test_exact_reference_agrees_with_dop853():
     assert agreement < 1e-10
 
 
+def test_scale_runs(tmp_path):
+    """The N-mass chain benchmark on a 5-mass chain, two routes each side."""
+    import scale
+
+    res = scale.main(sizes=(5,), tols=(1e-4,), repeats=1, out_dir=str(tmp_path))
+    assert res["front"][0]["statements"] == 14
+    assert all(r["error"] < 1e-2 for r in res["rows"])
+    assert (tmp_path / "scale.md").stat().st_size > 0
+
+
+def test_parallel_runs(tmp_path):
+    """The grid benchmark on 2 x 2 short hoist runs, one and two processes: the same
+    points."""
+    import parallel
+
+    res = parallel.main(jobs=[1, 2], out_dir=str(tmp_path), fintim=0.2, w=[66.0, 70.0],
+                        zeta=[0.005, 0.01])
+    assert all(r["same"] and not r["failed"] for r in res["rows"])
+
+
 def test_percall_runs(tmp_path):
     import percall
 
