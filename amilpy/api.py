@@ -113,6 +113,7 @@ class Model:
             max_events: int | None = None, max_time: float | None = None,
             fintim: float | None = None, progress=None, advice: bool = True,
             step_point: bool | None = None, seed: float | None = None,
+            jobs: int = 1, scheduler: str | None = None, done=None,
             **params: float) -> list[Run]:
         """Run every run of the listing (value lists, END groups); data values
         given as keywords override the listing's for all of them.
@@ -120,7 +121,14 @@ class Model:
         `step_point=True` runs a fixed-step method in step-point mode (the classic
         translators' loop: switches read at the step points, nothing located), False
         takes METHOD EULER/RECT out of it; None: the listing's choice. `seed` seeds
-        the random streams (GAUSS, UNIF, OU...) instead of the listing's RNSEED."""
+        the random streams (GAUSS, UNIF, OU...) instead of the listing's RNSEED.
+
+        `jobs`: worker processes for the runs, which are independent (the command
+        line uses every core); `scheduler`: the address of a Dask scheduler to run
+        them on instead (`amilpy[cluster]`). Either way the runs come back in their
+        order, the same as run one after the other, and a run whose data cannot be
+        evaluated comes back FAILED with its message (it does not stop the others).
+        `done(i, n)`: called as run i of n finishes."""
         from .run import Options, simulate
 
         _check_method(method)
@@ -129,7 +137,8 @@ class Model:
                 raise AmilError(f"{label} must be positive, got {tol}")
         if outputs is not None:
             outputs = [o.upper() for o in outputs]
-            unknown = [o for o in outputs if o not in self.ir.variables]
+            known = set(self.ir.variables)
+            unknown = [o for o in outputs if o not in known]
             if unknown:
                 raise AmilError(f"{unknown[0]} is not a variable of the model")
         opts = Options(method=method, rtol=rtol, atol=atol, events=events, outputs=outputs,
@@ -143,8 +152,9 @@ class Model:
         self._check_memory(specs, outputs, fintim)
         runs = []
         advised = False
-        for spec in specs:
-            run = simulate(self.ir, spec, opts, self.cache)
+        farmed = self._farm(specs, opts, jobs, scheduler, done)
+        for k, spec in enumerate(specs):
+            run = farmed[k] if farmed else simulate(self.ir, spec, opts, self.cache)
             if advice and not advised:
                 from .advice import stiffness_advice
 
@@ -153,6 +163,8 @@ class Model:
             runs.append(run)
             if run.message.startswith("interrupted"):
                 break  # Ctrl-C: keep what was computed, start nothing new
+            if done is not None and not farmed:
+                done(k, len(specs))
         return runs
 
     def _check_memory(self, specs: list[ir.RunSpec], outputs: list[str] | None,
@@ -173,20 +185,37 @@ class Model:
                 f"on every output row; limit {limit:.0e}, about {8 * limit / 1e9:.1f} GB): "
                 "raise OUTDEL/PRDEL, shorten FINTIM, or run fewer values at a time")
 
+    def _farm(self, specs: list[ir.RunSpec], opts, jobs: int, scheduler: str | None,
+              done) -> list[Run] | None:
+        """The runs, farmed out (see `amilpy.farm`); None to run them here, one by one."""
+        if not scheduler and (jobs <= 1 or len(specs) <= 1):
+            return None
+        from .farm import failed_run, run_tasks
+        from .run.plan import resolve_route
+
+        outcomes = run_tasks(self.ir, specs, opts, jobs, scheduler, cache=self.cache,
+                             done=None if done is None else lambda i, _: done(i, len(specs)))
+        return [o.run if o.run is not None else failed_run(
+            spec, resolve_route(spec, opts)[1],
+            "interrupted before it finished" if o.interrupted else o.error or "not run")
+            for o, spec in zip(outcomes, specs, strict=True)]
+
     def sweep(self, name: str, values, *, both_ways: bool = False, carry_state: bool = False,
               settle: float = 0.0, measure: str | None = None, method: str | None = None,
               rtol: float | None = None, atol: float | None = None,
               fintim: float | None = None, keep_runs: bool = False, progress=None,
               step_point: bool | None = None, seed: float | None = None,
-              **params: float):
-        """One run per value of data value `name` (see `amilpy.sweep.sweep`)."""
+              jobs: int = 1, scheduler: str | None = None, **params: float):
+        """One run per value of data value `name` (see `amilpy.sweep.sweep`; `jobs`,
+        `scheduler` as for `run`, for a sweep that does not carry its state)."""
         from .sweep import sweep
 
         _check_method(method)
         return sweep(self, name, [float(v) for v in values], both_ways=both_ways,
                      carry_state=carry_state, settle=settle, measure=measure, method=method,
                      rtol=rtol, atol=atol, fintim=fintim, keep_runs=keep_runs,
-                     progress=progress, step_point=step_point, seed=_seed(seed), **params)
+                     progress=progress, step_point=step_point, seed=_seed(seed),
+                     jobs=jobs, scheduler=scheduler, **params)
 
     def __repr__(self) -> str:
         return f"<amilpy.Model {self.name!r}: {len(self.ir.states)} states, " \

@@ -112,6 +112,21 @@ def _model_options(p: argparse.ArgumentParser, run_limits: bool = True) -> None:
                        help="event limit per run (default 200000)")
 
 
+def _farm_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--jobs", type=COUNT, metavar="N",
+                   help="worker processes for independent runs (value lists, END groups, "
+                        "sweep points; default: every core)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run the independent runs on this Dask scheduler "
+                        "(tcp://host:8786; pip install 'amilpy[cluster]')")
+
+
+def _jobs(args) -> int:
+    from .farm import default_jobs
+
+    return args.jobs or default_jobs()
+
+
 def _plot_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("plots")
     g.add_argument("--from", dest="t_from", type=FINITE, metavar="T1",
@@ -166,13 +181,15 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--quiet", action="store_true", help="no printout, only files and errors")
     run.add_argument("--no-advice", action="store_true",
                      help="do not probe for stiffness after an expensive explicit run")
+    _farm_options(run)
     _plot_options(run)
 
     sw = sub.add_parser("sweep", help="one run per value of a data value (amplitude-"
                                       "frequency characteristics)")
     sw.add_argument("file", metavar="FILE", help="the listing (.amil)")
-    sw.add_argument("range", metavar="NAME=START:STOP:STEP",
-                    help="the data value swept and its values, STOP included")
+    sw.add_argument("range", metavar="NAME=START:STOP:STEP", nargs="+",
+                    help="the data value swept and its values, STOP included; a second "
+                         "range makes a grid (every pair of values, one run each)")
     sw.add_argument("--both-ways", action="store_true", help="sweep up, then back down")
     sw.add_argument("--carry-state", action="store_true",
                     help="each run continues from the previous run's final state (the "
@@ -187,6 +204,7 @@ def _parser() -> argparse.ArgumentParser:
     _csv_dialect(sw)
     _model_options(sw, run_limits=False)
     sw.add_argument("--quiet", action="store_true", help="no table, only files and errors")
+    _farm_options(sw)
 
     rep = sub.add_parser("report", help="a lab-report document: listing, data, equations, "
                                         "printouts, events, plots")
@@ -309,7 +327,8 @@ def cmd_run(args, path: str, signals: Signals) -> int:
                          progress=progress, max_time=args.max_time, max_steps=args.max_steps,
                          max_events=args.max_events, fintim=args.fintim,
                          advice=not args.no_advice, step_point=args.step_point,
-                         seed=args.seed, **params)
+                         seed=args.seed, jobs=_jobs(args), scheduler=args.scheduler,
+                         **params)
     finally:
         progress.done()
     stem, out_dir = _stem_and_dir(path, args.out)
@@ -333,21 +352,31 @@ def cmd_run(args, path: str, signals: Signals) -> int:
 def cmd_sweep(args, path: str, signals: Signals) -> int:
     from .sweep import parse_range, sweep
 
-    try:
-        name, values = parse_range(args.range)
-    except AmilError as exc:
-        raise UsageError(f"the sweep range {args.range}: {exc}") from None
+    if len(args.range) > 2:
+        raise UsageError("give one range, or two for a grid (NAME=START:STOP:STEP each)")
+    ranges = []
+    for text in args.range:
+        try:
+            ranges.append(parse_range(text))
+        except AmilError as exc:
+            raise UsageError(f"the sweep range {text}: {exc}") from None
+    (name, values), grid = ranges[0], (ranges[1] if len(ranges) > 1 else None)
+    if grid and (args.carry_state or args.both_ways):
+        raise UsageError("a grid (two ranges) cannot --carry-state or sweep --both-ways: "
+                         "each point is a run of its own")
     model, params = _load(args, path)
-    if name not in model.ir.data_names:
-        hint = nearest(name, set(model.ir.data_names))
-        raise UsageError(f"{name} is not a PARAM/CONST/INCON value of this listing"
-                         + (f"; did you mean {hint}?" if hint else ""))
+    for swept in [name] + ([grid[0]] if grid else []):
+        if swept not in model.ir.data_names:
+            hint = nearest(swept, set(model.ir.data_names))
+            raise UsageError(f"{swept} is not a PARAM/CONST/INCON value of this listing"
+                             + (f"; did you mean {hint}?" if hint else ""))
     if args.measure and args.measure.upper() not in model.ir.variables:
         hint = nearest(args.measure, set(model.ir.variables))
         raise UsageError(f"--measure {args.measure}: not a variable of this listing"
                          + (f"; did you mean {hint}?" if hint else ""))
     progress = Progress(not args.quiet)
-    total = 2 * len(values) - 1 if args.both_ways else len(values)
+    total = 2 * len(values) - 1 if args.both_ways else \
+        len(values) * (len(grid[1]) if grid else 1)
 
     def point(i: int, n: int, value: float) -> None:
         progress.prefix = f"{name} point {min(i + 1, n)}/{n}  "
@@ -359,7 +388,9 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
                        carry_state=args.carry_state, settle=args.settle, measure=args.measure,
                        method=args.method, rtol=args.rtol, atol=args.atol, fintim=args.fintim,
                        keep_runs=False, progress=point, run_progress=progress,
-                       step_point=args.step_point, seed=args.seed, **params)
+                       step_point=args.step_point, seed=args.seed,
+                       jobs=1 if args.carry_state else _jobs(args), scheduler=args.scheduler,
+                       grid=grid, **params)
     finally:
         progress.done()
     stem, out_dir = _stem_and_dir(path, args.out)
@@ -372,9 +403,14 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
         write_out(lambda out: out.write(format_sweep(result)))
     code = _finish(path, written, errors, args.quiet, signals)
     failed = [p for p in result.points if p.status == "failed"]
-    if failed:
+    for message in result.errors:
+        print(f"amilpy: {path}: {message}", file=sys.stderr)
+    if failed and args.carry_state:
         print(f"amilpy: {path}: the run at {name} = {failed[0].value:g} failed; the "
               "sweep stopped there", file=sys.stderr)
+    elif failed and not result.errors:
+        print(f"amilpy: {path}: {len(failed)} point(s) failed, first at {name} = "
+              f"{failed[0].value:g}", file=sys.stderr)
     return max(code, EXIT_FAILED if failed else EXIT_OK)
 
 

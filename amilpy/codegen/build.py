@@ -9,6 +9,7 @@ span, so a fault is located from the code's own line table (see `faults`).
 from __future__ import annotations
 
 import ast as py
+import copy
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from itertools import count
@@ -30,6 +31,7 @@ from .pytree import (
     local,
     namespace,
     on_line,
+    parameter,
     place,
     vectorised,
 )
@@ -84,6 +86,18 @@ class Compiled:
     module: py.Module | None = field(default=None, repr=False)  # the scalar functions' tree
     namespace: dict = field(default_factory=dict, repr=False)
     checking: dict = field(default_factory=dict, repr=False)  # built on the first fault
+    derived: dict = field(default_factory=dict, repr=False)  # built on first use (jacobian)
+    # code built from `module` on first use, for every binding of it (see `rebound`)
+    shared: dict = field(default_factory=dict, repr=False)
+    binder: object = field(default=None, repr=False)  # the Compiler, for `rebound`
+
+    def rebound(self, constants: dict[str, float]) -> Compiled:
+        """These functions for a run whose constants differ from these only in the
+        parameters' values (`Compiler.parameters`): the same code, executed again
+        with the new values; no compilation."""
+        if constants == self.constants or self.binder is None:
+            return self
+        return self.binder.bind(constants)
 
     def fault_line(self, exc: BaseException) -> int | None:
         """The listing line of the generated statement that raised `exc`."""
@@ -142,7 +156,8 @@ class Compiler:
                  const_modes: dict[int, float], outputs: list[str] | None = None,
                  events: bool = True, setting: Setting | None = None,
                  kept: dict[str, float] | None = None,
-                 priors: dict[str, float] | None = None) -> None:
+                 priors: dict[str, float] | None = None,
+                 parameters: frozenset[str] = frozenset()) -> None:
         self.model = model
         self.setting = setting or Setting()
         self.constants = constants
@@ -152,6 +167,10 @@ class Compiler:
         # keeps that value on a path that does not assign it)
         self.kept = dict(kept or {})
         self.priors = dict(priors or {})
+        # constants the code reads as names (PARAM, INCON and what INITIAL derives
+        # from them), so that other values need no new code (`bind`)
+        self.parameters = frozenset(n for n in parameters if n in constants)
+        self.shared: dict = {}
         self.tables = tables
         self.const_modes = const_modes
         self.outputs = outputs
@@ -175,7 +194,7 @@ class Compiler:
         names = self.mode_names_new if new_modes else self.mode_names
         return Emitter(self.model, self.constants, self.const_modes, context, names,
                        self.global_tables, self.tables, self.unpacked_z, self.names,
-                       self.setting)
+                       self.setting, self.parameters)
 
     def line(self, kind: str, target: str, span: Span | None, expr=None) -> int:
         """The generated line of one IR statement (the same in every function)."""
@@ -386,6 +405,7 @@ class Compiler:
         model = self.model
         em = self.emitter("out")
         em.constants = {k: v for k, v in self.constants.items() if k not in code.assigned}
+        em.parameters = em.parameters - set(code.assigned)
         known = set(self.kept) | {st.name for st in model.states}
         body = self.prologue()
         first = start(code.assigned, known, self.constants)
@@ -435,11 +455,11 @@ class Compiler:
         out_names = self.outputs if self.outputs is not None else model.variables
         fns = [self.rhs(), self.surfaces(), self.modes(), self.outputs_function(out_names),
                self.memory()]
-        settles = any(s.onto for s in model.states)
-        if settles:
+        self.settles = any(s.onto for s in model.states)
+        if self.settles:
             fns.append(self.settle())
-        sections = self.sections()
-        extra = [self.section(fname, c) for fname, c in sections.items()]
+        self.code_sections = self.sections()
+        extra = [self.section(fname, c) for fname, c in self.code_sections.items()]
         # surf and out once more for NumPy columns: a condition there may be an array
         # (a memory function reading its condition), so if/else becomes a where()
         fns += [vectorised(fns[1], "surf_vec"), vectorised(fns[3], "out_vec")] + extra
@@ -447,38 +467,51 @@ class Compiler:
         place(module)
         py.fix_missing_locations(module)
         assert_closed(module)
-        source = py.unparse(module)
-        code = compile(module, model.path or model.name, "exec")
+        self.source = py.unparse(module)
+        self.code = compile(module, model.path or model.name, "exec")
+        self.module, self.out_names = module, list(out_names)
+        return self.bind(self.constants)
+
+    def bind(self, constants: dict[str, float]) -> Compiled:
+        """The built code for one run's constants: executed with its parameters' values
+        (cheap: it defines the functions), and the values that depend on them."""
+        model = self.model
+        binder = copy.copy(self)
+        binder.constants = constants
+        values = {parameter(n): float(constants[n]) for n in self.parameters}
         scalar: dict[str, object] = {"__builtins__": {}, **namespace(), **self.global_tables,
-                                     STATEMENTS: self.statements}
-        exec(code, scalar)  # noqa: S102 - compiler-built tree, closed namespace
+                                     STATEMENTS: self.statements, **values}
+        exec(self.code, scalar)  # noqa: S102 - compiler-built tree, closed namespace
         vector: dict[str, object] = {"__builtins__": {}, STATEMENTS: self.statements}
         vector.update({f"_{k}": v for k, v in vector_functions().items()})
         vector.update(self.global_tables)
-        exec(code, vector)  # noqa: S102 - the same code, elementwise functions
-        trains, train_surfaces = self.trains()
+        vector.update(values)
+        exec(self.code, vector)  # noqa: S102 - the same code, elementwise functions
+        trains, train_surfaces = binder.trains()
         if model.units:
             # statements (IF, loops) cannot run on columns: one row at a time
             vector["surf_vec"], vector["out_vec"] = by_rows(scalar["surf"]), \
                 by_rows(scalar["out"])
         return Compiled(
             state_names=[s.name for s in model.states],
-            y0=[self.constant(s.ic, s.span) for s in model.states],
+            y0=[binder.constant(s.ic, s.span) for s in model.states],
             z0=[v for mem, func in zip(model.memories, self.entries, strict=True)
                 for text in func.memory.initial
-                for v in initial_slots(model, text, mem, self.constants, self.tables)]
+                for v in initial_slots(model, text, mem, constants, self.tables)]
             + list(self.kept.values()),
-            out_names=list(out_names), constants=self.constants, rhs=scalar["rhs"],
+            out_names=list(self.out_names), constants=constants, rhs=scalar["rhs"],
             surf=scalar["surf"], out=scalar["out"], mem=scalar["mem"],
             watched=self.watched, const_modes=self.const_modes,
-            modes_literal=scalar["modes"], affine_time=self.affine(),
-            impulses=self.impulses(), source=source, tables=self.global_tables,
+            modes_literal=scalar["modes"], affine_time=binder.affine(),
+            impulses=binder.impulses(), source=self.source, tables=self.global_tables,
             surf_v=vector["surf_vec"], out_v=vector["out_vec"],
             memory_every_step=any(f.memory.every_step for f in self.entries),
             memory_times=self.memory_times(), statements=self.statements, model=model,
-            module=module, namespace=scalar, trains=trains, train_surfaces=train_surfaces,
-            settle=scalar["settle"] if settles else None, kept=list(self.kept),
-            code={fname: (sections[fname], scalar[fname]) for fname in sections},
+            module=self.module, namespace=scalar, shared=self.shared, binder=self,
+            trains=trains, train_surfaces=train_surfaces,
+            settle=scalar["settle"] if self.settles else None, kept=list(self.kept),
+            code={fname: (self.code_sections[fname], scalar[fname])
+                  for fname in self.code_sections},
         )
 
     def trains(self) -> tuple[list[tuple[float, float]], set[int]]:

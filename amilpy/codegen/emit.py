@@ -25,7 +25,7 @@ from ..library import Func, Kind, lookup, runtime_name
 from ..runtime import Extending, safe_pow
 from ..syntax import Visitor
 from ..templates import ARGUMENTS, argument_uses, tree
-from .pytree import const_value, local, number, user_function
+from .pytree import const_value, local, number, parameter, user_function
 
 _PYOPS = {"+": py.Add, "-": py.Sub, "*": py.Mult, "/": py.Div}
 _PYCMP = {"<": py.Lt, "<=": py.LtE, ">": py.Gt, ">=": py.GtE, "==": py.Eq, "/=": py.NotEq}
@@ -60,9 +60,13 @@ class Emitter(Visitor):
     def __init__(self, model: ir.Model, constants: dict[str, float], const_modes,
                  context: str, mode_names: dict[int, str], tables: dict[str, tuple],
                  source_tables: dict, unpacked_z: bool = True, names=None,
-                 setting: Setting | None = None) -> None:
+                 setting: Setting | None = None,
+                 parameters: frozenset[str] = frozenset()) -> None:
         self.model = model
         self.constants = constants
+        # constants read as names (p_NAME), not folded: a run with other values
+        # binds the same code to them (see `codegen.params`)
+        self.parameters = parameters
         self.const_modes = const_modes
         self.context = context
         self.mode_names = mode_names
@@ -132,6 +136,8 @@ class Emitter(Visitor):
     def visit_Name(self, e: syn.Name) -> py.expr:
         if e.name == "TIME" and "TIME" not in self.constants:  # TERMINAL knows TIME
             return py.Name("t", py.Load())
+        if e.name in self.parameters:
+            return py.Name(parameter(e.name), py.Load())
         if e.name in self.constants:
             return number(self.constants[e.name])
         return py.Name(local(e.name), py.Load())

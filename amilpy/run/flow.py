@@ -8,6 +8,7 @@
     s1, events = flow.advance(s0, 0.0, 2.0)
     s1, events, M = flow.advance(s0, 0.0, 2.0, sensitivity=True)
     s2, events = flow.advance(s1, s1.t, 10.0, stop_at_event=True)
+    J = flow.jacobian(s0, 0.0)                   # d f/d y in the branches of s0
 
 `advance` integrates exactly as a run does (same route, tolerances, breakpoints,
 event location, sliding and restarts; on the run's own [t0, FINTIM] the AUTO
@@ -44,11 +45,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import ir
+from ..codegen.jacobian import finite_difference
+from ..codegen.jacobian import for_compiled as jacobian_for
 from ..diagnostics import AmilError
 from ..outcome import message
 from ..result import Event
 from .loop import Cursor, Integrator, Stop
-from .plan import Options
+from .plan import SLIDE, Options
 from .prepare import Cache, prepare
 from .simulate import start_cursor
 from .steppoint import StepPoint
@@ -94,6 +97,17 @@ class Flow:
         integ = Integrator(self.model, self.plan, self.c, self.watch, self.opts)
         return integ.vector_field(Cursor(t, np.array(state.y, dtype=float), list(state.modes),
                                          list(state.memory)))
+
+    def jacobian(self, state: State, t: float) -> np.ndarray:
+        """d f / d y of the vector field `field` integrates from `state` at `t` (the
+        branches frozen as `state.modes` says): from the model's own equations, each
+        switch differentiated in its branch (`codegen.jacobian`, exact to rounding);
+        while a surface slides, by central differences of the combined field."""
+        y = np.array(state.y, dtype=float)
+        if SLIDE in state.modes:
+            return finite_difference(self.field(state, t), t, y)
+        return jacobian_for(self.c).dense(t, y.tolist(), list(state.modes),
+                                          list(state.memory))
 
     @property
     def surfaces(self) -> list[str]:

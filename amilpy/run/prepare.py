@@ -21,6 +21,7 @@ from ..codegen import (
     evaluate_constant,
     fault_line,
     initial_values,
+    parameter_names,
 )
 from ..diagnostics import AmilError, Diagnostic, Span
 from ..language import SEED_NAME
@@ -42,10 +43,12 @@ T = TypeVar("T")
 
 class Cache:
     """Values a model's runs share, by the data that determines them: INITIAL
-    values per set of data, compiled functions per set of constants, output grids
-    per timer. Each table is cleared when it grows past its limit (a long sweep)."""
+    values per set of data, compiled functions per set of constants (bound to the
+    code built for its true constants: runs that differ in PARAM values compile
+    once, see `codegen.parameter_names`), output grids per timer. Each table is
+    cleared when it grows past its limit (a long sweep)."""
 
-    LIMITS = {"initial": 256, "compiled": 64, "grid": 64}
+    LIMITS = {"initial": 256, "compiled": 64, "code": 64, "grid": 64, "parameters": 4}
 
     def __init__(self) -> None:
         self._tables: dict[str, dict] = {name: {} for name in self.LIMITS}
@@ -122,11 +125,15 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
                       hold=timer["DELT"] if route.fixed else min(timer["OUTDEL"],
                                                                  timer["PRDEL"]),
                       step=timer["DELT"] if step_point else None)
-    ckey = (tuple(sorted(constants.items())), tables,
-            tuple(opts.outputs) if opts.outputs is not None else None, opts.events, setting)
-    compiled = cache.get("compiled", ckey, lambda: Compiler(
-        model, constants, spec.tables, const_modes, opts.outputs, opts.events,
-        setting).build())
+    outputs = tuple(opts.outputs) if opts.outputs is not None else None
+    ckey = (tuple(sorted(constants.items())), tables, outputs, opts.events, setting)
+    # a run whose parameters alone differ binds the code built for another (no compile)
+    params = cache.get("parameters", id(model), lambda: parameter_names(model))
+    skey = (tuple(sorted((k, v) for k, v in constants.items() if k not in params)),
+            tuple(sorted(const_modes.items())), tables, outputs, opts.events, setting)
+    compiled = cache.get("compiled", ckey, lambda: cache.get("code", skey, lambda: Compiler(
+        model, constants, spec.tables, const_modes, opts.outputs, opts.events, setting,
+        parameters=params).build()).rebound(constants))
     t0 = float(opts.start["t"]) if opts.start else 0.0
     fintim = t0 + timer["FINTIM"]
     gkey = (t0, fintim, timer["OUTDEL"], timer["PRDEL"], step_point and timer["DELT"])
