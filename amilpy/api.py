@@ -129,7 +129,7 @@ class Model:
         order, the same as run one after the other, and a run whose data cannot be
         evaluated comes back FAILED with its message (it does not stop the others).
         `done(i, n)`: called as run i of n finishes."""
-        from .run import Options, simulate
+        from .run import Options
 
         _check_method(method)
         for label, tol in (("rtol", rtol), ("atol", atol)):
@@ -154,7 +154,7 @@ class Model:
         advised = False
         farmed = self._farm(specs, opts, jobs, scheduler, done)
         for k, spec in enumerate(specs):
-            run = farmed[k] if farmed else simulate(self.ir, spec, opts, self.cache)
+            run = farmed[k] if farmed else self._one(spec, opts, len(specs) > 1)
             if advice and not advised:
                 from .advice import stiffness_advice
 
@@ -184,6 +184,24 @@ class Model:
                 f"the {len(specs)} run(s) would keep {total:.3g} values ({columns} variables "
                 f"on every output row; limit {limit:.0e}, about {8 * limit / 1e9:.1f} GB): "
                 "raise OUTDEL/PRDEL, shorten FINTIM, or run fewer values at a time")
+
+    def _one(self, spec: ir.RunSpec, opts, among_others: bool) -> Run:
+        """One run here. Among other runs, one whose data cannot be evaluated comes
+        back FAILED with its message, as from a worker (`_farm`), and the others
+        are kept; alone, its fault is the listing's (exit 1, located)."""
+        from .run import simulate
+
+        if not among_others:
+            return simulate(self.ir, spec, opts, self.cache)
+        from .farm import failed_run
+        from .run.plan import resolve_route
+
+        try:
+            return simulate(self.ir, spec, opts, self.cache)
+        except AmilError as exc:
+            if exc.path is None:
+                exc.path = self.ir.path
+            return failed_run(spec, resolve_route(spec, opts)[1], exc.render())
 
     def _farm(self, specs: list[ir.RunSpec], opts, jobs: int, scheduler: str | None,
               done) -> list[Run] | None:

@@ -50,7 +50,8 @@ class Task:
 @dataclass
 class Outcome:
     """What a task gave: the run (or None), a sweep's (min, max, status, t0, t_end),
-    or the error that stopped it."""
+    or the error that stopped it (the task's label is not in it: the caller says
+    which run or point it was)."""
 
     run: Run | None = None
     point: tuple | None = None
@@ -128,9 +129,9 @@ def _execute(model: ir.Model, cache, task: Task) -> Outcome:
     except AmilError as exc:
         if exc.path is None:
             exc.path = model.path
-        return Outcome(error=f"{task.label}: {exc.render()}")
+        return Outcome(error=exc.render())
     except Exception as exc:  # noqa: BLE001 - reported with its parameters, others kept
-        return Outcome(error=f"{task.label}: {type(exc).__name__}: {exc}")
+        return Outcome(error=f"{type(exc).__name__}: {exc}")
     if task.measure is None:
         return Outcome(run=run)
     t0 = float(run.times[0]) if len(run.times) else float("nan")

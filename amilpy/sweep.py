@@ -198,10 +198,10 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
         if progress is not None:
             progress(finished[0], len(sequence), sequence[i][0])
 
-    for (value, direction, w), outcome in zip(sequence, farm(
+    for (value, direction, w), task, outcome in zip(sequence, tasks, farm(
             model.ir, tasks, jobs, scheduler, done, model.cache), strict=True):
         if outcome.point is None:
-            result.errors.append(outcome.error or "not run")
+            result.errors.append(f"{task.label}: {outcome.error or 'not run'}")
             nan = math.nan
             result.points.append(SweepPoint(value, direction, nan, nan, "failed", nan, nan, w))
             continue

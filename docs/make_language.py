@@ -29,16 +29,24 @@ checker and runner read (`python docs/make_language.py`), so they list exactly
 what amilpy runs. The functions' fuller notes are in `docs/functions.md`; the
 shipped models and what they are checked against in `docs/models.md`.
 
-| form | how amilpy knows it | time | sorted | example |
-|---|---|---|---|---|
-| **CSMP form** (the lab's AMIL, CSMP III, CSMP/360, FST) | the default | `TIME` | DYNAMIC is sorted; INITIAL and TERMINAL run in written order | `models/ex4_clutch.amil` |
-| **ACSL form** (ACSL, Magnolia) | the first statement is `PROGRAM` or `MODEL` | `T` (and `TIME`) | DERIVATIVE is sorted; INITIAL, DYNAMIC, DISCRETE, TERMINAL run in written order | `models/examples/` |
-| **FST form** (Wageningen's FORTRAN Simulation Translator) | CSMP form with FST's statements (`TIMER STTIME`, `FINISH X > v`, `TRANSLATION_GENERAL`, `WEATHER`, `;` between items) | `TIME` from `STTIME` | as CSMP | `models/examples/` |
+{forms}
 
 Keywords and names are case-insensitive; `!` starts a comment (except in `!=`);
 `...` or a trailing `,` continues a statement on the next line; text after `STOP`
 or `ENDJOB` is not read.
 """
+
+FORM_ROWS: tuple[tuple[str, ...], ...] = (
+    ("**CSMP form** (the lab's AMIL, CSMP III, CSMP/360, FST)", "the default", "`TIME`",
+     "DYNAMIC is sorted; INITIAL and TERMINAL run in written order",
+     "`models/ex4_clutch.amil`"),
+    ("**ACSL form** (ACSL, Magnolia)", "the first statement is `PROGRAM` or `MODEL`",
+     "`T` (and `TIME`)", "DERIVATIVE is sorted; INITIAL, DYNAMIC, DISCRETE, TERMINAL run "
+     "in written order", "`models/examples/`"),
+    ("**FST form** (Wageningen's FORTRAN Simulation Translator)", "CSMP form with FST's "
+     "statements (`TIMER STTIME`, `FINISH X > v`, `TRANSLATION_GENERAL`, `WEATHER`, `;` "
+     "between items)", "`TIME` from `STTIME`", "as CSMP", "`models/examples/`"),
+)
 
 # The side-by-side table: one row per construct whose spelling or meaning differs
 # between the dialects. amilpy reads every left-hand spelling as written.
@@ -240,7 +248,9 @@ def refused() -> str:
 
 
 def render() -> str:
-    return "\n\n".join([INTRO.rstrip(), FORMS.rstrip(), keywords(), side_by_side(),
+    intro = INTRO.format(forms=_table(("form", "how amilpy knows it", "time", "sorted",
+                                       "example"), FORM_ROWS))
+    return "\n\n".join([intro.rstrip(), FORMS.rstrip(), keywords(), side_by_side(),
                         methods(), functions(), refused()]) + "\n"
 
 

@@ -49,13 +49,20 @@ def test_value_lists_on_two_processes_equal_the_serial_runs():
 
 def test_a_failing_run_is_reported_and_the_others_kept():
     """A run whose data cannot be evaluated (INITIAL divides by ZETA = 0) comes back
-    FAILED, named by its parameters; the runs before and after it are kept."""
+    FAILED, named by its parameters; the runs before and after it are kept, on worker
+    processes and one after the other alike."""
     text = LISTS.replace("(0.05, 0.1, 0.2, 0.4)", "(0.05, 0.0, 0.2)").replace(
         "DYNAMIC", "INITIAL\n   TAU = 1.0/ZETA\nDYNAMIC")
     runs = amilpy.loads(text).run(advice=False, jobs=2)
     assert [r.ok for r in runs] == [True, False, True]
     assert "division by zero" in runs[1].message and runs[1].label == "ZETA = 0"
+    assert "ZETA = 0" not in runs[1].message  # the label is said once, by whoever prints
     assert len(runs[2].times) == 401
+    # one after the other in this process, the same: the fault does not stop the others
+    serial = amilpy.loads(text).run(advice=False, jobs=1)
+    assert [r.ok for r in serial] == [True, False, True]
+    assert serial[1].message == runs[1].message
+    assert all(_same(a, b) for a, b in zip(serial, runs, strict=True))
 
 
 def test_sweep_and_grid_on_processes_equal_serial():
