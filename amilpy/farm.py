@@ -167,7 +167,7 @@ def _on_processes(model: ir.Model, tasks: list[Task], jobs: int,
             try:
                 out[i] = future.result()
             except Exception as exc:  # noqa: BLE001 - a worker that died
-                out[i] = Outcome(error=f"{tasks[i].label}: the worker failed: {exc}")
+                out[i] = Outcome(error=f"the worker failed: {exc}")
             if done is not None:
                 done(i, out[i])
     except KeyboardInterrupt:
@@ -176,8 +176,7 @@ def _on_processes(model: ir.Model, tasks: list[Task], jobs: int,
         for child in mp.active_children():
             child.terminate()
         return [o if o is not None else Outcome(
-            error=f"{t.label}: interrupted before it finished", interrupted=True)
-            for o, t in zip(out, tasks, strict=True)]
+            error="interrupted before it finished", interrupted=True) for o in out]
     pool.shutdown()
     return [o if o is not None else Outcome(error="not run") for o in out]
 
@@ -205,7 +204,7 @@ def _on_dask(model: ir.Model, tasks: list[Task], address: str,
                 try:
                     out[i] = future.result()
                 except Exception as exc:  # noqa: BLE001 - a worker that died
-                    out[i] = Outcome(error=f"{tasks[i].label}: the worker failed: {exc}")
+                    out[i] = Outcome(error=f"the worker failed: {exc}")
                 if done is not None:
                     done(i, out[i])
         return [o if o is not None else Outcome(error="not run") for o in out]
