@@ -72,9 +72,11 @@ class _Step:
     e_b: list[float]  # the watched surfaces at tb
 
 
-class Integrator:
-    """Integrates one run's model under its plan; keeps the run's events, warnings
-    and counts across calls of `integrate`."""
+class RunLoop:
+    """What every run loop keeps across calls of its `integrate`: the run's events,
+    warnings and counts, its last good point, what stopped it, and its deadline
+    (`Integrator` locates the switching; `steppoint.StepPoint` reads it at the
+    step points)."""
 
     def __init__(self, model: ir.Model, plan: RunPlan, c: Compiled, watch: SurfaceWatch,
                  opts: Options, started: float | None = None) -> None:
@@ -85,9 +87,17 @@ class Integrator:
         self.warnings: list[str] = []
         self.nsteps = 0
         self.nfev = 0
-        self.faults: list[Fault] = []  # arithmetic faults the integration has not passed
         self.last_good: tuple[float, np.ndarray, list[float]] | None = None
         self.stop_reason: int | None = None  # the FINISH/TERMT surface that ended the run
+
+
+class Integrator(RunLoop):
+    """Integrates one run's model under its plan, switching instants located."""
+
+    def __init__(self, model: ir.Model, plan: RunPlan, c: Compiled, watch: SurfaceWatch,
+                 opts: Options, started: float | None = None) -> None:
+        super().__init__(model, plan, c, watch, opts, started)
+        self.faults: list[Fault] = []  # arithmetic faults the integration has not passed
         self._stiff_noted = False
         self._recent: list[float] = []  # restart instants (chatter)
         self._last_step: float | None = None

@@ -36,7 +36,7 @@ from ..outcome import Failure
 from ..result import Event, EventKind
 from ..steppers import FIXED, first_bad
 from .faults import Fault, fault_text
-from .loop import Cursor, Stop
+from .loop import Cursor, RunLoop, Stop
 from .plan import Grid, Options, Purpose, RunPlan
 from .record import Recorder
 from .watch import SurfaceWatch
@@ -88,20 +88,12 @@ def grid(t0: float, timer: dict[str, float]) -> Grid:
     return Grid(t0 + k * delt, np.isin(k, out_k), np.isin(k, pr_k))
 
 
-class StepPoint:
-    """Runs a step-point plan; keeps the run's events, warnings and counts."""
+class StepPoint(RunLoop):
+    """Runs a step-point plan: switches read at the step points, nothing located."""
 
     def __init__(self, model: ir.Model, plan: RunPlan, c: Compiled, watch: SurfaceWatch,
                  opts: Options, started: float | None = None) -> None:
-        self.model, self.plan, self.c, self.watch, self.opts = model, plan, c, watch, opts
-        self.started = _clock.perf_counter() if started is None else started
-        self.deadline = self.started + opts.max_time if opts.max_time else None
-        self.events: list[Event] = []
-        self.warnings: list[str] = []
-        self.nsteps = 0
-        self.nfev = 0
-        self.last_good: tuple[float, np.ndarray, list[float]] | None = None
-        self.stop_reason: int | None = None
+        super().__init__(model, plan, c, watch, opts, started)
         self.extrema: dict[str, list[float]] = {}  # RANGE over every step point
         self._purposes = [(w, w.purpose) for w in plan.watched]
         self._stepper = None
