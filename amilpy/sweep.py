@@ -122,6 +122,14 @@ def parse_range(text: str) -> tuple[str, list[float]]:
     return name.strip().upper(), values
 
 
+def default_measure(model) -> str:
+    """The variable a sweep or an analysis measures when none is named: the first
+    OUTPUT/PRINT variable of the first run, else the first variable (an ir.Model)."""
+    named = [n for r in model.runs[0].reports if r.kind in ("OUTPUT", "PRINT")
+             for n in r.names]
+    return named[0] if named else model.variables[0]
+
+
 def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
           carry_state: bool = False, settle: float = 0.0, measure: str | None = None,
           method: str | None = None, rtol: float | None = None, atol: float | None = None,
@@ -136,11 +144,7 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
     if name not in model.ir.data_names:
         raise AmilError(f"{name} is not a PARAM/CONST/INCON value of this model")
     variables = model.ir.variables
-    if measure is None:
-        reports = model.ir.runs[0].reports
-        named = [n for r in reports if r.kind in ("OUTPUT", "PRINT") for n in r.names]
-        measure = named[0] if named else variables[0]
-    measure = measure.upper()
+    measure = (measure or default_measure(model.ir)).upper()
     if measure not in variables:
         raise AmilError(f"{measure} is not a variable of the model")
     sequence = [(v, "up") for v in values]

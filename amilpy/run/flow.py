@@ -38,7 +38,7 @@ expect about 1E-4.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -46,11 +46,15 @@ from .. import ir
 from ..diagnostics import AmilError
 from ..outcome import message
 from ..result import Event
+from .grazing import Grazing, Missed
 from .loop import Cursor, Integrator, Stop
 from .plan import Options
 from .prepare import Cache, prepare
 from .simulate import start_cursor
+from .variational import Tangent
 from .watch import SurfaceWatch, TooManySlides
+
+MAX_REFINES = 64  # steps taken again in pieces, per advance (see grazing.py)
 
 
 @dataclass(frozen=True)
@@ -76,6 +80,13 @@ class Flow:
         prepared = prepare(model, spec, self.opts, cache)
         self.c, self.plan = prepared.compiled, prepared.plan
         self.watch = SurfaceWatch(self.c, self.plan)
+        # monodromy by the variational equations where they apply (else differences)
+        self.variational = True
+        self.last_sensitivity = ""  # how the last monodromy was made, and why
+        # look inside every step for a surface dipping across zero (grazing.py):
+        # the analyses need it, a plain flow stays the run's own integration
+        self.grazing = False
+        self.stiff = False  # a step of an explicit route was limited by stability
 
     @property
     def compiled(self):
@@ -104,58 +115,112 @@ class Flow:
         cur = self._start(np.array(self.c.y0, dtype=float), list(self.c.z0), None)
         return State(cur.y, tuple(cur.m), tuple(cur.z), cur.t)
 
-    def state(self, y, modes=None, memory=None) -> State:
-        """A state at the run's t0 from given values; branches chosen as at a start
-        when not given, memory from the run's start when not given."""
+    def state(self, y, modes=None, memory=None, t: float | None = None) -> State:
+        """A state at `t` (default the run's t0) from given values; branches chosen
+        as at a start when not given, memory from the run's start when not given."""
         z = list(self.c.z0) if memory is None else list(memory)
-        cur = self._start(np.array(y, dtype=float), z, None if modes is None else list(modes))
+        cur = self._start(np.array(y, dtype=float), z, None if modes is None else list(modes),
+                          t)
         return State(cur.y, tuple(cur.m), tuple(cur.z), cur.t)
 
-    def _start(self, y: np.ndarray, z: list[float], m) -> Cursor:
+    def _start(self, y: np.ndarray, z: list[float], m, t: float | None = None) -> Cursor:
         try:
-            return start_cursor(self.c, self.plan, self.watch, self.opts, y, z, m)
+            return start_cursor(self.c, self.plan, self.watch, self.opts, y, z, m, t)
         except (ArithmeticError, ValueError) as exc:
-            raise AmilError(f"cannot start at TIME = {self.plan.t0:g}: {exc}") from None
+            when = self.plan.t0 if t is None else t
+            raise AmilError(f"cannot start at TIME = {when:g}: {exc}") from None
 
     def advance(self, state: State, t0: float, t1: float, *, stop_at_event: bool = False,
-                sensitivity: bool = False):
+                sensitivity: bool = False, columns=None, scale=None, observer=None):
         """Integrate from `state` at `t0` to `t1` (or to the first event, or a
         FINISH/TERMT). Returns (state, events) or, with sensitivity, (state,
-        events, M) with M = d(final y)/d(initial y) (see the module docstring)."""
+        events, M) with M = d(final y)/d(initial y) (see the module docstring).
+        `columns`: the initial states M differentiates by (indices; default all,
+        M then has one column each); `scale`: each state's typical size, for the
+        differencing steps (default: the rule in the module docstring);
+        `observer(ta, tb, interpolant, modes, memory)` sees every accepted step
+        of the flow itself (not of the perturbed ones)."""
+        tangent = None
+        if sensitivity and self.variational and not stop_at_event:
+            n = len(state.y)
+            floor = self.plan.tol.atol / self.plan.tol.rtol
+            if scale is not None:
+                floor = np.maximum(floor, scale)
+            tangent = Tangent(self.c, self.watch, floor, n,
+                              range(n) if columns is None else columns)
+            seen = observer
+
+            def observer(ta, tb, interp, m, z):
+                tangent(ta, tb, interp, m, z)
+                if seen is not None:
+                    seen(ta, tb, interp, m, z)
         end, events = self._advance(np.array(state.y, dtype=float), state, t0, t1,
-                                    stop_at_event)
+                                    stop_at_event, observer)
         if not sensitivity:
             return end, events
-        return end, events, self._monodromy(state, t0, t1, stop_at_event)
+        if tangent is not None and tangent.failed is None:
+            self.last_sensitivity = "variational equations"
+            return end, events, tangent.phi
+        self.last_sensitivity = "differences" + (f" ({tangent.failed})" if tangent else "")
+        return end, events, self._monodromy(state, t0, t1, stop_at_event, columns, scale)
 
     def _advance(self, y: np.ndarray, state: State, t0: float, t1: float,
-                 stop_at_event: bool) -> tuple[State, list[Event]]:
-        integ = Integrator(self.model, self.plan, self.c, self.watch, self.opts)
-        integ.window(t0, t1)
+                 stop_at_event: bool, observer=None) -> tuple[State, list[Event]]:
         cur = Cursor(t0, y, list(state.modes), list(state.memory))
-        try:
-            integ.integrate(cur, t1, stop_at_event=stop_at_event)
-        except Stop as stop:
-            raise AmilError(message(stop.kind, t=stop.t, **stop.fields)) from None
-        except (ArithmeticError, ValueError, TooManySlides) as exc:
-            raise AmilError(f"integration failed at TIME = {cur.t:.9g}: {exc}") from None
-        return State(cur.y.copy(), tuple(cur.m), tuple(cur.z), cur.t), integ.events
+        events: list[Event] = []
+        plan, until = self.plan, None  # a step taken again in pieces, up to `until`
+        for _ in range(MAX_REFINES):
+            integ = Integrator(self.model, plan, self.c, self.watch, self.opts)
+            end = t1 if until is None else until
+            integ.window(cur.t, end)
+            seen = observer
+            if self.grazing:
+                guard = Grazing(self.c, self.plan)
 
-    def _monodromy(self, state: State, t0: float, t1: float, stop_at_event: bool
-                   ) -> np.ndarray:
+                def seen(ta, tb, interp, m, z, guard=guard):
+                    guard(ta, tb, interp, m, z)  # first: a missed dip aborts the step
+                    if observer is not None:
+                        observer(ta, tb, interp, m, z)
+            try:
+                integ.integrate(cur, end, stop_at_event=stop_at_event, observer=seen)
+            except Missed as miss:
+                events += integ.events
+                cur = Cursor(miss.ta, miss.y, miss.modes, miss.memory)
+                plan = replace(self.plan, max_step=(miss.tb - miss.ta) / 16)
+                until = miss.tb
+                continue
+            except Stop as stop:
+                raise AmilError(message(stop.kind, t=stop.t, **stop.fields)) from None
+            except (ArithmeticError, ValueError, TooManySlides) as exc:
+                raise AmilError(f"integration failed at TIME = {cur.t:.9g}: {exc}") from None
+            events += integ.events
+            self.stiff = self.stiff or any(w.startswith("stiff") for w in integ.warnings)
+            if until is None or integ.stop_reason is not None or cur.t >= t1 or \
+                    (stop_at_event and events):
+                break
+            plan, until = self.plan, None
+        else:
+            raise AmilError(f"integration failed at TIME = {cur.t:.9g}: a switching surface "
+                            f"dips across zero inside the steps more than {MAX_REFINES} times")
+        return State(cur.y.copy(), tuple(cur.m), tuple(cur.z), cur.t), events
+
+    def _monodromy(self, state: State, t0: float, t1: float, stop_at_event: bool,
+                   columns=None, scale=None) -> np.ndarray:
         y = np.array(state.y, dtype=float)
         n = len(y)
         tol = self.plan.tol
         rel = np.cbrt(tol.rtol)
-        scale = np.maximum(np.maximum(np.abs(y), np.mean(np.abs(y)) if n else 0.0),
-                           tol.atol / tol.rtol)
+        if scale is None:
+            scale = np.maximum(np.abs(y), np.mean(np.abs(y)) if n else 0.0)
+        scale = np.maximum(np.asarray(scale, dtype=float), tol.atol / tol.rtol)
         h = rel * scale
-        out = np.empty((n, n))
-        for j in range(n):
+        columns = range(n) if columns is None else list(columns)
+        out = np.empty((n, len(columns)))
+        for k, j in enumerate(columns):
             up, down = y.copy(), y.copy()
             up[j] += h[j]
             down[j] -= h[j]
             hi, _ = self._advance(up, state, t0, t1, stop_at_event)
             lo, _ = self._advance(down, state, t0, t1, stop_at_event)
-            out[:, j] = (hi.y - lo.y) / (up[j] - down[j])
+            out[:, k] = (hi.y - lo.y) / (up[j] - down[j])
         return out
