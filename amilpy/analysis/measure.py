@@ -52,7 +52,8 @@ class Tracker:
     """Observer: the running extrema and integrals of `names`, and samples of
     them for a figure."""
 
-    CANDIDATES = 3  # local extremes refined per variable and side
+    CANDIDATES = 3  # at most this many samples refined per variable and side
+    CLOSE = 1e-3  # ... those within this (relative to the variable's range) of the best
 
     def __init__(self, flow: Flow, names: list[str]) -> None:
         self.flow = flow
@@ -127,12 +128,13 @@ class Tracker:
         flat = [(sign * float(v[r, i]), k, i) for k, (_, v, *_) in enumerate(self.steps)
                 for i in range(v.shape[1])]
         best = max(flat)
-        # the local extremes among the samples, largest first: a few are refined
+        spread = best[0] - min(flat)[0]
+        # the best sample is refined, and any other near as good in another step
         # (two nearly equal peaks: the sampled one need not be the larger)
         peaks = sorted(flat, reverse=True)[: 4 * self.CANDIDATES]
         seen, out = set(), []
-        for _, k, i in peaks:
-            if k in seen:
+        for value, k, i in peaks:
+            if k in seen or (seen and best[0] - value > self.CLOSE * spread):
                 continue
             seen.add(k)
             out.append(self._refine(r, sign, k, i))

@@ -70,12 +70,21 @@ class Point:
 
     value: float  # the data value
     period: float
-    measures: dict[str, Stats]
+    tracker: Tracker = field(repr=False)  # what was seen over the period
     multipliers: np.ndarray
     kind: str = ""  # "", "fold", "end"
     residual: float = 0.0
     start: np.ndarray | None = None  # every state at the start of the orbit
     events: int = 0  # switches per period
+    _measures: dict[str, Stats] | None = field(default=None, repr=False)
+
+    @property
+    def measures(self) -> dict[str, Stats]:
+        """Minimum, maximum, mean of each measured variable (located when first
+        asked for: most Newton iterates on the way to a point are never asked)."""
+        if self._measures is None:
+            self._measures = self.tracker.stats(self.period)
+        return self._measures
 
     @property
     def mu_max(self) -> float:
@@ -94,6 +103,7 @@ class Response:
     points: list[Point] = field(default_factory=list)  # along the curve, folds in place
     notes: list[str] = field(default_factory=list)  # flags, what could not be followed
     complete: bool = True  # the curve reached an end of the range
+    names: list[str] = field(default_factory=list)  # the states, in Point.start order
 
     @property
     def folds(self) -> list[Point]:
@@ -200,7 +210,7 @@ class Continuation:
         if residual is None:
             residual = float(np.max(np.abs(ev.residual / self.wr))) if ev.residual.size \
                 else 0.0
-        point = Point(lam, period, tracker.stats(period), floquet(problem, ev), kind, residual,
+        point = Point(lam, period, tracker, floquet(problem, ev), kind, residual,
                       np.array(ev.start.y), len(ev.events))
         gx = (ev.jacobian * self.wx[None, :] / self.wr[:, None]) @ self.u
         glam = None if ev.glam is None else ev.glam / self.wr * self.span
@@ -268,6 +278,7 @@ class Continuation:
     def run(self) -> Response:
         out = Response(self.name, self.closure, self.measure_names)
         node, tangent = self.begin()
+        out.names = list(self.first.names)
         out.points.append(node.point)
         self.count = 1
         lo, hi = min(self.start, self.stop), max(self.start, self.stop)
