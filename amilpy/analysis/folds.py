@@ -5,10 +5,13 @@ The test function of a fold is det(P - I), the product of (mu - 1) over the
 Floquet multipliers: its sign changes when one real multiplier crosses +1, a
 complex pair adding |mu - 1|^2 > 0. Between two points where it changes sign
 the fold is located by bisection on that sign, on planes across the secant
-of the two points, each try corrected onto the curve, until the parabola
-lam(sigma) through the last three tries puts the extremum within FOLD_RTOL of
-both bracketing values. Where the planes miss the curve (a fold at a grazing
-turns within a tiny arclength) it is located by existence instead: beyond a
+of the two points, each try corrected onto the curve, until the last three
+tries' values agree to a tenth of FOLD_RTOL: lam is at most Lipschitz in the
+arclength there (a fold at a grazing is a corner, not a parabola), so the fold
+is within twice that of them; its value is the extreme try, moved to the
+vertex of the parabola through the three when that lies so close. Where the
+planes miss the curve (a fold at a grazing turns within a tiny arclength) it is
+located by existence instead: beyond a
 fold there is no orbit, so bisection on lam for the last value at which Newton
 in x from the orbit before the fold still converges.
 """
@@ -65,13 +68,11 @@ def fold(cont, a, b):
     normal = normal / length
     lo, hi = (0.0, a), (length, b)
     tries = [lo, hi]
-    value = 0.5 * (a.lam + b.lam)
+    up = a.heading > 0  # lam grew towards the fold: it is a largest lam
     for _ in range(60):
-        if len(tries) > 2:
-            value = _vertex(tries)
-            tol = FOLD_RTOL * max(abs(value), 1e-300)
-            if abs(value - lo[1].lam) <= tol and abs(value - hi[1].lam) <= tol:
-                break
+        last = [t[1].lam for t in tries[-3:]]
+        if len(tries) > 2 and max(last) - min(last) <= 0.1 * FOLD_RTOL * abs(last[-1]):
+            break
         mid = 0.5 * (lo[0] + hi[0])
         w = (mid - lo[0]) / (hi[0] - lo[0])
         cont.anchor = (a.x, a.lam)
@@ -86,6 +87,11 @@ def fold(cont, a, b):
         else:
             hi = (mid, node)
     best = min((lo[1], hi[1]), key=lambda n: _nearest_one(n.point.multipliers))
+    last = [t[1].lam for t in tries[-3:]]
+    value = max(last) if up else min(last)
+    vertex = _vertex(tries)
+    if abs(vertex - value) <= 0.1 * FOLD_RTOL * abs(value):
+        value = vertex
     return replace(best.point, kind="fold", value=value)
 
 
@@ -103,7 +109,7 @@ def by_existence(cont, a, b):
             break
     if hi_lam is None:
         return None
-    while abs(hi_lam - lo_lam) > FOLD_RTOL * max(abs(lo_lam), 1e-300):
+    while abs(hi_lam - lo_lam) > 0.1 * FOLD_RTOL * max(abs(lo_lam), 1e-300):
         mid = 0.5 * (lo_lam + hi_lam)
         found = _solve_at(cont, lo_x, mid)
         if found is None:

@@ -50,13 +50,13 @@ from .periodic import UNIT, NotConverged, floquet, newton, settle
 from .problem import Closure, Evaluation, Problem
 
 DS0, DS_MAX, DS_MIN = 0.02, 0.15, 2e-5  # arclength steps, in units of the whole range
-X_WEIGHT = 0.2  # a state moving by its size counts as a fifth of the range
+X_WEIGHT = 0.1  # a state moving by its size counts as a tenth of the range
 DRIFT = 0.5  # a corrected point this many steps from its prediction: a jump, refused
 TURN = 0.25  # radians the secant may turn in one step
 # the curve as drawn: lam over the range against the first measure's half
 # peak-to-peak over the largest met so far; a segment at most PLOT_STEP long,
 # turning at most PLOT_TURN from the one before
-PLOT_STEP, PLOT_TURN = 0.06, 0.15
+PLOT_STEP, PLOT_TURN = 0.08, 0.15
 # the largest scaled residual of a point on the curve: an orbit's states to about
 # 1E-7/(1 - |mu|) of their size, far below what a figure shows
 CURVE_TOL = 1e-7
@@ -302,8 +302,8 @@ class Continuation:
             out.points.append(nxt.point)
             self.count = len(out.points)
             self.say(nxt.lam, nxt.point.residual)
-            if len(nxt.ev.events) != len(node.ev.events):
-                tangent = self.past_grazing(node, nxt, tangent)
+            if len(nxt.ev.events) != len(node.ev.events) or (node.test > 0) != (nxt.test > 0):
+                tangent = self.turned(node, nxt, tangent)
             trail = [nxt] if self.jumped else (trail + [nxt])[-3:]
             node = nxt
         return out
@@ -338,10 +338,11 @@ class Continuation:
         self.largest, self.last_drawn, self.cruise = 0.0, None, DS0
         return node, self.tangent(node, towards)
 
-    def past_grazing(self, node: _Node, nxt: _Node, tangent: np.ndarray) -> np.ndarray:
-        """The number of switches per period changed between node and nxt: the
-        curve may have a corner. Go on along the tangent at nxt (not a secant or a
-        parabola across the corner), lam turning back if a multiplier crossed +1."""
+    def turned(self, node: _Node, nxt: _Node, tangent: np.ndarray) -> np.ndarray:
+        """A fold or a grazing (the number of switches per period changed) between
+        node and nxt: the curve may turn sharply there. Go on along the tangent at
+        nxt (not a secant or a parabola across the turn), lam turning back if a
+        multiplier crossed +1 (a fold)."""
         folded = (node.test > 0) != (nxt.test > 0)
         tangent = self.tangent(nxt, tangent)
         want = -node.heading if folded else node.heading
@@ -382,7 +383,7 @@ class Continuation:
                 continue
             limits = [TURN / max(turn, 1e-12), PLOT_TURN / max(bend, 1e-12),
                       PLOT_STEP / max(drawn, 1e-12)]
-            grow = min(2.0 if min(limits) > 4 else 1.5, *limits)
+            grow = min(4.0 if min(limits) > 16 else 2.0 if min(limits) > 4 else 1.5, *limits)
             if sharp:
                 grow = max(grow, self.cruise / max(length, 1e-300) / 4)
             self.last_drawn = seg / drawn if drawn > 0 else self.last_drawn
