@@ -1,8 +1,9 @@
 """The command line's analyses: `amilpy modes`, `periodic` and `response`
 (amilpy.analysis computes, amilpy.output.analysis prints and draws). Options,
 exit codes and the order of things (files first, then the printout) are those
-of `amilpy.cli`; a periodic orbit Newton cannot find, or a curve that cannot be
-followed over the whole range, is exit 3 with what was found."""
+of `amilpy.cli`; a periodic orbit Newton cannot find, an integration that cannot
+go on, or a curve that cannot be followed over the whole range, is exit 3 with
+what was found."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from . import cli as base
 from .console import Progress, write_out
 from .diagnostics import nearest
 from .output.writers import Outputs
+from .run.flow import FlowFailed
 
 
 def _span(text: str) -> tuple[str, float, float]:
@@ -101,6 +103,11 @@ def _prepare(args, path: str):
     return model, params
 
 
+def _failed(path: str, exc) -> int:
+    print(f"amilpy: {path}: {exc}", file=sys.stderr)
+    return base.EXIT_FAILED
+
+
 def _done(command: str, path: str, model, result, args, signals, text) -> int:
     stem, out_dir = base._stem_and_dir(path, getattr(args, "out", None))
     outputs = Outputs(command, stem, out_dir, model=model, analysis=result,
@@ -120,6 +127,8 @@ def cmd_modes(args, path: str, signals) -> int:
     try:
         result = model.modes(at=args.at, method=args.method, rtol=args.rtol,
                              atol=args.atol, progress=progress, **params)
+    except FlowFailed as exc:
+        return _failed(path, exc)
     finally:
         progress.done()
     return _done("modes", path, model, result, args, signals, modes_text)
@@ -142,6 +151,8 @@ def cmd_periodic(args, path: str, signals) -> int:
     except NotConverged as exc:
         print(f"amilpy: {path}: no periodic orbit found: {exc}", file=sys.stderr)
         return base.EXIT_FAILED
+    except FlowFailed as exc:
+        return _failed(path, exc)
     finally:
         progress.done()
     return _done("periodic", path, model, orbit, args, signals, orbit_text)
@@ -171,6 +182,8 @@ def cmd_response(args, path: str, signals) -> int:
         print(f"amilpy: {path}: no periodic orbit at {name} = {start:g}: {exc}",
               file=sys.stderr)
         return base.EXIT_FAILED
+    except FlowFailed as exc:
+        return _failed(path, exc)
     finally:
         progress.done()
     code = _done("response", path, model, resp, args, signals, response_text)

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..diagnostics import AmilError
-from ..run import State
+from ..run import FlowFailed, State
 from ..run.dense import sample
 from .measure import Stats, measure
 from .problem import Closure, Evaluation, Problem
@@ -121,6 +121,21 @@ def _sized(problem: Problem, peak: Peak, period: float) -> None:
 
 
 # ------------------------------------------------------------------ settling
+
+def settled(problem: Problem, model, length: float | None
+            ) -> tuple[Problem, tuple[State, float, np.ndarray]]:
+    """`settle`, on the AUTO route instead when the problem chose DOP853 itself and
+    the settling run found the model stiff or could not go on."""
+    try:
+        out = settle(problem, length)
+        if not (problem.chosen and problem.flow.stiff):
+            return problem, out
+    except FlowFailed:
+        if not problem.chosen:
+            raise
+    problem = problem.on_auto(model)
+    return problem, settle(problem, length)
+
 
 def settle(problem: Problem, length: float | None) -> tuple[State, float, np.ndarray]:
     """Run towards the steady state; (base state, t0, first unknowns). Sets the
@@ -276,12 +291,8 @@ def periodic(model, closure: Closure, measure_names: list[str], *, settle_time=N
              progress: Callable[[int, float], None] | None = None,
              **params: float) -> Orbit:
     """The periodic steady state of `model` (an api.Model); see the module."""
-    problem = Problem(model, closure, params, method, rtol, atol)
-    base, t0, x = settle(problem, settle_time)
-    stiff = problem.stiff_fallback(model)
-    if stiff is not None:
-        problem = stiff
-        base, t0, x = settle(problem, settle_time)
+    problem, (base, t0, x) = settled(Problem(model, closure, params, method, rtol, atol),
+                                     model, settle_time)
     ev, history = newton(problem, x, base, t0, progress)
     return orbit_of(problem, ev, t0, history, measure_names)
 

@@ -258,11 +258,8 @@ class Problem:
         self.period_scale = 1.0
         self.symmetries = self._no_symmetry()
 
-    def stiff_fallback(self, model) -> Problem | None:
-        """The same problem on the AUTO route, when this one chose DOP853 itself and
-        found the model stiff (else None)."""
-        if not (self.chosen and self.flow.stiff):
-            return None
+    def on_auto(self, model) -> Problem:
+        """The same problem on the AUTO route."""
         opts = dict(self.options, method="AUTO")
         return Problem(model, self.closure, self.params, parameter=self.parameter, **opts)
 

@@ -46,7 +46,7 @@ from ..diagnostics import AmilError
 from ..result import EventKind
 from . import folds
 from .measure import Stats, Tracker
-from .periodic import UNIT, NotConverged, floquet, newton, settle
+from .periodic import UNIT, NotConverged, floquet, newton, settled
 from .problem import Closure, Evaluation, Problem
 
 DS0, DS_MAX, DS_MIN = 0.02, 0.15, 2e-5  # arclength steps, in units of the whole range
@@ -312,12 +312,8 @@ class Continuation:
         """The first point (settled, then Newton) and the tangent towards STOP."""
         first = Problem(self.model, self.closure, {**self.params, self.name: self.start},
                         parameter=self.name, **self.options)
-        self.base, self.t_start, x = settle(first, self.settle_time)
-        stiff = first.stiff_fallback(self.model)
-        if stiff is not None:
-            first = stiff
-            self.options["method"] = "AUTO"
-            self.base, self.t_start, x = settle(first, self.settle_time)
+        first, (self.base, self.t_start, x) = settled(first, self.model, self.settle_time)
+        self.options["method"] = first.options["method"]  # AUTO if settled found it stiff
         if first.parameter is not None:
             self.shared = first
         else:

@@ -55,6 +55,12 @@ from .variational import Tangent
 from .watch import SurfaceWatch, TooManySlides
 
 MAX_REFINES = 64  # steps taken again in pieces, per advance (see grazing.py)
+GIVE_UP = 8  # dips of one surface found in one advance before it is left alone
+
+
+class FlowFailed(AmilError):
+    """The integration of a flow failed (the run's message says where and why):
+    not a fault in the listing as written, but a run that cannot go on."""
 
 
 @dataclass(frozen=True)
@@ -169,13 +175,15 @@ class Flow:
         cur = Cursor(t0, y, list(state.modes), list(state.memory))
         events: list[Event] = []
         plan, until = self.plan, None  # a step taken again in pieces, up to `until`
+        misses: dict[int, int] = {}  # per surface
         for _ in range(MAX_REFINES):
             integ = Integrator(self.model, plan, self.c, self.watch, self.opts)
             end = t1 if until is None else until
             integ.window(cur.t, end)
             seen = observer
             if self.grazing:
-                guard = Grazing(self.c, self.plan)
+                guard = Grazing(self.c, self.plan, self.watch,
+                                {k for k, n in misses.items() if n >= GIVE_UP})
 
                 def seen(ta, tb, interp, m, z, guard=guard):
                     guard(ta, tb, interp, m, z)  # first: a missed dip aborts the step
@@ -184,15 +192,16 @@ class Flow:
             try:
                 integ.integrate(cur, end, stop_at_event=stop_at_event, observer=seen)
             except Missed as miss:
+                misses[miss.surface] = misses.get(miss.surface, 0) + 1
                 events += integ.events
                 cur = Cursor(miss.ta, miss.y, miss.modes, miss.memory)
                 plan = replace(self.plan, max_step=(miss.tb - miss.ta) / 16)
                 until = miss.tb
                 continue
             except Stop as stop:
-                raise AmilError(message(stop.kind, t=stop.t, **stop.fields)) from None
+                raise FlowFailed(message(stop.kind, t=stop.t, **stop.fields)) from None
             except (ArithmeticError, ValueError, TooManySlides) as exc:
-                raise AmilError(f"integration failed at TIME = {cur.t:.9g}: {exc}") from None
+                raise FlowFailed(f"integration failed at TIME = {cur.t:.9g}: {exc}") from None
             events += integ.events
             self.stiff = self.stiff or any(w.startswith("stiff") for w in integ.warnings)
             if until is None or integ.stop_reason is not None or cur.t >= t1 or \
@@ -200,7 +209,7 @@ class Flow:
                 break
             plan, until = self.plan, None
         else:
-            raise AmilError(f"integration failed at TIME = {cur.t:.9g}: a switching surface "
+            raise FlowFailed(f"integration failed at TIME = {cur.t:.9g}: a switching surface "
                             f"dips across zero inside the steps more than {MAX_REFINES} times")
         return State(cur.y.copy(), tuple(cur.m), tuple(cur.z), cur.t), events
 

@@ -11,7 +11,10 @@ where a surface comes closest to zero at an inner sample, and close compared
 with how far it moves over the step, that approach is located by Brent's method
 on the dense output. A sample or an approach on the wrong side raises `Missed`;
 `Flow.advance` then takes that step again in pieces of a sixteenth (and again,
-if need be), so the dip becomes two located crossings.
+if need be), so the dip becomes two located crossings. A surface whose branch
+feeds nothing the states see there (the loop follows such a crossing without an
+event) is left alone, and one that dips again in pieces ever smaller is given up
+for the rest of the flow (`Flow.advance` counts).
 """
 
 from __future__ import annotations
@@ -39,11 +42,11 @@ class Missed(Exception):
 class Grazing:
     """Observer of a flow: raises `Missed` (see the module)."""
 
-    def __init__(self, c, plan: RunPlan) -> None:
-        self.c = c
+    def __init__(self, c, plan: RunPlan, watch, ignore: set[int] = frozenset()) -> None:
+        self.c, self.watch = c, watch
         self.watched = [k for k in plan.watch_idx
                         if plan.watched[k].kind is SurfaceKind.SIGN
-                        and plan.watched[k].purpose is not Purpose.MEMORY]
+                        and plan.watched[k].purpose is not Purpose.MEMORY and k not in ignore]
         self.fractions = np.arange(0, SAMPLES + 2) / (SAMPLES + 1)  # the ends too
 
     def __call__(self, ta: float, tb: float, interp, m, z) -> None:
@@ -65,7 +68,9 @@ class Grazing:
             if np.min(v[1:-1]) < 0 or (0 < i < n - 1 and v[i] <= CLOSE * (np.max(v) - v[i])
                                        and self._dips(k, side, times[i - 1], times[i + 1],
                                                       interp, m, z)):
-                raise Missed(ta, tb, np.asarray(interp(ta), dtype=float), m, z, k)
+                # a branch nothing reads now crosses silently in the loop too
+                if not self.watch.silent(k, float(times[i]), ys[:, i], m, z):
+                    raise Missed(ta, tb, np.asarray(interp(ta), dtype=float), m, z, k)
 
     def _dips(self, k: int, side: float, a: float, b: float, interp, m, z) -> bool:
         """Whether surface k's closest approach between a and b crosses zero."""
