@@ -235,6 +235,64 @@ class Model:
                      progress=progress, step_point=step_point, seed=_seed(seed),
                      jobs=jobs, scheduler=scheduler, **params)
 
+    def modes(self, at: float = 0.0, method: str | None = None, rtol: float | None = None,
+              atol: float | None = None, progress=None, **params: float):
+        """The linear modes about the state at TIME `at` (`amilpy.analysis.linear`):
+        eigenvalues, natural frequencies, damping ratios, shapes, the Jacobian."""
+        from .analysis.linear import modes
+
+        self._check_method(method)
+        return modes(self, at, method=method, rtol=rtol, atol=atol, progress=progress,
+                     **params)
+
+    def periodic(self, period=None, angle=None, measure=(), settle: float | None = None,
+                 method: str | None = None, rtol: float | None = None,
+                 atol: float | None = None, progress=None, **params: float):
+        """The periodic steady state by shooting (`amilpy.analysis.periodic`): after
+        `period` (a number or an expression of constants, "2*PI/W"), or when state
+        NAME has advanced by VALUE (`angle="PHI=2*PI"`); raises NotConverged."""
+        from .analysis import Closure
+        from .analysis.periodic import periodic
+
+        self._check_method(method)
+        return periodic(self, Closure.of(period, angle), self._measures(measure),
+                        settle_time=settle, method=method, rtol=rtol, atol=atol,
+                        progress=progress, **params)
+
+    def response(self, name: str, start: float, stop: float, period=None, angle=None,
+                 measure=(), settle: float | None = None, method: str | None = None,
+                 rtol: float | None = None, atol: float | None = None, progress=None,
+                 **params: float):
+        """The response curve in data value `name` over [start, stop] by continuation
+        of the periodic orbit (`amilpy.analysis.response`): stable and unstable
+        points, folds located."""
+        from .analysis import Closure
+        from .analysis.response import response
+
+        self._check_method(method)
+        self._specs({**params, name: start})  # an unknown name is an error here
+        return response(self, name.upper(), float(start), float(stop),
+                        Closure.of(period, angle), self._measures(measure),
+                        settle_time=settle, method=method, rtol=rtol, atol=atol,
+                        progress=progress, **params)
+
+    def _measures(self, names) -> list[str]:
+        from .sweep import default_measure
+
+        names = [names] if isinstance(names, str) else list(names)
+        out = [n.upper() for n in names] or [default_measure(self.ir)]
+        for n in out:
+            if n not in self.ir.variables:
+                hint = nearest(n, set(self.ir.variables))
+                raise AmilError(f"{n} is not a variable of the model"
+                                + (f"; did you mean {hint}?" if hint else ""))
+        return out
+
+    @staticmethod
+    def _check_method(method: str | None) -> None:
+        if method is not None and route_for(method) is None:
+            raise AmilError(f"unknown integration method {method}")
+
     def __repr__(self) -> str:
         return f"<amilpy.Model {self.name!r}: {len(self.ir.states)} states, " \
                f"{len(self.ir.runs)} runs>"

@@ -1,4 +1,5 @@
-"""The command line: `amilpy run`, `sweep`, `report`, `check`.
+"""The command line: `amilpy run`, `sweep`, `report`, `check`, and the analyses
+`modes`, `periodic`, `response` (cli_analysis.py).
 
 Exit codes (the highest that applies, over every file given):
   0  success
@@ -222,6 +223,9 @@ def _parser() -> argparse.ArgumentParser:
 
     chk = sub.add_parser("check", help="parse and check listings, do not run them")
     chk.add_argument("files", nargs="+", metavar="FILE", help="the listing(s) (.amil)")
+    from .cli_analysis import add_parsers
+
+    add_parsers(sub)
     return p
 
 
@@ -504,12 +508,15 @@ def main(argv: list[str] | None = None) -> int:
         print(f"amilpy {args.command}: {several[0]} names one file; with several listings "
               "run them one at a time", file=sys.stderr)
         return EXIT_USAGE
+    from .cli_analysis import COMMANDS as ANALYSES
+
+    command = {**COMMANDS, **ANALYSES}[args.command]
     signals = Signals()
     signals.install()
     try:
         code = EXIT_OK
         for path in paths:
-            code = max(code, _one(COMMANDS[args.command], args, path, signals))
+            code = max(code, _one(command, args, path, signals))
             if signals.received:
                 break  # an interrupt stops the files not yet started too
         return code

@@ -137,6 +137,14 @@ def parse_range(text: str) -> tuple[str, list[float]]:
     return name.strip().upper(), values
 
 
+def default_measure(model) -> str:
+    """The variable a sweep or an analysis measures when none is named: the first
+    OUTPUT/PRINT variable of the first run, else the first variable (an ir.Model)."""
+    named = [n for r in model.runs[0].reports if r.kind in ("OUTPUT", "PRINT")
+             for n in r.names]
+    return named[0] if named else model.variables[0]
+
+
 def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
           carry_state: bool = False, settle: float = 0.0, measure: str | None = None,
           method: str | None = None, rtol: float | None = None, atol: float | None = None,
@@ -160,11 +168,7 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
         raise AmilError("a grid of two data values cannot carry the state or sweep both "
                         "ways: each point is a run of its own")
     variables = model.ir.variables
-    if measure is None:
-        reports = model.ir.runs[0].reports
-        named = [n for r in reports if r.kind in ("OUTPUT", "PRINT") for n in r.names]
-        measure = named[0] if named else variables[0]
-    measure = measure.upper()
+    measure = (measure or default_measure(model.ir)).upper()
     if measure not in variables:
         raise AmilError(f"{measure} is not a variable of the model")
     second = grid[0].upper() if grid else None

@@ -139,3 +139,14 @@ def test_steppoint_runs(tmp_path):
     # the same loop written by hand: the rows agree to round-off
     assert all(r["max_diff"] <= 1e-12 for r in rows)
     assert (tmp_path / "steppoint.md").stat().st_size > 0
+
+
+def test_response_vs_sweep_runs(tmp_path):
+    import response_vs_sweep as rvs
+
+    res = rvs.main(quick=True, out_dir=str(tmp_path))
+    names = [r["name"] for r in res["rows"]]
+    assert names == ["response", "sweep 5 s"]
+    assert res["gap"] < 1e-6  # the truth is a fixed point of the SciPy reference's map
+    assert res["rows"][0]["max"] < 1e-4  # the curve, read between its points
+    assert (tmp_path / "response_vs_sweep.md").stat().st_size > 0

@@ -4,10 +4,11 @@ against closed forms: a linear oscillator (e^{AT}) and a dead-zone oscillator
 whose flow crosses two switches (the saltation at each in the matrix)."""
 
 import math
+import os
 
 import numpy as np
 import pytest
-from conftest import METHODS
+from conftest import METHODS, ROOT
 from scipy.linalg import expm
 
 import amilpy
@@ -104,3 +105,47 @@ def test_flow_beyond_fintim_and_from_a_given_state():
     end, events = flow.advance(start, 0.0, 8.0)
     assert end.y[0] == pytest.approx(1.0 - math.exp(-2.0), abs=1e-8)
     assert [e.time for e in events] == [6.0]
+
+
+GRAZE = """PARAM D = 0.999999, K = 100.0
+X = INTGRL(0.0, V)
+V = INTGRL(1.0, -X + FCNSW(X - D, 0.0, 0.0, -K*(X - D)))
+TIMER FINTIM = 3.0, OUTDEL = 0.5
+END
+"""
+
+
+def test_a_dip_inside_one_step_is_found_by_the_grazing_guard():
+    # X = sin(t) rises above D = 1 - 1e-6 for 2.8 ms around t = pi/2, inside one
+    # step of DOP853 (~0.2 s): the loop, which looks at step ends, sees nothing;
+    # with the guard the flow takes that step again in pieces and locates both
+    # crossings, at asin(D) and pi - asin(D) to the integration's accuracy
+    flow = amilpy.loads(GRAZE).flow(method="DOP853", rtol=1e-10, atol=1e-12)
+    _, events = flow.advance(flow.initial_state(), 0.0, 3.0)
+    assert events == []
+    flow.grazing = True
+    _, events = flow.advance(flow.initial_state(), 0.0, 3.0)
+    t_in = math.asin(0.999999)
+    assert [e.time for e in events] == pytest.approx([t_in, math.pi - t_in], abs=1e-6)
+
+
+def test_a_data_value_as_a_state_of_one_flow():
+    # the continuation's trick (analysis.problem.parameter_model): W, read only in
+    # DYNAMIC, becomes a state whose derivative is 0; a flow started with W = 71
+    # ends where a flow compiled with W = 71 does. ZETA is read by INITIAL: not so.
+    from amilpy.analysis.problem import parameter_model
+    from amilpy.run import Cache
+
+    model = amilpy.load(os.path.join(ROOT, "models", "hoist_backlash.amil"))
+    spec = model._specs({"W": 70.0})[0]
+    moved, moved_spec = parameter_model(model.ir, spec, "W")
+    assert "W" not in moved_spec.data and moved.states[-1].name == "W"
+    assert parameter_model(model.ir, spec, "ZETA") is None
+    one = Flow(moved, moved_spec, Options(rtol=1e-10, atol=1e-12), Cache())
+    y = np.array(one.initial_state().y)
+    y[one.state_names.index("W")] = 71.0
+    end, _ = one.advance(one.state(y), 0.0, 0.5)
+    other = model.flow(rtol=1e-10, atol=1e-12, W=71.0)
+    want, _ = other.advance(other.initial_state(), 0.0, 0.5)
+    got = [end.y[one.state_names.index(n)] for n in other.state_names]
+    assert got == pytest.approx(list(want.y), rel=1e-9, abs=1e-12)

@@ -55,11 +55,12 @@ class PlotOptions:
 class Outputs:
     """What a command hands its writers."""
 
-    command: str  # "run" or "sweep"
+    command: str  # "run", "sweep", "modes", "periodic" or "response"
     stem: str  # the listing's file name without .amil
     out_dir: str  # --out, else the listing's folder
     runs: list[Run] = field(default_factory=list)
     sweep: object = None  # a sweep.Sweep
+    analysis: object = None  # analysis.Modes, Orbit or Response
     model: object = None  # the api.Model (units, labels)
     dialect: str = "plain"  # --csv-dialect
     plot: PlotOptions = field(default_factory=PlotOptions)
@@ -124,6 +125,25 @@ def _sweep_png(o: Outputs, _path: str | None) -> list[str]:
     return [plot_sweep(o.sweep, sweep_png_path(o.out_dir, o.stem), title, axis_units)]
 
 
+def _analysis_csv(o: Outputs, path: str | None) -> list[str]:
+    from . import analysis, sheets
+
+    rows = {"modes": analysis.modes_csv, "periodic": analysis.orbit_csv,
+            "response": analysis.response_csv}[o.command]
+    header, body = rows(o.analysis)
+    partial = o.command == "response" and not o.analysis.complete
+    sheets.write_csv_rows(path, header, body, o.dialect,
+                          ["partial: the curve ends short of the range"] if partial else ())
+    return [path]
+
+
+def _analysis_png(o: Outputs, _path: str | None) -> list[str]:
+    from . import analysis
+
+    draw = {"periodic": analysis.plot_orbit, "response": analysis.plot_response}[o.command]
+    return [draw(o.analysis, analysis.png_path(o.out_dir, o.stem, o.command), o.model)]
+
+
 WRITERS: tuple[Writer, ...] = (
     Writer("prepare", "run", None, False,
            "PREPARE in the listing: its variables as NAME.csv in --out", _prepare,
@@ -143,6 +163,22 @@ WRITERS: tuple[Writer, ...] = (
     Writer("sweep-png", "sweep", "--plot", False,
            "draw the characteristic (half peak-to-peak against the value) as "
            "NAME_sweep.png next to the model or in --out", _sweep_png),
+    Writer("modes-csv", "modes", "--csv", True,
+           "write the modes as CSV: RE, IM, WN, FHZ, ZETA, the shape per state (real "
+           "parts, then IM_<state>)", _analysis_csv),
+    Writer("periodic-csv", "periodic", "--csv", True,
+           "write the orbit as CSV: PERIOD, MIN_/MAX_/MEAN_/HALF_PP_ of each measured "
+           "variable, STABLE, MU_MAX", _analysis_csv),
+    Writer("periodic-png", "periodic", "--plot", False,
+           "draw the measured variables over one period as NAME_periodic.png next to "
+           "the model or in --out", _analysis_png),
+    Writer("response-csv", "response", "--csv", True,
+           "write the curve as CSV, one row per orbit along it (folds in place, "
+           "KIND fold)", _analysis_csv),
+    Writer("response-png", "response", "--plot", False,
+           "draw half peak-to-peak against the value (stable solid, unstable dashed, "
+           "folds marked) as NAME_response.png next to the model or in --out",
+           _analysis_png),
 )
 
 

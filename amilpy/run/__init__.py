@@ -11,16 +11,20 @@
     record.py    rows on the output grid, RANGE brackets, the Run
     simulate.py  simulate(): one run from start to Run, RANGE located, TERMINAL
     flow.py      Flow.advance(): the loop as a function, with its sensitivity
+    variational.py  its monodromy by the variational equations and saltations
+    grazing.py   a surface dipping across zero inside a step, found
+    jacobian.py  the field's Jacobian (the one place it is made)
+    dense.py     a step's dense output at several instants
     faults.py    the one phrasing of an arithmetic fault in generated code
 
 The documented internal API: `simulate`, `Options`, `prepare` (with `Cache`
-and `Prepared`), `Flow` and `State`.
+and `Prepared`), `Flow`, `State` and `FlowFailed`.
 """
 
-from .flow import Flow, State
+from .flow import Flow, FlowFailed, State
 from .plan import DEFAULTS, Options, RunPlan, Tolerances
 from .prepare import Cache, Prepared, prepare
 from .simulate import simulate
 
-__all__ = ["DEFAULTS", "Cache", "Flow", "Options", "Prepared", "RunPlan", "State",
+__all__ = ["DEFAULTS", "Cache", "Flow", "FlowFailed", "Options", "Prepared", "RunPlan", "State",
            "Tolerances", "prepare", "simulate"]

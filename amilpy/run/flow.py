@@ -40,22 +40,31 @@ expect about 1E-4.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from .. import ir
-from ..codegen.jacobian import finite_difference
-from ..codegen.jacobian import for_compiled as jacobian_for
 from ..diagnostics import AmilError
 from ..outcome import message
 from ..result import Event
+from .grazing import Grazing, Missed
+from .jacobian import field_jacobian, model_jacobian
 from .loop import Cursor, Integrator, Stop
 from .plan import SLIDE, Options
 from .prepare import Cache, prepare
 from .simulate import start_cursor
 from .steppoint import StepPoint
+from .variational import Tangent
 from .watch import SurfaceWatch, TooManySlides
+
+MAX_REFINES = 64  # steps taken again in pieces, per advance (see grazing.py)
+GIVE_UP = 8  # dips of one surface found in one advance before it is left alone
+
+
+class FlowFailed(AmilError):
+    """The integration of a flow failed (the run's message says where and why):
+    not a fault in the listing as written, but a run that cannot go on."""
 
 
 @dataclass(frozen=True)
@@ -81,6 +90,13 @@ class Flow:
         prepared = prepare(model, spec, self.opts, cache)
         self.c, self.plan = prepared.compiled, prepared.plan
         self.watch = SurfaceWatch(self.c, self.plan)
+        # monodromy by the variational equations where they apply (else differences)
+        self.variational = True
+        self.last_sensitivity = ""  # how the last monodromy was made, and why
+        # look inside every step for a surface dipping across zero (grazing.py):
+        # the analyses need it, a plain flow stays the run's own integration
+        self.grazing = False
+        self.stiff = False  # a step of an explicit route was limited by stability
 
     @property
     def compiled(self):
@@ -102,12 +118,16 @@ class Flow:
         """d f / d y of the vector field `field` integrates from `state` at `t` (the
         branches frozen as `state.modes` says): from the model's own equations, each
         switch differentiated in its branch (`codegen.jacobian`, exact to rounding);
-        while a surface slides, by central differences of the combined field."""
+        while a surface slides, or where the model's own cannot be had, by refined
+        central differences of the field (`run.jacobian`)."""
         y = np.array(state.y, dtype=float)
-        if SLIDE in state.modes:
-            return finite_difference(self.field(state, t), t, y)
-        return jacobian_for(self.c).dense(t, y.tolist(), list(state.modes),
-                                          list(state.memory))
+        if SLIDE not in state.modes:
+            jac = model_jacobian(self.c, t, y, state.modes, state.memory)
+            if jac is not None:
+                return jac
+        f, tol = self.field(state, t), self.plan.tol
+        return field_jacobian(lambda v: f(t, np.asarray(v)), y, tol.atol / tol.rtol,
+                              refine=True)
 
     @property
     def surfaces(self) -> list[str]:
@@ -120,68 +140,128 @@ class Flow:
         cur = self._start(np.array(self.c.y0, dtype=float), list(self.c.z0), None)
         return State(cur.y, tuple(cur.m), tuple(cur.z), cur.t)
 
-    def state(self, y, modes=None, memory=None) -> State:
-        """A state at the run's t0 from given values; branches chosen as at a start
-        when not given, memory from the run's start when not given."""
+    def state(self, y, modes=None, memory=None, t: float | None = None) -> State:
+        """A state at `t` (default the run's t0) from given values; branches chosen
+        as at a start when not given, memory from the run's start when not given."""
         z = list(self.c.z0) if memory is None else list(memory)
-        cur = self._start(np.array(y, dtype=float), z, None if modes is None else list(modes))
+        cur = self._start(np.array(y, dtype=float), z, None if modes is None else list(modes),
+                          t)
         return State(cur.y, tuple(cur.m), tuple(cur.z), cur.t)
 
-    def _integrator(self) -> Integrator | StepPoint:
+    def _integrator(self, plan=None) -> Integrator | StepPoint:
         cls = StepPoint if self.plan.step_point else Integrator
-        return cls(self.model, self.plan, self.c, self.watch, self.opts)
+        return cls(self.model, plan or self.plan, self.c, self.watch, self.opts)
 
-    def _start(self, y: np.ndarray, z: list[float], m) -> Cursor:
+    def _start(self, y: np.ndarray, z: list[float], m, t: float | None = None) -> Cursor:
         try:
             if self.plan.step_point:
                 # the branches as they read at t0; memory is updated at each step point,
                 # the first one included, when the flow advances
-                m = self.c.modes_literal(self.plan.t0, y.tolist(), [0.0] * len(
+                when = self.plan.t0 if t is None else t
+                m = self.c.modes_literal(when, y.tolist(), [0.0] * len(
                     self.plan.watched), z) if m is None else m
-                return Cursor(self.plan.t0, y, list(m), list(z))
-            return start_cursor(self.c, self.plan, self.watch, self.opts, y, z, m)
+                return Cursor(when, y, list(m), list(z))
+            return start_cursor(self.c, self.plan, self.watch, self.opts, y, z, m, t)
         except (ArithmeticError, ValueError) as exc:
-            raise AmilError(f"cannot start at TIME = {self.plan.t0:g}: {exc}") from None
+            when = self.plan.t0 if t is None else t
+            raise AmilError(f"cannot start at TIME = {when:g}: {exc}") from None
 
     def advance(self, state: State, t0: float, t1: float, *, stop_at_event: bool = False,
-                sensitivity: bool = False):
+                sensitivity: bool = False, columns=None, scale=None, observer=None):
         """Integrate from `state` at `t0` to `t1` (or to the first event, or a
         FINISH/TERMT). Returns (state, events) or, with sensitivity, (state,
-        events, M) with M = d(final y)/d(initial y) (see the module docstring)."""
+        events, M) with M = d(final y)/d(initial y) (see the module docstring).
+        `columns`: the initial states M differentiates by (indices; default all,
+        M then has one column each); `scale`: each state's typical size, for the
+        differencing steps (default: the rule in the module docstring);
+        `observer(ta, tb, interpolant, modes, memory)` sees every accepted step
+        of the flow itself (not of the perturbed ones)."""
+        tangent = None
+        # (step-point mode has no dense output for the variational equations to follow)
+        if sensitivity and self.variational and not stop_at_event and \
+                not self.plan.step_point:
+            n = len(state.y)
+            floor = self.plan.tol.atol / self.plan.tol.rtol
+            if scale is not None:
+                floor = np.maximum(floor, scale)
+            tangent = Tangent(self.c, self.watch, floor, n,
+                              range(n) if columns is None else columns)
+            seen = observer
+
+            def observer(ta, tb, interp, m, z):
+                tangent(ta, tb, interp, m, z)
+                if seen is not None:
+                    seen(ta, tb, interp, m, z)
         end, events = self._advance(np.array(state.y, dtype=float), state, t0, t1,
-                                    stop_at_event)
+                                    stop_at_event, observer)
         if not sensitivity:
             return end, events
-        return end, events, self._monodromy(state, t0, t1, stop_at_event)
+        if tangent is not None and tangent.failed is None:
+            self.last_sensitivity = "variational equations"
+            return end, events, tangent.phi
+        self.last_sensitivity = "differences" + (f" ({tangent.failed})" if tangent else "")
+        return end, events, self._monodromy(state, t0, t1, stop_at_event, columns, scale)
 
     def _advance(self, y: np.ndarray, state: State, t0: float, t1: float,
-                 stop_at_event: bool) -> tuple[State, list[Event]]:
-        integ = self._integrator()
-        integ.window(t0, t1)
+                 stop_at_event: bool, observer=None) -> tuple[State, list[Event]]:
         cur = Cursor(t0, y, list(state.modes), list(state.memory))
-        try:
-            integ.integrate(cur, t1, stop_at_event=stop_at_event)
-        except Stop as stop:
-            raise AmilError(message(stop.kind, t=stop.t, **stop.fields)) from None
-        except (ArithmeticError, ValueError, TooManySlides) as exc:
-            raise AmilError(f"integration failed at TIME = {cur.t:.9g}: {exc}") from None
-        return State(cur.y.copy(), tuple(cur.m), tuple(cur.z), cur.t), integ.events
+        events: list[Event] = []
+        plan, until = self.plan, None  # a step taken again in pieces, up to `until`
+        misses: dict[int, int] = {}  # per surface
+        for _ in range(MAX_REFINES):
+            integ = self._integrator(plan)
+            end = t1 if until is None else until
+            integ.window(cur.t, end)
+            seen = observer
+            if self.grazing and not self.plan.step_point:
+                guard = Grazing(self.c, self.plan, self.watch,
+                                {k for k, n in misses.items() if n >= GIVE_UP})
 
-    def _monodromy(self, state: State, t0: float, t1: float, stop_at_event: bool
-                   ) -> np.ndarray:
+                def seen(ta, tb, interp, m, z, guard=guard):
+                    guard(ta, tb, interp, m, z)  # first: a missed dip aborts the step
+                    if observer is not None:
+                        observer(ta, tb, interp, m, z)
+            try:
+                integ.integrate(cur, end, stop_at_event=stop_at_event, observer=seen)
+            except Missed as miss:
+                misses[miss.surface] = misses.get(miss.surface, 0) + 1
+                events += integ.events
+                cur = Cursor(miss.ta, miss.y, miss.modes, miss.memory)
+                plan = replace(self.plan, max_step=(miss.tb - miss.ta) / 16)
+                until = miss.tb
+                continue
+            except Stop as stop:
+                raise FlowFailed(message(stop.kind, t=stop.t, **stop.fields)) from None
+            except (ArithmeticError, ValueError, TooManySlides) as exc:
+                raise FlowFailed(f"integration failed at TIME = {cur.t:.9g}: {exc}") from None
+            events += integ.events
+            self.stiff = self.stiff or any(w.startswith("stiff") for w in integ.warnings)
+            if until is None or integ.stop_reason is not None or cur.t >= t1 or \
+                    (stop_at_event and events):
+                break
+            plan, until = self.plan, None
+        else:
+            raise FlowFailed(f"integration failed at TIME = {cur.t:.9g}: a switching surface "
+                            f"dips across zero inside the steps more than {MAX_REFINES} times")
+        return State(cur.y.copy(), tuple(cur.m), tuple(cur.z), cur.t), events
+
+    def _monodromy(self, state: State, t0: float, t1: float, stop_at_event: bool,
+                   columns=None, scale=None) -> np.ndarray:
         y = np.array(state.y, dtype=float)
         n = len(y)
         tol = self.plan.tol
         rel = np.cbrt(tol.rtol)
-        scale = np.maximum(np.maximum(np.abs(y), np.mean(np.abs(y)) if n else 0.0),
-                           tol.atol / tol.rtol)
+        if scale is None:
+            scale = np.maximum(np.abs(y), np.mean(np.abs(y)) if n else 0.0)
+        scale = np.maximum(np.asarray(scale, dtype=float), tol.atol / tol.rtol)
         h = rel * scale
-        out = np.empty((n, n))
-        for j in range(n):
+        columns = range(n) if columns is None else list(columns)
+        out = np.empty((n, len(columns)))
+        for k, j in enumerate(columns):
             up, down = y.copy(), y.copy()
             up[j] += h[j]
             down[j] -= h[j]
             hi, _ = self._advance(up, state, t0, t1, stop_at_event)
             lo, _ = self._advance(down, state, t0, t1, stop_at_event)
-            out[:, j] = (hi.y - lo.y) / (up[j] - down[j])
+            out[:, k] = (hi.y - lo.y) / (up[j] - down[j])
         return out

@@ -46,10 +46,12 @@ def simulate(model: ir.Model, spec: ir.RunSpec, options: Options | None = None,
 
 
 def start_cursor(c: Compiled, plan: RunPlan, watch: SurfaceWatch, opts: Options,
-                 y: np.ndarray, z: list[float], m: list[float] | None) -> Cursor:
-    """The state a run (or a flow) starts from: the branches in force at t0 (given,
-    or chosen the way the dynamics go), MODINT resets and memory applied."""
-    t0 = plan.t0
+                 y: np.ndarray, z: list[float], m: list[float] | None,
+                 t0: float | None = None) -> Cursor:
+    """The state a run (or a flow) starts from at t0 (default the run's): the
+    branches in force (given, or chosen the way the dynamics go), MODINT resets
+    and memory applied."""
+    t0 = plan.t0 if t0 is None else t0
     if m is None or len(m) != len(plan.watched):
         m = watch.choose_modes(t0, y, z, [0.0] * len(plan.watched), set(), first=True)
     y = watch.apply_resets(y, m, t0, z)

@@ -1,0 +1,198 @@
+"""The command line's analyses: `amilpy modes`, `periodic` and `response`
+(amilpy.analysis computes, amilpy.output.analysis prints and draws). Options,
+exit codes and the order of things (files first, then the printout) are those
+of `amilpy.cli`; a periodic orbit Newton cannot find, an integration that cannot
+go on, or a curve that cannot be followed over the whole range, is exit 3 with
+what was found."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from . import cli as base
+from .console import Progress, write_out
+from .diagnostics import nearest
+from .output.writers import Outputs
+from .run.flow import FlowFailed
+
+
+def _span(text: str) -> tuple[str, float, float]:
+    """NAME=START:STOP -> (NAME, START, STOP)."""
+    try:
+        name, spec = text.split("=", 1)
+        start, stop = (float(x.replace("D", "E").replace("d", "e")) for x in spec.split(":"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"write the range NAME=START:STOP, e.g. W=67.5:73, got {text!r}") from None
+    if not name.strip().isidentifier():
+        raise argparse.ArgumentTypeError(f"{name.strip()!r} is not a name (NAME=START:STOP)")
+    if not (math.isfinite(start) and math.isfinite(stop)) or start == stop:
+        raise argparse.ArgumentTypeError(f"START and STOP must be finite and differ, got "
+                                         f"{text!r}")
+    return name.strip().upper(), start, stop
+
+
+def _angle(text: str) -> str:
+    if "=" not in text or not text.split("=", 1)[0].strip().isidentifier():
+        raise argparse.ArgumentTypeError(f"takes NAME=VALUE, e.g. PHI=2*PI, got {text!r}")
+    return text
+
+
+def _common(p: argparse.ArgumentParser, command: str, closure: bool = True) -> None:
+    """The options every analysis takes."""
+    p.add_argument("file", metavar="FILE", help="the listing (.amil)")
+    if closure:
+        group = p.add_mutually_exclusive_group(required=True)
+        group.add_argument("--period", metavar="EXPR",
+                           help="forced motion of known period: a number or an expression "
+                                "of the listing's constants (2*PI/W)")
+        group.add_argument("--angle", metavar="NAME=VALUE", type=_angle,
+                           help="the period is over when state NAME has advanced by VALUE "
+                                "(a crank angle, a forcing phase: PHI=2*PI)")
+        p.add_argument("--settle", type=base.NONNEGATIVE, metavar="S",
+                       help="settling run before Newton, seconds (default: FINTIM)")
+        p.add_argument("--measure", metavar="VAR", action="append", default=[],
+                       help="a variable measured over the period (repeatable; default: "
+                            "the first OUTPUT/PRINT variable)")
+        p.add_argument("--out", metavar="DIR", help="where the PNG goes (default: next to "
+                                                    "the listing)")
+    base._writer_options(p, command)
+    base._csv_dialect(p)
+    p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
+                   help="override a PARAM/CONST/INCON value (repeatable)")
+    p.add_argument("--method", metavar="NAME", type=base._method,
+                   help="integration method (default: the listing's METHOD, else DOP853, "
+                        "or AUTO when that finds the model stiff)")
+    p.add_argument("--rtol", type=base.POSITIVE, metavar="X",
+                   help="relative tolerance (default 1e-9 for periodic and response)")
+    p.add_argument("--atol", type=base.POSITIVE, metavar="X",
+                   help="absolute tolerance (default 1e-12 for periodic and response)")
+    p.add_argument("--quiet", action="store_true", help="no printout, only files and errors")
+
+
+def add_parsers(sub) -> None:
+    m = sub.add_parser("modes", help="linear modes: eigenvalues, natural frequencies, "
+                                     "damping ratios and shapes about a state")
+    _common(m, "modes", closure=False)
+    m.add_argument("--at", type=base.FINITE, default=0.0, metavar="TIME",
+                   help="linearise about the state the run reaches at this TIME (default 0: "
+                        "its initial state)")
+    p = sub.add_parser("periodic", help="the periodic steady state by shooting: period, "
+                                        "extremes, Floquet multipliers, stability")
+    _common(p, "periodic")
+    r = sub.add_parser("response", help="a response curve by continuation of the periodic "
+                                        "orbit: stable and unstable branches, folds")
+    _common(r, "response")
+    r.add_argument("span", metavar="NAME=START:STOP", type=_span,
+                   help="the data value followed and its range")
+
+
+def _prepare(args, path: str):
+    from .api import load
+
+    model = load(path)
+    params = base._parse_sets(args.set)
+    base._check_sets(model, params)
+    for name in getattr(args, "measure", []):
+        if name.upper() not in model.ir.variables:
+            hint = nearest(name, set(model.ir.variables))
+            raise base.UsageError(f"--measure {name}: not a variable of this listing"
+                                  + (f"; did you mean {hint}?" if hint else ""))
+    return model, params
+
+
+def _failed(path: str, exc) -> int:
+    print(f"amilpy: {path}: {exc}", file=sys.stderr)
+    return base.EXIT_FAILED
+
+
+def _done(command: str, path: str, model, result, args, signals, text) -> int:
+    stem, out_dir = base._stem_and_dir(path, getattr(args, "out", None))
+    outputs = Outputs(command, stem, out_dir, model=model, analysis=result,
+                      dialect=args.csv_dialect)
+    written, errors = base._write_outputs(outputs, args, signals)
+    if not args.quiet and not signals.held_back:
+        write_out(lambda out: out.write(text(result, model)))
+    return base._finish(path, written, errors, args.quiet, signals)
+
+
+def cmd_modes(args, path: str, signals) -> int:
+    from .output.analysis import modes_text
+
+    model, params = _prepare(args, path)
+    progress = Progress(not args.quiet)
+    progress.prefix = f"modes: to TIME = {args.at:g}  "
+    try:
+        result = model.modes(at=args.at, method=args.method, rtol=args.rtol,
+                             atol=args.atol, progress=progress, **params)
+    except FlowFailed as exc:
+        return _failed(path, exc)
+    finally:
+        progress.done()
+    return _done("modes", path, model, result, args, signals, modes_text)
+
+
+def cmd_periodic(args, path: str, signals) -> int:
+    from .analysis import NotConverged
+    from .output.analysis import orbit_text
+
+    model, params = _prepare(args, path)
+    progress = Progress(not args.quiet)
+
+    def step(i: int, residual: float) -> None:
+        progress.line(f"periodic: Newton step {i}, residual {residual:.2e}")
+
+    try:
+        orbit = model.periodic(period=args.period, angle=args.angle, measure=args.measure,
+                               settle=args.settle, method=args.method, rtol=args.rtol,
+                               atol=args.atol, progress=step, **params)
+    except NotConverged as exc:
+        print(f"amilpy: {path}: no periodic orbit found: {exc}", file=sys.stderr)
+        return base.EXIT_FAILED
+    except FlowFailed as exc:
+        return _failed(path, exc)
+    finally:
+        progress.done()
+    return _done("periodic", path, model, orbit, args, signals, orbit_text)
+
+
+def cmd_response(args, path: str, signals) -> int:
+    from .analysis import NotConverged
+    from .output.analysis import response_text
+
+    name, start, stop = args.span
+    model, params = _prepare(args, path)
+    if name not in model.ir.data_names:
+        hint = nearest(name, set(model.ir.data_names))
+        raise base.UsageError(f"{name} is not a PARAM/CONST/INCON value of this listing"
+                              + (f"; did you mean {hint}?" if hint else ""))
+    progress = Progress(not args.quiet)
+
+    def point(value: float, count: int, residual: float) -> None:
+        progress.line(f"response: {name} = {value:.7g}  point {count}  "
+                      f"residual {residual:.1e}")
+
+    try:
+        resp = model.response(name, start, stop, period=args.period, angle=args.angle,
+                              measure=args.measure, settle=args.settle, method=args.method,
+                              rtol=args.rtol, atol=args.atol, progress=point, **params)
+    except NotConverged as exc:
+        print(f"amilpy: {path}: no periodic orbit at {name} = {start:g}: {exc}",
+              file=sys.stderr)
+        return base.EXIT_FAILED
+    except FlowFailed as exc:
+        return _failed(path, exc)
+    finally:
+        progress.done()
+    code = _done("response", path, model, resp, args, signals, response_text)
+    if not resp.complete:
+        print(f"amilpy: {path}: the curve could not be followed past {name} = "
+              f"{resp.points[-1].value:.7g}; what was found is printed and written",
+              file=sys.stderr)
+        code = max(code, base.EXIT_FAILED)
+    return code
+
+
+COMMANDS = {"modes": cmd_modes, "periodic": cmd_periodic, "response": cmd_response}

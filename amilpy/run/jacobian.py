@@ -1,0 +1,91 @@
+"""The Jacobian of the vector field, d(dy/dt)/dy, for the analyses: the one place
+they take it from (the linear modes, the variational equations of the flow map and
+the symmetries of a periodic orbit). `model_jacobian` gives the model's own
+(`codegen.jacobian`: each switch differentiated in its branch, exact to rounding);
+where there is none (a sliding surface's combined field, a construct the symbolic
+route does not take, a derivative that faults at the point) the analyses fall back
+on central differences, `field_jacobian`:
+
+Column j is (f(y + h_j e_j) - f(y - h_j e_j)) / (2 h_j) with
+h_j = eps**(1/3) * max(|y_j|, floor_j); the caller's floor is the state's size
+(along an orbit), at least ABSERR_j / RELERR_j. Truncation, h^2 |f'''| / 6, and
+rounding, eps |terms| / h, are then of one size: about eps**(2/3) = 4E-11 of
+the entries when the terms that make up a derivative are of the order of the
+derivative at the state's scale. A state that is zero where the Jacobian is
+taken (a speed at an equilibrium) has no scale of its own, and terms that
+cancel (a spring holding a load: C1*X1 - MN) leave rounding of eps*|C1*X1|/h.
+`refine=True` (one-off Jacobians: modes, symmetries) therefore tries each
+column at h, 4h, ..., 65536h and keeps the largest step whose estimate agrees
+with the next smaller step's to 1E-10 of the column (so its truncation error
+is below that; where no two agree so well, the pair that agrees best); the
+change is its error estimate. A field linear in the states (a frozen switch
+branch, springs, dashpots) then comes out exact to rounding at a large step.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+STEP = float(np.cbrt(np.finfo(float).eps))  # 6.06E-6
+REFINE = tuple(4.0 ** k for k in range(9))  # up to 0.4 of the state's size
+AGREE = 1e-10
+
+
+def _column(f, y: list[float], j: int, h: float) -> list[float]:
+    up, down = list(y), list(y)
+    up[j] += h
+    down[j] -= h
+    width = up[j] - down[j]
+    return [(a - b) / width for a, b in zip(f(up), f(down), strict=True)]
+
+
+def model_jacobian(c, t: float, y, m, z) -> np.ndarray | None:
+    """d rhs/d y of a run's compiled model (`codegen.Compiled`) at (t, y) in the
+    branches m, from its equations; None where it cannot be had there."""
+    from ..codegen.jacobian import for_compiled
+
+    try:
+        jac = for_compiled(c).dense(t, [float(v) for v in y], list(m), list(z))
+    except (NotImplementedError, ArithmeticError, ValueError):
+        return None
+    return jac if np.all(np.isfinite(jac)) else None
+
+
+def field_jacobian(f: Callable[[list[float]], object], y, floor,
+                   refine: bool = False, with_error: bool = False):
+    """d f/d y at y (f: the field at fixed TIME, branches and memory, of a list of
+    the states' values); with
+    `with_error`, (J, the estimated error of each column) (refined steps)."""
+    if refine or with_error:
+        jac, error = refined(f, y, floor)
+        return (jac, error) if with_error else jac
+    return differences(f, y, floor)
+
+
+def differences(f, y, floor) -> np.ndarray:
+    y = [float(v) for v in y]
+    h = (STEP * np.maximum(np.abs(y), floor)).tolist()
+    if not y:
+        return np.empty((0, 0))
+    return np.array([_column(f, y, j, h[j]) for j in range(len(y))]).T
+
+
+def refined(f, y: np.ndarray, floor) -> tuple[np.ndarray, np.ndarray]:
+    """(J, estimated error of each column): each column at the largest step whose
+    estimate agrees with the next smaller one to AGREE of the column's size (its
+    truncation error is then below that), else where two estimates agree best."""
+    y = [float(v) for v in y]
+    h = STEP * np.maximum(np.abs(y), floor)
+    out = np.empty((len(y), len(y)))
+    error = np.zeros(len(y))
+    for j in range(len(y)):
+        tries = [np.array(_column(f, y, j, k * h[j])) for k in REFINE]
+        size = max(float(np.max(np.abs(t))) for t in tries)
+        changes = [float(np.max(np.abs(b - a))) for a, b in zip(tries[:-1], tries[1:], strict=True)]
+        good = [k for k, c in enumerate(changes) if c <= AGREE * size]
+        best = good[-1] if good else int(np.argmin(changes))
+        out[:, j] = tries[best]
+        error[j] = changes[best]
+    return out, error

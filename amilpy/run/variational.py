@@ -1,0 +1,156 @@
+"""The variational equations of the flow map, integrated along the flow: the
+monodromy matrix with the saltation matrix of each located switch.
+
+`Tangent` observes the run loop's accepted steps (each cut at the located
+switches, so it lies in one branch) and carries Phi = d y(t)/d y(t0):
+
+- across a step [ta, tb], Phi' = A(t) Phi with A the field's Jacobian
+  (`jacobian.field_jacobian`) on the step's dense output, by the sixth-order
+  Magnus method on three Gauss-Legendre nodes (Blanes, Casas & Ros 2000):
+  exp(Omega) Phi, exact for a branch linear in the states whatever the step
+  (and an exponential, so stiff modes decay as they should). A step over which
+  h |A(c3) - A(c1)| > 0.5 is halved (at most 64 pieces);
+- at a switch at t_e on surface s(t, y) = 0, from field f- to f+,
+      Phi <- (I + (f+ - f-) n^T / (n . f- + ds/dt)) Phi,    n = ds/dy,
+  surface after surface when several change at once (exact when they are one
+  surface written twice, like the hoist's |Y| = DH and Y = DH). A switch on
+  TIME alone (n = 0) has no saltation.
+
+What it does not handle it says (`Tangent.failed`), and the flow map then
+takes central differences of whole flows instead: a sliding motion, a state
+reset (MODINT), a memory value the field reads changing along the way, a
+crossing where the flow is tangent to the surface (n . f- ~ 0).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.linalg import expm
+
+from .dense import sample
+from .jacobian import STEP, field_jacobian, model_jacobian
+from .plan import SLIDE
+
+_C = np.array([0.5 - math.sqrt(15) / 10, 0.5, 0.5 + math.sqrt(15) / 10])
+VARIATION = 0.5  # h |A(c3) - A(c1)| above this: the step is halved
+MAX_DEPTH = 6
+
+
+def _comm(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return a @ b - b @ a
+
+
+def magnus6(a1: np.ndarray, a2: np.ndarray, a3: np.ndarray, h: float) -> np.ndarray:
+    """exp(Omega) over a step h from A at the three Gauss-Legendre nodes."""
+    b1 = h * a2
+    b2 = math.sqrt(15) * h / 3 * (a3 - a1)
+    b3 = 10 * h / 3 * (a3 - 2 * a2 + a1)
+    c1 = _comm(b1, b2)
+    c2 = -_comm(b1, 2 * b3 + c1) / 60
+    return expm(b1 + b3 / 12 + _comm(-20 * b1 - b3 + c1, b2 + c2) / 240)
+
+
+class Tangent:
+    """Observer of a flow: Phi = d y(t)/d y(t0)[:, columns] (see the module)."""
+
+    def __init__(self, c, watch, floor: np.ndarray, n: int, columns) -> None:
+        self.c, self.watch, self.floor = c, watch, floor
+        self.phi = np.eye(n)[:, list(columns)]
+        self.prev: tuple | None = None  # (tb, y(tb), modes, memory) of the last step
+        self.failed: str | None = None
+
+    def jacobian(self, t: float, y: np.ndarray, m, z) -> np.ndarray:
+        jac = model_jacobian(self.c, t, y, m, z)
+        if jac is not None:
+            return jac
+        rhs = self.c.rhs
+        return field_jacobian(lambda v: rhs(t, v, m, z), y, self.floor)
+
+    def __call__(self, ta: float, tb: float, interp, m, z) -> None:
+        if self.failed is not None:
+            return
+        if SLIDE in m:
+            self.failed = "a surface slides"
+            return
+        ya = np.asarray(interp(ta), dtype=float)
+        if self.prev is not None:
+            self._join(ta, ya, m, z)
+            if self.failed is not None:
+                return
+        if tb > ta:
+            self.phi = self._propagate(ta, tb, interp, m, z, 0) @ self.phi
+        self.prev = (tb, np.asarray(interp(tb), dtype=float), list(m), list(z))
+
+    def _propagate(self, ta: float, tb: float, interp, m, z, depth: int) -> np.ndarray:
+        h = tb - ta
+        t1, t2, t3 = ta + _C * h
+        ys = sample(interp, (t1, t2, t3))
+        a1 = self.jacobian(t1, ys[:, 0], m, z)
+        a3 = self.jacobian(t3, ys[:, 2], m, z)
+        change = float(np.max(np.abs(a3 - a1)))
+        if change <= 1e-13 * float(np.max(np.abs(a1))):
+            return expm(h * a1)  # the same Jacobian along the step: a linear branch
+        if h * change > VARIATION and depth < MAX_DEPTH:
+            mid = 0.5 * (ta + tb)
+            return self._propagate(mid, tb, interp, m, z, depth + 1) @ \
+                self._propagate(ta, mid, interp, m, z, depth + 1)
+        a2 = self.jacobian(t2, ys[:, 1], m, z)
+        return magnus6(a1, a2, a3, h)
+
+    def _join(self, t: float, y: np.ndarray, m, z) -> None:
+        """What happened between the last step and this one: switches (saltation),
+        or something the variational equations do not follow."""
+        t_prev, y_prev, m_prev, z_prev = self.prev
+        if self.watch.resets and m != m_prev and \
+                np.any(np.abs(y - y_prev) > 1e-6 * scale_of(y, self.floor)):
+            self.failed = "a state is reset"
+            return
+        if z != z_prev and m == m_prev and \
+                self.c.rhs(t, y.tolist(), m, z) != self.c.rhs(t, y.tolist(), m, z_prev):
+            self.failed = "a memory value the derivatives read changes"
+            return
+        current, mem = list(m_prev), z_prev
+        for k in range(len(m)):
+            if m[k] == m_prev[k]:
+                continue
+            after = list(current)
+            after[k] = m[k]
+            s = self._saltation(k, t, y, current, after, mem, z)
+            if s is None:
+                return
+            self.phi = s @ self.phi
+            current, mem = after, z
+
+    def _saltation(self, k: int, t: float, y: np.ndarray, before, after, z_before, z_after
+                   ) -> np.ndarray | None:
+        c = self.c
+        g = self.watch.watched[k].gradient
+        yl = y.tolist()
+        if g is None:
+            h = STEP * scale_of(y, self.floor)
+            g = np.empty(len(y))
+            for j in range(len(y)):
+                up, down = y.copy(), y.copy()
+                up[j] += h[j]
+                down[j] -= h[j]
+                g[j] = (c.surf(t, up.tolist(), before, z_before)[k] -
+                        c.surf(t, down.tolist(), before, z_before)[k]) / (up[j] - down[j])
+        g = np.asarray(g, dtype=float)
+        if not np.any(g):
+            return np.eye(len(y))  # a switch on TIME alone: the instant does not move
+        ht = STEP * max(abs(t), 1.0)
+        st = (c.surf(t + ht, yl, before, z_before)[k] -
+              c.surf(t - ht, yl, before, z_before)[k]) / (2 * ht)
+        f_minus = np.asarray(c.rhs(t, yl, before, z_before), dtype=float)
+        f_plus = np.asarray(c.rhs(t, yl, after, z_after), dtype=float)
+        rate = float(g @ f_minus) + st
+        if abs(rate) <= 1e-9 * (float(np.abs(g) @ np.abs(f_minus)) + abs(st)) or rate == 0:
+            self.failed = "the flow is tangent to a switching surface"
+            return None
+        return np.eye(len(y)) + np.outer(f_plus - f_minus, g) / rate
+
+
+def scale_of(y: np.ndarray, floor: np.ndarray) -> np.ndarray:
+    return np.maximum(np.abs(y), floor)
