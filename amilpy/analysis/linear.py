@@ -29,6 +29,7 @@ class Linearisation:
     jacobian: np.ndarray  # J[i, j] = d(dy_i/dt)/d y_j
     names: list[str]  # the states, in the order of J's rows and columns
     error: float  # estimated error of J, relative to its largest entry
+    how: str = "the model's equations"  # or "central differences"
 
 
 def linearise(flow: Flow, state: State, t: float) -> tuple[np.ndarray, list[str]]:
@@ -44,7 +45,9 @@ def jacobian(flow: Flow, state: State, t: float) -> Linearisation:
     jac = None if SLIDE in state.modes else model_jacobian(flow.compiled, t, y, state.modes,
                                                            state.memory)
     error = np.zeros(len(y))  # the model's own: exact to rounding
+    how = "the model's equations"
     if jac is None:
+        how = "central differences"
         f, tol = flow.field(state, t), flow.plan.tol
         try:
             jac, error = field_jacobian(lambda v: f(t, np.asarray(v)), y,
@@ -57,7 +60,7 @@ def jacobian(flow: Flow, state: State, t: float) -> Linearisation:
                         f"finite near {flow.state_names[bad]} = {y[bad]:g}")
     size = float(np.max(np.abs(jac))) if jac.size else 0.0
     return Linearisation(jac, flow.state_names,
-                         float(np.max(error)) / size if size and len(error) else 0.0)
+                         float(np.max(error)) / size if size and len(error) else 0.0, how)
 
 
 @dataclass(frozen=True)
@@ -93,6 +96,7 @@ class Modes:
     jacobian: np.ndarray
     error: float  # the Jacobian's estimated relative error
     modes: list[Mode]  # zero modes first, then by natural frequency
+    how: str = "the model's equations"  # the Jacobian's source (see `Linearisation`)
 
 
 def mode_list(jac: np.ndarray) -> list[Mode]:
@@ -131,4 +135,5 @@ def modes(model, at: float = 0.0, *, method: str | None = None, rtol: float | No
         if state.t < at:
             raise AmilError(f"the run stops at TIME = {state.t:.9g}, before --at {at:g}")
     lin = jacobian(flow, state, at)
-    return Modes(at, state, lin.names, lin.jacobian, lin.error, mode_list(lin.jacobian))
+    return Modes(at, state, lin.names, lin.jacobian, lin.error, mode_list(lin.jacobian),
+                 lin.how)
