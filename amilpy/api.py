@@ -56,16 +56,18 @@ class Model:
     def parameters(self) -> dict[str, float]:
         return dict(self.ir.runs[0].data)
 
-    def python_source(self, **params: float) -> str:
+    def python_source(self, weather_dir: str | list[str] | None = None,
+                      **params: float) -> str:
         """The generated Python of the first run (what `--show-python` prints)."""
-        from .run import prepare
+        from .run import Options, prepare
 
         spec = self._specs(params)[0]
         if self.ir.acsl is not None:
             from .run.acsl import prepare_acsl
 
             return prepare_acsl(self.ir, spec, cache=self.cache).compiled.source
-        return prepare(self.ir, spec, cache=self.cache).compiled.source
+        opts = Options(weather_dirs=_folders(weather_dir))
+        return prepare(self.ir, spec, opts, cache=self.cache).compiled.source
 
     def flow(self, method: str | None = None, rtol: float | None = None,
              atol: float | None = None, run: int = 0, **params: float) -> Flow:
@@ -113,6 +115,7 @@ class Model:
             max_events: int | None = None, max_time: float | None = None,
             fintim: float | None = None, progress=None, advice: bool = True,
             step_point: bool | None = None, seed: float | None = None,
+            weather_dir: str | list[str] | None = None,
             jobs: int = 1, scheduler: str | None = None, done=None,
             **params: float) -> list[Run]:
         """Run every run of the listing (value lists, END groups); data values
@@ -122,6 +125,8 @@ class Model:
         translators' loop: switches read at the step points, nothing located), False
         takes METHOD EULER/RECT out of it; None: the listing's choice. `seed` seeds
         the random streams (GAUSS, UNIF, OU...) instead of the listing's RNSEED.
+        `weather_dir`: folder(s) of CABO weather files for an FST listing's WEATHER,
+        looked in after the listing's own (see `amilpy.weather`).
 
         `jobs`: worker processes for the runs, which are independent (the command
         line uses every core); `scheduler`: the address of a Dask scheduler to run
@@ -143,7 +148,8 @@ class Model:
                 raise AmilError(f"{unknown[0]} is not a variable of the model")
         opts = Options(method=method, rtol=rtol, atol=atol, events=events, outputs=outputs,
                        max_time=max_time, progress=progress, fintim=fintim,
-                       step_point=step_point, seed=_seed(seed))
+                       step_point=step_point, seed=_seed(seed),
+                       weather_dirs=_folders(weather_dir))
         if max_steps:
             opts.max_steps = max_steps
         if max_events:
@@ -223,6 +229,7 @@ class Model:
               rtol: float | None = None, atol: float | None = None,
               fintim: float | None = None, keep_runs: bool = False, progress=None,
               step_point: bool | None = None, seed: float | None = None,
+              weather_dir: str | list[str] | None = None,
               jobs: int = 1, scheduler: str | None = None, **params: float):
         """One run per value of data value `name` (see `amilpy.sweep.sweep`; `jobs`,
         `scheduler` as for `run`, for a sweep that does not carry its state)."""
@@ -233,7 +240,8 @@ class Model:
                      carry_state=carry_state, settle=settle, measure=measure, method=method,
                      rtol=rtol, atol=atol, fintim=fintim, keep_runs=keep_runs,
                      progress=progress, step_point=step_point, seed=_seed(seed),
-                     jobs=jobs, scheduler=scheduler, **params)
+                     weather_dirs=_folders(weather_dir), jobs=jobs, scheduler=scheduler,
+                     **params)
 
     def modes(self, at: float = 0.0, method: str | None = None, rtol: float | None = None,
               atol: float | None = None, progress=None, **params: float):
@@ -296,6 +304,13 @@ class Model:
     def __repr__(self) -> str:
         return f"<amilpy.Model {self.name!r}: {len(self.ir.states)} states, " \
                f"{len(self.ir.runs)} runs>"
+
+
+def _folders(value) -> tuple[str, ...]:
+    """One folder or several (weather_dir=)."""
+    if value is None:
+        return ()
+    return (str(value),) if isinstance(value, (str, os.PathLike)) else tuple(map(str, value))
 
 
 def _seed(seed) -> float | None:

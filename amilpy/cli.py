@@ -103,6 +103,10 @@ def _model_options(p: argparse.ArgumentParser, run_limits: bool = True) -> None:
     p.add_argument("--seed", type=FINITE, metavar="N",
                    help="seed of the random streams (GAUSS, UNIF, OU...), instead of "
                         "the listing's RNSEED (default 1)")
+    p.add_argument("--weather-dir", metavar="DIR", action="append", default=[],
+                   help="a folder of CABO weather files for an FST listing's WEATHER, "
+                        "looked in after WTRDIR, the listing's folder and its weather/ "
+                        "and ../weather/ (repeatable)")
     if run_limits:
         p.add_argument("--max-time", type=POSITIVE, metavar="S",
                        help="wall-clock limit per run, seconds (reading, checking and "
@@ -316,7 +320,7 @@ def _load(args, path: str):
         model = load(path)
         params = _parse_sets(args.set)
         _check_sets(model, params)
-        model.python_source(**params)
+        model.python_source(weather_dir=getattr(args, "weather_dir", None), **params)
     return model, params
 
 
@@ -324,14 +328,16 @@ def cmd_run(args, path: str, signals: Signals) -> int:
     model, params = _load(args, path)
     plot = _plot_choice(args, model)
     if args.show_python:
-        write_out(lambda out: out.write(model.python_source(**params) + "\n"))
+        write_out(lambda out: out.write(model.python_source(weather_dir=args.weather_dir,
+                                                            **params) + "\n"))
     progress = Progress(not args.quiet)
     try:
         runs = model.run(method=args.method, rtol=args.rtol, atol=args.atol,
                          progress=progress, max_time=args.max_time, max_steps=args.max_steps,
                          max_events=args.max_events, fintim=args.fintim,
                          advice=not args.no_advice, step_point=args.step_point,
-                         seed=args.seed, jobs=_jobs(args), scheduler=args.scheduler,
+                         seed=args.seed, weather_dir=args.weather_dir, jobs=_jobs(args),
+                         scheduler=args.scheduler,
                          **params)
     finally:
         progress.done()
@@ -393,6 +399,7 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
                        method=args.method, rtol=args.rtol, atol=args.atol, fintim=args.fintim,
                        keep_runs=False, progress=point, run_progress=progress,
                        step_point=args.step_point, seed=args.seed,
+                       weather_dirs=tuple(args.weather_dir),
                        jobs=1 if args.carry_state else _jobs(args), scheduler=args.scheduler,
                        grid=grid, **params)
     finally:
@@ -430,7 +437,7 @@ def cmd_report(args, path: str, signals: Signals) -> int:
     runs = model.run(method=args.method, rtol=args.rtol, atol=args.atol, fintim=args.fintim,
                      max_time=args.max_time, max_steps=args.max_steps,
                      max_events=args.max_events, step_point=args.step_point, seed=args.seed,
-                     **params)
+                     weather_dir=args.weather_dir, **params)
     errors: list[OutputError] = []
     with signals.held():
         written = write_report(model, runs, path, args.out, formats, args.lang, plot, errors)

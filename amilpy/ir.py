@@ -357,6 +357,7 @@ class RunSpec:
     # None: the method's default (routes.step_point_mode)
     step_point: bool | None = None
     timer_spans: dict[str, Span] = field(default_factory=dict)  # where each TIMER key is
+    weather: object | None = None  # FST's WEATHER statements (weather.WeatherSpec)
 
 
 @dataclass
@@ -383,6 +384,13 @@ class Model:
     # names -> where defined, for reports and hints
     spans: dict[str, Span] = field(default_factory=dict)
     data_kinds: dict[str, str] = field(default_factory=dict)  # PARAM, CONST or INCON
+    # FST's WEATHER: the weather names the model reads (a table each, filled per run
+    # from the CABO files: `WEATHER_TABLE + name`), and the lines that read them
+    weather: list[str] = field(default_factory=list)
+    weather_lines: list[Span] = field(default_factory=list)
+    # TERMT/FINISH surfaces whose condition holds at zero too (T >= TSTOP): where a
+    # step point lands exactly on it (step-point mode), the run stops there
+    closed: set[int] = field(default_factory=set)
     # compiled functions per set of constants: repeated runs do not recompile
     compiled: dict = field(default_factory=dict, repr=False, compare=False)
     # INITIAL values per set of data, output grids per timer: likewise

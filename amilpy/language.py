@@ -54,6 +54,20 @@ REPORT_KEYWORDS: dict[str, str] = {
 
 TOLERANCE_KEYWORDS: tuple[str, ...] = ("RELERR", "ABSERR")
 
+# FST's TIMER (section 13): STTIME is the start time (FINTIM then an end time); these
+# other keys of FST's TIMER are read and have no meaning here.
+START_KEY = "STTIME"
+IGNORED_TIMER_KEYS: tuple[str, ...] = ("IPFORM", "COPINF", "DELTMP", "IDTMP")
+# TRANSLATION_GENERAL DRIVER = '...' -> (METHOD, step-point mode or None: the method's)
+DRIVERS: dict[str, tuple[str, bool | None]] = {"EUDRIV": ("RECT", True),
+                                                "RKDRIV": ("RKS", None)}
+# its other keys: what each becomes (None: read and ignored)
+TRANSLATION_KEYS: dict[str, str | None] = {"DRIVER": "METHOD", "EPS": "RELERR",
+                                           "DELMAX": "DELMAX", "TRACE": None}
+TRANSLATION_FSE_DRIVER = "EUDRIV"  # TRANSLATION_FSE is FST's Euler translator
+# WEATHER items (section 13) -> what they give the weather reader
+WEATHER_KEYS: tuple[str, ...] = ("WTRDIR", "CNTR", "ISTN", "IYEAR")
+
 # What a line is, for the reader and for every message that quotes one: a line
 # ends at \n, \r\n or \r, and nowhere else (not at U+2028, U+0085, a form feed
 # or a vertical tab, where str.splitlines would also break).

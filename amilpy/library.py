@@ -502,6 +502,18 @@ register(Func("AFGEN", Kind.TABLE, "AFGEN(F, X)", "linear interpolation in a FUN
               lookup="AFGEN"))
 register(Func("NLFGEN", Kind.TABLE, "NLFGEN(F, X)",
               "quadratic interpolation in a FUNCTION table", lookup="NLFGEN"))
+# FST's weather names (section 13) read the day's value, floor(TIME), from a table per
+# name that a run fills from the CABO files (`run.prepare`): WEATHER_TABLE + name (in
+# lower case: no listing can name it). The value is held in memory, read again where
+# the run restarts (every day's start is a breakpoint): within a day's segment every
+# stage of a step sees that day, the stage at the segment's end included. Neither is
+# callable from a listing.
+WEATHER_FUNC, WEATHER_LOOKUP, WEATHER_TABLE = ".WEATHER", "WDAY", "wx_"
+WEATHER_HOLD = ".WEATHER_HOLD"
+register(Func(WEATHER_FUNC, Kind.TABLE, ".WEATHER(F, X)", "the day's weather value",
+              lookup=WEATHER_LOOKUP))
+register(Func(WEATHER_HOLD, Kind.MEMORY, ".WEATHER_HOLD(X)", "X as at the last restart",
+              memory=MemorySpec("1", ("0.0",), "Z0", ("A",), every_step=False)))
 register(Func("LINT", Kind.TABLE, "LINT(F, X)",
               "linear interpolation in a FUNCTION table; outside it the end segments are "
               "extended, with a warning", lookup="LINT", extends=True))

@@ -102,6 +102,29 @@ def _outside(table: Table, x: float) -> float | None:
     return None
 
 
+class DayTable:
+    """One weather variable by day (FST's WEATHER): `values[d - first]` holds from
+    TIME = d to d + 1; a missing value (NaN) read is an error naming the file and day
+    (`missing[d]`)."""
+
+    def __init__(self, first: int, values: tuple[float, ...], missing: dict[int, str]) -> None:
+        self.first, self.values, self.missing = first, values, missing
+
+    def __repr__(self) -> str:  # the cache keys of a run read it
+        return f"DayTable({self.first}, {self.values!r})"
+
+
+def weather_day(table: DayTable, x: float) -> float:
+    """The value of the day floor(x)."""
+    if x != x:
+        return math.nan
+    day = math.floor(x)
+    k = day - table.first
+    if 0 <= k < len(table.values) and table.values[k] == table.values[k]:
+        return table.values[k]
+    raise ValueError(table.missing.get(day, f"no weather for day {day} (TIME = {x:g})"))
+
+
 def afgen(table: Table, x: float) -> float:
     """Linear interpolation; the end values hold outside the table; NaN for NaN."""
     end = _outside(table, x)
@@ -405,6 +428,7 @@ HELPERS: dict[str, Callable] = {
     "LINT": lint, "PULSE_ON": pulse_on, "IMPULS_STEP": impulse_step, "DRAW": draw,
     "SGN": sign, "LEVEL": level, "WHERE": _where, "ALL": _all, "ANY": _any,
     "NITER": loop_count, "RANGE": range,  # FOR/DO loops of procedural code
+    "WDAY": weather_day,
 }
 
 
@@ -427,6 +451,7 @@ def vector_helpers() -> dict[str, Callable]:
         "DERIV": each(deriv), "IMPULS": each(impulse_at), "POW": np.power,
         "DELAY": each(delay, excluded={3, 4, 5}),
         "LINT": lambda table, x: each(lambda v: lint(table, v))(x),
+        "WDAY": lambda table, x: each(lambda v: weather_day(table, v))(x),
         "PULSE_ON": each(pulse_on), "IMPULS_STEP": each(impulse_step),
         "LEVEL": lambda v: np.ceil(np.asarray(v) - 0.5), "SGN": np.sign,
         "WHERE": np.where, "ALL": many(np.logical_and), "ANY": many(np.logical_or),

@@ -150,7 +150,7 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
           method: str | None = None, rtol: float | None = None, atol: float | None = None,
           fintim: float | None = None, keep_runs: bool = False, progress=None,
           run_progress=None, step_point: bool | None = None, seed: float | None = None,
-          jobs: int = 1, scheduler: str | None = None,
+          weather_dirs: tuple[str, ...] = (), jobs: int = 1, scheduler: str | None = None,
           grid: tuple[str, list[float]] | None = None, **params: float) -> Sweep:
     """Run `model` once per value of data value `name` and measure `measure`.
     `progress(i, n, value)` is called after each point, `run_progress` during each
@@ -182,7 +182,7 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
     def options(start=None) -> Options:
         return Options(method=method, rtol=rtol, atol=atol, start=start, fintim=fintim,
                        progress=run_progress, extrema=(measure,), settle=settle,
-                       step_point=step_point, seed=seed)
+                       step_point=step_point, seed=seed, weather_dirs=weather_dirs)
 
     if carry_state:
         _carried(model, result, sequence, options, params, keep_runs, progress)

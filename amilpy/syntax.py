@@ -261,8 +261,10 @@ class Tolerance(Node):
 
 @dataclass(frozen=True)
 class Finish(Node):
-    settings: tuple[Setting, ...]
+    settings: tuple[Setting, ...]  # FINISH X = v: where X crosses v
     span: Span
+    # FINISH X > v (FST): where the relation first holds, as TERMT(X > v)
+    relations: tuple[Termt, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -448,15 +450,49 @@ class Declare(Node):
     span: Span
 
 
+@dataclass(frozen=True)
+class Item(Node):
+    """NAME = 'text' or NAME = number in an FST WEATHER or TRANSLATION_* statement."""
+
+    name: str
+    value: str | float
+    span: Span
+
+
+@dataclass(frozen=True)
+class Translation(Node):
+    """TRANSLATION_GENERAL DRIVER = 'EUDRIV', ...; TRANSLATION_FSE (FST, section 13)."""
+
+    kind: str  # TRANSLATION_GENERAL or TRANSLATION_FSE
+    items: tuple[Item, ...]
+    span: Span
+
+
+@dataclass(frozen=True)
+class Weather(Node):
+    """WEATHER WTRDIR = '...'; CNTR = 'NLD'; ISTN = 1; IYEAR = 1990 (FST)."""
+
+    items: tuple[Item, ...]
+    span: Span
+
+
+@dataclass(frozen=True)
+class DefineCall(Node):
+    """DEFINE_CALL NAME(...): a Fortran routine's interface, read and not needed."""
+
+    span: Span
+
+
 Statement = (
     Assign | Data | Table | Timer | Method | Tolerance | Finish | Termt | Report | Label
     | Title | Section | End | Stop | If | Procedural | Loop | FunctionDef | Block | Schedule
-    | Interval | Cinterval | Variable | Control | Declare
+    | Interval | Cinterval | Variable | Control | Declare | Translation | Weather | DefineCall
 )
 STATEMENTS: tuple[type[Node], ...] = (Assign, Data, Table, Timer, Method, Tolerance, Finish,
                                       Termt, Report, Label, Title, Section, End, Stop, If,
                                       Procedural, Loop, FunctionDef, Block, Schedule, Interval,
-                                      Cinterval, Variable, Control, Declare)
+                                      Cinterval, Variable, Control, Declare, Translation,
+                                      Weather, DefineCall)
 
 
 @dataclass(frozen=True)

@@ -24,8 +24,6 @@ import math
 import os
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from .diagnostics import AmilError, Diagnostic, Span
 
 # the daily columns of a CABO row after station, year and day, as the listing names them
@@ -148,7 +146,7 @@ class Weather:
             path = find_file(name, self.dirs)
             if path is None:
                 where = ", ".join(d or "." for d in dict.fromkeys(self.dirs))
-                uses = ", ".join(str(s.line) for s in self.used_at[:8])
+                uses = ", ".join(str(n) for n in sorted({s.line for s in self.used_at})[:8])
                 raise AmilError([Diagnostic(
                     f"the weather file {name} (station {self.spec.country} "
                     f"{self.spec.station}, {year}) is not in {where}",
@@ -174,24 +172,50 @@ class Weather:
 
     def value(self, name: str, t: float) -> float:
         """The weather variable `name` at TIME t."""
+        value, missing = self.lookup(name, t)
+        if missing:
+            raise AmilError(missing)
+        return value
+
+    def lookup(self, name: str, t: float) -> tuple[float, str | None]:
+        """(value, None), or (NaN, what is missing: the file, day and variable) where
+        the file has no value; a file that is not there is an error at once."""
         year, day = self.locate(t)
         if name == "DOY":
-            return float(day)
+            return float(day), None
         if name == "YEAR":
-            return float(year)
+            return float(year), None
         data = self._year(year)
         if name in STATION:
-            return (data.long, data.lat, data.elev)[STATION.index(name)]
+            return (data.long, data.lat, data.elev)[STATION.index(name)], None
         row = data.days.get(day)
         k = DAILY.index(name)
         if row is None or row[k] == MISSING:
             what = "has no line for" if row is None else "has -99 (missing) for"
-            raise AmilError(f"the weather file {data.path} {what} {name} on day {day} "
-                            f"of {year} (TIME = {t:g})")
-        return row[k] * SCALE.get(name, 1.0)
+            return math.nan, (f"the weather file {data.path} {what} {name} on day {day} "
+                              f"of {year} (TIME = {t:g})")
+        return row[k] * SCALE.get(name, 1.0), None
 
-    def values(self, name: str, ts: np.ndarray) -> np.ndarray:
-        """`value` at every instant of ts."""
+    def tables(self, names: list[str], t0: float, t1: float) -> dict[str, object]:
+        """A `runtime.DayTable` per name over the days of [t0, t1], and one more."""
+        from .runtime import DayTable
+
+        first, last = math.floor(t0), math.floor(t1) + 1
+        out = {}
+        for name in names:
+            values, missing = [], {}
+            for day in range(first, last + 1):
+                value, problem = self.lookup(name, float(day))
+                values.append(value)
+                if problem:
+                    missing[day] = problem
+            out[name] = DayTable(first, tuple(values), missing)
+        return out
+
+    def values(self, name: str, ts):
+        """`value` at every instant of ts (a NumPy array)."""
+        import numpy as np
+
         return np.array([self.value(name, float(t)) for t in np.asarray(ts, float)])
 
     def day_starts(self, t0: float, t1: float) -> list[float]:

@@ -58,7 +58,7 @@ def test_families_hold_every_expression_node():
     # a node added to syntax or ir must join a family, or no complete visitor sees it
     families = set(ir.EXPRESSIONS) | set(syntax.STATEMENTS) | set(ir.CODE)
     # pieces of statements, not visited alone
-    parts = {syntax.DataItem, syntax.Setting, syntax.Branch}
+    parts = {syntax.DataItem, syntax.Setting, syntax.Branch, syntax.Item}
     assert set(NODES.values()) == families | parts
     assert set(syntax.EXPRESSIONS) < set(ir.EXPRESSIONS)
 

@@ -43,6 +43,11 @@ def check(program: ast.Program, name: str | None = None) -> ir.Model:
     data = RunGroups(rep).read(groups)
     names = Names(rep, program, data)
     low = Lowering(rep)
+    if data.weather is not None:
+        # FST's weather names, where the listing does not define them itself
+        own = set(data.names) | set(assigned_names([st for section in parts.values()
+                                                    for st in section]))
+        low.weather = frozenset(names.weather_names - own)
 
     # INITIAL: plain assignments, evaluated once, sorted
     initial: list[ir.Equation] = []
@@ -91,10 +96,17 @@ def check(program: ast.Program, name: str | None = None) -> ir.Model:
 
     names.check_references(parts, low.before_run,
                            {s.name for s in low.states if not s.hidden})
+    # a weather name a report asks for is a variable of the run (PRINT RDD)
+    reported = {n: st.span for st in data.reports for n in st.names if n in low.weather}
+    dynamic += [ir.Equation(n, low.expr(ast.Name(n, span), n), span)
+                for n, span in reported.items()]
     initial = order.sort(initial, "INITIAL", rep, low.switches, low.memories)
     dynamic = order.sort(dynamic, "DYNAMIC", rep, low.switches, low.memories, units)
     for s in data.finish:
         low.finish(s)
+    for st in data.finish_relations:
+        if names.check_calls(st.expr, None, "DYNAMIC"):
+            low.termt(st, finish=True)
     for st, cond in termts:
         if names.check_calls(st.expr, None, "DYNAMIC"):
             low.termt(st, cond)
@@ -107,6 +119,9 @@ def check(program: ast.Program, name: str | None = None) -> ir.Model:
         switches=low.switches, surfaces=low.surfaces, memories=low.memories, runs=data.runs,
         data_names=data.names, spans={**data.spans, **names.defined}, data_kinds=data.kinds,
         units=units, warnings=low.warnings, terminal_code=terminal_code,
+        weather=sorted(low.weather_used), closed=low.closed,
+        weather_lines=sorted({s for spans in low.weather_used.values() for s in spans},
+                             key=lambda s: (s.line, s.column)),
     )
     classify(model)
     rep.raise_if_any()

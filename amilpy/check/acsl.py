@@ -127,7 +127,8 @@ class _Check:
             switches=low.switches, surfaces=low.surfaces, memories=low.memories,
             runs=data.runs, data_names=data.names,
             spans={**data.spans, **self.names.defined}, data_kinds=data.kinds, units=units,
-            acsl=acsl, warnings=low.warnings + self.warnings(initial, kept, initial_names))
+            acsl=acsl, warnings=low.warnings + self.warnings(initial, kept, initial_names),
+            closed=low.closed)
         classify(model)
         rep.raise_if_any()
         return model

@@ -13,13 +13,25 @@ from dataclasses import dataclass, field, replace
 from .. import ir
 from .. import syntax as ast
 from ..diagnostics import Reporter, Span, nearest
-from ..language import RESERVED, TIME, TIMER_KEYS
+from ..language import (
+    DRIVERS,
+    IGNORED_TIMER_KEYS,
+    RESERVED,
+    START_KEY,
+    TIME,
+    TIMER_KEYS,
+    TRANSLATION_FSE_DRIVER,
+    TRANSLATION_KEYS,
+    WEATHER_KEYS,
+)
 from ..routes import method_names, route_for
 from ..syntax import Visitor
+from ..weather import WeatherSpec
 
 # what may stand in a run group after the first END
 DATA_STATEMENTS = (ast.Data, ast.Table, ast.Timer, ast.Method, ast.Tolerance, ast.Finish,
-                   ast.Report, ast.Label, ast.Title)
+                   ast.Report, ast.Label, ast.Title, ast.Translation, ast.Weather,
+                   ast.DefineCall)
 
 Table = tuple[tuple[float, ...], tuple[float, ...]]
 
@@ -36,6 +48,8 @@ class Data:
     finish: list[ast.Setting]  # FINISH items of the first group
     reports: list[ast.Report]  # every report statement, for the name checks
     tolerances: list[tuple[str, ast.Setting]]  # (RELERR or ABSERR, NAME = value)
+    finish_relations: list[ast.Termt] = field(default_factory=list)  # FINISH X > v
+    weather: WeatherSpec | None = None  # the WEATHER statements' station and year
 
 
 def split_groups(program: ast.Program) -> list[list[ast.Node]]:
@@ -148,6 +162,10 @@ class RunGroups(Visitor):
         self.reports: list[ir.Report] = []
         self.titles: list[str] = []
         self.finish: list[ast.Setting] = []
+        self.finish_relations: list[ast.Termt] = []
+        self.driver: tuple[str, Span] | None = None  # FST's DRIVER and where
+        self.weather_items: dict[str, ast.Item] = {}
+        self.weather_span: Span | None = None
         self.all_reports: list[ast.Report] = []
         self.all_tolerances: list[tuple[str, ast.Setting]] = []
         self.runs: list[ir.RunSpec] = []
@@ -157,6 +175,7 @@ class RunGroups(Visitor):
     def read(self, groups: list[list[ast.Node]], needs_fintim: bool = True) -> Data:
         """`needs_fintim`: CSMP form; in ACSL form a TERMT may bound the run instead."""
         finish_first: list[ast.Setting] = []
+        relations_first: list[ast.Termt] = []
         for gi, group in enumerate(groups):
             self.group = _Group(
                 gi, reports=[] if any(isinstance(s, ast.Report) for s in group) else None,
@@ -170,6 +189,13 @@ class RunGroups(Visitor):
                 self.titles = self.group.titles
             if gi == 0:
                 finish_first = list(self.finish)
+                relations_first = list(self.finish_relations)
+                self.check_driver()
+                start, end = self.timer.get(START_KEY), self.timer.get("FINTIM")
+                if start is not None and end is not None and not end > start:
+                    self.rep.error(f"FINTIM = {end:g} is not after STTIME = {start:g}",
+                                   self.timer_spans.get("FINTIM"),
+                                   "with STTIME (FST), FINTIM is the end time, not a length")
                 if "FINTIM" not in self.timer and needs_fintim:
                     self.rep.error(
                         "FINTIM is not given", self.timer_span,
@@ -188,8 +214,12 @@ class RunGroups(Visitor):
                     f"give {name} a value before the first END; a statement after END "
                     "changes it for the runs that follow",
                 )
+        weather = self.weather_spec()
+        for run in self.runs:
+            run.weather = weather
         return Data(self.runs, list(self.data), self.spans, dict(self.kinds), self.tables,
-                    finish_first, self.all_reports, self.all_tolerances)
+                    finish_first, self.all_reports, self.all_tolerances, relations_first,
+                    weather)
 
     def add_runs(self) -> None:
         """The runs of the group just read: one per value of its value lists."""
@@ -219,6 +249,7 @@ class RunGroups(Visitor):
                 abserr=self.tolerance["ABSERR"], relerr_each=dict(self.each["RELERR"]),
                 abserr_each=dict(self.each["ABSERR"]), reports=list(self.reports),
                 titles=list(self.titles), timer_spans=dict(self.timer_spans),
+                step_point=DRIVERS[self.driver[0]][1] if self.driver else None,
             ))
         # a later group inherits everything; value lists collapse to their first value
         for lname in lists:
@@ -265,8 +296,17 @@ class RunGroups(Visitor):
         if self.group.index == 0 and self.timer_span is None:
             self.timer_span = st.span
         for s in st.settings:
+            if s.name in IGNORED_TIMER_KEYS:
+                continue  # FST's output and translator settings: nothing to do here
+            if s.name == START_KEY:
+                if not math.isfinite(s.value):
+                    self.rep.error(f"{s.name} must be a finite number (got {s.value:g})",
+                                   s.span)
+                self.timer[s.name] = s.value
+                self.timer_spans[s.name] = s.span
+                continue
             if s.name not in TIMER_KEYS:
-                hint = nearest(s.name, set(TIMER_KEYS))
+                hint = nearest(s.name, set(TIMER_KEYS) | {START_KEY})
                 self.rep.error(
                     f"unknown TIMER setting {s.name}",
                     s.span,
@@ -302,6 +342,81 @@ class RunGroups(Visitor):
 
     def visit_Finish(self, st: ast.Finish) -> None:
         self.finish.extend(st.settings)
+        self.finish_relations.extend(st.relations)
+
+    def visit_Translation(self, st: ast.Translation) -> None:
+        """FST's translator settings (section 13): the driver is a METHOD."""
+        if st.kind == "TRANSLATION_FSE":
+            self.driver = (TRANSLATION_FSE_DRIVER, st.span)
+        for item in st.items:
+            meaning = TRANSLATION_KEYS.get(item.name, "?")
+            if st.kind == "TRANSLATION_FSE":
+                self.rep.error(f"TRANSLATION_FSE has no setting {item.name}", item.span,
+                               "TRANSLATION_FSE takes no settings: it is the Euler driver")
+            elif meaning == "?":
+                self.rep.error(f"TRANSLATION_GENERAL has no setting {item.name}", item.span,
+                               "TRANSLATION_GENERAL takes " + ", ".join(TRANSLATION_KEYS))
+            elif meaning == "METHOD":
+                driver = str(item.value).upper()
+                if driver not in DRIVERS:
+                    self.rep.error(f"unknown DRIVER '{item.value}'", item.span,
+                                   "DRIVER is " + " or ".join(f"'{d}'" for d in DRIVERS))
+                else:
+                    self.driver = (driver, item.span)
+            elif meaning is not None:
+                if isinstance(item.value, str) or not item.value > 0:
+                    self.rep.error(f"{item.name} must be a positive number", item.span)
+                elif meaning == "RELERR":
+                    self.tolerance["RELERR"] = float(item.value)
+                else:
+                    self.timer[meaning] = float(item.value)
+                    self.timer_spans[meaning] = item.span
+
+    def check_driver(self) -> None:
+        """The METHOD a DRIVER means, or an error where METHOD says otherwise."""
+        if self.driver is None:
+            return
+        name, span = self.driver
+        method = DRIVERS[name][0]
+        if self.method is None:
+            self.method = method
+        elif route_for(self.method) is not route_for(method):
+            self.rep.error(f"METHOD {self.method} contradicts DRIVER = '{name}', which is "
+                           f"METHOD {method}" + (" in step-point mode" if DRIVERS[name][1]
+                                                else ""), span,
+                           "remove one of them")
+
+    def visit_Weather(self, st: ast.Weather) -> None:
+        """WEATHER items, gathered over every WEATHER statement (FST splits them)."""
+        self.weather_span = self.weather_span or st.span
+        for item in st.items:
+            if item.name not in WEATHER_KEYS:
+                self.rep.error(f"WEATHER has no setting {item.name}", item.span,
+                               "WEATHER takes " + ", ".join(WEATHER_KEYS))
+            self.weather_items[item.name] = item
+
+    def weather_spec(self) -> WeatherSpec | None:
+        items = self.weather_items
+        if not items:
+            return None
+        missing = [k for k in ("CNTR", "ISTN", "IYEAR") if k not in items]
+        if missing:
+            self.rep.error(f"WEATHER needs {', '.join(missing)}", self.weather_span,
+                           "e.g. WEATHER CNTR = 'NLD'; ISTN = 1; IYEAR = 1990")
+            return None
+        for key in ("ISTN", "IYEAR"):
+            value = items[key].value
+            if isinstance(value, str) or value != int(value):
+                self.rep.error(f"{key} must be a whole number", items[key].span)
+                return None
+        wtrdir = items.get("WTRDIR")
+        return WeatherSpec(str(items["CNTR"].value).strip().upper(), int(items["ISTN"].value),
+                           int(items["IYEAR"].value),
+                           str(wtrdir.value) if wtrdir is not None else None,
+                           self.weather_span)
+
+    def visit_DefineCall(self, st: ast.DefineCall) -> None:
+        pass  # a routine's interface: its CALL is what amilpy refuses
 
     def visit_Report(self, st: ast.Report) -> None:
         kind = "OUTPUT" if st.kind == "PRTPLT" else st.kind

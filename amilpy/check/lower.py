@@ -14,7 +14,16 @@ from collections.abc import Callable
 from .. import ir
 from .. import syntax as ast
 from ..diagnostics import Diagnostic, Reporter, Span
-from ..library import RELATIONS, Func, Kind, lookup
+from ..language import TIME
+from ..library import (
+    RELATIONS,
+    WEATHER_FUNC,
+    WEATHER_HOLD,
+    WEATHER_TABLE,
+    Func,
+    Kind,
+    lookup,
+)
 from ..surfaces import constant_value
 from ..syntax import Visitor
 from ..templates import ARGUMENTS, instantiate, template_names
@@ -117,6 +126,21 @@ class Lowering:
         # described as written: "T >= TSTOP"); None where no single line holds it
         self.written: Callable[[Span], str | None] = lambda span: None
         self.warnings: list[Diagnostic] = []
+        # FST's weather names the listing does not define itself, and those read
+        self.weather: frozenset[str] = frozenset()
+        self.weather_used: dict[str, list[Span]] = {}
+        self.weather_memory: dict[str, int] = {}  # the memory holding each name's value
+        self.closed: set[int] = set()  # TERMT surfaces true at zero (>=, <=)
+
+    def weather_value(self, name: str, span: Span) -> ir.MemoryValue:
+        """A weather name's value: the day's, held from the last restart (library's
+        WEATHER_HOLD), one memory per name."""
+        self.weather_used.setdefault(name, []).append(span)
+        if name not in self.weather_memory:
+            day = ast.Call(WEATHER_FUNC, (ast.Name(WEATHER_TABLE + name, span),
+                                          ast.Name(TIME, span)), span)
+            self.weather_memory[name] = self.memory(ast.Call(WEATHER_HOLD, (day,), span), name)
+        return ir.MemoryValue(self.weather_memory[name], span)
 
     def expr(self, expr: ast.Node, target: str | None, literal: bool = False) -> ast.Node:
         """An expression with its simulation-function calls lowered (`literal`: in
@@ -273,17 +297,21 @@ class Lowering:
         self.surface(expr, ir.SurfaceKind.SIGN, None, ir.Purpose.FINISH, s.span,
                      f"FINISH {s.name}={s.value:g}", f"{s.name} - {s.value:g}")
 
-    def termt(self, st: ast.Termt, cond: ast.Node | None = None) -> int:
+    def termt(self, st: ast.Termt, cond: ast.Node | None = None, finish: bool = False) -> int:
         """TERMT(c [, 'message']): the run ends where c turns true (`cond`: c as the
-        surface reads it, when that differs from what the listing wrote)."""
+        surface reads it, when that differs from what the listing wrote). `finish`:
+        FST's FINISH c, the same thing."""
         from .code import condition_surface
 
         cond = st.expr if cond is None else cond
         text = self.written(st.expr.span) or expr_text(None, st.expr, TEXT_LIMIT)
-        where = f"TERMT({text}) at line {st.span.line}"
+        where = f"{'FINISH ' + text if finish else f'TERMT({text})'} at line {st.span.line}"
         description = f"{st.message} ({where})" if st.message else where
-        return self.surface(self.expr(condition_surface(cond), "TERMT"), ir.SurfaceKind.SIGN,
-                            None, ir.Purpose.TERMT, st.span, description, text)
+        index = self.surface(self.expr(condition_surface(cond), "TERMT"), ir.SurfaceKind.SIGN,
+                             None, ir.Purpose.TERMT, st.span, description, text)
+        if isinstance(cond, ast.BinOp) and cond.op in (">=", "<="):
+            self.closed.add(index)
+        return index
 
 
 class _Lowerer(Visitor):
@@ -300,6 +328,8 @@ class _Lowerer(Visitor):
         return expr
 
     def visit_Name(self, expr: ast.Name) -> ast.Node:
+        if expr.name in self.lowering.weather and not self.literal:
+            return self.lowering.weather_value(expr.name, expr.span)
         return expr
 
     def visit_Neg(self, expr: ast.Neg) -> ast.Node:

@@ -18,6 +18,7 @@ from ..language import (
 )
 from ..library import Kind, callable_names, lookup
 from ..surfaces import constant_value
+from ..weather import NAMES as WEATHER_NAMES
 from .groups import Data, check_assignable
 
 # the largest store a function's literal argument may ask for (DELAY's N points)
@@ -177,7 +178,7 @@ class Names:
         """Every name read is known: in DYNAMIC and TERMINAL anything defined; in
         INITIAL and in values needed before the run (`before_run`, with what they are)
         only data and INITIAL values. Then the names of reports, FINISH and tolerances."""
-        known = set(self.defined) | self.data_names | set(RESERVED)
+        known = set(self.defined) | self.data_names | set(RESERVED) | self.weather_names
         initial_names = {t for st in sections["INITIAL"] for t in getattr(st, "targets", ())}
         initial_ok = self.data_names | initial_names | KNOWN_BEFORE_RUN
         # a table name as AFGEN's first argument is no value
@@ -206,6 +207,11 @@ class Names:
             for node in names_of(st):
                 if node.name not in known:
                     self.undefined(node, known)
+        weather = self.weather_names - set(self.defined)
+        for st in sections["TERMINAL"]:
+            for node in names_of(st):
+                if node.name in weather:
+                    self.undefined(node, known - weather)
         for expr, what in before_run:
             for node in names_of(expr):
                 if node.name in initial_ok:
@@ -229,6 +235,10 @@ class Names:
                     hint = nearest(n, report_known - {TIME})
                     self.rep.error(f"{st.kind} names {n}, which the model never defines", s,
                                    f"did you mean {hint}?" if hint else None)
+        for st in self.data.finish_relations:
+            for node in ast.walk(st.expr):
+                if isinstance(node, ast.Name) and node.name not in known:
+                    self.undefined(node, known)
         for s in self.data.finish:
             if s.name not in known:
                 hint = nearest(s.name, known)
@@ -245,7 +255,24 @@ class Names:
                 + "a per-variable tolerance applies to a state (an INTGRL output)"
                 + ("" if hint or not states else ": " + ", ".join(sorted(states)[:8])))
 
+    @property
+    def weather_names(self) -> set[str]:
+        """FST's weather names, when the listing has a WEATHER statement."""
+        return set(WEATHER_NAMES) if self.data.weather is not None else set()
+
     def undefined(self, node: ast.Name, known: set[str]) -> None:
+        if node.name in WEATHER_NAMES and node.name not in self.defined:
+            if self.data.weather is not None:
+                self.rep.error(f"{node.name} is the day's weather, which changes in time",
+                               node.span, f"read {node.name} in the dynamic statements (assign "
+                               "it to a variable there), not in INITIAL, TERMINAL or an "
+                               "initial value")
+            else:
+                self.rep.error(f"{node.name} is used but never defined", node.span,
+                               f"{node.name} is an FST weather variable: add a WEATHER "
+                               "statement (WEATHER CNTR = 'NLD'; ISTN = 1; IYEAR = 1990), "
+                               "or define it")
+            return
         if node.name in self.table_names:
             self.rep.error(f"{node.name} is a FUNCTION table, not a value", node.span,
                            f"look it up with AFGEN({node.name}, X)")

@@ -527,6 +527,8 @@ class Compiler:
                 surfaces.update(watched)
                 trains.extend(tuple(self.constant(instantiate(t, sw.args, sw.span), sw.span)
                                     for t in pair) for pair in func.breaks)
+        if self.model.weather:
+            trains.append((0.0, 1.0))  # FST's weather changes at every day's start
         return trains, surfaces
 
     def affine(self) -> set[int]:

@@ -307,7 +307,33 @@ class Builder:
         return ast.Tolerance(kind, None, self.settings(node.children[1:]), self.span(node))
 
     def st_finish(self, node) -> ast.Finish:
-        return ast.Finish(self.settings(node.children), self.span(node))
+        from lark import Tree
+
+        settings = [c for c in node.children if c.data == "setting"]
+        relations = tuple(
+            ast.Termt(self.expr(Tree("rel", c.children, c.meta)), self.span(c))
+            for c in node.children if c.data == "finish_relation")
+        return ast.Finish(self.settings(settings), self.span(node), relations)
+
+    def items(self, nodes) -> tuple[ast.Item, ...]:
+        out = []
+        for item in nodes:
+            name, value = item.children
+            text = string_value(str(value.children[0])) if value.data == "string" \
+                else self.value(value)
+            out.append(ast.Item(str(name).upper(), text, self.span(item)))
+        return tuple(out)
+
+    def st_translation(self, node) -> ast.Translation:
+        kind, *items = node.children
+        return ast.Translation(str(kind).upper(), self.items(i for i in items if i is not None),
+                               self.span(node))
+
+    def st_weather(self, node) -> ast.Weather:
+        return ast.Weather(self.items(node.children), self.span(node))
+
+    def st_define_call(self, node) -> ast.DefineCall:
+        return ast.DefineCall(self.span(node))
 
     def st_termt(self, node) -> ast.Termt:
         expr, message = node.children

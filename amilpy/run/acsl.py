@@ -32,8 +32,17 @@ from ..language import MAX_INTERVALS
 from ..outcome import Failure
 from ..result import Event, EventKind
 from ..routes import IALG_METHODS, route_for
+from . import steppoint
 from .loop import Cursor, Stop
-from .plan import Grid, Options, Purpose, SurfaceKind, make_grid, make_plan
+from .plan import (
+    Grid,
+    Options,
+    Purpose,
+    SurfaceKind,
+    make_grid,
+    make_plan,
+    resolve_step_point,
+)
 from .prepare import Cache, Prepared, before_run, constant_modes, random_seed
 from .simulate import _Run
 
@@ -128,10 +137,13 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
     method = _method(model, spec, opts, constants)
     spec = replace(spec, method=method)
     timer = _timer(model, spec, opts, constants, cint)
-    const_modes = constant_modes(model, constants, spec.tables)
+    # IALG 3 (Euler) is METHOD RECT, in step-point mode like every classic translator's
+    step_point = resolve_step_point(spec, opts)
+    const_modes = constant_modes(model, constants, spec.tables, step_point)
     fixed = route_for(method or "AUTO").fixed
     # a random draw is held for one output interval (one DELT with a fixed step)
-    setting = Setting(seed=random_seed(opts, constants), hold=timer["DELT"] if fixed else cint)
+    setting = Setting(seed=random_seed(opts, constants), hold=timer["DELT"] if fixed else cint,
+                      step=timer["DELT"] if step_point else None)
     ckey = ("acsl", tuple(sorted(constants.items())), tuple(kept.items()),
             tuple(sorted(priors.items())), repr(sorted(spec.tables.items())),
             tuple(opts.outputs) if opts.outputs is not None else None, opts.events, setting)
@@ -154,8 +166,8 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
     else:
         fintim, unbounded = MAX_INTERVALS * cint, True
     timer["FINTIM"] = fintim
-    grid = make_grid(t0, t0 + fintim, cint, cint)
-    plan = make_plan(model, spec, opts, compiled, timer, grid, t0=t0)
+    grid = steppoint.grid(t0, timer) if step_point else make_grid(t0, t0 + fintim, cint, cint)
+    plan = make_plan(model, spec, opts, compiled, timer, grid, step_point, t0=t0)
     return AcslPrepared({**constants, **values}, compiled, plan, schedules, stop, unbounded)
 
 
@@ -287,6 +299,11 @@ class AcslRun(_Run):
         """The branches in force after code changed states or kept names. A surface
         at zero to rounding (a crossing just located) goes the way the motion takes
         it, not by the sign of its rounding error."""
+        if self.plan.step_point:  # the branches as they read here, nothing located
+            new = list(self.c.modes_literal(cur.t, cur.y.tolist(), cur.m, cur.z))
+            self.integ.record_changes(cur.t, cur.y, cur.m, new, cur.z, set())
+            cur.m[:] = new
+            return
         near: set[int] = set()
         if self.plan.watch_idx:
             e = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z)

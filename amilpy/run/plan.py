@@ -19,6 +19,7 @@ import numpy as np
 from .. import ir
 from ..codegen import Compiled
 from ..diagnostics import AmilError, Diagnostic
+from ..language import START_KEY
 from ..result import EventKind
 from ..routes import DEFAULT, Route, StepPointError, route_for, step_point_mode
 from ..surfaces import linear_gradient, sign
@@ -60,6 +61,8 @@ class Options:
     # False takes EULER/RECT out of it; None: the listing's, else the method's default
     step_point: bool | None = None
     seed: float | None = None  # the random streams' seed, instead of the listing's
+    # folders where FST's weather files are looked for after the listing's own (§13)
+    weather_dirs: tuple[str, ...] = ()
 
 
 class SurfaceKind(str, Enum):
@@ -220,6 +223,13 @@ def timer_values(spec: ir.RunSpec, fintim: float | None = None,
         if not fintim > 0:
             raise AmilError(f"FINTIM must be positive (got {fintim:g})")
         t["FINTIM"] = fintim
+    if START_KEY in t:
+        # FST: the run starts at STTIME and FINTIM is its end; from here on FINTIM is
+        # the run's length, as in CSMP (the one place the two meet)
+        if not t["FINTIM"] > t[START_KEY]:
+            raise AmilError(f"FINTIM = {t['FINTIM']:g} must be later than STTIME = "
+                            f"{t[START_KEY]:g}: with STTIME, FINTIM is the end time")
+        t["FINTIM"] -= t[START_KEY]
     fintim = t["FINTIM"]
     if "OUTDEL" not in t and "PRDEL" not in t:
         t["OUTDEL"] = fintim / 100.0
@@ -247,8 +257,18 @@ def timer_values(spec: ir.RunSpec, fintim: float | None = None,
 
 
 def reserved_values(timer: dict[str, float]) -> dict[str, float]:
-    """The TIMER values a listing may read (DELT, FINTIM, ...)."""
-    return {k: timer[k] for k in ("FINTIM", "DELT", "PRDEL", "OUTDEL", "DELMIN", "DELMAX")}
+    """The TIMER values a listing may read (DELT, FINTIM, ...); FINTIM as the listing
+    gave it (an end time after FST's STTIME)."""
+    out = {k: timer[k] for k in ("FINTIM", "DELT", "PRDEL", "OUTDEL", "DELMIN", "DELMAX")}
+    out["FINTIM"] += timer.get(START_KEY, 0.0)
+    return out
+
+
+def start_time(spec: ir.RunSpec, opts: Options) -> float:
+    """Where a run starts: a carried state's time, else TIMER STTIME (FST), else 0."""
+    if opts.start:
+        return float(opts.start["t"])
+    return float(spec.timer.get(START_KEY, 0.0))
 
 
 def _grid(t0: float, fintim: float, step: float) -> np.ndarray:
@@ -282,6 +302,9 @@ def resolve_step_point(spec: ir.RunSpec, opts: Options) -> bool:
     method's default; an error for a variable-step method."""
     route, method = resolve_route(spec, opts)
     asked = opts.step_point if opts.step_point is not None else spec.step_point
+    if opts.step_point is None and opts.method is not None and route.uses_tolerances:
+        asked = None  # a variable-step method asked for outright replaces the listing's
+        # step-point driver (IALG 3, DRIVER = 'EUDRIV') with located switching
     try:
         return step_point_mode(route, asked, method)
     except StepPointError as exc:
@@ -296,7 +319,7 @@ def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: Compiled,
     In step-point mode the run ends at the grid's last step point."""
     route, method = resolve_route(spec, opts)
     if t0 is None:
-        t0 = float(opts.start["t"]) if opts.start else 0.0
+        t0 = start_time(spec, opts)
     fintim = float(grid.times[-1]) if step_point else t0 + timer["FINTIM"]
     state_index = {n: i for i, n in enumerate(c.state_names)}
     watched = []

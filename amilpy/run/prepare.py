@@ -9,8 +9,10 @@ keeps compiled functions, INITIAL values and grids between the runs of one model
 
 from __future__ import annotations
 
+import math
+import os
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TypeVar
 
 from .. import ir
@@ -35,6 +37,7 @@ from .plan import (
     reserved_values,
     resolve_route,
     resolve_step_point,
+    start_time,
     timer_values,
 )
 
@@ -48,7 +51,8 @@ class Cache:
     once, see `codegen.parameter_names`), output grids per timer. Each table is
     cleared when it grows past its limit (a long sweep)."""
 
-    LIMITS = {"initial": 256, "compiled": 64, "code": 64, "grid": 64, "parameters": 4}
+    LIMITS = {"initial": 256, "compiled": 64, "code": 64, "grid": 64, "parameters": 4,
+              "weather": 16}
 
     def __init__(self) -> None:
         self._tables: dict[str, dict] = {name: {} for name in self.LIMITS}
@@ -108,12 +112,41 @@ def constant_modes(model: ir.Model, constants: dict[str, float], tables,
     return const_modes
 
 
+def with_weather(model: ir.Model, spec: ir.RunSpec, timer: dict[str, float], opts: Options,
+                 cache: Cache) -> ir.RunSpec:
+    """The run's spec with a day table per weather name the model reads, over the
+    run's days, from the CABO files (FST's WEATHER; `weather.py` finds and reads them,
+    and says where it looked when a file is not there)."""
+    from ..library import WEATHER_TABLE
+    from ..weather import Weather
+
+    t0 = start_time(spec, opts)
+    t1 = t0 + timer["FINTIM"] + timer["DELT"]  # a step-point run may pass FINTIM
+    folder = os.path.dirname(os.path.abspath(model.path)) if model.path else os.getcwd()
+    key = (spec.weather, math.floor(t0), math.floor(t1), tuple(opts.weather_dirs),
+           tuple(model.weather), folder)
+
+    def read() -> dict[str, object]:
+        weather = Weather(spec.weather, folder, list(opts.weather_dirs), model.weather_lines)
+        try:
+            days = weather.tables(model.weather, t0, t1)
+        except AmilError as exc:
+            if exc.path is None:
+                exc.path, exc.source = model.path, model.source
+            raise
+        return {WEATHER_TABLE + name: table for name, table in days.items()}
+
+    return replace(spec, tables={**spec.tables, **cache.get("weather", key, read)})
+
+
 def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> Prepared:
     timer = timer_values(spec, opts.fintim, opts.max_rows)
     route, method = resolve_route(spec, opts)
     step_point = resolve_step_point(spec, opts)
     if step_point:
         timer = steppoint.timer(model, spec, timer, method)
+    if model.weather and spec.weather is not None:
+        spec = with_weather(model, spec, timer, opts, cache)
     reserved = reserved_values(timer)
     tables = repr(sorted(spec.tables.items()))
     ikey = (tuple(sorted(spec.data.items())), tuple(sorted(reserved.items())), tables)
@@ -134,7 +167,7 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
     compiled = cache.get("compiled", ckey, lambda: cache.get("code", skey, lambda: Compiler(
         model, constants, spec.tables, const_modes, opts.outputs, opts.events, setting,
         parameters=params).build()).rebound(constants))
-    t0 = float(opts.start["t"]) if opts.start else 0.0
+    t0 = start_time(spec, opts)
     fintim = t0 + timer["FINTIM"]
     gkey = (t0, fintim, timer["OUTDEL"], timer["PRDEL"], step_point and timer["DELT"])
     grid = cache.get("grid", gkey, lambda: steppoint.grid(t0, timer) if step_point else

@@ -176,7 +176,8 @@ class StepPoint(RunLoop):
         for k, (w, purpose) in enumerate(self._purposes):
             was, now = old[k], new[k]
             if purpose is Purpose.TERMT:
-                hit = now > 0
+                # T >= TSTOP holds at zero: a step point exactly there stops the run
+                hit = now > 0 or (now == 0 and w.surface in self.model.closed)
             elif purpose is Purpose.FINISH:
                 hit = not first and now != was and (now == 0.0 or now * was < 0)
             else:
@@ -190,6 +191,13 @@ class StepPoint(RunLoop):
                                          EventKind(purpose.value), w.text))
         self.stop_reason = stop
         return stop is not None
+
+    def record_changes(self, t: float, y, m, new_m, z, at_zero: set[int]) -> None:
+        """Events for the branches that code changed at an instant (ACSL's DISCRETE)."""
+        for k, (w, purpose) in enumerate(self._purposes):
+            if new_m[k] != m[k] and purpose not in (Purpose.TERMT, Purpose.FINISH):
+                self._event(Event(t, w.description, w.surface, m[k], new_m[k],
+                                  w.event_kind(new_m[k]), w.text))
 
     def _event(self, event: Event) -> None:
         """A branch change; past the event limit they are counted, not kept (a

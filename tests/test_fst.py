@@ -1,0 +1,235 @@
+"""FST's form (contract section 13): TIMER STTIME, relational FINISH, the translator's
+driver, WEATHER read from CABO files, and IALG 3 / EUDRIV in step-point mode. The
+numbers are checked against the plain Euler recurrence written here, reading the
+weather files with their own few lines of parsing (not amilpy.weather)."""
+
+from __future__ import annotations
+
+import math
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+
+import amilpy
+from amilpy.diagnostics import AmilError
+
+HERE = Path(__file__).resolve().parent
+WEATHER = HERE / "listings" / "weather"  # synthetic CABO files (TZ 2, 2018 and 2019)
+
+LOGISTIC = """TITLE FST LOGISTIC GROWTH
+PARAM RGR = 0.1; WMAX = 100.
+INCON WI = 1.
+W = INTGRL(WI, RGR*W*(1. - W/WMAX))
+FINISH W > 90.
+TIMER STTIME = 80.; FINTIM = 300.; DELT = 1.; PRDEL = 20.
+TRANSLATION_GENERAL DRIVER = 'EUDRIV'
+PRINT W
+END
+STOP
+"""
+
+CROP = """TITLE FST CROP: TEMPERATURE SUM AND RADIATION
+WEATHER WTRDIR = 'C:\\DATA\\NOWHERE\\'; CNTR = 'TZ'; ISTN = 2
+WEATHER IYEAR = 2018
+TIMER STTIME = 100.; FINTIM = 300.; DELT = 1.; PRDEL = 10.
+TRANSLATION_GENERAL DRIVER = 'EUDRIV'; TRACE = 0
+PARAM TBASE = 10.
+INCON TSUMI = 0.
+TSUM = INTGRL(TSUMI, AMAX1(0., (TMMN+TMMX)/2. - TBASE))
+RADSUM = INTGRL(0., RDD*1.E-6)
+FINISH TSUM > 800.
+PRINT TSUM, RADSUM, DOY
+END
+STOP
+"""
+
+
+def _cabo(path: Path) -> dict[int, list[float]]:
+    """day -> [radiation kJ, tmin, tmax, vp, wind, rain]: the rows of a CABO file."""
+    rows = {}
+    for line in path.read_text().splitlines():
+        f = line.split()
+        if len(f) >= 9 and not f[0].startswith("*"):
+            rows[int(f[2])] = [float(x) for x in f[3:9]]
+    return rows
+
+
+def _listing(tmp_path: Path, text: str, name: str = "model.fst") -> str:
+    path = tmp_path / name
+    path.write_text(text)
+    return str(path)
+
+
+def test_fst_euler_loop_from_sttime_is_the_plain_recurrence():
+    # FST's EUDRIV: W(k+1) = W(k) + DELT*rate(W(k)) from STTIME = 80, rows every PRDEL
+    # from STTIME, and FINISH W > 90 tested at each step point: exact to round-off
+    run, = amilpy.loads(LOGISTIC).run(advice=False)
+    assert run.method == "RECT" and run.times[0] == 80.0
+    w, t, rows = 1.0, 80, {}
+    while True:
+        rows[t] = w
+        if w > 90.0:
+            break
+        w, t = w + 0.1 * w * (1.0 - w / 100.0), t + 1
+    assert run.t_end == t == 150
+    for time, value in zip(run.times, run.values["W"], strict=True):
+        assert value == pytest.approx(rows[round(time)], rel=1e-14)
+    assert "FINISH W > 90. at line 5" in run.message
+
+
+def test_a_variable_step_method_locates_the_relational_finish():
+    # dW/dt = RGR W (1 - W/WMAX) from W(80) = 1: W = WMAX / (1 + 99 exp(-RGR (t - 80))),
+    # W = 90 at t = 80 + ln(99*9)/RGR; located to the tolerance (1e-6 relative)
+    run, = amilpy.loads(LOGISTIC).run(method="RKS", rtol=1e-9, atol=1e-12, advice=False)
+    assert run.t_end == pytest.approx(80.0 + math.log(99.0 * 9.0) / 0.1, rel=1e-8)
+
+
+def test_drivers_methods_and_the_timer_are_checked(tmp_path):
+    cases = [
+        (LOGISTIC.replace("EUDRIV", "XXDRIV"), "unknown DRIVER 'XXDRIV'", "'EUDRIV' or"),
+        (LOGISTIC.replace("PRINT W", "METHOD RKS\nPRINT W"),
+         "METHOD RKS contradicts DRIVER = 'EUDRIV'", "remove one"),
+        (LOGISTIC.replace("FINTIM = 300.", "FINTIM = 50."),
+         "FINTIM = 50 is not after STTIME = 80", "end time"),
+        (LOGISTIC.replace("DRIVER = 'EUDRIV'", "DRIVER = 'EUDRIV'; FOO = 1"),
+         "TRANSLATION_GENERAL has no setting FOO", "DRIVER, EPS"),
+    ]
+    for text, message, hint in cases:
+        with pytest.raises(AmilError) as err:
+            amilpy.loads(text)
+        rendered = err.value.render()
+        assert message in rendered and hint in rendered, rendered
+
+
+def test_rkdriv_is_rks_with_eps_as_relerr_and_fse_is_euler():
+    rks, = amilpy.loads(LOGISTIC.replace("DRIVER = 'EUDRIV'",
+                                         "DRIVER = 'RKDRIV'; EPS = 1E-8")).run(advice=False)
+    assert rks.method == "RKS" and rks.rtol == 1e-8
+    fse, = amilpy.loads(LOGISTIC.replace("TRANSLATION_GENERAL DRIVER = 'EUDRIV'",
+                                         "TRANSLATION_FSE")).run(advice=False)
+    euler, = amilpy.loads(LOGISTIC).run(advice=False)
+    assert fse.method == "RECT" and list(fse.values["W"]) == list(euler.values["W"])
+
+
+def _crop_reference(rows: dict[int, list[float]]):
+    """The crop listing by hand: Euler with DELT = 1 from day 100, each day's weather."""
+    tsum, rad, t, out = 0.0, 0.0, 100, {}
+    while True:
+        out[t] = (tsum, rad)
+        if tsum > 800.0:
+            return t, out
+        r = rows[t]
+        tsum += max(0.0, (r[1] + r[2]) / 2.0 - 10.0)
+        rad += r[0] * 1000.0 * 1e-6  # kJ in the file, J in the model
+        t += 1
+
+
+def test_weather_from_a_cabo_file_in_step_point_mode(tmp_path):
+    # the file is found through weather_dir= (WTRDIR and the listing's folders lack it)
+    path = _listing(tmp_path, CROP)
+    run, = amilpy.load(path).run(weather_dir=str(WEATHER), advice=False)
+    end, ref = _crop_reference(_cabo(WEATHER / "TZ2.018"))
+    assert run.t_end == end
+    for t, tsum, rad, doy in zip(run.times, run.values["TSUM"], run.values["RADSUM"],
+                                 run.values["DOY"], strict=True):
+        assert (tsum, rad) == pytest.approx(ref[round(t)], rel=1e-13)
+        assert doy == round(t)  # day of 2018 = floor(TIME)
+
+
+def test_weather_with_located_finish_is_exact_between_day_starts(tmp_path):
+    # the daily values are constant over each day and every day's start is a
+    # breakpoint: the integral is exact, and the crossing of 800 lies inside day
+    # 156 at 156 + (800 - TSUM(156)) / rate(156), located to 1e-9 by AUTO and RKS
+    os.makedirs(tmp_path / "weather")
+    shutil.copy(WEATHER / "TZ2.018", tmp_path / "weather" / "tz2.018")  # any case
+    path = _listing(tmp_path, CROP)
+    rows = _cabo(WEATHER / "TZ2.018")
+    end, ref = _crop_reference(rows)
+    tsum = ref[end - 1][0]
+    rate = max(0.0, (rows[end - 1][1] + rows[end - 1][2]) / 2.0 - 10.0)
+    crossing = end - 1 + (800.0 - tsum) / rate
+    for method in ("AUTO", "RKS"):
+        run, = amilpy.load(path).run(method=method, advice=False)
+        assert run.t_end == pytest.approx(crossing, abs=1e-6), method
+
+
+def test_a_missing_weather_file_names_where_it_looked_and_the_lines(tmp_path):
+    path = _listing(tmp_path, CROP)
+    with pytest.raises(AmilError) as err:
+        amilpy.load(path).run(advice=False)
+    text = err.value.render()
+    assert "the weather file TZ2.018 (station TZ 2, 2018) is not in /DATA/NOWHERE/" in text
+    assert str(tmp_path / "weather") in text and "line(s) 8, 9" in text
+    assert "--weather-dir" in text
+
+
+def test_a_missing_value_that_is_read_stops_the_run_naming_file_day_and_variable(tmp_path):
+    os.makedirs(tmp_path / "weather")
+    lines = (WEATHER / "TZ2.018").read_text().splitlines()
+    out = []
+    for line in lines:
+        f = line.split()
+        if len(f) >= 9 and not f[0].startswith("*") and f[2] == "105":
+            f[5] = "-99"
+            line = "  ".join(f)
+        out.append(line)
+    (tmp_path / "weather" / "TZ2.018").write_text("\n".join(out) + "\n")
+    run, = amilpy.load(_listing(tmp_path, CROP)).run(advice=False)
+    assert not run.ok and run.times[-1] <= 105.0
+    assert "has -99 (missing) for TMMX on day 105 of 2018" in run.message
+
+
+def test_weather_names_are_checked(tmp_path):
+    no_weather = "TITLE T\nX = INTGRL(0., RDD)\nTIMER FINTIM = 10.\nPRINT X\nEND\n"
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(no_weather)
+    assert "RDD is an FST weather variable: add a WEATHER statement" in err.value.render()
+    in_initial = CROP.replace("PARAM TBASE = 10.", "PARAM TBASE = 10.\nINITIAL\nR0 = RDD\n"
+                              "DYNAMIC")
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(in_initial)
+    assert "RDD is the day's weather, which changes in time" in err.value.render()
+    # a name the listing defines itself is its own, not the weather's
+    own = CROP.replace("RADSUM = INTGRL(0., RDD*1.E-6)", "RDD = 2.E7\n"
+                       "RADSUM = INTGRL(0., RDD*1.E-6)")
+    path = _listing(tmp_path, own)
+    run, = amilpy.load(path).run(weather_dir=str(WEATHER), advice=False)
+    assert run.values["RADSUM"][1] == pytest.approx(200.0, rel=1e-12)
+
+
+ACSL_EULER = """PROGRAM euler decay with doses
+  CONSTANT K = 0.3, DOSE = 5.0, TSTOP = 10.0
+  ALGORITHM IALG = 3
+  NSTEPS NSTP = 4
+  CINTERVAL CINT = 1.0
+  DERIVATIVE
+    X = INTEG(-K*X + STEP(2.5), 1.0)
+    TERMT(T >= TSTOP, 'end')
+  END
+  DISCRETE DOSING
+    INTERVAL DT = 4.0
+    X = X + DOSE
+  END
+  PRINT X
+END
+"""
+
+
+def test_acsl_ialg_3_is_the_classic_euler_loop_with_its_events():
+    # IALG = 3 is Euler in step-point mode: h = CINT/NSTP = 0.25, the STEP read at
+    # the step points (on from 2.5), a dose at t = 0, 4, 8 before that instant's row,
+    # and TERMT(T >= TSTOP) holding at the step point T = 10 exactly
+    run, = amilpy.loads(ACSL_EULER).run(advice=False)
+    x, t, rows = 6.0, 0.0, {0: 6.0}
+    for _ in range(40):
+        x, t = x + 0.25 * (-0.3 * x + (1.0 if t >= 2.5 else 0.0)), t + 0.25
+        if abs(t - 4.0) < 1e-9 or abs(t - 8.0) < 1e-9:
+            x += 5.0
+        if abs(t - round(t)) < 1e-9:
+            rows[round(t)] = x
+    assert run.method == "RECT" and run.t_end == 10.0
+    assert len(run.times) == 11
+    for time, value in zip(run.times, run.values["X"], strict=True):
+        assert value == pytest.approx(rows[round(time)], rel=1e-13)
