@@ -4,8 +4,10 @@ worked much harder than an implicit one would have (a stiff model).
 The probe integrates the first tenth of the run with the explicit method and
 with Radau, discarding outputs, and compares right-hand-side evaluations
 (Radau's include those of its finite-difference Jacobians). It runs only when
-the explicit run finished and was expensive, so a cheap run pays nothing, and
-within the run's own limits: the wall-clock time the run left, and its steps.
+the explicit run finished, was expensive in evaluations and actually slow (a
+second of wall-clock time: the probe costs 20-60 % of the run, worth paying
+only where advice can save time), and within the run's own limits: the
+wall-clock time the run left, and its steps.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from .routes import route_for
 from .run import Cache, Options, simulate
 
 EXPENSIVE = 5_000  # right-hand-side evaluations before a probe is worth it
+SLOW = 1.0  # seconds of wall-clock time a run must have taken before a probe
 RATIO = 5.0  # how many times cheaper the implicit method must be to say so
 PROBE_STEPS = 200_000
 
@@ -27,14 +30,16 @@ def stiffness_advice(model: ir.Model, spec: ir.RunSpec, run: Run, opts: Options,
     """A one-line note when METHOD STIFF would have been much cheaper, else None."""
     route = route_for(run.method)
     if route.fixed or not route.explicit or not run.ok or \
-            run.stats.get("nfev", 0) < EXPENSIVE:
+            run.stats.get("nfev", 0) < EXPENSIVE or run.stats.get("seconds", 0.0) < SLOW:
         return None
     left = None
     if opts.max_time is not None:
         left = opts.max_time - run.stats.get("seconds", 0.0)
         if left <= 0:
             return None
-    window = 0.1 * spec.timer["FINTIM"]
+    # the run's length (ACSL form: a TERMT may end it, with no FINTIM given)
+    length = spec.timer.get("FINTIM", run.t_end - (float(run.t[0]) if len(run.t) else 0.0))
+    window = 0.1 * length
     # outputs: one variable on a coarse grid; the work is the integration
     probe_spec = replace(spec, timer={**spec.timer, "OUTDEL": window, "PRDEL": window},
                          reports=[])

@@ -60,7 +60,12 @@ class Model:
         """The generated Python of the first run (what `--show-python` prints)."""
         from .run import prepare
 
-        return prepare(self.ir, self._specs(params)[0], cache=self.cache).compiled.source
+        spec = self._specs(params)[0]
+        if self.ir.acsl is not None:
+            from .run.acsl import prepare_acsl
+
+            return prepare_acsl(self.ir, spec, cache=self.cache).compiled.source
+        return prepare(self.ir, spec, cache=self.cache).compiled.source
 
     def flow(self, method: str | None = None, rtol: float | None = None,
              atol: float | None = None, run: int = 0, **params: float) -> Flow:
@@ -68,8 +73,11 @@ class Model:
         `amilpy.run.flow` for `advance`, its events and its sensitivity."""
         from .run import Flow, Options
 
-        if method is not None and route_for(method) is None:
-            raise AmilError(f"unknown integration method {method}")
+        _check_method(method)
+        if self.ir.acsl is not None:
+            raise AmilError("a flow map is not available for a program in ACSL form: its "
+                            "DISCRETE sections and DYNAMIC statements run between the "
+                            "integrator's steps", self.ir.path)
         spec = self._specs(params)[run]
         return Flow(self.ir, spec, Options(method=method, rtol=rtol, atol=atol), self.cache)
 
@@ -104,31 +112,49 @@ class Model:
             outputs: list[str] | None = None, max_steps: int | None = None,
             max_events: int | None = None, max_time: float | None = None,
             fintim: float | None = None, progress=None, advice: bool = True,
+            step_point: bool | None = None, seed: float | None = None,
+            jobs: int = 1, scheduler: str | None = None, done=None,
             **params: float) -> list[Run]:
         """Run every run of the listing (value lists, END groups); data values
-        given as keywords override the listing's for all of them."""
-        from .run import Options, simulate
+        given as keywords override the listing's for all of them.
 
-        if method is not None and route_for(method) is None:
-            raise AmilError(f"unknown integration method {method}")
+        `step_point=True` runs a fixed-step method in step-point mode (the classic
+        translators' loop: switches read at the step points, nothing located), False
+        takes METHOD EULER/RECT out of it; None: the listing's choice. `seed` seeds
+        the random streams (GAUSS, UNIF, OU...) instead of the listing's RNSEED.
+
+        `jobs`: worker processes for the runs, which are independent (the command
+        line uses every core); `scheduler`: the address of a Dask scheduler to run
+        them on instead (`amilpy[cluster]`). Either way the runs come back in their
+        order, the same as run one after the other, and a run whose data cannot be
+        evaluated comes back FAILED with its message (it does not stop the others).
+        `done(i, n)`: called as run i of n finishes."""
+        from .run import Options
+
+        _check_method(method)
         for label, tol in (("rtol", rtol), ("atol", atol)):
             if tol is not None and not tol > 0:
                 raise AmilError(f"{label} must be positive, got {tol}")
         if outputs is not None:
             outputs = [o.upper() for o in outputs]
-            unknown = [o for o in outputs if o not in self.ir.variables]
+            known = set(self.ir.variables)
+            unknown = [o for o in outputs if o not in known]
             if unknown:
                 raise AmilError(f"{unknown[0]} is not a variable of the model")
         opts = Options(method=method, rtol=rtol, atol=atol, events=events, outputs=outputs,
-                       max_time=max_time, progress=progress, fintim=fintim)
+                       max_time=max_time, progress=progress, fintim=fintim,
+                       step_point=step_point, seed=_seed(seed))
         if max_steps:
             opts.max_steps = max_steps
         if max_events:
             opts.max_events = max_events
+        specs = self._specs(params)
+        self._check_memory(specs, outputs, fintim)
         runs = []
         advised = False
-        for spec in self._specs(params):
-            run = simulate(self.ir, spec, opts, self.cache)
+        farmed = self._farm(specs, opts, jobs, scheduler, done)
+        for k, spec in enumerate(specs):
+            run = farmed[k] if farmed else self._one(spec, opts, len(specs) > 1)
             if advice and not advised:
                 from .advice import stiffness_advice
 
@@ -137,22 +163,77 @@ class Model:
             runs.append(run)
             if run.message.startswith("interrupted"):
                 break  # Ctrl-C: keep what was computed, start nothing new
+            if done is not None and not farmed:
+                done(k, len(specs))
         return runs
+
+    def _check_memory(self, specs: list[ir.RunSpec], outputs: list[str] | None,
+                      fintim: float | None) -> None:
+        """Refuse, before the first run, runs whose rows together would not fit. (In
+        ACSL form the rows follow CINT and TERMT, known only after INITIAL: a run is
+        capped at language.MAX_INTERVALS rows instead.)"""
+        from .run.plan import DEFAULTS, stored_values
+
+        if self.ir.acsl is not None:
+            return
+        columns = len(outputs) if outputs is not None else len(self.ir.variables)
+        total = sum(stored_values(spec, columns, fintim) for spec in specs)
+        limit = DEFAULTS["max_values"]
+        if total > limit:
+            raise AmilError(
+                f"the {len(specs)} run(s) would keep {total:.3g} values ({columns} variables "
+                f"on every output row; limit {limit:.0e}, about {8 * limit / 1e9:.1f} GB): "
+                "raise OUTDEL/PRDEL, shorten FINTIM, or run fewer values at a time")
+
+    def _one(self, spec: ir.RunSpec, opts, among_others: bool) -> Run:
+        """One run here. Among other runs, one whose data cannot be evaluated comes
+        back FAILED with its message, as from a worker (`_farm`), and the others
+        are kept; alone, its fault is the listing's (exit 1, located)."""
+        from .run import simulate
+
+        if not among_others:
+            return simulate(self.ir, spec, opts, self.cache)
+        from .farm import failed_run
+        from .run.plan import resolve_route
+
+        try:
+            return simulate(self.ir, spec, opts, self.cache)
+        except AmilError as exc:
+            if exc.path is None:
+                exc.path = self.ir.path
+            return failed_run(spec, resolve_route(spec, opts)[1], exc.render())
+
+    def _farm(self, specs: list[ir.RunSpec], opts, jobs: int, scheduler: str | None,
+              done) -> list[Run] | None:
+        """The runs, farmed out (see `amilpy.farm`); None to run them here, one by one."""
+        if not scheduler and (jobs <= 1 or len(specs) <= 1):
+            return None
+        from .farm import failed_run, run_tasks
+        from .run.plan import resolve_route
+
+        outcomes = run_tasks(self.ir, specs, opts, jobs, scheduler, cache=self.cache,
+                             done=None if done is None else lambda i, _: done(i, len(specs)))
+        return [o.run if o.run is not None else failed_run(
+            spec, resolve_route(spec, opts)[1],
+            "interrupted before it finished" if o.interrupted else o.error or "not run")
+            for o, spec in zip(outcomes, specs, strict=True)]
 
     def sweep(self, name: str, values, *, both_ways: bool = False, carry_state: bool = False,
               settle: float = 0.0, measure: str | None = None, method: str | None = None,
               rtol: float | None = None, atol: float | None = None,
               fintim: float | None = None, keep_runs: bool = False, progress=None,
-              **params: float):
-        """One run per value of data value `name` (see `amilpy.sweep.sweep`)."""
+              step_point: bool | None = None, seed: float | None = None,
+              jobs: int = 1, scheduler: str | None = None, **params: float):
+        """One run per value of data value `name` (see `amilpy.sweep.sweep`; `jobs`,
+        `scheduler` as for `run`, for a sweep that does not carry its state)."""
         from .sweep import sweep
 
-        if method is not None and route_for(method) is None:
-            raise AmilError(f"unknown integration method {method}")
+        _check_method(method)
         return sweep(self, name, [float(v) for v in values], both_ways=both_ways,
                      carry_state=carry_state, settle=settle, measure=measure, method=method,
                      rtol=rtol, atol=atol, fintim=fintim, keep_runs=keep_runs,
-                     progress=progress, **params)
+                     progress=progress, step_point=step_point, seed=_seed(seed),
+                     jobs=jobs, scheduler=scheduler, **params)
 
     def modes(self, at: float = 0.0, method: str | None = None, rtol: float | None = None,
               atol: float | None = None, progress=None, **params: float):
@@ -217,6 +298,19 @@ class Model:
                f"{len(self.ir.runs)} runs>"
 
 
+def _seed(seed) -> float | None:
+    """A seed as given (a whole number is usual; any finite number is a seed)."""
+    if seed is None:
+        return None
+    try:
+        value = float(seed)
+    except (TypeError, ValueError):
+        raise AmilError(f"seed must be a number, got {seed!r}") from None
+    if value != value or value in (float("inf"), float("-inf")):
+        raise AmilError(f"seed must be a finite number, got {seed!r}")
+    return value
+
+
 def loads(text: str, name: str = "<listing>") -> Model:
     """Parse and check a listing given as text."""
     program = parse(text, name)
@@ -241,3 +335,10 @@ def load(path: str | os.PathLike) -> Model:
         raise AmilError([Diagnostic("the file is not valid UTF-8", Span(line, col),
                                     "save the listing as UTF-8")], path) from None
     return loads(text, path)
+
+
+def _check_method(method: str | None) -> None:
+    """The API's METHOD names are the listing's (routes.ROUTES)."""
+    if method is not None and route_for(method) is None:
+        raise AmilError(f"unknown integration method {method}")
+

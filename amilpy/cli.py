@@ -21,7 +21,7 @@ import os
 import sys
 
 from . import __version__
-from .console import Progress, Signals, tolerant_streams, write_out
+from .console import Progress, Signals, TimeLimit, time_limit, tolerant_streams, write_out
 from .diagnostics import AmilError, nearest
 from .output.files import OutputError
 from .output.writers import DIALECTS, WRITERS, Outputs, PlotOptions, dest, writers_for
@@ -96,13 +96,36 @@ def _model_options(p: argparse.ArgumentParser, run_limits: bool = True) -> None:
     p.add_argument("--rtol", type=POSITIVE, metavar="X", help="relative tolerance (RELERR)")
     p.add_argument("--atol", type=POSITIVE, metavar="X", help="absolute tolerance (ABSERR)")
     p.add_argument("--fintim", type=POSITIVE, metavar="S", help="run length instead of FINTIM")
+    p.add_argument("--step-point", action="store_true", default=None,
+                   help="run a fixed-step method in step-point mode, as the classic "
+                        "translators did: switches read at the step points, nothing "
+                        "located (METHOD EULER/RECT always is)")
+    p.add_argument("--seed", type=FINITE, metavar="N",
+                   help="seed of the random streams (GAUSS, UNIF, OU...), instead of "
+                        "the listing's RNSEED (default 1)")
     if run_limits:
         p.add_argument("--max-time", type=POSITIVE, metavar="S",
-                       help="wall-clock limit per run, seconds")
+                       help="wall-clock limit per run, seconds (reading, checking and "
+                       "compiling the listing are bounded by it too)")
         p.add_argument("--max-steps", type=COUNT, metavar="N",
                        help="step limit per run (default 5000000)")
         p.add_argument("--max-events", type=COUNT, metavar="N",
                        help="event limit per run (default 200000)")
+
+
+def _farm_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--jobs", type=COUNT, metavar="N",
+                   help="worker processes for independent runs (value lists, END groups, "
+                        "sweep points; default: every core)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run the independent runs on this Dask scheduler "
+                        "(tcp://host:8786; pip install 'amilpy[cluster]')")
+
+
+def _jobs(args) -> int:
+    from .farm import default_jobs
+
+    return args.jobs or default_jobs()
 
 
 def _plot_options(p: argparse.ArgumentParser) -> None:
@@ -159,13 +182,15 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--quiet", action="store_true", help="no printout, only files and errors")
     run.add_argument("--no-advice", action="store_true",
                      help="do not probe for stiffness after an expensive explicit run")
+    _farm_options(run)
     _plot_options(run)
 
     sw = sub.add_parser("sweep", help="one run per value of a data value (amplitude-"
                                       "frequency characteristics)")
     sw.add_argument("file", metavar="FILE", help="the listing (.amil)")
-    sw.add_argument("range", metavar="NAME=START:STOP:STEP",
-                    help="the data value swept and its values, STOP included")
+    sw.add_argument("range", metavar="NAME=START:STOP:STEP", nargs="+",
+                    help="the data value swept and its values, STOP included; a second "
+                         "range makes a grid (every pair of values, one run each)")
     sw.add_argument("--both-ways", action="store_true", help="sweep up, then back down")
     sw.add_argument("--carry-state", action="store_true",
                     help="each run continues from the previous run's final state (the "
@@ -180,6 +205,7 @@ def _parser() -> argparse.ArgumentParser:
     _csv_dialect(sw)
     _model_options(sw, run_limits=False)
     sw.add_argument("--quiet", action="store_true", help="no table, only files and errors")
+    _farm_options(sw)
 
     rep = sub.add_parser("report", help="a lab-report document: listing, data, equations, "
                                         "printouts, events, plots")
@@ -281,12 +307,21 @@ def _finish(path: str, written: list[str], errors: list[str], quiet: bool,
     return EXIT_OUTPUT if errors else EXIT_OK
 
 
-def cmd_run(args, path: str, signals: Signals) -> int:
+def _load(args, path: str):
+    """The listing read, checked and its first run compiled (into the model's cache,
+    where the run finds it), within --max-time; and the --set values."""
     from .api import load
 
-    model = load(path)
-    params = _parse_sets(args.set)
-    _check_sets(model, params)
+    with time_limit(getattr(args, "max_time", None)):
+        model = load(path)
+        params = _parse_sets(args.set)
+        _check_sets(model, params)
+        model.python_source(**params)
+    return model, params
+
+
+def cmd_run(args, path: str, signals: Signals) -> int:
+    model, params = _load(args, path)
     plot = _plot_choice(args, model)
     if args.show_python:
         write_out(lambda out: out.write(model.python_source(**params) + "\n"))
@@ -295,7 +330,9 @@ def cmd_run(args, path: str, signals: Signals) -> int:
         runs = model.run(method=args.method, rtol=args.rtol, atol=args.atol,
                          progress=progress, max_time=args.max_time, max_steps=args.max_steps,
                          max_events=args.max_events, fintim=args.fintim,
-                         advice=not args.no_advice, **params)
+                         advice=not args.no_advice, step_point=args.step_point,
+                         seed=args.seed, jobs=_jobs(args), scheduler=args.scheduler,
+                         **params)
     finally:
         progress.done()
     stem, out_dir = _stem_and_dir(path, args.out)
@@ -317,26 +354,33 @@ def cmd_run(args, path: str, signals: Signals) -> int:
 
 
 def cmd_sweep(args, path: str, signals: Signals) -> int:
-    from .api import load
     from .sweep import parse_range, sweep
 
-    try:
-        name, values = parse_range(args.range)
-    except AmilError as exc:
-        raise UsageError(f"the sweep range {args.range}: {exc}") from None
-    model = load(path)
-    params = _parse_sets(args.set)
-    _check_sets(model, params)
-    if name not in model.ir.data_names:
-        hint = nearest(name, set(model.ir.data_names))
-        raise UsageError(f"{name} is not a PARAM/CONST/INCON value of this listing"
-                         + (f"; did you mean {hint}?" if hint else ""))
+    if len(args.range) > 2:
+        raise UsageError("give one range, or two for a grid (NAME=START:STOP:STEP each)")
+    ranges = []
+    for text in args.range:
+        try:
+            ranges.append(parse_range(text))
+        except AmilError as exc:
+            raise UsageError(f"the sweep range {text}: {exc}") from None
+    (name, values), grid = ranges[0], (ranges[1] if len(ranges) > 1 else None)
+    if grid and (args.carry_state or args.both_ways):
+        raise UsageError("a grid (two ranges) cannot --carry-state or sweep --both-ways: "
+                         "each point is a run of its own")
+    model, params = _load(args, path)
+    for swept in [name] + ([grid[0]] if grid else []):
+        if swept not in model.ir.data_names:
+            hint = nearest(swept, set(model.ir.data_names))
+            raise UsageError(f"{swept} is not a PARAM/CONST/INCON value of this listing"
+                             + (f"; did you mean {hint}?" if hint else ""))
     if args.measure and args.measure.upper() not in model.ir.variables:
         hint = nearest(args.measure, set(model.ir.variables))
         raise UsageError(f"--measure {args.measure}: not a variable of this listing"
                          + (f"; did you mean {hint}?" if hint else ""))
     progress = Progress(not args.quiet)
-    total = 2 * len(values) - 1 if args.both_ways else len(values)
+    total = 2 * len(values) - 1 if args.both_ways else \
+        len(values) * (len(grid[1]) if grid else 1)
 
     def point(i: int, n: int, value: float) -> None:
         progress.prefix = f"{name} point {min(i + 1, n)}/{n}  "
@@ -347,7 +391,10 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
         result = sweep(model, name, values, both_ways=args.both_ways,
                        carry_state=args.carry_state, settle=args.settle, measure=args.measure,
                        method=args.method, rtol=args.rtol, atol=args.atol, fintim=args.fintim,
-                       keep_runs=False, progress=point, run_progress=progress, **params)
+                       keep_runs=False, progress=point, run_progress=progress,
+                       step_point=args.step_point, seed=args.seed,
+                       jobs=1 if args.carry_state else _jobs(args), scheduler=args.scheduler,
+                       grid=grid, **params)
     finally:
         progress.done()
     stem, out_dir = _stem_and_dir(path, args.out)
@@ -360,27 +407,30 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
         write_out(lambda out: out.write(format_sweep(result)))
     code = _finish(path, written, errors, args.quiet, signals)
     failed = [p for p in result.points if p.status == "failed"]
-    if failed:
+    for message in result.errors:
+        print(f"amilpy: {path}: {message}", file=sys.stderr)
+    if failed and args.carry_state:
         print(f"amilpy: {path}: the run at {name} = {failed[0].value:g} failed; the "
               "sweep stopped there", file=sys.stderr)
+    elif failed and not result.errors:
+        print(f"amilpy: {path}: {len(failed)} point(s) failed, first at {name} = "
+              f"{failed[0].value:g}", file=sys.stderr)
     return max(code, EXIT_FAILED if failed else EXIT_OK)
 
 
 def cmd_report(args, path: str, signals: Signals) -> int:
-    from .api import load
     from .output.report import FORMATS, write_report
 
     formats = [f.strip().lower() for f in args.format.split(",") if f.strip()]
     bad = [f for f in formats if f not in FORMATS]
     if bad or not formats:
         raise UsageError(f"--format takes {', '.join(FORMATS)}; got {args.format!r}")
-    model = load(path)
-    params = _parse_sets(args.set)
-    _check_sets(model, params)
+    model, params = _load(args, path)
     plot = _plot_choice(args, model)
     runs = model.run(method=args.method, rtol=args.rtol, atol=args.atol, fintim=args.fintim,
                      max_time=args.max_time, max_steps=args.max_steps,
-                     max_events=args.max_events, **params)
+                     max_events=args.max_events, step_point=args.step_point, seed=args.seed,
+                     **params)
     errors: list[OutputError] = []
     with signals.held():
         written = write_report(model, runs, path, args.out, formats, args.lang, plot, errors)
@@ -396,11 +446,14 @@ def cmd_report(args, path: str, signals: Signals) -> int:
 
 def cmd_check(args, path: str, signals: Signals) -> int:
     from .api import load
+    from .diagnostics import render
 
     ir = load(path).ir
     write_out(lambda out: out.write(
         f"{path}: ok — {len([s for s in ir.states if not s.hidden])} states, "
         f"{len(ir.dynamic)} equations, {len(ir.switches)} switches, {len(ir.runs)} run(s)\n"))
+    if ir.warnings:
+        print(render(ir.warnings, path, ir.source), file=sys.stderr)
     return EXIT_OK
 
 
@@ -424,6 +477,10 @@ def _one(command, args, path: str, signals: Signals) -> int:
     except KeyboardInterrupt:
         print(f"amilpy: {path}: interrupted", file=sys.stderr)
         return EXIT_FAILED
+    except TimeLimit:
+        print(f"amilpy: {path}: reading, checking and compiling the listing took longer "
+              f"than --max-time {args.max_time:g} s", file=sys.stderr)
+        return EXIT_FAILED
     except MemoryError:
         print(f"amilpy: {path}: out of memory", file=sys.stderr)
         return EXIT_FAILED
@@ -439,6 +496,11 @@ def main(argv: list[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse has printed the usage (or --help, --version)
         return int(exc.code) if isinstance(exc.code, int) else EXIT_USAGE
+    method = getattr(args, "method", None) and route_for(args.method)
+    if getattr(args, "step_point", None) and method and method.uses_tolerances:
+        print(f"amilpy {args.command}: --step-point needs a fixed-step method; --method "
+              f"{args.method} chooses its own steps", file=sys.stderr)
+        return EXIT_USAGE
     paths = getattr(args, "files", None) or [args.file]
     several = [w.flag for w in WRITERS if w.takes_path and w.flag
                and getattr(args, dest(w.flag), None)]

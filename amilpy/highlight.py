@@ -21,7 +21,7 @@ from typing import Any
 # Absolute imports: `pygmentize -x -l amilpy/highlight.py:AmilLexer` runs this
 # file outside its package, where relative imports fail.
 from amilpy.language import RESERVED
-from amilpy.library import ALIASES, FUNCTIONS
+from amilpy.library import callable_names
 
 # Statement and section keywords (grammar/amil.lark, "keywords"). TITLE and
 # LABEL are handled apart because their free text runs to the end of the line.
@@ -35,7 +35,7 @@ TEXT_KEYWORDS = ("TITLE", "LABEL")
 KEYWORDS = TEXT_KEYWORDS + SECTION_KEYWORDS + STATEMENT_KEYWORDS
 
 # Every name a listing may call, canonical names and aliases alike.
-BUILTIN_FUNCTIONS = tuple(sorted(set(FUNCTIONS) | set(ALIASES)))
+BUILTIN_FUNCTIONS = tuple(sorted(callable_names()))
 RESERVED_NAMES = tuple(RESERVED)
 
 FORMATTERS = ("terminal", "html", "latex")

@@ -34,6 +34,7 @@ class Purpose(str, Enum):
     MEMORY = "memory"  # a memory function's condition
     FINISH = "finish"  # FINISH X = value: ends the run when crossed
     TERMT = "termt"  # TERMT(expr): ends the run when it turns positive
+    SCHEDULE = "schedule"  # SCHEDULE s .XP./.XN./.XZ. e: runs DISCRETE s when crossed
 
     def __str__(self) -> str:
         return self.value
@@ -92,9 +93,90 @@ class Impulse(Node):
     child_fields = ("start", "period")
 
 
+@dataclass(frozen=True)
+class UnitValue(Node):
+    """The value of `name` after sorting unit `unit` (an IF or PROCEDURAL block of
+    sorted code) has run: the unit computes all its outputs at once."""
+
+    unit: int
+    name: str
+    span: Span
+
+
 # every expression node a later stage may meet
 EXPRESSIONS: tuple[type[Node], ...] = syntax.EXPRESSIONS + (SwitchValue, MemoryValue,
-                                                            TableLookup, Impulse)
+                                                            TableLookup, Impulse, UnitValue)
+
+
+# ------------------------------------------- statements of written-order code
+# (INITIAL, DYNAMIC's own statements, DISCRETE and TERMINAL in ACSL form, and the
+# bodies of sorting units). Their expressions are IR expressions.
+
+
+@dataclass(frozen=True)
+class Let(Node):
+    """NAME = expr; `store` says how the value is kept: REAL, INTEGER (truncated
+    toward 0) or LOGICAL (1.0 if true, else 0.0)."""
+
+    target: str
+    expr: Expr
+    span: Span
+    store: str = "REAL"
+    child_fields = ("expr",)
+
+
+@dataclass(frozen=True)
+class IfThen(Node):
+    """(condition, statements) pairs, the first true one runs; a None condition is ELSE."""
+
+    branches: tuple[tuple[Expr | None, tuple[Node, ...]], ...]
+    span: Span
+
+    def children(self) -> tuple[Node, ...]:
+        out: list[Node] = []
+        for cond, body in self.branches:
+            if cond is not None:
+                out.append(cond)
+            out.extend(body)
+        return tuple(out)
+
+
+@dataclass(frozen=True)
+class ForLoop(Node):
+    """var = start, stop, step (bounds read once; at most language.MAX_LOOP times)."""
+
+    var: str
+    start: Expr
+    stop: Expr
+    step: Expr
+    body: tuple[Node, ...]
+    span: Span
+
+    def children(self) -> tuple[Node, ...]:
+        return (self.start, self.stop, self.step) + self.body
+
+
+@dataclass(frozen=True)
+class ScheduleAt(Node):
+    """SCHEDULE section .AT. when (valued now)."""
+
+    section: str
+    when: Expr
+    span: Span
+    child_fields = ("when",)
+
+
+@dataclass(frozen=True)
+class TermtIf(Node):
+    """TERMT in written-order code: the run ends after this code when cond is true."""
+
+    cond: Expr
+    index: int  # into Model.termts
+    span: Span
+    child_fields = ("cond",)
+
+
+CODE: tuple[type[Node], ...] = (Let, IfThen, ForLoop, ScheduleAt, TermtIf)
 
 
 # ---------------------------------------------------------------- instances
@@ -151,9 +233,16 @@ class State:
     deriv: Expr
     span: Span
     hidden: bool = False
-    # MODINT: while surface `reset_surfaces[0]` <= 0 the state is held (its
-    # derivative is 0); the reset to IC while `reset_surfaces[1]` > 0 is the runner's.
+    # MODINT: the reset to IC while `reset_surfaces[1]` > 0 (and `reset_surfaces[0]`
+    # <= 0) is the runner's.
     reset_surfaces: tuple[int, ...] = ()
+    # the state integrates while `runs` holds (a library template over the modes of
+    # `modes`, M0, M1, ...), else its derivative is 0: MODINT's hold, LIMINT's bounds
+    modes: tuple[int, ...] = ()
+    runs: str = ""
+    # (value, when): the runner puts the state on value while `when` (a template over
+    # the modes of `modes`) holds, at each restart and step point (LIMINT's bounds)
+    onto: tuple[tuple[Expr, str], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -161,6 +250,81 @@ class Equation:
     target: str
     expr: Expr
     span: Span
+
+
+@dataclass(frozen=True)
+class Unit:
+    """An IF or PROCEDURAL block of sorted code: one sorting unit. Its outputs are
+    the names it assigns (each an Equation whose value is a `UnitValue`), its
+    inputs the names it reads; inside, the statements run in written order. An
+    output a path does not assign keeps its value from before (`priors`)."""
+
+    index: int
+    kind: str  # IF or PROCEDURAL
+    outputs: tuple[str, ...]
+    inputs: tuple[str, ...]
+    body: tuple[Node, ...]
+    span: Span
+
+
+@dataclass(frozen=True)
+class Code:
+    """Written-order code of one section (ACSL INITIAL, DYNAMIC, a DISCRETE,
+    TERMINAL): names may be reassigned; `assigned` in order of first assignment."""
+
+    section: str
+    body: tuple[Node, ...]
+    assigned: tuple[str, ...]
+    span: Span | None
+
+
+@dataclass(frozen=True)
+class Discrete:
+    """DISCRETE name ... END, with INTERVAL v = dt when it has one."""
+
+    name: str
+    code: Code
+    interval: str | None  # the INTERVAL variable
+    interval_value: Expr | None
+    span: Span
+
+
+@dataclass(frozen=True)
+class Termination:
+    """A TERMT: where it stands (DERIVATIVE: located; else tested when its code runs),
+    its condition as written and its message."""
+
+    section: str
+    text: str
+    message: str | None
+    span: Span
+
+
+@dataclass
+class Acsl:
+    """What a program in ACSL form adds to the model (contract sections 9-11)."""
+
+    initial: list[Code]  # in file order
+    dynamic: Code  # DYNAMIC's own statements, run at every CINT instant
+    discretes: dict[str, Discrete]
+    terminal: list[Code]
+    discrete_vars: list[str]  # names written-order code keeps between instants (z slots)
+    cint_name: str
+    cint: Expr  # the value CINTERVAL gives (before INITIAL may reassign it)
+    t0: float
+    termts: list[Termination]
+    # the DISCRETE section each SCHEDULE .XP./.XN./.XZ. surface runs, and the crossing
+    # direction (+1 XP, -1 XN, 0 XZ)
+    crossings: dict[int, tuple[str, int]] = field(default_factory=dict)
+    # names assigned in INITIAL and again in DERIVATIVE: their INITIAL value is the
+    # value an IF unit keeps on a path that does not assign them
+    priors: set[str] = field(default_factory=set)
+    stores: dict[str, str] = field(default_factory=dict)  # declared INTEGER / LOGICAL
+    functions: dict[str, object] = field(default_factory=dict)  # FUNCTION definitions
+    bounded: bool = False  # a TERMT or TIMER FINTIM bounds the run
+    # ALGORITHM, NSTEPS, MAXTERVAL, MINTERVAL -> the constant that holds its value
+    controls: dict[str, str] = field(default_factory=dict)
+    control_spans: dict[str, Span] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -189,6 +353,10 @@ class RunSpec:
     abserr_each: dict[str, float] = field(default_factory=dict)
     reports: list[Report] = field(default_factory=list)
     titles: list[str] = field(default_factory=list)
+    # step-point mode as the listing asks it (ALGORITHM IALG = 3, DRIVER = 'EUDRIV');
+    # None: the method's default (routes.step_point_mode)
+    step_point: bool | None = None
+    timer_spans: dict[str, Span] = field(default_factory=dict)  # where each TIMER key is
 
 
 @dataclass
@@ -207,6 +375,11 @@ class Model:
     memories: list[Memory]
     runs: list[RunSpec]
     data_names: list[str]
+    units: list[Unit] = field(default_factory=list)  # IF/PROCEDURAL blocks of DYNAMIC
+    terminal_code: list[Code] = field(default_factory=list)  # TERMINAL with IF/DO blocks
+    acsl: Acsl | None = None  # the ACSL form's sections and events
+    # notes for the listing (read before any value, == tested pointwise, ...)
+    warnings: list = field(default_factory=list)
     # names -> where defined, for reports and hints
     spans: dict[str, Span] = field(default_factory=dict)
     data_kinds: dict[str, str] = field(default_factory=dict)  # PARAM, CONST or INCON
@@ -217,7 +390,10 @@ class Model:
 
     @property
     def variables(self) -> list[str]:
-        """Every named quantity of DYNAMIC a run records (states and algebraic)."""
+        """Every named quantity of DYNAMIC a run records (states and algebraic, and in
+        ACSL form the names written-order code keeps)."""
         names = [s.name for s in self.states if not s.hidden]
         names += [e.target for e in self.dynamic]
+        if self.acsl is not None:
+            names += [n for n in self.acsl.discrete_vars if n not in names]
         return names

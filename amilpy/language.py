@@ -20,6 +20,10 @@ KNOWN_BEFORE_RUN: frozenset[str] = frozenset(RESERVED)
 # Reserved names that are settings, not quantities: never a column of a printout.
 SETTINGS: frozenset[str] = frozenset(set(RESERVED) - {TIME})
 
+# The data value that seeds the random streams (GAUSS, UNIF, OU, ...) when the run is
+# not given a seed (--seed, seed=): ACSL's system variable of that name. Default 1.
+SEED_NAME = "RNSEED"
+
 # Sections of the CSMP form, with the spellings that open them.
 SECTIONS: dict[str, str] = {
     "INITIAL": "INITIAL",
@@ -59,3 +63,61 @@ LINE_BREAK = re.compile(r"\r\n|\r|\n")
 def split_lines(text: str) -> list[str]:
     """The lines of a listing, numbered as diagnostics and the parser number them."""
     return LINE_BREAK.split(text)
+
+
+# ------------------------------------------------ the ACSL form (contract 8-14)
+
+# Statements whose items `;` separates like `,` (section 8); TRANSLATION_* too.
+ITEM_KEYWORDS: frozenset[str] = frozenset({"PARAM", "PARAMETER", "CONST", "CONSTANT", "INCON",
+                                           "TIMER", "FINISH", "WEATHER"})
+# A file whose first statement is one of these is in ACSL form (section 9).
+ACSL_HEADS: tuple[str, ...] = ("PROGRAM", "MODEL")
+ACSL_TIME = "T"  # time in ACSL form (TIME too, unless the listing assigns it)
+DEFAULT_CINT = 0.1
+MAX_LOOP = 1_000_000  # iterations of one FOR/DO loop
+MAX_INTERVALS = 1_000_000  # output intervals of a run no TERMT or FINTIM bounds
+# ALGORITHM ... XERROR: integration control (section 11); the names are constants
+CONTROL_KEYWORDS: tuple[str, ...] = ("ALGORITHM", "NSTEPS", "MAXTERVAL", "MINTERVAL",
+                                     "MERROR", "XERROR")
+# type statements -> what they store (double precision arithmetic throughout)
+TYPE_KEYWORDS: dict[str, str] = {"LOGICAL": "LOGICAL", "INTEGER": "INTEGER", "REAL": "REAL",
+                                 "DOUBLEPRECISION": "REAL", "DIMENSION": "REAL"}
+
+# What amilpy does not run (section 14): the construct as a reader knows it, and what
+# to write instead. Statement keywords first, then functions.
+REFUSED: dict[str, tuple[str, str]] = {
+    "GOTO": ("GO TO", "write IF (c) THEN ... ELSE ... END IF"),
+    "CONTINUE": ("CONTINUE (the end of a labelled DO)", "write DO i = a, b ... END DO"),
+    "ARRAY": ("FST's ARRAY (arrays)", "write one scalar per element (X1, X2, ...)"),
+    "ARRAY_SIZE": ("FST's ARRAY_SIZE (arrays)", "write one scalar per element (X1, X2, ...)"),
+    "STORAGE": ("CSMP's STORAGE (arrays)", "write one scalar per element (X1, X2, ...)"),
+    "TABLE": ("the TABLE statement", "write a table as FUNCTION F = x1,y1, x2,y2, ... and "
+              "read it with AFGEN(F, X)"),
+    "MACRO": ("ACSL's MACRO", "write the statements out, or a FUNCTION y = f(a, b) ... END"),
+    "SUBMODEL": ("ACSL's SUBMODEL", "write the statements out"),
+    "CHARACTER": ("CHARACTER variables", "remove it: strings are only TERMT messages, "
+                  "WEATHER/TRANSLATION values and comments"),
+    "EVENT": ("FST 3's EVENT blocks", "write a DISCRETE section run by SCHEDULE (ACSL form)"),
+    "CALL": ("CALL of a Fortran subroutine", "rewrite it as statements or a PROCEDURE"),
+    "SUBROUTINE": ("a Fortran subroutine", "rewrite it as statements or a PROCEDURE; text "
+                   "after STOP is not read"),
+    "COMMON": ("Fortran COMMON", "remove it: every name of a listing is global"),
+    "EQUIVALENCE": ("Fortran EQUIVALENCE", "remove it: write X = Y"),
+    "EXTERNAL": ("Fortran EXTERNAL", "remove it"),
+    "DATA": ("the Fortran DATA statement", "write CONSTANT X = value"),
+    "READ": ("Fortran READ", "give the values with CONSTANT (or PARAM)"),
+    "WRITE": ("Fortran WRITE", "name the variables in PRINT or OUTPUT"),
+    "FORMAT": ("Fortran FORMAT", "remove it: PRINT and OUTPUT format the values"),
+    "RETURN": ("Fortran RETURN", "write IF (c) THEN ... END IF around what it skips"),
+    "INCLUDE": ("INCLUDE", "copy the included statements into the listing"),
+}
+REFUSED_FUNCTIONS: dict[str, tuple[str, str]] = {
+    "IMPLC": ("ACSL's IMPLC (implicit algebraic loop)", "write the loop out with a state, "
+              "e.g. a fast first-order lag REALPL"),
+    "IMPVC": ("ACSL's IMPVC (vector implicit loop)", "write one state per element"),
+    "INTVC": ("ACSL's INTVC (vector integration)", "write one INTEG per element"),
+    "TRAN": ("ACSL's TRAN (transfer function)", "write it as INTEG states, or LEDLAG/"
+             "REALPL/CMPXPL for first and second order"),
+    "DBLINT": ("ACSL's DBLINT (double integrator with limits)", "write two INTEGs and "
+               "an IF on the limits"),
+}

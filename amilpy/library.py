@@ -4,31 +4,37 @@ surfaces, states, memory slots with their initial values and their update after
 an accepted step, and its run-time function. The checker lowers a call and the
 compiler emits it by reading the entry; nothing else knows a function by name.
 
-Kinds (the contract's section 5):
-  math    a plain function of its arguments (ABS, SIN, AMAX1, ...)
-  state   introduces states (INTGRL, REALPL, LEDLAG, CMPXPL, MODINT)
-  switch  a branch selected by the sign of one or more surfaces (FSW, LIMIT, ...)
-  time    a switch whose surface is TIME minus a constant (STEP, RAMP, SINE)
-  memory  keeps values from the last accepted step (HSTRSS, ZHOLD, RST, PULSE, DERIV,
-          DELAY)
+Kinds (the contract's sections 5 and 12):
+  math    a plain function of its arguments (ABS, SIN, AMAX1, NOTNUL, ...)
+  state   introduces states (INTGRL, REALPL, LEDLAG, CMPXPL, MODINT, LIMINT)
+  switch  a branch selected by the sign of one or more surfaces (FSW, LIMIT, RSW, ...)
+  time    a switch on TIME alone (STEP, RAMP, SINE/HARM, the PULSE train): its
+          surfaces change sign at instants known before the run (breakpoints)
+  memory  keeps values from the last accepted step (HSTRSS, BCKLSH, ZHOLD, RST, PULSE,
+          DERIV, DELAY), and the random functions (GAUSS, UNIF, RNDGEN, OU), whose
+          draws are held in memory between draw instants
   impulse IMPULS: 1 at t = P1 + k*P2, else 0
-  table   AFGEN / NLFGEN interpolation in a FUNCTION table
+  table   AFGEN / NLFGEN / LINT interpolation in a FUNCTION table
 
 Values, surfaces, states and memory updates are small templates in a Python
 subset (`templates.py` parses and checks them once, at import). A name means:
 A, B, ... the call's arguments; M0, M1, ... the modes of its surfaces (memory:
 its conditions as the step saw them; N0, ... as they stand from now on); Y0,
 Y1, ... its own states; Z0, Z1, ... its memory slots (Z: the whole memory
-vector, OFFSET: its first slot, VALUE: its value); TIME; INF; and calls of the
-language's functions or of `runtime.HELPERS`. A template whose text starts with
-`*` gives several slots at once.
+vector, OFFSET: its first slot, VALUE: its value; SEED, HOLD: the run's random seed and
+how long a draw is held; SITE: the call site's number); TIME; INF; and calls of the
+language's functions or of `runtime.HELPERS` (a surface may call a helper too:
+PULSE's train). A template whose text starts with `*` gives several slots at once.
+
+A signature names its arguments; `[, E]` marks optional ones at the end and
+`...)` any number from the last named one on.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import Enum
 from typing import Any
 
@@ -61,6 +67,15 @@ class StateSpec:
     # the first state takes the assigned variable's name when the call is the
     # whole right-hand side (Y = REALPL(...)); LEDLAG's inside state never does
     named: bool = True
+    # when the state integrates, over the modes of the function's surfaces (M0, ...);
+    # else its derivative is 0 (MODINT holds, LIMINT stops at a bound)
+    runs: str = ""
+    # MODINT: the runner resets the state to IC while surface 1 > 0 and surface 0 <= 0
+    resets: bool = False
+    # where the runner puts the state while it is held there: (value over the
+    # arguments, when over the modes), at each restart and step point (LIMINT's
+    # bounds: a held state sits exactly on its bound, never a rounding beside it)
+    onto: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -97,22 +112,45 @@ class Func:
     vector: str | Callable[[Any], Callable] | None = None
     # tables: the run-time interpolation (a `runtime.HELPERS` name)
     lookup: str = ""
+    note: str = ""  # said with the signature when a call has the wrong arguments
     literal_args: tuple[int, ...] = ()  # positive integer literals (DELAY's N)
     constant_args: tuple[int, ...] = ()  # known before the run (initial values, DELAY's P)
+    # constant arguments that must be > 0 / >= 0: checked with the data when the
+    # listing is checked, else when the run's constants are known
+    positive_args: tuple[int, ...] = ()
+    nonnegative_args: tuple[int, ...] = ()
+    # time functions: (first instant, period) templates over constant arguments; the
+    # function's surfaces change sign only at first + k*period (k >= 0), which are
+    # breakpoints (PULSE's train); an affine surface (STEP's TIME - P) needs none
+    breaks: tuple[tuple[str, str], ...] = ()
+    # tables: reads outside the table extend the end segments, with a warning (LINT)
+    extends: bool = False
     # other forms of the same name, told apart by their number of arguments
     variants: tuple[Func, ...] = field(default=())
 
     @property
     def arg_names(self) -> tuple[str, ...]:
         """The arguments' names in the signature ("X", "A", ...)."""
-        inner = self.signature[self.signature.index("(") + 1:-1]
-        return tuple(a.strip() for a in inner.split(",") if a.strip() not in ("", "..."))
+        return _names(self.signature[self.signature.index("(") + 1:-1])
 
     @property
     def nargs(self) -> tuple[int, int | None]:
         """(min, max) arguments, from the signature (max None: any number)."""
         n = len(self.arg_names)
-        return (n, None) if self.signature.endswith("...)") else (n, n)
+        if self.signature.endswith("...)"):
+            return n, None
+        if "[" in self.signature:  # optional arguments at the end
+            return len(_names(self.signature[self.signature.index("(") + 1:
+                                             self.signature.index("[")])), n
+        return n, n
+
+    def argument_fault(self, i: int, value: float) -> str | None:
+        """What is wrong with constant argument i's value, else None."""
+        if i in self.positive_args and not value > 0:
+            return f"{self.arg_names[i]} of {self.name} must be positive (got {value:g})"
+        if i in self.nonnegative_args and not value >= 0:
+            return f"{self.arg_names[i]} of {self.name} must not be negative (got {value:g})"
+        return None
 
     @property
     def outputs(self) -> int:
@@ -129,6 +167,21 @@ class Func:
     def signatures(self) -> str:
         return " or ".join(f.signature for f in (self, *self.variants))
 
+    def counts(self) -> str:
+        """How many arguments the forms take, for a message: "3", "2 to 4", "at least
+        2", "3, 4 or 5"."""
+        forms = [f.nargs for f in (self, *self.variants)]
+        if len(forms) == 1 or any(hi is None for _, hi in forms):
+            lo, hi = forms[0]
+            return f"{lo}" if hi == lo else (f"{lo} to {hi}" if hi else f"at least {lo}")
+        n = sorted({k for lo, hi in forms for k in range(lo, hi + 1)})
+        return str(n[0]) if len(n) == 1 else ", ".join(map(str, n[:-1])) + f" or {n[-1]}"
+
+
+def _names(inner: str) -> tuple[str, ...]:
+    inner = inner.replace("[", "").replace("]", "")
+    return tuple(a.strip() for a in inner.split(",") if a.strip() not in ("", "..."))
+
 
 FUNCTIONS: dict[str, Func] = {}
 ALIASES: dict[str, str] = {}
@@ -142,6 +195,12 @@ def register(func: Func) -> Func:
     for alias in func.aliases:
         ALIASES[alias] = func.name
     return func
+
+
+def callable_names() -> set[str]:
+    """Every name a listing may call (canonical and aliases); the relational
+    switches the checker makes from `A > B` are not among them."""
+    return {n for n in (*FUNCTIONS, *ALIASES) if not n.startswith(".")}
 
 
 def lookup(name: str, nargs: int | None = None) -> Func | None:
@@ -163,10 +222,18 @@ def check_template_set(f: Func) -> None:
         check_template(text, f.name, args=n, calls=calls, **kw)
 
     for t in f.surfaces:
-        check(t, arithmetic=True)
+        check(t, states=nstates, arithmetic=True)
+    for first, period in f.breaks:
+        check(first, arithmetic=True)
+        check(period, arithmetic=True)
     for s in f.states:
         check(s.ic, arithmetic=True)
         check(s.deriv, states=nstates, arithmetic=True)
+        if s.runs:
+            check(s.runs, modes=nsurf)
+        for value, when in s.onto:
+            check(value, states=nstates, arithmetic=True)
+            check(when, modes=nsurf)
     for v in f.values:
         check(v, modes=nsurf, states=nstates, arithmetic=f.kind is Kind.STATE)
     if f.memory is not None:
@@ -248,12 +315,16 @@ _math("AMOD(A, B)", rt.fortran_amod, "fmod", "MOD", doc="remainder with the sign
 _math("SIGN(A, B)", rt.fortran_sign, _vector_sign, doc="|A| with the sign of B")
 _math("AMAX1(X1, X2, ...)", max, _vector_many("maximum"), "MAX", "AMAX0", "MAX1")
 _math("AMIN1(X1, X2, ...)", min, _vector_many("minimum"), "MIN", "AMIN0", "MIN1")
+_math("NOTNUL(X)", rt.notnul, lambda np: (lambda x: np.where(np.asarray(x) == 0.0, 1.0, x)),
+      doc="1 if X = 0, else X: Y/NOTNUL(X) never divides by 0")
 
 # --- states -------------------------------------------------------------------
 register(Func("INTGRL", Kind.STATE, "INTGRL(IC, X)", "Y = IC + integral of X",
-              states=(StateSpec("A", "B", "INTGRL"),), values=("Y0",)))
+              states=(StateSpec("A", "B", "INTGRL"),), values=("Y0",),
+              note="the initial value comes first"))
 register(Func("INTEG", Kind.STATE, "INTEG(X, IC)", "ACSL order: INTEG(X, IC)",
-              states=(StateSpec("B", "A", "INTGRL"),), values=("Y0",)))
+              states=(StateSpec("B", "A", "INTGRL"),), values=("Y0",),
+              note="the derivative comes first, the initial value second (ACSL order)"))
 register(Func("REALPL", Kind.STATE, "REALPL(IC, P, X)", "P*Y' + Y = X, Y(0) = IC",
               states=(StateSpec("A", "(C - Y0)/B", "REALPL"),), values=("Y0",)))
 register(Func("LEDLAG", Kind.STATE, "LEDLAG(P1, P2, X)", "(P1*s + 1)/(P2*s + 1) applied to X",
@@ -269,7 +340,18 @@ register(Func("MODINT", Kind.STATE, "MODINT(IC, X1, X2, X3)",
               "X1>0: integrate X3; else X2>0: reset to IC; else hold",
               # the state is held while surface 0 <= 0; the runner resets it to IC
               # while surface 1 > 0 (ir.State.reset_surfaces)
-              states=(StateSpec("A", "D", "MODINT"),), surfaces=("B", "C"), values=("Y0",)))
+              states=(StateSpec("A", "D", "MODINT", runs="M0 > 0.0", resets=True),),
+              surfaces=("B", "C"), values=("Y0",)))
+register(Func("LIMINT", Kind.STATE, "LIMINT(YD, IC, BB, TB)",
+              "integral of YD from IC, held within [BB, TB]: it stops at a bound while "
+              "YD pushes it out, and leaves it when YD turns",
+              # surfaces Y - BB, Y - TB (the bounds, located) and YD; the state stops
+              # while (Y <= BB and YD < 0) or (Y >= TB and YD > 0)
+              states=(StateSpec("B", "A", "LIMINT",
+                                runs="((M0 > 0 or M2 >= 0) and (M1 < 0 or M2 <= 0))",
+                                onto=(("C", "(M0 <= 0 and M2 < 0)"),
+                                      ("D", "(M1 >= 0 and M2 > 0)"))),),
+              surfaces=("Y0 - C", "Y0 - D", "A"), values=("Y0",)))
 
 # --- switches -----------------------------------------------------------------
 register(Func("FCNSW", Kind.SWITCH, "FCNSW(X, A, B, C)", "A if X<0; B if X=0; C if X>0",
@@ -288,6 +370,8 @@ register(Func("DEADSP", Kind.SWITCH, "DEADSP(P1, P2, X)",
               surfaces=("C - A", "C - B")))
 register(Func("QNTZR", Kind.SWITCH, "QNTZR(P, X)", "P*k for (k-1/2)P < X <= (k+1/2)P",
               values=("(M0 * A)",), surfaces=("B / A",), surface_kind=SurfaceKind.LEVEL))
+# ACSL's names for the same tests (a number is true when > 0)
+_LOGIC_ALIASES = {"AND": ("REAAND",), "NOR": ("REANOR",)}
 for _name, _value, _doc in (
     ("AND", "(1.0 if (M0 > 0 and M1 > 0) else 0.0)", "1 if X1>0 and X2>0, else 0"),
     ("IOR", "(1.0 if (M0 > 0 or M1 > 0) else 0.0)", "1 if X1>0 or X2>0, else 0"),
@@ -297,9 +381,20 @@ for _name, _value, _doc in (
     ("EQUIV", "(1.0 if ((M0 > 0) == (M1 > 0)) else 0.0)", "1 if both or neither > 0"),
 ):
     register(Func(_name, Kind.SWITCH, f"{_name}(X1, X2)", _doc, values=(_value,),
-                  surfaces=("A", "B")))
+                  surfaces=("A", "B"), aliases=_LOGIC_ALIASES.get(_name, ())))
 register(Func("NOT", Kind.SWITCH, "NOT(X)", "0 if X>0, else 1",
               values=("(0.0 if M0 > 0 else 1.0)",), surfaces=("A",)))
+# the condition itself is the surface: a number is true when > 0, and a relational
+# test (X > 0) is a switch whose value (1 or 0) is located where X crosses 0
+register(Func("RSW", Kind.SWITCH, "RSW(C, A, B)", "A if C is true (> 0), else B",
+              values=("(B if M0 > 0 else C)",), surfaces=("A",)))
+
+# --- relational tests in sorted code (section 10): `A > B` is a switch on A - B ------
+# Their names cannot be written as a call; the checker makes them from the operators.
+RELATIONS: dict[str, str] = {"<": ".LT.", "<=": ".LE.", ">": ".GT.", ">=": ".GE."}
+for _op, _name in RELATIONS.items():
+    register(Func(_name, Kind.SWITCH, f"{_name}(A, B)", f"1 if A {_op} B, else 0",
+                  values=(f"(1.0 if M0 {_op} 0 else 0.0)",), surfaces=("A - B",)))
 
 # --- time switches (surface TIME - P: breakpoints known before the run) --------
 register(Func("STEP", Kind.TIME, "STEP(P)", "0 for t<P; 1 for t>=P",
@@ -307,6 +402,7 @@ register(Func("STEP", Kind.TIME, "STEP(P)", "0 for t<P; 1 for t>=P",
 register(Func("RAMP", Kind.TIME, "RAMP(P)", "0 for t<P; t-P after",
               values=("(0.0 if M0 < 0 else TIME - A)",), surfaces=("TIME - A",)))
 register(Func("SINE", Kind.TIME, "SINE(P1, P2, P3)", "0 for t<P1; sin(P2(t-P1)+P3) after",
+              ("HARM",),  # ACSL's HARM(TZ, W, P): the same arguments in the same order
               values=("(0.0 if M0 < 0 else SIN(B*(TIME - A) + C))",), surfaces=("TIME - A",)))
 register(Func("IMPULS", Kind.IMPULSE, "IMPULS(P1, P2)", "1 at t = P1 + k*P2"))
 
@@ -330,8 +426,22 @@ register(Func("PULSE", Kind.MEMORY, "PULSE(P, X)", "Y=1 for at least P from X>0"
               # Z0 is the instant the pulse ends; a trigger starts a new one
               memory=MemorySpec("1", ("-INF",), "(1.0 if TIME < Z0 else 0.0)",
                                 ("((TIME + A) if (N0 > 0.0 and TIME >= Z0) else Z0)",),
-                                every_step=False, wakes=0)))
-register(Func("DERIV", Kind.MEMORY, "DERIV(IC, X)", "dX/dt, Y(0)=IC", constant_args=(0,),
+                                every_step=False, wakes=0),
+              variants=(
+                  # ACSL's pulse train: on at TZ + k*P for W
+                  Func("PULSE", Kind.TIME, "PULSE(TZ, P, W)",
+                       "1 for TZ + k*P <= t < TZ + k*P + W (k = 0, 1, ...), else 0",
+                       values=("(1.0 if M0 > 0 else 0.0)",),
+                       surfaces=("PULSE_ON(TIME, A, B, C)",),
+                       breaks=(("A", "B"), ("A + C", "B")),
+                       constant_args=(0, 1, 2), positive_args=(1,), nonnegative_args=(2,)),
+              )))
+_BACKLASH = "AMIN1(C + B, AMAX1(C - B, Z0))"
+register(Func("BCKLSH", Kind.MEMORY, "BCKLSH(IC, DL, X)",
+              "backlash of total width 2*DL: HSTRSS(IC, -DL, DL, X)", constant_args=(0,),
+              memory=MemorySpec("1", ("A",), _BACKLASH, ("VALUE",))))
+register(Func("DERIV", Kind.MEMORY, "DERIV(IC, X)", "dX/dt, Y(0)=IC", ("DERIVT",),
+              constant_args=(0,),
               # (x1, t1) the newest accepted point, (x2, t2) the one before, the value
               memory=MemorySpec("5", ("0.0", "0.0", "0.0", "0.0", "A"),
                                 "DERIV(B, TIME, Z0, Z1, Z2, Z3, Z4)",
@@ -341,10 +451,57 @@ register(Func("DELAY", Kind.MEMORY, "DELAY(N, P, X)",
               literal_args=(0,), constant_args=(1,),
               memory=MemorySpec("A + 6", ("*DELAY_INIT(A)",),
                                 "DELAY(TIME, B, C, Z, OFFSET, A)",
-                                ("*DELAY_STORE(TIME, B, C, Z, OFFSET, A)",))))
+                                ("*DELAY_STORE(TIME, B, C, Z, OFFSET, A)",)),
+              variants=(
+                  # ACSL: IC until t0 + TDL, then X(t - TDL) from a store of NMX points
+                  # over TDL (DMIN, ACSL's smallest spacing, is read and not needed).
+                  # Slots: the instant the delayed X starts (the loop wakes there: X(t0)
+                  # may differ from IC), whether it has, then CSMP's store.
+                  Func("DELAY", Kind.MEMORY, "DELAY(X, IC, TDL, NMX[, DMIN])",
+                       "IC for t < t0+TDL, else X(t-TDL) from NMX points stored over TDL, "
+                       "interpolated",
+                       literal_args=(3,), constant_args=(2,), positive_args=(2,),
+                       memory=MemorySpec(
+                           "D + 8", ("INF", "0.0", "*DELAY_INIT(D)"),
+                           "(DELAY(TIME, C, A, Z, OFFSET + 2, D) if Z1 > 0.0 else B)",
+                           ("((TIME + C) if Z2 == 0.0 else Z0)",
+                            "(1.0 if TIME >= Z0 else 0.0)",
+                            "*DELAY_STORE(TIME, C, A, Z, OFFSET + 2, D)"),
+                           wakes=0)),
+              )))
+
+# --- random: one stream per call site, a draw held for an output interval --------
+# (DELT with a fixed step); the slots are runtime.draw's. CSMP's forms take the
+# stream's own seed as first argument.
+_DRAWN = ("0.0", "-INF", "-1.0", "0.0")
+
+
+def _random(signature: str, doc: str, draw: str, **kw: Any) -> Func:
+    return Func(signature[:signature.index("(")], Kind.MEMORY, signature, doc,
+                memory=MemorySpec("4", _DRAWN, "Z0", (f"*DRAW({draw})",), every_step=False,
+                                  wakes=1), **kw)
+
+
+_RUN = "TIME, HOLD, SEED, SITE"
+register(replace(
+    _random("GAUSS(M, S)", "normal, mean M and standard deviation S",
+            f"0.0, {_RUN}, 0.0, Z, OFFSET, A, B, 0.0"),
+    variants=(_random("GAUSS(SEED, M, S)", "CSMP: normal, mean M, standard deviation S, "
+                      "from the stream seeded by SEED", f"0.0, {_RUN}, A, Z, OFFSET, B, C, 0.0",
+                      constant_args=(0,)),)))
+register(_random("UNIF(A, B)", "uniform on [A, B)", f"1.0, {_RUN}, 0.0, Z, OFFSET, A, B, 0.0"))
+register(_random("RNDGEN(SEED)", "CSMP: uniform on [0, 1) from the stream seeded by SEED",
+                 f"1.0, {_RUN}, A, Z, OFFSET, 0.0, 1.0, 0.0", constant_args=(0,)))
+register(_random("OU(TC, M, S)", "Ornstein-Uhlenbeck process with time constant TC, mean M "
+                 "and standard deviation S, from y(t0) = M",
+                 f"2.0, {_RUN}, 0.0, Z, OFFSET, A, B, C", constant_args=(0,),
+                 positive_args=(0,)))
 
 # --- tables ----------------------------------------------------------------------
 register(Func("AFGEN", Kind.TABLE, "AFGEN(F, X)", "linear interpolation in a FUNCTION table",
               lookup="AFGEN"))
 register(Func("NLFGEN", Kind.TABLE, "NLFGEN(F, X)",
               "quadratic interpolation in a FUNCTION table", lookup="NLFGEN"))
+register(Func("LINT", Kind.TABLE, "LINT(F, X)",
+              "linear interpolation in a FUNCTION table; outside it the end segments are "
+              "extended, with a warning", lookup="LINT", extends=True))

@@ -33,6 +33,8 @@ class EventKind(str, Enum):
     FINISH = "finish"  # a FINISH condition was met
     TERMT = "termt"  # a TERMT condition turned true
     BREAKPOINT = "breakpoint"  # a switch on TIME alone, at an instant known in advance
+    SCHEDULE = "schedule"  # a SCHEDULE .XP./.XN./.XZ. crossing (ACSL form)
+    DISCRETE = "discrete"  # a DISCRETE section ran (ACSL form)
 
     def __str__(self) -> str:
         return self.value

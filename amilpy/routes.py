@@ -30,6 +30,8 @@ class Route:
     stability_limit: float | None = None
     # the solver's own tolerance as a fraction of RELERR/ABSERR (see BDF's row)
     local_tolerance: float = 1.0
+    # runs in step-point mode unless told otherwise (the classic translators' RECT)
+    step_point: bool = False
 
     @property
     def uses_tolerances(self) -> bool:
@@ -60,7 +62,8 @@ ROUTES: tuple[Route, ...] = (
     Route("RK4", ("RK4", "RKSFX", "SIMP"), True, True, "RK4", None,
           "fixed-step classic Runge-Kutta, order 4", stability_limit=2.785),
     Route("EULER", ("EULER", "RECT"), True, True, "Euler", None,
-          "fixed-step Euler (rectangular)", stability_limit=2.0),
+          "fixed-step Euler (rectangular), in step-point mode", stability_limit=2.0,
+          step_point=True),
     Route("TRAPZ", ("TRAPZ", "HEUN"), True, True, "Heun", None,
           "fixed-step Heun (trapezoid predictor-corrector)", stability_limit=2.0),
     Route("ADAMS", ("ADAMS", "AB2"), True, True, "AdamsBashforth2", None,
@@ -71,6 +74,30 @@ BY_NAME: dict[str, Route] = {r.name: r for r in ROUTES}
 # Every METHOD spelling -> its route.
 METHODS: dict[str, Route] = {alias: r for r in ROUTES for alias in r.aliases}
 DEFAULT = "AUTO"
+
+# ACSL's ALGORITHM IALG = n -> the METHOD it runs as (contract section 11). IALG 3 is
+# Euler in step-point mode (section 14): METHOD RECT here, the mode is the run's.
+IALG_METHODS: dict[int, str] = {1: "LSODA", 2: "BDF", 3: "RECT", 4: "TRAPZ", 5: "RK4",
+                                8: "RKS", 9: "RKS", 10: "BDF"}
+
+
+class StepPointError(ValueError):
+    """Step-point mode asked of a variable-step route."""
+
+
+def step_point_mode(route: Route, asked: bool | None, method: str | None = None) -> bool:
+    """Whether a run on `route` is in step-point mode: as asked (--step-point,
+    step_point=, the listing's ALGORITHM IALG = 3 or DRIVER = 'EUDRIV'), else the
+    route's default (EULER/RECT: on; the other fixed-step routes: located switching).
+    Raises StepPointError when a variable-step route is asked for it."""
+    if asked is None:
+        return route.step_point
+    if asked and route.uses_tolerances:
+        fixed = ", ".join(r.aliases[0] for r in ROUTES if r.fixed)
+        raise StepPointError(
+            f"step-point mode needs a fixed-step method ({fixed}); METHOD "
+            f"{(method or route.name).upper()} chooses its own steps")
+    return asked
 
 
 def route_for(method: str | None) -> Route | None:

@@ -11,8 +11,10 @@ from __future__ import annotations
 
 import bisect
 import functools
+import hashlib
 import math
 from collections.abc import Callable
+from statistics import NormalDist
 
 from .surfaces import level, sign
 
@@ -67,6 +69,11 @@ def safe_log10(x: float) -> float:
     if x > 0.0:
         return math.log10(x)
     return -math.inf if x == 0.0 else math.nan
+
+
+def notnul(x: float) -> float:
+    """NOTNUL: 1 for 0 (either sign), else x, so that y/NOTNUL(x) never divides by 0."""
+    return 1.0 if x == 0.0 else x
 
 
 def nan_on_domain(f: Callable[[float], float]) -> Callable[[float], float]:
@@ -124,6 +131,146 @@ def nlfgen(table: Table, x: float) -> float:
     return (y0 * (x - x1) * (x - x2) / ((x0 - x1) * (x0 - x2))
             + y1 * (x - x0) * (x - x2) / ((x1 - x0) * (x1 - x2))
             + y2 * (x - x0) * (x - x1) / ((x2 - x0) * (x2 - x1)))
+
+
+class Extending(tuple):
+    """A FUNCTION table read by LINT, which extends its end segments outside it: the
+    table notes how far outside it was read, for the run's one warning."""
+
+    def __new__(cls, name: str, table: Table) -> Extending:
+        obj = super().__new__(cls, table)
+        obj.name = name
+        obj.reset()
+        return obj
+
+    def reset(self) -> None:
+        self.low, self.high = math.inf, -math.inf  # the x read below / above the table
+
+    def note(self, x: float) -> None:
+        self.low, self.high = min(self.low, x), max(self.high, x)
+
+    def warning(self) -> str | None:
+        """The run's warning when the table was read outside, else None."""
+        xs = self[0]
+        outside = [f"down to {self.low:.6g}"] if self.low < xs[0] else []
+        outside += [f"up to {self.high:.6g}"] if self.high > xs[-1] else []
+        if not outside:
+            return None
+        return (f"LINT read table {self.name} outside its x range [{xs[0]:g}, {xs[-1]:g}] "
+                f"({' and '.join(outside)}): the end segments were extended")
+
+
+def lint(table: Extending, x: float) -> float:
+    """Linear interpolation; outside the table the end segment is extended (and the
+    table notes it); NaN for NaN."""
+    xs, ys = table
+    if x != x:
+        return math.nan
+    if x < xs[0] or x > xs[-1]:
+        table.note(x)
+    i = min(max(bisect.bisect_right(xs, x) - 1, 0), len(xs) - 2)
+    return ys[i] + (ys[i + 1] - ys[i]) * (x - xs[i]) / (xs[i + 1] - xs[i])
+
+
+def table_warnings(tables: dict) -> list[str]:
+    """The warnings of the LINT tables a run read outside (and they start afresh)."""
+    out = []
+    for table in tables.values():
+        if isinstance(table, Extending):
+            text = table.warning()
+            if text:
+                out.append(text)
+            table.reset()
+    return out
+
+
+# ------------------------------------------------------------- time switches
+def pulse_on(t: float, tz: float, p: float, w: float) -> float:
+    """The surface of PULSE(TZ, P, W): the time left in the pulse while it is on
+    (> 0), minus the time to the next pulse while it is off (< 0).
+
+    Its sign changes exactly at the instants TZ + k*P and (TZ + W) + k*P, computed
+    as these very float expressions (the run's breakpoints are computed the same
+    way), and nowhere else: at a breakpoint the sign is already the new one."""
+    if t < tz:
+        return t - tz
+    k = math.floor((t - tz) / p)
+    # the pulse that started last, by the breakpoints' own arithmetic
+    while tz + (k + 1) * p <= t:
+        k += 1
+    while k > 0 and tz + k * p > t:
+        k -= 1
+    end = (tz + w) + k * p
+    if t < end:
+        return end - t
+    return t - (tz + (k + 1) * p)
+
+
+def impulse_step(t: float, start: float, period: float, delt: float) -> float:
+    """IMPULS in step-point mode: 1.0 when an instant start + k*period (k >= 0) lies
+    in (t - DELT, t], so each instant is seen at the first step point at or after
+    it (to rounding), as a switch on TIME is; else 0.0. Integrated over the steps of
+    any of the fixed-step methods, each instant weighs exactly DELT."""
+    tol = 1e-9 * delt
+    lo, hi = t - delt + tol, t + tol
+    if period <= 0.0:
+        return 1.0 if lo < start <= hi else 0.0
+    k = max(0, math.ceil((lo - start) / period))
+    if start + k * period <= lo:
+        k += 1
+    return 1.0 if start + k * period <= hi else 0.0
+
+
+# ---------------------------------------------------------------- random streams
+# GAUSS, UNIF, RNDGEN and OU draw a new value at t0 + k*h (h: one output interval, or
+# DELT with a fixed step) and hold it until the next. Draw k of a call site is a pure
+# function of (seed, call site, the call's own seed, k), so a run is reproducible bit
+# for bit, a restart or a re-integration (RANGE, flows) draws the same numbers, and
+# the sites are independent streams. Slots: the value, the next draw's instant (a
+# wake-up for the loop), the index k of the draw held (-1: none yet), and t0.
+NORMAL, UNIFORM, ORNSTEIN_UHLENBECK = 0.0, 1.0, 2.0
+_UNIT = NormalDist()
+
+
+def uniform_draw(seed: float, site: int, own: float, k: int) -> float:
+    """Draw k of a stream, uniform on (0, 1): 53 bits of a BLAKE2b hash of its key."""
+    key = f"{float(seed)!r}:{int(site)}:{float(own)!r}:{int(k)}".encode()
+    bits = int.from_bytes(hashlib.blake2b(key, digest_size=8).digest(), "little") >> 11
+    return (bits + 0.5) * 2.0**-53
+
+
+def normal_draw(seed: float, site: int, own: float, k: int) -> float:
+    """Draw k of a stream, standard normal (the inverse normal CDF of a uniform)."""
+    return _UNIT.inv_cdf(uniform_draw(seed, site, own, k))
+
+
+def draw(kind: float, t: float, hold: float, seed: float, site: float, own: float, z,
+         o: int, a: float, b: float, c: float) -> list[float]:
+    """The four slots of a random function after a step ending at t: unchanged until
+    the next draw is due, then the draw of the interval t falls in. NORMAL: a + b*N;
+    UNIFORM: a + (b - a)*U; ORNSTEIN_UHLENBECK (a = tc, b = mean, c = s): the exact
+    transition over each interval from y(t0) = mean."""
+    value, due, k, t0 = z[o], z[o + 1], int(z[o + 2]), z[o + 3]
+    if k >= 0 and t < due:
+        return [value, due, float(k), t0]
+    if k < 0:
+        t0, new = t, 0
+    else:
+        new = k + 1
+        while t0 + (new + 1) * hold <= t:
+            new += 1
+    if kind == NORMAL:
+        value = a + b * normal_draw(seed, site, own, new)
+    elif kind == UNIFORM:
+        value = a + (b - a) * uniform_draw(seed, site, own, new)
+    elif k < 0:
+        value = b
+    else:
+        decay = math.exp(-hold / a)
+        spread = c * math.sqrt(-math.expm1(-2.0 * hold / a))
+        for j in range(k + 1, new + 1):
+            value = b + (value - b) * decay + spread * normal_draw(seed, site, own, j)
+    return [value, t0 + (new + 1) * hold, float(new), t0]
 
 
 # ------------------------------------------------------------ memory functions
@@ -239,10 +386,25 @@ def _any(*v) -> bool:
 
 
 # name -> the callable; generated code reads it as `_NAME`
+def loop_count(start: float, stop: float, step: float) -> int:
+    """How many times FOR/DO i = start, stop, step runs (Fortran's trip count), at
+    most language.MAX_LOOP."""
+    from .language import MAX_LOOP
+
+    if step == 0.0:
+        raise ValueError("a FOR/DO loop with step 0")
+    n = math.floor((stop - start + step) / step)
+    if n > MAX_LOOP:
+        raise ValueError(f"a FOR/DO loop of {n} iterations (at most {MAX_LOOP})")
+    return max(0, int(n))
+
+
 HELPERS: dict[str, Callable] = {
     "AFGEN": afgen, "NLFGEN": nlfgen, "DERIV": deriv, "IMPULS": impulse_at, "POW": safe_pow,
     "DELAY": delay, "DELAY_STORE": delay_store, "DELAY_INIT": delay_init,
+    "LINT": lint, "PULSE_ON": pulse_on, "IMPULS_STEP": impulse_step, "DRAW": draw,
     "SGN": sign, "LEVEL": level, "WHERE": _where, "ALL": _all, "ANY": _any,
+    "NITER": loop_count, "RANGE": range,  # FOR/DO loops of procedural code
 }
 
 
@@ -264,6 +426,8 @@ def vector_helpers() -> dict[str, Callable]:
         "NLFGEN": lambda table, x: each(lambda v: nlfgen(table, v))(x),
         "DERIV": each(deriv), "IMPULS": each(impulse_at), "POW": np.power,
         "DELAY": each(delay, excluded={3, 4, 5}),
+        "LINT": lambda table, x: each(lambda v: lint(table, v))(x),
+        "PULSE_ON": each(pulse_on), "IMPULS_STEP": each(impulse_step),
         "LEVEL": lambda v: np.ceil(np.asarray(v) - 0.5), "SGN": np.sign,
         "WHERE": np.where, "ALL": many(np.logical_and), "ANY": many(np.logical_or),
     }

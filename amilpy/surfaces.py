@@ -31,12 +31,24 @@ def level(v: float) -> float:
     return float(math.ceil(v - 0.5))
 
 
-def _arith(op: str, a: float, b: float) -> float | None:
-    """a op b for + - * / (None for a division by zero or another operator)."""
+def truth(x: float) -> bool:
+    """A number used as a condition: true iff > 0 (TERMT, IF, the logic functions)."""
+    return x > 0.0
+
+
+def operate(op: str, a: float, b: float) -> float | None:
+    """a op b for the arithmetic, relational and logical operators of the language
+    (None for a division by zero, and for ** which the compiler folds itself)."""
     try:
         if op == "/":
             return a / b
-        return {"+": a + b, "-": a - b, "*": a * b}.get(op)
+        value = {"+": lambda: a + b, "-": lambda: a - b, "*": lambda: a * b,
+                 "<": lambda: a < b, "<=": lambda: a <= b, ">": lambda: a > b,
+                 ">=": lambda: a >= b, "==": lambda: a == b, "/=": lambda: a != b,
+                 "AND": lambda: truth(a) and truth(b), "OR": lambda: truth(a) or truth(b),
+                 "EQV": lambda: truth(a) == truth(b), "NEQV": lambda: truth(a) != truth(b),
+                 }.get(op)
+        return None if value is None else float(value())
     except ZeroDivisionError:
         return None
 
@@ -61,7 +73,11 @@ class _Constant(Visitor):
 
     def visit_BinOp(self, e: syn.BinOp) -> float | None:
         a, b = self.visit(e.left), self.visit(e.right)
-        return None if a is None or b is None else _arith(e.op, a, b)
+        return None if a is None or b is None else operate(e.op, a, b)
+
+    def visit_Not(self, e: syn.Not) -> float | None:
+        v = self.visit(e.operand)
+        return None if v is None else float(not truth(v))
 
     def _unknown(self, e) -> None:
         # a function, a switch, a memory or a table: not folded here (the
@@ -69,7 +85,7 @@ class _Constant(Visitor):
         return None
 
     visit_Call = visit_SwitchValue = visit_MemoryValue = _unknown
-    visit_TableLookup = visit_Impulse = _unknown
+    visit_TableLookup = visit_Impulse = visit_UnitValue = _unknown
 
 
 @deep_enough()
@@ -106,7 +122,7 @@ class _Linear(Visitor):
 
     def visit_BinOp(self, e):
         a, b = self.visit(e.left), self.visit(e.right)
-        if a is None or b is None:
+        if a is None or b is None or e.op not in ("+", "-", "*", "/"):
             return None
         if e.op in "+-":
             s = 1.0 if e.op == "+" else -1.0
@@ -127,7 +143,7 @@ class _Linear(Visitor):
         return None  # a function of the states: no exact gradient
 
     visit_Call = visit_SwitchValue = visit_MemoryValue = _nonlinear
-    visit_TableLookup = visit_Impulse = _nonlinear
+    visit_TableLookup = visit_Impulse = visit_Not = visit_UnitValue = _nonlinear
 
 
 @deep_enough()
@@ -174,6 +190,8 @@ class _Affine(Visitor):
 
     def visit_BinOp(self, e) -> int:
         a, b = self.visit(e.left), self.visit(e.right)
+        if e.op not in ("+", "-", "*", "/", "**"):  # a truth: it jumps
+            return CONSTANT if a == b == CONSTANT else OTHER
         if e.op in "+-":
             return max(a, b)
         if e.op == "*":
@@ -185,12 +203,16 @@ class _Affine(Visitor):
     def visit_Call(self, e) -> int:
         return CONSTANT if all(self.visit(x) == CONSTANT for x in e.args) else OTHER
 
+    def visit_Not(self, e) -> int:
+        return CONSTANT if self.visit(e.operand) == CONSTANT else OTHER
+
     def _other(self, e) -> int:
         # a switch's value jumps, a memory's moves with the states, a table
-        # is not affine, IMPULS is a train of instants
+        # is not affine, IMPULS is a train of instants, a unit's output may jump
         return OTHER
 
     visit_SwitchValue = visit_MemoryValue = visit_TableLookup = visit_Impulse = _other
+    visit_UnitValue = _other
 
 
 @deep_enough()
@@ -213,6 +235,10 @@ class _Dependence(Visitor):
     def __init__(self, model: ir.Model) -> None:
         self.model = model
         self.states = {s.name for s in model.states}
+        # names written-order code keeps (ACSL form) change at events: like states,
+        # a surface on them is watched (its branch is chosen again at each restart)
+        if model.acsl is not None:
+            self.states |= set(model.acsl.discrete_vars)
         self.equations = {e.target: e.expr for e in model.dynamic}
         self.names: dict[str, ir.Depends] = {}
         self.switches: dict[int, ir.Depends] = {}
@@ -248,6 +274,19 @@ class _Dependence(Visitor):
     def visit_BinOp(self, e) -> ir.Depends:
         return self.most((e.left, e.right))
 
+    def visit_Not(self, e) -> ir.Depends:
+        return self.visit(e.operand)
+
+    def visit_UnitValue(self, e) -> ir.Depends:
+        # a unit's outputs move with what it reads (its conditions' surfaces too)
+        if ("u", e.unit) not in self.names:
+            unit = self.model.units[e.unit]
+            self.names[("u", e.unit)] = ir.Depends.STATE
+            self.names[("u", e.unit)] = self.most(
+                [syn.Name(n, unit.span) for n in unit.inputs]
+                + [n for n in walk_code(unit.body) if isinstance(n, ir.SwitchValue)])
+        return self.names[("u", e.unit)]
+
     def visit_Call(self, e) -> ir.Depends:
         return self.most(e.args)
 
@@ -269,6 +308,11 @@ class _Dependence(Visitor):
 
     def visit_Impulse(self, e) -> ir.Depends:
         return ir.Depends.TIME
+
+
+def walk_code(body) -> list[syn.Node]:
+    """Every node of a block of IR statements (their expressions included)."""
+    return [n for st in body for n in syn.walk(st)]
 
 
 @deep_enough()

@@ -26,6 +26,7 @@ class SweepPoint:
     status: str
     t_start: float
     t_end: float
+    second: float | None = None  # a grid's second value at this point
 
     @property
     def amplitude(self) -> float:
@@ -64,10 +65,22 @@ class Sweep:
     # (a transient) and every later one from a settled state: it is left out of
     # the jump search
     carry_state: bool = False
+    second: str | None = None  # a grid: the second data value swept
+    errors: list[str] = field(default_factory=list)  # points that could not run, why
 
-    def branch(self, direction: str) -> tuple[np.ndarray, np.ndarray]:
-        pts = [p for p in self.points if p.direction == direction]
+    def branch(self, direction: str, second: float | None = None
+               ) -> tuple[np.ndarray, np.ndarray]:
+        pts = [p for p in self.points if p.direction == direction and p.second == second]
         return (np.array([p.value for p in pts]), np.array([p.amplitude for p in pts]))
+
+    def lines(self) -> list[tuple[str, np.ndarray, np.ndarray]]:
+        """(label, values, amplitudes) of each curve: a direction swept, or for a grid
+        each value of the second data value."""
+        if self.second is None:
+            return [(f"sweep {d}", *self.branch(d))
+                    for d in dict.fromkeys(p.direction for p in self.points)]
+        return [(f"{self.second} = {w:g}", *self.branch("up", w))
+                for w in dict.fromkeys(p.second for p in self.points)]
 
     def jumps(self) -> dict[str, Jump | None]:
         """For each direction swept, its jump: the largest change of amplitude
@@ -75,6 +88,8 @@ class Sweep:
         (median) change of the NEIGHBOURS steps each side; else None. Directions
         with fewer than three points to compare are left out (no noise to judge by)."""
         out: dict[str, Jump | None] = {}
+        if self.second is not None:
+            return out  # a grid: no one line to search along
         for direction in ("up", "down"):
             v, a = self.branch(direction)
             if direction == "up" and self.carry_state and len(v):
@@ -134,34 +149,84 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
           carry_state: bool = False, settle: float = 0.0, measure: str | None = None,
           method: str | None = None, rtol: float | None = None, atol: float | None = None,
           fintim: float | None = None, keep_runs: bool = False, progress=None,
-          run_progress=None, **params: float) -> Sweep:
+          run_progress=None, step_point: bool | None = None, seed: float | None = None,
+          jobs: int = 1, scheduler: str | None = None,
+          grid: tuple[str, list[float]] | None = None, **params: float) -> Sweep:
     """Run `model` once per value of data value `name` and measure `measure`.
     `progress(i, n, value)` is called after each point, `run_progress` during each
-    run (as `Options.progress`)."""
-    from .run import Options, simulate
+    run (as `Options.progress`; one process only). Points that do not carry the
+    state are independent: `jobs` worker processes or a Dask `scheduler` run them
+    (see `amilpy.farm`), in any order, the result in the points' order. `grid`:
+    (name, values) of a second data value: every pair of values is a point."""
+    from .run import Options
 
     name = name.upper()
-    if name not in model.ir.data_names:
-        raise AmilError(f"{name} is not a PARAM/CONST/INCON value of this model")
+    for n in [name] + ([grid[0].upper()] if grid else []):
+        if n not in model.ir.data_names:
+            raise AmilError(f"{n} is not a PARAM/CONST/INCON value of this model")
+    if grid and (carry_state or both_ways):
+        raise AmilError("a grid of two data values cannot carry the state or sweep both "
+                        "ways: each point is a run of its own")
     variables = model.ir.variables
     measure = (measure or default_measure(model.ir)).upper()
     if measure not in variables:
         raise AmilError(f"{measure} is not a variable of the model")
-    sequence = [(v, "up") for v in values]
-    if both_ways:
-        sequence += [(v, "down") for v in reversed(values[:-1])]
-    result = Sweep(name, measure, settle, carry_state=carry_state)
+    second = grid[0].upper() if grid else None
+    sequence = [(v, "up", None) for v in values]
+    if grid:
+        sequence = [(v, "up", w) for w in grid[1] for v in values]
+    elif both_ways:
+        sequence += [(v, "down", None) for v in reversed(values[:-1])]
+    result = Sweep(name, measure, settle, carry_state=carry_state, second=second)
+
+    def options(start=None) -> Options:
+        return Options(method=method, rtol=rtol, atol=atol, start=start, fintim=fintim,
+                       progress=run_progress, extrema=(measure,), settle=settle,
+                       step_point=step_point, seed=seed)
+
+    if carry_state:
+        _carried(model, result, sequence, options, params, keep_runs, progress)
+        return result
+    from .farm import Task, farm
+
+    tasks = []
+    for value, _, w in sequence:
+        data = {**params, name: value, **({second: w} if second else {})}
+        label = f"{name} = {value:g}" + (f", {second} = {w:g}" if second else "")
+        tasks.append(Task(model._specs(data)[0], options(), label, measure, settle,
+                          keep_runs))
+    finished = [0]
+
+    def done(i: int, _outcome) -> None:
+        finished[0] += 1
+        if progress is not None:
+            progress(finished[0], len(sequence), sequence[i][0])
+
+    for (value, direction, w), task, outcome in zip(sequence, tasks, farm(
+            model.ir, tasks, jobs, scheduler, done, model.cache), strict=True):
+        if outcome.point is None:
+            result.errors.append(f"{task.label}: {outcome.error or 'not run'}")
+            nan = math.nan
+            result.points.append(SweepPoint(value, direction, nan, nan, "failed", nan, nan, w))
+            continue
+        result.points.append(SweepPoint(value, direction, *outcome.point, w))
+        if keep_runs:
+            result.runs.append(outcome.run)
+    return result
+
+
+def _carried(model, result: Sweep, sequence, options, params, keep_runs: bool,
+             progress) -> None:
+    """One point after the other, each from the previous one's final state."""
+    from .farm import extent
+    from .run import simulate
+
     start = None
-    for i, (value, direction) in enumerate(sequence):
-        spec = model._specs({**params, name: value})[0]
-        opts = Options(method=method, rtol=rtol, atol=atol,
-                       start=start if carry_state else None, fintim=fintim,
-                       progress=run_progress)
-        run = simulate(model.ir, spec, opts, model.cache)
+    for i, (value, direction, _) in enumerate(sequence):
+        spec = model._specs({**params, result.name: value})[0]
+        run = simulate(model.ir, spec, options(start), model.cache)
         t0 = float(run.times[0])
-        keep = run.times >= t0 + settle
-        v = run.values[measure][keep]
-        lo, hi = (float(np.min(v)), float(np.max(v))) if v.size else (math.nan, math.nan)
+        lo, hi = extent(run, result.measure)
         result.points.append(SweepPoint(value, direction, lo, hi, str(run.status), t0,
                                         float(run.t_end)))
         if keep_runs:
@@ -171,4 +236,3 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
         if not run.ok:
             break  # what follows would start from a failed state
         start = run.final_state
-    return result

@@ -151,7 +151,9 @@ class Call(Node):
 
 @dataclass(frozen=True)
 class BinOp(Node):
-    op: str  # one of + - * / **
+    # arithmetic + - * / **; relational < <= > >= == /= (a number 1.0 or 0.0);
+    # logical AND OR EQV NEQV (operands true when > 0; a number 1.0 or 0.0)
+    op: str
     left: Expr
     right: Expr
     span: Span
@@ -165,10 +167,33 @@ class Neg(Node):
     child_fields = ("operand",)
 
 
-Expr = Num | Name | Call | BinOp | Neg
+@dataclass(frozen=True)
+class Not(Node):
+    """`.NOT. X` (also `~X`): 1.0 when X is not true (X <= 0), else 0.0."""
+
+    operand: Expr
+    span: Span
+    child_fields = ("operand",)
+
+
+# the operators of BinOp by kind (the grammar's spellings fold to these)
+RELATIONAL = ("<", "<=", ">", ">=", "==", "/=")
+LOGICAL = ("AND", "OR", "EQV", "NEQV")
+
+Expr = Num | Name | Call | BinOp | Neg | Not
 # the expression nodes of the syntax: a visitor of syntax expressions declares
 # `complete = EXPRESSIONS` (ir.EXPRESSIONS adds the IR's own)
-EXPRESSIONS: tuple[type[Node], ...] = (Num, Name, Call, BinOp, Neg)
+EXPRESSIONS: tuple[type[Node], ...] = (Num, Name, Call, BinOp, Neg, Not)
+
+
+def is_logical(e: Node) -> bool:
+    """An expression whose value is a truth (1.0 or 0.0) by its form: a relational
+    or logical operation, .NOT., .TRUE./.FALSE. (as written)."""
+    if isinstance(e, BinOp):
+        return e.op in RELATIONAL or e.op in LOGICAL
+    if isinstance(e, Not):
+        return True
+    return isinstance(e, Num) and e.text.upper() in (".TRUE.", ".FALSE.")
 
 
 # ------------------------------------------------------------------ statements
@@ -244,6 +269,7 @@ class Finish(Node):
 class Termt(Node):
     expr: Expr
     span: Span
+    message: str | None = None  # TERMT(c, 'message'): said with the time when it stops
     child_fields = ("expr",)
 
 
@@ -273,6 +299,7 @@ class Title(Node):
 class Section(Node):
     name: str  # INITIAL, DYNAMIC, TERMINAL
     span: Span
+    written: str = ""  # the keyword as written (DERIVATIVE opens DYNAMIC in CSMP form)
 
 
 @dataclass(frozen=True)
@@ -285,12 +312,151 @@ class Stop(Node):
     span: Span
 
 
+# --------------------------------------- procedural code and the ACSL form (8-11)
+
+
+@dataclass(frozen=True)
+class Branch(Node):
+    """One branch of an IF: its condition (None: ELSE) and statements."""
+
+    cond: Expr | None
+    body: tuple[Statement, ...]
+    span: Span
+
+    def children(self) -> tuple[Node, ...]:
+        return ((self.cond,) if self.cond is not None else ()) + self.body
+
+
+@dataclass(frozen=True)
+class If(Node):
+    """IF (c) THEN ... [ELSE IF (c) THEN ...] [ELSE ...] END IF, Magnolia's IF (c) ...
+    END, and the one-line IF (c) statement (one branch of one statement)."""
+
+    branches: tuple[Branch, ...]
+    span: Span
+    child_fields = ("branches",)
+
+
+@dataclass(frozen=True)
+class Procedural(Node):
+    """PROCEDURAL (o1, o2 = i1, i2) ... END: one sorting unit, written order inside."""
+
+    outputs: tuple[str, ...]
+    inputs: tuple[str, ...]
+    body: tuple[Statement, ...]
+    span: Span
+    child_fields = ("body",)
+
+
+@dataclass(frozen=True)
+class Loop(Node):
+    """FOR i = a, b [, s] ... END  or  DO i = a, b [, s] ... END DO."""
+
+    var: str
+    start: Expr
+    stop: Expr
+    step: Expr | None
+    body: tuple[Statement, ...]
+    span: Span
+    keyword: str = "DO"
+
+    def children(self) -> tuple[Node, ...]:
+        return (self.start, self.stop) + ((self.step,) if self.step is not None else ()) \
+            + self.body
+
+
+@dataclass(frozen=True)
+class FunctionDef(Node):
+    """FUNCTION y = f(a, b) ... END (ACSL form): written order, no states."""
+
+    name: str
+    result: str
+    params: tuple[str, ...]
+    body: tuple[Statement, ...]
+    span: Span
+    child_fields = ("body",)
+
+
+@dataclass(frozen=True)
+class Block(Node):
+    """A section of the ACSL form: INITIAL, DYNAMIC, DERIVATIVE, DISCRETE (with its
+    name), TERMINAL; `END` closes it."""
+
+    kind: str
+    name: str | None
+    body: tuple[Statement, ...]
+    span: Span
+    child_fields = ("body",)
+
+
+@dataclass(frozen=True)
+class Schedule(Node):
+    """SCHEDULE s .AT. e (kind AT), or .XP./.XN./.XZ. e (a crossing of e)."""
+
+    section: str
+    kind: str  # AT, XP, XN, XZ
+    expr: Expr
+    span: Span
+    child_fields = ("expr",)
+
+
+@dataclass(frozen=True)
+class Interval(Node):
+    """INTERVAL v = dt inside a DISCRETE section: it runs at t0 and every v after."""
+
+    name: str
+    expr: Expr
+    span: Span
+    child_fields = ("expr",)
+
+
+@dataclass(frozen=True)
+class Cinterval(Node):
+    """CINTERVAL CINT = v: the name and value of the output interval."""
+
+    name: str
+    expr: Expr
+    span: Span
+    child_fields = ("expr",)
+
+
+@dataclass(frozen=True)
+class Variable(Node):
+    """VARIABLE X [= t0]: the independent variable's name and start."""
+
+    name: str
+    value: float | None
+    span: Span
+
+
+@dataclass(frozen=True)
+class Control(Node):
+    """ALGORITHM, NSTEPS, MAXTERVAL, MINTERVAL, MERROR, XERROR: NAME = value, ..."""
+
+    keyword: str
+    settings: tuple[Setting, ...]
+    span: Span
+
+
+@dataclass(frozen=True)
+class Declare(Node):
+    """LOGICAL / INTEGER / REAL / DOUBLEPRECISION names (DIMENSION without sizes)."""
+
+    type: str  # LOGICAL, INTEGER or REAL
+    names: tuple[str, ...]
+    name_spans: tuple[Span, ...]
+    span: Span
+
+
 Statement = (
     Assign | Data | Table | Timer | Method | Tolerance | Finish | Termt | Report | Label
-    | Title | Section | End | Stop
+    | Title | Section | End | Stop | If | Procedural | Loop | FunctionDef | Block | Schedule
+    | Interval | Cinterval | Variable | Control | Declare
 )
 STATEMENTS: tuple[type[Node], ...] = (Assign, Data, Table, Timer, Method, Tolerance, Finish,
-                                      Termt, Report, Label, Title, Section, End, Stop)
+                                      Termt, Report, Label, Title, Section, End, Stop, If,
+                                      Procedural, Loop, FunctionDef, Block, Schedule, Interval,
+                                      Cinterval, Variable, Control, Declare)
 
 
 @dataclass(frozen=True)
@@ -298,3 +464,5 @@ class Program:
     statements: tuple[Statement, ...]
     path: str | None
     source: str
+    form: str = "CSMP"  # ACSL when the file starts with PROGRAM or MODEL (section 9)
+    name: str = ""  # the ACSL program's name (the rest of its PROGRAM/MODEL line)

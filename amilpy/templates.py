@@ -21,6 +21,9 @@ from .diagnostics import Span
 ARGUMENTS = "ABCDEFGH"
 # placeholders whose meaning does not depend on the function
 FIXED_NAMES = frozenset({"TIME", "INF"})
+# placeholders of memory templates set by the run, not the listing: the random
+# streams' seed, how long a draw is held, and the call site's own number
+RUN_NAMES = frozenset({"SEED", "HOLD", "SITE"})
 _ARITHMETIC = (py.Expression, py.BinOp, py.UnaryOp, py.Name, py.Constant, py.Call, py.Load,
                py.Add, py.Sub, py.Mult, py.Div, py.USub)
 _ANY = _ARITHMETIC + (py.IfExp, py.Compare, py.BoolOp, py.And, py.Or, py.Lt, py.Gt, py.LtE,
@@ -86,7 +89,8 @@ def _known(name: str, args: int, modes: int, states: int, slots: bool, update: b
         k = _index(name, prefix)
         if k is not None:
             return k < limit
-    if slots and (name in ("Z", "OFFSET") or _index(name, "Z") is not None):
+    if slots and (name in ("Z", "OFFSET") or name in RUN_NAMES
+                  or _index(name, "Z") is not None):
         return True
     return update and name == "VALUE"
 

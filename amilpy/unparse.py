@@ -12,8 +12,11 @@ from . import ir
 from . import syntax as syn
 from .syntax import Visitor, deep_enough
 
-_PREC = {"+": 1, "-": 1, "*": 2, "/": 2, "**": 4}
-_UNARY = 3  # unary minus binds looser than ** and tighter than * /
+_PREC = {"EQV": 1, "NEQV": 1, "OR": 2, "AND": 3, "<": 5, "<=": 5, ">": 5, ">=": 5, "==": 5,
+         "/=": 5, "+": 6, "-": 6, "*": 7, "/": 7, "**": 9}
+_NOT = 4
+_UNARY = 8  # unary minus binds looser than ** and tighter than * /
+_WORDS = {"EQV": " .EQV. ", "NEQV": " .NEQV. ", "OR": " .OR. ", "AND": " .AND. "}
 
 
 class _Text(Visitor):
@@ -52,14 +55,21 @@ class _Text(Visitor):
         p = _PREC[e.op]
         # ** groups to the right, the others to the left; an operand grouped the
         # other way keeps its parentheses (X + (Y + Z) is not X + Y + Z in floats)
-        left_p = p + 1 if e.op == "**" else p
+        left_p = p + 1 if e.op == "**" or p == _PREC["<"] else p
         right_p = p if e.op == "**" else p + 1
-        op = e.op if e.op in ("*", "/", "**") else f" {e.op} "
+        op = e.op if e.op in ("*", "/", "**") else _WORDS.get(e.op, f" {e.op} ")
         text = f"{self.visit(e.left, left_p)}{op}{self.visit(e.right, right_p)}"
         return f"({text})" if p < parent else text
 
+    def visit_Not(self, e: syn.Not, parent: int) -> str:
+        inner = ".NOT. " + self.visit(e.operand, _NOT)
+        return f"({inner})" if parent > _NOT else inner
+
     def visit_Call(self, e: syn.Call, parent: int) -> str:
         return self.call(e.func, e.args)
+
+    def visit_UnitValue(self, e: ir.UnitValue, parent: int) -> str:
+        return e.name
 
     def visit_SwitchValue(self, e: ir.SwitchValue, parent: int) -> str:
         sw = self.model.switches[e.switch]

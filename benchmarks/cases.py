@@ -1,14 +1,23 @@
 """Benchmark cases: each model as an amilpy listing, a reference solution on its output
-grid, and the same equations hand-written as plain Python functions (floats only, no
-NumPy in the right-hand side) for the SciPy baselines.
+grid checked against a second method, and the same equations hand-written as plain Python
+functions (floats only, no NumPy in the right-hand side) for the SciPy baselines.
 
-The references of the shipped models are imported from ``tests/references`` (they
-integrate at rtol 1e-12 with every switching instant located and the integration
-restarted). The core models have closed forms.
+References. The Exercise 4 drives and the hoist are affine between switches: their
+reference is exact there (`exact.py`, the matrix exponential, switches located on the
+exact solution) and is checked against the hybrid DOP853 integration of
+``tests/references`` at rtol 1e-13. The crank-slider and the machine unit are
+nonlinear and smooth: DOP853 at rtol 1e-13, checked against Radau at its tightest
+(rtol 2.3e-13). `Case.agreement` is the largest difference of the two on the grid, in
+the error metric below. The core models have closed forms.
 
-Hand-written functions know the switches on TIME (the case lists them as breakpoints and
-gives one function per segment) but not the switches on states: those they integrate
-through, as a hand-written ``odeint`` call would.
+Hand-written functions come two ways, as a user would write them:
+
+* ``segments``: one function per TIME segment (split at the switches on TIME, the
+  clutch instant), integrating straight through the switches on states, as an
+  ``odeint`` user would;
+* ``hybrid``: one function per branch of the switches on states, each switch a
+  terminal event of ``solve_ivp`` followed by a restart in the new branch (stiction,
+  backlash; the crank-slider's ``FINISH W = 10`` as a terminal event).
 """
 
 from __future__ import annotations
@@ -29,6 +38,8 @@ if ROOT not in sys.path:
 
 ATOL_SCALE = 1e-12  # floor of the per-state scale in the error metric
 
+from hybrids import Hybrid, crank_hybrid, ex4_hybrid, hoist_hybrid  # noqa: E402
+
 
 @dataclass
 class Case:
@@ -44,6 +55,11 @@ class Case:
     fintim: float
     state_switches: bool  # has switches on states (hand-written code integrates through)
     end_time: Callable[[], float] | None = None  # e.g. FINISH: the reference's stop time
+    # a second reference, by another method (None: the reference is a closed form)
+    check: Callable[[np.ndarray], dict[str, np.ndarray]] | None = None
+    reference_method: str = "closed form"
+    check_method: str = ""
+    hybrid: Callable[[], Hybrid] | None = None  # branches and events (hand-written)
     _ref_cache: dict = field(default_factory=dict)
 
     def grid(self) -> np.ndarray:
@@ -56,6 +72,21 @@ class Case:
             g = self.grid()
             self._ref_cache["ref"] = (g, self.reference(g))
         return self._ref_cache["ref"]
+
+    def agreement(self) -> tuple[float, str]:
+        """The largest difference of the two references on the grid, in the error
+        metric (each state relative to its maximum), and the state where it is."""
+        if self.check is None:
+            return 0.0, ""
+        if "agreement" not in self._ref_cache:
+            g, ref = self.ref()
+            other = self.check(g)
+            scales = self.scales()
+            diffs = {n: float(np.max(np.abs(other[n] - ref[n])) / (ATOL_SCALE + scales[n]))
+                     for n in self.states}
+            worst = max(diffs, key=diffs.get)
+            self._ref_cache["agreement"] = (diffs[worst], worst)
+        return self._ref_cache["agreement"]
 
     def scales(self) -> dict[str, float]:
         _, r = self.ref()
@@ -195,12 +226,32 @@ def _ex4_meter_segments():
     return [(2.5, f)]
 
 
+def _ex4_names(chain) -> list[str]:
+    n = chain.n
+    return ["IA"] + [f"W{k + 1}" for k in range(n)] + [f"TH{k + 1}" for k in range(n - 1)]
+
+
 def _ex4_reference(chain_name: str, t_end: float, rename: dict[str, str]):
+    """Exact between switches (exact.py)."""
+    def ref(grid):
+        import exact
+
+        from tests.references import ex4
+
+        chain = getattr(ex4, chain_name)()
+        y = exact.ex4_exact(chain, grid)
+        return {rename.get(k, k): y[:, i] for i, k in enumerate(_ex4_names(chain))}
+
+    return ref
+
+
+def _ex4_check(chain_name: str, t_end: float, rename: dict[str, str]):
+    """The hybrid DOP853 integration of tests/references at rtol 1e-13."""
     def ref(grid):
         from tests.references import ex4
 
         chain = getattr(ex4, chain_name)()
-        tr = ex4.simulate(chain, t_end)
+        tr = ex4.simulate(chain, t_end, rtol=1e-13, atol=1e-20)
         s = tr.sample(grid)
         return {rename.get(k, k): v for k, v in s.items()}
 
@@ -235,9 +286,20 @@ def _hoist_segments():
 
 
 def _hoist_reference(grid):
+    """Exact between contact edges (exact.py)."""
+    import exact
+
     from tests.references import hoist
 
-    r = hoist.simulate(hoist.Hoist(), 70.0, (0.0, 5.0), t_eval=grid)
+    y = exact.hoist_exact(hoist.Hoist(), 70.0, grid)
+    return dict(zip(["X1", "Y", "V1", "V2", "V3", "PH"], y.T, strict=True))
+
+
+def _hoist_check(grid):
+    """The hybrid DOP853 integration of tests/references at rtol 1e-13."""
+    from tests.references import hoist
+
+    r = hoist.simulate(hoist.Hoist(), 70.0, (0.0, 5.0), t_eval=grid, rtol=1e-13, atol=1e-15)
     return dict(zip(["X1", "Y", "V1", "V2", "V3", "PH"], r.y, strict=True))
 
 
@@ -247,26 +309,41 @@ def _hoist_reference(grid):
 def _crank_segments():
     from tests.references import crank_slider
 
-    return [(_crank_end(), crank_slider.rhs)]  # already a plain float function
+    # without events a user integrates to FINTIM and keeps the rows before W = 10
+    return [(3.0, crank_slider.rhs)]  # already a plain float function
 
 
-_CRANK = {}
+_SMOOTH: dict[str, object] = {}
 
 
-def _crank_sol():
-    if "sol" not in _CRANK:
-        from tests.references import crank_slider
+def _smooth(name: str, method: str = "DOP853"):
+    """A smooth reference solution: DOP853 at rtol 1e-13, or Radau at its tightest."""
+    key = f"{name}/{method}"
+    if key not in _SMOOTH:
+        from scipy.integrate import solve_ivp
 
-        _CRANK["sol"] = crank_slider.exact()[1]
-    return _CRANK["sol"]
+        from tests.references import crank_slider, machine_unit
+
+        rtol = 1e-13 if method == "DOP853" else 2.3e-13  # Radau's floor is 1000 eps
+        if name == "crank":
+            def finish(t, s):
+                return s[1] - 10.0
+            finish.terminal, finish.direction = True, 1.0
+            _SMOOTH[key] = solve_ivp(crank_slider.rhs, (0.0, 3.0), [0.0, 0.0], method=method,
+                                     rtol=rtol, atol=1e-14, events=[finish],
+                                     dense_output=True)
+        else:
+            _SMOOTH[key] = solve_ivp(machine_unit.rhs, (0.0, 10.0), [0.0] * 3, method=method,
+                                     rtol=rtol, atol=1e-14, dense_output=True)
+    return _SMOOTH[key]
 
 
 def _crank_end() -> float:
-    return float(_crank_sol().t[-1])  # W = 10 reached (the listing's FINISH)
+    return float(_smooth("crank").t[-1])  # W = 10 reached (the listing's FINISH)
 
 
-def _crank_reference(grid):
-    y = _crank_sol().sol(grid)
+def _crank_reference(grid, method="DOP853"):
+    y = _smooth("crank", method).sol(grid)
     return {"PHI": y[0], "W": y[1]}
 
 
@@ -276,11 +353,8 @@ def _machine_segments():
     return [(10.0, machine_unit.rhs)]  # already a plain float function
 
 
-def _machine_reference(grid):
-    from tests.references import machine_unit
-
-    _, sol = machine_unit.simulate(10.0)
-    y = sol.sol(grid)
+def _machine_reference(grid, method="DOP853"):
+    y = _smooth("machine", method).sol(grid)
     return {"PHI": y[0], "W": y[1], "AW": y[2]}
 
 
@@ -370,6 +444,28 @@ def _gap_segments():
     return [(12.0, f)]
 
 
+def _gap_hybrid() -> Hybrid:
+    """The dead zone's three branches, |X| = D ending each."""
+    k, d = GAP_W**2, GAP_D
+
+    def field(mode, seg):
+        off = mode * d
+        if mode == 0:
+            return lambda t, y: [y[1], 0.0]
+        return lambda t, y: [y[1], -k * (y[0] - off)]
+
+    def events(mode):
+        if mode == 0:
+            return [(lambda t, y: y[0] - d, 1.0), (lambda t, y: y[0] + d, -1.0)]
+        return [(lambda t, y, off=mode * d: y[0] - off, -float(mode))]
+
+    def jump(mode, j, t, y):
+        new = (1 if j == 0 else -1) if mode == 0 else 0
+        return new, y
+
+    return Hybrid(1, field, events, jump)
+
+
 def _fswt_segments():
     k1, xe, k2 = SW_K1, SW_XE, SW_K2
 
@@ -406,33 +502,45 @@ def _osc_segments():
 
 
 def all_cases() -> dict[str, Case]:
+    exact = "exact between switches (matrix exponential)"
+    dop = "hybrid DOP853, rtol 1e-13"
+    ex4_ref = dict(reference_method=exact, check_method=dop)
+    smooth = dict(reference_method="DOP853, rtol 1e-13", check_method="Radau, rtol 2.3e-13")
+    meter = {"TH1": "TH12", "TH2": "TH23", "TH3": "TH34"}
     cases = [
         Case("ex4_elastic", True, _read("ex4_elastic"), ["IA", "TH", "W1", "W2"],
              [0.0] * 4, _ex4_elastic_segments,
-             _ex4_reference("elastic_chain", 0.5, {"TH1": "TH"}), 5e-5, 0.5, True),
+             _ex4_reference("elastic_chain", 0.5, {"TH1": "TH"}), 5e-5, 0.5, True,
+             check=_ex4_check("elastic_chain", 0.5, {"TH1": "TH"}),
+             hybrid=ex4_hybrid("elastic"), **ex4_ref),
         Case("ex4_clutch", True, _read("ex4_clutch"), ["IA", "TH", "W1", "W2"],
              [0.0] * 4, _ex4_clutch_segments,
-             _ex4_reference("clutch_chain", 0.5, {"TH1": "TH"}), 5e-5, 0.5, True),
+             _ex4_reference("clutch_chain", 0.5, {"TH1": "TH"}), 5e-5, 0.5, True,
+             check=_ex4_check("clutch_chain", 0.5, {"TH1": "TH"}),
+             hybrid=ex4_hybrid("clutch"), **ex4_ref),
         Case("ex4_torque_meter", True, _read("ex4_torque_meter"),
              ["IA", "TH12", "TH23", "TH34", "W1", "W2", "W3", "W4"], [0.0] * 8,
-             _ex4_meter_segments,
-             _ex4_reference("meter_chain", 2.5, {"TH1": "TH12", "TH2": "TH23", "TH3": "TH34"}),
-             2.5e-4, 2.5, True),
+             _ex4_meter_segments, _ex4_reference("meter_chain", 2.5, meter), 2.5e-4, 2.5, True,
+             check=_ex4_check("meter_chain", 2.5, meter), hybrid=ex4_hybrid("meter"),
+             **ex4_ref),
         Case("hoist_backlash", True, _read("hoist_backlash"),
              ["X1", "Y", "V1", "V2", "V3", "PH"], [0.0] * 6, _hoist_segments,
-             _hoist_reference, 1e-3, 5.0, True),
+             _hoist_reference, 1e-3, 5.0, True, check=_hoist_check, hybrid=hoist_hybrid,
+             **ex4_ref),
         Case("crank_slider_startup", True, _read("crank_slider_startup"), ["PHI", "W"],
              [0.0, 0.0], _crank_segments, _crank_reference, 1e-3, 3.0, False,
-             end_time=_crank_end),
+             end_time=_crank_end, check=lambda g: _crank_reference(g, "Radau"),
+             hybrid=crank_hybrid, **smooth),
         Case("machine_unit", True, _read("machine_unit"), ["PHI", "W", "AW"], [0.0] * 3,
-             _machine_segments, _machine_reference, 1e-3, 10.0, False),
+             _machine_segments, _machine_reference, 1e-3, 10.0, False,
+             check=lambda g: _machine_reference(g, "Radau"), **smooth),
         Case("exp_decay", False, DECAY, ["X"], [1.0], _decay_segments,
              lambda g: {"X": np.exp(-2.0 * g)}, 0.01, 2.0, False),
         Case("oscillator", False, OSC, ["X", "V"], [1.0, 0.0], _osc_segments,
              lambda g: {"X": np.cos(OSC_W * g), "V": -OSC_W * np.sin(OSC_W * g)},
              0.01, 20.0, False),
         Case("deadzone_osc", False, GAP, ["X", "V"], [1.5, 0.0], _gap_segments, _gap_exact,
-             0.01, 12.0, True),
+             0.01, 12.0, True, hybrid=_gap_hybrid),
         Case("fsw_on_time", False, FSWT, ["X"], [0.0], _fswt_segments, _fswt_reference,
              0.01, 2.0, False),
     ]

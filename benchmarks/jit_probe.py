@@ -51,15 +51,20 @@ def main(path: str | None = None) -> None:
     # the same function returning an array, for numba (compiler text, not model text)
     head, ret = source.rsplit("return [", 1)
     namespace = {"np": np}
+    # the run's parameters (p_NAME globals): numba takes globals as constants
+    namespace.update({k: v for k, v in compiled.namespace.items() if k.startswith("p_")})
     exec(head + "return np.array([" + ret.rstrip() + ")", namespace)  # noqa: S102
+    start = time.perf_counter()
     jitted = numba.njit(namespace["rhs"])
     n = len(compiled.y0)
     y0 = np.asarray(compiled.y0, dtype=float)
     modes = tuple(1.0 for _ in compiled.watched)
     z0 = tuple(compiled.z0)
     jitted(0.0, y0, modes, z0)
+    first = time.perf_counter() - start
     plain = compiled.rhs
-    print(f"{os.path.basename(path)}: {n} states")
+    print(f"{os.path.basename(path)}: {n} states; numba's first call (compiling) "
+          f"{first * 1e3:.0f} ms")
     print(f"one call: python {per_call(lambda: plain(0.0, y0.tolist(), modes, z0)):.3f} us, "
           f"numba {per_call(lambda: jitted(0.0, y0, modes, z0)):.3f} us")
     fintim = prepared.plan.timer["FINTIM"]

@@ -40,6 +40,8 @@ import statistics
 import sys
 import time
 import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, field
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
@@ -47,15 +49,18 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from cases import ROOT, Case, all_cases, error_on_grid, with_delt  # noqa: E402
+from hybrids import hybrid_solve  # noqa: E402
 
 AMILPY_METHODS = ["AUTO", "RKS", "DOP853", "LSODA", "RADAU", "BDF"]
 FIXED_METHODS = ["RK4", "EULER", "TRAPZ"]
 # the same ladder for both sides: a level one side reaches only at the last rung must
 # not read as "not reached" for the other
-TOLS = [10.0**-k for k in range(3, 12)]
+TOLS = [10.0**-k for k in range(3, 13)]
 HAND_TOLS = TOLS
 HAND_ROUTES = ["ivp_RK45", "ivp_DOP853", "ivp_LSODA", "ivp_Radau", "ivp_BDF", "odeint",
                "ode_dop853", "ode_vode_bdf", "ode_lsoda"]
+# with the switches on states as terminal events (cases that have a `hybrid`)
+EVENT_ROUTES = ["ivp_RK45+ev", "ivp_DOP853+ev", "ivp_LSODA+ev", "ivp_Radau+ev"]
 LEVELS = [1e-3, 1e-6, 1e-9]
 SLOW = 4.0  # seconds: a route whose run takes longer stops tightening
 
@@ -87,47 +92,150 @@ def first_run_cost(case: Case) -> dict:
     return {"case": case.name, "load_s": t1 - t0, "first_run_s": t2 - t1, "steady_run_s": steady}
 
 
-def amilpy_point(model, case: Case, method: str, rtol: float | None, atol: float | None,
-                 repeats: int, delt: float | None = None) -> dict:
-    row = {"case": case.name, "kind": "amilpy", "route": method, "rtol": rtol, "atol": atol,
-           "delt": delt}
-    try:
-        secs, runs = _median_time(lambda: model.run(method=method, rtol=rtol, atol=atol),
-                                  repeats)
-        r = runs[0]
-        err = error_on_grid(case, r.t, {n: r[n] for n in case.states})
-        row.update(time=secs, nfev=r.stats.get("nfev"), nsteps=r.stats.get("nsteps"),
-                   events=len(r.events), error=err, status=str(r.status))
-    except Exception as exc:  # noqa: BLE001 - a failing route is a result, not a crash
-        row.update(time=math.nan, nfev=None, nsteps=None, events=None, error=math.inf,
-                   status=f"ERROR {type(exc).__name__}: {str(exc).splitlines()[0][:80]}")
-    return row
+PROBE_METHODS = ["RKS", "DOP853"]  # the explicit routes the advice probes after
 
 
-def amilpy_rows(case: Case, repeats: int, tols, ladder: int, methods, fixed) -> list[dict]:
+def probe_cost(case: Case, rtol: float = 1e-6, repeats: int = 3) -> list[dict]:
+    """What the stiffness-advice probe adds after a run of an explicit method: the run
+    alone and the probe alone (`advice.stiffness_advice`, made to run whatever the
+    run's length), each the median of repeats; `advice` whether it would run at all
+    (the run took `advice.SLOW` seconds or more)."""
+    import amilpy
+    from amilpy import advice as advice_module
+    from amilpy.run import Options
+
+    threshold = getattr(advice_module, "SLOW", 0.0)  # (no such threshold before)
+
+    def stiffness_advice(*args):
+        advice_module.SLOW = 0.0
+        try:
+            return advice_module.stiffness_advice(*args)
+        finally:
+            advice_module.SLOW = threshold
+
+    model = amilpy.loads(case.text, case.name)
+    model.run()
+    atol = rtol * case.atol_factor()
+    spec = model.ir.runs[0]
+    out = []
+    for method in PROBE_METHODS:
+        run_s, runs = _median_time(lambda m=method: model.run(method=m, rtol=rtol, atol=atol,
+                                                             advice=False), repeats)
+        opts = Options(method=method, rtol=rtol, atol=atol)
+        probe_s, note = _median_time(lambda r=runs[0], o=opts: stiffness_advice(
+            model.ir, spec, r, o, model.cache), repeats)
+        out.append({"case": case.name, "method": method, "rtol": rtol, "run_s": run_s,
+                    "probe_s": probe_s, "nfev": runs[0].stats.get("nfev"),
+                    "advice": note is not None,
+                    "probed": runs[0].stats.get("seconds", 0.0) >= threshold and
+                    runs[0].stats.get("nfev", 0) >= advice_module.EXPENSIVE})
+        print(f"  probe {case.name} {method}: run {run_s * 1e3:.3g} ms, probe "
+              f"{probe_s * 1e3:.3g} ms", flush=True)
+    return out
+
+
+@dataclass
+class Point:
+    """One route at one setting: `run()` integrates once; `row(result)` measures it."""
+
+    row0: dict
+    run: Callable[[], object]
+    row: Callable[[object], dict]
+    times: list[float] = field(default_factory=list)
+
+
+def amilpy_points(case: Case, tols, methods, fixed, ladder: int) -> list[list[Point]]:
+    """Per route, its points from loose to tight (the model compiled before any timing)."""
     import amilpy
 
     model = amilpy.loads(case.text, case.name)
-    model.run()  # compile once for this set of constants
+    model.run(advice=False)  # compile once for this set of constants
     fac = case.atol_factor()
-    rows = []
+
+    def measured(runs) -> dict:
+        r = runs[0]
+        return dict(nfev=r.stats.get("nfev"), nsteps=r.stats.get("nsteps"),
+                    events=len(r.events), status=str(r.status),
+                    error=error_on_grid(case, r.t, {n: r[n] for n in case.states}))
+
+    routes = []
     for method in methods:
-        for rtol in tols:
-            row = amilpy_point(model, case, method, rtol, rtol * fac, repeats)
-            rows.append(row)
-            print(_fmt(row), flush=True)
-            if not row["time"] < SLOW or row["status"].startswith("ERROR"):
-                break
+        # the integration alone: the stiffness-advice probe is measured apart (probe_cost)
+        routes.append([Point(
+            {"case": case.name, "kind": "amilpy", "route": method, "rtol": rtol,
+             "atol": rtol * fac, "delt": None},
+            lambda m=method, r=rtol: model.run(method=m, rtol=r, atol=r * fac, advice=False),
+            measured) for rtol in tols])
     for method in fixed:
+        pts = []
         for k in range(ladder):
             delt = case.outdel / 2**k
             m = amilpy.loads(with_delt(case.text, delt), case.name)
-            m.run(method=method)  # compile (a new DELT is a new constant)
-            row = amilpy_point(m, case, method, None, None, repeats, delt)
+            pts.append(Point({"case": case.name, "kind": "amilpy", "route": method,
+                              "rtol": None, "atol": None, "delt": delt},
+                             lambda m=m, meth=method: m.run(method=meth, advice=False),
+                             measured))
+        routes.append(pts)
+    return routes
+
+
+def hand_points(case: Case, tols, routes) -> list[list[Point]]:
+    fac = case.atol_factor()
+
+    def measured(res) -> dict:
+        t, vals, nfev, nsteps = res
+        return dict(nfev=nfev or None, nsteps=nsteps or None, events=0, status="finished",
+                    error=error_on_grid(case, t, vals))
+
+    out = []
+    for route in routes:
+        if route.endswith("+ev") and case.hybrid is None:
+            continue
+        out.append([Point({"case": case.name, "kind": "hand", "route": route, "rtol": rtol,
+                           "atol": rtol * fac, "delt": None},
+                          lambda route=route, rtol=rtol: hand_solve(case, route, rtol,
+                                                                    rtol * fac),
+                          measured) for rtol in tols])
+    return out
+
+
+def _time(point: Point):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        t0 = time.perf_counter()
+        res = point.run()
+        point.times.append(time.perf_counter() - t0)
+    return res
+
+
+def measure(routes: list[list[Point]], repeats: int) -> list[dict]:
+    """Time every point `repeats` times, interleaved: the first pass goes route by route
+    (a route stops tightening once a run takes over SLOW seconds or fails) and measures
+    each result; every later pass runs all the points kept once more, in the same
+    order, so a change of the machine's load falls on both sides of a ratio alike.
+    The time of a point is the median of its passes (one pass past 1 s)."""
+    rows, kept = [], []
+    for points in routes:
+        for p in points:
+            row = dict(p.row0)
+            try:
+                row.update(p.row(_time(p)))
+            except Exception as exc:  # noqa: BLE001 - a failing route is a result
+                row.update(nfev=None, nsteps=None, events=None, error=math.inf,
+                           status=f"ERROR {type(exc).__name__}: "
+                                  f"{str(exc).splitlines()[0][:80] if str(exc) else ''}")
+                p.times[:] = [math.nan]
             rows.append(row)
-            print(_fmt(row), flush=True)
-            if not row["time"] < SLOW or row["status"].startswith("ERROR"):
+            kept.append(p)
+            if not p.times[-1] < SLOW or row["status"].startswith("ERROR"):
                 break
+    for _ in range(max(0, repeats - 1)):
+        for p in kept:
+            if p.times[0] < 1.0:
+                _time(p)
+    for row, p in zip(rows, kept, strict=True):
+        row["time"] = statistics.median(p.times)
+        print(_fmt(row), flush=True)
     return rows
 
 
@@ -135,7 +243,7 @@ def amilpy_rows(case: Case, repeats: int, tols, ladder: int, methods, fixed) -> 
 
 def _pieces(case: Case):
     """[(ta, tb, f, grid points in (ta, tb])] with f(t, y) taking the solver's array."""
-    grid, _ = case.ref()
+    grid = case.grid()
     out, ta = [], 0.0
     for tb, f in case.segments():
         def g(t, y, f=f):
@@ -148,11 +256,17 @@ def _pieces(case: Case):
 
 
 def hand_solve(case: Case, route: str, rtol: float, atol: float):
-    """Integrate the hand-written equations; (grid, {state: values}, nfev, nsteps)."""
+    """Integrate the hand-written equations; (grid, {state: values}, nfev, nsteps). The
+    rows go straight into one preallocated array, as a user who wants arrays writes it."""
     from scipy.integrate import ode, odeint, solve_ivp
 
+    if route.endswith("+ev"):
+        return hybrid_solve(case, route[4:-3], rtol, atol)
     y = np.array(case.y0, dtype=float)
-    ts, ys = [0.0], [y.copy()]
+    grid = case.grid()
+    rows = np.empty((len(grid), len(y)))
+    rows[0] = y
+    filled = 1
     nfev = nsteps = 0
     for ta, tb, f, pts in _pieces(case):
         tail = [] if len(pts) and abs(pts[-1] - tb) <= 1e-12 * max(tb, 1) else [tb]
@@ -182,36 +296,11 @@ def hand_solve(case: Case, route: str, rtol: float, atol: float):
                 seg[i] = r.integrate(tp)
                 if not r.successful():
                     raise RuntimeError(f"ode {name} failed at {tp}")
-        ts.extend(pts.tolist())
-        ys.extend(seg[: len(pts)])
-        y = np.array(seg[-1], dtype=float)
-    vals = np.array(ys)
-    return np.array(ts), {n: vals[:, i] for i, n in enumerate(case.states)}, nfev, nsteps
-
-
-def hand_rows(case: Case, repeats: int, tols, routes) -> list[dict]:
-    fac = case.atol_factor()
-    rows = []
-    for route in routes:
-        for rtol in tols:
-            row = {"case": case.name, "kind": "hand", "route": route, "rtol": rtol,
-                   "atol": rtol * fac, "delt": None, "events": 0}
-            try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    secs, (t, vals, nfev, nsteps) = _median_time(
-                        lambda route=route, rtol=rtol: hand_solve(case, route, rtol, rtol * fac),
-                        repeats)
-                row.update(time=secs, nfev=nfev or None, nsteps=nsteps or None,
-                           error=error_on_grid(case, t, vals), status="finished")
-            except Exception as exc:  # noqa: BLE001
-                row.update(time=math.nan, nfev=None, nsteps=None, error=math.inf,
-                           status=f"ERROR {type(exc).__name__}: {str(exc)[:80]}")
-            rows.append(row)
-            print(_fmt(row), flush=True)
-            if not row["time"] < SLOW:
-                break
-    return rows
+        rows[filled:filled + len(pts)] = seg[:len(pts)]
+        filled += len(pts)
+        y = seg[-1]
+    return grid[:filled], {n: rows[:filled, i] for i, n in enumerate(case.states)}, nfev, \
+        nsteps
 
 
 # --------------------------------------------------------------------------- analysis
@@ -242,6 +331,10 @@ def time_at(rows: list[dict], level: float) -> float:
     return math.inf  # pragma: no cover
 
 
+def by_route_time(by_route: dict, key: tuple[str, str], level: float) -> float:
+    return time_at(by_route[key], level) if key in by_route else math.nan
+
+
 def summarize(case: Case, rows: list[dict], levels=LEVELS) -> list[dict]:
     by_route: dict[tuple[str, str], list[dict]] = {}
     for r in rows:
@@ -266,6 +359,7 @@ def summarize(case: Case, rows: list[dict], levels=LEVELS) -> list[dict]:
                                 default=math.inf),
             "min_err_auto": min((e for _, e in front(by_route.get(("amilpy", "AUTO"), []))),
                                 default=math.inf),
+            "ceiling": by_route_time(by_route, ("ceiling", "numba"), level),
         })
     return out
 
@@ -290,7 +384,8 @@ COLUMNS = ["case", "kind", "route", "rtol", "atol", "delt", "time", "nfev", "nst
            "error", "status"]
 
 
-def write_outputs(out_dir: str, rows, summary, firsts, plot: bool = True) -> None:
+def write_outputs(out_dir: str, rows, summary, firsts, plot: bool = True, refs=(), probes=(),
+                  load: str = "") -> None:
     os.makedirs(out_dir, exist_ok=True)
     with open(os.path.join(out_dir, "work_precision.csv"), "w", newline="") as fh:
         w = csv.DictWriter(fh, COLUMNS)
@@ -298,23 +393,33 @@ def write_outputs(out_dir: str, rows, summary, firsts, plot: bool = True) -> Non
         for r in rows:
             w.writerow({k: r.get(k) for k in COLUMNS})
     scols = ["case", "level", "best_hand", "hand_s", "auto_s", "ratio", "best_amilpy",
-             "best_amilpy_s", "min_err_hand", "min_err_auto"]
+             "best_amilpy_s", "min_err_hand", "min_err_auto", "ceiling"]
     with open(os.path.join(out_dir, "summary.csv"), "w", newline="") as fh:
         w = csv.DictWriter(fh, scols)
         w.writeheader()
         for r in summary:
             w.writerow(r)
     with open(os.path.join(out_dir, "work_precision.md"), "w") as fh:
-        fh.write(markdown(rows, summary, firsts))
+        fh.write(markdown(rows, summary, firsts, refs, probes, load))
     if plot:
         for case in sorted({r["case"] for r in rows}):
             plot_case(case, [r for r in rows if r["case"] == case],
                       os.path.join(out_dir, f"wp_{case}.png"))
 
 
-def markdown(rows, summary, firsts) -> str:
-    lines = ["## Equal-error summary (time to reach the error level; ratio = AUTO / fastest "
-             "hand-written)", "",
+def markdown(rows, summary, firsts, refs=(), probes=(), load: str = "") -> str:
+    lines = []
+    if load:
+        lines += [f"Machine load (`uptime` load averages, 1/5/15 min): {load}", ""]
+    if refs:
+        lines += ["## References", "",
+                  "| case | reference | checked against | largest difference (state) |",
+                  "|---|---|---|---|"]
+        lines += [f"| {r['case']} | {r['reference']} | {r['check']} | "
+                  f"{_g(r['agreement'], '{:.1e}')} {r['state']} |" for r in refs]
+        lines.append("")
+    lines += ["## Equal-error summary (time to reach the error level; ratio = AUTO / fastest "
+              "hand-written)", "",
              "| case | error | fastest hand-written | its time [ms] | amilpy AUTO [ms] | ratio "
              "| fastest amilpy | its time [ms] | best error hand | best error AUTO |",
              "|---|---|---|---|---|---|---|---|---|---|"]
@@ -324,6 +429,24 @@ def markdown(rows, summary, firsts) -> str:
             f"{_g(s['auto_s'] * 1e3)} | {_g(s['ratio'], '{:.2f}')} | {s['best_amilpy']} | "
             f"{_g(s['best_amilpy_s'] * 1e3)} | {_g(s['min_err_hand'], '{:.1e}')} | "
             f"{_g(s['min_err_auto'], '{:.1e}')} |")
+    if any(math.isfinite(x.get("ceiling", math.nan)) for x in summary):
+        lines += ["", "Compiled ceiling (hand-written RHS and integrator compiled by numba, "
+                  "see ceiling.py): time to reach the level and AUTO / ceiling", "",
+                  "| case | error | ceiling [ms] | AUTO / ceiling |", "|---|---|---|---|"]
+        for x in summary:
+            c = x.get("ceiling", math.nan)
+            ratio = x["auto_s"] / c if math.isfinite(c) and math.isfinite(x["auto_s"]) \
+                else math.nan
+            lines.append(f"| {x['case']} | {x['level']:.0e} | {_g(c * 1e3)} | "
+                         f"{_g(ratio, '{:.1f}')} |")
+    if probes:
+        lines += ["", "## The stiffness-advice probe (not in the times above)", "",
+                  "| case | method | rtol | run [ms] | probe [ms] | probe / run | "
+                  "probed after this run | advice |", "|---|---|---|---|---|---|---|---|"]
+        lines += [f"| {p['case']} | {p['method']} | {p['rtol']:.0e} | {_g(p['run_s'] * 1e3)} "
+                  f"| {_g(p['probe_s'] * 1e3)} | {p['probe_s'] / p['run_s']:.0%} | "
+                  f"{'yes' if p.get('probed') else 'no (quicker than 1 s)'} | "
+                  f"{'yes' if p['advice'] else 'no'} |" for p in probes]
     lines += ["", "## amilpy first-run cost (listing defaults)", "",
               "| case | parse+check [ms] | first run [ms] | steady run [ms] |", "|---|---|---|---|"]
     for f in firsts:
@@ -380,7 +503,7 @@ def plot_case(case: str, rows: list[dict], path: str) -> None:
 
 def main(models=None, tols=None, hand_tols=None, repeats: int = 3, ladder: int = 7,
          methods=None, fixed=None, hand_routes=None, out_dir: str | None = None,
-         plot: bool = True, slow: float | None = None) -> dict:
+         plot: bool = True, slow: float | None = None, probe: bool = True) -> dict:
     global SLOW
     if slow is not None:
         SLOW = slow
@@ -389,38 +512,66 @@ def main(models=None, tols=None, hand_tols=None, repeats: int = 3, ladder: int =
     tols = tols or TOLS
     hand_tols = hand_tols or HAND_TOLS
     out_dir = out_dir or os.path.join(ROOT, "benchmarks", "results")
-    rows, summary, firsts = [], [], []
+    rows, summary, firsts, refs, probes = [], [], [], [], []
     import amilpy  # one-time imports (SciPy, the grammar) are startup.py's subject
     amilpy.loads(cases["exp_decay"].text).run()
+    load_before = _load()
     for name in names:
         case = cases[name]
         print(f"== {name}", flush=True)
         case.ref()
+        agreement, state = case.agreement()
+        refs.append({"case": name, "reference": case.reference_method,
+                     "check": case.check_method or "-", "agreement": agreement,
+                     "state": state})
         firsts.append(first_run_cost(case))
-        rows_c = amilpy_rows(case, repeats, tols, ladder,
-                             AMILPY_METHODS if methods is None else methods,
-                             FIXED_METHODS if fixed is None else fixed)
-        rows_c += hand_rows(case, repeats, hand_tols, HAND_ROUTES if hand_routes is None
-                            else hand_routes)
+        if case.shipped and probe:
+            probes += probe_cost(case, repeats=repeats)
+        routes = amilpy_points(case, tols, AMILPY_METHODS if methods is None else methods,
+                               FIXED_METHODS if fixed is None else fixed, ladder)
+        routes += hand_points(case, hand_tols, HAND_ROUTES + EVENT_ROUTES
+                              if hand_routes is None else hand_routes)
+        rows_c = measure(routes, repeats)
         rows += rows_c
         summary += summarize(case, rows_c)
-    write_outputs(out_dir, rows, summary, firsts, plot)
+    load = f"{load_before} before, {_load()} after"
+    write_outputs(out_dir, rows, summary, firsts, plot, refs, probes, load)
     print()
-    print(markdown([], summary, firsts))
-    return {"rows": rows, "summary": summary, "first": firsts, "out_dir": out_dir}
+    print(markdown([], summary, firsts, refs, probes, load))
+    return {"rows": rows, "summary": summary, "first": firsts, "out_dir": out_dir,
+            "references": refs, "probes": probes}
+
+
+def _load() -> str:
+    return " ".join(f"{x:.2f}" for x in os.getloadavg())
+
+
+SHIPPED = ["ex4_elastic", "ex4_clutch", "ex4_torque_meter", "hoist_backlash",
+           "crank_slider_startup", "machine_unit"]
 
 
 if __name__ == "__main__":
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--models", nargs="*", help="case names (default: all)")
+    p.add_argument("--models", nargs="*", help="case names, or 'shipped' (default: all)")
+    p.add_argument("--ratios", action="store_true",
+                   help="the equal-error table only: the shipped models, AUTO against the "
+                        "hand-written routes (and the ceiling), no other amilpy method")
+    p.add_argument("--methods", nargs="*", help=f"amilpy methods (default {AMILPY_METHODS})")
     p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--ladder", type=int, default=7, help="DELT = OUTDEL/2**k, k < this")
     p.add_argument("--quick", action="store_true", help="two tolerances, one repeat")
     p.add_argument("--slow", type=float, default=SLOW, help="stop a route past this [s]")
     p.add_argument("--out", default=None)
     a = p.parse_args()
+    models = a.models
+    if a.ratios or (models and models == ["shipped"]):
+        models = [m for m in (models or SHIPPED) if m != "shipped"] or SHIPPED
+    methods, fixed = a.methods, None
+    if a.ratios:
+        methods, fixed = ["AUTO"], []
     if a.quick:
-        main(a.models, tols=[1e-3, 1e-6], hand_tols=[1e-3, 1e-6], repeats=1, ladder=2,
-             out_dir=a.out, slow=a.slow)
+        main(models, tols=[1e-3, 1e-6], hand_tols=[1e-3, 1e-6], repeats=1, ladder=2,
+             out_dir=a.out, slow=a.slow, methods=methods, fixed=fixed)
     else:
-        main(a.models, repeats=a.repeats, ladder=a.ladder, out_dir=a.out, slow=a.slow)
+        main(models, repeats=a.repeats, ladder=a.ladder, out_dir=a.out, slow=a.slow,
+             methods=methods, fixed=fixed)

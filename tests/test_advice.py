@@ -13,10 +13,31 @@ END
 """
 
 
-def test_stiff_model_on_rks_gets_advice_once():
+def test_stiff_model_on_rks_gets_advice_once(monkeypatch):
+    from amilpy import advice
+
+    monkeypatch.setattr(advice, "SLOW", 0.0)  # this run takes well under a second
     runs = amilpy.loads(STIFF.replace("END", "METHOD RKS\nEND\nPARAM C = 2.0E6\nEND")).run()
     assert runs[0].advice.startswith("stiff: METHOD STIFF took")
     assert runs[1].advice is None  # said once
+
+
+def test_a_quick_run_is_not_probed():
+    """The probe costs 20-60 % of the run (benchmarks/README.md): only a run that took
+    SLOW seconds or more pays it, however many evaluations it made."""
+    from dataclasses import replace
+
+    from amilpy import advice
+    from amilpy.run import Options
+
+    model = amilpy.loads(STIFF)
+    run, = model.run(method="RKS", advice=False)
+    assert run.stats["nfev"] >= advice.EXPENSIVE
+    quick = replace(run, stats={**run.stats, "seconds": 0.5 * advice.SLOW})
+    slow = replace(run, stats={**run.stats, "seconds": 2.0 * advice.SLOW})
+    spec, opts = model.ir.runs[0], Options(method="RKS")
+    assert advice.stiffness_advice(model.ir, spec, quick, opts) is None
+    assert advice.stiffness_advice(model.ir, spec, slow, opts).startswith("stiff:")
 
 
 def test_advice_can_be_silenced_and_is_not_given_for_auto():

@@ -77,7 +77,8 @@ def test_written_files_get_the_usual_mode(model, tmp_path):
 def test_show_python(model, capsys):
     assert main(["run", str(model), "--show-python", "--quiet"]) == 0
     out = capsys.readouterr().out
-    assert "def rhs(t, y, m, z):" in out and "-2.0 * v_X" in out
+    # K is a PARAM: read by name, so another value binds the same code
+    assert "def rhs(t, y, m, z):" in out and "-p_K * v_X" in out
 
 
 def test_check_ok_and_model_error_exit_codes(tmp_path, capsys):
@@ -161,7 +162,8 @@ def test_ctrl_c_keeps_the_rows_and_exits_3(tmp_path, capsys, monkeypatch):
             pass
 
     monkeypatch.setattr(cli, "Progress", Interrupt)
-    assert main(["run", str(path), "--method", "RKS"]) == 3
+    # one process: the progress callback that interrupts runs in this one
+    assert main(["run", str(path), "--method", "RKS", "--jobs", "1"]) == 3
     out = capsys.readouterr()
     assert "interrupted at TIME = " in out.err and "PARTIAL RESULTS" in out.out
     rows = (tmp_path / "long.csv").read_text().splitlines()
@@ -334,3 +336,47 @@ def test_a_read_only_folder_exits_4(model, tmp_path, capsys):
         assert done.returncode == 4, done.stderr
         err = done.stderr
     assert f"cannot write {folder / 'x.csv'}: Permission denied" in err
+
+
+def test_max_time_bounds_reading_checking_and_compiling(tmp_path, capsys):
+    # 1400 nested LIMITs: each level is a switch whose surfaces and code are built
+    # in order, a few seconds of front end; --max-time 0.1 stops it there (exit 3,
+    # like a run stopped by a limit) instead of only once a run has started
+    text = "X = INTGRL(0.0, " + "LIMIT(-1.0, 1.0, " * 1400 + "TIME" + ")" * 1400 + ")\n"
+    listing = tmp_path / "nested.amil"
+    listing.write_text(text + "TIMER FINTIM = 1.0\nEND\n")
+    assert main(["run", str(listing), "--max-time", "0.1", "--quiet"]) == 3
+    err = capsys.readouterr().err
+    assert "reading, checking and compiling the listing took longer than --max-time 0.1 s" \
+        in err
+
+
+def test_a_max_time_past_any_timer_is_no_limit(model, capsys):
+    # --max-time 1E308 once overflowed setitimer's time_t (found by the fuzzer)
+    assert main(["run", str(model), "--max-time", "1e308", "--quiet"]) == 0
+
+
+def test_step_point_and_seed_options(model, tmp_path, capsys):
+    """--step-point puts a fixed-step method in step-point mode (the header says so),
+    is refused with a variable-step one, and --seed makes the random streams a
+    function of it alone."""
+    assert main(["run", str(model), "--method", "RK4", "--step-point", "--quiet",
+                 "--csv", str(tmp_path / "a.csv")]) == 0
+    assert main(["run", str(model), "--method", "RK4", "--step-point"]) == 0
+    assert "(METHOD RK4, DELT 0.00625, step-point mode)" in capsys.readouterr().out
+    assert main(["run", str(model), "--method", "RKS", "--step-point"]) == 2  # usage
+    assert "--step-point needs a fixed-step method; --method RKS" in capsys.readouterr().err
+    # the listing's own variable-step METHOD: a fault in the listing's run
+    auto = tmp_path / "auto.amil"
+    auto.write_text(DECAY.replace("PRINT X", "METHOD RKS\nPRINT X"))
+    assert main(["run", str(auto), "--step-point"]) == 1
+    err = capsys.readouterr().err
+    assert "step-point mode needs a fixed-step method" in err and "METHOD RKS" in err
+    noisy = tmp_path / "noise.amil"
+    noisy.write_text("G = GAUSS(0.0, 1.0)\nTIMER FINTIM = 1.0, OUTDEL = 0.1\nEND\n")
+    out = {}
+    for seed in ("3", "3", "4"):
+        path = tmp_path / f"g{len(out)}.csv"
+        assert main(["run", str(noisy), "--seed", seed, "--quiet", "--csv", str(path)]) == 0
+        out[len(out)] = path.read_text()
+    assert out[0] == out[1] != out[2]

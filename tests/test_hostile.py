@@ -75,11 +75,43 @@ def test_mutation_fuzz_bounded():
     assert kinds.get("ok-1", 0) > MUTATIONS // 4  # the mutations do break listings
 
 
-def test_mutation_setting_fintim_to_infinity():
-    # a mutation once set FINTIM = 1E999 in machine_unit.amil: an OverflowError traceback
-    cases = [c for c in mutate.generate(MUTATIONS, seed=0) if c[0] == "machine_unit-s0-96"]
-    r, = target.run_cases(cases, timeout=CASE_TIMEOUT, mem_mb=MEM_MB)
-    assert r.ok, r.detail
+def test_mutation_setting_fintim_to_infinity(root):
+    # a mutation once set FINTIM = 1E999 in machine_unit.amil (with its PRDEL and
+    # OUTDEL): an OverflowError traceback
+    with open(os.path.join(root, "models", "machine_unit.amil"), "rb") as fh:
+        text = fh.read().replace(b"FINTIM = 10.0", b"FINTIM = 1E999")
+    r, = target.run_cases([("fintim_1e999", text, "machine_unit, FINTIM = 1E999")],
+                          timeout=CASE_TIMEOUT, mem_mb=MEM_MB)
+    assert r.kind == "ok-1" and "FINTIM" in r.detail, r.detail
+
+
+def test_lookalikes_nesting_and_long_sums_are_errors_or_runs():
+    # what an independent campaign found and the mutations of the time missed:
+    # look-alike characters (each named, never read as its ASCII twin), nested
+    # switches and sums of up to 3000 terms, on every listing of the corpus
+    cases = []
+    for op in ("lookalike", "nest_switches", "long_sum"):
+        for k, f in enumerate(mutate.corpus_files()):
+            rng = mutate.random.Random(f"{op}:{k}")
+            data = open(f, "rb").read()
+            for j in range(4):
+                new, _ = mutate.mutate_once(data, rng, op)
+                cases.append((f"{op}-{k}-{j}", new, f"{op} of {os.path.basename(f)}"))
+    results = target.run_cases(cases, timeout=CASE_TIMEOUT, mem_mb=MEM_MB)
+    bad = [r for r in results if not r.ok]
+    assert not bad, "\n".join(f"{r.kind} {r.description}: {r.detail[-400:]}" for r in bad)
+    named = [r for r in results if r.case.startswith("lookalike") and r.kind == "ok-1"]
+    assert named and all("U+" in r.detail or "error" in r.detail for r in named)
+
+
+def test_hostile_numbers_on_the_command_line_are_usage_errors():
+    # NaN, infinities, overflowing and malformed numbers in every numeric option,
+    # --set and a sweep range: a usage error naming the option (exit 2), or a run
+    results = target.run_cases(list(mutate.cli_cases(120, seed=0)), timeout=CASE_TIMEOUT,
+                               mem_mb=MEM_MB)
+    bad = [r for r in results if not r.ok]
+    assert not bad, "\n".join(f"{r.kind} {r.description}: {r.detail[-400:]}" for r in bad)
+    assert target.summarize(results).get("ok-2", 0) > 60
 
 
 def test_limit_at_bound_with_breakpoint_rks(tmp_path, capsys):

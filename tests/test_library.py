@@ -68,7 +68,8 @@ def test_delay_of_a_state_starts_from_its_initial_value():
     ("DELAY(2.5, 0.5, X)", "N of DELAY must be a whole number written out"),
     ("DELAY(0, 0.5, X)", "N of DELAY must be a whole number written out"),
     ("DELAY(10, X, X)", "P of DELAY uses X, which changes in time"),
-    ("DELAY(10, 0.5)", "DELAY takes 3 arguments, got 2"),
+    # CSMP's form takes 3, ACSL's (section 12) 4 or 5: the message counts both
+    ("DELAY(10, 0.5)", "DELAY takes 3, 4 or 5 arguments, got 2"),
 ])
 def test_delay_arguments_are_checked(call, message):
     with pytest.raises(AmilError) as err:
@@ -156,3 +157,11 @@ def test_a_table_lookup_of_nan_is_nan(func):
     x = np.sqrt(0.5)
     assert np.isnan(r["Y"][0]) and r["Y"][-1] == pytest.approx(
         x if func == "AFGEN" else x * x, rel=1e-12)
+
+
+def test_a_memory_condition_is_read_on_the_spot_when_nothing_is_watched():
+    """events=False (comparisons) watches only FINISH/TERMT: ZHOLD's condition is then
+    read where it is evaluated (it was a KeyError in the compiler)."""
+    r = run1("X = INTGRL(0.0, 1.0)\nH = ZHOLD(X - 0.5, X)\nTIMER FINTIM = 1, OUTDEL = 0.1\n"
+             "END\n", events=False)
+    assert r.ok and r["H"][-1] == pytest.approx(1.0) and r["H"][3] == 0.0

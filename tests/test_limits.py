@@ -117,3 +117,15 @@ def test_advice_probe_never_follows_a_failed_run_nor_exceeds_the_time_left(monke
     assert [o.method for o in calls] == ["RKS", "RADAU"]
     assert calls[0].max_time == pytest.approx(5.0) and calls[1].max_time == pytest.approx(4.0)
     assert all(o.max_steps == 1000 for o in calls)
+
+
+def test_runs_that_together_would_not_fit_in_memory_are_refused_before_the_first():
+    # 3000 runs of 1E5 rows each, X and Y on every row: 1.2E9 values (10 GB) kept
+    # for the printout and the plots. One such run is fine; all of them used to run
+    # until the machine was out of memory and nothing was written.
+    listing = ("PARAM K = ({n}*1.0)\nX = INTGRL(0.0, K)\nY = X*2.0\n"
+               "TIMER FINTIM = 1.0, OUTDEL = 1.0E-5\nEND\n")
+    with pytest.raises(amilpy.AmilError, match=r"the 3000 run\(s\) would keep 1\.2e\+09 "
+                       r"values .*raise OUTDEL/PRDEL"):
+        amilpy.loads(listing.format(n=3000)).run(advice=False)
+    assert amilpy.loads(listing.format(n=1)).run(advice=False)[0].ok

@@ -34,7 +34,8 @@ def test_generated_code_is_closed():
     assert not kinds & {"Attribute", "Import", "ImportFrom", "Global", "Lambda", "Subscript"
                         } - {"Subscript"}
     names = {node.id for node in ast.walk(tree) if isinstance(node, ast.Name)}
-    assert all(n.startswith(("v_", "h_", "_", "m", "n", "z")) or n in ("t", "y") for n in names)
+    assert all(n.startswith(("v_", "h_", "p_", "_", "m", "n", "z")) or n in ("t", "y")
+               for n in names)
 
 
 def test_generated_functions_have_no_builtins():

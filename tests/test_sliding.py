@@ -7,6 +7,10 @@ import pytest
 from conftest import METHODS, run1
 
 RELAY = "FSW(X, -1.0, 0.0, 1.0)"
+# Sliding is located switching. METHOD EULER runs in step-point mode by default (the
+# classic translators' loop: a relay there chatters from step to step, as it did in
+# CSMP), so these tests ask every method for located switching (step_point=False).
+LOCATED = {"step_point": False, "advice": False}
 
 
 @pytest.mark.parametrize("shared", [False, True], ids=["two_switches", "shared_variable"])
@@ -17,7 +21,7 @@ def test_switches_on_one_surface_slide_together(method, shared):
     # the second switch flipped at the slide and gave Y(3) = 3.
     body = (f"S = {RELAY}\nX = INTGRL(1.0, -S)\nY = INTGRL(0.0, S)\n" if shared else
             f"X = INTGRL(1.0, -{RELAY})\nY = INTGRL(0.0, {RELAY})\n")
-    r = run1(body + "TIMER FINTIM = 3.0, OUTDEL = 0.1\nEND\n", method=method, advice=False)
+    r = run1(body + "TIMER FINTIM = 3.0, OUTDEL = 0.1\nEND\n", method=method, **LOCATED)
     assert r.status == "finished", r.message
     assert r["Y"][-1] == pytest.approx(1.0, abs=1e-9)
     assert r["X"][-1] == pytest.approx(0.0, abs=1e-9)
@@ -44,7 +48,7 @@ def test_two_relays_slide_to_the_origin(method):
     # Both relays end sliding at X = Y = 0 (both surfaces at once: the weights solve
     # X' = Y' = 0, each relay reading 0). The exact Y(4) is 0; it used to end at
     # -4.53 or -1.20 depending on the method.
-    r = run1(TWO_RELAYS, method=method, advice=False)
+    r = run1(TWO_RELAYS, method=method, **LOCATED)
     assert r.status == "finished", r.message
     assert abs(r["X"][-1]) <= 1e-9 and abs(r["Y"][-1]) <= 1e-9
 
@@ -54,7 +58,7 @@ def test_two_relays_trajectory(method):
     # X' = -1.5, Y' = -0.5 until X = 0 at 2/3 (Y = 2/3); then X slides (SX = -0.5
     # keeps X' = 0) and Y' = -1.25 until Y = 0 at 1.2; then both slide at the origin.
     # Piecewise linear: every method is exact up to where the slides are located.
-    r = run1(TWO_RELAYS_SHARED, method=method, advice=False)
+    r = run1(TWO_RELAYS_SHARED, method=method, **LOCATED)
     t = r.t
     x = np.where(t < 2 / 3, 1.0 - 1.5 * t, 0.0)
     y = np.where(t < 2 / 3, 1.0 - 0.5 * t, np.maximum(2 / 3 - 1.25 * (t - 2 / 3), 0.0))
@@ -78,7 +82,7 @@ def test_stick_slip_with_two_friction_terms_on_one_velocity(method):
     # reaches F1 + F2 = 0.5 at TIME 0.5, then slips: X = 0.5 + sin(TIME - 0.5).
     # One term alone cannot hold past K*X = F1 = 0.3: a per-switch slide let go there.
     # Both terms stand on one surface (V - VB), so the stick ends in one event.
-    r = run1(TWO_FRICTIONS, method=method, advice=False)
+    r = run1(TWO_FRICTIONS, method=method, **LOCATED)
     assert r.status == "finished", r.message
     t = r.t
     x = np.where(t <= 0.5, t, 0.5 + np.sin(t - 0.5))

@@ -2,10 +2,11 @@
 branches in force there, and the eigenvalues and mode shapes of its Jacobian.
 
 `linearise` is the way in: the Jacobian of `Flow.field` (the field a stepper
-integrates, branches frozen, sliding surfaces combined) by central differences
-with the step chosen column by column (`run.jacobian.field_jacobian`, refined,
-the one place a Jacobian is made; its module states the accuracy).
-`Linearisation.error` is the estimate, relative to the largest entry of J.
+integrates, branches frozen, sliding surfaces combined): the model's own where it
+can be had (`run.jacobian.model_jacobian`, exact to rounding), else by central
+differences with the step chosen column by column (`run.jacobian.field_jacobian`;
+its module states the accuracy). `Linearisation.error` is the differences'
+estimate, relative to the largest entry of J (0 for the model's own).
 """
 
 from __future__ import annotations
@@ -17,7 +18,8 @@ import numpy as np
 
 from ..diagnostics import AmilError
 from ..run import Flow, State
-from ..run.jacobian import field_jacobian
+from ..run.jacobian import field_jacobian, model_jacobian
+from ..run.plan import SLIDE
 
 ZERO = 1e-8  # an eigenvalue below this fraction of the largest is a zero mode
 
@@ -27,6 +29,7 @@ class Linearisation:
     jacobian: np.ndarray  # J[i, j] = d(dy_i/dt)/d y_j
     names: list[str]  # the states, in the order of J's rows and columns
     error: float  # estimated error of J, relative to its largest entry
+    how: str = "the model's equations"  # or "central differences"
 
 
 def linearise(flow: Flow, state: State, t: float) -> tuple[np.ndarray, list[str]]:
@@ -38,21 +41,26 @@ def linearise(flow: Flow, state: State, t: float) -> tuple[np.ndarray, list[str]
 
 def jacobian(flow: Flow, state: State, t: float) -> Linearisation:
     """`linearise` with its error estimate (see the module docstring)."""
-    f = flow.field(state, t)
     y = np.asarray(state.y, dtype=float)
-    tol = flow.plan.tol
-    try:
-        jac, error = field_jacobian(lambda v: f(t, np.asarray(v)), y, tol.atol / tol.rtol,
-                                    with_error=True)
-    except (ArithmeticError, ValueError) as exc:
-        raise AmilError(f"cannot linearise at TIME = {t:.9g}: {exc}") from None
+    jac = None if SLIDE in state.modes else model_jacobian(flow.compiled, t, y, state.modes,
+                                                           state.memory)
+    error = np.zeros(len(y))  # the model's own: exact to rounding
+    how = "the model's equations"
+    if jac is None:
+        how = "central differences"
+        f, tol = flow.field(state, t), flow.plan.tol
+        try:
+            jac, error = field_jacobian(lambda v: f(t, np.asarray(v)), y,
+                                        tol.atol / tol.rtol, with_error=True)
+        except (ArithmeticError, ValueError) as exc:
+            raise AmilError(f"cannot linearise at TIME = {t:.9g}: {exc}") from None
     if not np.all(np.isfinite(jac)):
         bad = int(np.argwhere(~np.isfinite(jac))[0][1])
         raise AmilError(f"cannot linearise at TIME = {t:.9g}: the derivatives are not "
                         f"finite near {flow.state_names[bad]} = {y[bad]:g}")
     size = float(np.max(np.abs(jac))) if jac.size else 0.0
     return Linearisation(jac, flow.state_names,
-                         float(np.max(error)) / size if size and len(error) else 0.0)
+                         float(np.max(error)) / size if size and len(error) else 0.0, how)
 
 
 @dataclass(frozen=True)
@@ -88,6 +96,7 @@ class Modes:
     jacobian: np.ndarray
     error: float  # the Jacobian's estimated relative error
     modes: list[Mode]  # zero modes first, then by natural frequency
+    how: str = "the model's equations"  # the Jacobian's source (see `Linearisation`)
 
 
 def mode_list(jac: np.ndarray) -> list[Mode]:
@@ -126,4 +135,5 @@ def modes(model, at: float = 0.0, *, method: str | None = None, rtol: float | No
         if state.t < at:
             raise AmilError(f"the run stops at TIME = {state.t:.9g}, before --at {at:g}")
     lin = jacobian(flow, state, at)
-    return Modes(at, state, lin.names, lin.jacobian, lin.error, mode_list(lin.jacobian))
+    return Modes(at, state, lin.names, lin.jacobian, lin.error, mode_list(lin.jacobian),
+                 lin.how)

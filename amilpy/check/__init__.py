@@ -19,9 +19,11 @@ from ..diagnostics import Reporter
 from ..surfaces import classify
 from ..syntax import deep_enough
 from . import order
+from .code import CodeLowering, assigned_names
 from .groups import RunGroups, reject_late_equations, sections, split_groups
 from .lower import Lowering
 from .names import PURE, Names
+from .units import declared_stores, unit_equations, written_text
 
 __all__ = ["check"]
 
@@ -30,6 +32,10 @@ __all__ = ["check"]
 def check(program: ast.Program, name: str | None = None) -> ir.Model:
     """The checked, sorted model of a parsed listing; raises AmilError with every
     fault found."""
+    if program.form == "ACSL":
+        from .acsl import check_acsl
+
+        return check_acsl(program, name)
     rep = Reporter(program.path, program.source)
     groups = split_groups(program)
     parts = sections(groups[0] if groups else [], rep)
@@ -50,20 +56,33 @@ def check(program: ast.Program, name: str | None = None) -> ir.Model:
             continue
         initial.append(ir.Equation(st.targets[0], low.expr(st.expr, None, literal=True),
                                    st.span))
-    # DYNAMIC: one parallel block, sorted
+    low.written = written_text(program.source)
+    stores = declared_stores(program.statements)
+    code = CodeLowering(rep, low, names, stores)
+    # DYNAMIC: one parallel block, sorted (an IF block is one unit)
     dynamic: list[ir.Equation] = []
-    termts: list[ast.Termt] = []
+    units: list[ir.Unit] = []
+    termts: list[tuple[ast.Termt, ast.Node | None]] = []
     for st in parts["DYNAMIC"]:
         if isinstance(st, ast.Termt):
-            termts.append(st)
+            termts.append((st, None))
+            continue
+        if isinstance(st, ast.If):
+            dynamic.extend(unit_equations(code, names, st, units, "DYNAMIC"))
             continue
         ok = all([names.define(t, s, "DYNAMIC")
                   for t, s in zip(st.targets, st.target_spans, strict=True)])
         if names.check_calls(st.expr, None, "DYNAMIC") and ok:
             dynamic.extend(low.statement(st))
+    termts += code.termts
     # TERMINAL: once at the end of a run, in written order
     terminal: list[ir.Equation] = []
-    for st in parts["TERMINAL"]:
+    terminal_code: list[ir.Code] = []
+    if any(isinstance(st, (ast.If, ast.Loop)) for st in parts["TERMINAL"]):
+        for target in assigned_names(parts["TERMINAL"]):
+            names.define(target, parts["TERMINAL"][0].span, "TERMINAL")
+        terminal_code.append(code.written(parts["TERMINAL"], "TERMINAL"))
+    for st in parts["TERMINAL"] if not terminal_code else ():
         for target, span in zip(st.targets, st.target_spans, strict=True):
             names.define(target, span, "TERMINAL")
         if names.check_calls(st.expr, PURE, "TERMINAL") and len(st.targets) == 1:
@@ -73,12 +92,12 @@ def check(program: ast.Program, name: str | None = None) -> ir.Model:
     names.check_references(parts, low.before_run,
                            {s.name for s in low.states if not s.hidden})
     initial = order.sort(initial, "INITIAL", rep, low.switches, low.memories)
-    dynamic = order.sort(dynamic, "DYNAMIC", rep, low.switches, low.memories)
+    dynamic = order.sort(dynamic, "DYNAMIC", rep, low.switches, low.memories, units)
     for s in data.finish:
         low.finish(s)
-    for st in termts:
+    for st, cond in termts:
         if names.check_calls(st.expr, None, "DYNAMIC"):
-            low.termt(st)
+            low.termt(st, cond)
 
     # states in a canonical order: the listing's order must not matter
     low.states.sort(key=lambda s: (s.hidden, s.name))
@@ -87,6 +106,7 @@ def check(program: ast.Program, name: str | None = None) -> ir.Model:
         initial=initial, dynamic=dynamic, terminal=terminal, states=low.states,
         switches=low.switches, surfaces=low.surfaces, memories=low.memories, runs=data.runs,
         data_names=data.names, spans={**data.spans, **names.defined}, data_kinds=data.kinds,
+        units=units, warnings=low.warnings, terminal_code=terminal_code,
     )
     classify(model)
     rep.raise_if_any()

@@ -53,9 +53,15 @@ def split_groups(program: ast.Program) -> list[list[ast.Node]]:
     return groups
 
 
+# statements of the ACSL form: in a CSMP-form file, an error that says so
+ACSL_STATEMENTS = (ast.Schedule, ast.Interval, ast.Cinterval, ast.Variable, ast.Control,
+                   ast.Block, ast.Procedural, ast.FunctionDef)
+
+
 def sections(group: list[ast.Node], rep: Reporter) -> dict[str, list[ast.Node]]:
     """The equations of the first group by section (none: DYNAMIC); TERMT stands in
-    DYNAMIC only."""
+    DYNAMIC only. IF blocks stand in DYNAMIC (a sorting unit) and TERMINAL, DO loops
+    in TERMINAL (written order)."""
     out: dict[str, list[ast.Node]] = {"INITIAL": [], "DYNAMIC": [], "TERMINAL": []}
     current = "DYNAMIC"
     for st in group:
@@ -64,7 +70,18 @@ def sections(group: list[ast.Node], rep: Reporter) -> dict[str, list[ast.Node]]:
         elif isinstance(st, ast.Termt) and current != "DYNAMIC":
             rep.error(f"TERMT cannot stand in {current}", st.span,
                       "TERMT(expr) ends the run when expr turns positive: put it in DYNAMIC")
-        elif isinstance(st, (ast.Assign, ast.Termt)):
+        elif isinstance(st, ast.If) and current == "INITIAL":
+            rep.error("an IF block cannot stand in INITIAL in CSMP form", st.span,
+                      "compute the value with FSW or INSW, or write the listing in ACSL "
+                      "form (PROGRAM ... END), whose INITIAL runs in written order")
+        elif isinstance(st, ast.Loop) and current != "TERMINAL":
+            rep.error(f"a DO loop cannot stand in {current}", st.span,
+                      "loops run in written-order code: TERMINAL, or a PROCEDURAL block "
+                      "of the ACSL form")
+        elif isinstance(st, ACSL_STATEMENTS):
+            rep.error(f"{type(st).__name__.upper()} belongs to the ACSL form", st.span,
+                      "start the file with PROGRAM or MODEL (ACSL form)")
+        elif isinstance(st, (ast.Assign, ast.Termt, ast.If, ast.Loop)):
             out[current].append(st)
     return out
 
@@ -81,8 +98,13 @@ def reject_late_equations(groups: list[list[ast.Node]], rep: Reporter) -> None:
                 )
 
 
-def check_assignable(name: str, span: Span, what: str, rep: Reporter) -> bool:
-    if name in RESERVED:
+def check_assignable(name: str, span: Span, what: str, rep: Reporter,
+                     reserved: tuple[str, ...] = RESERVED) -> bool:
+    if name in reserved:
+        if reserved != RESERVED:
+            rep.error(f"{name} is time and cannot be {what}", span,
+                      "time is T (its name may be changed with VARIABLE)")
+            return False
         rep.error(
             f"{name} is a reserved name and cannot be {what}",
             span,
@@ -118,6 +140,7 @@ class RunGroups(Visitor):
         self.tables: dict[str, Table] = {}
         self.table_spans: dict[str, Span] = {}
         self.timer: dict[str, float] = {}
+        self.timer_spans: dict[str, Span] = {}
         self.timer_span: Span | None = None  # the first group's first TIMER statement
         self.method: str | None = None
         self.tolerance: dict[str, float | None] = {"RELERR": None, "ABSERR": None}
@@ -131,7 +154,8 @@ class RunGroups(Visitor):
         self.base: dict[str, float] | None = None
         self.group = _Group(0)
 
-    def read(self, groups: list[list[ast.Node]]) -> Data:
+    def read(self, groups: list[list[ast.Node]], needs_fintim: bool = True) -> Data:
+        """`needs_fintim`: CSMP form; in ACSL form a TERMT may bound the run instead."""
         finish_first: list[ast.Setting] = []
         for gi, group in enumerate(groups):
             self.group = _Group(
@@ -146,7 +170,7 @@ class RunGroups(Visitor):
                 self.titles = self.group.titles
             if gi == 0:
                 finish_first = list(self.finish)
-                if "FINTIM" not in self.timer:
+                if "FINTIM" not in self.timer and needs_fintim:
                     self.rep.error(
                         "FINTIM is not given", self.timer_span,
                         "add FINTIM to this TIMER statement, e.g. FINTIM = 1.0"
@@ -194,7 +218,7 @@ class RunGroups(Visitor):
                 method=self.method, relerr=self.tolerance["RELERR"],
                 abserr=self.tolerance["ABSERR"], relerr_each=dict(self.each["RELERR"]),
                 abserr_each=dict(self.each["ABSERR"]), reports=list(self.reports),
-                titles=list(self.titles),
+                titles=list(self.titles), timer_spans=dict(self.timer_spans),
             ))
         # a later group inherits everything; value lists collapse to their first value
         for lname in lists:
@@ -253,6 +277,7 @@ class RunGroups(Visitor):
             elif s.value <= 0 and s.name != "DELMIN":
                 self.rep.error(f"{s.name} must be positive (got {s.value:g})", s.span)
             self.timer[s.name] = s.value
+            self.timer_spans[s.name] = s.span
 
     def visit_Method(self, st: ast.Method) -> None:
         if route_for(st.name) is None:

@@ -9,10 +9,12 @@ purpose are one `ir.Surface`, so a run has one mode for it wherever it stands.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from .. import ir
 from .. import syntax as ast
-from ..diagnostics import Reporter, Span
-from ..library import Func, Kind, lookup
+from ..diagnostics import Diagnostic, Reporter, Span
+from ..library import RELATIONS, Func, Kind, lookup
 from ..surfaces import constant_value
 from ..syntax import Visitor
 from ..templates import ARGUMENTS, instantiate, template_names
@@ -22,10 +24,10 @@ from ..unparse import expr_text
 TEXT_LIMIT = 60
 
 
-def surface_text(template: str, call: ast.Call) -> str:
+def surface_text(template: str, call: ast.Call, states: tuple[str, ...] = ()) -> str:
     """A surface as the listing writes it: the template over the call's own
     arguments ("W1", "TIME - T1", "X - P2")."""
-    return expr_text(None, instantiate(template, call.args, call.span), TEXT_LIMIT)
+    return expr_text(None, instantiate(template, call.args, call.span, states), TEXT_LIMIT)
 
 
 def describe(call: ast.Call) -> str:
@@ -77,6 +79,12 @@ class _Shape(Visitor):
     def visit_Neg(self, e: ast.Neg) -> tuple:
         return ("Neg", self.shape(e.operand))
 
+    def visit_Not(self, e: ast.Not) -> tuple:
+        return ("Not", self.shape(e.operand))
+
+    def visit_UnitValue(self, e: ir.UnitValue) -> tuple:
+        return ("Unit", e.unit, e.name)
+
     def visit_SwitchValue(self, e: ir.SwitchValue) -> tuple:
         return ("Switch", e.switch, e.output)
 
@@ -105,6 +113,10 @@ class Lowering:
         self.before_run: list[tuple[ast.Node, str]] = []
         self.shapes = _Shape()
         self.interned: dict[tuple, int] = {}
+        # the listing's own text of a span (relational switches and TERMTs are
+        # described as written: "T >= TSTOP"); None where no single line holds it
+        self.written: Callable[[Span], str | None] = lambda span: None
+        self.warnings: list[Diagnostic] = []
 
     def expr(self, expr: ast.Node, target: str | None, literal: bool = False) -> ast.Node:
         """An expression with its simulation-function calls lowered (`literal`: in
@@ -167,14 +179,15 @@ class Lowering:
         others = (*(s.deriv for s in func.states), *func.values, *func.surfaces)
         args = self.args(call, owner, literal=in_ic - {i for t in others
                                                         for i in arguments_of(t)})
-        # a state function's surfaces are its first state's modes (MODINT's hold/reset)
-        resets = tuple(self.surface(instantiate(t, args, sp), func.surface_kind, None,
-                                    ir.Purpose.SWITCH, sp, describe(call),
-                                    surface_text(t, call))
-                       for t in func.surfaces)
         named = [k == 0 and bool(target) and s.named for k, s in enumerate(func.states)]
         names = tuple(target if named[k] else self.hidden(s.tag, owner)
                       for k, s in enumerate(func.states))
+        # a state function's surfaces (over its arguments and its own states) are
+        # what its states' `runs` read (MODINT's hold and reset, LIMINT's bounds)
+        modes = tuple(self.surface(instantiate(t, args, sp, names), func.surface_kind, None,
+                                   ir.Purpose.SWITCH, sp, describe(call),
+                                   surface_text(t, call, names))
+                      for t in func.surfaces)
         for k, spec in enumerate(func.states):
             if arguments_of(spec.ic):
                 self.before_run.append((instantiate(spec.ic, call.args, sp),
@@ -182,7 +195,9 @@ class Lowering:
             self.states.append(ir.State(
                 names[k], instantiate(spec.ic, args, sp, names),
                 instantiate(spec.deriv, args, sp, names), sp, not named[k],
-                reset_surfaces=resets if k == 0 else ()))
+                reset_surfaces=modes if spec.resets else (),
+                modes=modes if spec.runs or spec.onto else (), runs=spec.runs,
+                onto=tuple((instantiate(v, args, sp, names), when) for v, when in spec.onto)))
         return instantiate(func.values[0], args, sp, names)
 
     def surface(self, expr: ast.Node, kind: ir.SurfaceKind, owner: int | None,
@@ -218,6 +233,7 @@ class Lowering:
 
     def switch(self, call: ast.Call, target: str) -> int:
         func = lookup(call.func, len(call.args))
+        self.note_before_run(func, call)
         args = self.args(call, target)
         index = len(self.switches)
         surfaces = [self.surface(instantiate(t, args, call.span), func.surface_kind, index,
@@ -228,17 +244,46 @@ class Lowering:
                                        target, call.func))
         return index
 
+    def relational(self, e: ast.BinOp, target: str | None) -> int:
+        """A relational test of sorted code (`A > B`): a switch on A - B."""
+        func = lookup(RELATIONS[e.op])
+        args = (self.expr(e.left, target), self.expr(e.right, target))
+        text = self.written(e.span) or expr_text(None, e, TEXT_LIMIT)
+        index = len(self.switches)
+        description = f"{text} at line {e.span.line}"
+        left, right = (self.written(x.span) or expr_text(None, x, TEXT_LIMIT)
+                       for x in (e.left, e.right))
+        if not isinstance(e.right, (ast.Num, ast.Name, ast.Call)):
+            right = f"({right})"
+        zero = isinstance(e.right, ast.Num) and e.right.value == 0.0
+        surface = self.surface(instantiate(func.surfaces[0], args, e.span), func.surface_kind,
+                               index, ir.Purpose.SWITCH, e.span, description,
+                               left if zero else f"{left} - {right}")
+        self.switches.append(ir.Switch(index, func.name, args, (surface,), e.span,
+                                       target or "?", e.op))
+        return index
+
+    def warn(self, message: str, span: Span, hint: str | None = None) -> None:
+        if not any(w.span == span and w.message == message for w in self.warnings):
+            self.warnings.append(Diagnostic(message, span, hint, "warning"))
+
     def finish(self, s: ast.Setting) -> None:
         """FINISH X = value: the run ends where X - value changes sign."""
         expr = ast.BinOp("-", ast.Name(s.name, s.span), ast.Num(s.value, s.span), s.span)
         self.surface(expr, ir.SurfaceKind.SIGN, None, ir.Purpose.FINISH, s.span,
                      f"FINISH {s.name}={s.value:g}", f"{s.name} - {s.value:g}")
 
-    def termt(self, st: ast.Termt) -> None:
-        """TERMT(expr): the run ends where expr turns positive."""
-        text = expr_text(None, st.expr, TEXT_LIMIT)
-        self.surface(self.expr(st.expr, "TERMT"), ir.SurfaceKind.SIGN, None,
-                     ir.Purpose.TERMT, st.span, f"TERMT({text}) at line {st.span.line}", text)
+    def termt(self, st: ast.Termt, cond: ast.Node | None = None) -> int:
+        """TERMT(c [, 'message']): the run ends where c turns true (`cond`: c as the
+        surface reads it, when that differs from what the listing wrote)."""
+        from .code import condition_surface
+
+        cond = st.expr if cond is None else cond
+        text = self.written(st.expr.span) or expr_text(None, st.expr, TEXT_LIMIT)
+        where = f"TERMT({text}) at line {st.span.line}"
+        description = f"{st.message} ({where})" if st.message else where
+        return self.surface(self.expr(condition_surface(cond), "TERMT"), ir.SurfaceKind.SIGN,
+                            None, ir.Purpose.TERMT, st.span, description, text)
 
 
 class _Lowerer(Visitor):
@@ -261,7 +306,42 @@ class _Lowerer(Visitor):
         return ast.Neg(self.visit(expr.operand), expr.span)
 
     def visit_BinOp(self, expr: ast.BinOp) -> ast.Node:
-        return ast.BinOp(expr.op, self.visit(expr.left), self.visit(expr.right), expr.span)
+        op = expr.op
+        if op in ast.LOGICAL:
+            # a number used as a condition is true iff > 0: in sorted code that is
+            # a switch on the number itself
+            left, right = self.condition(expr.left), self.condition(expr.right)
+            return ast.BinOp(op, left, right, expr.span)
+        if op in RELATIONS and not self.literal:
+            return ir.SwitchValue(self.lowering.relational(expr, self.target), expr.span)
+        if op == "/" and all(isinstance(x, ast.Num) and x.text.isdigit()
+                             for x in (expr.left, expr.right)):
+            self.lowering.warn(
+                f"{expr.left.text}/{expr.right.text} is a division of whole numbers: it is "
+                f"{expr.left.value / expr.right.value:g} here (Fortran would give "
+                f"{int(expr.left.value / expr.right.value) if expr.right.value else 0})",
+                expr.span, "write the numbers with a point (1./2.) to say a real division is "
+                "meant")
+        if op in ("==", "/=") and not self.literal and _reads_names(expr):
+            self.lowering.warn(
+                f"{self.lowering.written(expr.span) or op} is tested where it is "
+                "evaluated, never located", expr.span,
+                "equality of values that move is rarely exact; a test with < or > "
+                "is a switching surface whose crossing is located")
+        return ast.BinOp(op, self.visit(expr.left), self.visit(expr.right), expr.span)
+
+    def visit_Not(self, expr: ast.Not) -> ast.Node:
+        return ast.Not(self.condition(expr.operand), expr.span)
+
+    def visit_UnitValue(self, expr: ir.UnitValue) -> ast.Node:
+        return expr
+
+    def condition(self, expr: ast.Node) -> ast.Node:
+        """A condition lowered: a number that is not a truth by its form becomes
+        `number > 0` (a switch in sorted code)."""
+        if ast.is_logical(expr) or not _reads_names(expr):
+            return self.visit(expr)
+        return self.visit(ast.BinOp(">", expr, ast.Num(0.0, expr.span, "0"), expr.span))
 
     def visit_Call(self, expr: ast.Call) -> ast.Node:
         low, target = self.lowering, self.target
@@ -291,3 +371,8 @@ class _Lowerer(Visitor):
         if kind == Kind.MEMORY:
             return ir.MemoryValue(low.memory(expr, target), expr.span)
         raise AssertionError(f"no lowering for {kind} functions")
+
+
+def _reads_names(expr: ast.Node) -> bool:
+    """Whether an expression reads any name (else it is a number once folded)."""
+    return any(isinstance(n, ast.Name) for n in ast.walk(expr))

@@ -4,10 +4,20 @@ tolerance reads known where it is read (a misspelt one gets the nearest known na
 
 from __future__ import annotations
 
+import math
+
 from .. import syntax as ast
 from ..diagnostics import Reporter, Span, nearest
-from ..language import KNOWN_BEFORE_RUN, RESERVED, SETTINGS, TIME, split_lines
-from ..library import ALIASES, FUNCTIONS, Kind, lookup
+from ..language import (
+    KNOWN_BEFORE_RUN,
+    REFUSED_FUNCTIONS,
+    RESERVED,
+    SETTINGS,
+    TIME,
+    split_lines,
+)
+from ..library import Kind, callable_names, lookup
+from ..surfaces import constant_value
 from .groups import Data, check_assignable
 
 # the largest store a function's literal argument may ask for (DELAY's N points)
@@ -28,10 +38,13 @@ class Names:
         self.table_names = set(data.tables)
         self.defined: dict[str, Span] = {}
         self.where: dict[str, str] = {}  # name -> the section that computes it
+        self.form = program.form
+        self.reserved: tuple[str, ...] = RESERVED
+        self.functions: dict[str, int] = {}  # FUNCTIONs the listing defines -> arity
 
     # definitions -----------------------------------------------------------------
     def define(self, target: str, span: Span, where: str) -> bool:
-        if not check_assignable(target, span, "assigned", self.rep):
+        if not check_assignable(target, span, "assigned", self.rep, self.reserved):
             return False
         if target in self.defined:
             first = self.defined[target]
@@ -65,25 +78,27 @@ class Names:
 
     def check_call(self, node: ast.Call, allow, section: str) -> None:
         entry = lookup(node.func)
+        if entry is None and node.func in self.functions:
+            if len(node.args) != self.functions[node.func]:
+                self.rep.error(f"FUNCTION {node.func} takes {self.functions[node.func]} "
+                               f"arguments, got {len(node.args)}", node.span)
+            return
         if entry is None:
-            hint = nearest(node.func, set(FUNCTIONS) | set(ALIASES))
-            self.rep.error(f"unknown function {node.func}", node.span,
-                           f"did you mean {hint}?" if hint else
-                           "see the function list in the manual")
+            self.unknown_function(node)
             return
         n = len(node.args)
         func = entry.form(n)
         lo, hi = func.nargs
         if n < lo or (hi is not None and n > hi):
-            want = f"{lo}" if hi == lo else (f"{lo} to {hi}" if hi else f"at least {lo}")
+            want = entry.counts()
             comma = self.decimal_comma(node)
             if comma:
                 hint = f"'{comma}' reads as two arguments; the decimal separator is a " \
                        f"point: write {comma.replace(',', '.')}"
-            elif n > (hi or n):
-                hint = "a decimal comma (1,5) splits a number into two arguments"
             else:
-                hint = f"write it as {entry.signatures()}"
+                notes = "; ".join(f"{f.signature}: {f.note}" if f.note else f.signature
+                                  for f in (entry, *entry.variants))
+                hint = f"write it as {notes}"
             self.rep.error(f"{node.func} takes {want} argument{'s' if want != '1' else ''}, "
                            f"got {n}", node.span, hint)
             return
@@ -95,11 +110,42 @@ class Names:
                 self.rep.error(f"{what} of {node.func} must be a whole number written out, "
                                f"from 1 to {MAX_STORE}", arg.span,
                                f"e.g. {func.signature.replace(what, '100', 1)}")
+        self.check_argument_values(node, func)
         if allow is not None and func.kind not in allow:
             self.rep.error(f"{node.func} cannot be used in {section}", node.span,
-                           "states, memory functions and IMPULS belong in DYNAMIC")
+                           "compute its argument in the block and put the call after it, "
+                           "outside" if section.startswith("an IF") else
+                           "states, memory functions and IMPULS belong in "
+                           + ("DERIVATIVE" if self.form == "ACSL" else "DYNAMIC"))
         if func.kind == Kind.TABLE:
             self.check_table_argument(node)
+
+    def check_argument_values(self, node: ast.Call, func) -> None:
+        """Arguments that must be positive (PULSE's P) or not negative, where their
+        value is known from the data (else the run checks them)."""
+        for i in (*func.positive_args, *func.nonnegative_args):
+            for spec in self.data.runs:
+                value = constant_value(node.args[i], {**spec.data, "PI": math.pi})
+                fault = None if value is None else func.argument_fault(i, value)
+                if fault:
+                    self.rep.error(fault, node.args[i].span,
+                                   f"{func.signature}: {func.doc}")
+                    break
+
+    def unknown_function(self, node: ast.Call) -> None:
+        if node.func in REFUSED_FUNCTIONS:
+            what, hint = REFUSED_FUNCTIONS[node.func]
+            self.rep.error(f"{what} (line {node.span.line}): not supported", node.span, hint)
+            return
+        if node.func in self.defined or node.func in self.data_names:
+            self.rep.error(f"{node.func} is a variable, not a function: subscripts "
+                           f"(arrays) are not supported", node.span,
+                           "write one scalar per element (X1, X2, ...)")
+            return
+        hint = nearest(node.func, callable_names() | set(self.functions))
+        self.rep.error(f"unknown function {node.func}", node.span,
+                       f"did you mean {hint}?" if hint else
+                       "see the function list in docs/language.md")
 
     def check_table_argument(self, node: ast.Call) -> None:
         first = node.args[0]
@@ -132,11 +178,11 @@ class Names:
         INITIAL and in values needed before the run (`before_run`, with what they are)
         only data and INITIAL values. Then the names of reports, FINISH and tolerances."""
         known = set(self.defined) | self.data_names | set(RESERVED)
-        initial_names = {t for st in sections["INITIAL"] for t in st.targets}
+        initial_names = {t for st in sections["INITIAL"] for t in getattr(st, "targets", ())}
         initial_ok = self.data_names | initial_names | KNOWN_BEFORE_RUN
         # a table name as AFGEN's first argument is no value
         table_args = {id(node.args[0]) for section in sections.values() for st in section
-                      for node in ast.walk(st.expr)
+                      for node in ast.walk(st)
                       if isinstance(node, ast.Call) and node.args
                       and getattr(lookup(node.func), "kind", None) == Kind.TABLE}
 
@@ -145,7 +191,7 @@ class Names:
                     if isinstance(node, ast.Name) and id(node) not in table_args)
 
         for st in sections["INITIAL"]:
-            for node in names_of(st.expr):
+            for node in names_of(st):
                 if node.name in initial_ok:
                     continue
                 if node.name in self.defined:
@@ -157,7 +203,7 @@ class Names:
                 else:
                     self.undefined(node, known)
         for st in sections["DYNAMIC"] + sections["TERMINAL"]:
-            for node in names_of(st.expr):
+            for node in names_of(st):
                 if node.name not in known:
                     self.undefined(node, known)
         for expr, what in before_run:
@@ -203,6 +249,11 @@ class Names:
         if node.name in self.table_names:
             self.rep.error(f"{node.name} is a FUNCTION table, not a value", node.span,
                            f"look it up with AFGEN({node.name}, X)")
+            return
+        if node.name == "T" and self.form == "CSMP":
+            self.rep.error("T is used but never defined", node.span,
+                           "time is TIME in this form; a file that starts with PROGRAM or "
+                           "MODEL is in ACSL form, where time is T")
             return
         hint = nearest(node.name, known - {"DELMIN", "DELMAX"})
         self.rep.error(

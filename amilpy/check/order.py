@@ -36,10 +36,18 @@ class _Reads(Visitor):
             self.seen.add(("m", node.memory))
             self.pending.extend(self.memories[node.memory].args)
 
+    def visit_UnitValue(self, node: ir.UnitValue) -> None:
+        if ("u", node.unit) not in self.seen:
+            self.seen.add(("u", node.unit))
+            self.names.extend(self.units[node.unit].inputs)
 
-def reads(expr: ast.Node, switches: list[ir.Switch], memories: list[ir.Memory]) -> list[str]:
-    """Variable names an IR expression reads, including through switch/memory args."""
+
+def reads(expr: ast.Node, switches: list[ir.Switch], memories: list[ir.Memory],
+          units: list[ir.Unit] = ()) -> list[str]:
+    """Variable names an IR expression reads, including through switch/memory args
+    and the inputs of sorting units."""
     visitor = _Reads(switches, memories)
+    visitor.units = units
     visitor.pending.append(expr)
     while visitor.pending:
         for node in ast.walk(visitor.pending.pop()):
@@ -48,13 +56,14 @@ def reads(expr: ast.Node, switches: list[ir.Switch], memories: list[ir.Memory]) 
 
 
 def sort(equations: list[ir.Equation], section: str, rep: Reporter,
-         switches: list[ir.Switch], memories: list[ir.Memory]) -> list[ir.Equation]:
+         switches: list[ir.Switch], memories: list[ir.Memory],
+         units: list[ir.Unit] = ()) -> list[ir.Equation]:
     """Order equations so each follows what it reads; report algebraic loops."""
     by_target = {e.target: e for e in equations}
     deps: dict[str, list[str]] = {}
     for e in equations:
         seen: list[str] = []
-        for n in reads(e.expr, switches, memories):
+        for n in reads(e.expr, switches, memories, units):
             if n in by_target and n not in seen:
                 seen.append(n)
         deps[e.target] = seen

@@ -22,11 +22,12 @@ Modules: `emit` (IR expressions -> Python expressions), `build` (the functions,
 from __future__ import annotations
 
 from .build import Compiled, Compiler, fault_line
-from .consts import evaluate_constant, initial_values
+from .consts import evaluate_constant, initial_values, parameter_names
+from .emit import Setting
 from .faults import FaultReport
 from .pytree import namespace
 
 NAMESPACE = namespace()  # as the library stands at import (benchmarks read it)
 
-__all__ = ["Compiled", "Compiler", "FaultReport", "NAMESPACE", "evaluate_constant",
-           "fault_line", "initial_values", "namespace"]
+__all__ = ["Compiled", "Compiler", "FaultReport", "NAMESPACE", "Setting", "evaluate_constant",
+           "fault_line", "initial_values", "namespace", "parameter_names"]

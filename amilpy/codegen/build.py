@@ -9,6 +9,7 @@ span, so a fault is located from the code's own line table (see `faults`).
 from __future__ import annotations
 
 import ast as py
+import copy
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from itertools import count
@@ -19,8 +20,9 @@ from ..diagnostics import AmilError, Diagnostic, Span
 from ..library import lookup, vector_functions
 from ..surfaces import is_affine
 from ..syntax import deep_enough
+from ..templates import instantiate
 from .consts import evaluate_constant, initial_slots
-from .emit import Emitter, needs
+from .emit import Emitter, Setting, needs
 from .faults import STATEMENTS, FaultReport, Statement, explain, statement_of
 from .pytree import (
     Folder,
@@ -29,9 +31,11 @@ from .pytree import (
     local,
     namespace,
     on_line,
+    parameter,
     place,
     vectorised,
 )
+from .written import Statements, start
 
 # models with more memory slots than this read them from z instead of unpacking
 MAX_UNPACKED_SLOTS = 32
@@ -67,10 +71,33 @@ class Compiled:
     memory_times: Callable | None = None
     # line k of the generated code is statements[k - 1] (None: scaffolding)
     statements: list[Statement | None] = field(default_factory=list)
+    # (t, y, m, z) -> the states put where their function holds them (LIMINT's
+    # bounds), or None when no state is
+    settle: Callable | None = None
+    # time switches whose surfaces change sign only at first + k*period (PULSE's
+    # train): those instants are breakpoints, and these surfaces are not located
+    trains: list[tuple[float, float]] = field(default_factory=list)
+    train_surfaces: set[int] = field(default_factory=set)
+    # ACSL form: the names written-order code keeps (z after the memory slots), and
+    # that code by function name: (its IR, fn(t, y, m, z, ev) -> (y, z, values))
+    kept: list[str] = field(default_factory=list)
+    code: dict[str, tuple[ir.Code, Callable]] = field(default_factory=dict)
     model: ir.Model | None = field(default=None, repr=False)
     module: py.Module | None = field(default=None, repr=False)  # the scalar functions' tree
     namespace: dict = field(default_factory=dict, repr=False)
     checking: dict = field(default_factory=dict, repr=False)  # built on the first fault
+    derived: dict = field(default_factory=dict, repr=False)  # built on first use (jacobian)
+    # code built from `module` on first use, for every binding of it (see `rebound`)
+    shared: dict = field(default_factory=dict, repr=False)
+    binder: object = field(default=None, repr=False)  # the Compiler, for `rebound`
+
+    def rebound(self, constants: dict[str, float]) -> Compiled:
+        """These functions for a run whose constants differ from these only in the
+        parameters' values (`Compiler.parameters`): the same code, executed again
+        with the new values; no compilation."""
+        if constants == self.constants or self.binder is None:
+            return self
+        return self.binder.bind(constants)
 
     def fault_line(self, exc: BaseException) -> int | None:
         """The listing line of the generated statement that raised `exc`."""
@@ -99,6 +126,20 @@ def _deepest(model: ir.Model) -> Span | None:
     return where
 
 
+def by_rows(fn: Callable) -> Callable:
+    """fn over NumPy columns (t an array, y a list of arrays), a row at a time."""
+    import numpy as np
+
+    def columns(t, y, m, z):
+        times = np.atleast_1d(np.asarray(t, dtype=float))
+        rows = np.column_stack([np.broadcast_to(c, times.shape) for c in y]) if y else \
+            np.empty((times.size, 0))
+        out = [fn(float(times[i]), rows[i].tolist(), m, z) for i in range(times.size)]
+        width = len(out[0]) if out else 0
+        return [np.array([r[j] for r in out], dtype=float) for j in range(width)]
+    return columns
+
+
 def fault_line(exc: BaseException) -> int | None:
     """The listing line of the generated statement that raised `exc`, if the fault
     happened inside generated code."""
@@ -113,9 +154,23 @@ class Compiler:
 
     def __init__(self, model: ir.Model, constants: dict[str, float], tables,
                  const_modes: dict[int, float], outputs: list[str] | None = None,
-                 events: bool = True) -> None:
+                 events: bool = True, setting: Setting | None = None,
+                 kept: dict[str, float] | None = None,
+                 priors: dict[str, float] | None = None,
+                 parameters: frozenset[str] = frozenset()) -> None:
         self.model = model
+        self.setting = setting or Setting()
         self.constants = constants
+        # ACSL form: the names written-order code keeps between instants (memory
+        # slots after the memory functions', in z) with their starting values, and
+        # the INITIAL values of names DERIVATIVE computes again (a unit's output
+        # keeps that value on a path that does not assign it)
+        self.kept = dict(kept or {})
+        self.priors = dict(priors or {})
+        # constants the code reads as names (PARAM, INCON and what INITIAL derives
+        # from them), so that other values need no new code (`bind`)
+        self.parameters = frozenset(n for n in parameters if n in constants)
+        self.shared: dict = {}
         self.tables = tables
         self.const_modes = const_modes
         self.outputs = outputs
@@ -124,7 +179,7 @@ class Compiler:
         if not events:
             # only FINISH/TERMT stay watched: they stop the run, they switch nothing
             self.watched = [i for i in self.watched
-                            if model.surfaces[i].purpose in ("finish", "termt")]
+                            if model.surfaces[i].purpose in ("finish", "termt", "schedule")]
         self.mode_names = {s: f"m{k}" for k, s in enumerate(self.watched)}
         self.mode_names_new = {s: f"n{k}" for k, s in enumerate(self.watched)}
         self.global_tables: dict[str, tuple] = {}
@@ -138,11 +193,12 @@ class Compiler:
     def emitter(self, context: str, new_modes: bool = False) -> Emitter:
         names = self.mode_names_new if new_modes else self.mode_names
         return Emitter(self.model, self.constants, self.const_modes, context, names,
-                       self.global_tables, self.tables, self.unpacked_z, self.names)
+                       self.global_tables, self.tables, self.unpacked_z, self.names,
+                       self.setting, self.parameters)
 
     def line(self, kind: str, target: str, span: Span | None, expr=None) -> int:
         """The generated line of one IR statement (the same in every function)."""
-        key = (kind, target)
+        key = (kind, target, span)
         if key not in self.lines:
             self.statements.append(Statement(kind, target, span, expr))
             self.lines[key] = len(self.statements)
@@ -166,16 +222,42 @@ class Compiler:
         nz = sum(m.nslots for m in self.model.memories)
         if mem and nz and self.unpacked_z:
             names = [py.Name(f"z{k}", py.Store()) for k in range(nz)]
-            body.append(py.Assign([py.Tuple(names, py.Store())], py.Name("z", py.Load()))
+            source = py.Name("z", py.Load()) if not self.kept else py.Subscript(
+                py.Name("z", py.Load()), py.Slice(None, py.Constant(nz)), py.Load())
+            body.append(py.Assign([py.Tuple(names, py.Store())], source)
                         if nz > 1 else py.Assign([names[0]], py.Subscript(
                             py.Name("z", py.Load()), py.Constant(0), py.Load())))
+        if mem and self.kept:
+            for k, n in enumerate(self.kept):
+                body.append(py.Assign([py.Name(local(n), py.Store())], py.Subscript(
+                    py.Name("z", py.Load()), py.Constant(nz + k), py.Load())))
         return body
 
     def algebra(self, roots, em: Emitter) -> list[py.stmt]:
-        """The algebraic equations the roots read, in sorted order, one line each."""
-        return [on_line(py.Assign([py.Name(local(e.target), py.Store())], em.emit(e.expr)),
-                        self.line("equation", e.target, e.span, e.expr))
-                for e in needs(self.model, roots)]
+        """The algebraic equations the roots read, in sorted order, one line each; a
+        sorting unit's statements where its first output is needed."""
+        out: list[py.stmt] = []
+        done: set[int] = set()
+        for e in needs(self.model, roots):
+            if isinstance(e.expr, ir.UnitValue):
+                if e.expr.unit not in done:
+                    done.add(e.expr.unit)
+                    out.extend(self.unit(self.model.units[e.expr.unit], em))
+                continue
+            out.append(on_line(py.Assign([py.Name(local(e.target), py.Store())],
+                                         em.emit(e.expr)),
+                               self.line("equation", e.target, e.span, e.expr)))
+        return out
+
+    def unit(self, unit: ir.Unit, em: Emitter) -> list[py.stmt]:
+        """An IF or PROCEDURAL unit: its outputs' values before it, then its body."""
+        first = start(unit.outputs, set(self.kept), self.priors)
+        for st in first:
+            on_line(st, self.line("code", f"{unit.kind} at line {unit.span.line}", unit.span))
+        return first + self.code_emitter(em).block(unit.body)
+
+    def code_emitter(self, em: Emitter) -> Statements:
+        return Statements(em, self.line, lambda: f"w{next(self.names)}")
 
     def surface_algebra(self, em: Emitter) -> list[py.stmt]:
         """What the watched surfaces read: the algebra, then the switch values they
@@ -209,9 +291,9 @@ class Compiler:
         values = []
         for s in states:
             value = em.emit(s.deriv)
-            if s.reset_surfaces:  # MODINT: held while its first surface is <= 0
-                value = py.IfExp(py.Compare(em.mode(s.reset_surfaces[0]), [py.Gt()],
-                                            [py.Constant(0.0)]), value, py.Constant(0.0))
+            if s.runs:  # MODINT holds, LIMINT stops at a bound: the derivative is 0
+                value = py.IfExp(em.fill(s.runs, [], [em.mode(i) for i in s.modes]), value,
+                                 py.Constant(0.0))
             values.append(on_line(value, self.state_line(s)))
         body.append(py.Return(py.List(values, py.Load())))
         return function("rhs", ("t", "y", "m", "z"), body)
@@ -281,8 +363,78 @@ class Compiler:
                 e = on_line(em.fill(text, args, modes, new_modes, mem, value), line)
                 new.append(on_line(py.Starred(e, py.Load()), line) if templates.spread(text)
                            else e)
+        if self.kept:  # the names written-order code keeps: unchanged by a step
+            nz = sum(m.nslots for m in model.memories)
+            new.append(py.Starred(py.Subscript(py.Name("z", py.Load()),
+                                               py.Slice(py.Constant(nz), None), py.Load()),
+                                  py.Load()))
         body.append(py.Return(py.List(new, py.Load())))
         return function("mem", ("t", "y", "m", "mn", "z"), body)
+
+    def check_arguments(self) -> None:
+        """Constant arguments that must be positive or not negative (PULSE's P and W),
+        now that the run's constants are known; a fault is located at the call."""
+        model = self.model
+        for inst in (*model.switches, *model.memories):
+            func = lookup(inst.func, len(inst.args))
+            for i in (*func.positive_args, *func.nonnegative_args):
+                fault = func.argument_fault(i, self.constant(inst.args[i], inst.span))
+                if fault:
+                    raise AmilError([Diagnostic(fault, inst.span,
+                                                f"{func.signature}: {func.doc}")],
+                                    model.path, model.source)
+
+    def settle(self) -> py.FunctionDef:
+        """The states put on the values their functions hold them at (LIMINT at a
+        bound), the others as they are."""
+        em = self.emitter("rhs")
+        states = self.model.states
+        body = self.prologue() + self.algebra([v for s in states for v, _ in s.onto], em)
+        values = []
+        for s in states:
+            value: py.expr = py.Name(local(s.name), py.Load())
+            for target, when in reversed(s.onto):
+                value = py.IfExp(em.fill(when, [], [em.mode(i) for i in s.modes]),
+                                 em.emit(target), value)
+            values.append(on_line(value, self.state_line(s)))
+        body.append(py.Return(py.List(values, py.Load())))
+        return function("settle", ("t", "y", "m", "z"), body)
+    def section(self, fname: str, code: ir.Code) -> py.FunctionDef:
+        """Written-order code as `fname(t, y, m, z, ev)` -> (states, z, values of the
+        names it assigns); DERIVATIVE's values it reads are computed first."""
+        model = self.model
+        em = self.emitter("out")
+        em.constants = {k: v for k, v in self.constants.items() if k not in code.assigned}
+        em.parameters = em.parameters - set(code.assigned)
+        known = set(self.kept) | {st.name for st in model.states}
+        body = self.prologue()
+        first = start(code.assigned, known, self.constants)
+        for st in first:
+            on_line(st, self.line("code", code.section, code.span))
+        body += first
+        reads = [n for st in code.body for n in syn.walk(st) if isinstance(n, syn.Name)]
+        body += self.algebra(reads, em)
+        body += self.code_emitter(em).block(code.body)
+        nz = sum(m.nslots for m in model.memories)
+        states = py.List([py.Name(local(st.name), py.Load()) for st in model.states], py.Load())
+        kept = py.List([py.Starred(py.Subscript(py.Name("z", py.Load()), py.Slice(
+            None, py.Constant(nz)), py.Load()), py.Load())]
+            + [py.Name(local(n), py.Load()) for n in self.kept], py.Load())
+        values = py.List([py.Name(local(n), py.Load()) for n in code.assigned], py.Load())
+        body.append(py.Return(py.Tuple([states, kept, values], py.Load())))
+        return function(fname, ("t", "y", "m", "z", "ev"), body)
+
+    def sections(self) -> dict[str, ir.Code]:
+        """Written-order code run during a run (the ACSL form's DYNAMIC, DISCRETE and
+        TERMINAL; a CSMP TERMINAL with IF or DO blocks), by function name."""
+        acsl = self.model.acsl
+        out: dict[str, ir.Code] = {}
+        if acsl is not None:
+            out["dynamic"] = acsl.dynamic
+            out.update({f"discrete_{k}": d.code for k, d in enumerate(acsl.discretes.values())})
+        terminal = acsl.terminal if acsl is not None else self.model.terminal_code
+        out.update({f"terminal_{k}": c for k, c in enumerate(terminal)})
+        return out
 
     @deep_enough()
     def build(self) -> Compiled:
@@ -299,41 +451,83 @@ class Compiler:
 
     def _build(self) -> Compiled:
         model = self.model
+        self.check_arguments()
         out_names = self.outputs if self.outputs is not None else model.variables
         fns = [self.rhs(), self.surfaces(), self.modes(), self.outputs_function(out_names),
                self.memory()]
+        self.settles = any(s.onto for s in model.states)
+        if self.settles:
+            fns.append(self.settle())
+        self.code_sections = self.sections()
+        extra = [self.section(fname, c) for fname, c in self.code_sections.items()]
         # surf and out once more for NumPy columns: a condition there may be an array
         # (a memory function reading its condition), so if/else becomes a where()
-        fns += [vectorised(fns[1], "surf_vec"), vectorised(fns[3], "out_vec")]
+        fns += [vectorised(fns[1], "surf_vec"), vectorised(fns[3], "out_vec")] + extra
         module = Folder().visit(py.Module(body=fns, type_ignores=[]))
         place(module)
         py.fix_missing_locations(module)
         assert_closed(module)
-        source = py.unparse(module)
-        code = compile(module, model.path or model.name, "exec")
+        self.source = py.unparse(module)
+        self.code = compile(module, model.path or model.name, "exec")
+        self.module, self.out_names = module, list(out_names)
+        return self.bind(self.constants)
+
+    def bind(self, constants: dict[str, float]) -> Compiled:
+        """The built code for one run's constants: executed with its parameters' values
+        (cheap: it defines the functions), and the values that depend on them."""
+        model = self.model
+        binder = copy.copy(self)
+        binder.constants = constants
+        values = {parameter(n): float(constants[n]) for n in self.parameters}
         scalar: dict[str, object] = {"__builtins__": {}, **namespace(), **self.global_tables,
-                                     STATEMENTS: self.statements}
-        exec(code, scalar)  # noqa: S102 - compiler-built tree, closed namespace
+                                     STATEMENTS: self.statements, **values}
+        exec(self.code, scalar)  # noqa: S102 - compiler-built tree, closed namespace
         vector: dict[str, object] = {"__builtins__": {}, STATEMENTS: self.statements}
         vector.update({f"_{k}": v for k, v in vector_functions().items()})
         vector.update(self.global_tables)
-        exec(code, vector)  # noqa: S102 - the same code, elementwise functions
+        vector.update(values)
+        exec(self.code, vector)  # noqa: S102 - the same code, elementwise functions
+        trains, train_surfaces = binder.trains()
+        if model.units:
+            # statements (IF, loops) cannot run on columns: one row at a time
+            vector["surf_vec"], vector["out_vec"] = by_rows(scalar["surf"]), \
+                by_rows(scalar["out"])
         return Compiled(
             state_names=[s.name for s in model.states],
-            y0=[self.constant(s.ic, s.span) for s in model.states],
+            y0=[binder.constant(s.ic, s.span) for s in model.states],
             z0=[v for mem, func in zip(model.memories, self.entries, strict=True)
                 for text in func.memory.initial
-                for v in initial_slots(model, text, mem, self.constants, self.tables)],
-            out_names=list(out_names), constants=self.constants, rhs=scalar["rhs"],
+                for v in initial_slots(model, text, mem, constants, self.tables)]
+            + list(self.kept.values()),
+            out_names=list(self.out_names), constants=constants, rhs=scalar["rhs"],
             surf=scalar["surf"], out=scalar["out"], mem=scalar["mem"],
             watched=self.watched, const_modes=self.const_modes,
-            modes_literal=scalar["modes"], affine_time=self.affine(),
-            impulses=self.impulses(), source=source, tables=self.global_tables,
+            modes_literal=scalar["modes"], affine_time=binder.affine(),
+            impulses=binder.impulses(), source=self.source, tables=self.global_tables,
             surf_v=vector["surf_vec"], out_v=vector["out_vec"],
             memory_every_step=any(f.memory.every_step for f in self.entries),
             memory_times=self.memory_times(), statements=self.statements, model=model,
-            module=module, namespace=scalar,
+            module=self.module, namespace=scalar, shared=self.shared, binder=self,
+            trains=trains, train_surfaces=train_surfaces,
+            settle=scalar["settle"] if self.settles else None, kept=list(self.kept),
+            code={fname: (self.code_sections[fname], scalar[fname])
+                  for fname in self.code_sections},
         )
+
+    def trains(self) -> tuple[list[tuple[float, float]], set[int]]:
+        """The (first instant, period) of the time switches that declare their
+        breakpoints (PULSE's train), and their watched surfaces."""
+        if not self.events or self.setting.step is not None:
+            return [], set()
+        trains, surfaces = [], set()
+        for sw in self.model.switches:
+            func = lookup(sw.func, len(sw.args))
+            watched = [i for i in sw.surfaces if i in self.watched]
+            if func.breaks and watched:
+                surfaces.update(watched)
+                trains.extend(tuple(self.constant(instantiate(t, sw.args, sw.span), sw.span)
+                                    for t in pair) for pair in func.breaks)
+        return trains, surfaces
 
     def affine(self) -> set[int]:
         """Time surfaces affine in TIME: their roots are breakpoints found exactly."""
@@ -341,12 +535,14 @@ class Compiler:
         equations = {e.target: e.expr for e in model.dynamic}
         return {i for i in self.watched
                 if model.surfaces[i].depends == ir.Depends.TIME and self.events
+                and self.setting.step is None
                 and model.surfaces[i].kind == ir.SurfaceKind.SIGN
                 and is_affine(model.surfaces[i].expr, self.constants, equations)}
 
     def impulses(self) -> list[tuple[float, float]]:
         model = self.model
         exprs = [e.expr for e in model.dynamic] + [s.deriv for s in model.states]
+        exprs += [n for u in model.units for st in u.body for n in syn.walk(st)]
         exprs += [a for sw in model.switches for a in sw.args]
         exprs += [a for m in model.memories for a in m.args]
         exprs += [s.expr for s in model.surfaces]

@@ -21,17 +21,46 @@ def _emitter(model: ir.Model, constants: dict[str, float], tables) -> Emitter:
     return Emitter(model, constants, {}, "literal", {}, {}, tables)
 
 
+# expression -> its code with the constants it reads as names (p_NAME): a run with
+# other data evaluates its INITIAL section without compiling it again
+_CODE: dict[tuple, tuple] = {}
+_CODE_LIMIT = 4096
+
+
 @deep_enough()
 def evaluate_constant(model: ir.Model, expr, constants: dict[str, float], tables,
                       span: Span) -> float:
     """Evaluate an expression of constants (INITIAL, initial conditions)."""
-    em = _emitter(model, constants, tables)
-    try:
-        tree = em.emit(expr)
-    except KeyError as exc:  # a name that is not a constant
-        raise AmilError([Diagnostic(f"{exc.args[0]} is not known before the run starts",
-                                    span)], model.path, model.source) from None
-    return float(evaluate(model, tree, em.tables, span))
+    from .. import syntax as syn
+    from .pytree import parameter
+
+    names = frozenset(n.name for n in syn.walk(expr)
+                      if isinstance(n, syn.Name) and n.name in constants)
+    key = (id(expr), names, tuple(sorted(tables)))
+    entry = _CODE.get(key)
+    if entry is None or entry[0] is not expr:
+        em = Emitter(model, constants, {}, "literal", {}, {}, tables, parameters=names)
+        try:
+            tree = em.emit(expr)
+        except KeyError as exc:  # a name that is not a constant
+            raise AmilError([Diagnostic(f"{exc.args[0]} is not known before the run "
+                                        "starts", span)], model.path, model.source) from None
+        body = py.Expression(tree)
+        py.fix_missing_locations(body)
+        assert_closed(py.Module(body=[py.Expr(body.body)], type_ignores=[]))
+        if len(_CODE) > _CODE_LIMIT:
+            _CODE.clear()
+        entry = _CODE[key] = (expr, compile(body, model.path or model.name, "eval"),
+                              sorted(em.tables))
+    _, code, used = entry
+    scope = {"__builtins__": {}, **namespace(),
+             **{name: _table(tables, name) for name in used},
+             **{parameter(n): constants[n] for n in names}}
+    return float(_run(model, lambda: eval(code, scope), span))  # noqa: S307
+
+
+def _table(tables, name: str):
+    return tables[name[len("_T_"):]]
 
 
 def initial_slots(model: ir.Model, text: str, mem: ir.Memory, constants: dict[str, float],
@@ -53,8 +82,14 @@ def evaluate(model: ir.Model, body: py.expr, tables: dict[str, tuple], span: Spa
     scope: dict[str, object] = {"__builtins__": {}}
     scope.update(namespace())
     scope.update(tables)
+    return _run(model, lambda: eval(compile(tree, model.path or model.name, "eval"),  # noqa: S307
+                                    scope), span)
+
+
+def _run(model: ir.Model, evaluate_it, span: Span):
+    """evaluate_it(), its faults as AmilErrors at span."""
     try:
-        return eval(compile(tree, model.path or model.name, "eval"), scope)  # noqa: S307
+        return evaluate_it()
     except ZeroDivisionError:
         raise AmilError([Diagnostic("division by zero", span,
                                     "check the data values this expression uses")],
@@ -84,3 +119,18 @@ def initial_values(model: ir.Model, data: dict[str, float], tables,
     for eq in model.initial:
         constants[eq.target] = evaluate_constant(model, eq.expr, constants, tables, eq.span)
     return constants
+
+
+def parameter_names(model: ir.Model) -> frozenset[str]:
+    """The constants generated code reads by name instead of folding in: PARAM and
+    INCON values, and the INITIAL values computed from them. A sweep, a value list
+    or --set changes those, and the same code serves every run (`Compiler.bind`);
+    CONST values, TIMER values and what INITIAL computes from them alone are the
+    true constants, folded into the code."""
+    from .. import syntax as syn
+
+    names = {n for n in model.data_names if model.data_kinds.get(n) != "CONST"}
+    for eq in model.initial:  # in sorted order: what an equation reads comes first
+        if any(isinstance(x, syn.Name) and x.name in names for x in syn.walk(eq.expr)):
+            names.add(eq.target)
+    return frozenset(names)

@@ -15,18 +15,41 @@ from __future__ import annotations
 import ast as py
 import math
 from collections import Counter
+from dataclasses import dataclass
 from itertools import count
 
 from .. import ir
 from .. import syntax as syn
 from ..diagnostics import Span
 from ..library import Func, Kind, lookup, runtime_name
-from ..runtime import safe_pow
+from ..runtime import Extending, safe_pow
 from ..syntax import Visitor
 from ..templates import ARGUMENTS, argument_uses, tree
-from .pytree import const_value, local, number
+from .pytree import const_value, local, number, parameter, user_function
 
 _PYOPS = {"+": py.Add, "-": py.Sub, "*": py.Mult, "/": py.Div}
+_PYCMP = {"<": py.Lt, "<=": py.LtE, ">": py.Gt, ">=": py.GtE, "==": py.Eq, "/=": py.NotEq}
+
+
+def truth(value: py.expr) -> py.expr:
+    """A number used as a condition: `value > 0`."""
+    return py.Compare(value, [py.Gt()], [py.Constant(0.0)])
+
+
+def as_number(test: py.expr, yes: float = 1.0, no: float = 0.0) -> py.expr:
+    """A truth used as a number: 1.0 or 0.0."""
+    return py.IfExp(test, py.Constant(yes), py.Constant(no))
+
+
+@dataclass(frozen=True)
+class Setting:
+    """What generated code takes from how a run is made, not from the listing."""
+
+    seed: float = 1.0  # the random streams' seed (--seed, the listing's RNSEED, else 1)
+    hold: float = math.nan  # how long a random draw is held (an output interval, or DELT)
+    # step-point mode: DELT. Every switch is read on the spot (in every function,
+    # at every stage point); IMPULS is 1 at the first step point at or after an instant
+    step: float | None = None
 
 
 class Emitter(Visitor):
@@ -36,9 +59,14 @@ class Emitter(Visitor):
 
     def __init__(self, model: ir.Model, constants: dict[str, float], const_modes,
                  context: str, mode_names: dict[int, str], tables: dict[str, tuple],
-                 source_tables: dict, unpacked_z: bool = True, names=None) -> None:
+                 source_tables: dict, unpacked_z: bool = True, names=None,
+                 setting: Setting | None = None,
+                 parameters: frozenset[str] = frozenset()) -> None:
         self.model = model
         self.constants = constants
+        # constants read as names (p_NAME), not folded: a run with other values
+        # binds the same code to them (see `codegen.params`)
+        self.parameters = parameters
         self.const_modes = const_modes
         self.context = context
         self.mode_names = mode_names
@@ -46,6 +74,7 @@ class Emitter(Visitor):
         self.source_tables = source_tables  # the run's FUNCTION tables
         self.unpacked_z = unpacked_z
         self.names = names if names is not None else count(1)  # for bound arguments
+        self.setting = setting or Setting()
         # switch values already computed into a local, by (switch, output)
         self.hoisted: dict[tuple[int, int], str] = {}
         self.hoisted_memory: dict[int, str] = {}  # memory values likewise, by instance
@@ -75,7 +104,10 @@ class Emitter(Visitor):
     def mode(self, surface: int) -> py.expr:
         if surface in self.const_modes:
             return number(self.const_modes[surface])
-        if self.context == "literal":
+        if self.context == "literal" or self.setting.step is not None or \
+                surface not in self.mode_names:
+            # on the spot: INITIAL/TERMINAL, step-point mode, or a surface the run does
+            # not watch (comparisons without events read memory conditions so)
             s = self.model.surfaces[surface]
             return self.literal_mode(s.kind, self.emit(s.expr))
         return py.Name(self.mode_names[surface], py.Load())
@@ -104,6 +136,8 @@ class Emitter(Visitor):
     def visit_Name(self, e: syn.Name) -> py.expr:
         if e.name == "TIME" and "TIME" not in self.constants:  # TERMINAL knows TIME
             return py.Name("t", py.Load())
+        if e.name in self.parameters:
+            return py.Name(parameter(e.name), py.Load())
         if e.name in self.constants:
             return number(self.constants[e.name])
         return py.Name(local(e.name), py.Load())
@@ -111,8 +145,23 @@ class Emitter(Visitor):
     def visit_Neg(self, e: syn.Neg) -> py.expr:
         return py.UnaryOp(py.USub(), self.emit(e.operand))
 
+    def visit_Not(self, e: syn.Not) -> py.expr:
+        return as_number(truth(self.emit(e.operand)), 0.0, 1.0)
+
+    def visit_UnitValue(self, e: ir.UnitValue) -> py.expr:
+        # the unit's statements ran before (Compiler.algebra emits them first)
+        return py.Name(local(e.name), py.Load())
+
     def visit_BinOp(self, e: syn.BinOp) -> py.expr:
         left, right = self.emit(e.left), self.emit(e.right)
+        if e.op in _PYCMP:  # evaluated where it stands (sorted code lowers <, > to switches)
+            return as_number(py.Compare(left, [_PYCMP[e.op]()], [right]))
+        if e.op in ("AND", "OR"):
+            op = py.And() if e.op == "AND" else py.Or()
+            return as_number(py.BoolOp(op, [truth(left), truth(right)]))
+        if e.op in ("EQV", "NEQV"):
+            same = py.Eq() if e.op == "EQV" else py.NotEq()
+            return as_number(py.Compare(truth(left), [same], [truth(right)]))
         if e.op == "**":
             k = const_value(right)
             if k is not None and k.is_integer() and abs(k) <= 64:
@@ -128,6 +177,18 @@ class Emitter(Visitor):
 
     def visit_Call(self, e: syn.Call) -> py.expr:
         func = lookup(e.func, len(e.args))
+        acsl = self.model.acsl
+        if func is None and acsl is not None and e.func in acsl.functions:
+            # a FUNCTION the listing defines (ACSL form)
+            from .written import user_callable
+
+            self.tables[user_function(e.func)] = user_callable(
+                self.model, e.func, self.constants, self.source_tables)
+            return py.Call(py.Name(user_function(e.func), py.Load()),
+                           [self.emit(a) for a in e.args], [])
+        if func is None:  # a run-time helper a library template calls (PULSE_ON)
+            return py.Call(py.Name("_" + e.func, py.Load()), [self.emit(a) for a in e.args],
+                           [])
         if func.kind in (Kind.SWITCH, Kind.TIME):  # literal use (INITIAL/TERMINAL)
             return self.literal_switch(func, e.args)
         args = [self.emit(a) for a in e.args]
@@ -141,7 +202,14 @@ class Emitter(Visitor):
 
     def visit_TableLookup(self, e: ir.TableLookup) -> py.expr:
         name = "_T_" + e.table
-        self.tables[name] = self.source_tables[e.table]
+        if lookup(e.written or e.func).extends:
+            # LINT's own copy notes reads outside the table (one warning per run);
+            # "_T__": no table name starts with "_"
+            name = "_T__" + e.table
+            if name not in self.tables:
+                self.tables[name] = Extending(e.table, self.source_tables[e.table])
+        else:
+            self.tables[name] = self.source_tables[e.table]
         return py.Call(py.Name("_" + e.func, py.Load()), [py.Name(name, py.Load()),
                                                           self.emit(e.x)], [])
 
@@ -160,6 +228,10 @@ class Emitter(Visitor):
         return self.memory_value(self.model.memories[e.memory])
 
     def visit_Impulse(self, e: ir.Impulse) -> py.expr:
+        if self.setting.step is not None:
+            return py.Call(py.Name("_IMPULS_STEP", py.Load()),
+                           [py.Name("t", py.Load()), self.emit(e.start), self.emit(e.period),
+                            number(self.setting.step)], [])
         if self.context == "rhs":
             return py.Constant(0.0)
         return py.Call(py.Name("_IMPULS", py.Load()),
@@ -238,9 +310,13 @@ class _Fill(py.NodeTransformer):
 
     def visit_Name(self, node: py.Name) -> py.expr:
         name = node.id
+        setting = self.em.setting
         fixed = {"TIME": lambda: py.Name("t", py.Load()), "INF": lambda: number(math.inf),
                  "VALUE": lambda: self.value, "Z": lambda: py.Name("z", py.Load()),
-                 "OFFSET": lambda: py.Constant(self.memory.slot)}
+                 "OFFSET": lambda: py.Constant(self.memory.slot),
+                 "SEED": lambda: number(float(setting.seed)),
+                 "HOLD": lambda: number(setting.hold),
+                 "SITE": lambda: py.Constant(self.memory.index)}
         if name in fixed:
             return fixed[name]()
         if len(name) == 1:
@@ -289,6 +365,15 @@ class _Needs(Visitor):
         if ("m", node.memory) not in self.seen:
             self.seen.add(("m", node.memory))
             self.pending.extend(self.model.memories[node.memory].args)
+
+    def visit_UnitValue(self, node: ir.UnitValue) -> None:
+        if ("u", node.unit) not in self.seen:
+            self.seen.add(("u", node.unit))
+            unit = self.model.units[node.unit]
+            self.pending.extend(syn.Name(n, unit.span) for n in unit.inputs)
+            # the switches of its conditions: their surfaces read algebra too
+            self.pending.extend(n for st in unit.body for n in syn.walk(st)
+                                if isinstance(n, ir.SwitchValue))
 
 
 def needs(model: ir.Model, roots: list[syn.Node]) -> list[ir.Equation]:

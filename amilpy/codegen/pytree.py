@@ -7,13 +7,14 @@ from __future__ import annotations
 import ast as py
 import copy
 import math
+from collections.abc import Callable
 
 from ..library import math_functions
 from ..runtime import HELPERS, safe_pow
 
 # the arguments of every generated function; with the v_/h_ locals of model
 # names, the mN/nN/zN/wN locals and the _NAME callables, all generated code reads
-ARGS = ("t", "y", "m", "mn", "z")
+ARGS = ("t", "y", "m", "mn", "z", "ev")
 
 
 def namespace() -> dict[str, object]:
@@ -32,6 +33,16 @@ def local(name: str) -> str:
         # character as _XX so that no two names meet
         return "h_" + "".join(c if c.isalnum() else f"_{ord(c):02X}" for c in name)
     return "v_" + name
+
+
+def user_function(name: str) -> str:
+    """The Python name of a FUNCTION the listing defines (ACSL form)."""
+    return "_U_" + name
+
+
+def parameter(name: str) -> str:
+    """The global a run's parameter is read from in generated code."""
+    return "p_" + name
 
 
 def number(v: float) -> py.expr:
@@ -184,14 +195,16 @@ def vectorised(fn: py.FunctionDef, name: str) -> py.FunctionDef:
     return new
 
 
-def assert_closed(module: py.Module) -> None:
-    """Generated code reads only the compiler's names: no attributes, no builtins."""
+def assert_closed(module: py.Module, also: Callable[[str], bool] | None = None) -> None:
+    """Generated code reads only the compiler's names: no attributes, no builtins.
+    `also`: names a later stage adds (the Jacobian's derivative locals)."""
     allowed = set(namespace()) | set(ARGS)
     for node in py.walk(module):
         if isinstance(node, (py.Attribute, py.Import, py.ImportFrom, py.Global, py.Lambda)):
             raise AssertionError(f"generated code contains {type(node).__name__}")
         if isinstance(node, py.Name) and isinstance(node.ctx, py.Load):
-            ok = (node.id in allowed or node.id.startswith(("v_", "h_", "_T_"))
-                  or (node.id[0] in "mnzw" and node.id[1:].isdigit()))
+            ok = (node.id in allowed or node.id.startswith(("v_", "h_", "_T_", "_U_", "p_"))
+                  or (node.id[0] in "mnzw" and node.id[1:].isdigit())
+                  or (also is not None and also(node.id)))
             if not ok:
                 raise AssertionError(f"generated code reads unknown name {node.id}")

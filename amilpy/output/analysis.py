@@ -49,8 +49,9 @@ def _title(model) -> str:
 def modes_text(result, model=None) -> str:
     head = f"LINEAR MODES OF {_title(model)}".rstrip()
     lines = [head, f"about the state at TIME = {result.time:.9g}, switch branches as in force "
-             f"there; Jacobian by central differences, estimated error "
-             f"{result.error:.1E} of its largest entry",
+             "there; Jacobian from " + (result.how if result.how != "central differences"
+                                         else f"central differences, estimated error "
+                                         f"{result.error:.1E} of its largest entry"),
              "  " + ", ".join(f"{n} = {v:.6g}" for n, v in zip(result.names, result.state.y,
                                                                strict=True)), "",
              f"{'MODE':>5}{'RE [1/S]':>14}{'IM [RAD/S]':>14}{'WN [RAD/S]':>14}"

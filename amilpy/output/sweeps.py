@@ -21,12 +21,15 @@ def units(model, result: Sweep) -> tuple[str, str]:
 
 
 def table_text(result: Sweep) -> str:
-    head = (f"{'':6}{result.name:>14}{'MIN ' + result.measure:>16}"
-            f"{'MAX ' + result.measure:>16}{'HALF P-P':>16}")
-    rows = [f"SWEEP OF {result.name}, {result.measure} MEASURED AFTER {result.settle:g} S",
-            head]
+    second = result.second
+    head = (f"{'':6}{result.name:>14}" + (f"{second:>14}" if second else "") +
+            f"{'MIN ' + result.measure:>16}{'MAX ' + result.measure:>16}{'HALF P-P':>16}")
+    what = result.name + (f" AND {second}" if second else "")
+    rows = [f"SWEEP OF {what}, {result.measure} MEASURED AFTER {result.settle:g} S", head]
     for p in result.points:
-        rows.append(f"{p.direction:6}{p.value:14.6g}{p.minimum:16.6E}{p.maximum:16.6E}"
+        rows.append(f"{p.direction:6}{p.value:14.6g}" +
+                    (f"{p.second:14.6g}" if second else "") +
+                    f"{p.minimum:16.6E}{p.maximum:16.6E}"
                     f"{p.amplitude:16.6E}" + ("" if p.status != "failed" else "  FAILED"))
     return "\n".join(rows) + "\n"
 
@@ -36,6 +39,8 @@ def jump_lines(result: Sweep) -> list[str]:
     first point is left out, when it is."""
     out = []
     name = result.name
+    if result.second is not None:
+        return ["a grid of two data values: no jump search (it follows one swept value)"]
     if result.carry_state and result.points:
         out.append(f"the first point ({name} = {result.points[0].value:g}) starts from the "
                    "listing's initial state, a transient: it is left out of the jump search")
@@ -63,10 +68,11 @@ def format_sweep(result: Sweep) -> str:
 
 def csv_rows(result: Sweep) -> tuple[list[str], Iterator[list]]:
     m = result.measure
-    header = ["DIRECTION", result.name, f"MIN_{m}", f"MAX_{m}", f"HALF_PP_{m}", "STATUS",
-              "TIME_START", "TIME_END"]
-    rows = ([p.direction, p.value, p.minimum, p.maximum, p.amplitude, p.status, p.t_start,
-             p.t_end] for p in result.points)
+    second = [result.second] if result.second else []
+    header = ["DIRECTION", result.name, *second, f"MIN_{m}", f"MAX_{m}", f"HALF_PP_{m}",
+              "STATUS", "TIME_START", "TIME_END"]
+    rows = ([p.direction, p.value, *([p.second] if second else []), p.minimum, p.maximum,
+             p.amplitude, p.status, p.t_start, p.t_end] for p in result.points)
     return header, rows
 
 
@@ -76,11 +82,12 @@ def plot_sweep(result: Sweep, path: str, title: str | None = None,
 
     fig = Figure(figsize=(8, 4.8))
     ax = fig.subplots()
-    for direction, colour, marker in (("up", "tab:blue", "^"), ("down", "tab:red", "v")):
-        v, a = result.branch(direction)
+    styles = {"sweep up": ("tab:blue", "^"), "sweep down": ("tab:red", "v")}
+    for label, v, a in result.lines():
+        colour, marker = styles.get(label, (None, "o"))
         if len(v):
             ax.plot(v, a, color=colour, marker=marker, markersize=4, linewidth=1.2,
-                    label=f"sweep {direction}")
+                    label=label)
     x_unit, y_unit = axis_units
     ax.set_xlabel(result.name + (f" [{x_unit}]" if x_unit else ""))
     ax.set_ylabel(f"half peak-to-peak of {result.measure}" + (f" [{y_unit}]" if y_unit else ""))

@@ -37,6 +37,10 @@ def event_change(event: Event) -> str:
         return f"{event.text or 'its argument'} stays at 0: both sides push it back"
     if event.kind in ("finish", "termt"):  # the condition that stops the run
         return "reached"
+    if event.kind == "schedule":  # EventKind.SCHEDULE: a crossing that runs a DISCRETE
+        return f"{event.text or 'its expression'} crossed zero"
+    if event.kind == "discrete":  # EventKind.DISCRETE
+        return "ran"
     return f"{branch_text(event, event.old)} -> {branch_text(event, event.new)}"
 
 

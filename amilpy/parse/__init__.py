@@ -14,10 +14,12 @@ from importlib import resources
 
 from .. import syntax as ast
 from ..diagnostics import AmilError, Diagnostic, Span
-from ..language import split_lines
+from ..language import ACSL_HEADS, split_lines
 from ..syntax import MAX_DEPTH
+from .blocks import Nester
 from .build import Builder
 from .errors import syntax_diagnostic
+from .lexical import blank_comment_lines, code_end, continues, prepare
 
 __all__ = ["MAX_DEPTH", "MAX_ERRORS", "blank_comment_lines", "parse"]
 
@@ -39,27 +41,7 @@ def _parser():
     )
 
 
-def _continues(line: str) -> bool:
-    """A line whose code ends in a continuation mark (`...` or `&`)."""
-    code = line.strip().split("!", 1)[0].rstrip()
-    return code.endswith("...") or code.endswith("&")
-
-
-def blank_comment_lines(text: str) -> str:
-    """Blank every `*` comment line, keeping line and column numbers intact.
-
-    A line that follows a continuation mark is part of an expression even when
-    it starts with `*`, so it is kept.
-    """
-    out = []
-    continued = False
-    for line in text.split("\n"):
-        if not continued and line.strip().startswith("*"):
-            out.append("")
-            continue
-        out.append(line)
-        continued = _continues(line)
-    return "\n".join(out)
+_continues = continues
 
 
 def parse(text: str, path: str | None = None) -> ast.Program:
@@ -69,7 +51,7 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     if text.startswith("\ufeff"):
         text = text[1:]
     # one definition of a line (language.split_lines), for the reader and messages
-    prepared = blank_comment_lines("\n".join(split_lines(text)))
+    prepared = prepare("\n".join(split_lines(text)))
     if not prepared.endswith("\n"):
         prepared += "\n"
     parser = _parser()
@@ -94,9 +76,40 @@ def parse(text: str, path: str | None = None) -> ast.Program:
             continue
         break
     if errors:
+        if is_acsl(prepared):
+            errors = [_array_list(d) for d in errors]
         raise AmilError(errors, path, text)
-    statements = Builder(text, path).statements(tree)
-    return ast.Program(tuple(statements), path, text)
+    builder = Builder(text, path)
+    items = builder.statements(tree)
+    form, name, statements = Nester(builder.errors).nest(items)
+    if builder.errors:
+        raise AmilError(sorted(builder.errors, key=_where), path, text)
+    return ast.Program(tuple(statements), path, text, form, name)
+
+
+def is_acsl(prepared: str) -> bool:
+    """The file is in ACSL form: its first statement is PROGRAM or MODEL."""
+    import re
+
+    for line in prepared.split("\n"):
+        code = line[:code_end(line)].strip()
+        if code:
+            word = re.match(r"[A-Za-z]+", code)
+            return word is not None and word.group().upper() in ACSL_HEADS
+    return False
+
+
+def _array_list(d: Diagnostic) -> Diagnostic:
+    """In ACSL form `CONSTANT X = 1, 2, 3` is an array, not a decimal comma."""
+    if not d.message.startswith("a decimal comma in a data statement"):
+        return d
+    return Diagnostic("a list of values for one name (an array): not supported", d.span,
+                      "write one CONSTANT per value (X1 = ..., X2 = ...)", d.severity,
+                      d.related)
+
+
+def _where(d: Diagnostic) -> tuple[int, int]:
+    return (d.span.line, d.span.column) if d.span else (10**9, 0)
 
 
 def _diagnose(exc, part: str, lines: list[str], offset: int, parser) -> Diagnostic:

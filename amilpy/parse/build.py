@@ -9,18 +9,41 @@ from __future__ import annotations
 
 from .. import syntax as ast
 from ..diagnostics import AmilError, Diagnostic, Span
-from ..language import DATA_KEYWORDS, REPORT_KEYWORDS, SECTIONS
+from ..language import (
+    DATA_KEYWORDS,
+    REFUSED,
+    REPORT_KEYWORDS,
+    SECTIONS,
+    TYPE_KEYWORDS,
+)
 from ..syntax import MAX_DEPTH
+from .blocks import Close, ElseHead, Head
 
 # -------------------------------------------------------------- tree -> syntax
 
 MAX_RUNS = 10_000  # value-list runs in one group: beyond this, a typo or a sweep
 
 _BINOPS = {"add": "+", "sub": "-", "mul": "*", "div": "/", "pow": "**"}
+# relational and logical operators (the token's spelling decides: rel, land, ...)
+_OPERATORS = {".EQ.": "==", "==": "==", ".NE.": "/=", "/=": "/=", "~=": "/=",
+              ".LT.": "<", "<": "<", ".LE.": "<=", "<=": "<=", ".GT.": ">", ">": ">",
+              ".GE.": ">=", ">=": ">=", ".AND.": "AND", "&&": "AND", ".OR.": "OR",
+              "||": "OR", ".EQV.": "EQV", ".NEQV.": "NEQV"}
+_LOGIC = ("rel", "land", "lor", "eqv")
 
 
 def _number(text: str) -> float:
     return float(text.replace("D", "E").replace("d", "e"))
+
+
+def string_value(token: str) -> str:
+    """The text of a string as written ('it''s' -> it's; a `...` continuation inside
+    joins the lines)."""
+    import re
+
+    inner = token[1:-1]
+    inner = re.sub(r"\.\.\.[ \t]*\r?\n[ \t]*", "", inner)
+    return inner.replace("''", "'")
 
 
 class Builder:
@@ -29,6 +52,12 @@ class Builder:
     def __init__(self, source: str, path: str | None) -> None:
         self.source = source
         self.path = path
+        self.errors: list[Diagnostic] = []  # refusals and misplaced strings
+
+    def refuse(self, construct: str, span: Span, hint: str) -> None:
+        """A construct amilpy does not run (contract section 14)."""
+        self.errors.append(Diagnostic(f"{construct} (line {span.line}): not supported",
+                                      span, hint))
 
     @staticmethod
     def span(node) -> Span:
@@ -37,12 +66,18 @@ class Builder:
             return Span(meta.line, meta.column, meta.end_line, meta.end_column)
         return Span(node.line, node.column, node.end_line, node.end_column)
 
-    def statements(self, tree) -> list[ast.Statement]:
-        out: list[ast.Statement] = []
+    def statements(self, tree) -> list:
+        """The statements read one by one; block openers and closers as `blocks`
+        heads (nested by `blocks.Nester`), comments left out."""
+        out: list = []
         for node in tree.children:
-            built = getattr(self, "st_" + node.data)(node)
-            out.append(built)
+            built = self.statement(node)
+            if built is not None:
+                out.append(built)
         return out
+
+    def statement(self, node):
+        return getattr(self, "st_" + node.data)(node)
 
     # statements ------------------------------------------------------------
     def st_title(self, node) -> ast.Title:
@@ -54,10 +89,144 @@ class Builder:
         return ast.Label(text, self.span(node))
 
     def st_section(self, node) -> ast.Section:
-        return ast.Section(SECTIONS[str(node.children[0]).upper()], self.span(node))
+        written = str(node.children[0]).upper()
+        return ast.Section(SECTIONS[written], self.span(node), written)
 
     def st_end(self, node) -> ast.End:
         return ast.End(self.span(node))
+
+    def st_end_if(self, node) -> Close:
+        return Close("ENDIF", self.span(node))
+
+    def st_end_do(self, node) -> Close:
+        return Close("ENDDO", self.span(node))
+
+    def st_comment(self, node) -> None:
+        return None  # a string alone: ACSL's END $ 'of derivative'
+
+    # blocks (nested by blocks.Nester) --------------------------------------
+    def st_program(self, node) -> Head:
+        text = str(node.children[0]).strip() if node.children and node.children[0] else ""
+        return Head("PROGRAM", self.span(node), text)
+
+    def st_discrete(self, node) -> Head:
+        name = node.children[0] if node.children else None
+        return Head("DISCRETE", self.span(node), str(name).upper() if name else None)
+
+    def st_included(self, node) -> Head:
+        return Head("INCLUDED", self.span(node))
+
+    def st_procedural(self, node) -> Head:
+        outputs: tuple[str, ...] = ()
+        inputs: tuple[str, ...] = ()
+        for lists in node.children:
+            for part in lists.children:
+                if part.data == "outputs":
+                    outputs = tuple(str(n).upper() for n in part.children)
+                elif part.children:  # proc_inputs: "=" inputs?
+                    inputs = tuple(str(n).upper() for n in part.children[0].children)
+        return Head("PROCEDURAL", self.span(node), data=(outputs, inputs))
+
+    def st_if_head(self, node) -> Head:
+        return Head("IF", self.span(node), data=self.expr(node.children[0]))
+
+    def st_if_one(self, node) -> ast.If | None:
+        cond, inner = node.children
+        built = self.statement(inner)
+        if built is None:
+            return None
+        if not isinstance(built, (ast.Assign, ast.Termt, ast.Schedule, ast.If)):
+            return None
+        span = self.span(node)
+        return ast.If((ast.Branch(self.expr(cond), (built,), span),), span)
+
+    def st_else_if(self, node) -> ElseHead:
+        return ElseHead(self.expr(node.children[0]), self.span(node))
+
+    def st_else_(self, node) -> ElseHead:
+        return ElseHead(None, self.span(node))
+
+    def loop(self, kind: str, node) -> Head:
+        var, start, stop, step = node.children
+        return Head(kind, self.span(node), data=(
+            str(var).upper(), self.expr(start), self.expr(stop),
+            self.expr(step) if step is not None else None))
+
+    def st_for_head(self, node) -> Head:
+        return self.loop("FOR", node)
+
+    def st_do_head(self, node) -> Head:
+        return self.loop("DO", node)
+
+    def st_do_labelled(self, node) -> None:
+        self.refuse(f"a labelled DO (DO {node.children[0]} ...)", self.span(node),
+                    "write DO i = a, b ... END DO")
+
+    def st_func_def(self, node) -> Head:
+        name, func, params = node.children
+        names = tuple(str(n).upper() for n in params.children) if params is not None else ()
+        return Head("FUNCTION", self.span(node), str(func).upper(),
+                    data=(str(name).upper(), names))
+
+    # statements of the ACSL form ---------------------------------------------
+    def st_schedule(self, node) -> ast.Schedule:
+        name, op, expr = node.children
+        kind = str(op).strip(".").upper()
+        return ast.Schedule(str(name).upper(), kind, self.expr(expr), self.span(node))
+
+    def st_interval(self, node) -> ast.Interval:
+        return ast.Interval(str(node.children[0]).upper(), self.expr(node.children[1]),
+                            self.span(node))
+
+    def st_cinterval(self, node) -> ast.Cinterval:
+        return ast.Cinterval(str(node.children[0]).upper(), self.expr(node.children[1]),
+                             self.span(node))
+
+    def st_variable(self, node) -> ast.Variable:
+        name, value = node.children
+        return ast.Variable(str(name).upper(), self.value(value) if value is not None else None,
+                            self.span(node))
+
+    def st_control(self, node) -> ast.Control:
+        return ast.Control(str(node.children[0]).upper(), self.settings(node.children[1:]),
+                           self.span(node))
+
+    def st_declare(self, node) -> ast.Declare | None:
+        words = [str(c).upper().replace(" ", "").replace("\t", "") for c in node.children
+                 if not hasattr(c, "data")]
+        items = [c for c in node.children if hasattr(c, "data")]
+        kind = TYPE_KEYWORDS[words[-1]]
+        for item in items:
+            if item.data == "decl_array":
+                self.refuse(f"the array {str(item.children[0]).upper()}", self.span(item),
+                            "write one scalar per element (X1, X2, ...); a declaration "
+                            "without a size declares a scalar")
+        names = [c.children[0] for c in items if c.data == "decl_item"]
+        return ast.Declare(kind, tuple(str(n).upper() for n in names),
+                           tuple(self.span(n) for n in names), self.span(node))
+
+    def st_refused(self, node) -> None:
+        word = " ".join(str(node.children[0]).upper().split())
+        what, hint = REFUSED[word.replace(" ", "")]
+        if word.replace(" ", "") == "CALL" and len(node.children) > 1 and node.children[1]:
+            routine = str(node.children[1]).split("(")[0].strip().upper() or "it"
+            self.errors.append(Diagnostic(
+                f"CALL {routine} (line {self.span(node).line}): Fortran subroutines are not "
+                "run", self.span(node), f"rewrite {routine} as statements or a PROCEDURE"))
+            return None
+        self.refuse(what, self.span(node), hint)
+        return None
+
+    def st_labelled(self, node) -> None:
+        label = str(node.children[0]).strip()
+        self.refuse(f"the statement label {label}", self.span(node),
+                    "remove it: GO TO and labelled loops are not supported; write IF (c) "
+                    "THEN ... END IF or DO i = a, b ... END DO")
+
+    def st_assign_subscript(self, node) -> None:
+        name = str(node.children[0]).upper()
+        self.refuse(f"the subscripted assignment {name}(...) = ...", self.span(node),
+                    "arrays are not supported: write one scalar per element (X1, X2, ...)")
 
     def st_stop(self, node) -> ast.Stop:
         return ast.Stop(self.span(node))
@@ -74,6 +243,14 @@ class Builder:
     def value(self, node) -> float:
         if node.data == "negative":
             return -_number(str(node.children[0]))
+        if node.data == "truth":
+            return 1.0 if str(node.children[0]).upper() == ".TRUE." else 0.0
+        if node.data == "string":
+            self.errors.append(Diagnostic(
+                f"the string {node.children[0]} cannot be a value", self.span(node),
+                "strings are TERMT messages, WEATHER/TRANSLATION values and comments; put "
+                "the text in a TERMT message or a comment"))
+            return 0.0
         return _number(str(node.children[0]))
 
     def st_data(self, node) -> ast.Data:
@@ -133,7 +310,9 @@ class Builder:
         return ast.Finish(self.settings(node.children), self.span(node))
 
     def st_termt(self, node) -> ast.Termt:
-        return ast.Termt(self.expr(node.children[0]), self.span(node))
+        expr, message = node.children
+        return ast.Termt(self.expr(expr), self.span(node),
+                         string_value(str(message)) if message is not None else None)
 
     def st_report(self, node) -> ast.Report:
         kind = REPORT_KEYWORDS[str(node.children[0]).upper()]
@@ -155,10 +334,10 @@ class Builder:
         def parts(node) -> list:
             if node.data == "call":
                 return [a for a in node.children[1:] if a is not None]
-            if node.data in _BINOPS:
+            if node.data in _BINOPS or node.data in _LOGIC:
                 return [node.children[0], node.children[-1]]
-            if node.data in ("neg", "pos"):
-                return [node.children[0]]
+            if node.data in ("neg", "pos", "lnot"):
+                return [node.children[-1]]
             return []
 
         done: list[tuple[ast.Expr, int]] = []  # built nodes with their depth
@@ -201,4 +380,24 @@ class Builder:
             return ast.Neg(args[0], self.span(node))
         if kind == "pos":
             return args[0]
+        if kind in _LOGIC:
+            op = _OPERATORS[str(node.children[1]).upper()]
+            return ast.BinOp(op, args[0], args[1], self.span(node))
+        if kind == "lnot":
+            return ast.Not(args[0], self.span(node))
+        if kind == "truth":
+            tok = str(node.children[0]).upper()
+            return ast.Num(1.0 if tok == ".TRUE." else 0.0, self.span(node), tok)
+        if kind == "string":
+            text = str(node.children[0])
+            self.errors.append(Diagnostic(
+                f"the string {text} cannot be a value", self.span(node),
+                "strings are TERMT messages, WEATHER/TRANSLATION values and comments; put "
+                "the text in a TERMT message or a comment"))
+            return ast.Num(0.0, self.span(node), "0")
+        if kind == "subscript":
+            name = str(node.children[0]).upper()
+            self.refuse(f"the subscript {name}[...]", self.span(node),
+                        "arrays are not supported: write one scalar per element (X1, X2, ...)")
+            return ast.Num(0.0, self.span(node), "0")
         raise AssertionError(f"unknown expression node {kind}")

@@ -43,8 +43,10 @@ EXAMPLES: dict[str, tuple[str, list[str]]] = {
         ["X\n", "X Y\n", "X + 1\n"],
     ),
     "a data statement takes NAME = number": (
-        "PARAM, CONST and INCON take numbers only; derived values belong in INITIAL",
-        ["PARAM A\n", "PARAM A = B\n", "PARAM A = 1 + 2\n", "CONST A = 2*B\n", "PARAM\n"],
+        "PARAM, CONST and INCON take numbers only (in their lines `;` separates items "
+        "like `,`); derived values belong in INITIAL",
+        ["PARAM A\n", "PARAM A = B\n", "PARAM A = 1 + 2\n", "CONST A = 2*B\n", "PARAM\n",
+         "PARAM A = 1, B = 2*C\n", "PARAM A = 1, B = C\n", "PARAM A = 1, B = 2 + C\n"],
     ),
     "a decimal comma in a data statement": (
         "the decimal separator is a point: write 1.5, not 1,5",
@@ -66,6 +68,12 @@ _TERMINALS = {
     "INITIAL": "INITIAL", "DYNAMIC": "DYNAMIC", "TERMINAL": "TERMINAL", "_END": "END",
     "_STOP": "STOP", "_TITLE": "TITLE", "_LABEL": "LABEL", "_FUNCTION": "FUNCTION",
     "_TIMER": "TIMER", "_METHOD": "METHOD", "_FINISH": "FINISH", "_TERMT": "TERMT",
+    "REL_OP": "a comparison (< <= > >= == /=)", "AND_OP": ".AND.", "OR_OP": ".OR.",
+    "NOT_OP": ".NOT.", "EQV_OP": ".EQV.", "TRUTH": ".TRUE./.FALSE.", "STRING": "a string",
+    "LSQB": "'['", "RSQB": "']'", "COLON": "':'", "SCHED_OP": ".AT./.XP./.XN./.XZ.",
+    "CONTROL_KW": "ALGORITHM/NSTEPS/MAXTERVAL/...", "TYPE_KW": "LOGICAL/INTEGER/REAL",
+    "DERIVATIVE": "DERIVATIVE", "REST": "text", "LABEL_NUM": "a label",
+    "LABEL_NAME": "a label",
 }
 _LETTERS_HINT = "letters and digits outside A-Z, 0-9 are allowed only in comments and " \
     "TITLE/LABEL text"
@@ -111,6 +119,8 @@ def syntax_diagnostic(exc, text: str, parser) -> Diagnostic:
         ch = text[exc.pos_in_stream] if exc.pos_in_stream < len(text) else ""
         if ch and not ch.isascii():
             return not_ascii(ch, span)
+        if ch == "'":
+            return _unclosed(span)
         label = _label(exc, parser)
         if label:
             msg, hint = label, EXAMPLES[label][0]
@@ -118,7 +128,7 @@ def syntax_diagnostic(exc, text: str, parser) -> Diagnostic:
             msg, hint = f"unexpected character {ch!r}", None
             if ch and not ch.isprintable():
                 msg = f"unexpected character {ch!r} ({character_name(ch)})"
-        if ch == ",":
+        if ch == "," and _between_digits(text, exc.pos_in_stream):
             hint = "a decimal separator is a point: write 1.5, not 1,5"
         return Diagnostic(msg, span, hint)
     token = getattr(exc, "token", None)
@@ -131,6 +141,8 @@ def syntax_diagnostic(exc, text: str, parser) -> Diagnostic:
                           "remove it: code is ASCII letters, digits, operators and blanks")
     if isinstance(exc, UnexpectedToken) and token is not None and token.end_column:
         span = Span(line, column, token.end_line or line, token.end_column)
+    if first == "'" and "'" not in str(token)[1:]:
+        return _unclosed(span)
     label = _label(exc, parser)
     if label is None and token is not None:
         label = _fallback_label(token, text)
@@ -138,11 +150,25 @@ def syntax_diagnostic(exc, text: str, parser) -> Diagnostic:
     if label:
         return Diagnostic(f"{label} (found {shown})", span, EXAMPLES[label][0])
     expected = sorted(getattr(exc, "expected", None) or getattr(exc, "allowed", ()) or ())
-    names = list(dict.fromkeys(_TERMINALS.get(e, "a keyword") for e in expected))
+    names = list(dict.fromkeys(_TERMINALS.get(e, e[1:] if e.startswith("_") and
+                                               e[1:].isalpha() else "a keyword")
+                               for e in expected))
     hint = f"expected {', '.join(names[:8])}" if names else None
-    if token is not None and str(token) == ",":
+    if token is not None and str(token) == "," and \
+            _between_digits(text, getattr(token, "start_pos", None)):
         hint = (hint + "; " if hint else "") + "a decimal separator is a point, not a comma"
     return Diagnostic(f"unexpected {shown}", span, hint)
+
+
+def _between_digits(text: str, pos: int | None) -> bool:
+    """A comma with a digit on both sides: a decimal comma is plausible there."""
+    return pos is not None and 0 < pos < len(text) - 1 and text[pos - 1].isdigit() \
+        and text[pos + 1].isdigit()
+
+
+def _unclosed(span: Span) -> Diagnostic:
+    return Diagnostic("a string that is not closed", span,
+                      "end it with a quote on the same line ('text'; '' is one quote inside)")
 
 
 def _label(exc, parser) -> str | None:

@@ -6,6 +6,8 @@
     watch.py     SurfaceWatch: branches, crossings located on the dense output,
                  the branch to enter, sliding (slide.py: several surfaces at once)
     loop.py      Integrator: segments, steps, events, restarts, limits
+    steppoint.py StepPoint: the classic fixed-step loop (step-point mode), its grid
+                 and TIMER rules
     record.py    rows on the output grid, RANGE brackets, the Run
     simulate.py  simulate(): one run from start to Run, RANGE located, TERMINAL
     flow.py      Flow.advance(): the loop as a function, with its sensitivity

@@ -8,11 +8,13 @@
     s1, events = flow.advance(s0, 0.0, 2.0)
     s1, events, M = flow.advance(s0, 0.0, 2.0, sensitivity=True)
     s2, events = flow.advance(s1, s1.t, 10.0, stop_at_event=True)
+    J = flow.jacobian(s0, 0.0)                   # d f/d y in the branches of s0
 
 `advance` integrates exactly as a run does (same route, tolerances, breakpoints,
 event location, sliding and restarts; on the run's own [t0, FINTIM] the AUTO
 route checks its surfaces at the same output instants, so a flow from t0 to
-FINTIM ends where the run ends) and records no rows. A failure raises
+FINTIM ends where the run ends; in step-point mode the classic loop, on the
+grid t0 + k*DELT from the flow's t0) and records no rows. A failure raises
 AmilError with the run's message.
 
 Sensitivity. `sensitivity=True` also gives M = d(final state)/d(initial state),
@@ -47,10 +49,12 @@ from ..diagnostics import AmilError
 from ..outcome import message
 from ..result import Event
 from .grazing import Grazing, Missed
+from .jacobian import field_jacobian, model_jacobian
 from .loop import Cursor, Integrator, Stop
-from .plan import Options
+from .plan import SLIDE, Options
 from .prepare import Cache, prepare
 from .simulate import start_cursor
+from .steppoint import StepPoint
 from .variational import Tangent
 from .watch import SurfaceWatch, TooManySlides
 
@@ -110,6 +114,21 @@ class Flow:
         return integ.vector_field(Cursor(t, np.array(state.y, dtype=float), list(state.modes),
                                          list(state.memory)))
 
+    def jacobian(self, state: State, t: float) -> np.ndarray:
+        """d f / d y of the vector field `field` integrates from `state` at `t` (the
+        branches frozen as `state.modes` says): from the model's own equations, each
+        switch differentiated in its branch (`codegen.jacobian`, exact to rounding);
+        while a surface slides, or where the model's own cannot be had, by refined
+        central differences of the field (`run.jacobian`)."""
+        y = np.array(state.y, dtype=float)
+        if SLIDE not in state.modes:
+            jac = model_jacobian(self.c, t, y, state.modes, state.memory)
+            if jac is not None:
+                return jac
+        f, tol = self.field(state, t), self.plan.tol
+        return field_jacobian(lambda v: f(t, np.asarray(v)), y, tol.atol / tol.rtol,
+                              refine=True)
+
     @property
     def surfaces(self) -> list[str]:
         """The watched surfaces, as the listing writes them, in `State.modes` order."""
@@ -129,8 +148,19 @@ class Flow:
                           t)
         return State(cur.y, tuple(cur.m), tuple(cur.z), cur.t)
 
+    def _integrator(self, plan=None) -> Integrator | StepPoint:
+        cls = StepPoint if self.plan.step_point else Integrator
+        return cls(self.model, plan or self.plan, self.c, self.watch, self.opts)
+
     def _start(self, y: np.ndarray, z: list[float], m, t: float | None = None) -> Cursor:
         try:
+            if self.plan.step_point:
+                # the branches as they read at t0; memory is updated at each step point,
+                # the first one included, when the flow advances
+                when = self.plan.t0 if t is None else t
+                m = self.c.modes_literal(when, y.tolist(), [0.0] * len(
+                    self.plan.watched), z) if m is None else m
+                return Cursor(when, y, list(m), list(z))
             return start_cursor(self.c, self.plan, self.watch, self.opts, y, z, m, t)
         except (ArithmeticError, ValueError) as exc:
             when = self.plan.t0 if t is None else t
@@ -147,7 +177,9 @@ class Flow:
         `observer(ta, tb, interpolant, modes, memory)` sees every accepted step
         of the flow itself (not of the perturbed ones)."""
         tangent = None
-        if sensitivity and self.variational and not stop_at_event:
+        # (step-point mode has no dense output for the variational equations to follow)
+        if sensitivity and self.variational and not stop_at_event and \
+                not self.plan.step_point:
             n = len(state.y)
             floor = self.plan.tol.atol / self.plan.tol.rtol
             if scale is not None:
@@ -177,11 +209,11 @@ class Flow:
         plan, until = self.plan, None  # a step taken again in pieces, up to `until`
         misses: dict[int, int] = {}  # per surface
         for _ in range(MAX_REFINES):
-            integ = Integrator(self.model, plan, self.c, self.watch, self.opts)
+            integ = self._integrator(plan)
             end = t1 if until is None else until
             integ.window(cur.t, end)
             seen = observer
-            if self.grazing:
+            if self.grazing and not self.plan.step_point:
                 guard = Grazing(self.c, self.plan, self.watch,
                                 {k for k, n in misses.items() if n >= GIVE_UP})
 

@@ -1,7 +1,10 @@
-"""The Jacobian of the vector field, d(dy/dt)/dy, by central differences: the one
-place it is made (the linear modes, the variational equations of the flow map and
-the symmetries of a periodic orbit all call `field_jacobian`). A symbolic
-Jacobian of the IR replaces the body of `field_jacobian` and nothing else.
+"""The Jacobian of the vector field, d(dy/dt)/dy, for the analyses: the one place
+they take it from (the linear modes, the variational equations of the flow map and
+the symmetries of a periodic orbit). `model_jacobian` gives the model's own
+(`codegen.jacobian`: each switch differentiated in its branch, exact to rounding);
+where there is none (a sliding surface's combined field, a construct the symbolic
+route does not take, a derivative that faults at the point) the analyses fall back
+on central differences, `field_jacobian`:
 
 Column j is (f(y + h_j e_j) - f(y - h_j e_j)) / (2 h_j) with
 h_j = eps**(1/3) * max(|y_j|, floor_j); the caller's floor is the state's size
@@ -36,6 +39,18 @@ def _column(f, y: list[float], j: int, h: float) -> list[float]:
     down[j] -= h
     width = up[j] - down[j]
     return [(a - b) / width for a, b in zip(f(up), f(down), strict=True)]
+
+
+def model_jacobian(c, t: float, y, m, z) -> np.ndarray | None:
+    """d rhs/d y of a run's compiled model (`codegen.Compiled`) at (t, y) in the
+    branches m, from its equations; None where it cannot be had there."""
+    from ..codegen.jacobian import for_compiled
+
+    try:
+        jac = for_compiled(c).dense(t, [float(v) for v in y], list(m), list(z))
+    except (NotImplementedError, ArithmeticError, ValueError):
+        return None
+    return jac if np.all(np.isfinite(jac)) else None
 
 
 def field_jacobian(f: Callable[[list[float]], object], y, floor,

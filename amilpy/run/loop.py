@@ -20,13 +20,19 @@ import numpy as np
 
 from .. import ir
 from ..codegen import Compiled
+from ..codegen.jacobian import for_compiled as jacobian_for
+from ..codegen.rolled import for_compiled as rolled_rhs
 from ..outcome import Failure
 from ..result import Event
 from ..steppers import Chunked, Hermite, StepFailure, Stepper, first_bad, make_stepper
+from ..steppers.jacobian import SegmentJacobian
+from .edges import expected_event, locate_crossings
 from .faults import Fault, fault_text
 from .plan import SLIDE, Options, Purpose, RunPlan, SurfaceKind, time_breakpoints
 from .record import Recorder
 from .watch import SurfaceWatch, TooManySlides, wrong_side
+
+_EPS = float(np.finfo(float).eps)
 
 # (ta, tb, dense output, modes, memory) of every accepted step, for analyses
 Observer = Callable[[float, float, Callable, list, list], None]
@@ -66,9 +72,11 @@ class _Step:
     e_b: list[float]  # the watched surfaces at tb
 
 
-class Integrator:
-    """Integrates one run's model under its plan; keeps the run's events, warnings
-    and counts across calls of `integrate`."""
+class RunLoop:
+    """What every run loop keeps across calls of its `integrate`: the run's events,
+    warnings and counts, its last good point, what stopped it, and its deadline
+    (`Integrator` locates the switching; `steppoint.StepPoint` reads it at the
+    step points)."""
 
     def __init__(self, model: ir.Model, plan: RunPlan, c: Compiled, watch: SurfaceWatch,
                  opts: Options, started: float | None = None) -> None:
@@ -79,9 +87,17 @@ class Integrator:
         self.warnings: list[str] = []
         self.nsteps = 0
         self.nfev = 0
-        self.faults: list[Fault] = []  # arithmetic faults the integration has not passed
         self.last_good: tuple[float, np.ndarray, list[float]] | None = None
         self.stop_reason: int | None = None  # the FINISH/TERMT surface that ended the run
+
+
+class Integrator(RunLoop):
+    """Integrates one run's model under its plan, switching instants located."""
+
+    def __init__(self, model: ir.Model, plan: RunPlan, c: Compiled, watch: SurfaceWatch,
+                 opts: Options, started: float | None = None) -> None:
+        super().__init__(model, plan, c, watch, opts, started)
+        self.faults: list[Fault] = []  # arithmetic faults the integration has not passed
         self._stiff_noted = False
         self._recent: list[float] = []  # restart instants (chatter)
         self._last_step: float | None = None
@@ -149,6 +165,7 @@ class Integrator:
         m, z, faults, n = cur.m, cur.z, self.faults, len(cur.y)
         deadline, calls = self.deadline, [0]
         rhs, sliding, field = self.c.rhs, SLIDE in m, self.watch.field
+        rolled = rolled_rhs(self.c)  # a large model's repeated equations on arrays
 
         def f(t, y):
             if deadline is not None:
@@ -157,7 +174,8 @@ class Integrator:
                     raise Stop(Failure.TIME_LIMIT, t, limit=self.opts.max_time)
             try:
                 # no surface slides: the compiled derivatives themselves (the hot path)
-                return field(t, y, m, z) if sliding else rhs(t, y.tolist(), m, z)
+                return field(t, y, m, z) if sliding else rolled(t, y, m, z) if rolled \
+                    else rhs(t, y.tolist(), m, z)
             except (ArithmeticError, ValueError) as exc:
                 try:
                     on = self.watch.at_zero(t, y, m, z)
@@ -200,8 +218,18 @@ class Integrator:
         stepper = make_stepper(
             plan.route.name, f, cur.t, cur.y, seg_end, rtol=plan.tol.rtol, atol=plan.tol.atol,
             delt=plan.timer["DELT"], max_step=plan.max_step, first_step=self._last_step,
-            checks=checks, chunk=chunk, max_steps=self.opts.max_steps - self.nsteps)
+            checks=checks, chunk=chunk, max_steps=self.opts.max_steps - self.nsteps,
+            expect=expected_event(self._recent, cur.t), jac=self._jacobian(cur, f))
         return stepper, f
+
+    def _jacobian(self, cur: Cursor, f) -> SegmentJacobian | None:
+        """The segment's Jacobian from the model's equations, for the routes that use
+        one (built the first time a stepper asks for it); none while surfaces slide."""
+        route = self.plan.route
+        if route.fixed or route.explicit or SLIDE in cur.m or not len(cur.y):
+            return None
+        c = self.c
+        return SegmentJacobian(len(cur.y), lambda: jacobian_for(c), cur.m, cur.z, f)
 
     def _segment(self, cur: Cursor, stepper: Stepper, f, seg_end: float, t_end: float,
                  rec: Recorder | None, observer: Observer | None, stop_at_event: bool) -> None:
@@ -297,14 +325,10 @@ class Integrator:
                 (silent if watch.silent(k, tb, yb, m, z) else hits).append(k)
         slide_exit = watch.slide_exits(m, tb, yb, z)
         if hits or slide_exit:
+            # departed: no crossing to bracket, sign at tb
+            roots, step.departed = locate_crossings(watch, stepper, hits, m, z, ta, tb,
+                                                    seg_start, (e_prev, e_b))
             interp = stepper.interpolant()
-            roots = {}
-            for k in hits:
-                tk = watch.locate(k, m, z, interp, ta, tb, seg_start)
-                if tk is None:
-                    step.departed.add(k)  # no crossing to bracket: sign at tb
-                else:
-                    roots[k] = tk
             for k, side in slide_exit:
                 roots[k] = watch.locate_slide_exit(k, side, m, z, interp, ta, tb)
             t_star = min(roots.values(), default=tb)
@@ -313,7 +337,7 @@ class Integrator:
                 stepper.truncate(t_star)
                 step.tb, step.yb, step.truncated = stepper.t, stepper.y, True
             e_b = c.surf(step.tb, step.yb.tolist(), m, z)
-            close = 8 * np.finfo(float).eps * max(abs(step.tb), 1e-300)
+            close = 8 * _EPS * max(abs(step.tb), 1e-300)
             step.triggered = {k for k, tk in roots.items() if tk - t_star <= close}
             # leaving a sliding motion: the side it leaves to is known
             step.exits = {k: side for k, side in slide_exit if k in step.triggered}
@@ -359,17 +383,18 @@ class Integrator:
         tb, yb = step.tb, step.yb
         new_m = watch.choose_modes(tb, yb, z, m, step.triggered, forced=step.exits)
         for k in step.triggered:
-            purpose = self.plan.watched[k].purpose
-            if (purpose is Purpose.TERMT and new_m[k] > 0) or \
-                    (purpose is Purpose.FINISH and new_m[k] != m[k]):
-                self.stop_reason = k
+            w = self.plan.watched[k]
+            if (w.purpose is Purpose.TERMT and new_m[k] > 0) or \
+                    (w.purpose is Purpose.FINISH and new_m[k] != m[k]) or \
+                    (w.purpose is Purpose.SCHEDULE and w.fires(m[k], new_m[k])):
+                self.stop_reason = k  # a SCHEDULE: the caller runs its DISCRETE, goes on
         n_events = len(self.events)
         self.record_changes(tb, yb, m, new_m, z, step.triggered)
         if c.z0:
             z[:] = c.mem(tb, yb.tolist(), m, new_m, z)
         changed = new_m != m
         m[:] = new_m
-        y = watch.apply_resets(yb, m)
+        y = watch.apply_resets(yb, m, tb, z)
         cur.t, cur.y = tb, y
         if rec is not None:
             rec.restarted(tb, y, m, z)

@@ -39,6 +39,7 @@ from .record import Bracket, Extrema, vertices
 from .watch import SurfaceWatch, TooManySlides, crossings
 
 SAMPLES = 33  # instants per zoom level on the AUTO route
+_EPS = float(np.finfo(float).eps)
 LEVELS = 2
 
 
@@ -233,8 +234,8 @@ def turns(value, ta: float, tb: float, points: int = 3) -> list[tuple[float, flo
     from scipy.optimize import brentq
 
     out = [(ta, value(ta)), (tb, value(tb))]
-    if not tb > ta:
-        return out
+    if not tb - ta > 64 * _EPS * max(abs(ta), abs(tb)):
+        return out  # (a restart an ulp after a row: no room for a rate)
     d = 1e-7 * (tb - ta)
 
     def rate(t: float) -> float:

@@ -18,9 +18,9 @@ import numpy as np
 
 from .. import ir
 from ..codegen import Compiled
-from ..diagnostics import AmilError
+from ..diagnostics import AmilError, Diagnostic
 from ..result import EventKind
-from ..routes import DEFAULT, Route, route_for
+from ..routes import DEFAULT, Route, StepPointError, route_for, step_point_mode
 from ..surfaces import linear_gradient, sign
 
 DEFAULTS = {
@@ -29,6 +29,9 @@ DEFAULTS = {
     "max_steps": 5_000_000,
     "max_events": 200_000,
     "max_rows": 2_000_000,
+    # values all the runs of one call keep (rows x variables, summed over the runs):
+    # 2E8 float64 are 1.6 GB, what a laptop can spare for a printout
+    "max_values": 200_000_000,
 }
 
 SLIDE = 0.5  # the mode of a sliding surface: not a sign (-1, 0, 1) nor a QNTZR level
@@ -50,6 +53,13 @@ class Options:
     start: dict | None = None  # continue from a previous run's final_state
     fintim: float | None = None  # run length instead of the listing's FINTIM
     progress: Callable | None = None  # callable(t, fintim, events, steps) or None
+    # variables whose minimum and maximum are located like RANGE's (a sweep's measure)
+    extrema: tuple[str, ...] = ()
+    settle: float = 0.0  # RANGE and `extrema` count the rows from t0 + settle on
+    # step-point mode (routes.step_point_mode): True puts any fixed-step method in it,
+    # False takes EULER/RECT out of it; None: the listing's, else the method's default
+    step_point: bool | None = None
+    seed: float | None = None  # the random streams' seed, instead of the listing's
 
 
 class SurfaceKind(str, Enum):
@@ -66,10 +76,11 @@ class Purpose(str, Enum):
     MEMORY = "memory"
     FINISH = "finish"
     TERMT = "termt"
+    SCHEDULE = "schedule"  # ACSL's SCHEDULE s .XP. e: the loop stops there for DISCRETE s
 
     @property
     def stops(self) -> bool:
-        return self in (Purpose.FINISH, Purpose.TERMT)
+        return self in (Purpose.FINISH, Purpose.TERMT, Purpose.SCHEDULE)
 
 
 @dataclass(frozen=True)
@@ -83,13 +94,21 @@ class Watched:
     text: str  # the surface as the listing writes it ("W1", "TIME - T1")
     gradient: np.ndarray | None  # d e/d y when the surface is linear in the states
     breakpoint_only: bool  # affine in TIME: handled as breakpoints
+    direction: int = 0  # SCHEDULE: +1 .XP., -1 .XN., 0 .XZ. (either way)
+
+    def fires(self, old: float, new: float) -> bool:
+        """Whether entering `new` from `old` is a crossing this SCHEDULE runs on:
+        from < 0 to >= 0 (XP), from > 0 to <= 0 (XN), or either (XZ)."""
+        up = old < 0 and new >= 0 and new != SLIDE
+        down = old > 0 and new <= 0
+        return up if self.direction > 0 else down if self.direction < 0 else up or down
 
     def event_kind(self, new_mode: float) -> EventKind:
         """What entering `new_mode` on this surface is, as an event."""
-        if self.breakpoint_only:
-            return EventKind.BREAKPOINT
         if self.purpose.stops:
             return EventKind(self.purpose.value)
+        if self.breakpoint_only:
+            return EventKind.BREAKPOINT
         if new_mode == SLIDE:
             return EventKind.SLIDE
         return EventKind.LEVEL if self.kind is SurfaceKind.LEVEL else EventKind.SWITCH
@@ -173,12 +192,23 @@ class RunPlan:
     floor_origin: str  # where h_floor comes from, for the message
     lookahead_h: float  # the step of a look-ahead (the branch the motion takes)
     events: bool  # locate events (False: comparisons only)
+    step_point: bool = False  # the classic translators' loop (steppoint.py)
 
     @property
     def settings(self) -> str:
-        """What the route ran with: tolerances or the fixed step."""
-        return self.tol.describe() if self.route.uses_tolerances else \
-            f"DELT {self.timer['DELT']:g}"
+        """What the route ran with: tolerances or the fixed step (and its mode)."""
+        if self.route.uses_tolerances:
+            return self.tol.describe()
+        return f"DELT {self.timer['DELT']:g}" + (", step-point mode" if self.step_point
+                                                  else "")
+
+
+def stored_values(spec: ir.RunSpec, columns: int, fintim: float | None = None) -> float:
+    """The most values a run of `spec` keeps: its output rows (the OUTDEL and PRDEL
+    grids, both ends included) times `columns`."""
+    t = timer_values(spec, fintim)
+    rows = t["FINTIM"] / t["OUTDEL"] + t["FINTIM"] / t["PRDEL"] + 2.0
+    return rows * columns
 
 
 def timer_values(spec: ir.RunSpec, fintim: float | None = None,
@@ -247,12 +277,27 @@ def resolve_route(spec: ir.RunSpec, opts: Options) -> tuple[Route, str]:
     return route, requested.upper()
 
 
-def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: Compiled,
-              timer: dict[str, float], grid: Grid) -> RunPlan:
-    """The plan of one run, from its compiled functions (breakpoints need them)."""
+def resolve_step_point(spec: ir.RunSpec, opts: Options) -> bool:
+    """Whether a run is in step-point mode: the option, else the listing, else the
+    method's default; an error for a variable-step method."""
     route, method = resolve_route(spec, opts)
-    t0 = float(opts.start["t"]) if opts.start else 0.0
-    fintim = t0 + timer["FINTIM"]
+    asked = opts.step_point if opts.step_point is not None else spec.step_point
+    try:
+        return step_point_mode(route, asked, method)
+    except StepPointError as exc:
+        raise AmilError([Diagnostic(str(exc), None, "write METHOD EULER (RECT) or RK4, "
+                                    "or run without --step-point")]) from None
+
+
+def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: Compiled,
+              timer: dict[str, float], grid: Grid, step_point: bool = False,
+              t0: float | None = None) -> RunPlan:
+    """The plan of one run, from its compiled functions (breakpoints need them).
+    In step-point mode the run ends at the grid's last step point."""
+    route, method = resolve_route(spec, opts)
+    if t0 is None:
+        t0 = float(opts.start["t"]) if opts.start else 0.0
+    fintim = float(grid.times[-1]) if step_point else t0 + timer["FINTIM"]
     state_index = {n: i for i, n in enumerate(c.state_names)}
     watched = []
     for i in c.watched:
@@ -260,8 +305,11 @@ def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: Compiled,
         kind = SurfaceKind(s.kind)
         g = linear_gradient(s.expr, state_index, c.constants) \
             if kind is SurfaceKind.SIGN else None
+        crossing = model.acsl.crossings.get(i) if model.acsl is not None else None
         watched.append(Watched(i, kind, Purpose(s.purpose), s.description, s.text,
-                               None if g is None else np.asarray(g), i in c.affine_time))
+                               None if g is None else np.asarray(g),
+                               i in c.affine_time or i in c.train_surfaces,
+                               crossing[1] if crossing else 0))
     roots, breakpoints = time_breakpoints(c, watched, t0, fintim)
     pos = {i: k for k, i in enumerate(c.watched)}
     resets = []
@@ -284,7 +332,7 @@ def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: Compiled,
         floor_origin="TIMER DELMIN" if floor_given else
         "the default floor FINTIM*1E-12; TIMER DELMIN lowers it",
         lookahead_h=1e-8 * max(fintim - t0, abs(t0) * 1e-8),
-        events=opts.events,
+        events=opts.events, step_point=step_point,
     )
 
 
@@ -294,12 +342,14 @@ def time_breakpoints(c: Compiled, watched: list[Watched], t0: float, t1: float
     position) and the instants of IMPULS trains, sorted."""
     roots: dict[int, float] = {}
     for k, w in enumerate(watched):
-        if w.breakpoint_only:
+        if w.breakpoint_only and w.surface in c.affine_time:
             root = _affine_root(c, k, t0, t1)
             if root is not None and t0 < root < t1:
                 roots[k] = root
     points = list(roots.values())
-    for start, period in c.impulses:
+    # IMPULS instants, and the instants where a train's surfaces change sign (these
+    # take their new sign there: no root to polish)
+    for start, period in [*c.impulses, *c.trains]:
         if period > 0:
             k0 = max(0, math.ceil((t0 - start) / period))
             n = int(min((t1 - start) / period, k0 + 1_000_000))

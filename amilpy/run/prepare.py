@@ -14,20 +14,41 @@ from dataclasses import dataclass
 from typing import TypeVar
 
 from .. import ir
-from ..codegen import Compiled, Compiler, evaluate_constant, fault_line, initial_values
+from ..codegen import (
+    Compiled,
+    Compiler,
+    Setting,
+    evaluate_constant,
+    fault_line,
+    initial_values,
+    parameter_names,
+)
 from ..diagnostics import AmilError, Diagnostic, Span
+from ..language import SEED_NAME
 from ..surfaces import level, sign
-from .plan import Options, RunPlan, make_grid, make_plan, reserved_values, timer_values
+from . import steppoint
+from .plan import (
+    Options,
+    RunPlan,
+    make_grid,
+    make_plan,
+    reserved_values,
+    resolve_route,
+    resolve_step_point,
+    timer_values,
+)
 
 T = TypeVar("T")
 
 
 class Cache:
     """Values a model's runs share, by the data that determines them: INITIAL
-    values per set of data, compiled functions per set of constants, output grids
-    per timer. Each table is cleared when it grows past its limit (a long sweep)."""
+    values per set of data, compiled functions per set of constants (bound to the
+    code built for its true constants: runs that differ in PARAM values compile
+    once, see `codegen.parameter_names`), output grids per timer. Each table is
+    cleared when it grows past its limit (a long sweep)."""
 
-    LIMITS = {"initial": 256, "compiled": 64, "grid": 64}
+    LIMITS = {"initial": 256, "compiled": 64, "code": 64, "grid": 64, "parameters": 4}
 
     def __init__(self) -> None:
         self._tables: dict[str, dict] = {name: {} for name in self.LIMITS}
@@ -57,41 +78,78 @@ def prepare(model: ir.Model, spec: ir.RunSpec, opts: Options | None = None,
     AmilError at the listing's line."""
     opts = opts or Options()
     cache = cache or Cache()
+    return before_run(model, lambda: _prepare(model, spec, opts, cache))
+
+
+def before_run(model: ir.Model, make: Callable[[], T], what=str) -> T:
+    """`make()`, with an arithmetic fault in it (in the constant parts of a run) an
+    AmilError at the listing's line; `what` words the fault."""
     try:
-        return _prepare(model, spec, opts, cache)
+        return make()
     except (ArithmeticError, ValueError) as exc:
         line = fault_line(exc)
-        raise AmilError([Diagnostic(f"cannot be evaluated before the run: {exc}",
+        raise AmilError([Diagnostic(f"cannot be evaluated before the run: {what(exc)}",
                                     Span(line, 1) if line else None,
                                     "check the constant expressions on that line")],
                         model.path, model.source) from None
 
 
+def constant_modes(model: ir.Model, constants: dict[str, float], tables,
+                   step_point: bool = False) -> dict[int, float]:
+    """The branches of the surfaces fixed for the whole run (IMPULS's: 0, except in
+    step-point mode, which reads it at each point)."""
+    const_modes = {}
+    for s in model.surfaces:
+        if s.depends == "impulse" and not step_point:
+            const_modes[s.index] = 0.0
+        if s.depends == "const":
+            value = evaluate_constant(model, s.expr, constants, tables, s.span)
+            const_modes[s.index] = level(value) if s.kind == "level" else sign(value)
+    return const_modes
+
+
 def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> Prepared:
     timer = timer_values(spec, opts.fintim, opts.max_rows)
+    route, method = resolve_route(spec, opts)
+    step_point = resolve_step_point(spec, opts)
+    if step_point:
+        timer = steppoint.timer(model, spec, timer, method)
     reserved = reserved_values(timer)
     tables = repr(sorted(spec.tables.items()))
     ikey = (tuple(sorted(spec.data.items())), tuple(sorted(reserved.items())), tables)
     constants = dict(cache.get("initial", ikey, lambda: initial_values(
         model, spec.data, spec.tables, reserved)))
-    const_modes = {}
-    for s in model.surfaces:
-        if s.depends == "impulse":
-            const_modes[s.index] = 0.0
-        if s.depends == "const":
-            value = evaluate_constant(model, s.expr, constants, spec.tables, s.span)
-            const_modes[s.index] = level(value) if s.kind == "level" else sign(value)
-    ckey = (tuple(sorted(constants.items())), tables,
-            tuple(opts.outputs) if opts.outputs is not None else None, opts.events)
-    compiled = cache.get("compiled", ckey, lambda: Compiler(
-        model, constants, spec.tables, const_modes, opts.outputs, opts.events).build())
+    const_modes = constant_modes(model, constants, spec.tables, step_point)
+    setting = Setting(seed=random_seed(opts, constants),
+                      # a random draw is held for an output interval, DELT with a fixed step
+                      hold=timer["DELT"] if route.fixed else min(timer["OUTDEL"],
+                                                                 timer["PRDEL"]),
+                      step=timer["DELT"] if step_point else None)
+    outputs = tuple(opts.outputs) if opts.outputs is not None else None
+    ckey = (tuple(sorted(constants.items())), tables, outputs, opts.events, setting)
+    # a run whose parameters alone differ binds the code built for another (no compile)
+    params = cache.get("parameters", id(model), lambda: parameter_names(model))
+    skey = (tuple(sorted((k, v) for k, v in constants.items() if k not in params)),
+            tuple(sorted(const_modes.items())), tables, outputs, opts.events, setting)
+    compiled = cache.get("compiled", ckey, lambda: cache.get("code", skey, lambda: Compiler(
+        model, constants, spec.tables, const_modes, opts.outputs, opts.events, setting,
+        parameters=params).build()).rebound(constants))
     t0 = float(opts.start["t"]) if opts.start else 0.0
     fintim = t0 + timer["FINTIM"]
-    gkey = (t0, fintim, timer["OUTDEL"], timer["PRDEL"])
-    grid = cache.get("grid", gkey, lambda: make_grid(t0, fintim, timer["OUTDEL"],
-                                                     timer["PRDEL"]))
+    gkey = (t0, fintim, timer["OUTDEL"], timer["PRDEL"], step_point and timer["DELT"])
+    grid = cache.get("grid", gkey, lambda: steppoint.grid(t0, timer) if step_point else
+                     make_grid(t0, fintim, timer["OUTDEL"], timer["PRDEL"]))
     if len(grid.times) > opts.max_rows:
         raise AmilError([Diagnostic(
             f"the run would print {len(grid.times)} rows (limit {opts.max_rows})",
             None, "raise OUTDEL/PRDEL")], model.path, model.source)
-    return Prepared(constants, compiled, make_plan(model, spec, opts, compiled, timer, grid))
+    return Prepared(constants, compiled, make_plan(model, spec, opts, compiled, timer, grid,
+                                                   step_point))
+
+
+def random_seed(opts: Options, constants: dict[str, float]) -> float:
+    """The seed of a run's random streams: the option (--seed, seed=), else the
+    listing's RNSEED, else 1."""
+    if opts.seed is not None:
+        return float(opts.seed)
+    return float(constants.get(SEED_NAME, 1.0))

@@ -260,18 +260,23 @@ class Recorder:
     """The rows of one run, and the `Run` made of them."""
 
     def __init__(self, plan: RunPlan, c: Compiled, watch: SurfaceWatch,
-                 range_names: list[str]) -> None:
+                 range_names: list[str], range_from: float | None = None) -> None:
         self.plan = plan
         self.c = c
         self.watch = watch
         self.times = plan.grid.times
         self.rows = Rows(len(c.out_names))
         self.out_i = 0  # the next grid instant to record
+        # an instant whose row the caller takes itself, after its events (ACSL form)
+        self.hold: float | None = None
         index = {n: i for i, n in enumerate(c.out_names)}
         named = [n for n in dict.fromkeys(range_names) if n in index]
         self.extrema = Extrema(named, [index[n] for n in named])
         # the state after every restart, where a RANGE variable may have a kink
         self.restarts: list[Bracket] = []
+        # rows before this TIME are not searched (a sweep's settling time); the
+        # first row after it is then an end of the searched window, like a run's start
+        self.range_from = range_from
 
     @property
     def last_t(self) -> float | None:
@@ -295,7 +300,8 @@ class Recorder:
             t = float(self.times[g])  # print the grid instant, not a float next to it
         values = self.outputs(t, y, m if shown is None else shown, z)
         self.rows.add(t, g, values)
-        self.extrema.add(t, values, y, m, z)
+        if self.range_from is None or t >= self.range_from:
+            self.extrema.add(t, values, y, m, z)
 
     def restarted(self, t: float, y: np.ndarray, m, z) -> None:
         """The run restarts at t in modes m (kept when there is RANGE to locate)."""
@@ -303,7 +309,9 @@ class Recorder:
             self.restarts.append(Bracket(t, math.nan, np.array(y, float), tuple(m), tuple(z)))
 
     def grid_row(self, t: float, y: np.ndarray, m, z, shown=None) -> None:
-        """The row of the next grid instant."""
+        """The row of the next grid instant (none at the instant held for the caller)."""
+        if self.hold is not None and abs(t - self.hold) <= 1e-12 * max(abs(t), 1e-300):
+            return
         self.row(t, y, m, z, self.out_i, shown)
         self.out_i += 1
 
@@ -311,7 +319,11 @@ class Recorder:
         """Rows for the next len(T) grid instants at once."""
         n = len(T)
         self.rows.add_block(T, np.arange(self.out_i, self.out_i + n), table)
-        self.extrema.add_many(T, table, Y, m, z)
+        if self.range_from is None:
+            self.extrema.add_many(T, table, Y, m, z)
+        else:
+            keep = T >= self.range_from
+            self.extrema.add_many(T[keep], table[keep], Y[keep], m, z)
         self.out_i += n
 
     def run(self, spec, constants: dict[str, float], events: list[Event], status: Status,

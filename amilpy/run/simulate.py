@@ -19,12 +19,14 @@ from ..codegen import Compiled, evaluate_constant
 from ..diagnostics import AmilError
 from ..outcome import Failure, message
 from ..result import Event, EventKind, Run, Status
+from ..runtime import table_warnings
 from .faults import Fault, fault_text
 from .loop import Cursor, Integrator, Stop
 from .peaks import Context, locate_range
 from .plan import SLIDE, Options, RunPlan
 from .prepare import Cache, Prepared, prepare
 from .record import Recorder
+from .steppoint import StepPoint
 from .watch import SurfaceWatch, TooManySlides
 
 
@@ -35,6 +37,11 @@ def simulate(model: ir.Model, spec: ir.RunSpec, options: Options | None = None,
     `cache` (an `api.Model`'s) keeps compiled functions between runs."""
     opts = options or Options()
     started = _clock.perf_counter()
+    if model.acsl is not None:
+        from .acsl import AcslRun, prepare_acsl
+
+        return AcslRun(model, spec, opts, prepare_acsl(model, spec, opts, cache),
+                       started).run()
     return _Run(model, spec, opts, prepare(model, spec, opts, cache), started).run()
 
 
@@ -47,7 +54,7 @@ def start_cursor(c: Compiled, plan: RunPlan, watch: SurfaceWatch, opts: Options,
     t0 = plan.t0 if t0 is None else t0
     if m is None or len(m) != len(plan.watched):
         m = watch.choose_modes(t0, y, z, [0.0] * len(plan.watched), set(), first=True)
-    y = watch.apply_resets(y, m)
+    y = watch.apply_resets(y, m, t0, z)
     if c.z0:
         z = c.mem(t0, y.tolist(), m, m, z)
     return Cursor(t0, y, list(m), list(z))
@@ -60,38 +67,49 @@ class _Run:
         self.constants, self.c, self.plan = prepared.constants, prepared.compiled, prepared.plan
         self.watch = SurfaceWatch(self.c, self.plan)
         ranged = [n for r in spec.reports if r.kind == "RANGE" for n in r.names]
-        self.rec = Recorder(self.plan, self.c, self.watch, ranged)
-        self.integ = Integrator(model, self.plan, self.c, self.watch, opts, started)
+        self.rec = Recorder(self.plan, self.c, self.watch, ranged + list(opts.extrema),
+                            self.plan.t0 + opts.settle if opts.settle > 0 else None)
+        # step-point mode runs the classic loop (steppoint.py) instead of the located one
+        self.integ = (StepPoint if self.plan.step_point else Integrator)(
+            model, self.plan, self.c, self.watch, opts, started)
         self.started = started
 
     def run(self) -> Run:
-        c, plan, opts, rec, integ = self.c, self.plan, self.opts, self.rec, self.integ
-        start = opts.start
+        c, plan, integ, start = self.c, self.plan, self.integ, self.opts.start
         y = np.array(start["y"] if start else c.y0, dtype=float)
         z = list(start["z"]) if start else list(c.z0)
         m = [0.0] * len(plan.watched)
         cur = Cursor(plan.t0, y, m, z)
+        table_warnings(c.tables)  # LINT's notes start afresh
+        if not plan.step_point:  # (in step-point mode t0 is the loop's first point)
+            try:
+                cur = self._start(y, z)
+            except (ArithmeticError, ValueError) as exc:
+                # a fault in the switching surfaces at the start (QNTZR with P = 0, say)
+                text = fault_text(self.model, c, Fault(exc, cur.t, y.tolist(), m, z))
+                integ.events.clear()
+                return self.finish(Status.FAILED, message(Failure.CANNOT_START, t=plan.t0,
+                                                          detail=text), cur, {})
+        return self._integrate(cur)
+
+    def _start(self, y: np.ndarray, z: list[float]) -> Cursor:
+        """The branches in force at t0, and the first row."""
+        c, plan, integ, start = self.c, self.plan, self.integ, self.opts.start
+        cur = start_cursor(c, plan, self.watch, self.opts, y, z, start and start.get("m"))
+        for k, w in enumerate(plan.watched):
+            if cur.m[k] == SLIDE:  # sliding from the start is an event too
+                integ.events.append(Event(plan.t0, w.description, w.surface, 0.0, SLIDE,
+                                          EventKind.SLIDE, w.text))
+        self.first_row(cur)
+        return cur
+
+    def _integrate(self, cur: Cursor) -> Run:
+        c, plan, rec, integ = self.c, self.plan, self.rec, self.integ
         try:
-            cur = start_cursor(c, plan, self.watch, opts, y, z, start and start.get("m"))
-            for k, w in enumerate(plan.watched):
-                if cur.m[k] == SLIDE:  # sliding from the start is an event too
-                    integ.events.append(Event(plan.t0, w.description, w.surface, 0.0, SLIDE,
-                                              EventKind.SLIDE, w.text))
-            rec.grid_row(cur.t, cur.y, cur.m, cur.z,
-                         shown=rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
-        except (ArithmeticError, ValueError) as exc:
-            # a fault in the switching surfaces at the start (QNTZR with P = 0, say)
-            text = fault_text(self.model, c, Fault(exc, cur.t, y.tolist(), m, z))
-            integ.events.clear()
-            return self.finish(Status.FAILED, message(Failure.CANNOT_START, t=plan.t0,
-                                                      detail=text), cur, {})
-        status, text = Status.FINISHED, ""
-        try:
-            integ.integrate(cur, plan.fintim, rec)
-            if integ.stop_reason is not None:
-                status = Status.STOPPED
-                text = message(Status.STOPPED, t=cur.t,
-                               what=plan.watched[integ.stop_reason].description)
+            status, text = Status.FINISHED, ""
+            stopped = self.advance(cur)
+            if stopped is not None:
+                status, text = Status.STOPPED, message(Status.STOPPED, t=cur.t, what=stopped)
         except Stop as stop:
             status, text = Status.FAILED, message(stop.kind, t=stop.t, **stop.fields)
             cur.t = stop.t
@@ -115,8 +133,32 @@ class _Run:
             self._keep_last_good(cur)
         if status == Status.FINISHED and rec.out_i < len(plan.grid.times):
             rec.row(plan.fintim, cur.y, cur.m, cur.z, len(plan.grid.times) - 1)
-        ctx = Context(self.model, plan, c, self.watch, opts, self.started)
+        integ.warnings.extend(table_warnings(c.tables))
+        if plan.step_point:
+            return self.finish(status, text, cur, integ.range_values())
+        ctx = Context(self.model, plan, c, self.watch, self.opts, self.started)
         return self.finish(status, text, cur, locate_range(ctx, rec.extrema, rec.restarts))
+
+    def first_row(self, cur: Cursor) -> None:
+        """The row at t0 (the ACSL form runs the events due at t0 first)."""
+        self.rec.grid_row(cur.t, cur.y, cur.m, cur.z,
+                          shown=self.rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
+
+    def advance(self, cur: Cursor) -> str | None:
+        """Integrate to the end; what stopped the run early (FINISH, TERMT), if any."""
+        self.integ.integrate(cur, self.plan.fintim, self.rec)
+        reason = self.integ.stop_reason
+        return self.plan.watched[reason].description if reason is not None else None
+
+    def terminal(self, run: Run, cur: Cursor) -> dict[str, float]:
+        """TERMINAL's values, in written order."""
+        codes = self.model.terminal_code or (self.model.acsl.terminal if self.model.acsl
+                                             else [])
+        if codes:
+            from .acsl import run_terminal
+
+            return run_terminal(self.c, codes, cur)
+        return evaluate_terminal(self.model, self.spec, self.constants, run.final, cur.t)
 
     def _keep_last_good(self, cur: Cursor) -> None:
         """The last accepted state is the final row (everything computed)."""
@@ -129,15 +171,17 @@ class _Run:
     def finish(self, status: Status, text: str, cur: Cursor, extrema: dict) -> Run:
         integ = self.integ
         terminal: dict[str, float] = {}
+        notes = [f"line {d.span.line}: {d.message}" if d.span else d.message
+                 for d in self.model.warnings]
         run = self.rec.run(
-            self.spec, self.constants, integ.events, status, text, integ.warnings,
+            self.spec, self.constants, integ.events, status, text, notes + integ.warnings,
             dict(nsteps=integ.nsteps, nfev=integ.nfev, nevents=len(integ.events),
                  seconds=_clock.perf_counter() - self.started),
             cur.t, cur.y, cur.z, cur.m, terminal, extrema)
-        if status != Status.FAILED and self.model.terminal:
+        if status != Status.FAILED and (self.model.terminal or self.model.terminal_code
+                                        or (self.model.acsl and self.model.acsl.terminal)):
             try:
-                terminal.update(evaluate_terminal(self.model, self.spec, self.constants,
-                                                  run.final, cur.t))
+                terminal.update(self.terminal(run, cur))
             except AmilError as err:
                 d = err.diagnostics[0]
                 where = f" (line {d.span.line})" if d.span else ""

@@ -30,7 +30,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from .dense import sample
-from .jacobian import STEP, field_jacobian
+from .jacobian import STEP, field_jacobian, model_jacobian
 from .plan import SLIDE
 
 _C = np.array([0.5 - math.sqrt(15) / 10, 0.5, 0.5 + math.sqrt(15) / 10])
@@ -62,6 +62,9 @@ class Tangent:
         self.failed: str | None = None
 
     def jacobian(self, t: float, y: np.ndarray, m, z) -> np.ndarray:
+        jac = model_jacobian(self.c, t, y, m, z)
+        if jac is not None:
+            return jac
         rhs = self.c.rhs
         return field_jacobian(lambda v: rhs(t, v, m, z), y, self.floor)
 

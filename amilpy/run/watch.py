@@ -197,8 +197,14 @@ class SurfaceWatch:
         except (ArithmeticError, ValueError):
             return False
 
-    def apply_resets(self, y: np.ndarray, m: list[float]) -> np.ndarray:
-        """MODINT: hold the state at its IC while X1 <= 0 and X2 > 0."""
+    def apply_resets(self, y: np.ndarray, m: list[float], t: float | None = None,
+                     z=None) -> np.ndarray:
+        """MODINT: hold the state at its IC while X1 <= 0 and X2 > 0. Given (t, z):
+        also put each state where its function holds it (LIMINT on a bound)."""
+        if self.c.settle is not None and t is not None:
+            settled = np.array(self.c.settle(t, y.tolist(), m, z), dtype=float)
+            if not np.array_equal(settled, y):
+                y = settled
         for r in self.resets:
             m1 = m[r.first] if isinstance(r.first, int) else r.first
             m2 = m[r.second] if isinstance(r.second, int) else r.second
@@ -216,11 +222,12 @@ class SurfaceWatch:
             return e_b > 0.0
         return False
 
-    def locate(self, k: int, m, z, interp, ta: float, tb: float, segment_start: float
-               ) -> float | None:
+    def locate(self, k: int, m, z, interp, ta: float, tb: float, segment_start: float,
+               xtol: float | None = None) -> float | None:
         """Where in [ta, tb] surface k crossed, or None when the step began on the
         surface and was on the wrong side all along (nothing to bracket: the
-        caller takes the surface's sign at tb instead of stopping at ta again)."""
+        caller takes the surface's sign at tb instead of stopping at ta again).
+        `xtol`: how close (default: a few ulps of TIME)."""
         from scipy.optimize import brentq
 
         def g(t):
@@ -247,7 +254,8 @@ class SurfaceWatch:
                 # would make no progress)
                 return ta if ta > segment_start else None
             ta = ta_new
-        return brentq(g, ta, tb, xtol=_XTOL * max(abs(tb), 1e-300), rtol=_XTOL, maxiter=200)
+        return brentq(g, ta, tb, xtol=xtol or _XTOL * max(abs(tb), 1e-300), rtol=_XTOL,
+                      maxiter=200)
 
     def slide_exits(self, m, t: float, y: np.ndarray, z) -> list[tuple[int, float]]:
         """The sliding surfaces whose motion leaves them here, and to which side.

@@ -15,6 +15,7 @@ from ..routes import BY_NAME
 from .base import Chunked, Hermite, Rhs, StepFailure, Stepper, Stiffness, first_bad
 from .fixed import RK4, AdamsBashforth2, Clock, Euler, FixedStepper, Heun
 from .ivp import ScipyStepper, solver_tolerance
+from .jacobian import SegmentJacobian
 from .odeint import UNLIMITED, OdeintStepper
 
 # The fixed-step classes by the name a route's `stepper` field gives.
@@ -22,20 +23,23 @@ FIXED: dict[str, type[FixedStepper]] = {
     cls.__name__: cls for cls in (RK4, Euler, Heun, AdamsBashforth2)}
 
 __all__ = ["Chunked", "Clock", "FIXED", "Hermite", "OdeintStepper", "Rhs", "ScipyStepper",
-           "StepFailure", "Stepper", "Stiffness", "first_bad", "make_stepper",
-           "solver_tolerance"]
+           "SegmentJacobian", "StepFailure", "Stepper", "Stiffness", "first_bad",
+           "make_stepper", "solver_tolerance"]
 
 
 def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float, *,
                  rtol: np.ndarray, atol: np.ndarray, delt: float, max_step: float = math.inf,
                  first_step: float | None = None, checks=None, chunk: int = 16,
-                 max_steps: int = UNLIMITED) -> Stepper:
+                 max_steps: int = UNLIMITED, expect: float | None = None,
+                 jac: SegmentJacobian | None = None) -> Stepper:
     """The stepper for a canonical route name (see `routes.ROUTES`).
 
     `rtol`, `atol`: per-state tolerances (variable-step routes); `delt`: the fixed
     step; `checks`: the instants the loop looks at (the output grid), which only
     the odeint stepper uses (without them AUTO runs on SciPy's LSODA class, which
-    sees every step); `max_steps`: the steps the loop still allows.
+    sees every step); `max_steps`: the steps the loop still allows; `expect`: how
+    long after t0 the loop expects the next event (odeint sizes its first chunk so);
+    `jac`: the vector field's Jacobian, for the implicit routes (None: differences).
     """
     r = BY_NAME[route]
     if len(y0) == 0:
@@ -47,6 +51,6 @@ def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float
     if r.stepper == "odeint" and checks is not None:
         return OdeintStepper(fun, t0, y0, t_bound, checks, rtol=rtol, atol=atol,
                              max_step=max_step, first_step=first_step, chunk=chunk,
-                             max_steps=max_steps)
+                             max_steps=max_steps, expect=expect, jac=jac)
     return ScipyStepper(r.scipy, fun, t0, y0, t_bound, rtol=rtol, atol=atol, max_step=max_step,
-                        first_step=first_step, stability_limit=r.stability_limit)
+                        first_step=first_step, stability_limit=r.stability_limit, jac=jac)

@@ -87,6 +87,28 @@ class FixedStepper(Stepper):
             return self._stability_test(h)
         return None
 
+    def step_from(self, t: float, y: np.ndarray, f: np.ndarray, h: float
+                  ) -> StepFailure | None:
+        """One step of the method from (t, y) with rates f the caller took there, for
+        step-point mode (memory and events change at each step point before its rates
+        are taken; the stages call `fun` as `advance` does); the new state is `y`.
+        Adams keeps its history as `step` keeps it. Each call continues from where the
+        last one ended; the step that ended at t is tested for stability as `step`
+        tests it (now that its end's rates are known)."""
+        if self.steps_taken:
+            self.y, self.f = y, f
+            if self._beyond or self._steps % self.TEST_EVERY == 0:
+                failure = self._stability_test(t - self.t_old)
+                if failure is not None:
+                    return failure
+        self.t, self.y, self.f = t, y, f
+        y_new = self.advance(t, y, f, h)
+        self.steps_taken += 1
+        self._steps += 1
+        self.t_old, self.y_old, self.f_old = t, y, f
+        self.t, self.y = t + h, y_new
+        return None
+
     def _stability_test(self, h: float) -> StepFailure | None:
         """h*|lambda| along the last step, |f(y1) - f(y0)| / |y1 - y0|, with no extra
         evaluations. Past the method's limit on a decaying mode, the numerical

@@ -43,8 +43,11 @@ class ScipyStepper(Stepper):
 
     def __init__(self, name: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float, *,
                  rtol: np.ndarray | float, atol: np.ndarray | float, max_step: float,
-                 first_step: float | None, stability_limit: float | None = None) -> None:
+                 first_step: float | None, stability_limit: float | None = None,
+                 jac=None) -> None:
         from scipy import integrate
+
+        from .jacobian import DENSE_UP_TO
 
         cls = getattr(integrate, name)
         rtol, atol = solver_tolerance(rtol), solver_tolerance(atol)
@@ -53,6 +56,11 @@ class ScipyStepper(Stepper):
                    "max_step": max_step}
         if first_step is not None:
             options["first_step"] = min(first_step, abs(t_bound - t0))
+        # the model's Jacobian for the implicit solvers (SciPy's LSODA class takes a
+        # dense one only: a large model's stays with its differences)
+        if jac is not None and name in ("Radau", "BDF", "LSODA") and \
+                (name != "LSODA" or len(y0) <= DENSE_UP_TO):
+            options["jac"] = jac.for_scipy()
         self.solver = cls(fun, t0, y0, t_bound, **options)
         if vector_rtol:
             self.solver.rtol = rtol

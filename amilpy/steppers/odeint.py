@@ -10,7 +10,9 @@ import numpy as np
 
 from ..outcome import Failure
 from .base import Chunked, Rhs, StepFailure
+from .dense import Nodes, quintic_gap, quintic_terms
 from .ivp import ScipyStepper, solver_tolerance
+from .jacobian import DENSE_UP_TO, Banded, SegmentJacobian
 
 MXSTEP = 1_000_000  # odeint's steps per output interval when no limit is nearer
 UNLIMITED = 2**62
@@ -22,10 +24,15 @@ class OdeintStepper(Chunked):
     what makes it several times faster than driving a solver step by step. Its
     "steps" for the loop are the check instants (the output grid): the loop looks
     at the switching surfaces there. Where a surface has crossed, `interpolant()`
-    integrates that one interval again with SciPy's LSODA class, whose dense
-    output is accurate to the tolerance, so the crossing is located as precisely
-    as with any other route. A chunk grows geometrically after each start, so
-    the work thrown away after an event stays small.
+    is the cubic Hermite through the interval's two rows and their derivatives
+    (`dense.Nodes`: two evaluations, no integration); `window(t)` says whether its
+    error near t (estimated with a third row) is within the tolerance, and
+    `refine(lo, hi)` integrates a narrow window around the crossing once more with
+    odeint and makes its exact ends nodes of the dense output, so the crossing is
+    located as precisely as with any other route. The first chunk covers the time
+    the loop expects to the next event (`expect`, from the spacing of the recent
+    ones), so little is integrated past it and thrown away; later chunks grow
+    geometrically.
 
     `max_steps` bounds the internal steps this stepper may take: odeint's
     per-interval limit is set to what is left, a chunk is sized from the steps an
@@ -36,8 +43,11 @@ class OdeintStepper(Chunked):
     def __init__(self, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float, checks, *,
                  rtol: np.ndarray | float, atol: np.ndarray | float, max_step: float,
                  first_step: float | None, chunk: int = 16,
-                 max_steps: int = UNLIMITED) -> None:
+                 max_steps: int = UNLIMITED, expect: float | None = None,
+                 jac: SegmentJacobian | None = None) -> None:
         self.fun = fun
+        self.jac = jac
+        self._banded: Banded | None = None
         self.t = self.t_old = t0
         self.y = np.asarray(y0, dtype=float)
         self.y_old = self.y
@@ -52,11 +62,17 @@ class OdeintStepper(Chunked):
         self.pos = 0  # ... and how many of them the loop has taken
         self.next_check = 0
         self.chunk = chunk
+        if expect is not None and len(self.checks) > 1:
+            # cover the expected time to the next event, and a few instants more
+            n = bisect.bisect_right(self.checks, t0 + 1.05 * expect)
+            self.chunk = max(4, n + 3)
         self.max_steps = max_steps
         self._nfev = 0
         self._steps = 0  # internal steps of the chunks so far
         self._instants = 0  # check instants those steps covered
-        self._dense = None
+        self._dense: Nodes | None = None
+        self._derivs: dict[float, np.ndarray] = {}  # f at recent rows
+        self._before: tuple[float, np.ndarray] | None = None  # the row before t_old
         self._failure: StepFailure | None = None
         self.fallback: ScipyStepper | None = None
 
@@ -70,32 +86,51 @@ class OdeintStepper(Chunked):
 
     def _chunk_size(self, left: int) -> int:
         n = self.chunk
-        self.chunk = min(self.chunk * 4, 4096)
+        self.chunk = min(max(self.chunk, 4) * 4, 4096)
         if self._instants:
             per_instant = max(self._steps / self._instants, 1.0)
             n = min(n, max(1, int(left / per_instant)))
         return n
 
-    def _fill(self) -> None:
+    def _odeint(self, y0: np.ndarray, grid, **options):
+        """odeint from y0 through grid, with the model's Jacobian when there is one
+        (dense for a small model, else banded in a renumbering that narrows the band);
+        the rows come back in the states' own order."""
         from scipy.integrate import odeint
 
+        fun = self.fun
+        if self.jac is not None:
+            if len(y0) <= DENSE_UP_TO:
+                options["Dfun"] = self.jac.dense
+            else:
+                if self._banded is None:
+                    self._banded = self.jac.banded()
+                b = self._banded
+                fun, y0 = b.wrap(fun), b.to_new(y0)
+                options.update(Dfun=b.dfun, ml=b.ml, mu=b.mu)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # a failure is handled by the caller
+            ys, info = odeint(fun, y0, grid, rtol=self.rtol, atol=self.atol, tfirst=True,
+                              full_output=True, **options)
+        if self._banded is not None:
+            ys = self._banded.to_old(ys)
+        return ys, info
+
+    def _fill(self) -> None:
         left = self.max_steps - self._steps
         if left <= 0:
             self._failure = StepFailure(Failure.STEPS, self.t)
             return
         ts = self.checks[self.next_check:self.next_check + self._chunk_size(left)]
         grid = np.concatenate(([self.t], ts))
-        options = {"rtol": self.rtol, "atol": self.atol, "tfirst": True, "full_output": True,
-                   "mxstep": min(MXSTEP, left)}
+        options = {"mxstep": min(MXSTEP, left)}
         if math.isfinite(self.max_step):
             options["hmax"] = self.max_step
         if self.first_step:
             options["h0"] = min(self.first_step, ts[0] - self.t)
         if ts[-1] >= self.t_bound:
             options["tcrit"] = np.array([self.t_bound])
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # a failure is handled below, not printed
-            ys, info = odeint(self.fun, self.y, grid, **options)
+        ys, info = self._odeint(self.y, grid, **options)
         if info["message"] != "Integration successful.":
             self._keep_passed(ts, ys, info, left)
             return
@@ -131,7 +166,7 @@ class OdeintStepper(Chunked):
         t_last, y_last = (ts[good - 1], ys[good]) if good else (self.t, self.y)
         self.fallback = ScipyStepper("LSODA", self.fun, float(t_last), y_last, self.t_bound,
                                      rtol=self.rtol, atol=self.atol, max_step=self.max_step,
-                                     first_step=None)
+                                     first_step=None, jac=self.jac)
 
     def pending(self) -> tuple[np.ndarray, np.ndarray]:
         """The integrated check instants the loop has not taken yet (integrating the
@@ -142,6 +177,12 @@ class OdeintStepper(Chunked):
 
     def consume(self, n: int) -> None:
         last = self.pos + n - 1
+        if n >= 3:
+            self._before = (float(self.T[last - 2]), self.Y[last - 2])
+        elif n == 2:
+            self._before = (self.t, self.y)
+        else:
+            self._before = (self.t_old, self.y_old) if self.t_old < self.t else None
         if n >= 2:
             self.t_old, self.y_old = float(self.T[last - 1]), self.Y[last - 1]
         else:
@@ -170,30 +211,63 @@ class OdeintStepper(Chunked):
                 self.t == self.fallback.t:
             return self.fallback.interpolant()
         if self._dense is None:
-            from scipy.integrate import LSODA
-
-            # Integrate the interval once more with dense output. Tighter than the
-            # run: the state at the located crossing starts the next segment, and
-            # a run with many switches must not add a tolerance's worth at each.
-            rtol = np.maximum(np.asarray(self.rtol, dtype=float) * 0.01, 1e-13)
-            atol = np.maximum(np.asarray(self.atol, dtype=float) * 0.01, 1e-300)
-            solver = LSODA(self.fun, self.t_old, self.y_old, self.t,
-                           rtol=solver_tolerance(rtol), atol=atol)
-            pieces = []
-            while solver.status == "running":
-                solver.step()
-                if solver.status == "failed":
-                    break
-                pieces.append((solver.t_old, solver.t, solver.dense_output()))
-            self._nfev += solver.nfev
-            end_y = solver.y
-
-            ends = [b for _, b, _ in pieces]
-
-            def dense(t: float) -> np.ndarray:
-                k = bisect.bisect_left(ends, t)
-                return pieces[k][2](t) if k < len(pieces) else end_y
-
-            self._dense = dense
-            self.y = end_y  # consistent with the dense output at the interval's end
+            self._dense = Nodes([self.t_old, self.t], [self.y_old, self.y],
+                                [self._deriv(self.t_old, self.y_old), self._deriv(self.t, self.y)])
         return self._dense
+
+    def _deriv(self, t: float, y: np.ndarray) -> np.ndarray:
+        f = self._derivs.get(t)
+        if f is None:
+            if len(self._derivs) > 8:
+                self._derivs.clear()
+            f = self._derivs[t] = np.asarray(self.fun(t, y), dtype=float)
+            self._nfev += 1
+        return f
+
+    SHARP = 10.0  # a quintic whose cubic is this many tolerances off needs no window
+    WINDOW = 0.01  # share of the interval integrated again around a crossing
+
+    def sharpen(self) -> bool:
+        """Make the dense output the quintic through a third row (the next one
+        integrated, which continues the same smooth flow, else the one before) if
+        the cubic's distance from it (the cubic's error) is within SHARP tolerances
+        in the middle of the interval, where it is largest. False: `refine` is
+        needed near a crossing."""
+        dense = self.interpolant()
+        if not isinstance(dense, Nodes) or len(dense.t) > 2:
+            return False
+        third = None
+        if self.pos < len(self.T) and np.all(np.isfinite(self.Y[self.pos])):
+            third = (float(self.T[self.pos]), self.Y[self.pos])
+        elif self._before is not None:
+            third = self._before
+        if third is None:
+            return False
+        terms = quintic_terms(self.t_old, self.y_old, dense.f[0], self.t, self.y, dense.f[1],
+                              third[0], third[1], self._deriv(*third))
+        gap = quintic_gap(terms, 0.5 * (self.t_old + self.t))
+        scale = self.rtol * np.abs(0.5 * (self.y_old + self.y)) + self.atol
+        if not (gap <= self.SHARP * scale).all():
+            return False
+        dense.sharpen(terms)
+        return True
+
+    def refine(self, t: float):
+        """Integrate from the interval's start to both ends of a narrow window around
+        t (one odeint call) and make them nodes of the dense output; returns it."""
+        dense = self.interpolant()
+        h = self.t - self.t_old
+        lo, hi = max(self.t_old, t - self.WINDOW * h), min(self.t, t + self.WINDOW * h)
+        grid = [self.t_old] + [x for x in (lo, hi) if self.t_old < x < self.t]
+        if len(grid) > 1:
+            ys, info = self._odeint(self.y_old, grid, mxstep=MXSTEP)
+            self._nfev += int(info["nfe"][-1])
+            if info["message"] == "Integration successful." and np.all(np.isfinite(ys)):
+                for x, yx in zip(grid[1:], ys[1:], strict=True):
+                    dense.insert(x, yx, self._deriv(x, yx))
+        return dense
+
+    def truncate(self, t: float) -> None:
+        dense = self.interpolant()
+        self.y = np.asarray(dense(t), dtype=float)
+        self.t = t

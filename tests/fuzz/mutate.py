@@ -25,9 +25,25 @@ TOKENS = [
     b"2**2**2**2**2**2", b"EXP(EXP(EXP(EXP(X))))", b"ALOG(-1.0)", b"SQRT(-1.0)",
 ]
 
+# characters that look like ASCII code but are not (issue 15: a Bengali four read as
+# 4, a long s folded to S); each must be named, never read as its look-alike
+LOOKALIKES = {
+    "0": ["\u09e6", "\uff10", "\u0660", "O"], "4": ["\u09ea", "\u0664", "\uff14"],
+    "1": ["\u0661", "\uff11", "l"], "8": ["\u09ee"], "A": ["\u0410", "\u0391", "\uff21"],
+    "E": ["\u0415", "\u0395"], "I": ["\u0130", "\u0406", "\u2160"], "O": ["\u041e", "0"],
+    "S": ["\u017f", "\u0405"], "T": ["\u0422", "\u03a4"], "-": ["\u2212", "\u2013"],
+    " ": ["\u00a0", "\u2007", "\u3000"], "=": ["\uff1d"], "(": ["\uff08"], ",": ["\u201a"],
+    "\n": ["\u2028", "\u0085", "\x0c", "\x0b", "\r"], "*": ["\u2217", "\u00d7"],
+}
+
 OPERATORS = ["del_char", "dup_char", "swap_chars", "del_line", "dup_line", "swap_lines",
              "random_bytes", "invalid_utf8", "token", "replace_number", "truncate",
-             "case_flip", "join_lines"]
+             "case_flip", "join_lines", "lookalike", "nest_switches", "long_sum"]
+
+# switches whose arguments nest: each level is a surface the checker classifies and the
+# code generator writes (16 nested LIMITs took 100 s before both were made linear)
+NESTS = [b"LIMIT(-1.0, 1.0, ", b"DEADSP(-0.5, 0.5, ", b"FSW(X, -1.0, 0.0, ",
+         b"ZHOLD(X, ", b"INSW(X - 0.5, 0.0, ", b"AMAX1(0.0, "]
 
 
 def corpus_files() -> list[str]:
@@ -97,6 +113,31 @@ def mutate_once(data: bytes, rng: random.Random, op: str | None = None) -> tuple
         return data[:i] + data[i:i + 40].swapcase() + data[i + 40:], op
     if op == "join_lines":
         return data[:i] + data[i:].replace(b"\n", b" ", 1), op
+    if op == "lookalike":
+        text = data.decode("utf-8", "replace")
+        spots = [k for k, ch in enumerate(text) if ch in LOOKALIKES]
+        if not spots:
+            return data, op
+        k = rng.choice(spots)
+        return (text[:k] + rng.choice(LOOKALIKES[text[k]]) + text[k + 1:]).encode(), op
+    if op in ("nest_switches", "long_sum"):
+        # around (or instead of) the first number after i
+        j = i
+        while j < n and not data[j:j + 1].isdigit():
+            j += 1
+        if j == n:
+            return data, op
+        k = j
+        while k < n and (data[k:k + 1].isdigit() or data[k:k + 1] in b".E+-"):
+            k += 1
+        number = data[j:k]
+        if op == "nest_switches":
+            depth = rng.choice([2, 8, 16, 40, 200])
+            wrap = rng.choice(NESTS)
+            new = wrap * depth + number + b")" * depth
+        else:
+            new = b" + ".join([number] * rng.choice([10, 500, 999, 1500, 3000]))
+        return data[:j] + new + data[k:], op
     raise ValueError(op)
 
 
@@ -179,6 +220,40 @@ def extreme_cases(quick: bool = False) -> dict[str, bytes]:
         "empty": b"",
         "random_bytes_4k": bytes(random.Random(1).randrange(256) for _ in range(4096)),
     }
+
+
+# ----------------------------------------------------------------- command lines
+CLI_LISTING = (b"PARAM K = 1.0\nX = INTGRL(1.0, -K*X)\nY = FSW(X - 0.5, 0.0, 1.0, 1.0)\n"
+               b"TIMER FINTIM = 1.0, OUTDEL = 0.1\nPRINT X, Y\nOUTPUT X\nRANGE X\nEND\n")
+CLI_VALUES = ["nan", "NaN", "-nan", "inf", "-inf", "+inf", "Infinity", "1e999", "-1e999", "0",
+              "-0", "-1", "1e-320", "5e-324", "1e308", "", "abc", "1,5", "0x10", "1_000",
+              " 2", "3.0.0", "1e-9", "0.5", "2", "100000000000000000000"]
+CLI_OPTIONS = {
+    "run": ["--max-time", "--max-steps", "--max-events", "--rtol", "--atol", "--fintim",
+            "--from", "--to", "--runs"],
+    "report": ["--max-time", "--max-steps", "--max-events", "--rtol", "--atol", "--fintim",
+               "--from", "--to", "--runs"],
+    "sweep": ["--settle", "--rtol", "--atol", "--fintim"],
+}
+
+
+def cli_cases(count: int, seed: int = 0):
+    """Yield (case_id, bytes, description, argv): a small listing run with 1-3 numeric
+    options (or a --set, or a sweep range) given a hostile value; '{path}' in argv
+    stands for the listing. Accepted outcomes include exit 2, a usage error."""
+    for k in range(count):
+        rng = random.Random(f"cli:{seed}:{k}")
+        command = rng.choice(["run", "run", "report", "sweep"])
+        argv = [command, "{path}"]
+        if command == "sweep":
+            argv.append("K=" + ":".join(rng.choice(CLI_VALUES + ["1", "2", "0.5"])
+                                        for _ in range(3)))
+        for _ in range(rng.choice([1, 1, 2, 3])):
+            option = rng.choice(CLI_OPTIONS[command] + ["--set"])
+            value = rng.choice(CLI_VALUES)
+            argv += [option, f"K={value}" if option == "--set" else value]
+        argv += ["--quiet"]
+        yield f"cli-s{seed}-{k}", CLI_LISTING, "amilpy " + " ".join(argv), argv
 
 
 def big_file(path: str, megabytes: int = 50) -> None:

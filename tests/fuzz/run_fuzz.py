@@ -31,10 +31,14 @@ def main(argv=None) -> int:
     ap.add_argument("--mem", type=int, default=target.DEFAULT_MEM_MB, help="MB per worker")
     ap.add_argument("--extremes", action="store_true", help="also run the hand-made inputs")
     ap.add_argument("--big", action="store_true", help="also run a 50 MB listing")
+    ap.add_argument("--cli", type=int, default=0, metavar="N",
+                    help="also N command lines with hostile numeric values")
     ap.add_argument("--out", default="fuzz-findings")
     a = ap.parse_args(argv)
 
     cases = list(mutate.generate(a.count, a.seed))
+    if a.cli:
+        cases += list(mutate.cli_cases(a.cli, a.seed))
     if a.extremes:
         cases += [(k, v, f"extreme {k}") for k, v in mutate.extreme_cases().items()]
     if a.big:
@@ -65,13 +69,16 @@ def main(argv=None) -> int:
     if bad:
         os.makedirs(a.out, exist_ok=True)
         data = {c[0]: c[1] for c in cases}
+        argvs = {c[0]: c[3] for c in cases if len(c) > 3}
         for r in bad:
             base = os.path.join(a.out, f"{r.kind}-{r.case}")
             with open(base + ".amil", "wb") as fh:
                 fh.write(data[r.case])
+            argv = argvs.get(r.case, ["run", "{path}", *target.RUN_ARGS])
+            command = " ".join(base + ".amil" if x == "{path}" else repr(x) if not x or
+                               " " in x else x for x in argv)
             with open(base + ".json", "w") as fh:
-                json.dump({**target.as_dict(r), "command": "amilpy run " + base + ".amil "
-                           + " ".join(target.RUN_ARGS)}, fh, indent=1)
+                json.dump({**target.as_dict(r), "command": "amilpy " + command}, fh, indent=1)
         print(f"{len(bad)} failing cases written to {a.out}/")
         seen = {}
         for r in bad:

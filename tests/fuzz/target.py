@@ -63,8 +63,17 @@ def _alarm(signum, frame):
 
 
 def run_one(path: str, timeout: float, args: list[str] | None = None) -> dict:
-    """Run one listing file through the CLI in this process; classify the outcome."""
+    """Run one listing file through the CLI in this process; classify the outcome.
+    A case with its own command line (`case.argv.json` beside it, '{path}' standing
+    for the listing) may also end in a usage error (exit 2) and write files."""
     from amilpy.cli import main
+
+    argv_file = os.path.join(os.path.dirname(path), "case.argv.json")
+    own_argv = None
+    if os.path.exists(argv_file):
+        with open(argv_file) as fh:
+            own_argv = [path if a == "{path}" else a for a in json.load(fh)]
+    accepted = (0, 1, 2, 3) if own_argv else (0, 1, 3)
 
     folder = os.path.dirname(path)
     stem = os.path.splitext(os.path.basename(path))[0]
@@ -79,7 +88,7 @@ def run_one(path: str, timeout: float, args: list[str] | None = None) -> dict:
     signal.setitimer(signal.ITIMER_REAL, timeout)
     try:
         with redirect_stdout(out), redirect_stderr(err):
-            code = main(["run", path, *(args if args is not None else RUN_ARGS)])
+            code = main(own_argv or ["run", path, *(args if args is not None else RUN_ARGS)])
     except CaseTimeout:
         kind, detail = "hang", f"no answer within {timeout:g} s"
     except BaseException as exc:  # noqa: BLE001 - anything escaping main is a crash
@@ -93,7 +102,7 @@ def run_one(path: str, timeout: float, args: list[str] | None = None) -> dict:
     if kind is None:
         if "Traceback (most recent call last)" in stderr:
             kind, detail = "traceback", stderr[-3000:]
-        elif code not in (0, 1, 3):
+        elif code not in accepted:
             kind, detail = f"exit-{code}", stderr[-1000:]
         elif code != 0 and not stderr.strip():
             kind = "no-message"
@@ -101,7 +110,7 @@ def run_one(path: str, timeout: float, args: list[str] | None = None) -> dict:
             kind = f"ok-{code}"
             detail = stderr.strip().splitlines()[0][:300] if stderr.strip() else ""
     created = set(os.listdir(folder)) - before_files - {f"{stem}.csv"}
-    if created and kind.startswith("ok"):
+    if created and kind.startswith("ok") and not own_argv:
         kind, detail = "files", f"created {sorted(created)}"
     new = {m.split(".")[0] for m in set(sys.modules) - before_modules}
     if new & FORBIDDEN_MODULES and kind.startswith("ok"):
@@ -175,7 +184,7 @@ def worker(list_file: str, timeout: float, mem_mb: int, args: list[str] | None) 
 def run_cases(cases, timeout: float = DEFAULT_TIMEOUT, mem_mb: int = DEFAULT_MEM_MB,
               args: list[str] | None = None, workdir: str | None = None,
               progress=None) -> list[Result]:
-    """Run (case_id, bytes, description) cases in a worker subprocess.
+    """Run (case_id, bytes, description[, argv]) cases in a worker subprocess.
 
     Each case gets its own directory. If the worker stops answering (a hang the
     alarm cannot interrupt) or dies (memory limit, a signal), the case in
@@ -184,12 +193,15 @@ def run_cases(cases, timeout: float = DEFAULT_TIMEOUT, mem_mb: int = DEFAULT_MEM
     own = workdir is None
     workdir = workdir or tempfile.mkdtemp(prefix="amilfuzz-")
     paths, meta = [], {}
-    for i, (case_id, data, desc) in enumerate(cases):
+    for i, (case_id, data, desc, *argv) in enumerate(cases):
         d = os.path.join(workdir, f"{i:06d}")
         os.makedirs(d, exist_ok=True)
         p = os.path.join(d, "case.amil")
         with open(p, "wb") as fh:
             fh.write(data)
+        if argv:
+            with open(os.path.join(d, "case.argv.json"), "w") as fh:
+                json.dump(argv[0], fh)
         paths.append(p)
         meta[p] = (case_id, desc)
     results: dict[str, Result] = {}

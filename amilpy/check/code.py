@@ -1,0 +1,288 @@
+"""Procedural code -> IR statements (contract section 10).
+
+Two kinds of code:
+
+- **written order** (ACSL INITIAL, DYNAMIC's own statements, DISCRETE, TERMINAL,
+  FUNCTION bodies): names may be reassigned; every test is made where it stands
+  (`literal` lowering: no surface, nothing located);
+- **a sorting unit** (an IF or PROCEDURAL block of sorted code): one unit for the
+  sort, written order inside. Its conditions and switches are switching surfaces,
+  located like FSW; a surface must be a function of what the unit reads, so a name
+  the unit assigned before on its straight-line path is replaced by the expression
+  it was given (`substitute`). A test that reads a name assigned inside a nested
+  branch or a loop of the unit cannot be written that way: it is made where it
+  stands, with a warning.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from .. import ir
+from .. import syntax as ast
+from ..diagnostics import Reporter, Span
+from ..syntax import deep_enough
+from .lower import Lowering
+from .names import PURE, Names
+
+# what a unit in sorted code may call: no states, no memory (section 10)
+UNIT_CALLS = PURE
+
+
+def read_names(expr: ast.Node) -> list[str]:
+    """Every name an expression reads, in order, once each."""
+    return list(dict.fromkeys(n.name for n in ast.walk(expr) if isinstance(n, ast.Name)))
+
+
+@deep_enough()
+def substitute(expr: ast.Node, env: dict[str, ast.Node]) -> ast.Node:
+    """The expression with every name of `env` replaced by its expression."""
+    if not env:
+        return expr
+    if isinstance(expr, ast.Name):
+        return env.get(expr.name, expr)
+    if isinstance(expr, ast.Call):
+        return replace(expr, args=tuple(substitute(a, env) for a in expr.args))
+    if isinstance(expr, ast.BinOp):
+        return replace(expr, left=substitute(expr.left, env), right=substitute(expr.right, env))
+    if isinstance(expr, (ast.Neg, ast.Not)):
+        return replace(expr, operand=substitute(expr.operand, env))
+    return expr
+
+
+def assigned_names(body) -> list[str]:
+    """The names a block of statements assigns (loop variables too), in order."""
+    out: dict[str, None] = {}
+    for st in body:
+        for node in ast.walk(st):
+            if isinstance(node, ast.Assign):
+                out.update(dict.fromkeys(node.targets))
+            elif isinstance(node, ast.Loop):
+                out[node.var] = None
+    return list(out)
+
+
+def statement_reads(body) -> list[str]:
+    """Every name a block of statements reads, in order."""
+    out: dict[str, None] = {}
+    for st in body:
+        for node in ast.walk(st):
+            if isinstance(node, ast.Name):
+                out[node.name] = None
+    return list(out)
+
+
+class CodeLowering:
+    """Lowers blocks of statements; shares the model's `Lowering` (switches,
+    surfaces) and `Names` (calls)."""
+
+    def __init__(self, rep: Reporter, low: Lowering, names: Names,
+                 stores: dict[str, str] | None = None) -> None:
+        self.rep = rep
+        self.low = low
+        self.names = names
+        self.stores = stores or {}
+        self.termts: list[tuple[ast.Termt, ast.Node]] = []  # DERIVATIVE TERMTs found in units
+        # TERMTs of written-order code (TermtIf.index points here)
+        self.terminations: list[ir.Termination] = []
+
+    # ---------------------------------------------------------- written order
+    def written(self, body, section: str, span: Span | None = None) -> ir.Code:
+        """Written-order code of one section."""
+        lowered = self.block(body, section)
+        return ir.Code(section, tuple(lowered), tuple(assigned_names(body)), span)
+
+    def block(self, body, section: str) -> list[ast.Node]:
+        out: list[ast.Node] = []
+        for st in body:
+            lowered = self.statement(st, section)
+            if lowered is not None:
+                out.extend(lowered if isinstance(lowered, list) else [lowered])
+        return out
+
+    def expr(self, expr: ast.Node, target: str | None, section: str) -> ast.Node:
+        self.names.check_calls(expr, PURE, section)
+        return self.low.expr(expr, target, literal=True)
+
+    def statement(self, st, section: str):
+        if isinstance(st, ast.Assign):
+            if len(st.targets) > 1:
+                self.rep.error("only OUTSW gives two values, and only in sorted code", st.span)
+                return None
+            target = st.targets[0]
+            return ir.Let(target, self.expr(st.expr, target, section), st.span,
+                          self.stores.get(target, "REAL"))
+        if isinstance(st, ast.If):
+            return ir.IfThen(tuple(
+                (None if b.cond is None else self.expr(b.cond, None, section),
+                 tuple(self.block(b.body, section))) for b in st.branches), st.span)
+        if isinstance(st, ast.Loop):
+            step = st.step if st.step is not None else ast.Num(1.0, st.span, "1")
+            return ir.ForLoop(st.var, self.expr(st.start, None, section),
+                              self.expr(st.stop, None, section), self.expr(step, None, section),
+                              tuple(self.block(st.body, section)), st.span)
+        if isinstance(st, ast.Procedural):  # in written-order code: a plain group
+            return self.block(st.body, section)
+        if isinstance(st, ast.Schedule):
+            if st.kind != "AT":
+                self.rep.error(f"SCHEDULE .{st.kind}. stands only in DERIVATIVE", st.span,
+                               "a crossing is located in the sorted code; here write "
+                               f"SCHEDULE {st.section} .AT. T + delay")
+                return None
+            return ir.ScheduleAt(st.section, self.expr(st.expr, None, section), st.span)
+        if isinstance(st, ast.Declare):  # a FUNCTION's declarations: scalars
+            return None
+        if isinstance(st, ast.Termt):
+            text = self.low.written(st.expr.span) or ""
+            self.terminations.append(ir.Termination(section, text, st.message, st.span))
+            return ir.TermtIf(self.expr(st.expr, None, section), len(self.terminations) - 1,
+                              st.span)
+        self.rep.error(f"{type(st).__name__.upper()} cannot stand in {section}", st.span)
+        return None
+
+    # ------------------------------------------------------------ sorting units
+    def unit(self, st: ast.If | ast.Procedural, index: int, section: str) -> ir.Unit | None:
+        """An IF or PROCEDURAL block of sorted code as one unit."""
+        body = st.body if isinstance(st, ast.Procedural) else (st,)
+        outputs = assigned_names(body)
+        reads = [n for n in statement_reads(body) if n not in outputs]
+        if isinstance(st, ast.Procedural):
+            self.declared(st, outputs, reads)
+            outputs = list(dict.fromkeys([*st.outputs, *outputs]))
+            reads = list(dict.fromkeys([*st.inputs, *reads]))
+            reads = [n for n in reads if n not in outputs]
+        before = len(self.rep.diagnostics)
+        lowered = _Unit(self, section, st.span).block(body, {}, set(), ())
+        if len(self.rep.diagnostics) > before:
+            return None
+        return ir.Unit(index, "PROCEDURAL" if isinstance(st, ast.Procedural) else "IF",
+                       tuple(outputs), tuple(reads), tuple(lowered), st.span)
+
+    def declared(self, st: ast.Procedural, outputs: list[str], reads: list[str]) -> None:
+        missing_out = [n for n in outputs if n not in st.outputs]
+        # constants and time need no listing: they do not move the unit in the sort
+        fixed = self.names.data_names | {"TIME", "PI"}
+        missing_in = [n for n in reads if n not in st.inputs and n not in outputs
+                      and n not in fixed]
+        if st.outputs or st.inputs:
+            for names, what in ((missing_out, "assigns"), (missing_in, "reads")):
+                if names:
+                    self.low.warn(f"the PROCEDURAL {what} {', '.join(names)}, not in its "
+                                  "list", st.span,
+                                  "its outputs and inputs are its lists joined with what "
+                                  "the body assigns and reads")
+
+
+class _Unit:
+    """The lowering of one unit's statements: `env` holds the straight-line values
+    (name -> expression of what the unit reads), `opaque` the names assigned in a
+    nested branch or loop, `path` the conditions around the statement."""
+
+    def __init__(self, code: CodeLowering, section: str, span: Span) -> None:
+        self.code = code
+        self.section = section
+        self.span = span
+
+    def expr(self, expr: ast.Node, target: str | None, env, opaque, condition=False):
+        names = self.code.names
+        names.check_calls(expr, UNIT_CALLS, "an IF or PROCEDURAL block")
+        value = substitute(expr, env)
+        literal = bool(opaque & set(read_names(value)))
+        if literal and any(isinstance(n, ast.BinOp) and n.op in ast.RELATIONAL[:4]
+                           for n in ast.walk(value)):
+            self.code.low.warn(
+                "this test reads a value assigned inside an IF or a loop before it: it is "
+                "made where it stands, never located", expr.span,
+                "compute that value before the block, or test it with FSW/INSW")
+        if condition and not literal:
+            return self.code.low.expr(_as_condition(value), target)
+        return self.code.low.expr(value, target, literal=literal)
+
+    def block(self, body, env: dict, opaque: set, path: tuple) -> list[ast.Node]:
+        out: list[ast.Node] = []
+        for st in body:
+            if isinstance(st, ast.Assign):
+                target = st.targets[0]
+                if len(st.targets) > 1:
+                    self.code.rep.error("only OUTSW gives two values, and not inside a "
+                                        "block", st.span)
+                    continue
+                out.append(ir.Let(target, self.expr(st.expr, target, env, opaque), st.span,
+                                  self.code.stores.get(target, "REAL")))
+                value = substitute(st.expr, env)
+                if opaque & set(read_names(value)):
+                    opaque.add(target)
+                    env.pop(target, None)
+                else:
+                    env[target] = value
+                    opaque.discard(target)
+            elif isinstance(st, ast.If):
+                branches = []
+                inner: set[str] = set()
+                for b in st.branches:
+                    cond = None if b.cond is None else \
+                        self.expr(b.cond, None, env, opaque, condition=True)
+                    here = path + ((b.cond,) if b.cond is not None else ())
+                    branches.append((cond, tuple(self.block(b.body, dict(env), set(opaque),
+                                                            here))))
+                    inner.update(assigned_names(b.body))
+                out.append(ir.IfThen(tuple(branches), st.span))
+                for n in inner:
+                    env.pop(n, None)
+                opaque |= inner
+            elif isinstance(st, ast.Loop):
+                step = st.step if st.step is not None else ast.Num(1.0, st.span, "1")
+                changed = set(assigned_names(st.body)) | {st.var}
+                inside = {k: v for k, v in env.items() if k not in changed}
+                bounds = [self.expr(e, None, env, opaque) for e in (st.start, st.stop, step)]
+                body_ir = self.block(st.body, inside, opaque | changed, path)
+                out.append(ir.ForLoop(st.var, *bounds, tuple(body_ir), st.span))
+                for n in changed:
+                    env.pop(n, None)
+                opaque |= changed
+            elif isinstance(st, ast.Termt):
+                if path:  # TERMT(c) inside IF (d): TERMT(d .AND. c)
+                    cond = st.expr
+                    for d in reversed(path):
+                        cond = ast.BinOp("AND", d, cond, st.span)
+                    st = replace(st, expr=cond)
+                self.code.termts.append((st, substitute(st.expr, env)))
+            elif isinstance(st, ast.Procedural):
+                out.extend(self.block(st.body, env, opaque, path))
+            else:
+                what = type(st).__name__.upper()
+                self.code.rep.error(f"{what} cannot stand inside an IF or PROCEDURAL block "
+                                    f"of {self.section}", st.span)
+        return out
+
+
+def condition_surface(e: ast.Node) -> ast.Node:
+    """A condition as a continuous surface that is positive where the condition
+    holds (TERMT, FINISH relations): `A > B` is A - B, `A .AND. B` the smaller of
+    the two surfaces, `A .OR. B` the larger, `.NOT. A` its negative, a number
+    itself. Where no such surface exists (==, .EQV.), the truth minus 1/2."""
+    span = e.span
+    if isinstance(e, ast.BinOp):
+        if e.op in (">", ">="):
+            return ast.BinOp("-", e.left, e.right, span)
+        if e.op in ("<", "<="):
+            return ast.BinOp("-", e.right, e.left, span)
+        if e.op == "/=":
+            return ast.Call("ABS", (ast.BinOp("-", e.left, e.right, span),), span)
+        if e.op in ("AND", "OR"):
+            return ast.Call("AMIN1" if e.op == "AND" else "AMAX1",
+                            (condition_surface(e.left), condition_surface(e.right)), span)
+    if isinstance(e, ast.Not):
+        return ast.Neg(condition_surface(e.operand), span)
+    if isinstance(e, ast.Num) and ast.is_logical(e):
+        return ast.Num(1.0 if e.value > 0 else -1.0, span, e.text)
+    if ast.is_logical(e):
+        return ast.BinOp("-", e, ast.Num(0.5, span, "0.5"), span)
+    return e
+
+
+def _as_condition(expr: ast.Node) -> ast.Node:
+    """A condition as a truth (a number is true when > 0)."""
+    if ast.is_logical(expr):
+        return expr
+    return ast.BinOp(">", expr, ast.Num(0.0, expr.span, "0"), expr.span)

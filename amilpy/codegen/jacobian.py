@@ -1,0 +1,432 @@
+"""The Jacobian of the frozen-branch vector field, by differentiating the generated
+`rhs` (issue 14.3).
+
+The compiled `rhs` is straight-line code on floats: the states unpacked, one
+assignment per algebraic equation, the derivatives returned. Forward
+differentiation of that tree gives, for every assignment v and every state j that
+v depends on (the dependency graph: the sparsity), a local `d<j>_v` holding
+dv/dy_j, right after v's own assignment; the Jacobian's entries are the
+derivatives of the returned expressions. Switches are differentiated in the
+branch their frozen modes select (the same `if` on the modes, each branch
+differentiated), which is the Jacobian of the field the stepper integrates.
+
+Rules are written out for the arithmetic and the elementary functions; any other
+call (a table, DELAY, a function added to the library later) is differentiated
+numerically in its own arguments only (`_DIFF`, a central difference scaled to
+the argument: about 1e-10 relative), so every model has a Jacobian.
+
+Entries that come out as constants (a linear spring, 1 in X' = V) are computed
+once; the generated `jac(t, y, m, z)` returns the others, in the order of
+`ModelJacobian.rows, cols`. Its size is linear in the model's: one expression
+per nonzero entry of each assignment. A listing is still data: the generated
+code reads only the compiler's names (`pytree.assert_closed`).
+"""
+
+from __future__ import annotations
+
+import ast as py
+import math
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from .pytree import Folder, assert_closed, const_value, function, namespace
+
+_ONE = py.Constant(1.0)
+
+
+def _diff(f: Callable, k: int, *args: float) -> float:
+    """d f / d args[k] by a central difference scaled to the argument."""
+    x = args[k]
+    h = 6.055454e-6 * max(abs(x), 1.0)  # eps ** (1/3)
+    lo, hi = list(args), list(args)
+    lo[k], hi[k] = x - h, x + h
+    return (f(*hi) - f(*lo)) / (2.0 * h)
+
+
+def _sgn0(x: float) -> float:
+    return 1.0 if x > 0 else -1.0 if x < 0 else 0.0
+
+
+# d/da of f(a) for one-argument functions, in terms of the argument a (a Python
+# expression tree) and the function's value; None: not written out here
+def _rule(name: str, a: py.expr) -> py.expr | None:
+    def call(fn: str, *args: py.expr) -> py.expr:
+        return py.Call(py.Name(fn, py.Load()), list(args), [])
+
+    def c(x: float) -> py.expr:
+        return py.Constant(x)
+
+    def mul(x, y):
+        return py.BinOp(x, py.Mult(), y)
+
+    def div(x, y):
+        return py.BinOp(x, py.Div(), y)
+
+    def sub(x, y):
+        return py.BinOp(x, py.Sub(), y)
+
+    a2 = mul(a, _clone(a))
+    rules = {
+        "_SIN": lambda: call("_COS", a),
+        "_COS": lambda: py.UnaryOp(py.USub(), call("_SIN", a)),
+        "_EXP": lambda: call("_EXP", a),
+        "_SINH": lambda: call("_COSH", a),
+        "_COSH": lambda: call("_SINH", a),
+        "_TANH": lambda: sub(c(1.0), mul(call("_TANH", a), call("_TANH", _clone(a)))),
+        "_TAN": lambda: py.BinOp(c(1.0), py.Add(), mul(call("_TAN", a),
+                                                        call("_TAN", _clone(a)))),
+        "_ALOG": lambda: div(c(1.0), a),
+        "_ALOG10": lambda: div(c(1.0 / math.log(10.0)), a),
+        "_SQRT": lambda: div(c(0.5), call("_SQRT", a)),
+        "_ABS": lambda: call("_SGN0", a),
+        "_ATAN": lambda: div(c(1.0), py.BinOp(c(1.0), py.Add(), a2)),
+        "_ASIN": lambda: div(c(1.0), call("_SQRT", sub(c(1.0), a2))),
+        "_ACOS": lambda: div(c(-1.0), call("_SQRT", sub(c(1.0), a2))),
+        "_SGN": lambda: c(0.0),
+        "_LEVEL": lambda: c(0.0),
+        "_AINT": lambda: c(0.0),
+        "_FLOAT": lambda: c(1.0),
+    }
+    make = rules.get(name)
+    return make() if make else None
+
+
+class _Deriv:
+    """Forward differentiation of the rhs tree: `deps` (which states an expression
+    reads, through the locals) and `d(expr, j)` (its derivative in state j, None
+    for zero)."""
+
+    def __init__(self, states: dict[str, int]) -> None:
+        self.states = states  # local name of a state -> its index
+        self.local_deps: dict[str, frozenset[int]] = {}  # assigned local -> states
+        self.bound: dict[str, frozenset[int]] = {}  # walrus names -> states
+        self.known: dict[str, float] = {}  # derivative locals that are constants
+
+    # dependencies --------------------------------------------------------------
+    def deps(self, e: py.AST) -> frozenset[int]:
+        out: set[int] = set()
+        for node in py.walk(e):
+            if isinstance(node, py.Name) and isinstance(node.ctx, py.Load):
+                if node.id in self.states:
+                    out.add(self.states[node.id])
+                out |= self.local_deps.get(node.id, frozenset())
+                out |= self.bound.get(node.id, frozenset())
+            elif isinstance(node, py.NamedExpr):
+                self.bound[node.target.id] = self.deps(node.value)
+        # a test reads states too, but a branch is frozen: only the branches count
+        return frozenset(out)
+
+    # derivatives ----------------------------------------------------------------
+    def d(self, e: py.expr, j: int) -> py.expr | None:
+        method = getattr(self, "d_" + type(e).__name__, None)
+        if method is None:
+            raise NotImplementedError(type(e).__name__)
+        return method(e, j)
+
+    def d_Constant(self, e, j):
+        return None
+
+    def d_Name(self, e: py.Name, j: int):
+        if self.states.get(e.id) == j:
+            return _ONE
+        name = f"d{j}_{e.id}"
+        if name in self.known:
+            return py.Constant(self.known[name]) if self.known[name] else None
+        if j in self.local_deps.get(e.id, ()) or j in self.bound.get(e.id, ()):
+            return py.Name(name, py.Load())
+        return None
+
+    def d_Subscript(self, e: py.Subscript, j: int):
+        if isinstance(e.value, py.Tuple):  # ((w1 := a), ..., value)[-1]
+            parts = [self.d(x, j) for x in e.value.elts]
+            if parts[-1] is None and all(p is None for p in parts):
+                return None
+            parts = [p if p is not None else py.Constant(0.0) for p in parts]
+            return py.Subscript(py.Tuple(parts, py.Load()), _clone(e.slice), py.Load())
+        return None  # z[k]: memory, constant along a step
+
+    def d_NamedExpr(self, e: py.NamedExpr, j: int):
+        inner = self.d(e.value, j)
+        return py.NamedExpr(py.Name(f"d{j}_{e.target.id}", py.Store()),
+                            inner if inner is not None else py.Constant(0.0))
+
+    def d_UnaryOp(self, e: py.UnaryOp, j: int):
+        inner = self.d(e.operand, j)
+        if inner is None or isinstance(e.op, py.UAdd):
+            return inner
+        if isinstance(e.op, py.USub):
+            return py.UnaryOp(py.USub(), inner)
+        return None  # `not`: a condition
+
+    def d_BinOp(self, e: py.BinOp, j: int):
+        a, b = e.left, e.right
+        da, db = self.d(a, j), self.d(b, j)
+        if da is None and db is None:
+            return None
+        op = e.op
+
+        def cp(x):
+            return _clone(x)
+
+        def mul(x, y):
+            if const_value(x) == 1.0:
+                return y
+            return x if const_value(y) == 1.0 else py.BinOp(x, py.Mult(), y)
+
+        if isinstance(op, (py.Add, py.Sub)):
+            if db is None:
+                return da
+            if da is None:
+                return db if isinstance(op, py.Add) else py.UnaryOp(py.USub(), db)
+            return py.BinOp(da, type(op)(), db)
+        if isinstance(op, py.Mult):
+            left = mul(da, cp(b)) if da is not None else None
+            right = mul(cp(a), db) if db is not None else None
+            return right if left is None else left if right is None else \
+                py.BinOp(left, py.Add(), right)
+        if isinstance(op, py.Div):
+            first = py.BinOp(da, py.Div(), cp(b)) if da is not None else None
+            if db is None:
+                return first
+            second = py.BinOp(mul(cp(a), db), py.Div(), mul(cp(b), cp(b)))
+            return py.UnaryOp(py.USub(), second) if first is None else \
+                py.BinOp(first, py.Sub(), second)
+        if isinstance(op, py.Pow):
+            k = e.right.value if isinstance(e.right, py.Constant) else const_value(e.right)
+            if k is not None and db is None:
+                return mul(mul(py.Constant(float(k)), py.BinOp(cp(a), py.Pow(),
+                                                              py.Constant(k - 1))), da)
+            return self._numeric(py.Call(py.Name("_POW", py.Load()), [a, b], []), j)
+        raise NotImplementedError(type(op).__name__)
+
+    def d_IfExp(self, e: py.IfExp, j: int):
+        body, orelse = self.d(e.body, j), self.d(e.orelse, j)
+        if body is None and orelse is None:
+            return None
+        zero = py.Constant(0.0)
+        return py.IfExp(_clone(e.test), body or zero, orelse or zero)
+
+    def d_Call(self, e: py.Call, j: int):
+        name = e.func.id if isinstance(e.func, py.Name) else ""
+        if len(e.args) == 1:
+            da = self.d(e.args[0], j)
+            if da is None:
+                return None
+            rule = _rule(name, _clone(e.args[0]))
+            if rule is not None:
+                return py.BinOp(rule, py.Mult(), da)
+        return self._numeric(e, j)
+
+    def _numeric(self, e: py.Call, j: int):
+        """sum over the arguments k that depend on y_j: _DIFF(f, k, args) * d arg_k."""
+        total = None
+        for k, arg in enumerate(e.args):
+            da = self.d(arg, j)
+            if da is None:
+                continue
+            term = py.BinOp(py.Call(py.Name("_DIFF", py.Load()),
+                                    [_clone(e.func), py.Constant(k),
+                                     *[_clone(a) for a in e.args]], []), py.Mult(), da)
+            total = term if total is None else py.BinOp(total, py.Add(), term)
+        return total
+
+
+@dataclass
+class ModelJacobian:
+    """d rhs / d y of one run's compiled functions, with its sparsity.
+
+    `rows`, `cols`: the structurally nonzero entries (the dependency graph);
+    `constant`: the values of those that are constants (NaN where the generated
+    `variable(t, y, m, z)` gives them, in order)."""
+
+    n: int
+    rows: np.ndarray
+    cols: np.ndarray
+    constant: np.ndarray
+    variable: Callable
+    source: str
+
+    @property
+    def nnz(self) -> int:
+        return len(self.rows)
+
+    def values(self, t: float, y, m, z) -> np.ndarray:
+        v = self.constant.copy()
+        if self._varying.size:
+            v[self._varying] = self.variable(t, y, m, z)
+        return v
+
+    def __post_init__(self) -> None:
+        self._varying = np.flatnonzero(np.isnan(self.constant))
+
+    def dense(self, t: float, y, m, z) -> np.ndarray:
+        out = np.zeros((self.n, self.n))
+        out[self.rows, self.cols] = self.values(t, y, m, z)
+        return out
+
+    def bandwidth(self) -> tuple[int, int]:
+        """(lower, upper) diagonals the entries reach."""
+        if not self.nnz:
+            return 0, 0
+        d = self.rows - self.cols
+        return int(max(d.max(), 0)), int(max(-d.min(), 0))
+
+    def banded(self, t: float, y, m, z, ml: int, mu: int) -> np.ndarray:
+        """In ODEPACK's banded layout: out[mu + i - j, j] = d f_i / d y_j."""
+        out = np.zeros((ml + mu + 1, self.n))
+        out[mu + self.rows - self.cols, self.cols] = self.values(t, y, m, z)
+        return out
+
+    def sparse(self, t: float, y, m, z):
+        from scipy.sparse import csc_matrix
+
+        return csc_matrix((self.values(t, y, m, z), (self.rows, self.cols)),
+                          shape=(self.n, self.n))
+
+
+def build(module: py.Module, n: int, tables: dict | None = None,
+          values: dict | None = None) -> ModelJacobian:
+    """The Jacobian of the `rhs` function in a compiled module (`Compiled.module`);
+    `values`: the parameters' globals (p_NAME) it reads."""
+    return bind(code(module, n), tables, values)
+
+
+def bind(built: tuple, tables: dict | None = None, values: dict | None = None
+         ) -> ModelJacobian:
+    """The Jacobian's code (`code`) executed with one run's tables and parameters."""
+    compiled, n, rows, cols, constant, source = built
+    scope: dict[str, object] = {"__builtins__": {}, **namespace(), "_DIFF": _diff,
+                                "_SGN0": _sgn0, **(tables or {}), **(values or {})}
+    exec(compiled, scope)  # noqa: S102 - compiler-built tree, closed namespace
+    return ModelJacobian(n, rows, cols, constant, scope["jac"], source)
+
+
+def code(module: py.Module, n: int) -> tuple:
+    """The generated Jacobian of a module's `rhs`, compiled: (code, n, rows, cols,
+    constant entries, source)."""
+    rhs = next(f for f in module.body if isinstance(f, py.FunctionDef) and f.name == "rhs")
+    body = [_clone(s) for s in rhs.body]
+    states: dict[str, int] = {}
+    deriv = _Deriv(states)
+    out: list[py.stmt] = []
+    entries: list[tuple[int, int, py.expr]] = []
+    for stmt in body:
+        if isinstance(stmt, py.Assign) and isinstance(stmt.value, py.Name) and \
+                stmt.value.id == "y":
+            target = stmt.targets[0]
+            names = target.elts if isinstance(target, py.Tuple) else [target]
+            states.update({t.id: i for i, t in enumerate(names)})
+            out.append(stmt)
+        elif isinstance(stmt, py.Assign) and isinstance(stmt.value, py.Subscript) and \
+                isinstance(stmt.value.value, py.Name) and stmt.value.value.id == "y":
+            states[stmt.targets[0].id] = 0  # one state: v = y[0]
+            out.append(stmt)
+        elif isinstance(stmt, py.Assign) and len(stmt.targets) == 1 and \
+                isinstance(stmt.targets[0], py.Name):
+            name = stmt.targets[0].id
+            out.append(stmt)
+            dep = deriv.deps(stmt.value)
+            deriv.local_deps[name] = dep
+            for j in sorted(dep):
+                dv = deriv.d(stmt.value, j)
+                if dv is None:
+                    deriv.known[f"d{j}_{name}"] = 0.0
+                    continue
+                dv = _fold(dv)
+                if const_value(dv) is not None:
+                    deriv.known[f"d{j}_{name}"] = const_value(dv)  # propagated, not stored
+                else:
+                    out.append(py.Assign([py.Name(f"d{j}_{name}", py.Store())], dv))
+        elif isinstance(stmt, py.Return):
+            for i, value in enumerate(stmt.value.elts):
+                if any(isinstance(x, py.NamedExpr) for x in py.walk(value)):
+                    # its derivatives read the names it binds
+                    out.append(py.Assign([py.Name(f"r{i}", py.Store())], value))
+                for j in sorted(deriv.deps(value)):
+                    dv = deriv.d(value, j)
+                    if dv is not None:
+                        entries.append((i, j, dv))
+        else:
+            out.append(stmt)  # m and z unpacked
+    folded = [_fold(e) for _, _, e in entries]
+    constant = np.array([const_value(e) if const_value(e) is not None else math.nan
+                         for e in folded], dtype=float)
+    varying = [e for e, c in zip(folded, constant, strict=True) if math.isnan(c)]
+    out.append(py.Return(py.List(varying, py.Load())))
+    fn = function("jac", ("t", "y", "m", "z"), _live(out))
+    tree = py.Module(body=[fn], type_ignores=[])
+    py.fix_missing_locations(tree)
+    _closed(tree)
+    rows = np.array([i for i, _, _ in entries], dtype=int)
+    cols = np.array([j for _, j, _ in entries], dtype=int)
+    return compile(tree, "<jacobian>", "exec"), n, rows, cols, constant, py.unparse(tree)
+
+
+def for_compiled(c) -> ModelJacobian:
+    """The Jacobian of a run's compiled `rhs` (`codegen.Compiled`), built once."""
+    if "jacobian" not in c.derived:
+        if "jacobian" not in c.shared:  # one code for every binding of the module
+            c.shared["jacobian"] = code(c.module, len(c.state_names))
+        values = {k: v for k, v in c.namespace.items() if k.startswith("p_")}
+        c.derived["jacobian"] = bind(c.shared["jacobian"], c.tables, values)
+    return c.derived["jacobian"]
+
+
+def _live(body: list[py.stmt]) -> list[py.stmt]:
+    """The statements whose names are read later (the values the derivatives need),
+    the unpacking of y, m and z, and the return."""
+    used: set[str] = set()
+    kept: list[py.stmt] = []
+    for stmt in reversed(body):
+        targets = [n.id for n in py.walk(stmt) if isinstance(n, py.Name) and
+                   isinstance(n.ctx, py.Store)] if isinstance(stmt, py.Assign) else []
+        reads_args = isinstance(stmt, py.Assign) and isinstance(stmt.value, (py.Name,
+                                                                             py.Subscript))
+        if isinstance(stmt, py.Return) or reads_args and not targets or \
+                any(t in used for t in targets):
+            kept.append(stmt)
+            used |= {n.id for n in py.walk(stmt) if isinstance(n, py.Name) and
+                     isinstance(n.ctx, py.Load)}
+    return list(reversed(kept))
+
+
+def _fold(e: py.expr) -> py.expr:
+    return Folder().visit(py.Expression(e)).body
+
+
+_OURS = re.compile(r"d\d+_\w+|r\d+|_DIFF|_SGN0")
+
+
+def _closed(tree: py.Module) -> None:
+    """The rhs's own closedness check, with the derivative locals and helpers."""
+    assert_closed(tree, also=lambda name: _OURS.fullmatch(name) is not None)
+
+
+def _clone(node):
+    """A copy of a syntax tree, its nodes' fields only (no positions, no notes): far
+    cheaper than copy.deepcopy, which would also copy the IR each node remembers."""
+    if isinstance(node, py.AST):
+        new = type(node)()
+        for name in node._fields:
+            setattr(new, name, _clone(getattr(node, name, None)))
+        return new
+    if isinstance(node, list):
+        return [_clone(x) for x in node]
+    return node
+
+
+def finite_difference(f: Callable, t: float, y: np.ndarray, eps: float = 1e-7) -> np.ndarray:
+    """The Jacobian of f(t, y) by central differences (for tests and checks)."""
+    y = np.asarray(y, dtype=float)
+    n = len(y)
+    out = np.empty((n, n))
+    for j in range(n):
+        h = eps * max(abs(y[j]), 1.0)
+        up, down = y.copy(), y.copy()
+        up[j] += h
+        down[j] -= h
+        out[:, j] = (np.asarray(f(t, up), float) - np.asarray(f(t, down), float)) / (2 * h)
+    return out

@@ -1,0 +1,239 @@
+"""Independent runs on every core, or on a Dask cluster (issue 14.5).
+
+The runs of a listing's value lists and END groups, the points of a sweep that
+does not carry its state, and the points of a parameter grid do not depend on each
+other. `farm` hands them to worker processes on this machine (`jobs`) or to a Dask
+distributed cluster (`scheduler`, the optional extra `amilpy[cluster]`). Each worker
+gets the checked model once (pickled with the pool's initializer; scattered to
+every Dask worker once) and keeps its compiled functions between tasks, so a worker
+compiles a model once per set of constants, as a serial run would.
+
+Results come back in the order of the tasks, whatever order they finish in. A task
+that raises (a fault in its data, say) comes back as an `Outcome` with the error's
+text, labelled with its parameters; the others are kept. The same code runs each
+task as a serial run does (`run.simulate`), so the results are the same, bit for
+bit.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import pickle
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from . import ir
+from .diagnostics import AmilError
+from .result import Run
+
+# per worker process: token -> (model, its Cache)
+_MODELS: dict[str, tuple[ir.Model, object]] = {}
+
+
+@dataclass(frozen=True)
+class Task:
+    """One independent run. `measure`: a sweep's point only (the minimum and maximum
+    of that variable after `settle` seconds), the run itself kept only with
+    `keep_run`."""
+
+    spec: ir.RunSpec
+    options: object  # run.Options, without a progress callback
+    label: str
+    measure: str | None = None
+    settle: float = 0.0
+    keep_run: bool = True
+
+
+@dataclass
+class Outcome:
+    """What a task gave: the run (or None), a sweep's (min, max, status, t0, t_end),
+    or the error that stopped it (the task's label is not in it: the caller says
+    which run or point it was)."""
+
+    run: Run | None = None
+    point: tuple | None = None
+    error: str | None = None
+    interrupted: bool = False  # Ctrl-C came before it finished
+
+
+def default_jobs() -> int:
+    """Every core this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def farm(model: ir.Model, tasks: list[Task], jobs: int = 1, scheduler: str | None = None,
+         done: Callable[[int, Outcome], None] | None = None, cache=None) -> list[Outcome]:
+    """Run the tasks; their outcomes in the tasks' order. `done(i, outcome)` is called
+    as each finishes (in the order they finish). With one job (or one task) they run
+    here, one after the other, with `cache` (an `api.Model`'s)."""
+    if scheduler or (jobs > 1 and len(tasks) > 1):
+        # no progress lines from other processes
+        tasks = [replace(t, options=replace(t.options, progress=None)) for t in tasks]
+    if scheduler:
+        return _on_dask(model, tasks, scheduler, done)
+    if jobs <= 1 or len(tasks) <= 1:
+        if cache is None:
+            from .run import Cache
+
+            cache = Cache()
+        out = []
+        for i, task in enumerate(tasks):
+            out.append(_execute(model, cache, task))
+            if done is not None:
+                done(i, out[-1])
+        return out
+    return _on_processes(model, tasks, jobs, done)
+
+
+# ------------------------------------------------------------------------ workers
+
+def _token(blob: bytes) -> str:
+    return hashlib.sha256(blob).hexdigest()[:16]
+
+
+def _install(token: str, blob: bytes, ignore_interrupt: bool = False) -> None:
+    """A worker's copy of the model and its cache (pool initializer). A pool's worker
+    leaves Ctrl-C to the parent, which ends it."""
+    if ignore_interrupt:
+        import signal
+
+        # a forked worker has the command line's handlers: Ctrl-C is the parent's to
+        # handle, and the parent's terminate() must end the worker
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        for sig in (signal.SIGTERM, getattr(signal, "SIGHUP", None)):
+            if sig is not None:
+                signal.signal(sig, signal.SIG_DFL)
+    if token not in _MODELS:
+        from .run import Cache
+
+        _MODELS[token] = (pickle.loads(blob), Cache())  # noqa: S301 - our own pickle
+
+
+def execute(token: str, task: Task) -> Outcome:
+    """One task in a worker, on the model installed there."""
+    model, cache = _MODELS[token]
+    return _execute(model, cache, task)
+
+
+def _execute(model: ir.Model, cache, task: Task) -> Outcome:
+    from .run import simulate
+
+    try:
+        run = simulate(model, task.spec, task.options, cache)
+    except AmilError as exc:
+        if exc.path is None:
+            exc.path = model.path
+        return Outcome(error=exc.render())
+    except Exception as exc:  # noqa: BLE001 - reported with its parameters, others kept
+        return Outcome(error=f"{type(exc).__name__}: {exc}")
+    if task.measure is None:
+        return Outcome(run=run)
+    t0 = float(run.times[0]) if len(run.times) else float("nan")
+    lo, hi = extent(run, task.measure)
+    return Outcome(run=run if task.keep_run else None,
+                   point=(lo, hi, str(run.status), t0, float(run.t_end)))
+
+
+def extent(run: Run, measure: str) -> tuple[float, float]:
+    """The least and greatest value of `measure` after the settling time, located
+    between the output instants like RANGE (`Options.extrema`): the peak of a lightly
+    damped resonance falls between rows at any OUTDEL."""
+    lo, _, hi, _ = run.extrema.get(measure, (float("nan"),) * 4)
+    return lo, hi
+
+
+def _on_processes(model: ir.Model, tasks: list[Task], jobs: int,
+                  done: Callable | None) -> list[Outcome]:
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    blob = pickle.dumps(model)
+    token = _token(blob)
+    # fork where there is one: the workers start with amilpy, NumPy and SciPy imported
+    context = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else None)
+    out: list[Outcome | None] = [None] * len(tasks)
+    pool = ProcessPoolExecutor(max_workers=min(jobs, len(tasks)), mp_context=context,
+                               initializer=_install, initargs=(token, blob, True))
+    futures = {pool.submit(execute, token, task): i for i, task in enumerate(tasks)}
+    try:
+        for future in as_completed(futures):
+            i = futures[future]
+            try:
+                out[i] = future.result()
+            except Exception as exc:  # noqa: BLE001 - a worker that died
+                out[i] = Outcome(error=f"the worker failed: {exc}")
+            if done is not None:
+                done(i, out[i])
+    except KeyboardInterrupt:
+        # Ctrl-C: the finished runs are kept; the workers are ended, their runs lost
+        pool.shutdown(wait=False, cancel_futures=True)
+        for child in mp.active_children():
+            child.terminate()
+        return [o if o is not None else Outcome(
+            error="interrupted before it finished", interrupted=True) for o in out]
+    pool.shutdown()
+    return [o if o is not None else Outcome(error="not run") for o in out]
+
+
+def _on_dask(model: ir.Model, tasks: list[Task], address: str,
+             done: Callable | None) -> list[Outcome]:
+    try:
+        from distributed import Client, as_completed
+    except ImportError:
+        raise AmilError("--scheduler needs Dask: pip install 'amilpy[cluster]'") from None
+    blob = pickle.dumps(model)
+    token = _token(blob)
+    try:
+        client = Client(address, timeout=30, set_as_default=False)
+    except OSError as exc:
+        raise AmilError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
+    try:
+        shipped = client.scatter((token, blob), broadcast=True)  # once per worker
+        futures = [client.submit(_dask_task, shipped, task, pure=False) for task in tasks]
+        index = {f.key: i for i, f in enumerate(futures)}
+        out: list[Outcome | None] = [None] * len(tasks)
+        with client.as_current():
+            for future in as_completed(futures):
+                i = index[future.key]
+                try:
+                    out[i] = future.result()
+                except Exception as exc:  # noqa: BLE001 - a worker that died
+                    out[i] = Outcome(error=f"the worker failed: {exc}")
+                if done is not None:
+                    done(i, out[i])
+        return [o if o is not None else Outcome(error="not run") for o in out]
+    finally:
+        client.close()
+
+
+def _dask_task(shipped: tuple[str, bytes], task: Task) -> Outcome:
+    token, blob = shipped
+    _install(token, blob)
+    return execute(token, task)
+
+
+def run_tasks(model: ir.Model, specs: list[ir.RunSpec], options, jobs: int,
+              scheduler: str | None, done=None, cache=None) -> list[Outcome]:
+    """`farm` for a listing's runs, one task per spec."""
+    opts = replace(options, progress=None)
+    tasks = [Task(spec, opts, f"run {spec.label!r}" if spec.label else f"run {k + 1}")
+             for k, spec in enumerate(specs)]
+    return farm(model, tasks, jobs, scheduler, done, cache)
+
+
+def failed_run(spec: ir.RunSpec, method: str, message: str) -> Run:
+    """A run that could not start (a fault in its data): no rows, its message."""
+    from .result import Status
+
+    empty = np.empty(0)
+    return Run(label=spec.label, params=dict(spec.data), constants={}, times=empty,
+               values={}, outdel_mask=np.empty(0, bool), prdel_mask=np.empty(0, bool),
+               events=[], status=Status.FAILED, message=message, final={}, stats={},
+               method=method, rtol=float("nan"), atol=float("nan"), titles=list(spec.titles),
+               reports=list(spec.reports))

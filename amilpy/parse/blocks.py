@@ -1,0 +1,183 @@
+"""Statements read one by one -> nested blocks (contract sections 9 and 10).
+
+The grammar reads block openers (`IF (c) THEN`, `DISCRETE name`, `DO i = 1, N`, the
+sections of the ACSL form ...) and closers (`END`, `END IF`, `END DO`) as statements
+of their own, so a fault in one is located like any other; `nest` builds the
+blocks. In ACSL form (the first statement is PROGRAM or MODEL) `END` closes the
+innermost open block; `END IF`/`ENDIF` closes only an IF and `END DO`/`ENDDO` only
+a DO. In CSMP form the sections stay markers and `END` ends a run group; IF and DO
+blocks nest the same way, closed by `END IF` and `END DO`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .. import syntax as ast
+from ..diagnostics import Diagnostic, Span
+
+# what opens a block, as a reader calls it
+_NAMES = {"IF": "IF", "FOR": "FOR loop", "DO": "DO loop", "PROCEDURAL": "PROCEDURAL",
+          "FUNCTION": "FUNCTION", "DISCRETE": "DISCRETE", "PROGRAM": "PROGRAM",
+          "INITIAL": "INITIAL", "DYNAMIC": "DYNAMIC", "DERIVATIVE": "DERIVATIVE",
+          "TERMINAL": "TERMINAL"}
+ACSL_ONLY = ("FOR", "PROCEDURAL", "FUNCTION", "DISCRETE", "INCLUDED")
+
+
+@dataclass
+class Head:
+    """A block opener: IF (data: the condition), PROCEDURAL ((outputs, inputs)),
+    FOR/DO ((var, start, stop, step)), FUNCTION ((result, params)), DISCRETE and
+    the ACSL sections (name), PROGRAM (its name)."""
+
+    kind: str
+    span: Span
+    name: str | None = None
+    data: object = None
+
+
+@dataclass
+class ElseHead:
+    cond: ast.Expr | None  # ELSE IF (c); None: ELSE
+    span: Span
+
+
+@dataclass
+class Close:
+    kind: str  # END, ENDIF, ENDDO
+    span: Span
+
+
+@dataclass
+class _Open:
+    head: Head
+    branches: list[tuple[ast.Expr | None, Span, list]] = field(default_factory=list)
+
+    @property
+    def body(self) -> list:
+        return self.branches[-1][2]
+
+
+def _describe(kind: str) -> str:
+    return _NAMES.get(kind, kind)
+
+
+class Nester:
+    """Builds the nested statements; faults go to `errors`."""
+
+    def __init__(self, errors: list[Diagnostic]) -> None:
+        self.errors = errors
+
+    def error(self, message: str, span: Span | None, hint: str | None = None) -> None:
+        self.errors.append(Diagnostic(message, span, hint))
+
+    def nest(self, items: list) -> tuple[str, str, list]:
+        """(form, program name, top-level statements)."""
+        first = next((s for s in items if not isinstance(s, ast.Title)), None)
+        acsl = isinstance(first, Head) and first.kind == "PROGRAM"
+        form = "ACSL" if acsl else "CSMP"
+        stack: list[_Open] = []
+        top: list = []
+        name, closed = "", None
+        for item in items:
+            if acsl and isinstance(item, ast.Section):
+                item = Head(item.written or item.name, item.span)
+            if acsl and isinstance(item, ast.End):
+                item = Close("END", item.span)
+            if closed is not None:
+                if not isinstance(item, ast.Title):  # TITLE lines are fine anywhere
+                    self.error("only comments may follow the program's END", item.span,
+                               f"the program ends at line {closed.line}")
+                continue
+            target = stack[-1].body if stack else top
+            if isinstance(item, Head):
+                if item.kind == "PROGRAM":
+                    if not acsl or stack or top:
+                        self.error("PROGRAM or MODEL must be the first statement", item.span,
+                                   "a file in ACSL form starts with PROGRAM or MODEL")
+                        continue
+                    name = item.name or ""
+                elif not acsl and item.kind in ACSL_ONLY:
+                    self.error(f"{_describe(item.kind)} belongs to the ACSL form", item.span,
+                               "start the file with PROGRAM or MODEL (ACSL form)"
+                               + ("; in CSMP form write DO i = a, b ... END DO"
+                                  if item.kind == "FOR" else ""))
+                    continue
+                opened = _Open(item)
+                opened.branches.append((item.data if item.kind == "IF" else None, item.span, []))
+                stack.append(opened)
+            elif isinstance(item, ElseHead):
+                if not stack or stack[-1].head.kind != "IF":
+                    self.error("ELSE without an open IF", item.span)
+                    continue
+                open_if = stack[-1]
+                if open_if.branches[-1][0] is None and len(open_if.branches) > 1:
+                    self.error("ELSE IF or ELSE after the ELSE of this IF", item.span,
+                               f"the IF opened at line {open_if.head.span.line} has its ELSE")
+                    continue
+                open_if.branches.append((item.cond, item.span, []))
+            elif isinstance(item, Close):
+                done = self.close(stack, item, acsl)
+                if done is None:
+                    continue
+                if done.head.kind == "PROGRAM":
+                    top = list(self.block(done))
+                    closed = item.span
+                    continue
+                built = self.block(done)
+                into = stack[-1].body if stack else top
+                if done.head.kind == "INCLUDED":  # its statements stand where it stands
+                    into.extend(built)
+                else:
+                    into.append(built)
+            else:
+                target.append(item)
+        for opened in reversed(stack):
+            self.error(f"{_describe(opened.head.kind)} opened at line "
+                       f"{opened.head.span.line} is never closed", opened.head.span,
+                       "close it with " + self.closer(opened.head.kind, acsl))
+        return form, name, top
+
+    @staticmethod
+    def closer(kind: str, acsl: bool) -> str:
+        if kind == "IF":
+            return "END IF" + (" (or END)" if acsl else "")
+        if kind == "DO":
+            return "END DO" + (" (or END)" if acsl else "")
+        return "END"
+
+    def close(self, stack: list[_Open], item: Close, acsl: bool) -> _Open | None:
+        if not stack:
+            self.error(f"{'END' if item.kind == 'END' else item.kind} with no open block",
+                       item.span, "every END closes a block opened before it")
+            return None
+        kind = stack[-1].head.kind
+        want = {"ENDIF": "IF", "ENDDO": "DO"}.get(item.kind)
+        if want is not None and kind != want:
+            self.error(f"{'END IF' if want == 'IF' else 'END DO'} closes "
+                       f"{'an IF' if want == 'IF' else 'a DO loop'}, but the "
+                       f"innermost open block is the {_describe(kind)} of line "
+                       f"{stack[-1].head.span.line}", item.span,
+                       f"close that {_describe(kind)} first with "
+                       f"{self.closer(kind, acsl)}")
+            return None
+        return stack.pop()
+
+    def block(self, opened: _Open):
+        head = opened.head
+        body = tuple(opened.body)
+        if head.kind in ("PROGRAM", "INCLUDED"):
+            return body
+        if head.kind == "IF":
+            return ast.If(tuple(ast.Branch(cond, tuple(b), span)
+                                for cond, span, b in opened.branches), head.span)
+        if head.kind == "PROCEDURAL":
+            outputs, inputs = head.data
+            return ast.Procedural(outputs, inputs, body, head.span)
+        if head.kind in ("FOR", "DO"):
+            var, start, stop, step = head.data
+            return ast.Loop(var, start, stop, step, body, head.span, head.kind)
+        if head.kind == "FUNCTION":
+            result, params = head.data
+            return ast.FunctionDef(head.name or "", result, params, body, head.span)
+        return ast.Block(head.kind, head.name, body, head.span)

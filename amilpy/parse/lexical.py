@@ -1,0 +1,144 @@
+"""The lexical pass before the grammar: what a context-free lexer cannot decide.
+
+`prepare` rewrites the text without moving any line or column, so every
+diagnostic still points into the listing as written:
+
+- a line whose first non-blank character is `*` is a comment (blanked), unless it
+  continues the line before (`...` or `&` at its end);
+- in the item lists of `PARAM PARAMETER CONST CONSTANT INCON TIMER FINISH WEATHER
+  TRANSLATION_*`, a `;` separates items like `,` (it becomes `,`); a `;` that ends
+  the line still ends the statement. Everywhere else `;` separates statements;
+- `!=` inside parentheses is not-equal (it becomes `/=`); elsewhere `!` starts a
+  comment, so banner comments such as `!======` stay comments;
+- text after a `STOP` statement is not read (FST files keep Fortran there).
+
+Strings (`'text'`, `''` a quote) and `!` comments are skipped as units: a `!` or
+`;` inside a string and a `'` inside a comment are plain characters.
+"""
+
+from __future__ import annotations
+
+import re
+
+from ..language import ITEM_KEYWORDS
+
+_WORD = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+_STOP = re.compile(r"^[ \t]*STOP[ \t]*(?:[;$][ \t]*)?(?:!.*)?$", re.IGNORECASE)
+
+
+def code_end(line: str) -> int:
+    """Where the code of a line ends: at its `!` comment (outside strings), or its end."""
+    quoted = False
+    for i, ch in enumerate(line):
+        if ch == "'":
+            quoted = not quoted  # '' inside a string toggles twice: still inside
+        elif ch == "!" and not quoted:
+            return i
+    return len(line)
+
+
+def continues(line: str) -> bool:
+    """A line whose code ends in a continuation mark (`...` or `&`)."""
+    code = line[:code_end(line)].rstrip()
+    return code.endswith("...") or (code.endswith("&") and not code.endswith("&&"))
+
+
+def blank_comment_lines(text: str) -> str:
+    """Blank every `*` comment line, keeping line and column numbers intact.
+
+    A line that follows a continuation mark is part of an expression even when
+    it starts with `*`, so it is kept.
+    """
+    out = []
+    continued = False
+    for line in text.split("\n"):
+        if not continued and line.strip().startswith("*"):
+            out.append("")
+            continue
+        out.append(line)
+        continued = continues(line)
+    return "\n".join(out)
+
+
+def _after_stop(lines: list[str]) -> list[str]:
+    """Lines after the first STOP statement line are blanked (not read)."""
+    continued = False
+    for k, line in enumerate(lines):
+        if not continued and _STOP.match(line):
+            return lines[:k + 1] + [""] * (len(lines) - k - 1)
+        continued = continues(line)
+    return lines
+
+
+class _Scanner:
+    """Walks the statements of the text, keeping strings and comments whole."""
+
+    def __init__(self) -> None:
+        self.items = False  # inside an item-list statement
+        self.start = True  # at the start of a statement
+        self.depth = 0  # parentheses open in this statement
+
+    def end_statement(self) -> None:
+        self.items, self.start, self.depth = False, True, 0
+
+    def line(self, line: str, continued: bool) -> str:
+        chars = list(line)
+        i, n = 0, len(chars)
+        while i < n:
+            ch = chars[i]
+            if ch == "'":
+                j = i + 1
+                while j < n:
+                    if chars[j] == "'":
+                        if j + 1 < n and chars[j + 1] == "'":
+                            j += 2
+                            continue
+                        break
+                    j += 1
+                i, self.start = j + 1, False
+                continue
+            if ch == "!":
+                if self.depth > 0 and i + 1 < n and chars[i + 1] == "=":
+                    chars[i] = "/"
+                    i += 2
+                    continue
+                break  # a comment: the rest of the line
+            if ch in " \t\r":
+                i += 1
+                continue
+            if self.start:
+                self.start = False
+                word = _WORD.match(line, i)
+                if word is not None:
+                    rest = line[word.end():].lstrip(" \t")
+                    keyword = word.group().upper()
+                    self.items = (keyword in ITEM_KEYWORDS
+                                  or keyword.startswith("TRANSLATION_")) \
+                        and not (rest.startswith("=") and not rest.startswith("=="))
+                    i = word.end()
+                    continue
+            if ch == "(":
+                self.depth += 1
+            elif ch == ")":
+                self.depth = max(0, self.depth - 1)
+            elif ch == "$":
+                self.end_statement()
+            elif ch == ";":
+                if self.items and line[i + 1:code_end(line)].strip():
+                    chars[i] = ","
+                else:
+                    self.end_statement()
+            i += 1
+        if not continued:
+            self.end_statement()
+        return "".join(chars)
+
+
+def prepare(text: str) -> str:
+    """The text the grammar reads (see the module's docstring); same lines, same columns."""
+    lines = _after_stop(blank_comment_lines(text).split("\n"))
+    scanner = _Scanner()
+    out = []
+    for line in lines:
+        out.append(scanner.line(line, continues(line)))
+    return "\n".join(out)

@@ -1,0 +1,404 @@
+"""A run of a program in ACSL form (contract sections 9 and 11): its preparation and
+its event queue.
+
+One run: constants -> INITIAL (written order, `prepare_acsl`) -> the states' INTEG
+initial values -> DERIVATIVE -> the events due at t0 -> DYNAMIC's own statements ->
+the TERMT tests -> the first row. Then the loop integrates to the next of: a CINT
+instant where DYNAMIC's own statements run, a scheduled event, a located crossing
+(SCHEDULE .XP./.XN./.XZ., a TERMT). At an event the due DISCRETE sections run in
+queue order, then the run restarts (branches chosen again); at a CINT instant
+DYNAMIC's own statements and their TERMTs run and a row is taken (after the
+events of that instant). Rows are every CINT; the loop records them (interpolated)
+where nothing happens, and holds the row of an instant where something does, for
+`AcslRun.instant` to take after it. At the end: the last row, then TERMINAL.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from bisect import bisect_right
+from dataclasses import dataclass, field, replace
+from itertools import count
+
+import numpy as np
+
+from .. import ir
+from ..codegen import Compiler, Setting, evaluate_constant
+from ..codegen.faults import statement_of
+from ..codegen.written import SCHEDULE, compile_code
+from ..diagnostics import AmilError, Diagnostic
+from ..language import MAX_INTERVALS
+from ..outcome import Failure
+from ..result import Event, EventKind
+from ..routes import IALG_METHODS, route_for
+from .loop import Cursor, Stop
+from .plan import Grid, Options, Purpose, SurfaceKind, make_grid, make_plan
+from .prepare import Cache, Prepared, before_run, constant_modes, random_seed
+from .simulate import _Run
+
+
+@dataclass(frozen=True)
+class AcslPrepared(Prepared):
+    """A prepared run of the ACSL form: what INITIAL scheduled and whether a TERMT of
+    INITIAL already holds."""
+
+    schedules: list[tuple[float, str]] = field(default_factory=list)
+    stop: str | None = None
+    unbounded: bool = False  # no TERMT on time and no FINTIM: the run is capped
+
+
+class _Calls:
+    """What written-order code reports through `ev`: SCHEDULE and TERMT."""
+
+    def __init__(self) -> None:
+        self.schedules: list[tuple[float, str]] = []
+        self.termts: list[int] = []
+
+    def __call__(self, kind: int, what, value: float) -> None:
+        if kind == SCHEDULE:
+            self.schedules.append((float(value), what))
+        else:
+            self.termts.append(int(what))
+
+
+def termination(t: ir.Termination) -> str:
+    where = f"TERMT at line {t.span.line}" if not t.text else \
+        f"TERMT({t.text}) at line {t.span.line}"
+    return f"{t.message} ({where})" if t.message else where
+
+
+def code_fault(exc: BaseException) -> str:
+    """A fault in written-order code: the statement and what went wrong."""
+    found = statement_of(exc)
+    what = str(exc) or type(exc).__name__
+    if isinstance(exc, ZeroDivisionError):
+        what = "division by zero"
+    if found is None or found[0] is None or found[0].span is None:
+        return what
+    return f"{found[0].target} (line {found[0].span.line}): {what}"
+
+
+# ----------------------------------------------------------------- preparation
+
+
+def prepare_acsl(model: ir.Model, spec: ir.RunSpec, opts: Options | None = None,
+                 cache: Cache | None = None) -> AcslPrepared:
+    """Constants, INITIAL, compiled functions and plan of one run of the ACSL form.
+    A fault in INITIAL or in a value needed before the run is an AmilError there."""
+    opts = opts or Options()
+    cache = cache or Cache()
+    return before_run(model, lambda: _prepare(model, spec, opts, cache), code_fault)
+
+
+def _initial(model: ir.Model, spec: ir.RunSpec, cache: Cache):
+    """INITIAL, run once: (values of the names it assigns and of CINT and the
+    INTERVALs, what it scheduled, the first TERMT of it that holds)."""
+    acsl = model.acsl
+    base = {**spec.data, "PI": math.pi, **spec.timer}
+    tables = spec.tables
+    starts = {acsl.cint_name: evaluate_constant(model, acsl.cint, base, tables, None)}
+    for d in acsl.discretes.values():
+        if d.interval is not None:
+            starts[d.interval] = evaluate_constant(model, d.interval_value, base, tables,
+                                                   d.span)
+    key = (tuple(sorted(base.items())), repr(sorted(tables.items())))
+    init = cache.get("initial", ("acsl",) + key, lambda: compile_code(
+        model, "initial", acsl.initial, base, tables, starts))
+    calls = _Calls()
+    values = dict(zip(init.amil_names, init(acsl.t0, [], [], [], calls), strict=True))
+    stop = termination(acsl.termts[calls.termts[0]]) if calls.termts else None
+    return base, values, calls.schedules, stop
+
+
+def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> AcslPrepared:
+    acsl = model.acsl
+    base, values, schedules, stop = _initial(model, spec, cache)
+    # what DERIVATIVE computes (its equations and states) is no constant, even where
+    # INITIAL gave it a value
+    derived = {e.target for e in model.dynamic} | {s.name for s in model.states}
+    kept = {n: float(values.get(n, 0.0)) for n in acsl.discrete_vars}
+    constants = {k: v for k, v in {**base, **values}.items()
+                 if k not in kept and k not in derived}
+    priors = {n: values[n] for n in acsl.priors if n in values}
+    cint = kept.get(acsl.cint_name, constants.get(acsl.cint_name))
+    if not (cint is not None and math.isfinite(cint) and cint > 0):
+        raise AmilError(f"the output interval {acsl.cint_name} = {cint} must be positive",
+                        model.path)
+    method = _method(model, spec, opts, constants)
+    spec = replace(spec, method=method)
+    timer = _timer(model, spec, opts, constants, cint)
+    const_modes = constant_modes(model, constants, spec.tables)
+    fixed = route_for(method or "AUTO").fixed
+    # a random draw is held for one output interval (one DELT with a fixed step)
+    setting = Setting(seed=random_seed(opts, constants), hold=timer["DELT"] if fixed else cint)
+    ckey = ("acsl", tuple(sorted(constants.items())), tuple(kept.items()),
+            tuple(sorted(priors.items())), repr(sorted(spec.tables.items())),
+            tuple(opts.outputs) if opts.outputs is not None else None, opts.events, setting)
+    compiled = cache.get("compiled", ckey, lambda: Compiler(
+        model, constants, spec.tables, const_modes, opts.outputs, opts.events,
+        setting=setting, kept=kept, priors=priors).build())
+    t0 = acsl.t0
+    # a TERMT on time alone bounds the run: find its instant from a plan reaching far
+    far = dict(timer, FINTIM=MAX_INTERVALS * cint)
+    first = make_plan(model, spec, opts, compiled, far, make_grid(t0, t0 + cint, cint, cint),
+                      t0=t0)
+    roots = [first.roots[k] for k, w in enumerate(first.watched)
+             if w.purpose is Purpose.TERMT and k in first.roots]
+    given = opts.fintim or spec.timer.get("FINTIM")
+    unbounded = False
+    if roots and (given is None or min(roots) - t0 <= given):
+        fintim = min(roots) - t0 + cint  # the TERMT instant lies inside the run
+    elif given is not None:
+        fintim = given
+    else:
+        fintim, unbounded = MAX_INTERVALS * cint, True
+    timer["FINTIM"] = fintim
+    grid = make_grid(t0, t0 + fintim, cint, cint)
+    plan = make_plan(model, spec, opts, compiled, timer, grid, t0=t0)
+    return AcslPrepared({**constants, **values}, compiled, plan, schedules, stop, unbounded)
+
+
+def _method(model: ir.Model, spec: ir.RunSpec, opts: Options, constants) -> str | None:
+    """METHOD, or the route ALGORITHM IALG = n maps to (contract section 11)."""
+    if opts.method or spec.method:
+        return spec.method
+    name = model.acsl.controls.get("ALGORITHM")
+    if name is None:
+        return None
+    ialg = constants.get(name)
+    if ialg is None or not float(ialg).is_integer() or int(ialg) not in IALG_METHODS:
+        known = ", ".join(f"{k} ({v})" for k, v in IALG_METHODS.items())
+        raise AmilError([Diagnostic(f"ALGORITHM {name} = {ialg:g} is not an algorithm amilpy "
+                                    "runs", model.acsl.control_spans.get("ALGORITHM"),
+                                    f"IALG takes {known}")], model.path, model.source)
+    return IALG_METHODS[int(ialg)]
+
+
+def _timer(model: ir.Model, spec: ir.RunSpec, opts: Options, constants, cint: float
+           ) -> dict[str, float]:
+    """Output interval CINT; fixed step min(MAXT, CINT/NSTP), made to divide CINT;
+    variable step: DELMAX = MAXT, DELMIN = MINT."""
+    controls = model.acsl.controls
+
+    def control(keyword: str, default: float) -> float:
+        name = controls.get(keyword)
+        return float(constants[name]) if name in constants else default
+
+    nstp, maxt = control("NSTEPS", 10.0), control("MAXTERVAL", 1e10)
+    mint = control("MINTERVAL", 0.0)
+    delt = min(maxt, cint / max(nstp, 1.0))
+    delt = cint / max(1, math.ceil(cint / delt - 1e-9))
+    route = route_for(opts.method or spec.method)
+    timer = {"OUTDEL": cint, "PRDEL": cint, "DELT": delt, "DELMIN": mint,
+             "DELMAX": maxt if "MAXTERVAL" in controls and route is not None
+             and not route.fixed else math.inf}
+    timer.update({k: v for k, v in spec.timer.items() if k in ("DELMIN", "DELMAX")})
+    return timer
+
+
+# ------------------------------------------------------------------------ run
+
+
+class AcslRun(_Run):
+    """simulate's run with the ACSL form's order of one run (see the module's doc)."""
+
+    def __init__(self, model, spec, opts, prepared: AcslPrepared, started) -> None:
+        super().__init__(model, spec, opts, prepared, started)
+        self.acsl = model.acsl
+        self.prepared = prepared
+        c = self.c
+        self.fns = {d.name: c.code[f"discrete_{k}"][1]
+                    for k, d in enumerate(self.acsl.discretes.values())}
+        self.dynamic = c.code["dynamic"][1] if self.acsl.dynamic.body else None
+        self.queue: list[tuple[float, int, str]] = []
+        self.order = count()
+        self.stopped: str | None = prepared.stop
+        for d in self.acsl.discretes.values():
+            if d.interval is not None:
+                self.schedule(self.plan.t0, d.name)
+        for t, section in prepared.schedules:
+            self.schedule(t, section)
+
+    # ------------------------------------------------------------------- queue
+    def schedule(self, t: float, section: str, now: float | None = None) -> None:
+        if now is not None and t < now - 1e-12 * max(abs(now), 1.0):
+            raise Stop(Failure.FAULT, now, detail=f"SCHEDULE {section} at T = {t:.9g}, "
+                       "before the present time")
+        heapq.heappush(self.queue, (max(t, now) if now is not None else t, next(self.order),
+                                    section))
+
+    def due(self, t: float) -> bool:
+        return bool(self.queue) and self.queue[0][0] <= t + 1e-12 * max(abs(t), 1.0)
+
+    def next_instant(self, t: float) -> tuple[float, bool]:
+        """The next instant something happens, and whether it acts (else only ends)."""
+        nxt, acts = self.plan.fintim, False
+        if self.queue and self.queue[0][0] < nxt:
+            nxt, acts = self.queue[0][0], True
+        if self.dynamic is not None:
+            times = self.plan.grid.times
+            k = bisect_right(times, t * (1 + 1e-15) + 1e-300)
+            if k < len(times) and times[k] <= nxt:
+                nxt, acts = float(times[k]), True
+        return nxt, acts
+
+    # -------------------------------------------------------------------- code
+    def run_code(self, cur: Cursor, fn, what: str) -> _Calls:
+        calls = _Calls()
+        try:
+            y, z, _ = fn(cur.t, cur.y.tolist(), cur.m, cur.z, calls)
+        except (ArithmeticError, ValueError) as exc:
+            raise Stop(Failure.FAULT, cur.t, detail=f"{what}: {code_fault(exc)}") from None
+        cur.y = np.asarray(y, dtype=float)
+        cur.z[:] = z
+        for t, section in calls.schedules:
+            self.schedule(t, section, cur.t)
+        if calls.termts and self.stopped is None:
+            self.stopped = termination(self.acsl.termts[calls.termts[0]])
+        return calls
+
+    def run_due(self, cur: Cursor) -> bool:
+        """The DISCRETE sections due now, in queue order (one scheduled now by them runs
+        after them); each INTERVAL section is scheduled again."""
+        ran = False
+        while self.due(cur.t) and self.stopped is None:
+            _, _, section = heapq.heappop(self.queue)
+            self.run_code(cur, self.fns[section], f"DISCRETE {section}")
+            self.integ.events.append(Event(cur.t, f"DISCRETE {section}", -1, 0.0, 0.0,
+                                           EventKind.DISCRETE, section))
+            if len(self.integ.events) > self.opts.max_events:
+                raise Stop(Failure.EVENTS, cur.t, limit=self.opts.max_events)
+            d = self.acsl.discretes[section]
+            if d.interval is not None:
+                gap = self.value(cur, d.interval)
+                if gap > 0:
+                    self.schedule(cur.t + gap, section)
+            ran = True
+        return ran
+
+    def value(self, cur: Cursor, name: str) -> float:
+        kept = self.c.kept
+        if name in kept:
+            return float(cur.z[len(cur.z) - len(kept) + kept.index(name)])
+        return float(self.constants.get(name, 0.0))
+
+    def restart(self, cur: Cursor) -> None:
+        """The branches in force after code changed states or kept names. A surface
+        at zero to rounding (a crossing just located) goes the way the motion takes
+        it, not by the sign of its rounding error."""
+        near: set[int] = set()
+        if self.plan.watch_idx:
+            e = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z)
+            scale = 1e-12 * max(1.0, float(np.max(np.abs(cur.y))) if len(cur.y) else 1.0)
+            near = {k for k in self.plan.watch_idx if abs(e[k]) <= scale
+                    and self.plan.watched[k].kind is SurfaceKind.SIGN}
+        new = self.watch.choose_modes(cur.t, cur.y, cur.z, cur.m, near)
+        self.integ.record_changes(cur.t, cur.y, cur.m, new, cur.z, set())
+        cur.m[:] = new
+        cur.y = self.watch.apply_resets(cur.y, cur.m)
+
+    def termt_now(self, cur: Cursor) -> None:
+        """The TERMTs of DERIVATIVE, tested at an instant (t0, an event)."""
+        plan = self.plan
+        ks = [k for k, w in enumerate(plan.watched) if w.purpose is Purpose.TERMT]
+        if not ks or self.stopped is not None:
+            return
+        e = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z)
+        for k in ks:
+            if e[k] > 0 or (e[k] == 0 and plan.watched[k].breakpoint_only):
+                self.stopped = plan.watched[k].description
+                return
+
+    def instant(self, cur: Cursor) -> None:
+        """Events due now, then (at a CINT instant) DYNAMIC's own statements, the
+        TERMT tests and the row."""
+        changed = self.run_due(cur)
+        times = self.plan.grid.times
+        on_grid = self.rec.out_i < len(times) and \
+            abs(times[self.rec.out_i] - cur.t) <= 1e-12 * max(abs(cur.t), 1.0)
+        if on_grid and self.dynamic is not None and self.stopped is None:
+            self.run_code(cur, self.dynamic, "DYNAMIC")
+            changed = True
+        if changed:
+            self.restart(cur)
+        self.termt_now(cur)
+        self.rec.hold = None
+        if on_grid:
+            self.rec.grid_row(cur.t, cur.y, cur.m, cur.z,
+                              shown=self.rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
+        if changed and self.acsl.cint_name in self.c.kept:
+            self.regrid(cur.t, self.value(cur, self.acsl.cint_name))
+
+    def regrid(self, t: float, cint: float) -> None:
+        """CINT assigned during the run: rows every new CINT from this instant on."""
+        plan = self.plan
+        if cint == plan.timer["OUTDEL"]:
+            return
+        if not (math.isfinite(cint) and cint > 0):
+            raise Stop(Failure.FAULT, t, detail=f"{self.acsl.cint_name} = {cint:g}: the "
+                       "output interval must be positive")
+        done = plan.grid.times[:self.rec.out_i]
+        later = make_grid(t, plan.fintim, cint, cint).times
+        times = np.concatenate([done, later[later > (done[-1] if done.size else -math.inf)]])
+        every = np.ones(times.size, bool)
+        timer = dict(plan.timer, OUTDEL=cint, PRDEL=cint)
+        if route_for(plan.method) is not None and route_for(plan.method).fixed:
+            timer["DELT"] = cint / max(1, math.ceil(cint / plan.timer["DELT"] - 1e-9))
+        self.plan = replace(plan, grid=Grid(times, every, every), timer=timer,
+                            max_step=min(timer["DELMAX"], cint))
+        self.rec.plan = self.integ.plan = self.plan
+        self.rec.times = self.integ.check_times = times
+
+    # ---------------------------------------------------------------- _Run hooks
+    def first_row(self, cur: Cursor) -> None:
+        try:
+            self.instant(cur)
+        except Stop as stop:  # raised again where the run's faults are handled
+            self.failed = stop
+        if self.rec.last_t is None:
+            super().first_row(cur)
+
+    def advance(self, cur: Cursor) -> str | None:
+        plan, integ, rec = self.plan, self.integ, self.rec
+        if getattr(self, "failed", None) is not None:
+            raise self.failed
+        while self.stopped is None:
+            t_next, acts = self.next_instant(cur.t)
+            rec.hold = t_next if acts else None
+            integ.integrate(cur, t_next, rec)
+            rec.hold = None
+            reason = integ.stop_reason
+            if reason is not None:
+                w = plan.watched[reason]
+                if w.purpose is not Purpose.SCHEDULE:
+                    return w.description
+                integ.stop_reason = None  # runs now, as the next instant
+                self.schedule(cur.t, self.acsl.crossings[w.surface][0], cur.t)
+                continue
+            if cur.t >= plan.fintim:
+                if self.prepared.unbounded:
+                    raise Stop(Failure.FAULT, cur.t, detail=(
+                        f"no TERMT ended the run after {MAX_INTERVALS} output intervals; "
+                        "add TERMT(T >= TSTOP) or TIMER FINTIM"))
+                return None
+            if cur.t >= t_next:
+                self.instant(cur)
+        return self.stopped
+
+
+def run_terminal(c, codes, cur: Cursor) -> dict[str, float]:
+    """TERMINAL sections in file order: the values they assign."""
+    out: dict[str, float] = {}
+    y, z = cur.y.tolist(), list(cur.z)
+    for k, code in enumerate(codes):
+        _, fn = c.code[f"terminal_{k}"]
+        try:
+            y, z, values = fn(cur.t, y, cur.m, z, _Calls())
+        except (ArithmeticError, ValueError) as exc:
+            raise AmilError(f"TERMINAL: {code_fault(exc)}") from None
+        out.update(zip(code.assigned, values, strict=True))
+    return out
+
+
+__all__ = ["AcslPrepared", "AcslRun", "Grid", "prepare_acsl", "run_terminal"]

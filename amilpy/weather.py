@@ -1,0 +1,201 @@
+"""Daily weather from CABO-format files, for FST listings' WEATHER statement (§13).
+
+    WEATHER WTRDIR = 'C:\\SYS\\WEATHER\\'; CNTR = 'NLD'; ISTN = 1; IYEAR = 1990
+
+makes the day's RDD (J m-2 d-1: the file's kJ times 1000), TMMN, TMMX, VP, WN,
+RAIN, the station's LONG, LAT, ELEV, and DOY and YEAR available as names. The
+day is floor(TIME); after day 365 (366 in a leap year) the run goes on in the
+next year's file. The file of a year is CNTR + ISTN + '.' + the year's last three
+digits (NLD1.990), in any case, looked for in WTRDIR (backslashes read as
+folder separators, a drive letter dropped), the listing's folder, its weather/
+and ../weather/ folders, and any folders given (`--weather-dir`).
+
+A CABO file: lines starting with `*` are comments; the first other line is the
+station's LONG LAT ELEV A B (the Angstrom coefficients A and B are read and not
+used); then one row a day, `station year day radiation tmin tmax vp wind rain`.
+-99 marks a missing value: one that a run uses is an error naming the file, the
+day and the variable. Files are read when a value of their year is first asked
+for, so a listing that names no weather variable reads nothing.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .diagnostics import AmilError, Diagnostic, Span
+
+# the daily columns of a CABO row after station, year and day, as the listing names them
+DAILY = ("RDD", "TMMN", "TMMX", "VP", "WN", "RAIN")
+STATION = ("LONG", "LAT", "ELEV")
+CALENDAR = ("DOY", "YEAR")
+NAMES = DAILY + STATION + CALENDAR  # every name a WEATHER statement defines
+MISSING = -99.0
+SCALE = {"RDD": 1000.0}  # kJ in the file, J in the model
+
+
+@dataclass(frozen=True)
+class WeatherSpec:
+    """What a WEATHER statement (or several, FST splits them) asks for."""
+
+    country: str
+    station: int
+    year: int
+    wtrdir: str | None = None
+    span: Span | None = None  # the statement, for errors
+
+
+@dataclass
+class WeatherYear:
+    """One CABO file: the station's position and the daily rows by day of year."""
+
+    path: str
+    long: float
+    lat: float
+    elev: float
+    days: dict[int, tuple[float, ...]] = field(default_factory=dict)  # day -> DAILY values
+    lines: dict[int, int] = field(default_factory=dict)  # day -> line in the file
+
+
+def days_in(year: int) -> int:
+    return 366 if year % 4 == 0 and (year % 100 != 0 or year % 400 == 0) else 365
+
+
+def file_name(country: str, station: int, year: int) -> str:
+    """NLD1.990: country, station, '.', the last three digits of the year."""
+    return f"{country}{station}.{year % 1000:03d}"
+
+
+def search_dirs(spec: WeatherSpec, listing_dir: str, extra: list[str] | None = None
+                ) -> list[str]:
+    """Where the files are looked for, in order (§13)."""
+    dirs = []
+    if spec.wtrdir:
+        d = spec.wtrdir.replace("\\", "/")
+        if len(d) >= 2 and d[1] == ":":  # a Windows drive letter means nothing here
+            d = d[2:]
+        dirs.append(d)
+    dirs += [listing_dir, os.path.join(listing_dir, "weather"),
+             os.path.join(listing_dir, os.pardir, "weather")]
+    dirs += list(extra or [])
+    return dirs
+
+
+def find_file(name: str, dirs: list[str]) -> str | None:
+    """The file `name` in the first folder that has it, matched in any case."""
+    want = name.lower()
+    for d in dirs:
+        try:
+            entries = os.listdir(d or ".")
+        except OSError:
+            continue
+        for entry in sorted(entries):
+            if entry.lower() == want and os.path.isfile(os.path.join(d, entry)):
+                return os.path.join(d, entry)
+    return None
+
+
+def read_cabo(path: str) -> WeatherYear:
+    """Parse one CABO file; a malformed line is an error naming the file and line."""
+    try:
+        with open(path, encoding="utf-8", errors="replace") as fh:
+            text = fh.read()
+    except OSError as exc:
+        raise AmilError(f"cannot read the weather file {path}: {exc.strerror or exc}") from None
+    year: WeatherYear | None = None
+    for number, line in enumerate(text.splitlines(), start=1):
+        fields = line.split()
+        if not fields or fields[0].startswith("*"):
+            continue
+        try:
+            values = [float(f) for f in fields]
+        except ValueError:
+            raise AmilError(f"{path}:{number}: not a CABO weather line: {line.strip()[:60]!r}"
+                            ) from None
+        if year is None:
+            if len(values) < 3:
+                raise AmilError(f"{path}:{number}: the station line needs LONG LAT ELEV "
+                                f"(A B), found {len(values)} numbers")
+            year = WeatherYear(path, values[0], values[1], values[2])
+            continue
+        if len(values) < 3 + len(DAILY):
+            raise AmilError(f"{path}:{number}: a day needs station, year, day and "
+                            f"{len(DAILY)} values, found {len(values)} numbers")
+        day = int(values[2])
+        year.days[day] = tuple(values[3:3 + len(DAILY)])
+        year.lines[day] = number
+    if year is None:
+        raise AmilError(f"the weather file {path} has no station line and no days")
+    return year
+
+
+class Weather:
+    """The weather of one run: values by name and TIME, files read as needed."""
+
+    def __init__(self, spec: WeatherSpec, listing_dir: str, extra_dirs: list[str] | None = None,
+                 used_at: list[Span] | None = None) -> None:
+        self.spec = spec
+        self.dirs = search_dirs(spec, listing_dir, extra_dirs)
+        self.used_at = used_at or []  # the lines that use weather, for a missing file
+        self.years: dict[int, WeatherYear] = {}
+
+    def _year(self, year: int) -> WeatherYear:
+        if year not in self.years:
+            name = file_name(self.spec.country, self.spec.station, year)
+            path = find_file(name, self.dirs)
+            if path is None:
+                where = ", ".join(d or "." for d in dict.fromkeys(self.dirs))
+                uses = ", ".join(str(s.line) for s in self.used_at[:8])
+                raise AmilError([Diagnostic(
+                    f"the weather file {name} (station {self.spec.country} "
+                    f"{self.spec.station}, {year}) is not in {where}",
+                    self.spec.span,
+                    "put the file in one of those folders or give --weather-dir"
+                    + (f"; weather is used on line(s) {uses}" if uses else ""))])
+            self.years[year] = read_cabo(path)
+        return self.years[year]
+
+    def locate(self, t: float) -> tuple[int, int]:
+        """(year, day of year) of TIME t: day floor(t) of IYEAR, running on into the
+        following years."""
+        if not math.isfinite(t):
+            raise AmilError(f"no weather at TIME = {t}")
+        year, day = self.spec.year, int(math.floor(t))
+        while day > days_in(year):
+            day -= days_in(year)
+            year += 1
+        while day < 1:
+            year -= 1
+            day += days_in(year)
+        return year, day
+
+    def value(self, name: str, t: float) -> float:
+        """The weather variable `name` at TIME t."""
+        year, day = self.locate(t)
+        if name == "DOY":
+            return float(day)
+        if name == "YEAR":
+            return float(year)
+        data = self._year(year)
+        if name in STATION:
+            return (data.long, data.lat, data.elev)[STATION.index(name)]
+        row = data.days.get(day)
+        k = DAILY.index(name)
+        if row is None or row[k] == MISSING:
+            what = "has no line for" if row is None else "has -99 (missing) for"
+            raise AmilError(f"the weather file {data.path} {what} {name} on day {day} "
+                            f"of {year} (TIME = {t:g})")
+        return row[k] * SCALE.get(name, 1.0)
+
+    def values(self, name: str, ts: np.ndarray) -> np.ndarray:
+        """`value` at every instant of ts."""
+        return np.array([self.value(name, float(t)) for t in np.asarray(ts, float)])
+
+    def day_starts(self, t0: float, t1: float) -> list[float]:
+        """The instants in (t0, t1] where the day changes: where every daily value may
+        jump, so breakpoints for a variable-step method."""
+        first = math.floor(t0) + 1
+        return [float(d) for d in range(int(first), int(math.floor(t1)) + 1)]

@@ -1,0 +1,270 @@
+"""Write docs/language.md, the language reference, from the registries.
+
+The lists a reader looks things up in — keywords, methods, functions, what is refused —
+are generated here from the modules that the parser, checker and runner read
+(`amilpy.language`, `amilpy.routes`, `amilpy.library`), so the reference cannot
+say what amilpy does not do. The prose around them is written below.
+tests/test_docs_language.py fails when docs/language.md is not what this writes.
+
+    python docs/make_language.py          # rewrite docs/language.md
+    python docs/make_language.py --check  # exit 1 if it is out of date
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from amilpy import language, library, routes
+
+OUT = Path(__file__).resolve().parent / "language.md"
+
+INTRO = """\
+# The amilpy language reference
+
+amilpy reads listings of the CSSL family in three forms. The contract is
+`../shared/amil-language.md` (sections 1-14); this page is the reference a user
+looks things up in. Its tables are generated from the registries the parser,
+checker and runner read (`python docs/make_language.py`), so they list exactly
+what amilpy runs. The functions' fuller notes are in `docs/functions.md`; the
+shipped models and what they are checked against in `docs/models.md`.
+
+{forms}
+
+Keywords and names are case-insensitive; `!` starts a comment (except in `!=`);
+`...` or a trailing `,` continues a statement on the next line; text after `STOP`
+or `ENDJOB` is not read.
+"""
+
+FORM_ROWS: tuple[tuple[str, ...], ...] = (
+    ("**CSMP form** (the lab's AMIL, CSMP III, CSMP/360, FST)", "the default", "`TIME`",
+     "DYNAMIC is sorted; INITIAL and TERMINAL run in written order",
+     "`models/ex4_clutch.amil`"),
+    ("**ACSL form** (ACSL, Magnolia)", "the first statement is `PROGRAM` or `MODEL`",
+     "`T` (and `TIME`)", "DERIVATIVE is sorted; INITIAL, DYNAMIC, DISCRETE, TERMINAL run "
+     "in written order", "`models/examples/`"),
+    ("**FST form** (Wageningen's FORTRAN Simulation Translator)", "CSMP form with FST's "
+     "statements (`TIMER STTIME`, `FINISH X > v`, `TRANSLATION_GENERAL`, `WEATHER`, `;` "
+     "between items)", "`TIME` from `STTIME`", "as CSMP", "`models/examples/`"),
+)
+
+# The side-by-side table: one row per construct whose spelling or meaning differs
+# between the dialects. amilpy reads every left-hand spelling as written.
+SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
+    ("ACSL", "`X = INTEG(XD, X0)`", "`X = INTGRL(X0, XD)` (the arguments the other way round)"),
+    ("CSMP III", "`X = INTGRL(X0, XD)`", "a state X with X(t0) = X0 and dX/dt = XD"),
+    ("ACSL", "`T`", "`TIME` (in ACSL form; `TIME` is read too)"),
+    ("ACSL", "`CONSTANT K = 2.0`", "`CONST K = 2.0`"),
+    ("ACSL", "`CINTERVAL CINT = 0.1`", "rows every 0.1 (OUTDEL/PRDEL = CINT)"),
+    ("ACSL", "`TERMT(T >= TSTOP, 'msg')`", "the run stops where the condition first holds, "
+     "located like a switch; the message is printed"),
+    ("ACSL", "`ALGORITHM IALG = 2`", "`METHOD " + routes.IALG_METHODS[2] + "` (the table of "
+     "methods below gives every IALG)"),
+    ("ACSL", "`MAXTERVAL MAXT = h`, `MINTERVAL MINT = h`", "`TIMER DELMAX = h`, "
+     "`TIMER DELMIN = h`"),
+    ("ACSL", "`MERROR X = 1E-6`, `XERROR X = 1E-9`", "`RELERR X = 1E-6`, `ABSERR X = 1E-9` "
+     "(per state)"),
+    ("ACSL", "`SCHEDULE D .AT. T + 1.0`", "DISCRETE section D runs at that instant"),
+    ("ACSL", "`SCHEDULE D .XN. H`", "D runs where H crosses zero downwards, located"),
+    ("ACSL", "`DISCRETE D` / `INTERVAL DT = 0.5`", "D runs every 0.5 from the start"),
+    ("ACSL", "`IF (X .GT. 0.0) THEN ... ELSE ... END IF`", "in sorted code a switch on X, "
+     "located; in written-order code a branch"),
+    ("ACSL", "`PROCEDURAL (Y = X) ... END`", "one sorted unit with outputs Y and inputs X, "
+     "written order inside"),
+    ("ACSL", "`A .AND. B`, `A && B`, `X .NE. Y`, `X != Y`", "`A AND B`, `X /= Y`"),
+    ("ACSL", "`PULSE(TZ, P, W)`, `HARM(TZ, W, P)`, `RSW(C, A, B)`, `BCKLSH(IC, DL, X)`",
+     "a pulse train, `SINE(TZ, W, P)`, a switch on C, `HSTRSS(IC, -DL, DL, X)`"),
+    ("ACSL", "`DELAY(X, IC, TDL, NMX)`", "`DELAY` with the value IC before t0 + TDL"),
+    ("ACSL", "`ALGORITHM IALG = 3` (Euler)", "`METHOD RECT` in step-point mode"),
+    ("CSMP III", "`MACRO Y = LAG2(T, X) ... ENDMAC`, `A = LAG2(0.1, U)`", "the body "
+     "expanded at each call (its own states and locals per call)"),
+    ("CSMP III", "`PROCEDURE Y, Z = P(A, B) ... ENDPRO`", "`PROCEDURAL (Y, Z = A, B)`"),
+    ("CSMP III", "`NOSORT ... SORT`", "a written-order unit inside sorted code"),
+    ("CSMP III", "`Y = IMPL(Y0, P, FY)` ... `FY = ...`", "Y solved from Y = FY(Y) at every "
+     "evaluation, to abs(FY - Y) <= P*max(1, abs(Y))"),
+    ("CSMP III", "`FIXED I, J`", "`INTEGER I, J`"),
+    ("CSMP III", "`FINISH X = 10.0`", "the run stops where X crosses 10, located"),
+    ("CSMP III", "`METHOD RECT`, `TIMER DELT = 0.1`", "Euler in step-point mode, the classic "
+     "translators' loop, row for row"),
+    ("FST", "`PARAM A = 1.; B = 2.`", "`PARAM A = 1., B = 2.` (`;` separates items)"),
+    ("FST", "`TIMER STTIME = 80.; FINTIM = 300.`", "time runs from 80 to 300 (FINTIM is an "
+     "end time)"),
+    ("FST", "`FINISH DVS > 2.`", "the run stops where DVS first exceeds 2, located"),
+    ("FST", "`TRANSLATION_GENERAL DRIVER = 'EUDRIV'`", "`METHOD RECT` in step-point mode; "
+     "'RKDRIV' is `METHOD RKS`"),
+    ("FST", "`WEATHER CNTR = 'NLD'; ISTN = 1; IYEAR = 1990`", "RDD, TMMN, TMMX, VP, WN, RAIN, "
+     "DOY, ... read from the CABO file NLD1.990"),
+    ("CSMP, FST", "`X = FSW(E, A, B, C)`, `INSW(E, A, B)`", "switches on E, every change of "
+     "branch located (not stepped over)"),
+)
+
+FORMS = """\
+## The CSMP form
+
+```
+TITLE  MASS ON A SPRING
+PARAM  K = 4.0, M = 1.0            ! values a run may change (--set K=5, value lists)
+CONST  X0 = 1.0                    ! values fixed for every run
+INITIAL
+   W = SQRT(K/M)                   ! computed once, before the run
+DYNAMIC
+   X = INTGRL(X0, V)               ! the states: INTGRL(initial value, derivative)
+   V = INTGRL(0.0, -K/M*X)
+TIMER  FINTIM = 10.0, OUTDEL = 0.01, PRDEL = 0.5
+METHOD AUTO
+PRINT  X, V
+OUTPUT X
+END
+STOP
+```
+
+DYNAMIC statements may be written in any order: amilpy sorts them (an algebraic
+loop is an error naming its variables). A listing may hold several runs: after
+`END`, new data values and `END` again; a value list `PARAM K = (1.0, 4.0)` makes
+one run per value. `amilpy check` lists what it read.
+
+## The ACSL form
+
+```
+PROGRAM  one-compartment model, repeated doses
+  CONSTANT KE = 0.2, V = 10.0, DOSE = 100.0, TAU = 8.0, TSTOP = 48.0
+  CINTERVAL CINT = 0.5
+  INITIAL
+    A = 0.0
+  END
+  DERIVATIVE
+    A = INTEG(-KE*A, 0.0)
+    C = A/V
+    TERMT(T >= TSTOP, 'end of the regimen')
+  END
+  DISCRETE DOSING
+    INTERVAL TAU = 8.0
+    A = A + DOSE
+  END
+END
+```
+
+`END` closes the innermost block. INITIAL runs once at the start; DERIVATIVE is
+sorted and integrated; DYNAMIC runs in written order at every CINT row; DISCRETE
+sections run when SCHEDULE or INTERVAL says, and may change states (the run
+restarts from the new values); TERMINAL runs once at the end. With no PRINT or
+OUTPUT, every state is printed.
+
+## The FST form
+
+FST listings are CSMP-form listings with FST's statements: `;` between the items of
+PARAM/INCON/TIMER/FINISH lines, `TIMER STTIME`, relational FINISH conditions,
+`TRANSLATION_GENERAL DRIVER = 'EUDRIV'` (Euler in step-point mode, as FST runs it)
+and `WEATHER`, whose daily variables are read from CABO-format files (the file
+`NLD1.990` for `CNTR = 'NLD'; ISTN = 1; IYEAR = 1990`, looked for in WTRDIR, the
+listing's folder, its `weather/` and `../weather/`, and `--weather-dir`). A `CALL`
+of a Fortran subroutine is refused: rewrite it as statements or a PROCEDURE.
+"""
+
+
+def _table(head: tuple[str, ...], rows) -> str:
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    lines += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def _spellings(mapping: dict[str, str]) -> list[tuple[str, str]]:
+    by: dict[str, list[str]] = {}
+    for spelling, canon in mapping.items():
+        by.setdefault(canon, []).append(spelling)
+    return [(canon, ", ".join(f"`{s}`" for s in spellings)) for canon, spellings in by.items()]
+
+
+def keywords() -> str:
+    rows = [("section", ", ".join(f"`{s}`" for s in language.SECTIONS)
+             + "; ACSL form: " + ", ".join(f"`{h}`" for h in language.ACSL_HEADS)
+             + ", `INITIAL`, `DERIVATIVE`, `DYNAMIC`, `DISCRETE`, `TERMINAL` ... `END`")]
+    rows += [("data: " + canon, spellings) for canon, spellings
+             in _spellings(language.DATA_KEYWORDS)]
+    rows += [("output: " + canon, spellings) for canon, spellings
+             in _spellings(language.REPORT_KEYWORDS)]
+    rows.append(("TIMER keys", ", ".join(f"`{k}`" for k in language.TIMER_KEYS)))
+    rows.append(("tolerances", ", ".join(f"`{k}`" for k in language.TOLERANCE_KEYWORDS)
+                 + " (one value, or per state: `RELERR X = 1E-6`)"))
+    rows.append(("ACSL integration control", ", ".join(
+        f"`{k}`" for k in language.CONTROL_KEYWORDS)))
+    rows.append(("declarations", ", ".join(f"`{k}`" for k in language.TYPE_KEYWORDS)))
+    rows.append(("read-only names", ", ".join(f"`{k}`" for k in language.RESERVED)
+                 + f"; `{language.ACSL_TIME}` in ACSL form; `{language.SEED_NAME}` seeds "
+                 "the random functions"))
+    return "## Statements\n\n" + _table(("what", "spellings"), rows)
+
+
+def side_by_side() -> str:
+    return ("## You wrote → amilpy reads it as\n\n"
+            + _table(("dialect", "you wrote", "amilpy reads it as"), SIDE_BY_SIDE))
+
+
+def methods() -> str:
+    ialg: dict[str, list[str]] = {}
+    for n, m in sorted(routes.IALG_METHODS.items()):
+        ialg.setdefault(routes.METHODS[m].name, []).append(str(n))
+    rows = [(", ".join(f"`{a}`" for a in r.aliases), r.summary,
+             "DELT" if r.fixed else "RELERR, ABSERR", ", ".join(ialg.get(r.name, [])) or "-")
+            for r in routes.ROUTES]
+    return (f"## Methods (`METHOD`; default `{routes.DEFAULT}`)\n\n"
+            + _table(("METHOD", "what it is", "step set by", "ACSL IALG"), rows))
+
+
+_KINDS = {"MATH": "arithmetic", "STATE": "integrators (each call is a state)",
+          "SWITCH": "switches (every change of branch located)",
+          "TIME": "functions of time (their instants are breakpoints)",
+          "IMPULSE": "impulses", "MEMORY": "functions with memory",
+          "TABLE": "tables (`FUNCTION F = x1, y1, x2, y2, ...`)"}
+
+
+def functions() -> str:
+    groups: dict[str, list[tuple[str, str, str]]] = {}
+    for f in library.FUNCTIONS.values():
+        if f.name.startswith("."):
+            continue  # the relational operators' switches, written A .GT. B
+        for form in (f, *f.variants):
+            doc = (form.doc or "").replace("|", "\\|")
+            groups.setdefault(f.kind.name, []).append(
+                (f"`{form.signature}`", ", ".join(f"`{a}`" for a in f.aliases) or "", doc))
+    parts = ["## Functions\n\nEvery function amilpy runs, by kind (one entry each in "
+             "`amilpy/library.py`). A call with the wrong arguments is answered with the "
+             "signature below."]
+    for kind, title in _KINDS.items():
+        if kind in groups:
+            parts.append(f"### {title.capitalize()}\n\n"
+                         + _table(("call", "also spelled", "value"), groups[kind]))
+    return "\n\n".join(parts)
+
+
+def refused() -> str:
+    rows = [(f"`{k}`", what, instead) for k, (what, instead) in language.REFUSED.items()]
+    rows += [(f"`{k}(...)`", what, instead)
+             for k, (what, instead) in language.REFUSED_FUNCTIONS.items()]
+    return ("## What amilpy refuses\n\nThese constructs of the dialects are not run; a "
+            "listing that uses one gets an error naming it, its line, and what to write "
+            "instead (never a bare \"unexpected token\").\n\n"
+            + _table(("keyword", "the construct", "write instead"), rows))
+
+
+def render() -> str:
+    intro = INTRO.format(forms=_table(("form", "how amilpy knows it", "time", "sorted",
+                                       "example"), FORM_ROWS))
+    return "\n\n".join([intro.rstrip(), FORMS.rstrip(), keywords(), side_by_side(),
+                        methods(), functions(), refused()]) + "\n"
+
+
+def main(argv: list[str]) -> int:
+    text = render()
+    if "--check" in argv:
+        if OUT.read_text("utf-8") != text:
+            print(f"{OUT} is out of date: run python docs/make_language.py")
+            return 1
+        return 0
+    OUT.write_text(text, "utf-8")
+    print(f"written: {OUT}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

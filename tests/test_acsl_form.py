@@ -1,0 +1,329 @@
+"""The ACSL form (contract section 9): a PROGRAM or MODEL of nested sections, END closing
+the innermost block, sorted DERIVATIVE, written-order INITIAL/DYNAMIC/DISCRETE/TERMINAL,
+T as time, CINTERVAL rows, all states printed when nothing is asked, the order of one
+run. Numbers are checked against closed forms."""
+
+import math
+
+import numpy as np
+import pytest
+
+import amilpy
+from amilpy.diagnostics import AmilError
+
+
+def load(text: str) -> amilpy.Model:
+    return amilpy.loads(text, name="p.csl")
+
+
+def run(text: str, **kw):
+    runs = load(text).run(**kw)
+    assert len(runs) == 1
+    return runs[0]
+
+
+def fault(text: str) -> AmilError:
+    with pytest.raises(AmilError) as err:
+        load(text)
+    return err.value
+
+
+DECAY = """MODEL decay           ! X' = -K X, rows every CINT
+  INITIAL
+    CONSTANT K = 0.5, X0 = 2.0, TSTOP = 2.0
+    CINTERVAL CINT = 0.25
+  END
+  DYNAMIC
+    DERIVATIVE
+      X = INTEG(-K*X, X0)
+      TERMT(T >= TSTOP, 'time limit')
+    END
+  END
+END
+"""
+
+
+def test_rows_every_cint_up_to_the_termt_instant():
+    r = run(DECAY, rtol=1e-10, atol=1e-12)
+    assert np.allclose(r.t, np.arange(9) * 0.25, rtol=0, atol=1e-15)
+    assert np.max(np.abs(r["X"] - 2.0 * np.exp(-0.5 * r.t))) < 1e-9
+    assert r.status == "stopped" and r.message.startswith("stopped at TIME = 2: time limit")
+
+
+def test_no_print_statement_prints_t_and_every_state():
+    m = load(DECAY.replace("X = INTEG(-K*X, X0)", "X = INTEG(-K*X, X0)\n      R = K*X"))
+    from amilpy.output.printout import format_run
+
+    out = format_run(m.run()[0])
+    header = next(line for line in out.splitlines() if "TIME" in line)
+    assert header.split() == ["TIME", "X"]  # R is not a state
+
+
+def test_sections_nest_and_end_closes_the_innermost():
+    # INITIAL inside DYNAMIC, CONSTANT inside DERIVATIVE, DISCRETE inside DERIVATIVE
+    # (surprises 1 and 2 of tests/listings/SOURCES.md: accepted, as ACSL has them)
+    r = run("""PROGRAM nested
+  DYNAMIC
+    INITIAL
+      A0 = 3.0
+    END
+    DERIVATIVE
+      CONSTANT RATE = 2.0, TSTOP = 1.0
+      Y = INTEG(RATE, A0)
+      DISCRETE never
+        Y = 0.0
+      END
+      TERMT(T >= TSTOP)
+    END
+  END
+END
+""")
+    assert r["Y"][-1] == pytest.approx(5.0, rel=1e-9)
+
+
+def test_without_sections_everything_is_derivative():
+    r = run("PROGRAM p\nCONSTANT TSTOP = 1.0\nX = INTEG(1.0, 0.0)\nTERMT(T >= TSTOP)\nEND\n")
+    assert r["X"][-1] == pytest.approx(1.0)
+
+
+def test_written_order_initial_allows_reassignment():
+    r = run("""PROGRAM count
+  INITIAL
+    N = 1.0
+    N = N + 1.0
+    N = N*10.0
+    CONSTANT TSTOP = 1.0
+  END
+  DERIVATIVE
+    X = INTEG(N, 0.0)
+    TERMT(T >= TSTOP)
+  END
+END
+""")
+    assert r.constants["N"] == 20.0 and r["X"][-1] == pytest.approx(20.0, rel=1e-9)
+
+
+def test_reading_a_name_before_it_has_a_value_gives_zero_and_a_warning():
+    m = load("""PROGRAM p
+  INITIAL
+    A = B + 1.0
+    B = 5.0
+  END
+  DERIVATIVE
+    X = INTEG(A + B, 0.0)
+    TERMT(T >= 1.0)
+  END
+END
+""")
+    w, = m.ir.warnings
+    assert w.severity == "warning" and w.span.line == 3
+    assert "B is read at line 3 before it has a value (first assigned at line 4)" in w.message
+    r, = m.run()
+    assert r["X"][-1] == pytest.approx(6.0, rel=1e-9)  # A = 0 + 1, B = 5
+    assert any("line 3: B is read" in n for n in r.warnings)
+
+
+def test_time_is_t_and_time_too_and_variable_renames_it():
+    r = run("PROGRAM p\nDERIVATIVE\nX = INTEG(T + TIME, 0.0)\nTERMT(T >= 2.0)\nEND\nEND\n")
+    assert r["X"][-1] == pytest.approx(4.0, rel=1e-9)  # 2 * t^2/2 at t = 2
+    r = run("PROGRAM p\nVARIABLE S = 1.0\nCINTERVAL CI = 0.5\nDERIVATIVE\n"
+            "X = INTEG(S, 0.0)\nTERMT(S >= 2.0)\nEND\nEND\n")
+    assert list(r.t) == [1.0, 1.5, 2.0]  # time starts at 1 and is called S
+    assert r["X"][-1] == pytest.approx((4.0 - 1.0) / 2.0, rel=1e-9)
+
+
+def test_a_listing_may_name_a_variable_time():
+    # A10 (spring.csl): `time = INTEG(1.0, 0.0)`; ACSL's time is T, so this TIME is a
+    # state of its own (surprise 3: accepted), kept as TIME_
+    r = run("PROGRAM p\nDERIVATIVE\ntime = INTEG(2.0, 0.0)\nTERMT(T >= 1.0)\nEND\nEND\n")
+    assert r["TIME_"][-1] == pytest.approx(2.0) and r.t[-1] == pytest.approx(1.0)
+
+
+def test_cinterval_reassigned_in_initial_and_later():
+    r = run("""PROGRAM p
+  INITIAL
+    CONSTANT TSTOP = 3.0, POINTS = 6.0
+    CINT = TSTOP/POINTS
+    SCHEDULE FINER .AT. 1.0
+  END
+  DERIVATIVE
+    X = INTEG(1.0, 0.0)
+    TERMT(T >= TSTOP)
+  END
+  DISCRETE FINER
+    CINT = 0.25        ! from the next instant on
+  END
+END
+""")
+    assert np.allclose(r.t, [0, 0.5, 1.0, 1.25, 1.5, 1.75, 2.0, 2.25, 2.5, 2.75, 3.0])
+
+
+def test_constant_cint_is_the_output_interval():
+    # A11, A12: `CONSTANT CINT = 1.0` with no CINTERVAL (surprise 4: accepted)
+    r = run("PROGRAM p\nCONSTANT CINT = 0.5\nDERIVATIVE\nX = INTEG(1.0, 0.0)\n"
+            "TERMT(T >= 1.0)\nEND\nEND\n")
+    assert list(r.t) == [0.0, 0.5, 1.0]
+
+
+def test_dynamic_statements_run_at_every_cint_instant_in_written_order():
+    # the DYNAMIC block's own statements see the state at the instant; N counts them
+    r = run("""PROGRAM p
+  INITIAL
+    CINTERVAL CINT = 0.5
+    N = 0.0
+  END
+  DYNAMIC
+    DERIVATIVE
+      X = INTEG(1.0, 0.0)
+      TERMT(T >= 2.0)
+    END
+    N = N + 1.0
+    SEEN = X
+  END
+END
+""")
+    assert list(r["N"]) == [1.0, 2.0, 3.0, 4.0, 5.0]
+    assert np.allclose(r["SEEN"], r.t, atol=1e-12)
+
+
+def test_order_of_one_run_events_at_t0_before_the_first_row():
+    # constants -> INITIAL -> states -> events due at t0 -> DYNAMIC -> row: the row at
+    # t0 shows what the DISCRETE due at t0 set, and DYNAMIC saw it
+    r = run("""PROGRAM p
+  INITIAL
+    CINTERVAL CINT = 1.0
+    RATE = 1.0
+    SCHEDULE DOUBLE .AT. 0.0
+  END
+  DYNAMIC
+    DERIVATIVE
+      X = INTEG(RATE, 0.0)
+      TERMT(T >= 2.0)
+    END
+    SEENRATE = RATE
+  END
+  DISCRETE DOUBLE
+    RATE = 2.0*RATE
+  END
+END
+""")
+    assert list(r["RATE"]) == [2.0, 2.0, 2.0] and r["SEENRATE"][0] == 2.0
+    assert r["X"][-1] == pytest.approx(4.0)
+
+
+def test_terminal_runs_after_the_last_row_in_written_order():
+    r = run("""PROGRAM p
+  DERIVATIVE
+    X = INTEG(1.0, 0.0)
+    TERMT(T >= 2.0)
+  END
+  TERMINAL
+    Y = X*10.0
+    Y = Y + 1.0
+  END
+END
+""")
+    assert r.terminal == {"Y": pytest.approx(21.0)}
+
+
+def test_a_run_must_be_bounded():
+    err = fault("PROGRAM p\nDERIVATIVE\nX = INTEG(1.0, 0.0)\nEND\nEND\n")
+    assert "nothing ends the run" in err.diagnostics[0].message
+    assert "TERMT" in err.diagnostics[0].hint
+
+
+def test_timer_fintim_bounds_a_run_without_termt():
+    r = run("PROGRAM p\nTIMER FINTIM = 1.0\nCINTERVAL CINT = 0.5\nDERIVATIVE\n"
+            "X = INTEG(1.0, 0.0)\nEND\nEND\n")
+    assert list(r.t) == [0.0, 0.5, 1.0] and r.status == "finished"
+
+
+@pytest.mark.parametrize("text, message", [
+    ("PROGRAM p\nDERIVATIVE\nX = INTEG(1.0, 0.0)\nTERMT(T >= 1.0)\n",
+     "DERIVATIVE opened at line 2 is never closed"),
+    ("PROGRAM p\nDERIVATIVE\nIF (T > 1.0) THEN\nX = 1.0\nEND DO\nEND\nEND\n",
+     "END DO closes a DO loop, but the innermost open block is the IF of line 3"),
+    ("PROGRAM p\nDERIVATIVE\nX = INTEG(1.0, 0.0)\nTERMT(T >= 1.0)\nEND\nEND\nY = 2.0\n",
+     "only comments may follow the program's END"),
+    ("PROGRAM p\nDERIVATIVE\nX = INTEG(1.0, 0.0)\nTERMT(T >= 1.0)\nEND\nEND\nEND\n",
+     "only comments may follow the program's END"),
+    ("PROGRAM p\nY = 1.0\nDERIVATIVE\nX = INTEG(Y, 0.0)\nTERMT(T >= 1.0)\nEND\nEND\n",
+     "outside the sections only declarations may stand"),
+    ("PROGRAM p\nDERIVATIVE\nX = INTEG(1.0, 0.0)\nX = 2.0\nTERMT(T >= 1.0)\nEND\nEND\n",
+     "X is defined twice"),
+    ("PROGRAM p\nCONSTANT A = 1.0\nINITIAL\nA = 2.0\nEND\nDERIVATIVE\nX = INTEG(A, 0.)\n"
+     "TERMT(T >= 1.0)\nEND\nEND\n", "A is a CONSTANT and cannot be assigned"),
+    ("PROGRAM p\nDERIVATIVE\nX = INTEG(1.0, Y)\nY = X\nTERMT(T >= 1.0)\nEND\nEND\n",
+     "the initial value uses Y, which changes in time"),
+    ("PROGRAM p\nINITIAL\nSCHEDULE NOPE .AT. 1.0\nEND\nDERIVATIVE\nX = INTEG(1.0, 0.)\n"
+     "TERMT(T >= 1.0)\nEND\nDISCRETE NOPF\nEND\nEND\n",
+     "SCHEDULE names NOPE, which is no DISCRETE section"),
+])
+def test_structure_faults_name_the_block_and_its_line(text, message):
+    err = fault(text)
+    assert any(message in d.message for d in err.diagnostics), err.render()
+
+
+def test_integ_initial_value_is_evaluated_after_initial():
+    r = run("PROGRAM p\nINITIAL\nX0 = 4.0\nX0 = X0*2.0\nEND\nDERIVATIVE\n"
+            "X = INTEG(0.0, X0)\nTERMT(T >= 1.0)\nEND\nEND\n")
+    assert r["X"][0] == 8.0
+
+
+def test_a_csmp_form_t_hints_time():
+    with pytest.raises(AmilError) as err:
+        amilpy.loads("X = INTGRL(0.0, T)\nTIMER FINTIM = 1.0\nEND\n")
+    d = err.value.diagnostics[0]
+    assert d.message == "T is used but never defined" and "time is TIME" in d.hint
+
+
+def test_acsl_statements_in_csmp_form_say_which_form_they_belong_to():
+    with pytest.raises(AmilError) as err:
+        amilpy.loads("X = INTGRL(0.0, 1.0)\nSCHEDULE A .AT. 1.0\nTIMER FINTIM = 1.0\nEND\n")
+    d = err.value.diagnostics[0]
+    assert "belongs to the ACSL form" in d.message and "PROGRAM or MODEL" in d.hint
+
+
+def test_exact_exponential_on_a_finer_check():
+    # the TERMT instant is exact on time alone (a breakpoint), whatever CINT is
+    r = run(DECAY.replace("TSTOP = 2.0", "TSTOP = 1.9"))
+    assert r.t[-1] == 1.9 and r.t[-2] == 1.75
+    assert r["X"][-1] == pytest.approx(2.0 * math.exp(-0.95), rel=1e-6)
+
+
+def test_molly_style_punctuation_and_blocks_are_read():
+    # A12: `END; !OF DERIVATIVE`, `Discrete NewDay $!comment`, INCLUDED ... END (the
+    # text an ACSL INCLUDE brought in), Fortran's PARAMETER (N = v), `dimension integer i`
+    # and `Procedural()` with empty lists (SOURCES.md surprises 6, 9, 11: accepted)
+    r = run("""PROGRAM molly style
+  INITIAL
+    INCLUDED ! INCLUDE 'constants.csl'
+      Parameter (NFEED = 2)
+    END ! INCLUDE
+    dimension integer I
+    CINTERVAL CINT = 0.5
+  END
+  DERIVATIVE
+    Procedural()
+      Q = 1.0
+    END
+    Procedural(=X)
+      R = X
+    END
+    X = INTEG(Q*NFEED, 0.0)
+    Y = INTEG(R, 0.0)
+    TERMT(T >= 1.0)
+  END; !OF DERIVATIVE
+  Discrete NewDay                $!Schedules nothing
+    I = 1.9
+  END
+END
+""")
+    assert r["X"][-1] == pytest.approx(2.0) and r["Y"][-1] == pytest.approx(1.0)
+
+
+def test_pi_may_be_assigned_in_acsl_form():
+    # PI is no reserved name of ACSL (SOURCES.md surprise 10, in ACSL form)
+    r = run("PROGRAM p\nINITIAL\nPI = 3.0\nEND\nDERIVATIVE\nX = INTEG(PI, 0.0)\n"
+            "TERMT(T >= 1.0)\nEND\nEND\n")
+    assert r["X"][-1] == pytest.approx(3.0)

@@ -1,0 +1,133 @@
+"""Independent runs on every core and on a Dask cluster (issue 14.5): the same runs,
+bit for bit, in the same order as one after the other; a run that fails is reported
+with its parameters and the others are kept."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+import amilpy
+from amilpy.farm import default_jobs
+
+HERE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+HOIST = os.path.join(HERE, "models", "hoist_backlash.amil")
+
+LISTS = """TITLE A DAMPED OSCILLATOR, FOUR DAMPINGS
+PARAM ZETA = (0.05, 0.1, 0.2, 0.4), W = 6.0
+DYNAMIC
+   X = INTGRL(1.0, V)
+   V = INTGRL(0.0, -2.0*ZETA*W*V - W*W*X + FSW(X - 0.5, 0.0, 0.0, 1.0))
+TIMER FINTIM = 4.0, OUTDEL = 0.01
+END
+"""
+
+
+def _same(a, b) -> bool:
+    return (a.label == b.label and a.status == b.status and
+            np.array_equal(a.times, b.times) and
+            all(np.array_equal(a.values[k], b.values[k]) for k in a.values) and
+            [(e.time, e.new) for e in a.events] == [(e.time, e.new) for e in b.events])
+
+
+def test_value_lists_on_two_processes_equal_the_serial_runs():
+    """The four runs of a PARAM value list, on two worker processes, are the serial
+    runs bit for bit (times, every value, every event), in the listing's order."""
+    model = amilpy.loads(LISTS)
+    serial = model.run(advice=False)
+    farmed = amilpy.loads(LISTS).run(advice=False, jobs=2)
+    assert [r.label for r in farmed] == [r.label for r in serial] == \
+        ["ZETA = 0.05", "ZETA = 0.1", "ZETA = 0.2", "ZETA = 0.4"]
+    assert all(_same(a, b) for a, b in zip(serial, farmed, strict=True))
+
+
+def test_a_failing_run_is_reported_and_the_others_kept():
+    """A run whose data cannot be evaluated (INITIAL divides by ZETA = 0) comes back
+    FAILED, named by its parameters; the runs before and after it are kept, on worker
+    processes and one after the other alike."""
+    text = LISTS.replace("(0.05, 0.1, 0.2, 0.4)", "(0.05, 0.0, 0.2)").replace(
+        "DYNAMIC", "INITIAL\n   TAU = 1.0/ZETA\nDYNAMIC")
+    runs = amilpy.loads(text).run(advice=False, jobs=2)
+    assert [r.ok for r in runs] == [True, False, True]
+    assert "division by zero" in runs[1].message and runs[1].label == "ZETA = 0"
+    assert "ZETA = 0" not in runs[1].message  # the label is said once, by whoever prints
+    assert len(runs[2].times) == 401
+    # one after the other in this process, the same: the fault does not stop the others
+    serial = amilpy.loads(text).run(advice=False, jobs=1)
+    assert [r.ok for r in serial] == [True, False, True]
+    assert serial[1].message == runs[1].message
+    assert all(_same(a, b) for a, b in zip(serial, runs, strict=True))
+
+
+def test_sweep_and_grid_on_processes_equal_serial():
+    """A sweep without a carried state and a grid of two data values: every point on
+    two processes equals the serial point, in the points' order."""
+    model = amilpy.loads(LISTS)
+    values = [4.0, 5.0, 6.0, 7.0]
+    one = model.sweep("W", values, measure="X", settle=1.0)
+    two = model.sweep("W", values, measure="X", settle=1.0, jobs=2)
+    assert one.points == two.points
+    from amilpy.sweep import sweep
+
+    grid = sweep(model, "W", values, measure="X", grid=("ZETA", [0.1, 0.3]), jobs=2)
+    serial = sweep(model, "W", values, measure="X", grid=("ZETA", [0.1, 0.3]))
+    assert grid.points == serial.points
+    assert [(p.value, p.second) for p in grid.points] == \
+        [(v, z) for z in (0.1, 0.3) for v in values]
+
+
+def test_grid_from_the_command_line(tmp_path):
+    """`amilpy sweep FILE A=... B=...`: a grid, one row per pair, in the CSV too."""
+    from amilpy.cli import main
+
+    path = tmp_path / "osc.amil"
+    path.write_text(LISTS.replace("(0.05, 0.1, 0.2, 0.4)", "0.1"))
+    csv = tmp_path / "grid.csv"
+    assert main(["sweep", str(path), "W=4:6:1", "ZETA=0.1:0.2:0.1", "--measure", "X",
+                 "--csv", str(csv), "--quiet", "--jobs", "2"]) == 0
+    rows = csv.read_text().splitlines()
+    assert rows[0].split(",")[:3] == ["DIRECTION", "W", "ZETA"]
+    assert len(rows) == 1 + 3 * 2
+
+
+@pytest.mark.skipif(default_jobs() < 2, reason="needs two cores to interrupt two runs")
+def test_ctrl_c_keeps_the_finished_runs(tmp_path):
+    """Ctrl-C during a farmed run: the runs that finished are printed, the others
+    are reported interrupted, exit 3 (the run already printed loses nothing)."""
+    path = tmp_path / "two.amil"
+    # K = 1 takes a few thousand steps, K = 1000 a thousand times more
+    path.write_text("PARAM K = (1.0, 1000.0, 2000.0)\nX = INTGRL(0.0, COS(K*TIME))\n"
+                    "TIMER FINTIM = 1.0E3, OUTDEL = 1.0\nPRINT X\nEND\n")
+    env = dict(os.environ, PYTHONPATH=HERE)
+    proc = subprocess.Popen([sys.executable, "-m", "amilpy.cli", "run", str(path), "--jobs", "2",
+                             "--method", "RKS"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env,
+                            start_new_session=True)
+    time.sleep(3.0)
+    os.killpg(proc.pid, signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 3
+    assert "run 'K = 1000': interrupted before it finished" in err
+    first = out.split("RUN 2")[0]
+    assert "1.000000E+03" in first  # run 1 printed to its end, TIME = 1000
+
+
+def test_dask_cluster_equals_serial():
+    """The same runs on a Dask cluster started in this process (no network beyond
+    this machine): the serial runs, bit for bit, in their order."""
+    distributed = pytest.importorskip("distributed")
+    model = amilpy.loads(LISTS)
+    serial = model.run(advice=False)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        farmed = amilpy.loads(LISTS).run(advice=False, scheduler=cluster.scheduler_address)
+        points = model.sweep("W", [4.0, 5.0, 6.0], measure="X",
+                             scheduler=cluster.scheduler_address)
+    assert all(_same(a, b) for a, b in zip(serial, farmed, strict=True))
+    assert points.points == model.sweep("W", [4.0, 5.0, 6.0], measure="X").points

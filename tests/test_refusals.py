@@ -1,0 +1,134 @@
+"""What amilpy does not run (contract section 14): every keyword of these dialects it
+does not implement is an error that names the construct, its line and what to write
+instead, never a bare "unexpected token"; no parser token name reaches a user (the
+conftest fixture scans every diagnostic any test makes)."""
+
+import pytest
+from conftest import leaked_token
+
+import amilpy
+from amilpy.diagnostics import AmilError
+
+PROGRAM = "PROGRAM p\n{line}\nDERIVATIVE\nX = INTEG(1.0, 0.0)\nTERMT(T >= 1.0)\nEND\nEND\n"
+DERIV = "PROGRAM p\nDERIVATIVE\nX = INTEG(1.0, 0.0)\n{line}\nTERMT(T >= 1.0)\nEND\nEND\n"
+CSMP = "{line}\nX = INTGRL(0.0, 1.0)\nTIMER FINTIM = 1.0\nEND\n"
+
+# (listing, its line, what the message names, what the hint tells to write)
+CASES = [
+    (PROGRAM, "DIMENSION C(10)", 2, "the array C", "one scalar per element"),
+    (PROGRAM, "DoublePrecision InitCond(MaxInitValues,MaxAnimals)", 2,
+     "the array INITCOND", "one scalar per element"),
+    (DERIV, "Y = Z[4] + 1.0", 4, "the subscript Z[...]", "one scalar per element"),
+    (DERIV, "Ingr(IngrHc, i) = fHcFd * 100.0", 4, "the subscripted assignment INGR(...)",
+     "one scalar per element"),
+    (DERIV, "Y = X(2)", 4, "X is a variable, not a function: subscripts (arrays)",
+     "one scalar per element"),
+    (CSMP, "ARRAY MNDAT (1:NH)", 1, "FST's ARRAY (arrays)", "one scalar per element"),
+    (CSMP, "ARRAY_SIZE NH=10", 1, "FST's ARRAY_SIZE (arrays)", "one scalar per element"),
+    (CSMP, "STORAGE IC(5)", 1, "CSMP's STORAGE (arrays)", "one scalar per element"),
+    (CSMP, "TABLE IC(1-5) = 1., 2., 3., 4., 5.", 1, "the TABLE statement", "FUNCTION F ="),
+    (PROGRAM, "TABLE F, 1, 3 / 0., 1., 2., 0., 1., 4. /", 2, "the TABLE statement",
+     "AFGEN(F, X)"),
+    (PROGRAM, "CONSTANT MilkingHours = 6,14,18,22", 2,
+     "a list of values for one name (an array)", "one CONSTANT per value"),
+    (CSMP, "      SUBROUTINE GLA (TIME, X)", 1, "a Fortran subroutine", "PROCEDURE"),
+    (CSMP, "CALL TOTASS(DOY, LAT, DTR)", 1,
+     "CALL TOTASS (line 1): Fortran subroutines are not run",
+     "rewrite TOTASS as statements or a PROCEDURE"),
+    (DERIV, "IF( T.LE.1.0E-6) GO TO P", 4, "GO TO (line 4)", "IF (c) THEN"),
+    (DERIV, "GOTO 10", 4, "GO TO (line 4)", "IF (c) THEN"),
+    (DERIV, "10 CONTINUE", 4, "the statement label 10", "DO i = a, b"),
+    (DERIV, " 10:   ScAcAc=1.3555", 4, "the statement label 10", "IF (c) THEN"),
+    (DERIV, "AnotherLoop: Continue", 4, "the statement label AnotherLoop", "DO i = a, b"),
+    (DERIV, "CONTINUE", 4, "CONTINUE (the end of a labelled DO)", "END DO"),
+    (PROGRAM, "INITIAL\ndo AnotherLoop i = 1,NumberOfFeeds\nEND", 3,
+     "a labelled DO (DO AnotherLoop ...)", "DO i = a, b ... END DO"),
+    (PROGRAM, "MACRO first(y, x, tau)", 2, "MACRO", "FUNCTION y = f(a, b)"),
+    (PROGRAM, "SUBMODEL tank(h, q)", 2, "ACSL's SUBMODEL", "write the statements out"),
+    (DERIV, "Y = IMPLC(X - Y, 0.0)", 4, "ACSL's IMPLC (implicit algebraic loop)", "REALPL"),
+    (DERIV, "Y = IMPVC(X, 0.0)", 4, "ACSL's IMPVC", "one state per element"),
+    (DERIV, "Y = INTVC(X, 0.0)", 4, "ACSL's INTVC", "one INTEG per element"),
+    (DERIV, "Y = TRAN(1, 2, N, D, X)", 4, "ACSL's TRAN (transfer function)", "LEDLAG"),
+    (DERIV, "Y = DBLINT(X, 0.0, 0.0, -1.0, 1.0)", 4, "ACSL's DBLINT", "two INTEGs"),
+    (PROGRAM, "CHARACTER bufferslp*80;", 2, "CHARACTER variables", "TERMT messages"),
+    (PROGRAM, "Constant bufferslp = 'RumPartSizeSlp is positive'", 2,
+     "the string 'RumPartSizeSlp is positive' cannot be a value", "TERMT message"),
+    (CSMP, "EVENT", 1, "FST 3's EVENT blocks", "DISCRETE section"),
+    (CSMP, "COMMON /BLK/ A, B", 1, "Fortran COMMON", "global"),
+    (PROGRAM, "DERIVATIVE one\nALGORITHM IALG = 2\nY = INTEG(1.0, 0.)\nEND\n"
+     "DERIVATIVE two\nALGORITHM IALG = 5\nZ = INTEG(1.0, 0.)\nEND", 7,
+     "a per-section ALGORITHM (line 7)",
+     "one ALGORITHM statement"),
+]
+
+
+def fault(template: str, line: str) -> AmilError:
+    text = template.format(line=line)
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text, name="m.csl" if text.startswith("PROGRAM") else "m.amil")
+    return err.value
+
+
+@pytest.mark.parametrize("template, line, where, construct, instead", CASES,
+                         ids=[c[1].split("(")[0].strip()[:24] for c in CASES])
+def test_refused_constructs_are_named_with_line_and_alternative(template, line, where,
+                                                                 construct, instead):
+    err = fault(template, line)
+    d = next((d for d in err.diagnostics if construct in d.message), None)
+    assert d is not None, err.render()
+    assert d.span.line == where and instead in (d.hint or "")
+    assert not d.message.startswith("unexpected")
+
+
+def test_a_message_with_a_token_name_would_be_caught():
+    # the scan the conftest fixture makes on every diagnostic of the suite
+    assert leaked_token("unexpected '$' / expected DOLLAR") == "DOLLAR"
+    assert leaked_token("expected _NL or __ANON_3") == "_NL"
+    assert leaked_token("expected DATA_KW") == "DATA_KW"
+    assert leaked_token("write X = 1.0; character U+2212 MINUS SIGN") is None
+
+
+def test_an_unknown_statement_word_gets_a_label_not_tokens():
+    # the issue: every unknown keyword gave "unexpected 'X' / expected ',', '='"
+    with pytest.raises(AmilError) as err:
+        amilpy.loads("FROBNICATE X, Y\nX = INTGRL(0.0, 1.0)\nTIMER FINTIM = 1.0\nEND\n")
+    d = err.value.diagnostics[0]
+    assert d.message.startswith("this statement needs '='")
+
+
+def test_molly_style_listing_stops_with_refusals_only(tmp_path):
+    # the constructs of A12 (molly3.csl) that amilpy does not run, each named
+    text = """PROGRAM molly
+  INITIAL
+    Integer MaxEvents
+    Parameter (MaxHerds=1)
+    Constant InitCond = 1.0, 550, 3.5
+    CHARACTER bufferslp*80;
+  END
+  DERIVATIVE
+    IF( T.LE.1.0E-6) GO TO P
+    X = INTEG(1.0, 0.0)
+    TERMT(T >= 1.0)
+  END
+END
+"""
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text, "molly.csl")
+    messages = [d.message for d in err.value.diagnostics]
+    assert messages == ["a list of values for one name (an array): not supported"]
+
+
+@pytest.mark.parametrize("call, hint", [
+    # the signature, with what trips readers (INTGRL's order is not INTEG's)
+    ("INTGRL(1.0)", "write it as INTGRL(IC, X): the initial value comes first"),
+    ("INTGRL(A, B, C)", "write it as INTGRL(IC, X): the initial value comes first"),
+    ("INTEG(1.0)", "INTEG(X, IC): the derivative comes first"),
+    # a decimal comma only where a number stands on both sides of the comma
+    ("INTGRL(0.0, 1,5)", "'1,5' reads as two arguments; the decimal separator is a point"),
+])
+def test_argument_count_errors_show_the_signature(call, hint):
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(f"CONST A = 1.0, B = 2.0, C = 3.0\nX = {call}\nTIMER FINTIM = 1.0\n"
+                     "END\n")
+    d = err.value.diagnostics[0]
+    assert hint in d.hint and (("decimal" in d.hint) == ("1,5" in call))
