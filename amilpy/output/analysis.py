@@ -9,6 +9,7 @@ from collections.abc import Iterator, Sequence
 
 import numpy as np
 
+from ..run.jacobian import DIFFERENCES
 from . import words as W
 from .plot import save_png
 
@@ -49,8 +50,8 @@ def _title(model) -> str:
 def modes_text(result, model=None) -> str:
     head = f"LINEAR MODES OF {_title(model)}".rstrip()
     lines = [head, f"about the state at TIME = {result.time:.9g}, switch branches as in force "
-             "there; Jacobian from " + (result.how if result.how != "central differences"
-                                         else f"central differences, estimated error "
+             "there; Jacobian from " + (result.how if result.how != DIFFERENCES
+                                         else f"{DIFFERENCES}, estimated error "
                                          f"{result.error:.1E} of its largest entry"),
              "  " + ", ".join(f"{n} = {v:.6g}" for n, v in zip(result.names, result.state.y,
                                                                strict=True)), "",
