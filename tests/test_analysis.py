@@ -14,7 +14,7 @@ from scipy.linalg import expm
 import amilpy
 from amilpy.analysis import NotConverged
 from amilpy.analysis.linear import linearise
-from amilpy.run.jacobian import MODEL, field_jacobian
+from amilpy.run.jacobian import DIFFERENCES, MODEL, field_jacobian
 
 W0, Z = 3.0, 0.2  # X'' + 2 Z W0 X' + W0^2 X = 0
 DAMPED = f"""PARAM W0 = {W0}, Z = {Z}
@@ -63,6 +63,19 @@ def test_jacobian_of_a_nonlinear_field_and_its_stated_accuracy():
                                  with_error=True)
     assert diff[vx, xv] == pytest.approx(exact, rel=1e-9)
     assert abs(diff[vx, xv] - exact) <= max(10 * error[xv], 1e-12 * abs(exact))
+
+
+def test_modes_while_a_surface_slides_use_differences_of_the_combined_field():
+    # X' = -S + 0.3 Y, Y' = -2 Y + S with S a relay on X: X reaches 0 and slides
+    # there with S = 0.3 Y (X' = 0), so Y' = -1.7 Y. The combined field has no
+    # symbolic Jacobian; its central differences are exact to rounding on a field
+    # linear in the states: eigenvalues -1.7 (to 1e-10) and 0 (X held on the surface)
+    result = amilpy.loads("S = FSW(X, -1.0, 0.0, 1.0)\nX = INTGRL(1.0, -S + 0.3*Y)\n"
+                          "Y = INTGRL(0.0, -2.0*Y + S)\nTIMER FINTIM = 4.0\nEND\n"
+                          ).modes(at=3.0)
+    assert result.how == DIFFERENCES and result.error < 1e-10
+    zero, moving = result.modes
+    assert zero.zero and moving.eigenvalue == pytest.approx(-1.7, rel=1e-10)
 
 
 def test_modes_flag_rigid_body_and_follow_the_switch_branch():
