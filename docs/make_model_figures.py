@@ -2,6 +2,7 @@
 
     python docs/make_model_figures.py            # all figures into docs/figures/
     python docs/make_model_figures.py --no-sweep # skip the hoist sweep (about a minute)
+                                                 # and its comparison with `response`
 
 The hoist sweep is done by hand, as in tests/test_models.py: each point is four runs of
 the listing's 5 s, each started from the previous run's final state through the INCONs
@@ -129,6 +130,31 @@ def hoist_sweep_figure() -> None:
     _save(fig, "hoist_sweep.png")
 
 
+def hoist_response_figure() -> None:
+    """The response curve (continuation) against the stepped sweep of `amilpy
+    sweep` (20 s a point, the last 3 s measured, both ways, state carried) and the
+    harmonic balance of eq. (21): drawn by amilpy's own `plot_response`."""
+    from amilpy.output.analysis import plot_response
+
+    model = amilpy.load(MODELS / "hoist_backlash.amil")
+    h = hoist.Hoist()
+    loaded = {"X10": h.mn / h.c1, "Y0": h.half_gap + h.mn / h.c2}
+    resp = model.response("W", 67.5, 73.0, angle="PH=2*PI", measure="Y", settle=20.0,
+                          **loaded)
+    grid = [round(x, 3) for x in np.arange(67.5, 73.001, 0.1)]
+    sweep = model.sweep("W", grid, both_ways=True, carry_state=True, settle=17.0,
+                        measure="Y", fintim=20.0, **loaded)
+    up, down = sweep.branch("up"), sweep.branch("down")
+    # the undamped harmonic balance over the same window, sparse black dots under
+    # the curve (its arms above 0.04 belong to no orbit the damped model reaches)
+    w_hb, a_hb = hoist.harmonic_balance_curve(h, np.linspace(1e-3, 0.04, 120), 67.0, 73.5)
+    plot_response(resp, str(OUT / "hoist_response_vs_sweep.png"), model, reference=[
+        (w_hb, a_hb, "harmonic balance, eq. (21), undamped", "k."),
+        (up[0], up[1], "amilpy sweep up, 20 s a point", "C2^"),
+        (down[0], down[1], "amilpy sweep down", "C1v")])
+    print("wrote", OUT / "hoist_response_vs_sweep.png")
+
+
 def one_dof_figures() -> None:
     r = amilpy.load(MODELS / "crank_slider_startup.amil").run()[0]
     fig, ax = plt.subplots(figsize=(6, 3.6))
@@ -157,6 +183,7 @@ def main() -> None:
     one_dof_figures()
     if not args.no_sweep:
         hoist_sweep_figure()
+        hoist_response_figure()
 
 
 if __name__ == "__main__":

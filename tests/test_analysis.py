@@ -14,6 +14,7 @@ from scipy.linalg import expm
 import amilpy
 from amilpy.analysis import NotConverged
 from amilpy.analysis.linear import linearise
+from amilpy.run.jacobian import DIFFERENCES, MODEL, field_jacobian
 
 W0, Z = 3.0, 0.2  # X'' + 2 Z W0 X' + W0^2 X = 0
 DAMPED = f"""PARAM W0 = {W0}, Z = {Z}
@@ -41,20 +42,40 @@ def test_damped_oscillator_modes_exactly():
 
 
 def test_jacobian_of_a_nonlinear_field_and_its_stated_accuracy():
-    # d/dX of -G*SIN(X) - B*X**3 at X = 1.2 is -G cos(1.2) - 3 B 1.44: central
-    # differences with the step chosen per column, 1e-9 relative promised (the
-    # estimate the Linearisation gives must not understate the true error)
+    # d/dX of -G*SIN(X) - B*X**3 at X = 1.2 is -G cos(1.2) - 3 B 1.44. The model's
+    # own Jacobian (codegen.jacobian) is exact to rounding: 1e-14. The central
+    # differences the analyses fall back on (a sliding field, a construct without a
+    # symbolic derivative) promise 1e-9 relative with the step chosen per column,
+    # and their error estimate must not understate the true error
     model = amilpy.loads("PARAM G = 9.81, B = 0.7\nX = INTGRL(1.2, V)\n"
                          "V = INTGRL(-0.4, -G*SIN(X) - B*X**3)\nTIMER FINTIM = 1.0\nEND\n")
     flow = model.flow()
     state = flow.initial_state()
     jac, names = linearise(flow, state, 0.0)
     exact = -9.81 * math.cos(1.2) - 3 * 0.7 * 1.44
-    got = jac[names.index("V"), names.index("X")]
-    assert got == pytest.approx(exact, rel=1e-9)
-    assert jac[names.index("X"), names.index("V")] == 1.0
+    vx, xv = names.index("V"), names.index("X")
+    assert jac[vx, xv] == pytest.approx(exact, rel=1e-14)
+    assert jac[xv, vx] == 1.0
     lin = model.modes()
-    assert abs(got - exact) / abs(exact) <= max(10 * lin.error, 1e-12)
+    assert lin.how == MODEL and lin.error == 0.0
+    field = flow.field(state, 0.0)
+    diff, error = field_jacobian(lambda v: field(0.0, np.asarray(v)), state.y, 1e-3,
+                                 with_error=True)
+    assert diff[vx, xv] == pytest.approx(exact, rel=1e-9)
+    assert abs(diff[vx, xv] - exact) <= max(10 * error[xv], 1e-12 * abs(exact))
+
+
+def test_modes_while_a_surface_slides_use_differences_of_the_combined_field():
+    # X' = -S + 0.3 Y, Y' = -2 Y + S with S a relay on X: X reaches 0 and slides
+    # there with S = 0.3 Y (X' = 0), so Y' = -1.7 Y. The combined field has no
+    # symbolic Jacobian; its central differences are exact to rounding on a field
+    # linear in the states: eigenvalues -1.7 (to 1e-10) and 0 (X held on the surface)
+    result = amilpy.loads("S = FSW(X, -1.0, 0.0, 1.0)\nX = INTGRL(1.0, -S + 0.3*Y)\n"
+                          "Y = INTGRL(0.0, -2.0*Y + S)\nTIMER FINTIM = 4.0\nEND\n"
+                          ).modes(at=3.0)
+    assert result.how == DIFFERENCES and result.error < 1e-10
+    zero, moving = result.modes
+    assert zero.zero and moving.eigenvalue == pytest.approx(-1.7, rel=1e-10)
 
 
 def test_modes_flag_rigid_body_and_follow_the_switch_branch():

@@ -3,8 +3,8 @@ branches in force there, and the eigenvalues and mode shapes of its Jacobian.
 
 `linearise` is the way in: the Jacobian of `Flow.field` (the field a stepper
 integrates, branches frozen, sliding surfaces combined): the model's own where it
-can be had (`run.jacobian.model_jacobian`, exact to rounding), else by central
-differences with the step chosen column by column (`run.jacobian.field_jacobian`;
+can be had (exact to rounding), else by central differences with the step chosen
+column by column (`Flow.linearise`, by the one rule of `run.jacobian.jacobian_at`;
 its module states the accuracy). `Linearisation.error` is the differences'
 estimate, relative to the largest entry of J (0 for the model's own).
 """
@@ -18,8 +18,7 @@ import numpy as np
 
 from ..diagnostics import AmilError
 from ..run import Flow, State
-from ..run.jacobian import field_jacobian, model_jacobian
-from ..run.plan import SLIDE
+from ..run.jacobian import MODEL
 
 ZERO = 1e-8  # an eigenvalue below this fraction of the largest is a zero mode
 
@@ -29,7 +28,7 @@ class Linearisation:
     jacobian: np.ndarray  # J[i, j] = d(dy_i/dt)/d y_j
     names: list[str]  # the states, in the order of J's rows and columns
     error: float  # estimated error of J, relative to its largest entry
-    how: str = "the model's equations"  # or "central differences"
+    how: str = MODEL  # or run.jacobian.DIFFERENCES
 
 
 def linearise(flow: Flow, state: State, t: float) -> tuple[np.ndarray, list[str]]:
@@ -42,18 +41,10 @@ def linearise(flow: Flow, state: State, t: float) -> tuple[np.ndarray, list[str]
 def jacobian(flow: Flow, state: State, t: float) -> Linearisation:
     """`linearise` with its error estimate (see the module docstring)."""
     y = np.asarray(state.y, dtype=float)
-    jac = None if SLIDE in state.modes else model_jacobian(flow.compiled, t, y, state.modes,
-                                                           state.memory)
-    error = np.zeros(len(y))  # the model's own: exact to rounding
-    how = "the model's equations"
-    if jac is None:
-        how = "central differences"
-        f, tol = flow.field(state, t), flow.plan.tol
-        try:
-            jac, error = field_jacobian(lambda v: f(t, np.asarray(v)), y,
-                                        tol.atol / tol.rtol, with_error=True)
-        except (ArithmeticError, ValueError) as exc:
-            raise AmilError(f"cannot linearise at TIME = {t:.9g}: {exc}") from None
+    try:
+        jac, error, how = flow.linearise(state, t)
+    except (ArithmeticError, ValueError) as exc:
+        raise AmilError(f"cannot linearise at TIME = {t:.9g}: {exc}") from None
     if not np.all(np.isfinite(jac)):
         bad = int(np.argwhere(~np.isfinite(jac))[0][1])
         raise AmilError(f"cannot linearise at TIME = {t:.9g}: the derivatives are not "
@@ -96,7 +87,7 @@ class Modes:
     jacobian: np.ndarray
     error: float  # the Jacobian's estimated relative error
     modes: list[Mode]  # zero modes first, then by natural frequency
-    how: str = "the model's equations"  # the Jacobian's source (see `Linearisation`)
+    how: str = MODEL  # the Jacobian's source (see `Linearisation`)
 
 
 def mode_list(jac: np.ndarray) -> list[Mode]:

@@ -300,15 +300,11 @@ class Problem:
     def find_symmetries(self, states: list[State]) -> None:
         """The directions of cyclic states along which the field's Jacobian (rows:
         the cyclic states and the angle) vanishes at every one of `states`."""
-        from ..run.jacobian import field_jacobian
-
         rows = self.cyclic + ([self.angle] if self.angle is not None else [])
         w = self.scale
         blocks = []
         for s in states:
-            field = self.flow.field(s, s.t)
-            jac = field_jacobian(lambda v, f=field, t=s.t: f(t, np.asarray(v)), s.y, w,
-                                 refine=True)
+            jac = self.flow.jacobian(s, s.t, floor=w)
             blocks.append(jac[np.ix_(rows, self.cyclic)] * w[self.cyclic][None, :] /
                           w[rows][:, None])
         stacked = np.vstack(blocks) if blocks else np.zeros((0, len(self.cyclic)))

@@ -9,6 +9,7 @@ from collections.abc import Iterator, Sequence
 
 import numpy as np
 
+from ..run.jacobian import DIFFERENCES
 from . import words as W
 from .plot import save_png
 
@@ -49,8 +50,8 @@ def _title(model) -> str:
 def modes_text(result, model=None) -> str:
     head = f"LINEAR MODES OF {_title(model)}".rstrip()
     lines = [head, f"about the state at TIME = {result.time:.9g}, switch branches as in force "
-             "there; Jacobian from " + (result.how if result.how != "central differences"
-                                         else f"central differences, estimated error "
+             "there; Jacobian from " + (result.how if result.how != DIFFERENCES
+                                         else f"{DIFFERENCES}, estimated error "
                                          f"{result.error:.1E} of its largest entry"),
              "  " + ", ".join(f"{n} = {v:.6g}" for n, v in zip(result.names, result.state.y,
                                                                strict=True)), "",
@@ -231,7 +232,8 @@ def _runs(points: Sequence, measure: str) -> list[tuple[bool, list, list]]:
 
 def plot_response(resp, path: str, model=None, reference=None) -> str:
     """Half peak-to-peak of the first measure against the value: stable solid,
-    unstable dashed, folds marked. `reference`: extra (x, y, label) curves."""
+    unstable dashed, folds marked. `reference`: extra curves to compare, each
+    (x, y, label) or (x, y, label, matplotlib format such as "v" or "k:")."""
     from matplotlib.figure import Figure
 
     m0 = resp.measures[0]
@@ -251,8 +253,9 @@ def plot_response(resp, path: str, model=None, reference=None) -> str:
         for p in folds:
             ax.annotate(f"{p.value:.5g}", (p.value, p.measures[m0].half_pp),
                         textcoords="offset points", xytext=(6, -10), fontsize=8)
-    for x, y, label in reference or ():
-        ax.plot(x, y, ".", color="0.55", markersize=3, label=label)
+    for x, y, label, *fmt in reference or ():
+        ax.plot(x, y, *(fmt or ["."]), markersize=3, label=label,
+                **({} if fmt else {"color": "0.55"}))
     x_unit, y_unit = units(model, resp.name, m0)
     ax.set_xlabel(resp.name + (f" [{x_unit}]" if x_unit else ""))
     ax.set_ylabel(f"half peak-to-peak of {m0}" + (f" [{y_unit}]" if y_unit else ""))

@@ -49,9 +49,9 @@ from ..diagnostics import AmilError
 from ..outcome import message
 from ..result import Event
 from .grazing import Grazing, Missed
-from .jacobian import field_jacobian, model_jacobian
+from .jacobian import jacobian_at
 from .loop import Cursor, Integrator, Stop
-from .plan import SLIDE, Options
+from .plan import Options
 from .prepare import Cache, prepare
 from .simulate import start_cursor
 from .steppoint import StepPoint
@@ -114,20 +114,30 @@ class Flow:
         return integ.vector_field(Cursor(t, np.array(state.y, dtype=float), list(state.modes),
                                          list(state.memory)))
 
-    def jacobian(self, state: State, t: float) -> np.ndarray:
+    def jacobian(self, state: State, t: float, floor=None) -> np.ndarray:
         """d f / d y of the vector field `field` integrates from `state` at `t` (the
         branches frozen as `state.modes` says): from the model's own equations, each
         switch differentiated in its branch (`codegen.jacobian`, exact to rounding);
         while a surface slides, or where the model's own cannot be had, by refined
-        central differences of the field (`run.jacobian`)."""
+        central differences of the field with steps from `floor` (the states' sizes;
+        default ABSERR/RELERR), as `run.jacobian.jacobian_at` says."""
+        return self.linearise(state, t, floor)[0]
+
+    def linearise(self, state: State, t: float, floor=None
+                  ) -> tuple[np.ndarray, np.ndarray, str]:
+        """`jacobian` with the estimated error of each column and where it came from
+        (`run.jacobian.jacobian_at`)."""
         y = np.array(state.y, dtype=float)
-        if SLIDE not in state.modes:
-            jac = model_jacobian(self.c, t, y, state.modes, state.memory)
-            if jac is not None:
-                return jac
-        f, tol = self.field(state, t), self.plan.tol
-        return field_jacobian(lambda v: f(t, np.asarray(v)), y, tol.atol / tol.rtol,
-                              refine=True)
+        if floor is None:
+            floor = self.plan.tol.atol / self.plan.tol.rtol
+        field: list = []  # built only when differences are taken
+
+        def f(v):
+            if not field:
+                field.append(self.field(state, t))
+            return field[0](t, np.asarray(v))
+
+        return jacobian_at(self.c, f, t, y, state.modes, state.memory, floor, refine=True)
 
     @property
     def surfaces(self) -> list[str]:

@@ -1,10 +1,11 @@
 """The Jacobian of the vector field, d(dy/dt)/dy, for the analyses: the one place
 they take it from (the linear modes, the variational equations of the flow map and
-the symmetries of a periodic orbit). `model_jacobian` gives the model's own
-(`codegen.jacobian`: each switch differentiated in its branch, exact to rounding);
-where there is none (a sliding surface's combined field, a construct the symbolic
-route does not take, a derivative that faults at the point) the analyses fall back
-on central differences, `field_jacobian`:
+the symmetries of a periodic orbit). `jacobian_at` is the rule, written once:
+the model's own (`model_jacobian`, from `codegen.jacobian`: each switch
+differentiated in its branch, exact to rounding); where there is none (a sliding
+surface's combined field, a construct the symbolic route does not take, a
+derivative that faults at the point) central differences of the field,
+`field_jacobian`:
 
 Column j is (f(y + h_j e_j) - f(y - h_j e_j)) / (2 h_j) with
 h_j = eps**(1/3) * max(|y_j|, floor_j); the caller's floor is the state's size
@@ -28,6 +29,10 @@ from collections.abc import Callable
 
 import numpy as np
 
+from .plan import SLIDE
+
+MODEL = "the model's equations"
+DIFFERENCES = "central differences"
 STEP = float(np.cbrt(np.finfo(float).eps))  # 6.06E-6
 REFINE = tuple(4.0 ** k for k in range(9))  # up to 0.4 of the state's size
 AGREE = 1e-10
@@ -51,6 +56,23 @@ def model_jacobian(c, t: float, y, m, z) -> np.ndarray | None:
     except (NotImplementedError, ArithmeticError, ValueError):
         return None
     return jac if np.all(np.isfinite(jac)) else None
+
+
+def jacobian_at(c, field: Callable[[list[float]], object], t: float, y, m, z, floor,
+                refine: bool = False) -> tuple[np.ndarray, np.ndarray, str]:
+    """d f/d y at (t, y) in the branches m with memory z: (J, the estimated error of
+    each column, how it was had: MODEL or DIFFERENCES). The model's own unless a
+    surface slides or it cannot be had (error 0); else central differences of
+    `field` (the field at t of a list of the states' values), refined with their
+    error estimate when `refine` (one-off Jacobians), plain (error NaN) when not
+    (the many along a step of the variational equations)."""
+    if SLIDE not in m:
+        jac = model_jacobian(c, t, y, m, z)
+        if jac is not None:
+            return jac, np.zeros(len(jac)), MODEL
+    if refine:
+        return (*refined(field, y, floor), DIFFERENCES)
+    return differences(field, y, floor), np.full(len(y), np.nan), DIFFERENCES
 
 
 def field_jacobian(f: Callable[[list[float]], object], y, floor,

@@ -5,11 +5,12 @@ monodromy matrix with the saltation matrix of each located switch.
 switches, so it lies in one branch) and carries Phi = d y(t)/d y(t0):
 
 - across a step [ta, tb], Phi' = A(t) Phi with A the field's Jacobian
-  (`jacobian.field_jacobian`) on the step's dense output, by the sixth-order
-  Magnus method on three Gauss-Legendre nodes (Blanes, Casas & Ros 2000):
-  exp(Omega) Phi, exact for a branch linear in the states whatever the step
-  (and an exponential, so stiff modes decay as they should). A step over which
-  h |A(c3) - A(c1)| > 0.5 is halved (at most 64 pieces);
+  (`jacobian.jacobian_at`: the model's own, else differences) on the step's
+  dense output, by the sixth-order Magnus method on three Gauss-Legendre
+  nodes (Blanes, Casas & Ros 2000): exp(Omega) Phi, exact for a branch linear
+  in the states whatever the step (and an exponential, so stiff modes decay as
+  they should). A step over which h |A(c3) - A(c1)| > 0.5 is halved (at most
+  64 pieces);
 - at a switch at t_e on surface s(t, y) = 0, from field f- to f+,
       Phi <- (I + (f+ - f-) n^T / (n . f- + ds/dt)) Phi,    n = ds/dy,
   surface after surface when several change at once (exact when they are one
@@ -30,7 +31,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from .dense import sample
-from .jacobian import STEP, field_jacobian, model_jacobian
+from .jacobian import STEP, jacobian_at
 from .plan import SLIDE
 
 _C = np.array([0.5 - math.sqrt(15) / 10, 0.5, 0.5 + math.sqrt(15) / 10])
@@ -62,11 +63,8 @@ class Tangent:
         self.failed: str | None = None
 
     def jacobian(self, t: float, y: np.ndarray, m, z) -> np.ndarray:
-        jac = model_jacobian(self.c, t, y, m, z)
-        if jac is not None:
-            return jac
         rhs = self.c.rhs
-        return field_jacobian(lambda v: rhs(t, v, m, z), y, self.floor)
+        return jacobian_at(self.c, lambda v: rhs(t, v, m, z), t, y, m, z, self.floor)[0]
 
     def __call__(self, ta: float, tb: float, interp, m, z) -> None:
         if self.failed is not None:
