@@ -42,10 +42,10 @@ FORM_ROWS: tuple[tuple[str, ...], ...] = (
      "`models/ex4_clutch.amil`"),
     ("**ACSL form** (ACSL, Magnolia)", "the first statement is `PROGRAM` or `MODEL`",
      "`T` (and `TIME`)", "DERIVATIVE is sorted; INITIAL, DYNAMIC, DISCRETE, TERMINAL run "
-     "in written order", "`models/examples/`"),
+     "in written order", "`models/examples/oral_dosing.csl`"),
     ("**FST form** (Wageningen's FORTRAN Simulation Translator)", "CSMP form with FST's "
      "statements (`TIMER STTIME`, `FINISH X > v`, `TRANSLATION_GENERAL`, `WEATHER`, `;` "
-     "between items)", "`TIME` from `STTIME`", "as CSMP", "`models/examples/`"),
+     "between items)", "`TIME` from `STTIME`", "as CSMP", "`models/examples/fst_wheat.fst`"),
 )
 
 # The side-by-side table: one row per construct whose spelling or meaning differs
