@@ -176,7 +176,26 @@ class TermtIf(Node):
     child_fields = ("cond",)
 
 
-CODE: tuple[type[Node], ...] = (Let, IfThen, ForLoop, ScheduleAt, TermtIf)
+@dataclass(frozen=True)
+class Solve(Node):
+    """CSMP III's IMPL: `target` = `result`(target) solved by fixed-point iteration
+    from `start` (the last accepted value): `body` computes `result` from the target,
+    until |result - target| <= tol*max(1, |target|), at most IMPL_ITERATIONS times."""
+
+    target: str
+    start: Expr
+    tol: Expr
+    result: str
+    body: tuple[Node, ...]
+    span: Span
+
+    def children(self) -> tuple[Node, ...]:
+        return (self.start, self.tol) + self.body
+
+
+IMPL_ITERATIONS = 50  # contract section 13
+
+CODE: tuple[type[Node], ...] = (Let, IfThen, ForLoop, ScheduleAt, TermtIf, Solve)
 
 
 # ---------------------------------------------------------------- instances

@@ -95,7 +95,8 @@ CONTROL_KEYWORDS: tuple[str, ...] = ("ALGORITHM", "NSTEPS", "MAXTERVAL", "MINTER
                                      "MERROR", "XERROR")
 # type statements -> what they store (double precision arithmetic throughout)
 TYPE_KEYWORDS: dict[str, str] = {"LOGICAL": "LOGICAL", "INTEGER": "INTEGER", "REAL": "REAL",
-                                 "DOUBLEPRECISION": "REAL", "DIMENSION": "REAL"}
+                                 "DOUBLEPRECISION": "REAL", "DIMENSION": "REAL",
+                                 "FIXED": "INTEGER"}  # CSMP III's FIXED (section 13)
 
 # What amilpy does not run (section 14): the construct as a reader knows it, and what
 # to write instead. Statement keywords first, then functions.

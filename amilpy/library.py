@@ -512,6 +512,11 @@ WEATHER_FUNC, WEATHER_LOOKUP, WEATHER_TABLE = ".WEATHER", "WDAY", "wx_"
 WEATHER_HOLD = ".WEATHER_HOLD"
 register(Func(WEATHER_FUNC, Kind.TABLE, ".WEATHER(F, X)", "the day's weather value",
               lookup=WEATHER_LOOKUP))
+# CSMP III's IMPL (section 13) starts each solve from the last accepted value of its
+# unknown (IC at first): that value is kept here. Not callable from a listing.
+IMPL_LAST = ".IMPL_LAST"
+register(Func(IMPL_LAST, Kind.MEMORY, ".IMPL_LAST(IC, Y)", "Y at the last accepted step",
+              memory=MemorySpec("1", ("A",), "Z0", ("B",)), constant_args=(0,)))
 register(Func(WEATHER_HOLD, Kind.MEMORY, ".WEATHER_HOLD(X)", "X as at the last restart",
               memory=MemorySpec("1", ("0.0",), "Z0", ("A",), every_step=False)))
 register(Func("LINT", Kind.TABLE, "LINT(F, X)",

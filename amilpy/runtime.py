@@ -125,6 +125,14 @@ def weather_day(table: DayTable, x: float) -> float:
     raise ValueError(table.missing.get(day, f"no weather for day {day} (TIME = {x:g})"))
 
 
+def impl_fail(name: str, t: float, residual: float) -> None:
+    """IMPL's loop did not converge (contract section 13): a fault naming Y."""
+    from .ir import IMPL_ITERATIONS
+
+    raise ArithmeticError(f"IMPL for {name} did not converge in {IMPL_ITERATIONS} iterations "
+                          f"at TIME = {t:.9g}: |FOFY - {name}| = {abs(residual):.3g}")
+
+
 def afgen(table: Table, x: float) -> float:
     """Linear interpolation; the end values hold outside the table; NaN for NaN."""
     end = _outside(table, x)
@@ -428,7 +436,7 @@ HELPERS: dict[str, Callable] = {
     "LINT": lint, "PULSE_ON": pulse_on, "IMPULS_STEP": impulse_step, "DRAW": draw,
     "SGN": sign, "LEVEL": level, "WHERE": _where, "ALL": _all, "ANY": _any,
     "NITER": loop_count, "RANGE": range,  # FOR/DO loops of procedural code
-    "WDAY": weather_day,
+    "WDAY": weather_day, "IMPL_FAIL": impl_fail,
 }
 
 

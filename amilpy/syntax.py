@@ -477,6 +477,27 @@ class Weather(Node):
 
 
 @dataclass(frozen=True)
+class Macro(Node):
+    """MACRO O1, O2 = NAME(P1, P2) ... ENDMAC (CSMP III): expanded at each call
+    before checking (parse/macros.py); no later stage sees one."""
+
+    name: str
+    outputs: tuple[str, ...]
+    params: tuple[str, ...]
+    body: tuple[Statement, ...]
+    span: Span
+    child_fields = ("body",)
+
+
+@dataclass(frozen=True)
+class Nosort(Node):
+    """NOSORT (sorted=False) or SORT (True): a written-order region of sorted code."""
+
+    sorted: bool
+    span: Span
+
+
+@dataclass(frozen=True)
 class DefineCall(Node):
     """DEFINE_CALL NAME(...): a Fortran routine's interface, read and not needed."""
 
@@ -487,12 +508,13 @@ Statement = (
     Assign | Data | Table | Timer | Method | Tolerance | Finish | Termt | Report | Label
     | Title | Section | End | Stop | If | Procedural | Loop | FunctionDef | Block | Schedule
     | Interval | Cinterval | Variable | Control | Declare | Translation | Weather | DefineCall
+    | Macro | Nosort
 )
 STATEMENTS: tuple[type[Node], ...] = (Assign, Data, Table, Timer, Method, Tolerance, Finish,
                                       Termt, Report, Label, Title, Section, End, Stop, If,
                                       Procedural, Loop, FunctionDef, Block, Schedule, Interval,
                                       Cinterval, Variable, Control, Declare, Translation,
-                                      Weather, DefineCall)
+                                      Weather, DefineCall, Macro, Nosort)
 
 
 @dataclass(frozen=True)

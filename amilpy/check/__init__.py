@@ -23,7 +23,16 @@ from .code import CodeLowering, assigned_names
 from .groups import RunGroups, reject_late_equations, sections, split_groups
 from .lower import Lowering
 from .names import PURE, Names
-from .units import declared_stores, unit_equations, written_text
+from .units import (
+    ImplGroup,
+    declared_stores,
+    impl_equations,
+    impl_groups,
+    nosort_regions,
+    stored,
+    unit_equations,
+    written_text,
+)
 
 __all__ = ["check"]
 
@@ -39,6 +48,9 @@ def check(program: ast.Program, name: str | None = None) -> ir.Model:
     rep = Reporter(program.path, program.source)
     groups = split_groups(program)
     parts = sections(groups[0] if groups else [], rep)
+    for section in ("INITIAL", "TERMINAL"):  # sorted INITIAL keeps no order to keep;
+        # TERMINAL runs in written order anyway: NOSORT/SORT change nothing there
+        parts[section] = [s for s in parts[section] if not isinstance(s, ast.Nosort)]
     reject_late_equations(groups, rep)
     data = RunGroups(rep).read(groups)
     names = Names(rep, program, data)
@@ -50,8 +62,10 @@ def check(program: ast.Program, name: str | None = None) -> ir.Model:
         low.weather = frozenset(names.weather_names - own)
 
     # INITIAL: plain assignments, evaluated once, sorted
+    stores = declared_stores(program.statements)  # INTEGER (FIXED), LOGICAL names
     initial: list[ir.Equation] = []
     for st in parts["INITIAL"]:
+        st = stored(st, stores)
         for target, span in zip(st.targets, st.target_spans, strict=True):
             names.define(target, span, "INITIAL")
         if not names.check_calls(st.expr, PURE, "INITIAL"):
@@ -62,19 +76,22 @@ def check(program: ast.Program, name: str | None = None) -> ir.Model:
         initial.append(ir.Equation(st.targets[0], low.expr(st.expr, None, literal=True),
                                    st.span))
     low.written = written_text(program.source)
-    stores = declared_stores(program.statements)
     code = CodeLowering(rep, low, names, stores)
     # DYNAMIC: one parallel block, sorted (an IF block is one unit)
     dynamic: list[ir.Equation] = []
     units: list[ir.Unit] = []
     termts: list[tuple[ast.Termt, ast.Node | None]] = []
-    for st in parts["DYNAMIC"]:
+    for st in impl_groups(nosort_regions(parts["DYNAMIC"], rep), rep):
+        if isinstance(st, ImplGroup):
+            dynamic.extend(impl_equations(code, names, st, units))
+            continue
         if isinstance(st, ast.Termt):
             termts.append((st, None))
             continue
-        if isinstance(st, ast.If):
+        if isinstance(st, (ast.If, ast.Procedural)):
             dynamic.extend(unit_equations(code, names, st, units, "DYNAMIC"))
             continue
+        st = stored(st, stores)
         ok = all([names.define(t, s, "DYNAMIC")
                   for t, s in zip(st.targets, st.target_spans, strict=True)])
         if names.check_calls(st.expr, None, "DYNAMIC") and ok:

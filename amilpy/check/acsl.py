@@ -11,8 +11,6 @@ elsewhere is tested when its code runs.
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 from .. import ir
 from .. import syntax as ast
 from ..diagnostics import Reporter, Span, nearest
@@ -27,7 +25,7 @@ from .groups import DATA_STATEMENTS, RunGroups
 from .lower import TEXT_LIMIT, Lowering
 from .names import Names
 from .parts import Parts, Renamer, time_names
-from .units import declared_stores, unit_equations, written_text
+from .units import declared_stores, stored, unit_equations, written_text
 
 _DIRECTION = {"XP": 1, "XN": -1, "XZ": 0}
 
@@ -335,15 +333,4 @@ class _Check:
         from ..diagnostics import Diagnostic
 
         return Diagnostic(message, span, hint, "warning")
-
-
-def stored(st: ast.Assign, stores: dict[str, str]) -> ast.Assign:
-    """An assignment of sorted code to an INTEGER (truncated toward 0) or LOGICAL (1 or
-    0) name, as the value it keeps."""
-    kind = stores.get(st.targets[0]) if len(st.targets) == 1 else None
-    if kind == "INTEGER":
-        return replace(st, expr=ast.Call("AINT", (st.expr,), st.expr.span))
-    if kind == "LOGICAL" and not ast.is_logical(st.expr):
-        return replace(st, expr=ast.BinOp(">", st.expr, ast.Num(0.0, st.span, "0"), st.span))
-    return st
 

@@ -95,7 +95,7 @@ def sections(group: list[ast.Node], rep: Reporter) -> dict[str, list[ast.Node]]:
         elif isinstance(st, ACSL_STATEMENTS):
             rep.error(f"{type(st).__name__.upper()} belongs to the ACSL form", st.span,
                       "start the file with PROGRAM or MODEL (ACSL form)")
-        elif isinstance(st, (ast.Assign, ast.Termt, ast.If, ast.Loop)):
+        elif isinstance(st, (ast.Assign, ast.Termt, ast.If, ast.Loop, ast.Nosort)):
             out[current].append(st)
     return out
 

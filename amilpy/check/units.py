@@ -4,6 +4,7 @@ declared stores of names, and the listing's own text of an expression."""
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass, replace
 
 from .. import ir
 from .. import syntax as ast
@@ -34,6 +35,17 @@ def declared_stores(statements) -> dict[str, str]:
             if isinstance(node, ast.Declare) and node.type in ("INTEGER", "LOGICAL"):
                 out.update(dict.fromkeys(node.names, node.type))
     return out
+
+
+def stored(st: ast.Assign, stores: dict[str, str]) -> ast.Assign:
+    """An assignment of sorted code to an INTEGER (truncated toward 0) or LOGICAL (1 or
+    0) name, as the value it keeps."""
+    kind = stores.get(st.targets[0]) if len(st.targets) == 1 else None
+    if kind == "INTEGER":
+        return replace(st, expr=ast.Call("AINT", (st.expr,), st.expr.span))
+    if kind == "LOGICAL" and not ast.is_logical(st.expr):
+        return replace(st, expr=ast.BinOp(">", st.expr, ast.Num(0.0, st.span, "0"), st.span))
+    return st
 
 
 def first_assignment(st: ast.Node, name: str) -> Span:
@@ -77,3 +89,112 @@ def _partial_outputs(st: ast.If) -> list[str]:
     has_else = st.branches[-1].cond is None
     everywhere = everywhere if has_else and everywhere is not None else set()
     return [n for n in assigned_names((st,)) if n not in everywhere]
+
+
+@dataclass(frozen=True)
+class ImplGroup:
+    """`Y = IMPL(IC, P, FOFY)` and the statements after it up to `FOFY = ...`."""
+
+    head: ast.Assign
+    body: tuple[ast.Assign, ...]
+
+
+def impl_groups(statements: list, rep) -> list:
+    """DYNAMIC's statements with each IMPL loop gathered into an ImplGroup."""
+    out: list = []
+    i = 0
+    while i < len(statements):
+        st = statements[i]
+        call = st.expr if isinstance(st, ast.Assign) else None
+        if not (isinstance(call, ast.Call) and call.func == "IMPL"):
+            out.append(st)
+            i += 1
+            continue
+        if len(call.args) != 3 or len(st.targets) != 1 or \
+                not isinstance(call.args[2], ast.Name):
+            rep.error("IMPL is Y = IMPL(IC, P, FOFY): one name assigned, the first guess, "
+                      "the tolerance and the name the loop computes", st.span,
+                      "write Y = IMPL(IC, P, FOFY), then the statements that compute FOFY "
+                      "from Y, ending with FOFY = ...")
+            i += 1
+            continue
+        fofy = call.args[2].name
+        j = i + 1
+        while j < len(statements) and not (isinstance(statements[j], ast.Assign)
+                                           and fofy in statements[j].targets):
+            j += 1
+        if j == len(statements):
+            rep.error(f"IMPL for {st.targets[0]}: no statement {fofy} = ... follows", st.span,
+                      f"end the loop with {fofy} = (an expression of {st.targets[0]})")
+            i += 1
+            continue
+        body = statements[i + 1:j + 1]
+        bad = next((b for b in body if not isinstance(b, ast.Assign)), None)
+        if bad is not None:
+            rep.error(f"the IMPL loop for {st.targets[0]} holds assignments only", bad.span)
+        else:
+            out.append(ImplGroup(st, tuple(body)))
+        i = j + 1
+    return out
+
+
+def impl_equations(code: CodeLowering, names: Names, group: ImplGroup,
+                   units: list[ir.Unit]) -> list[ir.Equation]:
+    """An IMPL loop as one sorting unit: its statements lowered, run inside the
+    fixed-point iteration (ir.Solve) from the last accepted Y (library's IMPL_LAST)."""
+    from ..library import IMPL_LAST
+    from .names import PURE
+
+    head, low = group.head, code.low
+    y = head.targets[0]
+    ic, tol, result = head.expr.args
+    if not (names.define(y, head.target_spans[0], "DYNAMIC")
+            and names.check_calls(ic, PURE, "IMPL") and names.check_calls(tol, PURE, "IMPL")):
+        return []
+    unit = code.unit(ast.Procedural((), (), group.body, head.span), len(units), "DYNAMIC")
+    if unit is None:
+        return []
+    last = low.memory(ast.Call(IMPL_LAST, (ic, ast.Name(y, head.span)), head.span), y)
+    solve = ir.Solve(y, ir.MemoryValue(last, head.span), low.expr(tol, y), result.name,
+                     unit.body, head.span)
+    unit = replace(unit, kind="IMPL", outputs=(y, *unit.outputs), body=(solve,),
+                   inputs=tuple(n for n in unit.inputs if n != y))
+    units.append(unit)
+    out = [ir.Equation(y, ir.UnitValue(unit.index, y, head.span), head.span)]
+    for name in unit.outputs[1:]:
+        if names.define(name, _assigned_at(group.body, name), "DYNAMIC"):
+            out.append(ir.Equation(name, ir.UnitValue(unit.index, name, head.span), head.span))
+    return out
+
+
+def _assigned_at(body, name: str):
+    return next(st.target_spans[st.targets.index(name)] for st in body if name in st.targets)
+
+
+def nosort_regions(statements: list, rep) -> list:
+    """Sorted code with each NOSORT ... SORT region (to the section's end when no SORT
+    follows) as one written-order unit, a PROCEDURAL with inferred lists."""
+    out: list = []
+    region: list | None = None
+    start = None
+    for st in statements:
+        if isinstance(st, ast.Nosort):
+            if st.sorted and region is not None:
+                out.append(_region(region, start))
+                region = None
+            elif not st.sorted and region is None:
+                region, start = [], st.span
+            continue
+        if region is None:
+            out.append(st)
+        elif isinstance(st, ast.Termt):
+            out.append(st)  # a TERMT ends the run wherever it stands
+        else:
+            region.append(st)
+    if region is not None:
+        out.append(_region(region, start))
+    return [st for st in out if st is not None]
+
+
+def _region(body: list, span) -> ast.Procedural | None:
+    return ast.Procedural((), (), tuple(body), span) if body else None

@@ -97,7 +97,36 @@ class Statements:
                                                       py.Constant(0.0)], [])
             return [self.placed(py.If(truth(em.emit(st.cond)), [py.Expr(call)], []),
                                 "TERMT", st.span)]
+        if isinstance(st, ir.Solve):
+            return self.solve(st)
         raise AssertionError(f"no code for {type(st).__name__}")
+
+    def solve(self, st: ir.Solve) -> list[py.stmt]:
+        """IMPL: Y from its last accepted value; the body gives FOFY(Y); converged
+        when |FOFY - Y| <= P*max(1, |Y|), else Y = FOFY and again; a fault naming Y,
+        TIME and the residual after ir.IMPL_ITERATIONS tries."""
+        em = self.em
+        r, k, tol = self.fresh(), self.fresh(), self.fresh()
+
+        def call(f: str, *args: py.expr) -> py.expr:
+            return py.Call(py.Name(f, py.Load()), list(args), [])
+
+        y = name(st.target)
+        converged = py.Compare(call("_ABS", py.Name(r, py.Load())), [py.LtE()], [py.BinOp(
+            py.Name(tol, py.Load()), py.Mult(), call("_AMAX1", py.Constant(1.0),
+                                                     call("_ABS", y)))])
+        loop = py.For(py.Name(k, py.Store()), call("_RANGE", py.Constant(ir.IMPL_ITERATIONS)),
+                      [*self.block(st.body),
+                       py.Assign([py.Name(r, py.Store())],
+                                 py.BinOp(name(st.result), py.Sub(), name(st.target))),
+                       py.If(converged, [py.Break()], []),
+                       py.Assign([name(st.target, True)], name(st.result))],
+                      [py.Expr(call("_IMPL_FAIL", py.Constant(st.target), py.Name("t", py.Load()),
+                                    py.Name(r, py.Load())))])
+        head = [py.Assign([name(st.target, True)], em.emit(st.start)),
+                py.Assign([py.Name(tol, py.Store())], em.emit(st.tol)),
+                py.Assign([py.Name(r, py.Store())], py.Constant(0.0))]
+        return [self.placed(x, st.target, st.span) for x in (*head, loop)]
 
 
 def start(outputs, known: set[str], values: dict[str, float]) -> list[py.stmt]:

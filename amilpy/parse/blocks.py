@@ -20,7 +20,7 @@ from ..diagnostics import Diagnostic, Span
 _NAMES = {"IF": "IF", "FOR": "FOR loop", "DO": "DO loop", "PROCEDURAL": "PROCEDURAL",
           "FUNCTION": "FUNCTION", "DISCRETE": "DISCRETE", "PROGRAM": "PROGRAM",
           "INITIAL": "INITIAL", "DYNAMIC": "DYNAMIC", "DERIVATIVE": "DERIVATIVE",
-          "TERMINAL": "TERMINAL"}
+          "TERMINAL": "TERMINAL", "MACRO": "MACRO"}
 ACSL_ONLY = ("FOR", "PROCEDURAL", "FUNCTION", "DISCRETE", "INCLUDED")
 
 
@@ -97,6 +97,13 @@ class Nester:
                                    "a file in ACSL form starts with PROGRAM or MODEL")
                         continue
                     name = item.name or ""
+                elif item.kind == "MACRO" and (acsl or stack):
+                    self.error("MACRO ... ENDMAC stands at the top level of a CSMP-form "
+                               "listing" if not acsl else "ACSL's MACRO: not supported",
+                               item.span, "define it before the statements that call it"
+                               if not acsl else "write the statements out, or a FUNCTION "
+                               "y = f(a, b) ... END")
+                    continue
                 elif not acsl and item.kind in ACSL_ONLY:
                     self.error(f"{_describe(item.kind)} belongs to the ACSL form", item.span,
                                "start the file with PROGRAM or MODEL (ACSL form)"
@@ -144,6 +151,8 @@ class Nester:
             return "END IF" + (" (or END)" if acsl else "")
         if kind == "DO":
             return "END DO" + (" (or END)" if acsl else "")
+        if kind == "MACRO":
+            return "ENDMAC"
         return "END"
 
     def close(self, stack: list[_Open], item: Close, acsl: bool) -> _Open | None:
@@ -152,6 +161,16 @@ class Nester:
                        item.span, "every END closes a block opened before it")
             return None
         kind = stack[-1].head.kind
+        line = stack[-1].head.span.line
+        if item.kind == "ENDMAC" and kind != "MACRO":
+            self.error(f"ENDMAC closes a MACRO, but the innermost open block is the "
+                       f"{_describe(kind)} of line {line}", item.span,
+                       f"close that {_describe(kind)} first with {self.closer(kind, acsl)}")
+            return None
+        if kind == "MACRO" and item.kind != "ENDMAC":
+            self.error(f"{'END' if item.kind == 'END' else item.kind} inside the MACRO of "
+                       f"line {line}", item.span, "a MACRO ends with ENDMAC")
+            return None
         want = {"ENDIF": "IF", "ENDDO": "DO"}.get(item.kind)
         if want is not None and kind != want:
             self.error(f"{'END IF' if want == 'IF' else 'END DO'} closes "
@@ -177,6 +196,9 @@ class Nester:
         if head.kind in ("FOR", "DO"):
             var, start, stop, step = head.data
             return ast.Loop(var, start, stop, step, body, head.span, head.kind)
+        if head.kind == "MACRO":
+            outputs, params = head.data
+            return ast.Macro(head.name or "", outputs, params, body, head.span)
         if head.kind == "FUNCTION":
             result, params = head.data
             return ast.FunctionDef(head.name or "", result, params, body, head.span)

@@ -332,6 +332,32 @@ class Builder:
     def st_weather(self, node) -> ast.Weather:
         return ast.Weather(self.items(node.children), self.span(node))
 
+    def st_macro(self, node) -> Head | None:
+        """MACRO O1, O2 = NAME(P1, ...): CSMP III's; anything else (ACSL's MACRO
+        NAME(args), with its own substitution rules) is refused."""
+        import re
+
+        text = str(node.children[0]) if node.children and node.children[0] else ""
+        head = re.fullmatch(r"\s*([A-Za-z]\w*(?:\s*,\s*[A-Za-z]\w*)*)\s*=\s*([A-Za-z]\w*)"
+                            r"\s*\(\s*([A-Za-z]\w*(?:\s*,\s*[A-Za-z]\w*)*)?\s*\)\s*", text)
+        if head is None:
+            what, hint = REFUSED["MACRO"]
+            self.refuse(what, self.span(node), hint + "; CSMP III's MACRO O = NAME(P, ...) "
+                        "... ENDMAC is expanded")
+            return None
+        outputs = tuple(n.strip().upper() for n in head.group(1).split(","))
+        params = tuple(n.strip().upper() for n in (head.group(3) or "").split(",") if n.strip())
+        return Head("MACRO", self.span(node), head.group(2).upper(), (outputs, params))
+
+    def st_nosort(self, node) -> ast.Nosort:
+        return ast.Nosort(False, self.span(node))
+
+    def st_sort(self, node) -> ast.Nosort:
+        return ast.Nosort(True, self.span(node))
+
+    def st_endmac(self, node) -> Close:
+        return Close("ENDMAC", self.span(node))
+
     def st_define_call(self, node) -> ast.DefineCall:
         return ast.DefineCall(self.span(node))
 
