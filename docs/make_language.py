@@ -39,7 +39,7 @@ or `ENDJOB` is not read.
 FORM_ROWS: tuple[tuple[str, ...], ...] = (
     ("**CSMP form** (the lab's AMIL, CSMP III, CSMP/360, FST)", "the default", "`TIME`",
      "DYNAMIC is sorted; INITIAL and TERMINAL run in written order",
-     "`models/ex4_clutch.amil`"),
+     "`models/ex4_clutch.amil`, `models/examples/csmp_diode_filter.amil`"),
     ("**ACSL form** (ACSL, Magnolia)", "the first statement is `PROGRAM` or `MODEL`",
      "`T` (and `TIME`)", "DERIVATIVE is sorted; INITIAL, DYNAMIC, DISCRETE, TERMINAL run "
      "in written order", "`models/examples/oral_dosing.csl`"),

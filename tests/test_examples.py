@@ -65,3 +65,35 @@ def test_fst_wheat_is_the_euler_recurrence_over_its_weather_file():
     for i, t in enumerate(run.times):
         got = tuple(run.values[n][i] for n in ("DVS", "LAI", "WT", "RDD"))
         assert got == pytest.approx(rows[round(t)], rel=1e-12)
+
+
+def test_csmp_diode_filter_against_scipy_with_the_current_by_brentq():
+    # the same equations written for SciPy: V' = -I/C with I the root of
+    # R I + VT ln(1 + I/IS) = V (brentq), and the two FILT2 macros' four lags; RK45 at
+    # rtol 1e-11. The run at RELERR 1e-9: V to 1e-7, the filters to 1e-6.
+    from scipy.integrate import solve_ivp
+    from scipy.optimize import brentq
+
+    c, r, vt, i_s = 1e-3, 100.0, 0.02585, 1e-12
+
+    def current(v: float) -> float:
+        if v <= 0.0:
+            return 0.0
+        return brentq(lambda i: r * i + vt * math.log1p(i / i_s) - v, 0.0, v / r,
+                      xtol=1e-16, rtol=1e-15)
+
+    def rhs(t, y):
+        v, a1, a2, b1, b2 = y
+        i = current(v)
+        return [-i / c, (i - a1) / 0.01, (a1 - a2) / 0.01, (v - b1) / 0.05, (b1 - b2) / 0.05]
+
+    run, = amilpy.load(EXAMPLES / "csmp_diode_filter.amil").run(rtol=1e-9, atol=1e-12,
+                                                                   advice=False)
+    sol = solve_ivp(rhs, (0.0, 0.5), [5.0, 0, 0, 0, 0], t_eval=run.times, rtol=1e-11,
+                    atol=1e-14, method="RK45")
+    v, _, if2, _, vf2 = sol.y
+    assert run.values["V"] == pytest.approx(v, rel=1e-7)
+    # IMPL stops at |FI - I| <= 1E-10 (its P, absolute below 1 A): I within ~1e-10
+    assert run.values["I"] == pytest.approx([current(x) for x in v], rel=1e-7, abs=3e-10)
+    assert run.values["IF2"] == pytest.approx(if2, rel=1e-6, abs=1e-12)
+    assert run.values["VF2"] == pytest.approx(vf2, rel=1e-6, abs=1e-12)
