@@ -20,17 +20,12 @@ from typing import Any
 
 # Absolute imports: `pygmentize -x -l amilpy/highlight.py:AmilLexer` runs this
 # file outside its package, where relative imports fail.
-from amilpy.language import RESERVED
+from amilpy.language import RESERVED, STATEMENT_KEYWORDS
 from amilpy.library import callable_names
 
-# Statement and section keywords (grammar/amil.lark, "keywords"). TITLE and
-# LABEL are handled apart because their free text runs to the end of the line.
+# Statement and section keywords (amilpy.language). TITLE and LABEL are handled
+# apart because their free text runs to the end of the line.
 SECTION_KEYWORDS = ("INITIAL", "DYNAMIC", "DERIVATIVE", "TERMINAL", "END", "STOP")
-STATEMENT_KEYWORDS = (
-    "PARAM", "PARAMETER", "CONST", "CONSTANT", "INCON", "FUNCTION", "TIMER", "METHOD",
-    "RELERR", "ABSERR", "FINISH", "TERMT", "PRINT", "OUTPUT", "PRTPLT", "PLOT", "RANGE",
-    "PREPARE",
-)
 TEXT_KEYWORDS = ("TITLE", "LABEL")
 KEYWORDS = TEXT_KEYWORDS + SECTION_KEYWORDS + STATEMENT_KEYWORDS
 

@@ -98,6 +98,19 @@ TYPE_KEYWORDS: dict[str, str] = {"LOGICAL": "LOGICAL", "INTEGER": "INTEGER", "RE
                                  "DOUBLEPRECISION": "REAL", "DIMENSION": "REAL",
                                  "FIXED": "INTEGER"}  # CSMP III's FIXED (section 13)
 
+# Every statement keyword of the three forms, as the highlighter and the editors'
+# grammars show them (grammar/amil.lark is the parser's own list); TITLE, LABEL and
+# the section words are apart.
+BLOCK_KEYWORDS: tuple[str, ...] = (
+    "IF", "THEN", "ELSE", "ELSEIF", "ENDIF", "DO", "ENDDO", "FOR", "PROCEDURAL",
+    "DISCRETE", "MACRO", "ENDMAC", "PROCEDURE", "ENDPRO", "NOSORT", "SORT")
+STATEMENT_KEYWORDS: tuple[str, ...] = (
+    *DATA_KEYWORDS, "FUNCTION", "TIMER", "METHOD", *TOLERANCE_KEYWORDS, "FINISH", "TERMT",
+    *REPORT_KEYWORDS, *ACSL_HEADS, "SCHEDULE", "INTERVAL", "CINTERVAL", "VARIABLE",
+    *CONTROL_KEYWORDS, *(k for k in TYPE_KEYWORDS if k != "DOUBLEPRECISION"), "DOUBLE",
+    "PRECISION", "WEATHER", "TRANSLATION_GENERAL", "TRANSLATION_FSE", "DEFINE_CALL",
+    *BLOCK_KEYWORDS)
+
 # What amilpy does not run (section 14): the construct as a reader knows it, and what
 # to write instead. Statement keywords first, then functions.
 REFUSED: dict[str, tuple[str, str]] = {

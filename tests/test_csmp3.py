@@ -175,3 +175,26 @@ def test_fixed_declares_integer_names():
     run, = amilpy.loads(text).run(advice=False)
     assert set(run.values["N"]) == {2.0}
     assert run.values["X"][-1] == pytest.approx(2.0, rel=1e-9)
+
+
+def test_procedure_is_a_sorted_unit_with_its_lists():
+    # PROCEDURE Y, Z = P(X) ... ENDPRO: written order inside, sorted as one unit
+    # (it stands before X's statement); with X = exp(-t), Y = 2X and Z = Y + 1
+    text = """TITLE PROCEDURE
+PROCEDURE Y, Z = P(X)
+  Y = 2.*X
+  Z = Y + 1.
+ENDPRO
+X = INTGRL(1., -X)
+TIMER FINTIM = 1., PRDEL = 0.5
+PRINT Y, Z
+END
+"""
+    run, = amilpy.loads(text).run(rtol=1e-10, atol=1e-12, advice=False)
+    x = np.exp(-run.times)
+    assert np.allclose(run.values["Y"], 2.0 * x, rtol=1e-9)
+    assert np.allclose(run.values["Z"], 2.0 * x + 1.0, rtol=1e-9)
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text.replace("ENDPRO", "ENDMAC"))
+    assert "ENDMAC closes a MACRO, but the innermost open block is the PROCEDURE of line 2" \
+        in err.value.render()

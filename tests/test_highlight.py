@@ -256,7 +256,7 @@ def test_textmate_scopes_and_names_match_the_lexer():
     repo = grammar["repository"]
 
     def listed(pattern: str) -> set[str]:
-        inner = re.search(r"\(\?i:([A-Z0-9|]+)\)", pattern).group(1)
+        inner = re.search(r"\(\?i:([A-Z0-9_|]+)\)", pattern).group(1)
         return set(inner.split("|"))
 
     assert listed(repo["functions"]["match"]) == set(BUILTIN_FUNCTIONS)

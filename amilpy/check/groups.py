@@ -68,8 +68,10 @@ def split_groups(program: ast.Program) -> list[list[ast.Node]]:
 
 
 # statements of the ACSL form: in a CSMP-form file, an error that says so
+# (a Procedural in a CSMP-form file is CSMP III's PROCEDURE ... ENDPRO: the reader
+# refuses ACSL's PROCEDURAL there)
 ACSL_STATEMENTS = (ast.Schedule, ast.Interval, ast.Cinterval, ast.Variable, ast.Control,
-                   ast.Block, ast.Procedural, ast.FunctionDef)
+                   ast.Block, ast.FunctionDef)
 
 
 def sections(group: list[ast.Node], rep: Reporter) -> dict[str, list[ast.Node]]:
@@ -95,7 +97,8 @@ def sections(group: list[ast.Node], rep: Reporter) -> dict[str, list[ast.Node]]:
         elif isinstance(st, ACSL_STATEMENTS):
             rep.error(f"{type(st).__name__.upper()} belongs to the ACSL form", st.span,
                       "start the file with PROGRAM or MODEL (ACSL form)")
-        elif isinstance(st, (ast.Assign, ast.Termt, ast.If, ast.Loop, ast.Nosort)):
+        elif isinstance(st, (ast.Assign, ast.Termt, ast.If, ast.Loop, ast.Nosort,
+                             ast.Procedural)):
             out[current].append(st)
     return out
 

@@ -20,7 +20,9 @@ from ..diagnostics import Diagnostic, Span
 _NAMES = {"IF": "IF", "FOR": "FOR loop", "DO": "DO loop", "PROCEDURAL": "PROCEDURAL",
           "FUNCTION": "FUNCTION", "DISCRETE": "DISCRETE", "PROGRAM": "PROGRAM",
           "INITIAL": "INITIAL", "DYNAMIC": "DYNAMIC", "DERIVATIVE": "DERIVATIVE",
-          "TERMINAL": "TERMINAL", "MACRO": "MACRO"}
+          "TERMINAL": "TERMINAL", "MACRO": "MACRO", "PROCEDURE": "PROCEDURE"}
+# CSMP III's blocks and the closer each needs (END ends a run group in CSMP form)
+CLOSERS = {"MACRO": "ENDMAC", "PROCEDURE": "ENDPRO"}
 ACSL_ONLY = ("FOR", "PROCEDURAL", "FUNCTION", "DISCRETE", "INCLUDED")
 
 
@@ -151,9 +153,7 @@ class Nester:
             return "END IF" + (" (or END)" if acsl else "")
         if kind == "DO":
             return "END DO" + (" (or END)" if acsl else "")
-        if kind == "MACRO":
-            return "ENDMAC"
-        return "END"
+        return CLOSERS.get(kind, "END")
 
     def close(self, stack: list[_Open], item: Close, acsl: bool) -> _Open | None:
         if not stack:
@@ -162,14 +162,15 @@ class Nester:
             return None
         kind = stack[-1].head.kind
         line = stack[-1].head.span.line
-        if item.kind == "ENDMAC" and kind != "MACRO":
-            self.error(f"ENDMAC closes a MACRO, but the innermost open block is the "
-                       f"{_describe(kind)} of line {line}", item.span,
+        opens = {v: k for k, v in CLOSERS.items()}
+        if item.kind in opens and kind != opens[item.kind]:
+            self.error(f"{item.kind} closes a {opens[item.kind]}, but the innermost open "
+                       f"block is the {_describe(kind)} of line {line}", item.span,
                        f"close that {_describe(kind)} first with {self.closer(kind, acsl)}")
             return None
-        if kind == "MACRO" and item.kind != "ENDMAC":
-            self.error(f"{'END' if item.kind == 'END' else item.kind} inside the MACRO of "
-                       f"line {line}", item.span, "a MACRO ends with ENDMAC")
+        if kind in CLOSERS and item.kind != CLOSERS[kind]:
+            self.error(f"{'END' if item.kind == 'END' else item.kind} inside the {kind} of "
+                       f"line {line}", item.span, f"a {kind} ends with {CLOSERS[kind]}")
             return None
         want = {"ENDIF": "IF", "ENDDO": "DO"}.get(item.kind)
         if want is not None and kind != want:
@@ -190,7 +191,7 @@ class Nester:
         if head.kind == "IF":
             return ast.If(tuple(ast.Branch(cond, tuple(b), span)
                                 for cond, span, b in opened.branches), head.span)
-        if head.kind == "PROCEDURAL":
+        if head.kind in ("PROCEDURAL", "PROCEDURE"):
             outputs, inputs = head.data
             return ast.Procedural(outputs, inputs, body, head.span)
         if head.kind in ("FOR", "DO"):

@@ -332,22 +332,45 @@ class Builder:
     def st_weather(self, node) -> ast.Weather:
         return ast.Weather(self.items(node.children), self.span(node))
 
-    def st_macro(self, node) -> Head | None:
-        """MACRO O1, O2 = NAME(P1, ...): CSMP III's; anything else (ACSL's MACRO
-        NAME(args), with its own substitution rules) is refused."""
+    @staticmethod
+    def _named_lists(node):
+        """`O1, O2 = NAME(I1, I2)` after MACRO or PROCEDURE: (outputs, NAME, inputs)."""
         import re
 
         text = str(node.children[0]) if node.children and node.children[0] else ""
         head = re.fullmatch(r"\s*([A-Za-z]\w*(?:\s*,\s*[A-Za-z]\w*)*)\s*=\s*([A-Za-z]\w*)"
                             r"\s*\(\s*([A-Za-z]\w*(?:\s*,\s*[A-Za-z]\w*)*)?\s*\)\s*", text)
         if head is None:
+            return None
+        outputs = tuple(n.strip().upper() for n in head.group(1).split(","))
+        inputs = tuple(n.strip().upper() for n in (head.group(3) or "").split(",") if n.strip())
+        return outputs, head.group(2).upper(), inputs
+
+    def st_procedure(self, node) -> Head | None:
+        """PROCEDURE O1, O2 = NAME(I1, I2) (CSMP III): a PROCEDURAL block."""
+        lists = self._named_lists(node)
+        if lists is None:
+            self.errors.append(Diagnostic(
+                "PROCEDURE needs its lists: PROCEDURE O1, O2 = NAME(I1, I2)", self.span(node),
+                "name the outputs before '=' and the inputs in the parentheses"))
+            return None
+        outputs, name, inputs = lists
+        return Head("PROCEDURE", self.span(node), name, (outputs, inputs))
+
+    def st_endpro(self, node) -> Close:
+        return Close("ENDPRO", self.span(node))
+
+    def st_macro(self, node) -> Head | None:
+        """MACRO O1, O2 = NAME(P1, ...): CSMP III's; anything else (ACSL's MACRO
+        NAME(args), with its own substitution rules) is refused."""
+        lists = self._named_lists(node)
+        if lists is None:
             what, hint = REFUSED["MACRO"]
             self.refuse(what, self.span(node), hint + "; CSMP III's MACRO O = NAME(P, ...) "
                         "... ENDMAC is expanded")
             return None
-        outputs = tuple(n.strip().upper() for n in head.group(1).split(","))
-        params = tuple(n.strip().upper() for n in (head.group(3) or "").split(",") if n.strip())
-        return Head("MACRO", self.span(node), head.group(2).upper(), (outputs, params))
+        outputs, name, params = lists
+        return Head("MACRO", self.span(node), name, (outputs, params))
 
     def st_nosort(self, node) -> ast.Nosort:
         return ast.Nosort(False, self.span(node))
