@@ -125,6 +125,9 @@ class Func:
     breaks: tuple[tuple[str, str], ...] = ()
     # tables: reads outside the table extend the end segments, with a warning (LINT)
     extends: bool = False
+    # tables: which argument is the table and which the abscissa
+    table_at: int = 0
+    x_at: int = 1
     # other forms of the same name, told apart by their number of arguments
     variants: tuple[Func, ...] = field(default=())
 
@@ -522,3 +525,8 @@ register(Func(WEATHER_HOLD, Kind.MEMORY, ".WEATHER_HOLD(X)", "X as at the last r
 register(Func("LINT", Kind.TABLE, "LINT(F, X)",
               "linear interpolation in a FUNCTION table; outside it the end segments are "
               "extended, with a warning", lookup="LINT", extends=True))
+# FST's LINT2('F', F, N, X): the reader checks the name and drops it; N (the table's
+# length in FST's arrays) is read and not needed
+register(Func("LINT2", Kind.TABLE, "LINT2(F, N, X)",
+              "LINT with FST's arguments: LINT2('F', F, N, X)", lookup="LINT", extends=True,
+              table_at=0, x_at=2))

@@ -198,3 +198,21 @@ END
         amilpy.loads(text.replace("ENDPRO", "ENDMAC"))
     assert "ENDMAC closes a MACRO, but the innermost open block is the PROCEDURE of line 2" \
         in err.value.render()
+
+
+def test_lint2_is_lint_with_fst_arguments():
+    # LINT2('RDTB', RDTB, 4, TIME) = 1 + 0.2 t, extended past the table's end at 10:
+    # X = t + 0.1 t^2; the name in the string must be the table's
+    text = """TITLE LINT2
+FUNCTION RDTB = 0., 1., 10., 3.
+X = INTGRL(0., LINT2('RDTB', RDTB, 4, TIME))
+TIMER FINTIM = 12., PRDEL = 2.
+PRINT X
+END
+"""
+    run, = amilpy.loads(text).run(rtol=1e-10, atol=1e-12, advice=False)
+    assert np.allclose(run.values["X"], run.times + 0.1 * run.times ** 2, rtol=1e-9)
+    assert any("outside its x range [0, 10]" in w for w in run.warnings)
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text.replace("LINT2('RDTB'", "LINT2('XX'"))
+    assert err.value.render().count("LINT2 names the table 'XX' but reads another") == 1

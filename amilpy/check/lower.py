@@ -384,9 +384,10 @@ class _Lowerer(Visitor):
             return ast.Call(expr.func, tuple(self.visit(a) for a in expr.args), expr.span,
                             expr.arg_spans)
         if kind == Kind.TABLE:
-            name = expr.args[0].name if isinstance(expr.args[0], ast.Name) else "?"
-            return ir.TableLookup(name, self.visit(expr.args[1]), func.lookup, expr.span,
-                                  expr.func)
+            table = expr.args[func.table_at]
+            name = table.name if isinstance(table, ast.Name) else "?"
+            return ir.TableLookup(name, self.visit(expr.args[func.x_at]), func.lookup,
+                                  expr.span, expr.func)
         if self.literal:
             return expr  # refused by the call checks (no states or memory here)
         if kind == Kind.STATE:

@@ -408,12 +408,33 @@ class Builder:
 
         def parts(node) -> list:
             if node.data == "call":
-                return [a for a in node.children[1:] if a is not None]
+                args = [a for a in node.children[1:] if a is not None]
+                if named_table(node, args):
+                    return args[1:]  # LINT2('F', F, N, X): the name is read here
+                return args
             if node.data in _BINOPS or node.data in _LOGIC:
                 return [node.children[0], node.children[-1]]
             if node.data in ("neg", "pos", "lnot"):
                 return [node.children[-1]]
             return []
+
+        def named_table(node, args) -> bool:
+            """FST's LINT2('F', F, N, X) names its table in a string first: the string
+            must be the table's name; the call goes on as LINT2(F, N, X)."""
+            if str(node.children[0]).upper() != "LINT2" or len(args) != 4 or \
+                    getattr(args[0], "data", None) != "string":
+                return False
+            written = string_value(str(args[0].children[0])).strip().upper()
+            table = args[1]
+            if id(node) not in named and (getattr(table, "data", None) != "name" or
+                                          str(table.children[0]).upper() != written):
+                self.errors.append(Diagnostic(
+                    f"LINT2 names the table '{written}' but reads another", self.span(args[0]),
+                    "write LINT2('F', F, N, X) with the same name twice"))
+            named.add(id(node))
+            return True
+
+        named: set[int] = set()
 
         done: list[tuple[ast.Expr, int]] = []  # built nodes with their depth
         stack: list[tuple[object, bool]] = [(root, False)]
@@ -447,6 +468,8 @@ class Builder:
             return ast.Name(str(node.children[0]).upper(), self.span(node))
         if kind == "call":
             real = [a for a in node.children[1:] if a is not None]
+            if len(real) == len(args) + 1:  # LINT2's table name, read by `expr`
+                real = real[1:]
             return ast.Call(str(node.children[0]).upper(), tuple(args), self.span(node),
                             tuple(self.span(a) for a in real))
         if kind in _BINOPS:

@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from listings.references import water_stress
 
 import amilpy
+from listings.references import water_stress
 
 HERE = Path(__file__).resolve().parent / "fst"
 SHA256 = {
