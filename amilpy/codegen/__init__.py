@@ -21,7 +21,8 @@ Modules: `emit` (IR expressions -> Python expressions), `build` (the functions,
 
 from __future__ import annotations
 
-from .build import Compiled, Compiler, fault_line
+from .build import Compiler
+from .compiled import Compiled, fault_line
 from .consts import evaluate_constant, initial_values, parameter_names
 from .emit import Setting
 from .faults import FaultReport

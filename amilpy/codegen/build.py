@@ -11,7 +11,6 @@ from __future__ import annotations
 import ast as py
 import copy
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from itertools import count
 
 from .. import ir, templates
@@ -21,9 +20,10 @@ from ..library import lookup, vector_functions
 from ..surfaces import is_affine
 from ..syntax import deep_enough
 from ..templates import instantiate
+from .compiled import Compiled
 from .consts import evaluate_constant, initial_slots
 from .emit import Emitter, Setting, needs
-from .faults import STATEMENTS, FaultReport, Statement, explain, statement_of
+from .faults import STATEMENTS, Statement
 from .pytree import (
     Folder,
     assert_closed,
@@ -39,76 +39,6 @@ from .written import Statements, start
 
 # models with more memory slots than this read them from z instead of unpacking
 MAX_UNPACKED_SLOTS = 32
-
-
-@dataclass
-class Compiled:
-    """The callables and constants of one run of one model."""
-
-    state_names: list[str]
-    y0: list[float]
-    z0: list[float]
-    out_names: list[str]
-    constants: dict[str, float]
-    rhs: Callable
-    surf: Callable
-    out: Callable
-    mem: Callable
-    watched: list[int]  # surface indices surf() returns, in order
-    const_modes: dict[int, float]  # surfaces fixed for the whole run
-    modes_literal: Callable  # (t, y, m, z) -> list of literal modes of watched surfaces
-    affine_time: set[int]  # surfaces affine in TIME: their roots are breakpoints
-    impulses: list[tuple[float, float]]
-    source: str
-    tables: dict[str, tuple] = field(default_factory=dict)
-    # surf and out over NumPy columns: y is a list of arrays, t an array
-    surf_v: Callable | None = None
-    out_v: Callable | None = None
-    # some memory must be updated after every accepted step (HSTRSS, RST, DERIV,
-    # DELAY); when False, memory changes only where a run restarts anyway (ZHOLD, PULSE)
-    memory_every_step: bool = False
-    # (z, t) -> instants after t at which memory makes the model switch (PULSE ends)
-    memory_times: Callable | None = None
-    # line k of the generated code is statements[k - 1] (None: scaffolding)
-    statements: list[Statement | None] = field(default_factory=list)
-    # (t, y, m, z) -> the states put where their function holds them (LIMINT's
-    # bounds), or None when no state is
-    settle: Callable | None = None
-    # time switches whose surfaces change sign only at first + k*period (PULSE's
-    # train): those instants are breakpoints, and these surfaces are not located
-    trains: list[tuple[float, float]] = field(default_factory=list)
-    train_surfaces: set[int] = field(default_factory=set)
-    # ACSL form: the names written-order code keeps (z after the memory slots), and
-    # that code by function name: (its IR, fn(t, y, m, z, ev) -> (y, z, values))
-    kept: list[str] = field(default_factory=list)
-    code: dict[str, tuple[ir.Code, Callable]] = field(default_factory=dict)
-    model: ir.Model | None = field(default=None, repr=False)
-    module: py.Module | None = field(default=None, repr=False)  # the scalar functions' tree
-    namespace: dict = field(default_factory=dict, repr=False)
-    checking: dict = field(default_factory=dict, repr=False)  # built on the first fault
-    derived: dict = field(default_factory=dict, repr=False)  # built on first use (jacobian)
-    # code built from `module` on first use, for every binding of it (see `rebound`)
-    shared: dict = field(default_factory=dict, repr=False)
-    binder: object = field(default=None, repr=False)  # the Compiler, for `rebound`
-
-    def rebound(self, constants: dict[str, float]) -> Compiled:
-        """These functions for a run whose constants differ from these only in the
-        parameters' values (`Compiler.parameters`): the same code, executed again
-        with the new values; no compilation."""
-        if constants == self.constants or self.binder is None:
-            return self
-        return self.binder.bind(constants)
-
-    def fault_line(self, exc: BaseException) -> int | None:
-        """The listing line of the generated statement that raised `exc`."""
-        return fault_line(exc)
-
-    def explain_fault(self, exc: BaseException, t: float, y, m, z) -> FaultReport | None:
-        """What `exc`, raised by generated code evaluated at (t, y, m, z), did where:
-        the statement (its target and span) and the operation with its operand values,
-        e.g. "W2 (line 16): division by zero: JL = 0". None if the fault did not
-        happen in this model's generated code."""
-        return explain(self, exc, t, y, m, z)
 
 
 def _deepest(model: ir.Model) -> Span | None:
@@ -138,15 +68,6 @@ def by_rows(fn: Callable) -> Callable:
         width = len(out[0]) if out else 0
         return [np.array([r[j] for r in out], dtype=float) for j in range(width)]
     return columns
-
-
-def fault_line(exc: BaseException) -> int | None:
-    """The listing line of the generated statement that raised `exc`, if the fault
-    happened inside generated code."""
-    found = statement_of(exc)
-    if found is None or found[0] is None or found[0].span is None:
-        return None
-    return found[0].span.line
 
 
 class Compiler:
