@@ -8,6 +8,7 @@ import math
 from pathlib import Path
 
 import pytest
+from references import cabo
 
 import amilpy
 
@@ -32,13 +33,6 @@ def test_acsl_oral_dosing_is_the_superposition_of_bateman_curves():
     assert run.terminal["CTROUGH"] == pytest.approx(run.values["CP"][-1])
 
 
-def _cabo(path: Path) -> dict[int, list[float]]:
-    rows = {}
-    for line in path.read_text().splitlines():
-        f = line.split()
-        if len(f) >= 9 and not f[0].startswith("*"):
-            rows[int(f[2])] = [float(x) for x in f[3:9]]
-    return rows
 
 
 def test_fst_wheat_is_the_euler_recurrence_over_its_weather_file():
@@ -47,7 +41,7 @@ def test_fst_wheat_is_the_euler_recurrence_over_its_weather_file():
     # 1000); the INSW on DVS - 1 read at the day; FINISH DVS > 2 at the first day
     # it holds. Exact to round-off.
     run, = amilpy.load(EXAMPLES / "fst_wheat.fst").run(advice=False)
-    weather = _cabo(EXAMPLES / "weather" / "NLD1.020")
+    weather = cabo.days(EXAMPLES / "weather" / "NLD1.020")
     tbase, tsuma, tsumm, rue, k, sla, flv = 0.0, 1000.0, 800.0, 2.8, 0.6, 0.018, 0.35
     dvs, wlv, wt, day, rows = 0.0, 2.0, 4.0, 90, {}
     while True:

@@ -11,6 +11,7 @@ import shutil
 from pathlib import Path
 
 import pytest
+from references import cabo
 
 import amilpy
 from amilpy.diagnostics import AmilError
@@ -46,14 +47,6 @@ STOP
 """
 
 
-def _cabo(path: Path) -> dict[int, list[float]]:
-    """day -> [radiation kJ, tmin, tmax, vp, wind, rain]: the rows of a CABO file."""
-    rows = {}
-    for line in path.read_text().splitlines():
-        f = line.split()
-        if len(f) >= 9 and not f[0].startswith("*"):
-            rows[int(f[2])] = [float(x) for x in f[3:9]]
-    return rows
 
 
 def _listing(tmp_path: Path, text: str, name: str = "model.fst") -> str:
@@ -130,7 +123,7 @@ def test_weather_from_a_cabo_file_in_step_point_mode(tmp_path):
     # the file is found through weather_dir= (WTRDIR and the listing's folders lack it)
     path = _listing(tmp_path, CROP)
     run, = amilpy.load(path).run(weather_dir=str(WEATHER), advice=False)
-    end, ref = _crop_reference(_cabo(WEATHER / "TZ2.018"))
+    end, ref = _crop_reference(cabo.days(WEATHER / "TZ2.018"))
     assert run.t_end == end
     for t, tsum, rad, doy in zip(run.times, run.values["TSUM"], run.values["RADSUM"],
                                  run.values["DOY"], strict=True):
@@ -145,7 +138,7 @@ def test_weather_with_located_finish_is_exact_between_day_starts(tmp_path):
     os.makedirs(tmp_path / "weather")
     shutil.copy(WEATHER / "TZ2.018", tmp_path / "weather" / "tz2.018")  # any case
     path = _listing(tmp_path, CROP)
-    rows = _cabo(WEATHER / "TZ2.018")
+    rows = cabo.days(WEATHER / "TZ2.018")
     end, ref = _crop_reference(rows)
     tsum = ref[end - 1][0]
     rate = max(0.0, (rows[end - 1][1] + rows[end - 1][2]) / 2.0 - 10.0)
