@@ -47,9 +47,11 @@ NESTS = [b"LIMIT(-1.0, 1.0, ", b"DEADSP(-0.5, 0.5, ", b"FSW(X, -1.0, 0.0, ",
 
 
 def corpus_files() -> list[str]:
-    """Every shipped model and every test listing."""
-    files = sorted(glob.glob(os.path.join(ROOT, "models", "*.amil")))
-    files += sorted(glob.glob(os.path.join(ROOT, "tests", "golden", "*.amil")))
+    """Every shipped model and example and every test listing, of every form."""
+    files = []
+    for folder in ("models", os.path.join("models", "examples"), os.path.join("tests", "golden")):
+        for pattern in ("*.amil", "*.csl", "*.fst"):
+            files += sorted(glob.glob(os.path.join(ROOT, folder, pattern)))
     return files
 
 
