@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from . import ir
 from . import syntax as syn
+from .library import WEATHER_HOLD
 from .syntax import Visitor, deep_enough
 
 _PREC = {"EQV": 1, "NEQV": 1, "OR": 2, "AND": 3, "<": 5, "<=": 5, ">": 5, ">=": 5, "==": 5,
@@ -69,7 +70,13 @@ class _Text(Visitor):
         return self.call(e.func, e.args)
 
     def visit_UnitValue(self, e: ir.UnitValue, parent: int) -> str:
-        return e.name
+        # the value a block computes (an IF, PROCEDURAL/PROCEDURE/NOSORT, an IMPL loop)
+        if self.model is None:
+            return e.name
+        unit = self.model.units[e.unit]
+        what = {"IMPL": "the IMPL loop", "IF": "the IF block"}.get(unit.kind,
+                                                                   "the written-order block")
+        return f"({what} at line {unit.span.line})"
 
     def visit_SwitchValue(self, e: ir.SwitchValue, parent: int) -> str:
         sw = self.model.switches[e.switch]
@@ -78,6 +85,8 @@ class _Text(Visitor):
 
     def visit_MemoryValue(self, e: ir.MemoryValue, parent: int) -> str:
         mem = self.model.memories[e.memory]
+        if mem.func == WEATHER_HOLD:
+            return mem.target  # FST's weather name, as the listing writes it
         return self.call(mem.written or mem.func, mem.args)
 
     def visit_TableLookup(self, e: ir.TableLookup, parent: int) -> str:

@@ -226,3 +226,17 @@ def test_acsl_ialg_3_is_the_classic_euler_loop_with_its_events():
     assert len(run.times) == 11
     for time, value in zip(run.times, run.values["X"], strict=True):
         assert value == pytest.approx(rows[round(time)], rel=1e-13)
+
+
+def test_the_report_writes_weather_and_impl_as_the_listing_does():
+    # "Equations as evaluated" speaks the listing's language: a weather name, not the
+    # memory and table that hold it; an IMPL loop's outputs by the loop's line
+    from amilpy.unparse import expr_text
+
+    model = amilpy.loads(CROP)
+    tsum = next(s for s in model.ir.states if s.name == "TSUM")
+    assert expr_text(model.ir, tsum.deriv) == "AMAX1(0., (TMMN + TMMX)/2. - TBASE)"
+    impl = amilpy.loads("TITLE T\nY = IMPL(1., 1.E-8, F)\nF = COS(Y)\nX = INTGRL(0., Y)\n"
+                        "TIMER FINTIM = 1.\nPRINT X\nEND\n").ir
+    y = next(e for e in impl.dynamic if e.target == "Y")
+    assert expr_text(impl, y.expr) == "(the IMPL loop at line 2)"
