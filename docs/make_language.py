@@ -31,9 +31,9 @@ shipped models and what they are checked against in `docs/models.md`.
 
 {forms}
 
-Keywords and names are case-insensitive; `!` starts a comment (except in `!=`);
-`...` or a trailing `,` continues a statement on the next line; text after `STOP`
-or `ENDJOB` is not read.
+Keywords and names are case-insensitive; `!` starts a comment (except in `!=`); a
+line whose first character is `*` is a comment line; `...` or `&` at the end of a
+line continues the statement on the next one; text after `STOP` is not read.
 """
 
 FORM_ROWS: tuple[tuple[str, ...], ...] = (
