@@ -216,3 +216,33 @@ END
     with pytest.raises(AmilError) as err:
         amilpy.loads(text.replace("LINT2('RDTB'", "LINT2('XX'"))
     assert err.value.render().count("LINT2 names the table 'XX' but reads another") == 1
+
+
+def test_procedure_in_initial_is_refused_and_in_terminal_runs_in_order():
+    initial = """TITLE P
+INITIAL
+PROCEDURE Y = P(A)
+  Y = 2.*A
+ENDPRO
+PARAM A = 1.
+DYNAMIC
+X = INTGRL(1., -X)
+TIMER FINTIM = 1.
+PRINT X
+END
+"""
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(initial)
+    assert "a PROCEDURE block cannot stand in INITIAL" in err.value.render()
+    terminal = """TITLE P
+X = INTGRL(1., -X)
+TERMINAL
+PROCEDURE Z = P(X)
+  Z = 2.*X
+ENDPRO
+TIMER FINTIM = 1.
+PRINT X
+END
+"""
+    run, = amilpy.loads(terminal).run(rtol=1e-10, atol=1e-12, advice=False)
+    assert run.terminal["Z"] == pytest.approx(2.0 * math.exp(-1.0), rel=1e-9)

@@ -97,8 +97,16 @@ def sections(group: list[ast.Node], rep: Reporter) -> dict[str, list[ast.Node]]:
         elif isinstance(st, ACSL_STATEMENTS):
             rep.error(f"{type(st).__name__.upper()} belongs to the ACSL form", st.span,
                       "start the file with PROGRAM or MODEL (ACSL form)")
-        elif isinstance(st, (ast.Assign, ast.Termt, ast.If, ast.Loop, ast.Nosort,
-                             ast.Procedural)):
+        elif isinstance(st, ast.Procedural):  # CSMP III's PROCEDURE ... ENDPRO
+            if current == "INITIAL":
+                rep.error("a PROCEDURE block cannot stand in INITIAL", st.span,
+                          "INITIAL is sorted: write the statements out there, or put the "
+                          "PROCEDURE in DYNAMIC")
+            elif current == "TERMINAL":
+                out[current].extend(st.body)  # written order there anyway
+            else:
+                out[current].append(st)
+        elif isinstance(st, (ast.Assign, ast.Termt, ast.If, ast.Loop, ast.Nosort)):
             out[current].append(st)
     return out
 
