@@ -15,6 +15,7 @@ from hypothesis import strategies as st
 
 import amilpy
 from amilpy.cli import main
+from amilpy.diagnostics import AmilError
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from fuzz import mutate, target  # noqa: E402
@@ -299,3 +300,57 @@ def test_infinite_initial_condition_rks(tmp_path, capsys):
     p.write_text("X = INTGRL(1.0E999, -X)\nMETHOD RKS\nTIMER FINTIM = 1.0\nEND\n")
     code = main(["run", str(p), "--quiet"])
     assert code in (1, 3) and "Traceback" not in capsys.readouterr().err
+
+
+# Each construct of contract sections 11-13 written where a listing might put it
+# (every section, inside an IF, in the ACSL form, after END): each listing either
+# runs or gets a located error; nothing else (a traceback) may come out.
+_CONSTRUCTS = {
+    "macro": "MACRO Y = D(A)\n Y = 2.*A\nENDMAC\nQ = D(X)\n",
+    "procedure": "PROCEDURE Q = P(X)\n Q = 2.*X\nENDPRO\n",
+    "nosort": "NOSORT\n Q = X\n Q = Q*2.\nSORT\n",
+    "impl": "Q = IMPL(1., 1.E-6, G)\nG = 0.5*Q + 0.5*X\n",
+    "fixed": "FIXED N\nN = 2.7\n",
+    "weather": "WEATHER CNTR = 'TZ'; ISTN = 2; IYEAR = 2018\nQ = RDD\n",
+    "translation": "TRANSLATION_GENERAL DRIVER = 'EUDRIV'\n",
+    "finish": "FINISH X < 0.5\n",
+    "sttime": "TIMER STTIME = 5.\n",
+    "lint2": "FUNCTION TB = 0., 1., 10., 2.\nQ = LINT2('TB', TB, 4, TIME)\n",
+    "if": "IF (X > 0.5) THEN\n Q = 1.\nELSE\n Q = 2.\nENDIF\n",
+}
+
+
+def _placed(place: str, snippet: str) -> str:
+    head, dyn, tail = "TITLE T\nPARAM A = 1.\n", "X = INTGRL(1., -X)\n", \
+        "TIMER FINTIM = 1.\nPRINT X\nEND\n"
+    if place == "INITIAL":
+        return head + "INITIAL\n" + snippet + "DYNAMIC\n" + dyn + tail
+    if place == "DYNAMIC":
+        return head + "DYNAMIC\n" + dyn + snippet + tail
+    if place == "TERMINAL":
+        return head + "DYNAMIC\n" + dyn + "TERMINAL\n" + snippet + tail
+    if place == "IF":
+        return head + dyn + "IF (X > 0.2) THEN\n" + snippet + "ENDIF\n" + tail
+    if place == "AFTER_END":
+        return head + dyn + tail + snippet + "END\n"
+    body = "  " + snippet.replace("\n", "\n  ")
+    if place == "ACSL_DERIVATIVE":
+        return ("PROGRAM P\n DERIVATIVE\n  X = INTEG(-X, 1.)\n" + body
+                + "\n  TERMT(T >= 1.)\n END\nEND\n")
+    return ("PROGRAM P\n INITIAL\n" + body + "\n END\n DERIVATIVE\n  X = INTEG(-X, 1.)\n"
+            "  TERMT(T >= 1.)\n END\nEND\n")
+
+
+@pytest.mark.parametrize("place", ["INITIAL", "DYNAMIC", "TERMINAL", "IF", "AFTER_END",
+                                   "ACSL_DERIVATIVE", "ACSL_INITIAL"])
+@pytest.mark.parametrize("construct", sorted(_CONSTRUCTS))
+def test_every_dialect_construct_in_every_place_ends_cleanly(construct, place, tmp_path,
+                                                             monkeypatch):
+    monkeypatch.chdir(tmp_path)  # no weather file here: that is a located error too
+    text = _placed(place, _CONSTRUCTS[construct])
+    try:
+        runs = amilpy.loads(text).run(advice=False, max_time=10)
+    except AmilError as exc:
+        assert exc.render().strip()
+        return
+    assert runs and all(str(r.status) in ("finished", "stopped", "failed") for r in runs)

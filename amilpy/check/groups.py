@@ -168,6 +168,7 @@ class RunGroups(Visitor):
         self.timer_spans: dict[str, Span] = {}
         self.timer_span: Span | None = None  # the first group's first TIMER statement
         self.method: str | None = None
+        self.driven: str | None = None  # the METHOD a DRIVER set (not the listing's own)
         self.tolerance: dict[str, float | None] = {"RELERR": None, "ABSERR": None}
         self.each: dict[str, dict[str, float]] = {"RELERR": {}, "ABSERR": {}}
         self.reports: list[ir.Report] = []
@@ -198,10 +199,10 @@ class RunGroups(Visitor):
                 self.reports = self.group.reports
             if self.group.titles is not None:
                 self.titles = self.group.titles
+            self.check_driver()  # a driver given here holds from this group on
             if gi == 0:
                 finish_first = list(self.finish)
                 relations_first = list(self.finish_relations)
-                self.check_driver()
                 start, end = self.timer.get(START_KEY), self.timer.get("FINTIM")
                 if start is not None and end is not None and not end > start:
                     self.rep.error(f"FINTIM = {end:g} is not after STTIME = {start:g}",
@@ -389,8 +390,8 @@ class RunGroups(Visitor):
             return
         name, span = self.driver
         method = DRIVERS[name][0]
-        if self.method is None:
-            self.method = method
+        if self.method is None or self.method == self.driven:
+            self.method = self.driven = method
         elif route_for(self.method) is not route_for(method):
             self.rep.error(f"METHOD {self.method} contradicts DRIVER = '{name}', which is "
                            f"METHOD {method}" + (" in step-point mode" if DRIVERS[name][1]

@@ -134,6 +134,11 @@ class Names:
                     break
 
     def unknown_function(self, node: ast.Call) -> None:
+        if node.func == "IMPL":
+            self.rep.error("IMPL stands as a statement of its own in DYNAMIC (CSMP form)",
+                           node.span, "write Y = IMPL(IC, P, FOFY) in DYNAMIC, then the "
+                           "statements that compute FOFY from Y, ending with FOFY = ...")
+            return
         if node.func in REFUSED_FUNCTIONS:
             what, hint = REFUSED_FUNCTIONS[node.func]
             self.rep.error(f"{what} (line {node.span.line}): not supported", node.span, hint)
