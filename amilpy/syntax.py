@@ -524,3 +524,6 @@ class Program:
     source: str
     form: str = "CSMP"  # ACSL when the file starts with PROGRAM or MODEL (section 9)
     name: str = ""  # the ACSL program's name (the rest of its PROGRAM/MODEL line)
+    # CSMP III's MACROs, expanded before checking: (name, first and last line of the
+    # definition, the spans of its calls), so a fault in a body names the calls too
+    macros: tuple[tuple[str, int, int, tuple[Span, ...]], ...] = ()

@@ -246,3 +246,13 @@ END
 """
     run, = amilpy.loads(terminal).run(rtol=1e-10, atol=1e-12, advice=False)
     assert run.terminal["Z"] == pytest.approx(2.0 * math.exp(-1.0), rel=1e-9)
+
+
+def test_a_fault_in_a_macro_body_is_said_once_with_the_calls_it_came_through():
+    text = LAGS.replace("   Y  = REALPL(0., T, Y1)", "   Y  = REALPL(0., T, Y1) + FOO(1.)")
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text)
+    faults = [d for d in err.value.diagnostics if "unknown function FOO" in d.message]
+    assert len(faults) == 1 and faults[0].span.line == 4  # the body's line
+    assert [span.line for span, _ in faults[0].related] == [8, 9]  # both calls
+    assert "in MACRO LAG2, called here" in err.value.render()

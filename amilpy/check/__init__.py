@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from .. import ir
 from .. import syntax as ast
-from ..diagnostics import Reporter
+from ..diagnostics import AmilError, Reporter
 from ..surfaces import classify
 from ..syntax import deep_enough
 from . import order
@@ -45,6 +45,17 @@ def check(program: ast.Program, name: str | None = None) -> ir.Model:
         from .acsl import check_acsl
 
         return check_acsl(program, name)
+    try:
+        return _check_csmp(program, name)
+    except AmilError as exc:
+        if program.macros:
+            from ..parse.macros import in_macros
+
+            exc.diagnostics = in_macros(exc.diagnostics, program.macros)
+        raise
+
+
+def _check_csmp(program: ast.Program, name: str | None) -> ir.Model:
     rep = Reporter(program.path, program.source)
     groups = split_groups(program)
     parts = sections(groups[0] if groups else [], rep)

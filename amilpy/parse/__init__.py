@@ -20,7 +20,7 @@ from .blocks import Nester
 from .build import Builder
 from .errors import syntax_diagnostic
 from .lexical import blank_comment_lines, code_end, continues, prepare
-from .macros import expand
+from .macros import expand, in_macros
 
 __all__ = ["MAX_DEPTH", "MAX_ERRORS", "blank_comment_lines", "parse"]
 
@@ -83,10 +83,10 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     builder = Builder(text, path)
     items = builder.statements(tree)
     form, name, statements = Nester(builder.errors).nest(items)
-    statements = expand(statements, builder.errors)
+    statements, macros = expand(statements, builder.errors)
     if builder.errors:
-        raise AmilError(sorted(builder.errors, key=_where), path, text)
-    return ast.Program(tuple(statements), path, text, form, name)
+        raise AmilError(in_macros(sorted(builder.errors, key=_where), macros), path, text)
+    return ast.Program(tuple(statements), path, text, form, name, macros)
 
 
 def is_acsl(prepared: str) -> bool:

@@ -30,6 +30,7 @@ class Expander:
         self.errors = errors
         self.macros: dict[str, ast.Macro] = {}
         self.calls: dict[str, int] = {}
+        self.call_spans: dict[str, list] = {}
         self.made = 0
 
     def expand(self, statements: list) -> list:
@@ -96,6 +97,7 @@ class Expander:
                 st.span, f"write {signature} with your names and expressions"))
             return []
         self.calls[macro.name] = k = self.calls.get(macro.name, 0) + 1
+        self.call_spans.setdefault(macro.name, []).append(st.span)
         assigned = {t for s in macro.body for t in s.targets}
         names = {o: t for o, t in zip(macro.outputs, st.targets, strict=True)}
         names |= {n: f"{macro.name}#{k}.{n}" for n in assigned - set(macro.outputs)}
@@ -140,7 +142,32 @@ def _substitute(expr: ast.Node, names: dict[str, str], values: dict[str, ast.Nod
     return replace(expr, **changes) if changes else expr
 
 
-def expand(statements: list, errors: list[Diagnostic]) -> list:
-    """The top-level statements with every MACRO call expanded, the MACROs removed."""
+def expand(statements: list, errors: list[Diagnostic]) -> tuple[list, tuple]:
+    """The top-level statements with every MACRO call expanded, the MACROs removed;
+    and (name, first line, last line, call spans) of each MACRO (`Program.macros`)."""
+    expander = Expander(errors)
     with ast.deep_enough():
-        return Expander(errors).expand(statements)
+        out = expander.expand(statements)
+    where = tuple((m.name, m.span.line,
+                   max([m.span.line] + [s.span.end_line for s in m.body]),
+                   tuple(expander.call_spans.get(m.name, ())))
+                  for m in expander.macros.values())
+    return out, where
+
+
+def in_macros(diagnostics: list[Diagnostic], macros) -> list[Diagnostic]:
+    """Faults found in expanded MACRO bodies, once each (not once per call), with the
+    calls they came through as related places."""
+    out: list[Diagnostic] = []
+    seen: set = set()
+    for d in diagnostics:
+        key = (d.message, d.span, d.hint)
+        if key in seen:
+            continue
+        seen.add(key)
+        for name, first, last, calls in macros:
+            if d.span is not None and first <= d.span.line <= last and calls:
+                d = replace(d, related=d.related + tuple(
+                    (call, f"in MACRO {name}, called here") for call in calls))
+        out.append(d)
+    return out
