@@ -11,7 +11,6 @@ rows, divided by the variable's largest magnitude.
 
 from __future__ import annotations
 
-import hashlib
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +18,7 @@ import pytest
 
 import amilpy
 from amilpy.diagnostics import AmilError
+from listings import published_copy
 from listings.references import (
     dcm,
     diazepam,
@@ -53,13 +53,7 @@ SHA256 = {
 
 
 def listing(name: str) -> Path:
-    path = HERE / name
-    if not path.exists():
-        pytest.skip(f"{name} is not in tests/listings/acsl/: fetch it as "
-                    "tests/listings/SOURCES.md says (never committed)")
-    assert hashlib.sha256(path.read_bytes()).hexdigest() == SHA256[name], \
-        f"{name} differs from the copy SOURCES.md describes"
-    return path
+    return published_copy(HERE, name, SHA256[name])
 
 
 def worst(run, ref: dict, names=None) -> tuple[float, str]:

@@ -10,13 +10,13 @@ plain recurrence (references/water_stress.py) to round-off."""
 
 from __future__ import annotations
 
-import hashlib
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import amilpy
+from listings import published_copy
 from listings.references import water_stress
 
 HERE = Path(__file__).resolve().parent / "fst"
@@ -27,12 +27,7 @@ SHA256 = {
 
 
 def listing(name: str) -> Path:
-    path = HERE / name
-    if not path.exists():
-        pytest.skip(f"{name} is not in tests/listings/fst/: copy it as "
-                    "tests/listings/SOURCES.md says (never committed)")
-    assert hashlib.sha256(path.read_bytes()).hexdigest() == SHA256[name]
-    return path
+    return published_copy(HERE, name, SHA256[name])
 
 
 @pytest.mark.parametrize("name, key", [("legumes_water_stress.fst", "legumes"),
