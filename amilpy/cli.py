@@ -93,6 +93,9 @@ def _model_options(p: argparse.ArgumentParser, run_limits: bool = True) -> None:
                    help="override a PARAM/CONST/INCON value for every run (repeatable)")
     p.add_argument("--method", metavar="NAME", type=_method,
                    help="integration method, instead of METHOD: " + methods_help())
+    p.add_argument("--compiled", dest="method", action="store_const", const="COMPILED",
+                   help="the same as --method COMPILED (needs pip install 'amilpy[fast]'; "
+                        "the first run of a listing compiles it, about 1 s)")
     p.add_argument("--rtol", type=POSITIVE, metavar="X", help="relative tolerance (RELERR)")
     p.add_argument("--atol", type=POSITIVE, metavar="X", help="absolute tolerance (ABSERR)")
     p.add_argument("--fintim", type=POSITIVE, metavar="S", help="run length instead of FINTIM")

@@ -47,6 +47,11 @@ ROUTES: tuple[Route, ...] = (
           "variable-step Runge-Kutta 4(5), SciPy RK45", stability_limit=3.25),
     Route("DOP853", ("DOP853",), False, True, "scipy", "DOP853",
           "variable-step Dormand-Prince 8(5,3)", stability_limit=6.1),
+    # the same pair compiled with the model by numba (the [fast] extra; without it, or
+    # for a model with no compiled form, it runs as DOP853): amilpy.compiled
+    Route("COMPILED", ("COMPILED", "DOP853C"), False, True, "compiled", "DOP853",
+          "DOP853 compiled with the model by numba (pip install 'amilpy[fast]')",
+          stability_limit=6.1),
     Route("LSODA", ("LSODA", "MILNE"), False, False, "scipy", "LSODA",
           "SciPy's LSODA class, step by step"),
     Route("RADAU", ("RADAU", "STIFF"), False, False, "scipy", "Radau",

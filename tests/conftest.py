@@ -1,9 +1,13 @@
 import os
+import tempfile
 
 import pytest
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+# METHOD COMPILED's models (with numba installed): kept for the next session, not
+# in the user's own cache
+os.environ.setdefault("AMILPY_CACHE", os.path.join(tempfile.gettempdir(), "amilpy-test-cache"))
 
 import amilpy  # noqa: E402
 

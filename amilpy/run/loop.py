@@ -25,6 +25,7 @@ from ..codegen.rolled import for_compiled as rolled_rhs
 from ..outcome import Failure
 from ..result import Event
 from ..steppers import Chunked, Hermite, StepFailure, Stepper, first_bad, make_stepper
+from ..steppers.compiled import KernelStepper
 from ..steppers.jacobian import SegmentJacobian
 from .edges import expected_event, locate_crossings
 from .faults import Fault, fault_text
@@ -105,6 +106,8 @@ class Integrator(RunLoop):
         self._iterations = 0
         self.breakpoints, self.roots = plan.breakpoints, plan.roots
         self.check_times = plan.grid.times  # where AUTO looks at the surfaces
+        self._kernel = None  # METHOD COMPILED: the model's compiled module, on first use
+        self._stop_at_event = False
 
     # ------------------------------------------------------------------ public
     def first_step(self, h: float) -> None:
@@ -131,6 +134,7 @@ class Integrator(RunLoop):
             raise Stop(Failure.INITIAL_NOT_FINITE, cur.t, name=self.c.state_names[bad],
                        value=cur.y[bad])
         n_events = len(self.events)
+        self._stop_at_event = stop_at_event
         while cur.t < t_end and self.stop_reason is None:
             if stop_at_event and len(self.events) > n_events:
                 break
@@ -219,8 +223,27 @@ class Integrator(RunLoop):
             plan.route.name, f, cur.t, cur.y, seg_end, rtol=plan.tol.rtol, atol=plan.tol.atol,
             delt=plan.timer["DELT"], max_step=plan.max_step, first_step=self._last_step,
             checks=checks, chunk=chunk, max_steps=self.opts.max_steps - self.nsteps,
-            expect=expected_event(self._recent, cur.t), jac=self._jacobian(cur, f))
+            expect=expected_event(self._recent, cur.t), jac=self._jacobian(cur, f),
+            kernel=self._kernel_arguments(cur, dense))
         return stepper, f
+
+    def _kernel_arguments(self, cur: Cursor, dense: bool) -> dict | None:
+        """METHOD COMPILED: what its stepper needs (None: run on SciPy's DOP853, while
+        a surface slides, for an observer that wants every step, or when the model
+        has no compiled form -- said once)."""
+        plan, c = self.plan, self.c
+        if plan.route.stepper != "compiled" or SLIDE in cur.m or dense or not len(cur.y):
+            return None
+        if self._kernel is None:
+            from ..compiled import kernel_for
+
+            self._kernel = kernel_for(c)
+            if isinstance(self._kernel, str):
+                self.warnings.append(f"METHOD {plan.method}: {self._kernel}; it ran as DOP853")
+        if isinstance(self._kernel, str) or c.memory_every_step:
+            return None
+        plain = not (c.z0 or plan.resets or c.settle is not None or self._stop_at_event)
+        return kernel_arguments(self._kernel, c, plan, cur.m, cur.z, plain)
 
     def _jacobian(self, cur: Cursor, f) -> SegmentJacobian | None:
         """The segment's Jacobian from the model's equations, for the routes that use
@@ -238,9 +261,12 @@ class Integrator(RunLoop):
         e_prev = c.surf(cur.t, cur.y.tolist(), cur.m, cur.z) if plan.watch_idx else []
         seg_start = cur.t
         bulk = isinstance(stepper, Chunked) and SLIDE not in cur.m and rec is not None
+        compiled = isinstance(stepper, KernelStepper)
         while True:
             if bulk:
                 e_prev = self._take_clean(stepper, cur, seg_end, rec, e_prev)
+            elif compiled and not stepper.done:
+                e_prev, seg_start = self._take_compiled(stepper, cur, rec, e_prev, seg_start)
             self._check_limits(cur.t, stepper)
             failure = stepper.step()
             if failure is not None:
@@ -288,12 +314,7 @@ class Integrator(RunLoop):
         cut at the first."""
         ta, tb, yb = stepper.t_old, stepper.t, stepper.y
         self.last_good = (tb, yb, list(cur.m))
-        if stepper.stiff is not None and not self._stiff_noted:
-            self._stiff_noted = True
-            self.warnings.append(
-                f"stiff from TIME = {stepper.stiff.t:.6g}: the steps of METHOD "
-                f"{self.plan.method} are limited by stability, not accuracy (h*|lambda| = "
-                f"{stepper.stiff.h_lambda:.3g}): METHOD AUTO or STIFF needs far fewer steps")
+        self._note_stiff(stepper)
         if tb - ta < self.plan.h_floor:
             self._tiny += 1
             if self._tiny >= 100:
@@ -309,6 +330,14 @@ class Integrator(RunLoop):
                                       detail=""))
         self._passed(tb)
         return self._watch_step(stepper, cur, ta, tb, yb, e_prev, seg_start)
+
+    def _note_stiff(self, stepper: Stepper) -> None:
+        if stepper.stiff is not None and not self._stiff_noted:
+            self._stiff_noted = True
+            self.warnings.append(
+                f"stiff from TIME = {stepper.stiff.t:.6g}: the steps of METHOD "
+                f"{self.plan.method} are limited by stability, not accuracy (h*|lambda| = "
+                f"{stepper.stiff.h_lambda:.3g}): METHOD AUTO or STIFF needs far fewer steps")
 
     def _watch_step(self, stepper: Stepper, cur: Cursor, ta: float, tb: float,
                     yb: np.ndarray, e_prev, seg_start: float) -> _Step:
@@ -488,6 +517,81 @@ class Integrator(RunLoop):
                                self.nsteps + stepper.nstep)
         return e_last
 
+    # --------------------------------------------------------- the compiled path
+    def _take_compiled(self, stepper: KernelStepper, cur: Cursor, rec: Recorder | None,
+                       e_prev, seg_start: float):
+        """Run the compiled kernel until it holds a step for this loop: record its rows
+        (each block in its own branches) and the crossings it located, with the
+        same events, restarts and limits as `_restart`. Returns the surfaces where
+        it stands and the last restart (the segment's start for `locate`)."""
+        c, m, z = self.c, cur.m, cur.z
+        times = self.plan.grid.times
+        while not stepper.done:
+            self._check_limits(cur.t, stepper)
+            gi = rec.out_i if rec is not None else len(times)
+            got = stepper.advance(m, times, gi)
+            table = self._compiled_outputs(got, z) if rec is not None else None
+            start = 0
+            for j in range(len(got.event_t) + 1):
+                end = int(np.searchsorted(got.block, j, side="right"))
+                if rec is not None and end > start:
+                    # (a branch nothing uses may have changed inside: the rows' own
+                    # branches are in got.M, their outputs computed with them)
+                    rec.block(got.T[start:end], got.Y[start:end], table[start:end],
+                              got.M[start].tolist(), z)
+                start = end
+                if j == len(got.event_t):
+                    break
+                k, t, y = int(got.event_k[j]), float(got.event_t[j]), got.event_y[j].copy()
+                # with the branches nothing used that the kernel followed before it
+                m[:] = got.event_m[j].tolist()
+                new_m = list(m)
+                new_m[k] = float(got.event_new[j])
+                self.record_changes(t, y, m, new_m, z, {k})
+                m[:] = new_m
+                if rec is not None:
+                    rec.restarted(t, y, m, z)
+                self._recent.append(t)
+                seg_start = t
+                if len(self.events) > self.opts.max_events:
+                    raise Stop(Failure.EVENTS, t, limit=self.opts.max_events)
+                self._check_chatter()
+            m[:] = got.m.tolist()
+            self._note_stiff(stepper)
+            cur.t, cur.y = stepper.t, stepper.y
+            self.last_good = (cur.t, cur.y, list(m))
+            self._passed(cur.t)
+            if self.opts.progress is not None:
+                self.opts.progress(cur.t, self.plan.fintim, len(self.events),
+                                   self.nsteps + stepper.nstep)
+        if self.plan.watch_idx:
+            e_prev = c.surf(cur.t, cur.y.tolist(), m, z)
+        return e_prev, seg_start
+
+    def _compiled_outputs(self, got, z) -> np.ndarray:
+        """The output table of a kernel call's rows: one evaluation over all of them,
+        each row's branches as columns (the vector code selects per element), or
+        row group by row group where that code needs one branch at a time."""
+        c, n = self.c, len(got.T)
+        cols = list(got.Y.T)
+        try:
+            with np.errstate(all="ignore"):
+                outs = c.out_v(got.T, cols, list(got.M.T), z)
+            return np.column_stack([column(v, n) for v in outs]) if outs \
+                else np.empty((n, 0))
+        except (ValueError, TypeError):
+            pass
+        table = np.empty((n, len(c.out_names)))
+        modes, group = np.unique(got.M, axis=0, return_inverse=True)
+        for j, m in enumerate(modes):
+            rows = group.ravel() == j
+            k = int(rows.sum())
+            with np.errstate(all="ignore"):
+                outs = c.out_v(got.T[rows], [col[rows] for col in cols], m.tolist(), z)
+            table[rows] = np.column_stack([column(v, k) for v in outs]) if outs \
+                else np.empty((k, 0))
+        return table
+
     # ------------------------------------------------------------------ failures
     def _passed(self, t: float) -> None:
         """Faults before an accepted TIME were at trial points the solver stepped
@@ -517,6 +621,24 @@ class Integrator(RunLoop):
                                        detail=f": {failure.detail}"))
         return self.fault_or(Stop(Failure.SOLVER, stepper.t, detail=failure.detail))
 
+
+
+def kernel_arguments(kernel, c: Compiled, plan: RunPlan, m, z, plain: bool,
+                     follow: bool = True) -> dict:
+    """The compiled stepper's arguments for a segment in branches m. `plain`: the
+    kernel may locate a crossing and switch itself (nothing else happens there:
+    no memory to sample, no state to reset, no stop); `follow`: it may follow a
+    branch nothing uses (as `_watch_step`); else every crossing is the loop's."""
+    watched = plan.watched
+    handled = np.array([0 if watched[k].kind is not SurfaceKind.SIGN or
+                        watched[k].purpose is not Purpose.SWITCH or not follow
+                        else 2 if plain else 1 for k in range(len(m))], dtype=np.int64)
+    level = np.array([watched[k].kind is SurfaceKind.LEVEL for k in range(len(m))],
+                     dtype=bool)
+    return {"kernel": kernel, "m": m, "z": z, "p": kernel.parameter_values(c),
+            "watch": np.array(plan.watch_idx, dtype=np.int64), "handled": handled,
+            "level": level, "lookahead": plan.lookahead_h,
+            "stability_limit": plan.route.stability_limit}
 
 
 def column(v, n: int) -> np.ndarray:

@@ -13,7 +13,8 @@ again from the row where it starts:
 - on the AUTO route, when no switch, breakpoint or slide can come into it, by
   `odeint` itself, whose values at requested instants are its own interpolation
   (`_sampled`): 33 instants, then 33 around the best, and the parabola through
-  the best three (1/512 of an output interval apart);
+  the best three (1/512 of an output interval apart); on the COMPILED route the
+  same way by its kernel, whose rows are its own dense output;
 - otherwise through the run loop (events, slides and all) with the route's dense
   output, and the turn is solved for like a switch (`turns`: Brent's method on
   the sign change of the rate, which also closes in on a kink).
@@ -33,7 +34,7 @@ import numpy as np
 from .. import ir
 from ..codegen import Compiled
 from ..steppers import solver_tolerance
-from .loop import Cursor, Integrator, Stop, column
+from .loop import Cursor, Integrator, Stop, column, kernel_arguments
 from .plan import SLIDE, Options, RunPlan, SurfaceKind
 from .record import Bracket, Extrema, vertices
 from .watch import SurfaceWatch, TooManySlides, crossings
@@ -125,31 +126,23 @@ def _rate(ctx: Context, at: Bracket, col: int, span: float) -> float | None:
 
 def _sampled(ctx: Context, b: Bracket, columns: list[tuple[str, int, bool]], found: dict
              ) -> bool:
-    """AUTO, on an interval no switch can come into: odeint's values at fine
-    instants, zoomed once. False when this way does not apply."""
-    from scipy.integrate import odeint
-
+    """AUTO and COMPILED, on an interval no switch can come into: the integrator's
+    values at fine instants, zoomed once. False when this way does not apply."""
     c, plan, m, z = ctx.c, ctx.plan, list(b.m), list(b.z)
-    if not plan.chunked or SLIDE in m or any(b.ta < t < b.tb for t in plan.breakpoints) or \
+    if SLIDE in m or any(b.ta < t < b.tb for t in plan.breakpoints) or \
             any(b.ta < t < b.tb for t in c.memory_times(z, b.ta)):
         return False
-    rhs = c.rhs
-
-    def f(t, y):
-        return rhs(t, y.tolist(), m, z)
-
-    options = {"rtol": solver_tolerance(plan.tol.rtol), "atol": solver_tolerance(plan.tol.atol),
-               "tfirst": True, "full_output": True, "mxstep": 100_000}
+    integrate = _by_odeint(ctx, m, z) if plan.chunked else _by_kernel(ctx, m, z)
+    if integrate is None:
+        return False
 
     def sample(ts: np.ndarray, y0: np.ndarray) -> tuple[np.ndarray, list] | None:
         """States and outputs at ts, integrated from y0 at ts[0]."""
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                ys, info = odeint(f, y0, ts, **options)
+            ys = integrate(ts, y0)
         except (ArithmeticError, ValueError):
             return None
-        if info["message"] != "Integration successful." or not np.isfinite(ys).all():
+        if ys is None or not np.isfinite(ys).all():
             return None
         cols = list(ys.T)
         with np.errstate(all="ignore"):
@@ -190,6 +183,60 @@ def _sampled(ctx: Context, b: Bracket, columns: list[tuple[str, int, bool]], fou
             peak, t = float(peak_v[0]), float(peak_t[0])
         _better(found[name], top, peak if top else -peak, t)
     return True
+
+
+def _by_odeint(ctx: Context, m, z):
+    """AUTO: odeint from y0 through ts (its rows, ts[0]'s included), or None."""
+    from scipy.integrate import odeint
+
+    rhs, plan = ctx.c.rhs, ctx.plan
+
+    def f(t, y):
+        return rhs(t, y.tolist(), m, z)
+
+    options = {"rtol": solver_tolerance(plan.tol.rtol), "atol": solver_tolerance(plan.tol.atol),
+               "tfirst": True, "full_output": True, "mxstep": 100_000}
+
+    def integrate(ts: np.ndarray, y0: np.ndarray) -> np.ndarray | None:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            ys, info = odeint(f, y0, ts, **options)
+        return ys if info["message"] == "Integration successful." else None
+    return integrate
+
+
+def _by_kernel(ctx: Context, m, z):
+    """COMPILED: its kernel from y0 through ts, every crossing left to the loop (a
+    crossing inside gives None), or None when the route is not compiled."""
+    c, plan = ctx.c, ctx.plan
+    if plan.route.stepper != "compiled" or c.memory_every_step:
+        return None
+    from ..compiled import kernel_for
+    from ..steppers.compiled import KernelStepper
+
+    kernel = kernel_for(c)
+    if isinstance(kernel, str):
+        return None
+    arguments = kernel_arguments(kernel, c, plan, m, z, plain=False, follow=False)
+    arguments.pop("kernel")
+
+    def integrate(ts: np.ndarray, y0: np.ndarray) -> np.ndarray | None:
+        stepper = KernelStepper(kernel, None, float(ts[0]), y0, float(ts[-1]),
+                                rtol=plan.tol.rtol, atol=plan.tol.atol, max_step=plan.max_step,
+                                first_step=None, max_steps=100_000, **arguments)
+        ys = np.empty((len(ts), len(y0)))
+        ys[0], n = y0, 1
+        while not stepper.done:
+            got = stepper.advance(m, ts, n)
+            ys[n:n + len(got.T)] = got.Y
+            n += len(got.T)
+        if stepper.step() is not None or stepper.fallback is not None or stepper.t < ts[-1]:
+            return None  # a failure, or a crossing the loop must see
+        at = stepper.interpolant()
+        for i in range(n, len(ts)):
+            ys[i] = at(float(ts[i]))
+        return ys
+    return integrate
 
 
 def _integrated(ctx: Context, b: Bracket, columns: list[tuple[str, int, bool]],

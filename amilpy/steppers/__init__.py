@@ -31,7 +31,7 @@ def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float
                  rtol: np.ndarray, atol: np.ndarray, delt: float, max_step: float = math.inf,
                  first_step: float | None = None, checks=None, chunk: int = 16,
                  max_steps: int = UNLIMITED, expect: float | None = None,
-                 jac: SegmentJacobian | None = None) -> Stepper:
+                 jac: SegmentJacobian | None = None, kernel=None) -> Stepper:
     """The stepper for a canonical route name (see `routes.ROUTES`).
 
     `rtol`, `atol`: per-state tolerances (variable-step routes); `delt`: the fixed
@@ -39,7 +39,9 @@ def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float
     the odeint stepper uses (without them AUTO runs on SciPy's LSODA class, which
     sees every step); `max_steps`: the steps the loop still allows; `expect`: how
     long after t0 the loop expects the next event (odeint sizes its first chunk so);
-    `jac`: the vector field's Jacobian, for the implicit routes (None: differences).
+    `jac`: the vector field's Jacobian, for the implicit routes (None: differences);
+    `kernel`: for the compiled route, its `KernelStepper` arguments (None: the route
+    runs on its SciPy class).
     """
     r = BY_NAME[route]
     if len(y0) == 0:
@@ -52,5 +54,11 @@ def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float
         return OdeintStepper(fun, t0, y0, t_bound, checks, rtol=rtol, atol=atol,
                              max_step=max_step, first_step=first_step, chunk=chunk,
                              max_steps=max_steps, expect=expect, jac=jac)
+    if r.stepper == "compiled" and kernel is not None:
+        from .compiled import KernelStepper
+
+        return KernelStepper(kernel.pop("kernel"), fun, t0, y0, t_bound, rtol=rtol, atol=atol,
+                             max_step=max_step, first_step=first_step, max_steps=max_steps,
+                             **kernel)
     return ScipyStepper(r.scipy, fun, t0, y0, t_bound, rtol=rtol, atol=atol, max_step=max_step,
                         first_step=first_step, stability_limit=r.stability_limit, jac=jac)

@@ -1,0 +1,198 @@
+"""METHOD COMPILED: the numba kernel (`amilpy.compiled.kernel`) as a stepper.
+
+`advance` runs the kernel over as many output instants and plain crossings as it
+can (the run loop records its rows and events: `run.loop.Integrator._take_compiled`);
+the step it holds back -- the segment's last, or one with a crossing the loop must
+decide -- is this stepper's `step()`, with the method's own dense output, so the
+loop treats it as it treats any SciPy step. If the kernel's step size collapses
+(a fault, a singularity), SciPy's DOP853 takes over from where it stood and fails
+or not with the message the Python route gives.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..outcome import Failure
+from .base import Rhs, StepFailure, Stepper, Stiffness
+from .ivp import ScipyStepper
+
+
+@dataclass
+class Advance:
+    """What one kernel call produced: output rows (their block: the number of
+    located crossings before them) and located crossings (TIME, surface, new branch,
+    state)."""
+
+    status: int
+    T: np.ndarray
+    Y: np.ndarray
+    block: np.ndarray
+    M: np.ndarray  # each row's branches
+    event_t: np.ndarray
+    event_k: np.ndarray
+    event_new: np.ndarray
+    event_y: np.ndarray
+    event_m: np.ndarray  # the branches just before each
+    m: np.ndarray  # the branches where the kernel stands
+
+
+_ENTRIES: dict[int, object] = {}
+
+
+def _entry(dispatcher):
+    """A compiled function's machine code as Python calls it, past numba's dispatcher
+    (which types every argument on every call: 0.3 ms for the kernel's 30); each
+    has the one signature it was compiled for."""
+    entry = _ENTRIES.get(id(dispatcher))
+    if entry is None:
+        entry = _ENTRIES[id(dispatcher)] = \
+            dispatcher.overloads[dispatcher.signatures[0]].entry_point
+    return entry
+
+
+class KernelStepper(Stepper):
+    """The compiled DOP853 over one segment (branches frozen but for the crossings
+    the kernel locates itself)."""
+
+    EVENTS_PER_CALL = 64
+
+    def __init__(self, kernel, fun: Rhs | None, t0: float, y0: np.ndarray, t_bound: float, *,
+                 rtol, atol, max_step: float, first_step: float | None, max_steps: int,
+                 m, z, p: np.ndarray, watch: np.ndarray, handled: np.ndarray,
+                 level: np.ndarray, lookahead: float, stability_limit: float) -> None:
+        self.k = kernel.loop
+        # the model's functions go to the kernel as C functions (a dispatcher costs
+        # 0.1 ms a call to convert), and are called here past their dispatchers
+        self.rhs, self.surf = kernel.module.model_rhs_c, kernel.module.model_surf_c
+        self._rhs = _entry(kernel.module.model_rhs)
+        self._surf = _entry(kernel.module.model_surf)
+        self._advance, self._interpolate = _entry(self.k.advance), _entry(self.k.interpolate)
+        self.fun = fun
+        n = len(y0)
+        self.t = self.t_old = t0
+        self.y = np.array(y0, dtype=float)
+        self._y = self.y.copy()  # where the kernel stands
+        self.z = np.asarray(z, dtype=float)
+        self.p = p
+        self.rtol = np.broadcast_to(np.asarray(rtol, dtype=float), (n,)).copy()
+        self.atol = np.broadcast_to(np.asarray(atol, dtype=float), (n,)).copy()
+        self.watch, self.handled, self.level = watch, handled, level
+        self.max_steps = max_steps
+        m_arr = np.asarray(m, dtype=float)
+        self._f = np.empty(n)
+        self._rhs(t0, self._y, m_arr, self.z, p, self._f)
+        self._e = np.empty(max(len(m_arr), 1))
+        self._surf(t0, self._y, m_arr, self.z, p, self._e)
+        h = first_step if first_step else _entry(self.k.first_step)(
+            self.rhs, t0, self._y, self._f, t_bound, max_step, self.rtol, self.atol, m_arr,
+            self.z, p)
+        h = min(h, abs(t_bound - t0))
+        # TIME, next step, held step's end, evaluations, steps, bound, max step, lookahead,
+        # the stiffness test's counts, estimate, confirmation and cubic flag, the limit
+        self.sc = np.array([t0, h, math.nan, 1.0, 0.0, t_bound, max_step, lookahead,
+                            0.0, 0.0, 0.0, math.nan, 0.0, 0.0, stability_limit])
+        self._held_y, self._held_f = np.empty(n), np.empty(n)
+        self._held_F = np.empty((self.k.ROWS, n))
+        self._held = False
+        self._F: np.ndarray | None = None  # the last step's interpolant
+        self._h = 0.0
+        self._cubic = False
+        self._y_old = self.y
+        e = max(self.EVENTS_PER_CALL, 2 * len(m_arr) + 2)
+        self._ev = (np.empty(e), np.empty(e, np.int64), np.empty(e), np.empty((e, n)),
+                    np.empty((e, len(m_arr))))
+        self._failure: StepFailure | None = None
+        self.fallback: ScipyStepper | None = None
+
+    @property
+    def nfev(self) -> int:
+        return int(self.sc[3]) + (self.fallback.nfev if self.fallback is not None else 0)
+
+    @property
+    def nstep(self) -> int:
+        return int(self.sc[4]) + (self.fallback.nstep if self.fallback is not None else 0)
+
+    @property
+    def done(self) -> bool:
+        """No kernel call is due: a step is held, the kernel failed, or SciPy took over."""
+        return self._held or self._failure is not None or self.fallback is not None
+
+    def advance(self, m, grid: np.ndarray, gi: int) -> Advance:
+        """Run the kernel from where it stands with the branches `m` (updated in the
+        array returned with the crossings it locates)."""
+        m_arr = np.asarray(m, dtype=float)
+        left = max(len(grid) - gi, 0)
+        T, Y, B = np.empty(left), np.empty((left, len(self._y))), np.empty(left, np.int64)
+        M = np.empty((left, len(m_arr)))
+        et, ek, en, ey, em = self._ev
+        # the surfaces where the kernel stands, in the branches now in force (the loop
+        # may have changed a silent one)
+        self._surf(float(self.sc[0]), self._y, m_arr, self.z, self.p, self._e)
+        status, rows, nev, _ = self._advance(
+            self.rhs, self.surf, self._y, self._f, self._e, m_arr, self.z, self.p, self.sc,
+            self.rtol, self.atol, self.watch, self.handled, self.level, grid, gi, T, Y, B, M,
+            et, ek, en, ey, em, self._held_y, self._held_f, self._held_F, self.max_steps)
+        if rows or nev:
+            self.t = self.t_old = float(self.sc[0])
+            self.y = self._y.copy()
+            self._F = None
+        if self.stiff is None and self.sc[11] == self.sc[11]:
+            self.stiff = Stiffness(float(self.sc[11]), float(self.sc[12]))
+        if status == self.k.HELD:
+            self._held = True
+        elif status == self.k.STEPS:
+            self._failure = StepFailure(Failure.STEPS, float(self.sc[0]))
+        elif status == self.k.SMALL:
+            self._take_over()
+        self.t, self.y = float(self.sc[0]), self._y.copy()
+        return Advance(status, T[:rows], Y[:rows], B[:rows], M[:rows], et[:nev].copy(),
+                       ek[:nev].copy(), en[:nev].copy(), ey[:nev].copy(), em[:nev].copy(),
+                       m_arr)
+
+    def _take_over(self) -> None:
+        if self.fun is None:  # no Python field to go on with (RANGE's sampling)
+            self._failure = StepFailure(Failure.SOLVER, float(self.sc[0]), "step size too small")
+            return
+        self.fallback = ScipyStepper("DOP853", self.fun, float(self.sc[0]), self._y.copy(),
+                                     float(self.sc[5]), rtol=self.rtol, atol=self.atol,
+                                     max_step=float(self.sc[6]), first_step=None)
+
+    def step(self) -> StepFailure | None:
+        if self._held:
+            self._held = False
+            self.t_old, self._y_old = float(self.sc[0]), self._y.copy()
+            self.t = float(self.sc[2])
+            self.y = self._held_y.copy()
+            self._F = self._held_F.copy()
+            self._h = self.t - self.t_old  # the interpolant's own (truncate moves t)
+            self._cubic = bool(self.sc[13])
+            # the kernel goes on from the held step's end
+            self.sc[0] = self.t
+            self._y[:] = self._held_y
+            self._f[:] = self._held_f
+            return None
+        if self._failure is not None:
+            return self._failure
+        if self.fallback is None:
+            self._take_over()
+        failure = self.fallback.step()
+        self.t_old, self.t, self.y = self.fallback.t_old, self.fallback.t, self.fallback.y
+        self._F = None
+        return failure
+
+    def interpolant(self):
+        if self._F is None:
+            return self.fallback.interpolant()
+        t_old, h, F, cubic, interpolate = self.t_old, self._h, self._F, self._cubic, \
+            self._interpolate
+        n = len(self._y_old)
+
+        def at(t: float) -> np.ndarray:
+            out = np.empty(n)
+            interpolate(t_old, h, F, cubic, float(t), out)
+            return out
+        return at

@@ -1,0 +1,178 @@
+"""METHOD COMPILED: DOP853, the output rows and the plain crossings compiled by numba.
+
+Its reference is first SciPy's DOP853 (the same method: the kernel must take the same
+steps), then closed forms and the hoist's independent event-located reference. Without
+numba the route runs as DOP853 in Python and says so (the last tests run either way).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+
+import numpy as np
+import pytest
+
+import amilpy
+from amilpy import compiled
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from conftest import ROOT, run1  # noqa: E402
+
+needs_numba = pytest.mark.skipif(not compiled.available(), reason="numba not installed "
+                                 "(pip install 'amilpy[fast]')")
+
+# X grows at rate 1 until X = 0.5 (t = 0.5); from there X' = 1 - X:
+#   X = 1 - 0.5*exp(-(t - 0.5)) for t >= 0.5
+KNEE = """TITLE KNEE
+X = INTGRL(0.0, 1.0 - X*S)
+S = INSW(X - 0.5, 0.0, 1.0)
+TIMER FINTIM = 3.0, OUTDEL = 0.01
+METHOD COMPILED
+END
+"""
+
+
+def knee(t: np.ndarray) -> np.ndarray:
+    return np.where(t < 0.5, t, 1.0 - 0.5 * np.exp(-(t - 0.5)))
+
+
+@needs_numba
+def test_knee_closed_form_and_its_crossing():
+    # one crossing, located by the kernel (no Python between steps): at t = 0.5 to
+    # a few ulps, the rows within the tolerance's reach of the closed form
+    r = run1(KNEE, rtol=1e-10, atol=1e-12)
+    assert r.status == "finished" and not r.warnings
+    assert len(r.events) == 1 and r.events[0].time == pytest.approx(0.5, abs=1e-12)
+    assert np.max(np.abs(r["X"] - knee(r.t))) < 1e-9
+    assert r["S"][r.t > 0.5].min() == 1.0 and r["S"][r.t < 0.5].max() == 0.0
+
+
+@needs_numba
+@pytest.mark.parametrize("model", ["machine_unit", "crank_slider_startup"])
+def test_same_steps_as_scipy_dop853(model):
+    # the kernel is SciPy's DOP853 (coefficients, error norm, step control, first
+    # step): on a model with no crossing inside its steps, the same steps (but for
+    # one where rounding tips a step-size choice: the first step's norms are summed
+    # in another order) and the same rows within the method's own error (RELERR
+    # 1E-8: 1.7e-8 of the largest W measured, where one step went differently).
+    # (The crank-slider's FINISH is a crossing the loop decides: the kernel holds
+    # that step for it, as a Python stepper's step.)
+    m = amilpy.load(os.path.join(ROOT, "models", f"{model}.amil"))
+    a, = m.run(method="COMPILED", rtol=1e-8, atol=1e-10)
+    b, = m.run(method="DOP853", rtol=1e-8, atol=1e-10)
+    assert not a.warnings
+    assert abs(a.stats["nsteps"] - b.stats["nsteps"]) <= 2
+    assert len(a.t) == len(b.t) and a.t == pytest.approx(b.t, rel=1e-12)
+    for name in a.values:
+        scale = max(np.max(np.abs(b[name])), 1e-300)
+        assert np.max(np.abs(a[name] - b[name])) <= 1e-7 * scale, name
+    assert [e.time for e in a.events] == pytest.approx([e.time for e in b.events], rel=1e-12)
+
+
+@needs_numba
+def test_hoist_against_its_event_located_reference():
+    # 222 contact edges in 5 s, every one located in the kernel. Reference: the
+    # hoist's own SciPy integration with the edges as events (tests/references),
+    # at rtol 1e-12. RELERR 1E-9 gives 4e-8 of the largest value (DOP853's own
+    # error there, the same as the Python route's), so 1e-6 leaves room.
+    from references import hoist as ref
+
+    m = amilpy.load(os.path.join(ROOT, "models", "hoist_backlash.amil"))
+    r, = m.run(method="COMPILED", rtol=1e-9, atol=1e-12)
+    p, = m.run(method="DOP853", rtol=1e-9, atol=1e-12)
+    assert r.status == "finished" and not r.warnings
+    sim = ref.simulate(ref.Hoist(), 70.0, (0.0, 5.0), t_eval=r.t)
+    y_ref = sim.y[1]
+    assert np.max(np.abs(r["Y"] - y_ref)) <= 1e-6 * np.max(np.abs(y_ref))
+    assert len(r.events) == 2 * len(sim.edges)  # |Y| = DELTA/2: two surfaces each
+    assert len(r.events) == len(p.events) == 222
+    assert [e.time for e in r.events] == pytest.approx([e.time for e in p.events], abs=1e-9)
+    assert [e.surface for e in r.events] == [e.surface for e in p.events]
+
+
+@needs_numba
+@pytest.mark.parametrize("model", ["ex4_elastic", "ex4_clutch", "ex4_torque_meter"])
+def test_exercise4_events_and_rows_as_the_python_route(model):
+    # friction that sticks (a sliding surface: those segments run on SciPy's
+    # DOP853), a clutch with memory (its crossings go back to the loop), branches
+    # nothing uses that cross at every stability-bound step (followed in the kernel)
+    m = amilpy.load(os.path.join(ROOT, "models", f"{model}.amil"))
+    a, = m.run(method="COMPILED", rtol=1e-9, atol=1e-12)
+    b, = m.run(method="DOP853", rtol=1e-9, atol=1e-12)
+    assert a.status == b.status == "finished"
+    assert [(e.surface, e.old, e.new) for e in a.events] == \
+        [(e.surface, e.old, e.new) for e in b.events]
+    assert [e.time for e in a.events] == pytest.approx([e.time for e in b.events], abs=1e-9)
+    for name in b.values:
+        scale = max(np.max(np.abs(b[name])), 1e-300)
+        # two DOP853 runs at RELERR 1E-9 on stability-bound steps: their rows differ
+        # by their own errors (measured against the exact references: 3e-7 on the
+        # clutch, 2.3e-6 and 2.6e-6 on the torque meter)
+        assert np.max(np.abs(a[name] - b[name])) <= 1e-5 * scale, name
+
+
+@needs_numba
+def test_parameters_are_arguments_not_code():
+    # a new PARAM value (a sweep point) reads the same compiled functions with new
+    # arguments: no new module, and the values are those of the Python route
+    text = KNEE.replace("X = INTGRL(0.0, 1.0 - X*S)", "PARAM K = 1.0\nX = INTGRL(0.0, K - X*S)")
+    model = amilpy.loads(text, name="k.amil")
+    before = set(compiled._LOADED)
+    model.run(K=1.0)
+    new = set(compiled._LOADED) - before
+    second, = model.run(K=2.0)
+    assert len(new) == 1 and set(compiled._LOADED) - before == new
+    kernel = compiled._LOADED[new.pop()]
+    assert kernel.parameters == ("p_K",)
+    # X reaches 0.5 at t = 0.25 with K = 2; then X' = 2 - X
+    assert second.events[0].time == pytest.approx(0.25, abs=1e-12)
+    t = second.t[second.t > 0.25]
+    assert np.max(np.abs(second["X"][second.t > 0.25] - (2.0 - 1.5 * np.exp(-(t - 0.25))))) \
+        < 1e-5
+    with open(kernel.module.__file__) as fh:
+        assert "p[0]" in fh.read()
+
+
+@needs_numba
+def test_finish_and_termt_are_the_loops():
+    # a FINISH condition is a stop: the kernel hands its step back, the run ends at
+    # the located instant as on every route
+    r = run1(KNEE.replace("END", "FINISH X = 0.8\nEND"))
+    stop = 0.5 + math.log(0.5 / 0.2)  # 1 - 0.5 exp(-(t - 0.5)) = 0.8
+    assert r.t[-1] == pytest.approx(stop, abs=1e-9)
+
+
+@needs_numba
+def test_a_fault_gets_the_python_routes_message():
+    # the kernel's step size collapses where 1/(1 - TIME) blows up; SciPy's DOP853
+    # takes over there and the run fails with the message METHOD DOP853 gives
+    text = "X = INTGRL(1.0, 1.0/(1.0 - TIME))\nTIMER FINTIM = 2.0, OUTDEL = 0.01\nEND\n"
+    a = run1(text, method="COMPILED")
+    b = run1(text, method="DOP853")
+    assert a.status == b.status == "failed"
+    assert a.t[-1] == pytest.approx(b.t[-1], rel=1e-6)
+    assert a.message.split(":")[0] == b.message.split(":")[0]
+
+
+def test_no_compiled_form_runs_as_dop853_and_says_why():
+    # AFGEN's table has no compiled form (nor has anything without numba): the run
+    # is DOP853's, with one warning saying why
+    text = ("FUNCTION TAB = 0.0, 0.0, 1.0, 2.0, 2.0, 2.0\nX = INTGRL(0.0, AFGEN(TAB, TIME))\n"
+            "TIMER FINTIM = 2.0, OUTDEL = 0.1\nEND\n")
+    a = run1(text, method="COMPILED")
+    b = run1(text, method="DOP853")
+    assert len(a.warnings) == 1 and "ran as DOP853" in a.warnings[0]
+    assert ("AFGEN" in a.warnings[0]) or ("numba" in a.warnings[0])
+    assert np.array_equal(a["X"], b["X"])
+
+
+def test_without_numba_the_route_is_dop853(monkeypatch):
+    monkeypatch.setattr(compiled, "available", lambda: False)
+    text = KNEE.replace("TITLE KNEE", "TITLE KNEE2")
+    a = run1(text)
+    b = run1(text, method="DOP853")
+    assert any("numba is not installed" in w for w in a.warnings)
+    assert np.array_equal(a["X"], b["X"])
+    assert np.max(np.abs(a["X"] - knee(a.t))) < 1e-5
