@@ -14,6 +14,8 @@ For every case (``benchmarks/cases.py``) and every route:
   function) and integrated by ``solve_ivp`` (RK45, DOP853, LSODA, Radau, BDF), ``odeint``
   and ``ode`` (dop853, vode/BDF, lsoda), each to the same output grid, split at the
   switches on TIME, integrating straight through the switches on states;
+* when numba is importable, the compiled ceiling of the shipped models (``ceiling.py``:
+  the hand-written equations and a DOP853 with events, all compiled by numba);
 
 it records the wall time (median of ``--repeats`` runs, one run when it takes over 1 s;
 the model is compiled before any timing, and amilpy's first run with its compilation is
@@ -303,6 +305,28 @@ def hand_solve(case: Case, route: str, rtol: float, atol: float):
         nsteps
 
 
+# --------------------------------------------------------------------------- ceiling
+
+CEILING_COMPILE: dict[str, float] = {}  # case: the ceiling's first call (compiles) [s]
+
+
+def ceiling_points(case: Case, tols) -> list[list[Point]]:
+    """The compiled ceiling (ceiling.py: the hand-written model and DOP853 compiled by
+    numba), compiled before any timing; none when numba is not importable."""
+    try:
+        import ceiling
+    except ImportError:
+        return []
+    if case.name not in ceiling.MODELS:
+        return []
+    solver, CEILING_COMPILE[case.name] = ceiling.prepare(case)
+    fac = case.atol_factor()
+    return [[Point({"case": case.name, "kind": "ceiling", "route": "numba", "rtol": rtol,
+                    "atol": rtol * fac, "delt": None},
+                   lambda rtol=rtol: solver.run(rtol, rtol * fac), solver.measured)
+             for rtol in tols]]
+
+
 # --------------------------------------------------------------------------- analysis
 
 def front(rows: list[dict]) -> list[tuple[float, float]]:
@@ -439,6 +463,10 @@ def markdown(rows, summary, firsts, refs=(), probes=(), load: str = "") -> str:
                 else math.nan
             lines.append(f"| {x['case']} | {x['level']:.0e} | {_g(c * 1e3)} | "
                          f"{_g(ratio, '{:.1f}')} |")
+        if CEILING_COMPILE:
+            lines += ["", "The ceiling's compile (first call, not in its times; 0 when a model "
+                      "with the same functions compiled it before) [s]: " + ", ".join(
+                          f"{k} {v:.2f}" for k, v in CEILING_COMPILE.items())]
     if probes:
         lines += ["", "## The stiffness-advice probe (not in the times above)", "",
                   "| case | method | rtol | run [ms] | probe [ms] | probe / run | "
@@ -531,6 +559,7 @@ def main(models=None, tols=None, hand_tols=None, repeats: int = 3, ladder: int =
                                FIXED_METHODS if fixed is None else fixed, ladder)
         routes += hand_points(case, hand_tols, HAND_ROUTES + EVENT_ROUTES
                               if hand_routes is None else hand_routes)
+        routes += ceiling_points(case, hand_tols)
         rows_c = measure(routes, repeats)
         rows += rows_c
         summary += summarize(case, rows_c)
