@@ -152,6 +152,8 @@ def amilpy_points(case: Case, tols, methods, fixed, ladder: int) -> list[list[Po
 
     model = amilpy.loads(case.text, case.name)
     model.run(advice=False)  # compile once for this set of constants
+    if "COMPILED" in methods:
+        model.run(method="COMPILED", advice=False)  # and its numba functions
     fac = case.atol_factor()
 
     def measured(runs) -> dict:
@@ -397,6 +399,7 @@ def summarize(case: Case, rows: list[dict], levels=LEVELS) -> list[dict]:
                                 default=math.inf),
             "min_err_auto": min((e for _, e in front(by_route.get(("amilpy", "AUTO"), []))),
                                 default=math.inf),
+            "compiled_s": ami.get("COMPILED", math.nan),
             **ceiling_time(by_route, level),
         })
     return out
@@ -431,7 +434,8 @@ def write_outputs(out_dir: str, rows, summary, firsts, plot: bool = True, refs=(
         for r in rows:
             w.writerow({k: r.get(k) for k in COLUMNS})
     scols = ["case", "level", "best_hand", "hand_s", "auto_s", "ratio", "best_amilpy",
-             "best_amilpy_s", "min_err_hand", "min_err_auto", "ceiling", "ceiling_route"]
+             "best_amilpy_s", "min_err_hand", "min_err_auto", "ceiling", "ceiling_route",
+             "compiled_s"]
     with open(os.path.join(out_dir, "summary.csv"), "w", newline="") as fh:
         w = csv.DictWriter(fh, scols)
         w.writeheader()
@@ -472,14 +476,18 @@ def markdown(rows, summary, firsts, refs=(), probes=(), load: str = "") -> str:
                   "see ceiling.py): time to reach the level and AUTO / ceiling; the faster "
                   "of its two drivers: rows from the dense output (numba) or steps ending "
                   "on the output points (numba_land)", "",
-                  "| case | error | ceiling [ms] | AUTO / ceiling | driver |",
-                  "|---|---|---|---|---|"]
+                  "| case | error | ceiling [ms] | AUTO / ceiling | driver | "
+                  "COMPILED [ms] | COMPILED / ceiling |",
+                  "|---|---|---|---|---|---|---|"]
         for x in summary:
             c = x.get("ceiling", math.nan)
             ratio = x["auto_s"] / c if math.isfinite(c) and math.isfinite(x["auto_s"]) \
                 else math.nan
+            comp = x.get("compiled_s", math.nan)
+            cratio = comp / c if math.isfinite(c) and math.isfinite(comp) else math.nan
             lines.append(f"| {x['case']} | {x['level']:.0e} | {_g(c * 1e3)} | "
-                         f"{_g(ratio, '{:.1f}')} | {x.get('ceiling_route', '')} |")
+                         f"{_g(ratio, '{:.1f}')} | {x.get('ceiling_route', '')} | "
+                         f"{_g(comp * 1e3)} | {_g(cratio, '{:.1f}')} |")
         if CEILING_COMPILE:
             lines += ["", "The ceiling's compile (first call, not in its times; 0 when a model "
                       "with the same functions compiled it before) [s]: " + ", ".join(
@@ -614,7 +622,9 @@ if __name__ == "__main__":
         models = [m for m in (models or SHIPPED) if m != "shipped"] or SHIPPED
     methods, fixed = a.methods, None
     if a.ratios:
-        methods, fixed = ["AUTO"], []
+        # AUTO, and the compiled route beside the compiled ceiling when numba is here
+        from amilpy.compiled import available
+        methods, fixed = ["AUTO", "COMPILED"] if available() else ["AUTO"], []
     if a.quick:
         main(models, tols=[1e-3, 1e-6], hand_tols=[1e-3, 1e-6], repeats=1, ladder=2,
              out_dir=a.out, slow=a.slow, methods=methods, fixed=fixed)

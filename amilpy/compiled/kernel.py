@@ -106,12 +106,11 @@ def first_step(rhs, t, y, f, t_bound, max_step, rtol, atol, m, z, p):
 
 
 @_jit
-def _stages(rhs, t, y, f, h, m, z, p, K, y_new):
+def _stages(rhs, t, y, f, h, m, z, p, K, y_new, ys):
     """One DOP853 step from (t, y) with f = rhs(t, y): K[0..12] and y_new (K[12] is
     the derivative there); returns the error norm's square terms (err5, err3)."""
     n = y.size
     K[0, :] = f
-    ys = np.empty(n)
     for s in range(1, N_STAGES):
         for i in range(n):
             acc = 0.0
@@ -149,12 +148,11 @@ def _error_norm(y, y_new, K, h, rtol, atol):
 
 
 @_jit
-def dense_terms(rhs, t, y, h, y_new, f_new, m, z, p, K, F):
+def dense_terms(rhs, t, y, h, y_new, f_new, m, z, p, K, F, ys):
     """The step's interpolant, F[0..6] (SciPy's Dop853DenseOutput), with the three
     extra stages it needs, and its ends with their derivatives (F[7..10], for the
     cubic Hermite of `interpolate`)."""
     n = y.size
-    ys = np.empty(n)
     for s in range(N_STAGES + 1, N_EXTENDED):
         a = A_EXTRA[s - N_STAGES - 1]
         for i in range(n):
@@ -360,6 +358,7 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
     yt = np.empty(n)
     ft = np.empty(n)
     scratch = np.empty(n)
+    ys = np.empty(n)  # a stage's argument
     ne = e_a.size
     e_b = np.empty(ne)
     e0 = np.empty(ne)
@@ -400,7 +399,7 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
             if t_new > t_bound:
                 t_new = t_bound
             h = t_new - t
-            _stages(rhs, t, y, f, h, m, z, p, K, y_new)
+            _stages(rhs, t, y, f, h, m, z, p, K, y_new, ys)
             nfev += N_STAGES
             err = _error_norm(y, y_new, K, h, rtol, atol)
             if err < 1.0:
@@ -442,7 +441,7 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
                 first = k
         ends = t_new >= t_bound
         if first >= 0 or ends or (gi < ngrid and grid[gi] <= t_new):
-            dense_terms(rhs, t, y, h, y_new, f_new, m, z, p, K, F)
+            dense_terms(rhs, t, y, h, y_new, f_new, m, z, p, K, F, ys)
             nfev += 3
         t_star = t_new
         if first >= 0 and simple:

@@ -446,20 +446,25 @@ class Integrator(RunLoop):
 
     def record_changes(self, t: float, y: np.ndarray, m, new_m, z, at_zero: set[int]) -> None:
         """An event for every watched surface whose branch changes at t."""
-        for k, w in enumerate(self.plan.watched):
+        for k in range(len(self.plan.watched)):
             if new_m[k] == m[k]:
                 continue
             if k not in at_zero and self.watch.silent(k, t, y, new_m, z):
                 continue  # a branch nothing uses now: not an event
-            last = next((e for e in reversed(self.events) if e.surface == w.surface), None)
-            if last is not None and last.old == new_m[k] and \
-                    abs(last.time - t) <= 1e-12 * max(abs(t), 1e-300):
-                # switched and switched back at one instant (noise at a tangential
-                # crossing): nothing happened
-                self.events.remove(last)
-                continue
-            self.events.append(Event(t, w.description, w.surface, m[k], new_m[k],
-                                     w.event_kind(new_m[k]), w.text))
+            self._event(t, k, m[k], new_m[k])
+
+    def _event(self, t: float, k: int, old: float, new: float) -> None:
+        """Surface k's branch changes from old to new at t (a located crossing)."""
+        w = self.plan.watched[k]
+        last = next((e for e in reversed(self.events) if e.surface == w.surface), None)
+        if last is not None and last.old == new and \
+                abs(last.time - t) <= 1e-12 * max(abs(t), 1e-300):
+            # switched and switched back at one instant (noise at a tangential
+            # crossing): nothing happened
+            self.events.remove(last)
+            return
+        self.events.append(Event(t, w.description, w.surface, old, new, w.event_kind(new),
+                                 w.text))
 
     def _check_chatter(self) -> None:
         recent = self._recent
@@ -530,27 +535,16 @@ class Integrator(RunLoop):
             self._check_limits(cur.t, stepper)
             gi = rec.out_i if rec is not None else len(times)
             got = stepper.advance(m, times, gi)
-            table = self._compiled_outputs(got, z) if rec is not None else None
-            start = 0
-            for j in range(len(got.event_t) + 1):
-                end = int(np.searchsorted(got.block, j, side="right"))
-                if rec is not None and end > start:
-                    # (a branch nothing uses may have changed inside: the rows' own
-                    # branches are in got.M, their outputs computed with them)
-                    rec.block(got.T[start:end], got.Y[start:end], table[start:end],
-                              got.M[start].tolist(), z)
-                start = end
-                if j == len(got.event_t):
-                    break
-                k, t, y = int(got.event_k[j]), float(got.event_t[j]), got.event_y[j].copy()
-                # with the branches nothing used that the kernel followed before it
-                m[:] = got.event_m[j].tolist()
-                new_m = list(m)
-                new_m[k] = float(got.event_new[j])
-                self.record_changes(t, y, m, new_m, z, {k})
-                m[:] = new_m
-                if rec is not None:
-                    rec.restarted(t, y, m, z)
+            if rec is not None and len(got.T):
+                self._compiled_rows(rec, got, z)
+            ranged = rec is not None and bool(rec.extrema.names)
+            for j in range(len(got.event_t)):
+                k, t = int(got.event_k[j]), float(got.event_t[j])
+                self._event(t, k, float(got.event_m[j, k]), float(got.event_new[j]))
+                if ranged:  # (RANGE re-integrates from the restarts)
+                    new_m = got.event_m[j].tolist()
+                    new_m[k] = float(got.event_new[j])
+                    rec.restarted(t, got.event_y[j].copy(), new_m, z)
                 self._recent.append(t)
                 seg_start = t
                 if len(self.events) > self.opts.max_events:
@@ -567,6 +561,23 @@ class Integrator(RunLoop):
         if self.plan.watch_idx:
             e_prev = c.surf(cur.t, cur.y.tolist(), m, z)
         return e_prev, seg_start
+
+    def _compiled_rows(self, rec: Recorder, got, z) -> None:
+        """A kernel call's rows: their outputs, each row in its own branches (a
+        branch nothing uses may have changed inside a block), recorded at once, or
+        block by block between the located crossings when RANGE needs each block's
+        branches for its re-integration."""
+        table = self._compiled_outputs(got, z)
+        if not rec.extrema.names:
+            rec.block(got.T, got.Y, table, got.m.tolist(), z)
+            return
+        start = 0
+        for j in range(len(got.event_t) + 1):
+            end = int(np.searchsorted(got.block, j, side="right"))
+            if end > start:
+                rec.block(got.T[start:end], got.Y[start:end], table[start:end],
+                          got.M[start].tolist(), z)
+            start = end
 
     def _compiled_outputs(self, got, z) -> np.ndarray:
         """The output table of a kernel call's rows: one evaluation over all of them,
