@@ -193,3 +193,17 @@ def test_response_vs_sweep_runs(tmp_path):
     assert res["gap"] < 1e-6  # the truth is a fixed point of the SciPy reference's map
     assert res["rows"][0]["max"] < 1e-4  # the curve, read between its points
     assert (tmp_path / "response_vs_sweep.md").stat().st_size > 0
+
+
+def test_compiled_benchmark_runs(tmp_path):
+    pytest.importorskip("numba")
+    import compiled as bench
+
+    res = bench.main(models=["machine_unit"], repeats=1, long=2.0, out_dir=str(tmp_path),
+                     tols=[1e-6])
+    (cold, warm), = res["startup"].values()
+    assert all(x > 0 for x in cold) and warm[2] < cold[2]  # the model's cache is used
+    row, = res["runs"]
+    # the same method as DOP853 at RELERR 1e-6: the exact reference within 1e-4
+    assert row["COMPILED"][1] < 1e-4 and row["AUTO"][1] < 1e-4
+    assert (tmp_path / "compiled.md").stat().st_size > 0
