@@ -9,8 +9,10 @@ and a whole `odeint` integration (the AUTO route's engine) at three tolerances
 against the plain-Python function amilpy uses. amilpy's generated code works on
 Python floats, so a call costs about as little as numba's dispatcher alone:
 measured on the torque-meter model (8 states), 0.55 us (Python) against 1.05 us
-(numba) per call, and 5-8 % less time end to end -- not worth a dependency, so
-there is no `amilpy[fast]` extra. Re-run this when the model sizes grow.
+(numba) per call, and 5-8 % less time end to end: a compiled right side alone is
+not worth a dependency. What the `amilpy[fast]` extra does instead (METHOD
+COMPILED) is compile the step loop, the rows and the crossings with it
+(`amilpy/compiled`, measured by `compiled.py`).
 """
 
 from __future__ import annotations

@@ -55,17 +55,19 @@ class Kernel:
 
 
 _LOADED: dict[str, Kernel] = {}  # by module key, for this process
+# by the generated Python source: a run whose constants differ (FINTIM, say) builds
+# new scalar functions of the same text, and needs no new translation
+_BY_SOURCE: dict[str, Kernel | str] = {}
 
 
 def kernel_for(c: Compiled) -> Kernel | str:
     """The compiled module for `c`'s code (built, or read from the disk cache, once
     per process), or why there is none."""
-    cached = c.shared.get("kernel")
-    if cached is not None:
-        return cached
-    result = _build(c)
-    c.shared["kernel"] = result
-    return result
+    cached = c.shared.get("kernel") or _BY_SOURCE.get(c.source)
+    if cached is None:
+        cached = _BY_SOURCE[c.source] = _build(c)
+    c.shared["kernel"] = cached
+    return cached
 
 
 def _build(c: Compiled) -> Kernel | str:

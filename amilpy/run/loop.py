@@ -563,21 +563,9 @@ class Integrator(RunLoop):
         return e_prev, seg_start
 
     def _compiled_rows(self, rec: Recorder, got, z) -> None:
-        """A kernel call's rows: their outputs, each row in its own branches (a
-        branch nothing uses may have changed inside a block), recorded at once, or
-        block by block between the located crossings when RANGE needs each block's
-        branches for its re-integration."""
-        table = self._compiled_outputs(got, z)
-        if not rec.extrema.names:
-            rec.block(got.T, got.Y, table, got.m.tolist(), z)
-            return
-        start = 0
-        for j in range(len(got.event_t) + 1):
-            end = int(np.searchsorted(got.block, j, side="right"))
-            if end > start:
-                rec.block(got.T[start:end], got.Y[start:end], table[start:end],
-                          got.M[start].tolist(), z)
-            start = end
+        """A kernel call's rows, recorded at once: their outputs, and for RANGE's
+        re-integration their branches, each row's own."""
+        rec.block(got.T, got.Y, self._compiled_outputs(got, z), got.M, z)
 
     def _compiled_outputs(self, got, z) -> np.ndarray:
         """The output table of a kernel call's rows: one evaluation over all of them,

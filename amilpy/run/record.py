@@ -119,10 +119,12 @@ class Extrema:
                 self._scan_buffer()
 
     def add_many(self, T: np.ndarray, V: np.ndarray, Y: np.ndarray, m, z) -> None:
-        """Rows T (values V, states Y), all taken with modes m and memory z."""
+        """Rows T (values V, states Y), all taken with modes m and memory z (m may
+        be an array of each row's modes)."""
         if self.names and len(T):
             self._gather()
-            self.parts.append((T, V[:, self.columns], Y, tuple(m), tuple(z)))
+            modes = m if isinstance(m, np.ndarray) else tuple(m)
+            self.parts.append((T, V[:, self.columns], Y, modes, tuple(z)))
             self._grow(len(T))
 
     def _grow(self, n: int) -> None:
@@ -146,7 +148,8 @@ class Extrema:
         T, _, Y, m, z = self.parts[k]
         j = i - starts[k]
         many = isinstance(m, list)
-        return Bracket(float(T[j]), math.nan, np.array(Y[j], float), m[j] if many else m,
+        modes = tuple(m[j].tolist()) if isinstance(m, np.ndarray) else m[j] if many else m
+        return Bracket(float(T[j]), math.nan, np.array(Y[j], float), modes,
                        z[j] if many else z)
 
     def _scan_buffer(self) -> None:
@@ -316,14 +319,16 @@ class Recorder:
         self.out_i += 1
 
     def block(self, T: np.ndarray, Y: np.ndarray, table: np.ndarray, m, z) -> None:
-        """Rows for the next len(T) grid instants at once."""
+        """Rows for the next len(T) grid instants at once (m: their modes, or an
+        array of each row's)."""
         n = len(T)
         self.rows.add_block(T, np.arange(self.out_i, self.out_i + n), table)
         if self.range_from is None:
             self.extrema.add_many(T, table, Y, m, z)
         else:
             keep = T >= self.range_from
-            self.extrema.add_many(T[keep], table[keep], Y[keep], m, z)
+            self.extrema.add_many(T[keep], table[keep], Y[keep],
+                                  m[keep] if isinstance(m, np.ndarray) else m, z)
         self.out_i += n
 
     def run(self, spec, constants: dict[str, float], events: list[Event], status: Status,
