@@ -337,9 +337,9 @@ def _direction(rhs, surf, k, old, t, y, m, z, p, lookahead, f, yt, e0, e1):
 
 
 @_entry(types.UniTuple(_I8, 4), _FN, _FN, _V, _V, _V, _V, _V, _V, _V, _V, _V, _I, _I, _B,
-        _V, _I8, _V, _M, _I, _M, _V, _I, _V, _M, _M, _V, _V, _M, _I8)
+        _V, _I8, _V, _M, _M, _V, _I, _V, _M, _M, _V, _V, _M, _I8)
 def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level, grid, gi,
-            out_T, out_Y, out_B, out_M, ev_t, ev_k, ev_new, ev_y, ev_m, held_y, held_f,
+            out_T, out_Y, out_M, ev_t, ev_k, ev_new, ev_y, ev_m, held_y, held_f,
             held_F, max_steps):
     """Integrate from (sc[0], y) with step sc[1] towards sc[5] (see the module's
     docstring). Returns (status, rows, events, gi). In place: y, f and e_a (the
@@ -500,7 +500,6 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
             while gi < ngrid and grid[gi] < t_star:
                 out_T[rows] = grid[gi]
                 interpolate(t, h, F, cubic, grid[gi], out_Y[rows])
-                out_B[rows] = nev
                 out_M[rows, :] = m
                 rows += 1
                 gi += 1
@@ -527,7 +526,6 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
                 out_Y[rows, :] = y_new
             else:
                 interpolate(t, h, F, cubic, grid[gi], out_Y[rows])
-            out_B[rows] = nev
             out_M[rows, :] = m
             rows += 1
             gi += 1

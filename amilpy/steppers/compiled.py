@@ -23,14 +23,12 @@ from .ivp import ScipyStepper
 
 @dataclass
 class Advance:
-    """What one kernel call produced: output rows (their block: the number of
-    located crossings before them) and located crossings (TIME, surface, new branch,
-    state)."""
+    """What one kernel call produced: output rows and located crossings (TIME,
+    surface, new branch, state)."""
 
     status: int
     T: np.ndarray
     Y: np.ndarray
-    block: np.ndarray
     M: np.ndarray  # each row's branches
     event_t: np.ndarray
     event_k: np.ndarray
@@ -126,7 +124,7 @@ class KernelStepper(Stepper):
         array returned with the crossings it locates)."""
         m_arr = np.asarray(m, dtype=float)
         left = max(len(grid) - gi, 0)
-        T, Y, B = np.empty(left), np.empty((left, len(self._y))), np.empty(left, np.int64)
+        T, Y = np.empty(left), np.empty((left, len(self._y)))
         M = np.empty((left, len(m_arr)))
         et, ek, en, ey, em = self._ev
         # the surfaces where the kernel stands, in the branches now in force (the loop
@@ -134,7 +132,7 @@ class KernelStepper(Stepper):
         self._surf(float(self.sc[0]), self._y, m_arr, self.z, self.p, self._e)
         status, rows, nev, _ = self._advance(
             self.rhs, self.surf, self._y, self._f, self._e, m_arr, self.z, self.p, self.sc,
-            self.rtol, self.atol, self.watch, self.handled, self.level, grid, gi, T, Y, B, M,
+            self.rtol, self.atol, self.watch, self.handled, self.level, grid, gi, T, Y, M,
             et, ek, en, ey, em, self._held_y, self._held_f, self._held_F, self.max_steps)
         if rows or nev:
             self.t = self.t_old = float(self.sc[0])
@@ -149,7 +147,7 @@ class KernelStepper(Stepper):
         elif status == self.k.SMALL:
             self._take_over()
         self.t, self.y = float(self.sc[0]), self._y.copy()
-        return Advance(status, T[:rows], Y[:rows], B[:rows], M[:rows], et[:nev].copy(),
+        return Advance(status, T[:rows], Y[:rows], M[:rows], et[:nev].copy(),
                        ek[:nev].copy(), en[:nev].copy(), ey[:nev].copy(), em[:nev].copy(),
                        m_arr)
 
