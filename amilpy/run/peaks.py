@@ -227,7 +227,7 @@ def _by_kernel(ctx: Context, m, z):
         ys = np.empty((len(ts), len(y0)))
         ys[0], n = y0, 1
         while not stepper.done:
-            got = stepper.advance(m, ts, n)
+            got = stepper.advance(m, z, ts, n)
             ys[n:n + len(got.T)] = got.Y
             n += len(got.T)
         if stepper.step() is not None or stepper.fallback is not None or stepper.t < ts[-1]:

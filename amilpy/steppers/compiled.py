@@ -61,7 +61,8 @@ class KernelStepper(Stepper):
     def __init__(self, kernel, fun: Rhs | None, t0: float, y0: np.ndarray, t_bound: float, *,
                  rtol, atol, max_step: float, first_step: float | None, max_steps: int,
                  m, z, p: np.ndarray, watch: np.ndarray, handled: np.ndarray,
-                 level: np.ndarray, lookahead: float, stability_limit: float) -> None:
+                 level: np.ndarray, lookahead: float, stability_limit: float,
+                 h_floor: float) -> None:
         self.k = kernel.loop
         # the model's functions go to the kernel as C functions (a dispatcher costs
         # 0.1 ms a call to convert), and are called here past their dispatchers
@@ -90,9 +91,10 @@ class KernelStepper(Stepper):
             self.z, p)
         h = min(h, abs(t_bound - t0))
         # TIME, next step, held step's end, evaluations, steps, bound, max step, lookahead,
-        # the stiffness test's counts, estimate, confirmation and cubic flag, the limit
+        # the stiffness test's counts, estimate, confirmation and cubic flag, the limit,
+        # the steps before the last restart, the step-size floor (see kernel.advance)
         self.sc = np.array([t0, h, math.nan, 1.0, 0.0, t_bound, max_step, lookahead,
-                            0.0, 0.0, 0.0, math.nan, 0.0, 0.0, stability_limit])
+                            0.0, 0.0, 0.0, math.nan, 0.0, 0.0, stability_limit, 0.0, h_floor])
         self._held_y, self._held_f = np.empty(n), np.empty(n)
         self._held_F = np.empty((self.k.ROWS, n))
         self._held = False
@@ -119,10 +121,12 @@ class KernelStepper(Stepper):
         """No kernel call is due: a step is held, the kernel failed, or SciPy took over."""
         return self._held or self._failure is not None or self.fallback is not None
 
-    def advance(self, m, grid: np.ndarray, gi: int) -> Advance:
+    def advance(self, m, z, grid: np.ndarray, gi: int) -> Advance:
         """Run the kernel from where it stands with the branches `m` (updated in the
-        array returned with the crossings it locates)."""
+        array returned with the crossings it locates) and the memory `z` as the loop
+        keeps it now."""
         m_arr = np.asarray(m, dtype=float)
+        self.z = np.asarray(z, dtype=float)
         left = max(len(grid) - gi, 0)
         T, Y = np.empty(left), np.empty((left, len(self._y)))
         M = np.empty((left, len(m_arr)))
@@ -157,7 +161,8 @@ class KernelStepper(Stepper):
             return
         self.fallback = ScipyStepper("DOP853", self.fun, float(self.sc[0]), self._y.copy(),
                                      float(self.sc[5]), rtol=self.rtol, atol=self.atol,
-                                     max_step=float(self.sc[6]), first_step=None)
+                                     max_step=float(self.sc[6]), first_step=None,
+                                     stability_limit=float(self.sc[14]))
 
     def step(self) -> StepFailure | None:
         if self._held:
