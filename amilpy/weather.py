@@ -217,9 +217,3 @@ class Weather:
         import numpy as np
 
         return np.array([self.value(name, float(t)) for t in np.asarray(ts, float)])
-
-    def day_starts(self, t0: float, t1: float) -> list[float]:
-        """The instants in (t0, t1] where the day changes: where every daily value may
-        jump, so breakpoints for a variable-step method."""
-        first = math.floor(t0) + 1
-        return [float(d) for d in range(int(first), int(math.floor(t1)) + 1)]

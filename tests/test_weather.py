@@ -108,9 +108,3 @@ def test_a_malformed_line_is_named(tmp_path):
     (tmp_path / "NLD1.990").write_text(CABO.replace("0.65", "O.65"))
     with pytest.raises(AmilError, match=r"NLD1\.990:4: not a CABO weather line"):
         read_cabo(str(tmp_path / "NLD1.990"))
-
-
-def test_day_starts_are_the_breakpoints_of_the_daily_values():
-    w = Weather(_spec(wtrdir=WEATHER), listing_dir="/nonexistent")
-    assert w.day_starts(80.0, 83.0) == [81.0, 82.0, 83.0]
-    assert w.day_starts(80.5, 82.9) == [81.0, 82.0]
