@@ -63,11 +63,10 @@ _BY_SOURCE: dict[str, Kernel | str] = {}
 def kernel_for(c: Compiled) -> Kernel | str:
     """The compiled module for `c`'s code (built, or read from the disk cache, once
     per process), or why there is none."""
-    cached = c.shared.get("kernel") or _BY_SOURCE.get(c.source)
-    if cached is None:
-        cached = _BY_SOURCE[c.source] = _build(c)
-    c.shared["kernel"] = cached
-    return cached
+    kernel = _BY_SOURCE.get(c.source)
+    if kernel is None:
+        kernel = _BY_SOURCE[c.source] = _build(c)
+    return kernel
 
 
 def _build(c: Compiled) -> Kernel | str:

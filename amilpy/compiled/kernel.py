@@ -29,6 +29,32 @@ import numpy as np
 from numba import njit, types
 from scipy.integrate._ivp import dop853_coefficients as _dc
 
+from .layout import (
+    AT,
+    BOUND,
+    BUFFER,
+    CALM,
+    CUBIC,
+    FLOOR,
+    H_LAMBDA,
+    HELD,
+    HELD_END,
+    LIMIT,
+    LOOKAHEAD,
+    MAX_STEP,
+    NFEV,
+    NSTEPS,
+    PLAIN,
+    POSITIVE,
+    QUIET,
+    RESTARTED,
+    SMALL,
+    STEP,
+    STEPS,
+    STIFF_AT,
+    STIFF_H_LAMBDA,
+)
+
 N_STAGES = _dc.N_STAGES
 A = np.ascontiguousarray(_dc.A[:N_STAGES, :N_STAGES])
 B = np.ascontiguousarray(_dc.B)
@@ -62,17 +88,6 @@ def _entry(restype, *argtypes):
     one machine code for every model."""
     return njit(restype(*argtypes), cache=True, error_model="numpy")
 
-
-# what `advance` returns as its status
-BUFFER = 0  # a buffer is full or the call's step budget is spent: call again
-HELD = 1  # a step is held for the run loop (sc[2] is its end)
-STEPS = 2  # the run's step limit
-SMALL = 3  # the step size fell below its floor (a fault, a singularity)
-
-# what the kernel may do with a surface's crossing (`handled`)
-LOOP = 0  # hand the step to the run loop
-QUIET = 1  # follow it where its branch changes nothing (no restart, no event)
-PLAIN = 2  # that, or locate it, change the branch and restart
 
 STEPS_PER_CALL = 20000  # the run loop looks at its deadline and progress between calls
 
@@ -177,7 +192,7 @@ def dense_terms(rhs, t, y, h, y_new, f_new, m, z, p, K, F, ys):
             F[3 + r, i] = h * acc
 
 
-@_entry(types.none, _F8, _F8, _V, _M, _F8, _V)
+@_jit
 def dense_at(t_old, h, y_old, F, t, out):
     """The interpolant at t (SciPy's evaluation order)."""
     x = (t - t_old) / h
@@ -220,9 +235,9 @@ def interpolate(t_old, h, F, cubic, t, out):
 @_jit
 def _stiffness(y, y_new, K, h, sc, tested, t_new):
     """Hairer's stiffness test (as `ScipyStepper._stiffness_test`): h*|lambda| from
-    the last stage (c = 1) and the new point; sc[8], sc[9]: positive tests and calm
-    ones since, sc[10] the estimate, sc[11] and sc[12] where it was confirmed."""
-    if sc[8] == 0.0 and tested % 4:
+    the last stage (c = 1) and the new point, its counts and its findings in sc
+    (POSITIVE ... STIFF_H_LAMBDA, see `layout`)."""
+    if sc[POSITIVE] == 0.0 and tested % 4:
         return
     n = y.size
     den = 0.0
@@ -237,17 +252,17 @@ def _stiffness(y, y_new, K, h, sc, tested, t_new):
         num += g * g
     if not (0.0 < den < np.inf):
         return
-    sc[10] = abs(h) * math.sqrt(num / den)
-    if sc[10] > sc[14]:
-        sc[9] = 0.0
-        sc[8] += 1.0
-        if sc[8] == 15.0 and not sc[11] == sc[11]:
-            sc[11] = t_new
-            sc[12] = sc[10]
+    sc[H_LAMBDA] = abs(h) * math.sqrt(num / den)
+    if sc[H_LAMBDA] > sc[LIMIT]:
+        sc[CALM] = 0.0
+        sc[POSITIVE] += 1.0
+        if sc[POSITIVE] == 15.0 and not sc[STIFF_AT] == sc[STIFF_AT]:
+            sc[STIFF_AT] = t_new
+            sc[STIFF_H_LAMBDA] = sc[H_LAMBDA]
     else:
-        sc[9] += 1.0
-        if sc[9] == 6.0:
-            sc[8] = 0.0
+        sc[CALM] += 1.0
+        if sc[CALM] == 6.0:
+            sc[POSITIVE] = 0.0
 
 
 @_jit
@@ -341,21 +356,17 @@ def _direction(rhs, surf, k, old, t, y, m, z, p, lookahead, f, yt, e0, e1):
 def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level, grid, gi,
             out_T, out_Y, out_M, ev_t, ev_k, ev_new, ev_y, ev_m, held_y, held_f,
             held_F, max_steps):
-    """Integrate from (sc[0], y) with step sc[1] towards sc[5] (see the module's
-    docstring). Returns (status, rows, events, gi). In place: y, f and e_a (the
-    state, its derivative and the surfaces where the integration stands), m (the
-    branches, changed at located crossings), sc[0] (TIME), sc[1] (the next step),
-    sc[2] (a held step's end; its state, derivative and interpolant in held_*),
-    sc[3] and sc[4] (evaluations and steps, added to), sc[8..13] the stiffness test's
-    (`_stiffness`; sc[13]: the held step is interpolated from its ends), sc[14] the
-    pair's stability limit, sc[15] the steps before the last restart (the test counts
-    from there, as a new Python stepper would), sc[16] the step-size floor: a step
-    shorter, or one whose state is not finite, is held for the loop, which counts and
-    reports those. Every row has its branches
-    (out_M), every located crossing those before it (ev_m): a crossing followed
-    without a restart (a branch nothing uses) is not logged."""
+    """Integrate from (sc[AT], y) with step sc[STEP] towards sc[BOUND] (see the module's
+    docstring). Returns (status, rows, events, gi). In place: y, f and e_a (the state,
+    its derivative and the surfaces where the integration stands), m (the branches,
+    changed at located crossings) and sc (the slots of `layout`). A step shorter than
+    sc[FLOOR], or one whose state is not finite, is held for the loop, which counts and
+    reports those. Every row has its branches (out_M), every located crossing those
+    before it (ev_m): a crossing followed without a restart (a branch nothing uses) is
+    not logged."""
     n = y.size
-    t, h_abs, t_bound, max_step, lookahead = sc[0], sc[1], sc[5], sc[6], sc[7]
+    t, h_abs, t_bound = sc[AT], sc[STEP], sc[BOUND]
+    max_step, lookahead = sc[MAX_STEP], sc[LOOKAHEAD]
     K = np.empty((N_EXTENDED, n))
     y_new = np.empty(n)
     yt = np.empty(n)
@@ -383,7 +394,7 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
         if steps >= STEPS_PER_CALL or nev + nm > ev_t.size:
             status = BUFFER
             break
-        if sc[4] + steps >= max_steps:
+        if sc[NSTEPS] + steps >= max_steps:
             status = STEPS
             break
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
@@ -419,9 +430,9 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
             break
         steps += 1
         f_new = K[N_STAGES]
-        _stiffness(y, y_new, K, h, sc, sc[4] + steps - sc[15], t_new)
+        _stiffness(y, y_new, K, h, sc, sc[NSTEPS] + steps - sc[RESTARTED], t_new)
         # a stability-bound step: its rows and crossings from its ends only
-        cubic = sc[8] >= 15.0 and sc[10] > sc[14]
+        cubic = sc[POSITIVE] >= 15.0 and sc[H_LAMBDA] > sc[LIMIT]
         surf(t_new, y_new, m, z, p, e_b)
         first = -1
         simple = True
@@ -443,11 +454,11 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
                 simple = False  # departed from a surface it sat on
                 first = k
         ends = t_new >= t_bound
-        bad = h < sc[16]  # (the loop counts them: TIMER DELMIN, a finite-time singularity)
+        bad = h < sc[FLOOR]  # (the loop counts them: TIMER DELMIN, a finite-time singularity)
         for i in range(n):
             if not math.isfinite(y_new[i]):
                 bad = True
-        if bad:
+        if bad:  # held as a segment's last step is, nothing located
             first = -1
             ends = True
         if first >= 0 or ends or (gi < ngrid and grid[gi] <= t_new):
@@ -500,9 +511,9 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
             held_y[:] = y_new
             held_f[:] = K[N_STAGES]
             held_F[:, :] = F
-            sc[13] = 1.0 if cubic else 0.0
-            sc[2] = t_new
-            sc[1] = h_next
+            sc[CUBIC] = 1.0 if cubic else 0.0
+            sc[HELD_END] = t_new
+            sc[STEP] = h_next
             status = HELD
             break
         if first >= 0:
@@ -526,9 +537,9 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
             y[:] = yt
             h = t_star - t  # the next step tries the cut one's length, as the loop's
             t = t_star
-            sc[8] = 0.0  # the stiffness test starts again, as a new stepper's would
-            sc[9] = 0.0
-            sc[15] = sc[4] + steps
+            sc[POSITIVE] = 0.0  # the stiffness test starts again, as a new stepper's would
+            sc[CALM] = 0.0
+            sc[RESTARTED] = sc[NSTEPS] + steps
             rhs(t, y, m, z, p, f)
             nfev += 1
             surf(t, y, m, z, p, e_a)
@@ -552,9 +563,9 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
         f[:] = f_new
         e_a[:] = e_b
         h_abs = h_next
-    sc[0] = t
+    sc[AT] = t
     if status != HELD:
-        sc[1] = h_abs
-    sc[3] += nfev
-    sc[4] += steps
+        sc[STEP] = h_abs
+    sc[NFEV] += nfev
+    sc[NSTEPS] += steps
     return status, rows, nev, gi

@@ -22,6 +22,7 @@ from .. import ir
 from ..codegen import Compiled
 from ..codegen.jacobian import for_compiled as jacobian_for
 from ..codegen.rolled import for_compiled as rolled_rhs
+from ..compiled.layout import LOOP, PLAIN, QUIET
 from ..outcome import Failure
 from ..result import Event
 from ..steppers import Chunked, Hermite, StepFailure, Stepper, first_bad, make_stepper
@@ -513,8 +514,7 @@ class Integrator(RunLoop):
             return e_prev
         with np.errstate(all="ignore"):
             outs = self.c.out_v(T[:n], cols, m, z)
-        table = np.column_stack([column(v, n) for v in outs]) if outs else np.empty((n, 0))
-        rec.block(T[:n], Y[:n], table, m, z)
+        rec.block(T[:n], Y[:n], output_table(outs, n), m, z)
         stepper.consume(n)
         self._passed(stepper.t)
         cur.t, cur.y = stepper.t, stepper.y
@@ -529,7 +529,7 @@ class Integrator(RunLoop):
     def _take_compiled(self, stepper: KernelStepper, cur: Cursor, rec: Recorder | None,
                        e_prev, seg_start: float):
         """Run the compiled kernel until it holds a step for this loop: record its rows
-        (each block in its own branches) and the crossings it located, with the
+        (each in its own branches) and the crossings it located, with the
         same events, restarts and limits as `_restart`. Returns the surfaces where
         it stands and the last restart (the segment's start for `locate`)."""
         c, m, z = self.c, cur.m, cur.z
@@ -539,7 +539,8 @@ class Integrator(RunLoop):
             gi = rec.out_i if rec is not None else len(times)
             got = stepper.advance(m, z, times, gi)
             if rec is not None and len(got.T):
-                self._compiled_rows(rec, got, z)
+                # (each row's branches too: RANGE re-integrates from rows)
+                rec.block(got.T, got.Y, self._compiled_outputs(got, z), got.M, z)
             ranged = rec is not None and bool(rec.extrema.names)
             for j in range(len(got.event_t)):
                 k, t = int(got.event_k[j]), float(got.event_t[j])
@@ -570,11 +571,6 @@ class Integrator(RunLoop):
             e_prev = c.surf(cur.t, cur.y.tolist(), m, z)
         return e_prev, seg_start
 
-    def _compiled_rows(self, rec: Recorder, got, z) -> None:
-        """A kernel call's rows, recorded at once: their outputs, and for RANGE's
-        re-integration their branches, each row's own."""
-        rec.block(got.T, got.Y, self._compiled_outputs(got, z), got.M, z)
-
     def _compiled_outputs(self, got, z) -> np.ndarray:
         """The output table of a kernel call's rows: one evaluation over all of them,
         each row's branches as columns (the vector code selects per element), or
@@ -583,20 +579,16 @@ class Integrator(RunLoop):
         cols = list(got.Y.T)
         try:
             with np.errstate(all="ignore"):
-                outs = c.out_v(got.T, cols, list(got.M.T), z)
-            return np.column_stack([column(v, n) for v in outs]) if outs \
-                else np.empty((n, 0))
+                return output_table(c.out_v(got.T, cols, list(got.M.T), z), n)
         except (ValueError, TypeError):
             pass
         table = np.empty((n, len(c.out_names)))
         modes, group = np.unique(got.M, axis=0, return_inverse=True)
         for j, m in enumerate(modes):
             rows = group.ravel() == j
-            k = int(rows.sum())
             with np.errstate(all="ignore"):
                 outs = c.out_v(got.T[rows], [col[rows] for col in cols], m.tolist(), z)
-            table[rows] = np.column_stack([column(v, k) for v in outs]) if outs \
-                else np.empty((k, 0))
+            table[rows] = output_table(outs, int(rows.sum()))
         return table
 
     # ------------------------------------------------------------------ failures
@@ -637,15 +629,20 @@ def kernel_arguments(kernel, c: Compiled, plan: RunPlan, m, z, plain: bool,
     no memory to sample, no state to reset, no stop); `follow`: it may follow a
     branch nothing uses (as `_watch_step`); else every crossing is the loop's."""
     watched = plan.watched
-    handled = np.array([0 if watched[k].kind is not SurfaceKind.SIGN or
+    handled = np.array([LOOP if watched[k].kind is not SurfaceKind.SIGN or
                         watched[k].purpose is not Purpose.SWITCH or not follow
-                        else 2 if plain else 1 for k in range(len(m))], dtype=np.int64)
+                        else PLAIN if plain else QUIET for k in range(len(m))], dtype=np.int64)
     level = np.array([watched[k].kind is SurfaceKind.LEVEL for k in range(len(m))],
                      dtype=bool)
     return {"kernel": kernel, "m": m, "z": z, "p": kernel.parameter_values(c),
             "watch": np.array(plan.watch_idx, dtype=np.int64), "handled": handled,
             "level": level, "lookahead": plan.lookahead_h,
             "stability_limit": plan.route.stability_limit, "h_floor": plan.h_floor}
+
+
+def output_table(outs, n: int) -> np.ndarray:
+    """The vector output functions' results over n rows as an (n, outputs) table."""
+    return np.column_stack([column(v, n) for v in outs]) if outs else np.empty((n, 0))
 
 
 def column(v, n: int) -> np.ndarray:

@@ -16,6 +16,25 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..compiled.layout import (
+    AT,
+    BOUND,
+    CUBIC,
+    FLOOR,
+    HELD,
+    HELD_END,
+    LIMIT,
+    LOOKAHEAD,
+    MAX_STEP,
+    NFEV,
+    NSTEPS,
+    SLOTS,
+    SMALL,
+    STEP,
+    STEPS,
+    STIFF_AT,
+    STIFF_H_LAMBDA,
+)
 from ..outcome import Failure
 from .base import Rhs, StepFailure, Stepper, Stiffness
 from .ivp import ScipyStepper
@@ -84,17 +103,16 @@ class KernelStepper(Stepper):
         m_arr = np.asarray(m, dtype=float)
         self._f = np.empty(n)
         self._rhs(t0, self._y, m_arr, self.z, p, self._f)
-        self._e = np.empty(max(len(m_arr), 1))
-        self._surf(t0, self._y, m_arr, self.z, p, self._e)
+        self._e = np.empty(max(len(m_arr), 1))  # the surfaces where it stands (`advance`)
         h = first_step if first_step else _entry(self.k.first_step)(
             self.rhs, t0, self._y, self._f, t_bound, max_step, self.rtol, self.atol, m_arr,
             self.z, p)
-        h = min(h, abs(t_bound - t0))
-        # TIME, next step, held step's end, evaluations, steps, bound, max step, lookahead,
-        # the stiffness test's counts, estimate, confirmation and cubic flag, the limit,
-        # the steps before the last restart, the step-size floor (see kernel.advance)
-        self.sc = np.array([t0, h, math.nan, 1.0, 0.0, t_bound, max_step, lookahead,
-                            0.0, 0.0, 0.0, math.nan, 0.0, 0.0, stability_limit, 0.0, h_floor])
+        sc = self.sc = np.zeros(SLOTS)  # the kernel's scalar state (`compiled.layout`)
+        sc[AT], sc[STEP], sc[BOUND], sc[MAX_STEP] = t0, min(h, abs(t_bound - t0)), t_bound, \
+            max_step
+        sc[NFEV] = 1.0  # (the derivative above)
+        sc[LOOKAHEAD], sc[LIMIT], sc[FLOOR] = lookahead, stability_limit, h_floor
+        sc[HELD_END] = sc[STIFF_AT] = math.nan
         self._held_y, self._held_f = np.empty(n), np.empty(n)
         self._held_F = np.empty((self.k.ROWS, n))
         self._held = False
@@ -110,11 +128,11 @@ class KernelStepper(Stepper):
 
     @property
     def nfev(self) -> int:
-        return int(self.sc[3]) + (self.fallback.nfev if self.fallback is not None else 0)
+        return int(self.sc[NFEV]) + (self.fallback.nfev if self.fallback is not None else 0)
 
     @property
     def nstep(self) -> int:
-        return int(self.sc[4]) + (self.fallback.nstep if self.fallback is not None else 0)
+        return int(self.sc[NSTEPS]) + (self.fallback.nstep if self.fallback is not None else 0)
 
     @property
     def done(self) -> bool:
@@ -133,48 +151,47 @@ class KernelStepper(Stepper):
         et, ek, en, ey, em = self._ev
         # the surfaces where the kernel stands, in the branches now in force (the loop
         # may have changed a silent one)
-        self._surf(float(self.sc[0]), self._y, m_arr, self.z, self.p, self._e)
+        self._surf(float(self.sc[AT]), self._y, m_arr, self.z, self.p, self._e)
         status, rows, nev, _ = self._advance(
             self.rhs, self.surf, self._y, self._f, self._e, m_arr, self.z, self.p, self.sc,
             self.rtol, self.atol, self.watch, self.handled, self.level, grid, gi, T, Y, M,
             et, ek, en, ey, em, self._held_y, self._held_f, self._held_F, self.max_steps)
-        if rows or nev:
-            self.t = self.t_old = float(self.sc[0])
-            self.y = self._y.copy()
-            self._F = None
-        if self.stiff is None and self.sc[11] == self.sc[11]:
-            self.stiff = Stiffness(float(self.sc[11]), float(self.sc[12]))
-        if status == self.k.HELD:
+        # where the kernel stands now; its own steps are not the loop's to interpolate
+        self.t = self.t_old = float(self.sc[AT])
+        self.y = self._y.copy()
+        self._F = None
+        if self.stiff is None and self.sc[STIFF_AT] == self.sc[STIFF_AT]:
+            self.stiff = Stiffness(float(self.sc[STIFF_AT]), float(self.sc[STIFF_H_LAMBDA]))
+        if status == HELD:
             self._held = True
-        elif status == self.k.STEPS:
-            self._failure = StepFailure(Failure.STEPS, float(self.sc[0]))
-        elif status == self.k.SMALL:
+        elif status == STEPS:
+            self._failure = StepFailure(Failure.STEPS, float(self.sc[AT]))
+        elif status == SMALL:
             self._take_over()
-        self.t, self.y = float(self.sc[0]), self._y.copy()
         return Advance(status, T[:rows], Y[:rows], M[:rows], et[:nev].copy(),
                        ek[:nev].copy(), en[:nev].copy(), ey[:nev].copy(), em[:nev].copy(),
                        m_arr)
 
     def _take_over(self) -> None:
         if self.fun is None:  # no Python field to go on with (RANGE's sampling)
-            self._failure = StepFailure(Failure.SOLVER, float(self.sc[0]), "step size too small")
+            self._failure = StepFailure(Failure.SOLVER, float(self.sc[AT]), "step size too small")
             return
-        self.fallback = ScipyStepper("DOP853", self.fun, float(self.sc[0]), self._y.copy(),
-                                     float(self.sc[5]), rtol=self.rtol, atol=self.atol,
-                                     max_step=float(self.sc[6]), first_step=None,
-                                     stability_limit=float(self.sc[14]))
+        self.fallback = ScipyStepper("DOP853", self.fun, float(self.sc[AT]), self._y.copy(),
+                                     float(self.sc[BOUND]), rtol=self.rtol, atol=self.atol,
+                                     max_step=float(self.sc[MAX_STEP]), first_step=None,
+                                     stability_limit=float(self.sc[LIMIT]))
 
     def step(self) -> StepFailure | None:
         if self._held:
             self._held = False
-            self.t_old, self._y_old = float(self.sc[0]), self._y.copy()
-            self.t = float(self.sc[2])
+            self.t_old, self._y_old = float(self.sc[AT]), self._y.copy()
+            self.t = float(self.sc[HELD_END])
             self.y = self._held_y.copy()
             self._F = self._held_F.copy()
             self._h = self.t - self.t_old  # the interpolant's own (truncate moves t)
-            self._cubic = bool(self.sc[13])
+            self._cubic = bool(self.sc[CUBIC])
             # the kernel goes on from the held step's end
-            self.sc[0] = self.t
+            self.sc[AT] = self.t
             self._y[:] = self._held_y
             self._f[:] = self._held_f
             return None
