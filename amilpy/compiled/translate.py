@@ -18,32 +18,36 @@ from dataclasses import dataclass
 
 from ..codegen import Compiled
 
-# The run-time helpers (`codegen.pytree.namespace`, as _NAME) with a numba spelling:
-# the same meaning as `runtime`, faults as NaN or an infinity (numba's NumPy error
-# model), which the kernel's step control treats as it treats a NaN from Python.
-NUMBA_HELPERS: dict[str, str] = {
-    "ABS": "_ABS = abs",
-    "SQRT": "@_njit\ndef _SQRT(x):\n    return math.sqrt(x) if x >= 0.0 else math.nan",
-    "EXP": "_EXP = math.exp",
-    "ALOG": "@_njit\ndef _ALOG(x):\n    if x > 0.0:\n        return math.log(x)\n"
-            "    return -math.inf if x == 0.0 else math.nan",
-    "ALOG10": "@_njit\ndef _ALOG10(x):\n    if x > 0.0:\n        return math.log10(x)\n"
-              "    return -math.inf if x == 0.0 else math.nan",
-    "SIN": "_SIN = math.sin", "COS": "_COS = math.cos", "TAN": "_TAN = math.tan",
-    "ASIN": "@_njit\ndef _ASIN(x):\n    return math.asin(x) if -1.0 <= x <= 1.0 else math.nan",
-    "ACOS": "@_njit\ndef _ACOS(x):\n    return math.acos(x) if -1.0 <= x <= 1.0 else math.nan",
-    "ATAN": "_ATAN = math.atan", "TANH": "_TANH = math.tanh", "ATAN2": "_ATAN2 = math.atan2",
-    "SINH": "_SINH = math.sinh", "COSH": "_COSH = math.cosh",
-    "AINT": "@_njit\ndef _AINT(x):\n    return float(math.trunc(x))",
-    "FLOAT": "_FLOAT = float",
-    "AMOD": "@_njit\ndef _AMOD(a, b):\n    return math.fmod(a, b) if b != 0.0 else math.nan",
-    "SIGN": "@_njit\ndef _SIGN(a, b):\n    return abs(a) if b >= 0.0 else -abs(a)",
-    "AMAX1": "_AMAX1 = max", "AMIN1": "_AMIN1 = min",
-    "NOTNUL": "@_njit\ndef _NOTNUL(x):\n    return 1.0 if x == 0.0 else x",
-    "POW": "@_njit\ndef _POW(a, b):\n    return a ** b",
-    "SGN": "@_njit\ndef _SGN(x):\n    return 1.0 if x > 0 else (-1.0 if x < 0 else 0.0)",
-    "LEVEL": "@_njit\ndef _LEVEL(v):\n    return float(math.ceil(v - 0.5))",
+# The run-time helpers (`codegen.pytree.namespace`, as _NAME) the compiled route has.
+# Faults are NaN or an infinity there (numba's NumPy error model), which the kernel's
+# step control treats as it treats a NaN from Python. Most are what the Python route
+# calls: `math`'s functions and the builtins as numba has them (its math.asin is NaN
+# outside [-1, 1], where Python's raises), amilpy's own helpers compiled as written.
+# RESPELLED are those whose Python form catches an exception numba cannot: numba's
+# plain operation gives the NaN or infinity they return.
+AS_WRITTEN = frozenset({"SQRT", "ALOG", "ALOG10", "AINT", "SIGN", "NOTNUL", "SGN", "LEVEL"})
+_BUILTINS = {abs: "abs", max: "max", min: "min", float: "float"}
+RESPELLED: dict[str, str] = {
+    "EXP": "math.exp", "SINH": "math.sinh", "COSH": "math.cosh",
+    "AMOD": "np.fmod",  # (NaN for b = 0, as runtime.fortran_amod)
+    "POW": "np.power",  # (NaN for a negative base to a fractional power)
 }
+
+
+def _helper(name: str, obj: object) -> tuple[str, str | None]:
+    """The module text binding helper `name` (`_SQRT`) for numba, and the module it
+    imports (None: none); raises Unsupported."""
+    key = name[1:]
+    if key in RESPELLED:
+        return f"{name} = {RESPELLED[key]}", None
+    if key in AS_WRITTEN:
+        return f"{name} = _njit({obj.__module__}.{obj.__name__})", obj.__module__
+    if getattr(obj, "__module__", None) == "math":
+        return f"{name} = math.{obj.__name__}", None
+    if obj in _BUILTINS:
+        return f"{name} = {_BUILTINS[obj]}", None
+    raise Unsupported(f"{key} has no compiled form")
+
 
 _STATE_ARGS = ("y", "m", "z")  # what the generated functions unpack by position
 
@@ -134,18 +138,19 @@ def translate(c: Compiled) -> Translation:
         fn, reads = _function(found[source], target, parameters)
         functions.append(fn)
         used |= reads
-    helpers = []
+    helpers, imports = [], {"math", "numpy as np"}
     for name in sorted(used):
-        spelling = NUMBA_HELPERS.get(name[1:]) if name.startswith("_") else None
-        if spelling is None:
-            what = name[1:] if name.startswith("_") else name
-            raise Unsupported(f"{what} has no compiled form")
-        helpers.append(spelling)
+        if not name.startswith("_") or name not in c.namespace:
+            raise Unsupported(f"{name} has no compiled form")
+        line, module = _helper(name, c.namespace[name])
+        helpers.append(line)
+        imports |= {module} if module else set()
     model = py.Module(body=functions, type_ignores=[])
     py.fix_missing_locations(model)
     text = "\n\n".join([
         '"""One model\'s functions for amilpy\'s compiled route (amilpy.compiled.translate)."""',
-        "import math\n\nfrom numba import cfunc, njit\n\nfrom amilpy.compiled.kernel import MODEL",
+        "\n".join(f"import {m}" for m in sorted(imports)) +
+        "\n\nfrom numba import cfunc, njit\n\nfrom amilpy.compiled.kernel import MODEL",
         # (the order p holds them in: part of the text, so of the module's key)
         f"PARAMETERS = {names!r}",
         "_njit = njit(cache=True, error_model='numpy')\n"
