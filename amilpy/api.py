@@ -183,7 +183,12 @@ class Model:
         if self.ir.acsl is not None:
             return
         columns = len(outputs) if outputs is not None else len(self.ir.variables)
-        total = sum(stored_values(spec, columns, fintim) for spec in specs)
+        try:
+            total = sum(stored_values(spec, columns, fintim) for spec in specs)
+        except AmilError as exc:
+            if exc.path is None:
+                exc.path, exc.source = self.ir.path, self.ir.source
+            raise
         limit = DEFAULTS["max_values"]
         if total > limit:
             raise AmilError(

@@ -56,6 +56,28 @@ def _deepest(model: ir.Model) -> Span | None:
     return where
 
 
+def memory_read(fn: py.FunctionDef, nz: int, kept: list[str]) -> frozenset[int]:
+    """The slots of the memory vector z a generated function reads: its unpacked slots
+    (z0, z1, ...) and kept names that it loads, or every slot when it hands z itself
+    to a helper (DELAY's store)."""
+    loads: set[str] = set()
+    whole = False
+    for st in fn.body:
+        unpack = isinstance(st, py.Assign) and (
+            (isinstance(st.value, py.Name) and st.value.id == "z") or
+            (isinstance(st.value, py.Subscript) and isinstance(st.value.value, py.Name)
+             and st.value.value.id == "z"))
+        for node in py.walk(st.value if unpack else st):
+            if isinstance(node, py.Name) and isinstance(node.ctx, py.Load):
+                if node.id == "z" and not unpack:
+                    whole = True
+                loads.add(node.id)
+    if whole:
+        return frozenset(range(nz + len(kept)))
+    return frozenset({k for k in range(nz) if f"z{k}" in loads} |
+                     {nz + j for j, name in enumerate(kept) if local(name) in loads})
+
+
 def by_rows(fn: Callable) -> Callable:
     """fn over NumPy columns (t an array, y a list of arrays), a row at a time."""
     import numpy as np
@@ -433,6 +455,8 @@ class Compiler:
             settle=scalar["settle"] if self.settles else None, kept=list(self.kept),
             code={fname: (self.code_sections[fname], scalar[fname])
                   for fname in self.code_sections},
+            rhs_memory=memory_read(self.module.body[0], sum(m.nslots for m in model.memories),
+                                   list(self.kept)),
         )
 
     def trains(self) -> tuple[list[tuple[float, float]], set[int]]:

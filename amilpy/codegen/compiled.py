@@ -52,6 +52,10 @@ class Compiled:
     # that code by function name: (its IR, fn(t, y, m, z, ev) -> (y, z, values))
     kept: list[str] = field(default_factory=list)
     code: dict[str, tuple[ir.Code, Callable]] = field(default_factory=dict)
+    # the slots of z the derivatives read: memory written elsewhere (an output held by
+    # ZHOLD, a name DYNAMIC computes for the printout) changes nothing the integrator
+    # sees, so a run need not restart for it
+    rhs_memory: frozenset[int] = frozenset()
     model: ir.Model | None = field(default=None, repr=False)
     module: py.Module | None = field(default=None, repr=False)  # the scalar functions' tree
     namespace: dict = field(default_factory=dict, repr=False)

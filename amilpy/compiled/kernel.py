@@ -351,19 +351,21 @@ def _direction(rhs, surf, k, old, t, y, m, z, p, lookahead, f, yt, e0, e1):
     return 0.0
 
 
-@_entry(types.UniTuple(_I8, 4), _FN, _FN, _V, _V, _V, _V, _V, _V, _V, _V, _V, _I, _I, _B,
-        _V, _I8, _V, _M, _M, _V, _I, _V, _M, _M, _V, _V, _M, _I8)
+@_entry(types.UniTuple(_I8, 5), _FN, _FN, _V, _V, _V, _V, _V, _V, _V, _V, _V, _I, _I, _B,
+        _V, _I8, _V, _M, _M, _V, _I, _V, _M, _M, _V, _V, _M, _I8, _V, _M, _M)
 def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level, grid, gi,
             out_T, out_Y, out_M, ev_t, ev_k, ev_new, ev_y, ev_m, held_y, held_f,
-            held_F, max_steps):
+            held_F, max_steps, smp_T, smp_Y, smp_M):
     """Integrate from (sc[AT], y) with step sc[STEP] towards sc[BOUND] (see the module's
-    docstring). Returns (status, rows, events, gi). In place: y, f and e_a (the state,
-    its derivative and the surfaces where the integration stands), m (the branches,
-    changed at located crossings) and sc (the slots of `layout`). A step shorter than
-    sc[FLOOR], or one whose state is not finite, is held for the loop, which counts and
-    reports those. Every row has its branches (out_M), every located crossing those
-    before it (ev_m): a crossing followed without a restart (a branch nothing uses) is
-    not logged."""
+    docstring). Returns (status, rows, events, gi, samples). In place: y, f and e_a (the
+    state, its derivative and the surfaces where the integration stands), m (the
+    branches, changed at located crossings) and sc (the slots of `layout`). A step
+    shorter than sc[FLOOR], or one whose state is not finite, is held for the loop,
+    which counts and reports those. Every row has its branches (out_M), every located
+    crossing those before it (ev_m): a crossing followed without a restart (a branch
+    nothing uses) is not logged. Unless smp_T is empty, every step's end that is not a
+    crossing is a sample (smp_T, smp_Y, smp_M): the points RANGE reads between the rows
+    (the run restarts at a crossing, which RANGE reads in its new branches)."""
     n = y.size
     t, h_abs, t_bound = sc[AT], sc[STEP], sc[BOUND]
     max_step, lookahead = sc[MAX_STEP], sc[LOOKAHEAD]
@@ -386,12 +388,15 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
     flip = np.zeros(nm, np.bool_)
     rows = 0
     nev = 0
+    nsmp = 0
     nfev = 0
     steps = 0
     ngrid = grid.size
+    sampling = smp_T.size > 0
     status = BUFFER
     while True:
-        if steps >= STEPS_PER_CALL or nev + nm > ev_t.size:
+        if steps >= STEPS_PER_CALL or nev + nm > ev_t.size or \
+                (sampling and nsmp + 2 > smp_T.size):
             status = BUFFER
             break
         if sc[NSTEPS] + steps >= max_steps:
@@ -549,6 +554,11 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
             for k in watch:
                 if flip[k]:
                     m[k] = 1.0 if e_b[k] > 0.0 else (-1.0 if e_b[k] < 0.0 else 0.0)
+        if sampling:
+            smp_T[nsmp] = t_new
+            smp_Y[nsmp, :] = y_new
+            smp_M[nsmp, :] = m
+            nsmp += 1
         while gi < ngrid and grid[gi] <= t_new:
             out_T[rows] = grid[gi]
             if grid[gi] == t_new:
@@ -568,4 +578,4 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
         sc[STEP] = h_abs
     sc[NFEV] += nfev
     sc[NSTEPS] += steps
-    return status, rows, nev, gi
+    return status, rows, nev, gi, nsmp

@@ -383,7 +383,9 @@ class AcslRun(_Run):
         while self.stopped is None:
             t_next, acts = self.next_instant(cur.t)
             rec.hold = t_next if acts else None
-            integ.integrate(cur, t_next, rec)
+            # (a CINT instant or an event that changes nothing the derivatives read
+            # does not restart the integrator)
+            integ.integrate(cur, t_next, rec, pause=acts)
             rec.hold = None
             reason = integ.stop_reason
             if reason is not None:

@@ -25,14 +25,22 @@ from ..codegen.rolled import for_compiled as rolled_rhs
 from ..compiled.layout import LOOP, PLAIN, QUIET
 from ..outcome import Failure
 from ..result import Event
-from ..steppers import Chunked, Hermite, StepFailure, Stepper, first_bad, make_stepper
+from ..steppers import (
+    Chunked,
+    Evaluations,
+    Hermite,
+    StepFailure,
+    Stepper,
+    first_bad,
+    make_stepper,
+)
 from ..steppers.compiled import KernelStepper
 from ..steppers.jacobian import SegmentJacobian
 from .edges import expected_event, locate_crossings
 from .faults import Fault, fault_text
 from .plan import SLIDE, Options, Purpose, RunPlan, SurfaceKind, time_breakpoints
 from .record import Recorder
-from .watch import SurfaceWatch, TooManySlides, wrong_side
+from .watch import SurfaceWatch, TooManySlides, crossings, wrong_side
 
 _EPS = float(np.finfo(float).eps)
 
@@ -59,6 +67,23 @@ class Cursor:
     y: np.ndarray
     m: list[float]
     z: list[float]
+
+
+@dataclass
+class _Paused:
+    """A chunked segment stopped at an instant that may change nothing it reads (an
+    ACSL CINT instant or event): what is needed to go on with it (`_resume`)."""
+
+    stepper: Stepper
+    f: Callable
+    seg_end: float
+    seg_start: float
+    cur: Cursor
+    t: float
+    y: np.ndarray
+    modes: tuple
+    read: tuple  # the memory slots the derivatives read, as they were
+    rec: object
 
 
 @dataclass
@@ -109,6 +134,9 @@ class Integrator(RunLoop):
         self.check_times = plan.grid.times  # where AUTO looks at the surfaces
         self._kernel = None  # METHOD COMPILED: the model's compiled module, on first use
         self._stop_at_event = False
+        self._paused: _Paused | None = None
+        # a resumed stepper's steps and evaluations already counted in nsteps, nfev
+        self._counted = self._counted_nfev = 0
 
     # ------------------------------------------------------------------ public
     def first_step(self, h: float) -> None:
@@ -127,9 +155,16 @@ class Integrator(RunLoop):
             self.check_times = plan.t0 + step * np.arange(k0, k1 + 1)
 
     def integrate(self, cur: Cursor, t_end: float, rec: Recorder | None = None,
-                  stop_at_event: bool = False, observer: Observer | None = None) -> Cursor:
+                  stop_at_event: bool = False, observer: Observer | None = None,
+                  pause: bool = False) -> Cursor:
         """Integrate from `cur` to `t_end`, a FINISH/TERMT, or (stop_at_event) the
-        first event; rows go to `rec`. Raises Stop when the run cannot go on."""
+        first event; rows go to `rec`. Raises Stop when the run cannot go on.
+
+        `pause`: t_end is an instant where the caller runs code that may change
+        nothing the derivatives read (an ACSL CINT instant or event): a chunked
+        segment stops there without ending, and the next call goes on with it when
+        the states, the branches and the memory the derivatives read are as they
+        were (`_resume`); else it starts afresh, as at any restart."""
         bad = first_bad(cur.y)
         if bad is not None:
             raise Stop(Failure.INITIAL_NOT_FINITE, cur.t, name=self.c.state_names[bad],
@@ -139,19 +174,51 @@ class Integrator(RunLoop):
         while cur.t < t_end and self.stop_reason is None:
             if stop_at_event and len(self.events) > n_events:
                 break
-            seg_end = self._segment_end(cur, t_end)
-            stepper, f = self._start_segment(cur, seg_end, rec, observer is not None)
+            held = self._resume(cur, t_end, rec, observer)
+            if held is not None:
+                stepper, f, seg_end, seg_start = held
+            else:
+                seg_end = self._segment_end(cur, t_end, pause and observer is None)
+                stepper, f = self._start_segment(cur, seg_end, rec, observer is not None, t_end)
+                seg_start = cur.t
+            if seg_end > t_end and not (isinstance(stepper, Chunked) and
+                                        stepper.stop_at(t_end)):
+                # (a chunk that cannot stop there: a segment ending at t_end)
+                seg_end = self._segment_end(cur, t_end)
+                stepper, f = self._start_segment(cur, seg_end, rec, observer is not None)
+                seg_start = cur.t
             try:
-                self._segment(cur, stepper, f, seg_end, t_end, rec, observer, stop_at_event)
+                self._segment(cur, stepper, f, seg_end, t_end, rec, observer, stop_at_event,
+                              seg_start)
             finally:
-                self.nfev += stepper.nfev
-                self.nsteps += stepper.nstep
+                self.nfev += stepper.nfev - self._counted_nfev
+                self.nsteps += stepper.nstep - self._counted
+                self._counted = self._counted_nfev = 0
+                if self._paused is not None and self._paused.stepper is stepper:
+                    self._counted, self._counted_nfev = stepper.nstep, stepper.nfev
         return cur
 
+    def _resume(self, cur: Cursor, t_end: float, rec, observer) -> tuple | None:
+        """The paused segment, if nothing it reads has changed since it paused at the
+        instant where `cur` stands: (stepper, f, its end, its start)."""
+        p, self._paused = self._paused, None
+        if p is None:
+            return None
+        if observer is not None or rec is not p.rec or cur is not p.cur or cur.t != p.t or \
+                tuple(cur.m) != p.modes or not np.array_equal(cur.y, p.y) or \
+                tuple(cur.z[k] for k in sorted(self.c.rhs_memory)) != p.read or \
+                self._segment_end(cur, t_end, True) < p.seg_end:
+            self._counted = self._counted_nfev = 0
+            return None
+        return p.stepper, p.f, p.seg_end, p.seg_start
+
     # ---------------------------------------------------------------- segments
-    def _segment_end(self, cur: Cursor, t_end: float) -> float:
+    def _segment_end(self, cur: Cursor, t_end: float, pause: bool = False) -> float:
+        """Where a segment from `cur` ends: t_end (unless the segment may pause there:
+        a chunked one, then the run's end), a breakpoint, a memory's instant."""
         k = bisect_right(self.breakpoints, cur.t * (1 + 1e-15) + 1e-300)
-        seg_end = t_end
+        chunked = pause and self.plan.chunked and SLIDE not in cur.m and len(cur.y) > 0
+        seg_end = self.plan.fintim if chunked and t_end <= self.plan.fintim else t_end
         if k < len(self.breakpoints):
             seg_end = min(seg_end, self.breakpoints[k])
         for end in self._pulse_ends(cur.z, cur.t):
@@ -161,16 +228,22 @@ class Integrator(RunLoop):
     def _pulse_ends(self, z, t: float) -> list[float]:
         return [e for e in self.c.memory_times(z, t) if e < self.plan.fintim]
 
-    def vector_field(self, cur: Cursor) -> Callable[[float, np.ndarray], list]:
+    def vector_field(self, cur: Cursor, log: Evaluations | None = None
+                     ) -> Callable[[float, np.ndarray], list]:
         """The segment's vector field for the steppers. An arithmetic fault gives
         NaN (the solver shortens its step) and is kept for the message. A point
         exactly on a surface (the segment's start, say) may be where the branch in
         force has no value (X/P at P = 0 in X/FCNSW(P, P, 1., P)): there the
-        function's own branch at zero is taken, as it is defined."""
+        function's own branch at zero is taken, as it is defined. `log`: where the
+        evaluations are kept while it is on (AUTO's chunks: `OdeintStepper`)."""
         m, z, faults, n = cur.m, cur.z, self.faults, len(cur.y)
         deadline, calls = self.deadline, [0]
         rhs, sliding, field = self.c.rhs, SLIDE in m, self.watch.field
         rolled = rolled_rhs(self.c)  # a large model's repeated equations on arrays
+
+        if log is None:
+            log = Evaluations()  # (never on)
+        log_t, log_y = log.t.append, log.y.append
 
         def f(t, y):
             if deadline is not None:
@@ -179,8 +252,18 @@ class Integrator(RunLoop):
                     raise Stop(Failure.TIME_LIMIT, t, limit=self.opts.max_time)
             try:
                 # no surface slides: the compiled derivatives themselves (the hot path)
-                return field(t, y, m, z) if sliding else rolled(t, y, m, z) if rolled \
-                    else rhs(t, y.tolist(), m, z)
+                if sliding:
+                    return field(t, y, m, z)
+                if rolled:
+                    if log.on:
+                        log_t(t)
+                        log_y(y.copy())
+                    return rolled(t, y, m, z)
+                yl = y.tolist()
+                if log.on:
+                    log_t(t)
+                    log_y(yl)
+                return rhs(t, yl, m, z)
             except (ArithmeticError, ValueError) as exc:
                 try:
                     on = self.watch.at_zero(t, y, m, z)
@@ -195,12 +278,18 @@ class Integrator(RunLoop):
         return f
 
     def _start_segment(self, cur: Cursor, seg_end: float, rec: Recorder | None,
-                       dense: bool = False) -> tuple[Stepper, Callable]:
+                       dense: bool = False, t_end: float | None = None
+                       ) -> tuple[Stepper, Callable]:
         """The segment's stepper. `dense`: an observer wants every step's dense
         output, which AUTO's LSODA class gives as it steps (odeint's chunks would
         integrate every interval again for it)."""
         plan = self.plan
-        f = self.vector_field(cur)
+        chunked = plan.chunked and SLIDE not in cur.m and not dense
+        # AUTO's chunks watch every step LSODA takes through the evaluations it makes
+        # (and sample them for RANGE): a log when there is something to watch or find
+        log = Evaluations() if chunked and len(cur.y) and \
+            (plan.watch_idx or (rec is not None and rec.extrema.names)) else None
+        f = self.vector_field(cur, log)
         if len(cur.y):
             # a derivative that is not finite where a segment starts can never give
             # an accepted step: say so instead of shrinking the step forever
@@ -212,23 +301,53 @@ class Integrator(RunLoop):
         checks = None
         # while a surface slides, step by step (LSODA's class): its exit is seen at
         # the step it happens, with no chunk integrated past it
-        if plan.chunked and SLIDE not in cur.m and not dense:
+        if chunked:
             # the AUTO route steps from output instant to output instant
             times = self.check_times
             lo = bisect_right(times, cur.t, rec.out_i if rec else 0)
             checks = times[lo:bisect_left(times, seg_end, lo)]
         # with nothing to watch nothing is thrown away after a chunk: one odeint call
-        # per segment (a FINISH would throw away the rest of the run)
-        chunk = 16 if plan.watch_idx else 1 << 30
+        # per segment (a FINISH would throw away the rest of the run), unless it may
+        # pause (the caller's code may start afresh) or logs its evaluations (kept per
+        # chunk)
+        pausing = t_end is not None and seg_end > t_end
+        chunk = 16 if plan.watch_idx or log is not None or pausing else 1 << 30
         stepper = make_stepper(
             plan.route.name, f, cur.t, cur.y, seg_end, rtol=plan.tol.rtol, atol=plan.tol.atol,
             delt=plan.timer["DELT"], max_step=plan.max_step, first_step=self._last_step,
             checks=checks, chunk=chunk, max_steps=self.opts.max_steps - self.nsteps,
             expect=expected_event(self._recent, cur.t), jac=self._jacobian(cur, f),
-            kernel=self._kernel_arguments(cur, dense))
+            kernel=self._kernel_arguments(cur, dense, rec), log=log,
+            watch=(self._first_wrong(cur), cur.m, cur.z) if plan.watch_idx else None)
         return stepper, f
 
-    def _kernel_arguments(self, cur: Cursor, dense: bool) -> dict | None:
+    def _first_wrong(self, cur: Cursor) -> Callable[..., int]:
+        """`first_wrong(T, Y, samples=False)`: the index of the first of the instants T
+        (states Y, as rows) at which a watched surface is on the wrong side of the
+        branches in force (len(T) if none). For `samples` (step ends between output
+        instants) a surface whose branch is silent where it is first and last on the
+        wrong side there is passed over: the loop would follow its sign without a
+        restart, and an instant shows where it stays crossed."""
+        c, plan, watch, m, z = self.c, self.plan, self.watch, cur.m, cur.z
+
+        def first_wrong(T: np.ndarray, Y: np.ndarray, samples: bool = False) -> int:
+            if not len(T):
+                return 0
+            with np.errstate(all="ignore"):
+                E = [column(v, len(T)) for v in c.surf_v(T, list(Y.T), m, z)]
+            found = crossings(plan, E, m)
+            if samples:
+                for k in list(found):
+                    ends = np.flatnonzero(found[k])[[0, -1]]
+                    if all(watch.silent(k, float(T[i]), Y[i], m, z) for i in ends):
+                        del found[k]
+            if not found:
+                return len(T)
+            return min(int(np.argmax(mask)) for mask in found.values())
+        return first_wrong
+
+    def _kernel_arguments(self, cur: Cursor, dense: bool, rec: Recorder | None = None
+                          ) -> dict | None:
         """METHOD COMPILED: what its stepper needs (None: run on SciPy's DOP853, while
         a surface slides, for an observer that wants every step, or when the model
         has no compiled form -- said once)."""
@@ -247,7 +366,9 @@ class Integrator(RunLoop):
         if isinstance(self._kernel, str):
             return None
         plain = not (c.z0 or plan.resets or c.settle is not None or self._stop_at_event)
-        return kernel_arguments(self._kernel, c, plan, cur.m, cur.z, plain)
+        arguments = kernel_arguments(self._kernel, c, plan, cur.m, cur.z, plain)
+        arguments["sampling"] = rec is not None and bool(rec.extrema.names)
+        return arguments
 
     def _jacobian(self, cur: Cursor, f) -> SegmentJacobian | None:
         """The segment's Jacobian from the model's equations, for the routes that use
@@ -259,16 +380,18 @@ class Integrator(RunLoop):
         return SegmentJacobian(len(cur.y), lambda: jacobian_for(c), cur.m, cur.z, f)
 
     def _segment(self, cur: Cursor, stepper: Stepper, f, seg_end: float, t_end: float,
-                 rec: Recorder | None, observer: Observer | None, stop_at_event: bool) -> None:
-        """Step until the segment ends: its bound, a restart, or a stop."""
+                 rec: Recorder | None, observer: Observer | None, stop_at_event: bool,
+                 seg_start: float) -> None:
+        """Step until the segment ends: its bound, a restart, or a stop; or until it
+        pauses at t_end, when it goes on past it (see `integrate`)."""
         c, plan = self.c, self.plan
         e_prev = c.surf(cur.t, cur.y.tolist(), cur.m, cur.z) if plan.watch_idx else []
-        seg_start = cur.t
-        bulk = isinstance(stepper, Chunked) and SLIDE not in cur.m and rec is not None
+        chunked = isinstance(stepper, Chunked)
+        bulk = chunked and SLIDE not in cur.m and rec is not None
         compiled = isinstance(stepper, KernelStepper)
         while True:
             if bulk:
-                e_prev = self._take_clean(stepper, cur, seg_end, rec, e_prev)
+                e_prev = self._take_clean(stepper, cur, min(seg_end, t_end), rec, e_prev)
             elif compiled and not stepper.done:
                 e_prev, seg_start = self._take_compiled(stepper, cur, rec, e_prev, seg_start)
             self._check_limits(cur.t, stepper)
@@ -278,6 +401,8 @@ class Integrator(RunLoop):
             ta, step = stepper.t_old, self._accepted(stepper, cur, e_prev, seg_start)
             e_prev = step.e_b
             if rec is not None:
+                if chunked:
+                    rec.samples(*stepper.samples(step.tb), cur.m, cur.z)
                 self._rows_inside(rec, stepper, f, ta, cur.y, step.tb, step.yb, cur)
             if observer is not None:
                 observer(ta, step.tb, stepper.interpolant(), list(cur.m), list(cur.z))
@@ -288,7 +413,12 @@ class Integrator(RunLoop):
             if at_boundary and tb < t_end:
                 # a breakpoint: the surfaces on TIME that reach zero here decide anew
                 step.triggered |= {k for k, root in self.roots.items() if root == tb}
-            if step.triggered or step.departed or (at_boundary and tb < t_end):
+            restart = step.triggered or step.departed or (at_boundary and tb < t_end)
+            if rec is not None and not at_output and not restart:
+                # every step's end is one of RANGE's samples (a restart's, in its new
+                # branches, is kept by the restart)
+                rec.sample(tb, yb, cur.m, cur.z)
+            if restart:
                 if self._restart(cur, step, ta, at_output, at_boundary, rec, stop_at_event):
                     return
                 at_output = False  # recorded by the restart, in the new branches
@@ -299,15 +429,21 @@ class Integrator(RunLoop):
             cur.t, cur.y = tb, yb
             if at_boundary:
                 return
+            if tb >= t_end:
+                # paused at t_end: the caller's instant; the segment goes on from here
+                self._paused = _Paused(stepper, f, seg_end, seg_start, cur, tb, yb,
+                                       tuple(cur.m), tuple(cur.z[k] for k in
+                                                           sorted(c.rhs_memory)), rec)
+                return
             if self.opts.progress is not None and self._iterations % 200 == 0:
                 self.opts.progress(cur.t, plan.fintim, len(self.events),
-                                   self.nsteps + stepper.nstep)
+                                   self.nsteps + stepper.nstep - self._counted)
             if any(cur.t < e < seg_end for e in self._pulse_ends(cur.z, cur.t)):
                 return
 
     def _check_limits(self, t: float, stepper: Stepper) -> None:
         self._iterations += 1
-        if self.nsteps + stepper.nstep >= self.opts.max_steps:
+        if self.nsteps + stepper.nstep - self._counted >= self.opts.max_steps:
             raise Stop(Failure.STEPS, t, limit=self.opts.max_steps)
         if self.deadline is not None and _clock.perf_counter() > self.deadline:
             raise Stop(Failure.TIME_LIMIT, t, limit=self.opts.max_time)
@@ -490,31 +626,33 @@ class Integrator(RunLoop):
         surface and output functions over NumPy columns. Returns the surfaces at the
         last instant taken (or e_prev)."""
         T, Y = stepper.pending()
-        n = len(T)
+        # the segment's end (a breakpoint, a pause) is the step-by-step path's
+        n = int(np.searchsorted(T, seg_end, side="left"))
         times = self.plan.grid.times
-        if n and T[-1] >= seg_end:
-            n -= 1  # the segment's end is a breakpoint: the step-by-step path ends it
         if n == 0 or rec.out_i + n > len(times) or T[0] != times[rec.out_i]:
             return e_prev
+        # (a step end made a check instant is no row: the step-by-step path takes it)
+        grid = T[:n] == times[rec.out_i:rec.out_i + n]
+        if not grid.all():
+            n = int(np.argmin(grid))
         T, Y = T[:n], Y[:n]
         finite = np.isfinite(Y).all(axis=1)
         if not finite.all():
             n = int(np.argmin(finite))
-        cols = list(Y[:n].T)
-        m, z, e_last = cur.m, cur.z, e_prev
+        m, z = cur.m, cur.z
         if n and self.plan.watch_idx:
-            with np.errstate(all="ignore"):
-                E = [column(v, n) for v in self.c.surf_v(T[:n], cols, m, z)]
-                bad = wrong_side(self.plan, E, m)
-            if bad.any():
-                n = int(np.argmax(bad))
-                cols = [col[:n] for col in cols]
-            e_last = [float(e[n - 1]) for e in E] if n else e_prev
+            wrong = stepper.first_wrong()  # the stepper's own look at the surfaces
+            if wrong is None:
+                wrong = self._first_wrong(cur)(T[:n], Y[:n])
+            n = min(n, wrong)
         if n == 0:
             return e_prev
+        cols = list(Y[:n].T)
+        e_last = self.c.surf(float(T[n - 1]), Y[n - 1].tolist(), m, z) \
+            if self.plan.watch_idx else e_prev
         with np.errstate(all="ignore"):
             outs = self.c.out_v(T[:n], cols, m, z)
-        rec.block(T[:n], Y[:n], output_table(outs, n), m, z)
+        rec.block(T[:n], Y[:n], output_table(outs, n), m, z, stepper.samples(float(T[n - 1])))
         stepper.consume(n)
         self._passed(stepper.t)
         cur.t, cur.y = stepper.t, stepper.y
@@ -522,7 +660,7 @@ class Integrator(RunLoop):
             raise Stop(Failure.TIME_LIMIT, cur.t, limit=self.opts.max_time)
         if self.opts.progress is not None:
             self.opts.progress(cur.t, self.plan.fintim, len(self.events),
-                               self.nsteps + stepper.nstep)
+                               self.nsteps + stepper.nstep - self._counted)
         return e_last
 
     # --------------------------------------------------------- the compiled path
@@ -541,6 +679,8 @@ class Integrator(RunLoop):
             if rec is not None and len(got.T):
                 # (each row's branches too: RANGE re-integrates from rows)
                 rec.block(got.T, got.Y, self._compiled_outputs(got, z), got.M, z)
+            if rec is not None and len(got.S):
+                rec.samples_with_modes(got.S, got.SY, got.SM, z)
             ranged = rec is not None and bool(rec.extrema.names)
             for j in range(len(got.event_t)):
                 k, t = int(got.event_k[j]), float(got.event_t[j])
@@ -562,7 +702,7 @@ class Integrator(RunLoop):
             self._passed(cur.t)
             if self.opts.progress is not None:
                 self.opts.progress(cur.t, self.plan.fintim, len(self.events),
-                                   self.nsteps + stepper.nstep)
+                                   self.nsteps + stepper.nstep - self._counted)
         if c.z0 and stepper.fallback is None:
             # the memory as the Python route keeps it after an accepted step (the
             # kernel reads it as it stands: see `advance`)

@@ -115,7 +115,8 @@ def _rate(ctx: Context, at: Bracket, col: int, span: float) -> float | None:
     try:
         y = np.asarray(at.y, float)
         f = np.asarray(ctx.watch.field(at.ta, y, m, z), float)
-        d = 1e-7 * span
+        # (a bracket between two points at one TIME, a sample and a row: the rate there)
+        d = 1e-7 * span if span > 0 else 1e-13 * max(abs(at.ta), 1e-300)
         v0 = ctx.watch.outputs(at.ta, y, m, z)[col]
         v1 = ctx.watch.outputs(at.ta + d, y + d * f, m, z)[col]
     except (ArithmeticError, ValueError, TooManySlides):

@@ -219,6 +219,7 @@ def timer_values(spec: ir.RunSpec, fintim: float | None = None,
     """CSMP TIMER defaults: OUTDEL = FINTIM/100 and PRDEL = OUTDEL when neither is
     given; one given, the other takes its value; DELT divides the output interval."""
     t = dict(spec.timer)
+    fintim_option = fintim
     if fintim is not None:
         if not fintim > 0:
             raise AmilError(f"FINTIM must be positive (got {fintim:g})")
@@ -242,6 +243,19 @@ def timer_values(spec: ir.RunSpec, fintim: float | None = None,
     for name in ("FINTIM", "OUTDEL", "PRDEL"):
         if not (math.isfinite(t[name]) and t[name] > 0.0):
             raise AmilError(f"{name} = {t[name]:g} is not a usable time (FINTIM = {fintim:g})")
+    asked = fintim_option is not None
+    for name in ("OUTDEL", "PRDEL"):
+        if name in spec.timer and t[name] > t["FINTIM"] * (1.0 + 1e-12):
+            # rows at t0 and FINTIM only: a straight line where the plot should be
+            length = "as asked" if asked else "the run's length, FINTIM - STTIME" \
+                if START_KEY in spec.timer else "FINTIM"
+            raise AmilError([Diagnostic(
+                f"{name} = {t[name]:g} is longer than the run ({length}: "
+                f"{t['FINTIM']:g}): no output instant falls inside it",
+                spec.timer_spans.get(name),
+                f"ask for a run of at least {t[name]:g}, or write a smaller {name}" if asked
+                else f"write {name} = {t['FINTIM'] / 100.0:g} (a hundredth of the run) or "
+                "less, or a longer FINTIM")])
     rows = fintim / interval
     if not rows <= max_rows:
         raise AmilError(f"FINTIM/{'OUTDEL' if t['OUTDEL'] <= t['PRDEL'] else 'PRDEL'} = "
@@ -282,6 +296,10 @@ def _grid(t0: float, fintim: float, step: float) -> np.ndarray:
 
 
 def make_grid(t0: float, fintim: float, outdel: float, prdel: float) -> Grid:
+    if outdel == prdel:  # (one grid: the ACSL form's CINT, most listings)
+        times = _grid(t0, fintim, outdel)
+        every = np.ones(len(times), bool)
+        return Grid(times, every, every)
     go = _grid(t0, fintim, outdel)
     gp = _grid(t0, fintim, prdel)
     times = np.union1d(go, gp)

@@ -140,7 +140,12 @@ def with_weather(model: ir.Model, spec: ir.RunSpec, timer: dict[str, float], opt
 
 
 def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> Prepared:
-    timer = timer_values(spec, opts.fintim, opts.max_rows)
+    try:
+        timer = timer_values(spec, opts.fintim, opts.max_rows)
+    except AmilError as exc:
+        if exc.path is None:
+            exc.path, exc.source = model.path, model.source
+        raise
     route, method = resolve_route(spec, opts)
     step_point = resolve_step_point(spec, opts)
     if step_point:

@@ -108,6 +108,7 @@ class Extrema:
         self.single: list[tuple[float, np.ndarray, np.ndarray, tuple, tuple]] = []
         self.buffered = 0
         self._starts = np.zeros(1, int)  # where each part begins in a scan
+        self._order: np.ndarray | None = None  # the scan's time order of its points
         self.started = False
 
     def add(self, t: float, values: list[float], y: np.ndarray, m, z) -> None:
@@ -142,7 +143,9 @@ class Extrema:
                                [r[3] for r in rows], [r[4] for r in rows]))
 
     def _state(self, i: int) -> Bracket:
-        """Row i of the buffered parts, as the start of a bracket."""
+        """Row i (in time order) of the buffered parts, as the start of a bracket."""
+        if self._order is not None:
+            i = int(self._order[i])
         starts = self._starts
         k = int(np.searchsorted(starts, i, side="right")) - 1
         T, _, Y, m, z = self.parts[k]
@@ -160,12 +163,17 @@ class Extrema:
         ts = np.concatenate([p[0] for p in self.parts])
         vs = np.vstack([p[1] for p in self.parts])
         self._starts = np.cumsum([0] + [len(p[0]) for p in self.parts])
+        if len(ts) > 1 and (np.diff(ts) < 0).any():
+            # samples come as parts of their own, after the rows around them
+            self._order = np.argsort(ts, kind="stable")
+            ts, vs = ts[self._order], vs[self._order]
         self._scan(ts, vs)
         keep = max(0, len(ts) - 2)
         tail = [self._state(i) for i in range(keep, len(ts))]
         self.parts = [(ts[keep:], vs[keep:], np.array([b.y for b in tail]),
                        [b.m for b in tail], [b.z for b in tail])]
         self._starts = np.array([0, len(tail)])
+        self._order = None
         self.buffered = len(tail)
 
     def _scan(self, ts: np.ndarray, vs: np.ndarray) -> None:
@@ -245,6 +253,13 @@ class Extrema:
                 for j, name in enumerate(self.names)}
 
 
+def _column(v, n: int) -> np.ndarray:
+    """A vector function's result as n values (a constant comes back as a float)."""
+    if isinstance(v, np.ndarray) and v.shape == (n,):
+        return v
+    return np.full(n, float(v))
+
+
 def vertices(t: np.ndarray, v: np.ndarray, mid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """For each row i in mid, the largest value within [t[i-1], t[i+1]] of the
     parabola through rows i-1, i, i+1, and where it is."""
@@ -318,18 +333,67 @@ class Recorder:
         self.row(t, y, m, z, self.out_i, shown)
         self.out_i += 1
 
-    def block(self, T: np.ndarray, Y: np.ndarray, table: np.ndarray, m, z) -> None:
+    def block(self, T: np.ndarray, Y: np.ndarray, table: np.ndarray, m, z,
+              samples: tuple[np.ndarray, np.ndarray] | None = None) -> None:
         """Rows for the next len(T) grid instants at once (m: their modes, or an
-        array of each row's)."""
+        array of each row's); `samples`: the integrator's step ends among them (TIME,
+        states; modes m), which RANGE reads with the rows."""
         n = len(T)
         self.rows.add_block(T, np.arange(self.out_i, self.out_i + n), table)
+        self.out_i += n
+        if not self.extrema.names:
+            return
         if self.range_from is None:
             self.extrema.add_many(T, table, Y, m, z)
         else:
             keep = T >= self.range_from
             self.extrema.add_many(T[keep], table[keep], Y[keep],
                                   m[keep] if isinstance(m, np.ndarray) else m, z)
-        self.out_i += n
+        if samples is not None and len(samples[0]) and not isinstance(m, np.ndarray):
+            self._samples(T, m, z, *samples)
+
+    def _samples(self, T: np.ndarray, m, z, S: np.ndarray, SY: np.ndarray,
+                 every: bool = False) -> None:
+        """The samples among rows T, for RANGE (after the rows: `Extrema` puts them in
+        time order). Rows alone find a variable's turn wherever it turns at most once
+        between two of them, which it does where no two steps end between them: only
+        the samples of the other row intervals are needed (`every`: all of them)."""
+        if not every:
+            cut = np.searchsorted(S, T)
+            counts = np.diff(np.concatenate([[0], cut, [len(S)]]))
+            keep = np.repeat(counts >= 2, counts)
+            if not keep.any():
+                return
+            S, SY = S[keep], SY[keep]
+        if self.range_from is not None:
+            S, SY = S[S >= self.range_from], SY[S >= self.range_from]
+        with np.errstate(all="ignore"):
+            outs = self.c.out_v(S, list(SY.T), m, z)
+        table = np.zeros((len(S), len(outs)))
+        for j in self.extrema.columns:
+            table[:, j] = _column(outs[j], len(S))
+        self.extrema.add_many(S, table, SY, m, z)
+
+    def sample(self, t: float, y: np.ndarray, m, z) -> None:
+        """A point of the trajectory that is no row (a step's end): RANGE reads it."""
+        if self.extrema.names and (self.range_from is None or t >= self.range_from):
+            self.extrema.add(t, self.outputs(t, y, m, z), y, m, z)
+
+    def samples_with_modes(self, S: np.ndarray, SY: np.ndarray, SM: np.ndarray, z) -> None:
+        """Samples each in its own branches (the compiled kernel's step ends)."""
+        if not self.extrema.names:
+            return
+        if self.range_from is not None:
+            keep = S >= self.range_from
+            S, SY, SM = S[keep], SY[keep], SM[keep]
+        for mode in np.unique(SM, axis=0):
+            rows = (SM == mode).all(axis=1)
+            self._samples(S[rows], mode.tolist(), z, S[rows], SY[rows], every=True)
+
+    def samples(self, S: np.ndarray, SY: np.ndarray, m, z) -> None:
+        """Several such points, in order."""
+        for t, y in zip(S, SY, strict=True):
+            self.sample(float(t), y, m, z)
 
     def run(self, spec, constants: dict[str, float], events: list[Event], status: Status,
             message: str, warnings: list[str], stats: dict, t: float, y: np.ndarray, z, m,

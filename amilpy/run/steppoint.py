@@ -112,10 +112,11 @@ class StepPoint(RunLoop):
         return {n: tuple(v) for n, v in self.extrema.items()}
 
     def integrate(self, cur: Cursor, t_end: float, rec: Recorder | None = None,
-                  stop_at_event: bool = False, observer=None) -> Cursor:
+                  stop_at_event: bool = False, observer=None, pause: bool = False) -> Cursor:
         """The step points from cur.t (processed too) to t_end, on the grid cur.t +
         k*DELT; rows go to `rec`. Raises Stop when the run cannot go on. (`observer`,
-        for the located loop's dense output, has nothing to observe here.)"""
+        for the located loop's dense output, has nothing to observe here; nor has
+        `pause`, since nothing here starts afresh at an instant.)"""
         bad = first_bad(cur.y)
         if bad is not None:
             raise Stop(Failure.INITIAL_NOT_FINITE, cur.t, name=self.c.state_names[bad],

@@ -16,13 +16,13 @@ from .base import Chunked, Hermite, Rhs, StepFailure, Stepper, Stiffness, first_
 from .fixed import RK4, AdamsBashforth2, Clock, Euler, FixedStepper, Heun
 from .ivp import ScipyStepper, solver_tolerance
 from .jacobian import SegmentJacobian
-from .odeint import UNLIMITED, OdeintStepper
+from .odeint import UNLIMITED, Evaluations, OdeintStepper
 
 # The fixed-step classes by the name a route's `stepper` field gives.
 FIXED: dict[str, type[FixedStepper]] = {
     cls.__name__: cls for cls in (RK4, Euler, Heun, AdamsBashforth2)}
 
-__all__ = ["Chunked", "Clock", "FIXED", "Hermite", "OdeintStepper", "Rhs", "ScipyStepper",
+__all__ = ["Chunked", "Clock", "Evaluations", "FIXED", "Hermite", "OdeintStepper", "Rhs", "ScipyStepper",
            "SegmentJacobian", "StepFailure", "Stepper", "Stiffness", "first_bad",
            "make_stepper", "solver_tolerance"]
 
@@ -31,7 +31,8 @@ def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float
                  rtol: np.ndarray, atol: np.ndarray, delt: float, max_step: float = math.inf,
                  first_step: float | None = None, checks=None, chunk: int = 16,
                  max_steps: int = UNLIMITED, expect: float | None = None,
-                 jac: SegmentJacobian | None = None, kernel=None) -> Stepper:
+                 jac: SegmentJacobian | None = None, kernel=None,
+                 log: Evaluations | None = None, watch=None) -> Stepper:
     """The stepper for a canonical route name (see `routes.ROUTES`).
 
     `rtol`, `atol`: per-state tolerances (variable-step routes); `delt`: the fixed
@@ -41,7 +42,8 @@ def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float
     long after t0 the loop expects the next event (odeint sizes its first chunk so);
     `jac`: the vector field's Jacobian, for the implicit routes (None: differences);
     `kernel`: for the compiled route, its `KernelStepper` arguments (None: the route
-    runs on its SciPy class).
+    runs on its SciPy class); `log`, `watch`: the odeint stepper's evaluation log and
+    surface check (see `OdeintStepper`).
     """
     r = BY_NAME[route]
     if len(y0) == 0:
@@ -53,7 +55,8 @@ def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float
     if r.stepper == "odeint" and checks is not None:
         return OdeintStepper(fun, t0, y0, t_bound, checks, rtol=rtol, atol=atol,
                              max_step=max_step, first_step=first_step, chunk=chunk,
-                             max_steps=max_steps, expect=expect, jac=jac)
+                             max_steps=max_steps, expect=expect, jac=jac, log=log,
+                             watch=watch)
     if r.stepper == "compiled" and kernel is not None:
         from .compiled import KernelStepper
 

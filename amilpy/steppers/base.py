@@ -18,6 +18,12 @@ Optional capability, declared by subclassing `Chunked` (the AUTO route):
 
     pending() -> (T, Y)            check instants integrated ahead, not yet taken
     consume(n)                     take the next n of them at once
+    samples(t) -> (S, SY)          the integrator's own step ends before t not handed
+                                   out yet, between the instants (RANGE's samples)
+    stop_at(t) -> bool             make t a check instant (the loop pauses there)
+    first_wrong() -> int | None    the first pending instant where a surface is on
+                                   the wrong side, as the stepper found (None: it
+                                   does not look; the loop does)
 
 To add a route: subclass `Stepper` (the constructor takes what `make_stepper`
 passes for its kind), then add a row to `routes.ROUTES` whose `stepper` names
@@ -101,6 +107,20 @@ class Chunked(Stepper):
 
     def consume(self, n: int) -> None:  # pragma: no cover - interface
         """Take the next `n` pending instants at once (the loop found them clean)."""
+        raise NotImplementedError
+
+    def samples(self, t: float) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
+        """The step ends strictly before t not handed out yet, and their states."""
+        raise NotImplementedError
+
+    def stop_at(self, t: float) -> bool:  # pragma: no cover - interface
+        """Make t a check instant; False if it cannot be."""
+        raise NotImplementedError
+
+    def first_wrong(self) -> int | None:  # pragma: no cover - interface
+        """Index among the pending instants of the first one where a watched surface
+        is on the wrong side (len(pending) if none); None if the stepper does not
+        look at the surfaces itself."""
         raise NotImplementedError
 
 

@@ -55,6 +55,10 @@ class Advance:
     event_y: np.ndarray
     event_m: np.ndarray  # the branches just before each
     m: np.ndarray  # the branches where the kernel stands
+    # the steps' ends (and crossings) among the rows, with their branches (`sampling`)
+    S: np.ndarray
+    SY: np.ndarray
+    SM: np.ndarray
 
 
 _ENTRIES: dict[int, object] = {}
@@ -81,7 +85,7 @@ class KernelStepper(Stepper):
                  rtol, atol, max_step: float, first_step: float | None, max_steps: int,
                  m, z, p: np.ndarray, watch: np.ndarray, handled: np.ndarray,
                  level: np.ndarray, lookahead: float, stability_limit: float,
-                 h_floor: float) -> None:
+                 h_floor: float, sampling: bool = False) -> None:
         self.k = kernel.loop
         # the model's functions go to the kernel as C functions (a dispatcher costs
         # 0.1 ms a call to convert), and are called here past their dispatchers
@@ -125,6 +129,9 @@ class KernelStepper(Stepper):
                     np.empty((e, len(m_arr))))
         self._failure: StepFailure | None = None
         self.fallback: ScipyStepper | None = None
+        # every step's end as a sample for RANGE (when it is asked for)
+        s = max(64, min(4096, 2_000_000 // max(n, 1))) if sampling else 0
+        self._smp = (np.empty(s), np.empty((s, n)), np.empty((s, len(m_arr))))
 
     @property
     def nfev(self) -> int:
@@ -152,10 +159,12 @@ class KernelStepper(Stepper):
         # the surfaces where the kernel stands, in the branches now in force (the loop
         # may have changed a silent one)
         self._surf(float(self.sc[AT]), self._y, m_arr, self.z, self.p, self._e)
-        status, rows, nev, _ = self._advance(
+        st, sy, sm = self._smp
+        status, rows, nev, _, ns = self._advance(
             self.rhs, self.surf, self._y, self._f, self._e, m_arr, self.z, self.p, self.sc,
             self.rtol, self.atol, self.watch, self.handled, self.level, grid, gi, T, Y, M,
-            et, ek, en, ey, em, self._held_y, self._held_f, self._held_F, self.max_steps)
+            et, ek, en, ey, em, self._held_y, self._held_f, self._held_F, self.max_steps,
+            st, sy, sm)
         # where the kernel stands now; its own steps are not the loop's to interpolate
         self.t = self.t_old = float(self.sc[AT])
         self.y = self._y.copy()
@@ -170,7 +179,7 @@ class KernelStepper(Stepper):
             self._take_over()
         return Advance(status, T[:rows], Y[:rows], M[:rows], et[:nev].copy(),
                        ek[:nev].copy(), en[:nev].copy(), ey[:nev].copy(), em[:nev].copy(),
-                       m_arr)
+                       m_arr, st[:ns].copy(), sy[:ns].copy(), sm[:ns].copy())
 
     def _take_over(self) -> None:
         if self.fun is None:  # no Python field to go on with (RANGE's sampling)

@@ -1,4 +1,22 @@
-"""AUTO: Fortran LSODA (`odeint`) over chunks of check instants."""
+"""AUTO: Fortran LSODA (`odeint`) over chunks of check instants, every internal step
+watched.
+
+`odeint` returns states only at the instants it is asked for, and nothing of the
+steps it takes between them; a switch that flips and flips back between two
+output instants would pass unseen. But every step LSODA takes evaluates the
+derivatives at its end: all of a step's corrector iterations are at the step's
+new TIME, a rejected step is followed by evaluations at an earlier TIME, and the
+last evaluation at an accepted TIME is within the corrector's convergence test
+(a fraction of a tolerance unit) of the accepted state. So the log of the
+evaluations (`Evaluations`, filled by the run loop's vector field during a chunk)
+gives every accepted step end: the evaluations that no later one precedes
+(`Evaluations.step_ends`). The surfaces are looked at there too (`watch`), and where
+one is on the wrong side at a step end before any output instant shows it, the
+exact states at that step end and at the one before are integrated once more and
+put in as check instants (`_examine`): the loop then finds the crossing between two
+exact instants one LSODA step apart, as on any step-by-step route. The step ends
+are also the samples the RANGE search reads between output instants (`samples`).
+"""
 
 from __future__ import annotations
 
@@ -16,6 +34,52 @@ from .jacobian import DENSE_UP_TO, Banded, SegmentJacobian
 
 MXSTEP = 1_000_000  # odeint's steps per output interval when no limit is nearer
 UNLIMITED = 2**62
+
+
+class Evaluations:
+    """The derivative evaluations of one odeint call, in call order: TIME and the
+    state (a list, or an array for a large model). The run loop's vector field adds
+    to `t` and `y` while `on` (only during a chunk's own integration)."""
+
+    __slots__ = ("on", "t", "y")
+
+    def __init__(self) -> None:
+        self.on = False
+        self.t: list[float] = []
+        self.y: list = []
+
+    def start(self) -> None:
+        self.t.clear()
+        self.y.clear()
+        self.on = True
+
+    def step_ends(self, t0: float, t1: float) -> tuple[np.ndarray, np.ndarray]:
+        """The accepted step ends in (t0, t1] and their states (the last evaluation at
+        each): an evaluation is at an accepted step's end when no later one is at an
+        earlier TIME (a rejected step is tried again from before it) and the next one
+        is at a later TIME (the corrector's iterations share theirs)."""
+        self.on = False
+        if not self.t:
+            return np.empty(0), np.empty((0, 0))
+        t = np.asarray(self.t, dtype=float)
+        later = np.minimum.accumulate(t[::-1])[::-1]  # min(t[k:])
+        after = np.append(later[1:], np.inf)  # min(t[k+1:])
+        last = np.append(t[1:] != t[:-1], True)
+        keep = np.flatnonzero((t <= after) & last & (t > t0) & (t <= t1))
+        y = self.y
+        ys = np.array([y[k] for k in keep.tolist()], dtype=float).reshape(len(keep), -1)
+        self.t.clear()
+        self.y.clear()
+        return t[keep], ys
+
+
+# Floats of logged states a chunk may hold (n states x evaluations): a large model's
+# chunks are cut shorter rather than hold more
+LOG_BUDGET = 4_000_000
+# Bad step ends made exact check instants at once after the first (an excursion that
+# lasts several steps needs only its start; a surface grazing within a tolerance
+# unit of zero would otherwise cost one integration per step end)
+INSERT_AHEAD = 3
 
 
 class OdeintStepper(Chunked):
@@ -38,13 +102,21 @@ class OdeintStepper(Chunked):
     per-interval limit is set to what is left, a chunk is sized from the steps an
     instant has taken so far, and instants past the budget are dropped, so a run
     stops near its step limit instead of finishing a chunk of 4096 instants.
+
+    `log` and `watch` (the module's doc): the evaluations the vector field logs, and
+    `watch = (first_wrong, modes, memory)`, where `first_wrong(T, Y)` is the index of
+    the first of the instants T (states Y) at which a surface is on the wrong side of
+    the branches in force (len(T) if none) and `modes`/`memory` the lists the loop
+    changes in place (a branch followed without a restart), read to know when an
+    examination is out of date.
     """
 
     def __init__(self, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float, checks, *,
                  rtol: np.ndarray | float, atol: np.ndarray | float, max_step: float,
                  first_step: float | None, chunk: int = 16,
                  max_steps: int = UNLIMITED, expect: float | None = None,
-                 jac: SegmentJacobian | None = None) -> None:
+                 jac: SegmentJacobian | None = None, log: Evaluations | None = None,
+                 watch=None) -> None:
         self.fun = fun
         self.jac = jac
         self._banded: Banded | None = None
@@ -75,6 +147,17 @@ class OdeintStepper(Chunked):
         self._before: tuple[float, np.ndarray] | None = None  # the row before t_old
         self._failure: StepFailure | None = None
         self.fallback: ScipyStepper | None = None
+        self.log = log
+        self.watch = watch
+        self._evals = 0  # evaluations the logged chunks made
+        self.S = np.empty(0)  # the chunk's step ends (approximate states) ...
+        self.SY = np.empty((0, len(self.y)))
+        self._handed = t0  # ... handed out as samples up to here
+        # the chunk's examination (`_examine`): the modes and memory it holds for, the
+        # first instant on the wrong side, the step ends looked at up to here
+        self._exam_key: tuple | None = None
+        self._exam_bad = math.inf
+        self._exam_to = t0
 
     @property
     def nfev(self) -> int:
@@ -90,6 +173,9 @@ class OdeintStepper(Chunked):
         if self._instants:
             per_instant = max(self._steps / self._instants, 1.0)
             n = min(n, max(1, int(left / per_instant)))
+            if self.log is not None and self._evals:
+                floats = max(self._evals / self._instants, 1.0) * len(self.y)
+                n = min(n, max(1, int(LOG_BUDGET / floats)))
         return n
 
     def _odeint(self, y0: np.ndarray, grid, **options):
@@ -130,9 +216,16 @@ class OdeintStepper(Chunked):
             options["h0"] = min(self.first_step, ts[0] - self.t)
         if ts[-1] >= self.t_bound:
             options["tcrit"] = np.array([self.t_bound])
-        ys, info = self._odeint(self.y, grid, **options)
+        if self.log is not None:
+            self.log.start()
+        try:
+            ys, info = self._odeint(self.y, grid, **options)
+        finally:
+            if self.log is not None:
+                self.log.on = False
         if info["message"] != "Integration successful.":
             self._keep_passed(ts, ys, info, left)
+            self._log_steps()
             return
         self._nfev += int(info["nfe"][-1])
         self.first_step = float(info["hu"][-1])
@@ -144,7 +237,16 @@ class OdeintStepper(Chunked):
         self.next_check += good
         if good < len(ts):
             self._failure = StepFailure(Failure.STEPS, float(ts[good - 1]) if good else self.t)
+        self._evals += int(info["nfe"][-1])
+        self._log_steps()
 
+    def _log_steps(self) -> None:
+        """The chunk's step ends up to its last instant kept, from the log."""
+        if self.log is None:
+            return
+        end = float(self.T[-1]) if len(self.T) else self.t
+        self.S, self.SY = self.log.step_ends(self.t, end)
+        self._exam_key = None
     def _keep_passed(self, ts, ys, info, left: int) -> None:
         """Keep the instants LSODA really passed; then, if the step budget ran out,
         that is the failure, else SciPy's LSODA class takes over from the last of
@@ -170,10 +272,97 @@ class OdeintStepper(Chunked):
 
     def pending(self) -> tuple[np.ndarray, np.ndarray]:
         """The integrated check instants the loop has not taken yet (integrating the
-        next chunk if there are none); empty once LSODA's class has taken over."""
+        next chunk if there are none); empty once LSODA's class has taken over. A
+        step end where a surface is on the wrong side before any of them shows it is
+        among them, exact, with the step end before it (`_examine`)."""
         if self.pos >= len(self.T) and self.fallback is None and self._failure is None:
             self._fill()
+        self._examine()
         return self.T[self.pos:], self.Y[self.pos:]
+
+    def _examine(self) -> None:
+        """Look at the surfaces at the chunk's step ends ahead; the first step end on
+        the wrong side before the first such instant becomes an exact check instant
+        (integrated from the instant before it), with the step end before it and a
+        few more on the wrong side after it (INSERT_AHEAD)."""
+        if self.watch is None or self.pos >= len(self.T):
+            return
+        first_wrong, modes, memory = self.watch
+        key = (tuple(modes), tuple(memory))
+        if key != self._exam_key:
+            # (a new chunk, or a branch the loop followed without a restart)
+            T = self.T[self.pos:]
+            bad = first_wrong(T, self.Y[self.pos:])
+            self._exam_key, self._exam_to = key, self.t
+            self._exam_bad = float(T[bad]) if bad < len(T) else math.inf
+        limit = min(self._exam_bad, float(self.T[-1]))
+        if self._exam_to >= limit or not len(self.S):
+            return
+        lo = int(np.searchsorted(self.S, max(self.t, self._exam_to), side="right"))
+        hi = int(np.searchsorted(self.S, limit, side="left"))
+        wrong = first_wrong(self.S[lo:hi], self.SY[lo:hi], samples=True) if hi > lo else 0
+        if wrong >= hi - lo:
+            self._exam_to = limit
+            return
+        k = lo + wrong
+        tau = float(self.S[k])
+        i = int(np.searchsorted(self.T, tau, side="left"))  # the first instant >= tau
+        start_t = float(self.T[i - 1]) if i > self.pos else self.t
+        ahead = [float(self.S[j]) for j in range(k + 1, hi) if self.S[j] < self.T[i]]
+        points = ([float(self.S[k - 1])] if k > 0 and self.S[k - 1] > start_t else []) + \
+            [tau] + ahead[:INSERT_AHEAD]
+        self._exam_to = points[-1]
+        self._insert(points)
+
+    def _insert(self, points: list[float]) -> bool:
+        """Make instants (in order, between two pending instants or after the present
+        one) exact check instants: integrated from the instant before them. False if
+        odeint could not reach them all."""
+        i = int(np.searchsorted(self.T, points[0], side="left"))
+        start_t, start_y = (float(self.T[i - 1]), self.Y[i - 1]) if i > self.pos else \
+            (self.t, self.y)
+        ys, info = self._odeint(start_y, [start_t, *points], mxstep=MXSTEP)
+        self._nfev += int(info["nfe"][-1])
+        good = len(points) if info["message"] == "Integration successful." else 0
+        while good and not np.all(np.isfinite(ys[good])):
+            good -= 1
+        if good:
+            self.T = np.concatenate([self.T[:i], points[:good], self.T[i:]])
+            self.Y = np.concatenate([self.Y[:i], ys[1:good + 1], self.Y[i:]])
+        return good == len(points)
+
+    def stop_at(self, t: float) -> bool:
+        """Make t a check instant (the loop pauses there: an ACSL instant that may
+        change nothing the derivatives read). False if it cannot be."""
+        if self.fallback is not None or self._failure is not None or not t > self.t \
+                or t > self.t_bound:
+            return False
+        T = self.T[self.pos:]
+        if len(T) and t <= T[-1]:
+            j = int(np.searchsorted(T, t, side="left"))
+            return True if T[j] == t else self._insert([t])
+        # one of the instants still to integrate
+        rest = self.checks[self.next_check:]
+        j = int(np.searchsorted(rest, t, side="left"))
+        if not (j < len(rest) and rest[j] == t):
+            self.checks = np.insert(self.checks, self.next_check + j, t)
+        return True
+
+    def first_wrong(self) -> int | None:
+        """The first pending instant on the wrong side, as `_examine` found it (with
+        the branches in force: it looks again when they change)."""
+        self._examine()
+        if self._exam_key is None or self.pos >= len(self.T):
+            return None
+        return int(np.searchsorted(self.T, self._exam_bad, side="left")) - self.pos
+
+    def samples(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """The chunk's step ends strictly between the last ones handed out and t, with
+        their (approximate) states: the RANGE search's samples between instants."""
+        lo = np.searchsorted(self.S, self._handed, side="right")
+        hi = np.searchsorted(self.S, t, side="left")
+        self._handed = max(self._handed, t)
+        return self.S[lo:hi], self.SY[lo:hi]
 
     def consume(self, n: int) -> None:
         last = self.pos + n - 1
@@ -194,6 +383,7 @@ class OdeintStepper(Chunked):
     def step(self) -> StepFailure | None:
         if self.pos >= len(self.T) and self.fallback is None and self._failure is None:
             self._fill()
+        self._examine()
         if self.pos >= len(self.T):
             if self._failure is not None:
                 return self._failure

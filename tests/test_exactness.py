@@ -1,0 +1,194 @@
+"""Exact by default: what a run prints does not depend on the output grid.
+
+A switch that flips and flips back between two output instants, or a peak between
+them, is found on every route whatever OUTDEL is: the surfaces are looked at after
+every step the integrator takes (AUTO too: LSODA's own steps, recovered from the
+evaluations odeint makes), and RANGE reads every step's end as well as the rows.
+The references are closed forms and the exact piecewise solution of the clutch
+drive (`references/ex4.py`, DOP853 at rtol 1e-12 between located switches).
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import pytest
+from references import ex4
+from scipy.optimize import minimize_scalar
+
+import amilpy
+
+MODELS = Path(__file__).resolve().parents[1] / "models"
+ROUTES = ["AUTO", "RKS", "DOP853", "STIFF", "COMPILED"]
+
+
+def with_outdel(path: Path, old: str, new: str) -> amilpy.Model:
+    text = path.read_text(encoding="utf-8")
+    assert old in text
+    return amilpy.loads(text.replace(old, new), path.stem)
+
+
+# --- a switch that flips and flips back between two rows -------------------------------
+
+HIDDEN = """\
+TITLE HIDDEN CROSSINGS: X = SIN(W*TIME) ABOVE 0.5 FOR A THIRD OF EACH PERIOD
+PARAM W = 62.83185307179586
+DYNAMIC
+   X = INTGRL(0.0, W*COS(W*TIME))
+   S = FSW(X - 0.5, 0.0, 0.0, 1.0)
+   N = INTGRL(0.0, S)
+TIMER FINTIM = 1.0, OUTDEL = {outdel}
+RANGE X
+END
+STOP
+"""
+W = 20.0 * math.pi  # 10 periods in the run
+
+
+def hidden_crossings() -> list[float]:
+    """X = sin(W t) passes 0.5 upwards at (pi/6 + 2 pi k)/W, downwards at (5 pi/6 + ...)."""
+    times = [(a + 2.0 * math.pi * k) / W for k in range(10) for a in (math.pi / 6, 5 * math.pi / 6)]
+    return sorted(times)
+
+
+@pytest.mark.parametrize("route", ROUTES)
+@pytest.mark.parametrize("outdel", ["0.001", "0.35"])
+def test_a_switch_between_two_rows_is_located_on_every_route(route: str, outdel: str) -> None:
+    # At OUTDEL 0.35 three rows span ten periods: every crossing pair lies between two
+    # rows, and the printout used to show none of them on AUTO. X's error at the
+    # default tolerances is below 5e-7, so the crossing instants are right to
+    # 5e-7 / (W cos(pi/6)) = 9e-9 s; the time spent above 0.5 is a third of the run.
+    run, = amilpy.loads(HIDDEN.format(outdel=outdel), "hidden").run(method=route)
+    times = [e.time for e in run.events if e.switch.startswith("FSW")]
+    want = hidden_crossings()
+    assert len(times) == len(want), (route, outdel, times)
+    assert max(abs(a - b) for a, b in zip(times, want, strict=True)) < 1e-8
+    assert abs(run.final["N"] - 1.0 / 3.0) < 1e-7
+    lo, t_lo, hi, t_hi = run.extrema["X"]
+    # the peaks between the rows: 1 at pi/(2W), -1 at 3 pi/(2W) (to the error of X)
+    assert abs(hi - 1.0) < 1e-6 and abs(lo + 1.0) < 1e-6
+    assert abs(math.sin(W * t_hi) - 1.0) < 1e-6 and abs(math.sin(W * t_lo) + 1.0) < 1e-6
+
+
+# --- the clutch drive: the lab report's numbers on every route and grid -------------------
+
+CLUTCH = MODELS / "ex4_clutch.amil"
+OUTDEL_AS_SHIPPED = "OUTDEL = 5.0E-5"
+RUN_LENGTH = 0.06  # the start-up, the engagement at 35.1 ms and both reversals
+
+
+@cache
+def clutch_reference() -> dict[str, object]:
+    """The exact drive's switching instants after T1, W1's minimum and MC's maximum,
+    each located on its dense output to rounding."""
+    tr = ex4.simulate(ex4.clutch_chain(), RUN_LENGTH, rtol=1e-13, atol=1e-20)
+    crossings = tr.crossings()
+    t1 = ex4.clutch_time()
+
+    def extremum(name: str, lo: float, hi: float, sign: float) -> float:
+        res = minimize_scalar(lambda t: sign * float(tr.sample([t])[name][0]),
+                              bounds=(lo, hi), method="bounded",
+                              options={"xatol": 1e-13})
+        return float(tr.sample([res.x])[name][0])
+
+    return {"crossings": crossings, "breakaway": tr.events[0][0],
+            "W1 min": extremum("W1", crossings[0], crossings[1], 1.0),
+            "MC max": extremum("MC1", t1, crossings[0], -1.0)}
+
+
+@pytest.mark.parametrize("route", ROUTES)
+@pytest.mark.parametrize("outdel", ["5.0E-5", "1.0E-3", "5.0E-3", "0.05"])
+def test_clutch_events_and_range_do_not_depend_on_the_grid(route: str, outdel: str) -> None:
+    # Exercise 4's clutch: the rotor reverses for 0.24 ms after the engagement; at
+    # OUTDEL 1E-3 and coarser no row falls inside. The reversal instants must be the
+    # exact drive's to 1e-9 s (W1 passes zero at 1.5e6 rad/s^2: 1e-9 s is an error of
+    # 1.5e-3 rad/s in W1, 1.5e-6 of its range), and W1's minimum (-147.92 rad/s) and
+    # MC's peak (0.2717 N*m) to 1e-5 of their value.
+    ref = clutch_reference()
+    model = with_outdel(CLUTCH, OUTDEL_AS_SHIPPED, f"OUTDEL = {outdel}")
+    run, = model.run(method=route, fintim=RUN_LENGTH)
+    assert run.status == "finished", run.message
+    t1 = ex4.clutch_time()
+    reversals = [e.time for e in run.events if e.switch.startswith("FSW(W1")
+                 and e.time > t1]
+    assert len(reversals) == 2, [str(e) for e in run.events]
+    for got, want in zip(reversals, ref["crossings"], strict=True):
+        assert abs(got - want) < 1e-9, (got, want)
+    breakaway = [e.time for e in run.events if e.switch.startswith("FSW(W1")][1]
+    assert abs(breakaway - ref["breakaway"]) < 1e-9
+    w1_min, _, _, _ = run.extrema["W1"]
+    _, _, mc_max, _ = run.extrema["MC"]
+    assert abs(w1_min - ref["W1 min"]) < 1e-5 * abs(ref["W1 min"]), (w1_min, ref["W1 min"])
+    assert abs(mc_max - ref["MC max"]) < 1e-5 * ref["MC max"], (mc_max, ref["MC max"])
+
+
+# --- grids that cannot be right are refused ------------------------------------------------
+
+def test_an_output_interval_longer_than_the_run_is_refused() -> None:
+    # FINTIM 0.5 with OUTDEL 1.0 printed two rows and plotted a straight line
+    model = with_outdel(CLUTCH, OUTDEL_AS_SHIPPED, "OUTDEL = 1.0")
+    with pytest.raises(amilpy.AmilError) as err:
+        model.run()
+    text = err.value.render()
+    assert "OUTDEL = 1 is longer than the run" in text and "hint" in text
+    assert err.value.line == 61  # the TIMER statement
+    with pytest.raises(amilpy.AmilError, match="PRDEL = 0.01 is longer than the run"):
+        amilpy.load(CLUTCH).run(fintim=0.005)
+
+
+# --- ACSL: an instant that changes nothing the derivatives read costs no restart ----------
+
+DYNAMIC_OUTPUTS = """\
+PROGRAM decay with outputs computed at every CINT instant
+  CONSTANT K = 0.5, TSTOP = 10.0
+  CINTERVAL CINT = 0.01
+  INITIAL
+    Y0 = 1.0
+    KR = K
+  END
+  DYNAMIC
+    DERIVATIVE
+      Y = INTEG(-KR*Y, Y0)
+      Z = INTEG(Y, 0.0)
+    END
+    {dynamic}
+    TERMT(T >= TSTOP)
+  END
+END
+"""
+
+
+def acsl_run(dynamic: str) -> amilpy.Run:
+    run, = amilpy.loads(DYNAMIC_OUTPUTS.format(dynamic=dynamic), "decay").run()
+    assert run.status == "stopped", run.message
+    return run
+
+
+@pytest.mark.parametrize("dynamic", [
+    "YPCT = 100.0*Y/Y0\n    KR = K",  # an output, and a value the derivatives read, unchanged
+    "KR = K\n    IF (T > 100.0) KR = 2.0*K",  # a test that never changes it
+])
+def test_acsl_instants_that_change_nothing_cost_no_restart(dynamic: str) -> None:
+    # 1000 CINT instants: each used to restart LSODA from order 1 (7016 evaluations,
+    # Y off by 2.4e-5); going on with the same integration takes the evaluations of a
+    # run without DYNAMIC statements and is as exact as the tolerance
+    run = acsl_run(dynamic)
+    plain = acsl_run("KR = K") if "IF" in dynamic else None
+    t = run.t
+    assert np.max(np.abs(run["Y"] - np.exp(-0.5 * t))) < 2e-6
+    assert np.max(np.abs(run["Z"] - (1.0 - np.exp(-0.5 * t)) / 0.5)) < 4e-6
+    assert run.stats["nfev"] < 2500
+    if plain is not None:
+        assert abs(run.stats["nfev"] - plain.stats["nfev"]) <= 0.05 * plain.stats["nfev"]
+
+
+def test_acsl_instant_that_changes_a_rate_restarts_there() -> None:
+    # KR doubles at T = 4 (a CINT instant): Y = exp(-0.5 t) before, then
+    # exp(-2 - 1.0 (t - 4)); the change is seen at the instant, not stepped over
+    run = acsl_run("KR = K\n    IF (T >= 4.0) KR = 2.0*K")
+    t = run.t
+    want = np.where(t <= 4.0, np.exp(-0.5 * t), np.exp(-2.0 - 1.0 * (t - 4.0)))
+    assert np.max(np.abs(run["Y"] - want)) < 2e-6
