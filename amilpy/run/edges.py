@@ -4,8 +4,9 @@ A stepper whose dense output is cheap but coarse (AUTO's odeint: a cubic through
 two rows, `steppers.dense.Nodes`) first tries to make it good enough in place
 (`sharpen`: a quintic through a third row); where it cannot, the crossings are
 located on the coarse output, and a narrow window around the first is integrated
-once more (`refine`): the crossings of one step are solved together, the window
-once, and only the roots in it again on the refined output.
+once more (`refine`: on AUTO, within the LSODA step the crossing is in): the
+crossings of one step are solved together, the window once, and again on the
+refined output.
 
 A surface linear in the states (a gradient g) is solved on the dense output
 projected on g, a function of floats with no call of the compiled surfaces; the
@@ -52,12 +53,16 @@ def locate_crossings(watch: SurfaceWatch, stepper, hits: list[int], m, z, ta: fl
                              COARSE * (tb - ta) if coarse else None, ends)
     if not coarse or not roots:
         return roots, departed
-    first = min(roots.values())
-    interp = stepper.refine(first)
-    hi = first + 2 * stepper.WINDOW * (tb - ta)
-    better, _ = _roots(watch, [k for k, tk in roots.items() if tk <= hi], m, z, interp,
-                       ta, tb, segment_start, None, ends)
-    roots.update(better)
+    # the window around the first root, and once more around where it moved to if it
+    # fell outside (a first estimate on a cubic over many of LSODA's steps)
+    for _ in range(2):
+        first = min(roots.values())
+        interp = stepper.refine(first)
+        better, _ = _roots(watch, list(roots), m, z, interp, ta, tb, segment_start, None,
+                           ends)
+        roots.update(better)
+        if not better or stepper.resolved(min(roots.values())):
+            break
     return roots, departed
 
 

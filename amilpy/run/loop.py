@@ -26,6 +26,7 @@ from ..compiled.layout import LOOP, PLAIN, QUIET
 from ..outcome import Failure
 from ..result import Event
 from ..steppers import (
+    LOG_BUDGET,
     Chunked,
     Evaluations,
     Hermite,
@@ -243,7 +244,7 @@ class Integrator(RunLoop):
 
         if log is None:
             log = Evaluations()  # (never on)
-        log_t, log_y = log.t.append, log.y.append
+        log_t, log_y, logged = log.t.append, log.y.append, log.t
 
         def f(t, y):
             if deadline is not None:
@@ -258,11 +259,15 @@ class Integrator(RunLoop):
                     if log.on:
                         log_t(t)
                         log_y(y.copy())
+                        if len(logged) > log.limit:
+                            log.compact()
                     return rolled(t, y, m, z)
                 yl = y.tolist()
                 if log.on:
                     log_t(t)
                     log_y(yl)
+                    if len(logged) > log.limit:
+                        log.compact()
                 return rhs(t, yl, m, z)
             except (ArithmeticError, ValueError) as exc:
                 try:
@@ -287,7 +292,8 @@ class Integrator(RunLoop):
         chunked = plan.chunked and SLIDE not in cur.m and not dense
         # AUTO's chunks watch every step LSODA takes through the evaluations it makes
         # (and sample them for RANGE): a log when there is something to watch or find
-        log = Evaluations() if chunked and len(cur.y) and \
+        log = Evaluations(max(4096, LOG_BUDGET // max(len(cur.y), 1))) \
+            if chunked and len(cur.y) and \
             (plan.watch_idx or (rec is not None and rec.extrema.names)) else None
         f = self.vector_field(cur, log)
         if len(cur.y):
@@ -308,10 +314,9 @@ class Integrator(RunLoop):
             checks = times[lo:bisect_left(times, seg_end, lo)]
         # with nothing to watch nothing is thrown away after a chunk: one odeint call
         # per segment (a FINISH would throw away the rest of the run), unless it may
-        # pause (the caller's code may start afresh) or logs its evaluations (kept per
-        # chunk)
+        # pause (the caller's code may start afresh)
         pausing = t_end is not None and seg_end > t_end
-        chunk = 16 if plan.watch_idx or log is not None or pausing else 1 << 30
+        chunk = 16 if plan.watch_idx or pausing else 1 << 30
         stepper = make_stepper(
             plan.route.name, f, cur.t, cur.y, seg_end, rtol=plan.tol.rtol, atol=plan.tol.atol,
             delt=plan.timer["DELT"], max_step=plan.max_step, first_step=self._last_step,
@@ -419,7 +424,8 @@ class Integrator(RunLoop):
                 # branches, is kept by the restart)
                 rec.sample(tb, yb, cur.m, cur.z)
             if restart:
-                if self._restart(cur, step, ta, at_output, at_boundary, rec, stop_at_event):
+                h = min(stepper.step_size, tb - ta) if tb > ta else stepper.step_size
+                if self._restart(cur, step, h, at_output, at_boundary, rec, stop_at_event):
                     return
                 at_output = False  # recorded by the restart, in the new branches
             elif c.z0:
@@ -544,10 +550,11 @@ class Integrator(RunLoop):
             rec.grid_row(to, yo, cur.m, cur.z)
 
     # ----------------------------------------------------------------- restarts
-    def _restart(self, cur: Cursor, step: _Step, ta: float, at_output: bool,
+    def _restart(self, cur: Cursor, step: _Step, h: float, at_output: bool,
                  at_boundary: bool, rec: Recorder | None, stop_at_event: bool) -> bool:
         """New branches at step.tb, their events, memory and resets. True if the
-        segment ends here (a restart, or the run stops)."""
+        segment ends here (a restart, or the run stops); `h`: the step to try first
+        after it."""
         c, watch, m, z = self.c, self.watch, cur.m, cur.z
         tb, yb = step.tb, step.yb
         new_m = watch.choose_modes(tb, yb, z, m, step.triggered, forced=step.exits)
@@ -559,14 +566,18 @@ class Integrator(RunLoop):
                 self.stop_reason = k  # a SCHEDULE: the caller runs its DISCRETE, goes on
         n_events = len(self.events)
         self.record_changes(tb, yb, m, new_m, z, step.triggered)
+        changed = new_m != m
+        if rec is not None and changed:
+            rec.sample(tb, yb, m, z)  # (RANGE reads both sides of a jump)
         if c.z0:
             z[:] = c.mem(tb, yb.tolist(), m, new_m, z)
-        changed = new_m != m
         m[:] = new_m
         y = watch.apply_resets(yb, m, tb, z)
         cur.t, cur.y = tb, y
         if rec is not None:
             rec.restarted(tb, y, m, z)
+            if changed or not np.array_equal(y, yb):
+                rec.sample(tb, y, m, z)
         if at_output:
             rec.grid_row(tb, y, m, z, shown=rec.shown_modes(tb, y, m, z))
         if self.stop_reason is not None:
@@ -580,7 +591,7 @@ class Integrator(RunLoop):
             if len(self.events) > self.opts.max_events:
                 raise Stop(Failure.EVENTS, tb, limit=self.opts.max_events)
             self._check_chatter()
-            self._last_step = max(tb - ta, 1e-12 * max(abs(tb), 1.0))
+            self._last_step = max(h, 1e-12 * max(abs(tb), 1.0))
             return True
         return False
 
@@ -628,13 +639,8 @@ class Integrator(RunLoop):
         T, Y = stepper.pending()
         # the segment's end (a breakpoint, a pause) is the step-by-step path's
         n = int(np.searchsorted(T, seg_end, side="left"))
-        times = self.plan.grid.times
-        if n == 0 or rec.out_i + n > len(times) or T[0] != times[rec.out_i]:
+        if n == 0:
             return e_prev
-        # (a step end made a check instant is no row: the step-by-step path takes it)
-        grid = T[:n] == times[rec.out_i:rec.out_i + n]
-        if not grid.all():
-            n = int(np.argmin(grid))
         T, Y = T[:n], Y[:n]
         finite = np.isfinite(Y).all(axis=1)
         if not finite.all():
@@ -647,12 +653,37 @@ class Integrator(RunLoop):
             n = min(n, wrong)
         if n == 0:
             return e_prev
-        cols = list(Y[:n].T)
-        e_last = self.c.surf(float(T[n - 1]), Y[n - 1].tolist(), m, z) \
+        T, Y = T[:n], Y[:n]
+        # the rows among them: the next grid instants (the others are the stepper's
+        # own exact instants between rows, samples for RANGE)
+        times = self.plan.grid.times
+        rows = np.zeros(n, bool)
+        ahead = times[rec.out_i:rec.out_i + n]
+        at = np.searchsorted(T, ahead)
+        hit = at < n
+        hit[hit] = T[at[hit]] == ahead[hit]
+        if not hit.all():
+            # a grid instant not among them must come after them (else: one at a time)
+            first_miss = int(np.argmin(hit))
+            if first_miss < len(ahead) and ahead[first_miss] < T[-1]:
+                return e_prev
+        rows[at[hit]] = True
+        k = int(np.count_nonzero(rows))
+        samples = stepper.samples(float(T[-1]))
+        if not rows.all():
+            S = np.concatenate([samples[0], T[~rows]])
+            order = np.argsort(S, kind="stable")
+            SY = np.concatenate([samples[1].reshape(-1, Y.shape[1]), Y[~rows]])
+            samples = (S[order], SY[order])
+        e_last = self.c.surf(float(T[-1]), Y[-1].tolist(), m, z) \
             if self.plan.watch_idx else e_prev
+        TR, YR = T[rows], Y[rows]
         with np.errstate(all="ignore"):
-            outs = self.c.out_v(T[:n], cols, m, z)
-        rec.block(T[:n], Y[:n], output_table(outs, n), m, z, stepper.samples(float(T[n - 1])))
+            outs = self.c.out_v(TR, list(YR.T), m, z)
+        if k:
+            rec.block(TR, YR, output_table(outs, k), m, z, samples)
+        else:
+            rec.samples(*samples, m, z)
         stepper.consume(n)
         self._passed(stepper.t)
         cur.t, cur.y = stepper.t, stepper.y
@@ -685,10 +716,12 @@ class Integrator(RunLoop):
             for j in range(len(got.event_t)):
                 k, t = int(got.event_k[j]), float(got.event_t[j])
                 self._event(t, k, float(got.event_m[j, k]), float(got.event_new[j]))
-                if ranged:  # (RANGE re-integrates from the restarts)
+                if ranged:  # (RANGE re-integrates from the restarts, reads both sides)
                     new_m = got.event_m[j].tolist()
                     new_m[k] = float(got.event_new[j])
+                    rec.sample(t, got.event_y[j], got.event_m[j].tolist(), z)
                     rec.restarted(t, got.event_y[j].copy(), new_m, z)
+                    rec.sample(t, got.event_y[j], new_m, z)
                 if not self._recent or self._recent[-1] != t:
                     self._recent.append(t)  # one restart, however many cross at t
                 seg_start = t

@@ -119,17 +119,21 @@ class Extrema:
             if self.buffered >= self.BATCH:
                 self._scan_buffer()
 
-    def add_many(self, T: np.ndarray, V: np.ndarray, Y: np.ndarray, m, z) -> None:
+    def add_many(self, T: np.ndarray, V: np.ndarray, Y: np.ndarray, m, z,
+                 more: bool = False) -> None:
         """Rows T (values V, states Y), all taken with modes m and memory z (m may
-        be an array of each row's modes)."""
+        be an array of each row's modes). `more`: points of the same stretch of
+        time follow (samples among these rows): no scan before they are in."""
         if self.names and len(T):
             self._gather()
             modes = m if isinstance(m, np.ndarray) else tuple(m)
             self.parts.append((T, V[:, self.columns], Y, modes, tuple(z)))
-            self._grow(len(T))
+            self.buffered += len(T)
+            if not more and self.buffered >= self.BATCH:
+                self._scan_buffer()
 
-    def _grow(self, n: int) -> None:
-        self.buffered += n
+    def settle(self) -> None:
+        """Scan the buffer if it is full (after rows added with `more`)."""
         if self.buffered >= self.BATCH:
             self._scan_buffer()
 
@@ -343,13 +347,14 @@ class Recorder:
         self.out_i += n
         if not self.extrema.names:
             return
+        more = samples is not None and len(samples[0]) > 0 and not isinstance(m, np.ndarray)
         if self.range_from is None:
-            self.extrema.add_many(T, table, Y, m, z)
+            self.extrema.add_many(T, table, Y, m, z, more)
         else:
             keep = T >= self.range_from
             self.extrema.add_many(T[keep], table[keep], Y[keep],
-                                  m[keep] if isinstance(m, np.ndarray) else m, z)
-        if samples is not None and len(samples[0]) and not isinstance(m, np.ndarray):
+                                  m[keep] if isinstance(m, np.ndarray) else m, z, more)
+        if more:
             self._samples(T, m, z, *samples)
 
     def _samples(self, T: np.ndarray, m, z, S: np.ndarray, SY: np.ndarray,
@@ -362,11 +367,12 @@ class Recorder:
             cut = np.searchsorted(S, T)
             counts = np.diff(np.concatenate([[0], cut, [len(S)]]))
             keep = np.repeat(counts >= 2, counts)
-            if not keep.any():
-                return
             S, SY = S[keep], SY[keep]
         if self.range_from is not None:
             S, SY = S[S >= self.range_from], SY[S >= self.range_from]
+        if not len(S):
+            self.extrema.settle()
+            return
         with np.errstate(all="ignore"):
             outs = self.c.out_v(S, list(SY.T), m, z)
         table = np.zeros((len(S), len(outs)))
@@ -391,9 +397,9 @@ class Recorder:
             self._samples(S[rows], mode.tolist(), z, S[rows], SY[rows], every=True)
 
     def samples(self, S: np.ndarray, SY: np.ndarray, m, z) -> None:
-        """Several such points, in order."""
-        for t, y in zip(S, SY, strict=True):
-            self.sample(float(t), y, m, z)
+        """Several such points, in order, in the branches m."""
+        if self.extrema.names and len(S):
+            self._samples(S, m, z, S, SY, every=True)
 
     def run(self, spec, constants: dict[str, float], events: list[Event], status: Status,
             message: str, warnings: list[str], stats: dict, t: float, y: np.ndarray, z, m,

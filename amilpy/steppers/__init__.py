@@ -16,13 +16,13 @@ from .base import Chunked, Hermite, Rhs, StepFailure, Stepper, Stiffness, first_
 from .fixed import RK4, AdamsBashforth2, Clock, Euler, FixedStepper, Heun
 from .ivp import ScipyStepper, solver_tolerance
 from .jacobian import SegmentJacobian
-from .odeint import UNLIMITED, Evaluations, OdeintStepper
+from .odeint import LOG_BUDGET, UNLIMITED, Evaluations, OdeintStepper
 
 # The fixed-step classes by the name a route's `stepper` field gives.
 FIXED: dict[str, type[FixedStepper]] = {
     cls.__name__: cls for cls in (RK4, Euler, Heun, AdamsBashforth2)}
 
-__all__ = ["Chunked", "Clock", "Evaluations", "FIXED", "Hermite", "OdeintStepper", "Rhs", "ScipyStepper",
+__all__ = ["LOG_BUDGET", "Chunked", "Clock", "Evaluations", "FIXED", "Hermite", "OdeintStepper", "Rhs", "ScipyStepper",
            "SegmentJacobian", "StepFailure", "Stepper", "Stiffness", "first_bad",
            "make_stepper", "solver_tolerance"]
 

@@ -9,6 +9,8 @@ A stepper integrates one smooth segment (the switches' branches frozen) from
     y                              the state at `t` (an array the loop may keep)
     interpolant()                  callable t -> y on [t_old, t] (dense output)
     truncate(t)                    end the last step at t in [t_old, t] (an event)
+    step_size                      the length of the method's own recent steps (the
+                                   first step of the segment after a restart)
     nfev                           right-hand-side evaluations so far
     nstep                          accepted steps so far (internal ones included)
     stiff                          None, or a `Stiffness` once an explicit pair's
@@ -90,6 +92,11 @@ class Stepper:
 
     def interpolant(self) -> Callable[[float], np.ndarray]:  # pragma: no cover
         raise NotImplementedError
+
+    @property
+    def step_size(self) -> float:
+        """The length of the method's own recent steps (default: the last step's)."""
+        return self.t - self.t_old
 
     def truncate(self, t: float) -> None:
         """End the last step at `t` (default: take the dense output there)."""

@@ -39,43 +39,83 @@ UNLIMITED = 2**62
 class Evaluations:
     """The derivative evaluations of one odeint call, in call order: TIME and the
     state (a list, or an array for a large model). The run loop's vector field adds
-    to `t` and `y` while `on` (only during a chunk's own integration)."""
+    to `t` and `y` while `on` (only during a chunk's own integration), and calls
+    `compact` when `t` is longer than `limit`: the step ends known by then are kept
+    as arrays, so a long call holds its steps, not every evaluation."""
 
-    __slots__ = ("on", "t", "y")
+    __slots__ = ("on", "t", "y", "limit", "_done_t", "_done_y")
 
-    def __init__(self) -> None:
+    def __init__(self, limit: int = 1 << 30) -> None:
         self.on = False
         self.t: list[float] = []
         self.y: list = []
+        self.limit = limit
+        self._done_t: list[np.ndarray] = []
+        self._done_y: list[np.ndarray] = []
 
     def start(self) -> None:
         self.t.clear()
         self.y.clear()
+        self._done_t.clear()
+        self._done_y.clear()
         self.on = True
 
-    def step_ends(self, t0: float, t1: float) -> tuple[np.ndarray, np.ndarray]:
-        """The accepted step ends in (t0, t1] and their states (the last evaluation at
-        each): an evaluation is at an accepted step's end when no later one is at an
-        earlier TIME (a rejected step is tried again from before it) and the next one
-        is at a later TIME (the corrector's iterations share theirs)."""
-        self.on = False
-        if not self.t:
-            return np.empty(0), np.empty((0, 0))
-        t = np.asarray(self.t, dtype=float)
+    @staticmethod
+    def _ends(t: np.ndarray) -> np.ndarray:
+        """Which evaluations end accepted steps: no later one is at an earlier TIME (a
+        rejected step is tried again from before it) and the next one is at a later
+        TIME (the corrector's iterations share theirs)."""
         later = np.minimum.accumulate(t[::-1])[::-1]  # min(t[k:])
         after = np.append(later[1:], np.inf)  # min(t[k+1:])
         last = np.append(t[1:] != t[:-1], True)
-        keep = np.flatnonzero((t <= after) & last & (t > t0) & (t <= t1))
+        return np.flatnonzero((t <= after) & last)
+
+    def _states(self, keep: np.ndarray) -> np.ndarray:
         y = self.y
-        ys = np.array([y[k] for k in keep.tolist()], dtype=float).reshape(len(keep), -1)
+        return np.array([y[k] for k in keep.tolist()], dtype=float).reshape(len(keep), -1)
+
+    def compact(self) -> None:
+        """Keep the step ends found so far as arrays, and the evaluations after the
+        last of them (the step being tried may still be rejected) as they are."""
+        t = np.asarray(self.t, dtype=float)
+        keep = self._ends(t)[:-1]  # (the last one is the step being tried)
+        if not len(keep):
+            self.limit *= 2
+            return
+        self._done_t.append(t[keep])
+        self._done_y.append(self._states(keep))
+        cut = int(keep[-1]) + 1
+        del self.t[:cut]
+        del self.y[:cut]
+
+    def step_ends(self, t0: float, t1: float) -> tuple[np.ndarray, np.ndarray]:
+        """The accepted step ends in (t0, t1] and their states (the last evaluation at
+        each)."""
+        self.on = False
+        t = np.asarray(self.t, dtype=float)
+        keep = self._ends(t) if len(t) else np.empty(0, int)
+        ts = np.concatenate([*self._done_t, t[keep]])
+        ys = self._states(keep)
+        if self._done_y:
+            ys = np.concatenate([*self._done_y, ys.reshape(len(keep), -1)
+                                 if len(keep) else np.empty((0, self._done_y[0].shape[1]))])
+        inside = (ts > t0) & (ts <= t1)
         self.t.clear()
         self.y.clear()
-        return t[keep], ys
+        self._done_t.clear()
+        self._done_y.clear()
+        return ts[inside], ys[inside]
 
 
 # Floats of logged states a chunk may hold (n states x evaluations): a large model's
 # chunks are cut shorter rather than hold more
 LOG_BUDGET = 4_000_000
+# Check instants besides the output grid where it is coarse, about every ANCHOR_STEPS
+# of LSODA's steps (from the step ends of the chunk before): an exact state is never
+# far back, so a window integrated again to locate a crossing (or a hidden one made
+# visible) starts a bounded number of steps before it, whatever OUTDEL is
+ANCHOR_STEPS = 64
+ANCHORS_PER_CHUNK = 65536  # (more would be many more than the chunk has steps)
 # Bad step ends made exact check instants at once after the first (an excursion that
 # lasts several steps needs only its start; a surface grazing within a tolerance
 # unit of zero would otherwise cost one integration per step end)
@@ -134,6 +174,14 @@ class OdeintStepper(Chunked):
         self.pos = 0  # ... and how many of them the loop has taken
         self.next_check = 0
         self.chunk = chunk
+        # how far in time a chunk reaches at least before it ends at an instant of its
+        # own when the output grid is coarser: after a restart, a little past the next
+        # event the loop expects, else 64 steps of the one before the restart, then
+        # four times further each chunk (as the chunk's count of instants grows); else
+        # the chunk would run to the segment's end, past the next switch, and be
+        # thrown away there
+        self._horizon = 1.05 * expect if expect is not None else \
+            64.0 * first_step if first_step and log is not None else math.inf
         if expect is not None and len(self.checks) > 1:
             # cover the expected time to the next event, and a few instants more
             n = bisect.bisect_right(self.checks, t0 + 1.05 * expect)
@@ -150,13 +198,18 @@ class OdeintStepper(Chunked):
         self.log = log
         self.watch = watch
         self._evals = 0  # evaluations the logged chunks made
+        # between anchors (`_anchored`): from the steps before a restart at first, then
+        # from the chunk before (none in a run's first chunk: nothing is known yet)
+        self._spacing: float | None = ANCHOR_STEPS * first_step \
+            if first_step and log is not None else None
         self.S = np.empty(0)  # the chunk's step ends (approximate states) ...
         self.SY = np.empty((0, len(self.y)))
         self._handed = t0  # ... handed out as samples up to here
         # the chunk's examination (`_examine`): the modes and memory it holds for, the
         # first instant on the wrong side, the step ends looked at up to here
         self._exam_key: tuple | None = None
-        self._exam_bad = math.inf
+        self._exam_bad = math.inf  # the first instant on the wrong side
+        self._exam_limit = t0  # the step ends before it looked at up to here
         self._exam_to = t0
 
     @property
@@ -202,12 +255,43 @@ class OdeintStepper(Chunked):
             ys = self._banded.to_old(ys)
         return ys, info
 
+    def _anchored(self, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The chunk's instants: the check instants ts and anchors between them (about
+        every `_spacing`), and which are check instants. The anchors do not shorten
+        the chunk: each end of one is a fresh start of LSODA's."""
+        sp = self._spacing
+        if sp is None or not len(ts):
+            return ts, np.ones(len(ts), bool)
+        pts = np.concatenate(([self.t], ts))
+        gaps = np.diff(pts)
+        sp = max(sp, float(pts[-1] - pts[0]) / ANCHORS_PER_CHUNK)
+        with np.errstate(all="ignore"):
+            k = np.clip(np.ceil(gaps / sp) - 1.0, 0, ANCHORS_PER_CHUNK).astype(int)
+        if not k.any():
+            return ts, np.ones(len(ts), bool)
+        gap = np.repeat(np.arange(len(gaps)), k)
+        j = np.arange(len(gap)) - np.repeat(np.cumsum(k) - k, k) + 1
+        anchors = pts[gap] + gaps[gap] * (j / (k[gap] + 1.0))
+        anchors = anchors[(anchors > pts[gap]) & (anchors < pts[gap + 1])]
+        merged = np.concatenate([ts, anchors])
+        order = np.argsort(merged, kind="stable")
+        return merged[order], order < len(ts)
+
     def _fill(self) -> None:
         left = self.max_steps - self._steps
         if left <= 0:
             self._failure = StepFailure(Failure.STEPS, self.t)
             return
         ts = self.checks[self.next_check:self.next_check + self._chunk_size(left)]
+        end = self.t + self._horizon
+        self._horizon *= 4.0
+        if ts[0] > end:
+            # (a grid coarser than the horizon: the chunk ends at `end`, an instant of
+            # its own)
+            ts, checks = self._anchored(np.array([end]))
+            checks[-1] = False
+        else:
+            ts, checks = self._anchored(ts)
         grid = np.concatenate(([self.t], ts))
         options = {"mxstep": min(MXSTEP, left)}
         if math.isfinite(self.max_step):
@@ -234,7 +318,7 @@ class OdeintStepper(Chunked):
         self.T, self.Y, self.pos = ts[:good], ys[1:good + 1], 0
         self._steps += int(nst[good - 1]) if good else left
         self._instants += good
-        self.next_check += good
+        self.next_check += int(np.count_nonzero(checks[:good]))
         if good < len(ts):
             self._failure = StepFailure(Failure.STEPS, float(ts[good - 1]) if good else self.t)
         self._evals += int(info["nfe"][-1])
@@ -247,6 +331,11 @@ class OdeintStepper(Chunked):
         end = float(self.T[-1]) if len(self.T) else self.t
         self.S, self.SY = self.log.step_ends(self.t, end)
         self._exam_key = None
+        if len(self.S) >= 2:
+            # (the chunk's last steps, the longest: LSODA goes on with steps at least as
+            # long where nothing happens, and an anchor too many costs more than one
+            # too few)
+            self._spacing = ANCHOR_STEPS * float(np.max(np.diff(self.S[-17:])))
     def _keep_passed(self, ts, ys, info, left: int) -> None:
         """Keep the instants LSODA really passed; then, if the step budget ran out,
         that is the failure, else SciPy's LSODA class takes over from the last of
@@ -270,6 +359,13 @@ class OdeintStepper(Chunked):
                                      rtol=self.rtol, atol=self.atol, max_step=self.max_step,
                                      first_step=None, jac=self.jac)
 
+    @property
+    def step_size(self) -> float:
+        """LSODA's own recent steps (its step ends, not the instants the loop takes)."""
+        if self._spacing is not None:
+            return self._spacing / ANCHOR_STEPS
+        return self.first_step or (self.t - self.t_old)
+
     def pending(self) -> tuple[np.ndarray, np.ndarray]:
         """The integrated check instants the loop has not taken yet (integrating the
         next chunk if there are none); empty once LSODA's class has taken over. A
@@ -281,21 +377,28 @@ class OdeintStepper(Chunked):
         return self.T[self.pos:], self.Y[self.pos:]
 
     def _examine(self) -> None:
-        """Look at the surfaces at the chunk's step ends ahead; the first step end on
-        the wrong side before the first such instant becomes an exact check instant
-        (integrated from the instant before it), with the step end before it and a
-        few more on the wrong side after it (INSERT_AHEAD)."""
+        """Look at the surfaces at the chunk's step ends ahead. A crossing the instants
+        show is located between them (`refine` puts LSODA's step around it in); one
+        they hide -- a step end on the wrong side in an interval whose end is not --
+        becomes visible: that step end is made an exact check instant (integrated from
+        the instant before it), with a few more on the wrong side after it
+        (INSERT_AHEAD, in case it turns out on the right side after all)."""
         if self.watch is None or self.pos >= len(self.T):
             return
         first_wrong, modes, memory = self.watch
         key = (tuple(modes), tuple(memory))
         if key != self._exam_key:
             # (a new chunk, or a branch the loop followed without a restart)
-            T = self.T[self.pos:]
-            bad = first_wrong(T, self.Y[self.pos:])
+            T, Y = self.T[self.pos:], self.Y[self.pos:]
+            bad = first_wrong(T, Y)
             self._exam_key, self._exam_to = key, self.t
             self._exam_bad = float(T[bad]) if bad < len(T) else math.inf
-        limit = min(self._exam_bad, float(self.T[-1]))
+            # the last instant before the first on the wrong side of a surface that
+            # matters (one whose branch nothing uses is followed where it flips)
+            loud = first_wrong(T, Y, samples=True)
+            self._exam_limit = float(T[loud - 1]) if 0 < loud < len(T) else \
+                self.t if loud == 0 else float(T[-1])
+        limit = self._exam_limit
         if self._exam_to >= limit or not len(self.S):
             return
         lo = int(np.searchsorted(self.S, max(self.t, self._exam_to), side="right"))
@@ -307,12 +410,16 @@ class OdeintStepper(Chunked):
         k = lo + wrong
         tau = float(self.S[k])
         i = int(np.searchsorted(self.T, tau, side="left"))  # the first instant >= tau
-        start_t = float(self.T[i - 1]) if i > self.pos else self.t
         ahead = [float(self.S[j]) for j in range(k + 1, hi) if self.S[j] < self.T[i]]
-        points = ([float(self.S[k - 1])] if k > 0 and self.S[k - 1] > start_t else []) + \
-            [tau] + ahead[:INSERT_AHEAD]
+        points = [tau] + ahead[:INSERT_AHEAD]
         self._exam_to = points[-1]
-        self._insert(points)
+        if self._insert(points):
+            # (the first instant on the wrong side may now be one of them)
+            j = int(np.searchsorted(self.T, tau, side="left"))
+            T, Y = self.T[j:j + len(points)], self.Y[j:j + len(points)]
+            bad = first_wrong(T, Y)
+            if bad < len(T):
+                self._exam_bad = min(self._exam_bad, float(T[bad]))
 
     def _insert(self, points: list[float]) -> bool:
         """Make instants (in order, between two pending instants or after the present
@@ -443,12 +550,20 @@ class OdeintStepper(Chunked):
         return True
 
     def refine(self, t: float):
-        """Integrate from the interval's start to both ends of a narrow window around
-        t (one odeint call) and make them nodes of the dense output; returns it."""
+        """Integrate from the interval's start to a narrow window around t (one odeint
+        call) and make its exact ends nodes of the dense output; returns it. Where
+        LSODA took several steps in the interval, the window is the step its step ends
+        say the crossing is in (the first on the wrong side, and the one before),
+        with a narrow window around t inside it."""
         dense = self.interpolant()
         h = self.t - self.t_old
-        lo, hi = max(self.t_old, t - self.WINDOW * h), min(self.t, t + self.WINDOW * h)
-        grid = [self.t_old] + [x for x in (lo, hi) if self.t_old < x < self.t]
+        points = [max(self.t_old, t - self.WINDOW * h), min(self.t, t + self.WINDOW * h)]
+        step = self._crossing_step()
+        if step is not None:
+            lo, hi = step
+            w = 0.05 * (hi - lo)
+            points = [lo, hi] if not lo < t < hi else [lo, max(lo, t - w), min(hi, t + w), hi]
+        grid = [self.t_old] + sorted({x for x in points if self.t_old < x < self.t})
         if len(grid) > 1:
             ys, info = self._odeint(self.y_old, grid, mxstep=MXSTEP)
             self._nfev += int(info["nfe"][-1])
@@ -456,6 +571,31 @@ class OdeintStepper(Chunked):
                 for x, yx in zip(grid[1:], ys[1:], strict=True):
                     dense.insert(x, yx, self._deriv(x, yx))
         return dense
+
+    def resolved(self, t: float) -> bool:
+        """Whether the dense output around t is a narrow window's: a cubic over a
+        tenth of LSODA's step there at most (a cubic over a whole step of a high
+        order is off by up to (h*omega)^4/384 of the motion)."""
+        dense = self.interpolant()
+        k = min(max(bisect.bisect_left(dense.t, t), 1), len(dense.t) - 1)
+        step = self._crossing_step()
+        h = step[1] - step[0] if step is not None else self.t - self.t_old
+        return dense.t[k] - dense.t[k - 1] <= 0.11 * h
+
+    def _crossing_step(self) -> tuple[float, float] | None:
+        """The LSODA step of the present interval a crossing is in, by its step ends:
+        from the one before the first on the wrong side to that one (to the interval's
+        end if none is); None when LSODA took one step or none here."""
+        if self.watch is None or not len(self.S):
+            return None
+        lo = int(np.searchsorted(self.S, self.t_old, side="right"))
+        hi = int(np.searchsorted(self.S, self.t, side="left"))
+        if hi <= lo:
+            return None
+        k = lo + self.watch[0](self.S[lo:hi], self.SY[lo:hi], samples=True)
+        start = float(self.S[k - 1]) if k > lo else self.t_old
+        end = float(self.S[k]) if k < hi else self.t
+        return start, end
 
     def truncate(self, t: float) -> None:
         dense = self.interpolant()
