@@ -207,3 +207,24 @@ def test_compiled_benchmark_runs(tmp_path):
     # the same method as DOP853 at RELERR 1e-6: the exact reference within 1e-4
     assert row["COMPILED"][1] < 1e-4 and row["AUTO"][1] < 1e-4
     assert (tmp_path / "compiled.md").stat().st_size > 0
+
+
+def test_tolerances_runs(tmp_path):
+    """benchmarks/tolerances.py on two shipped examples, one route, one RELERR, and
+    the bouncing ball, whose closed form it checks the impacts against."""
+    import numpy as np
+    import tolerances as tol
+
+    impacts, h, v = tol.ball_exact(np.array([0.0, 1.0]))
+    assert len(impacts) == 7 and h[0] == tol.BALL_H0 and v[1] == -tol.BALL_G
+    t = np.linspace(0.0, 1.0, 11)
+    ref = {"X": np.sin(t), "Z": np.zeros_like(t)}
+    err, where = tol.global_error(t, lambda n: ref[n] + 1e-3, t, ref, ["X", "Z"])
+    assert err == pytest.approx(1e-3 / np.sin(1.0)) and where == "X"  # Z (all 0) left out
+    out = tmp_path / "tolerances.md"
+    assert tol.main(["--listings", "oral_dosing", "fst_wheat", "--routes", "AUTO",
+                     "--tols", "1e-6", "--other-tols", "1e-6", "--ratio-tols",
+                     "--repeats", "1", "--out", str(out)]) == 0
+    text = out.read_text()
+    assert "| oral_dosing | ACSL |" in text and "equal bit for bit" in text
+    assert "## Bouncing ball" in text
