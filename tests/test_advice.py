@@ -1,5 +1,5 @@
 """Method advice: an expensive explicit run of a stiff model says once that
-METHOD STIFF would be cheaper; a cheap or non-stiff run says nothing."""
+METHOD AUTO would be cheaper; a cheap or non-stiff run says nothing."""
 
 import amilpy
 
@@ -18,7 +18,7 @@ def test_stiff_model_on_rks_gets_advice_once(monkeypatch):
 
     monkeypatch.setattr(advice, "SLOW", 0.0)  # this run takes well under a second
     runs = amilpy.loads(STIFF.replace("END", "METHOD RKS\nEND\nPARAM C = 2.0E6\nEND")).run()
-    assert runs[0].advice.startswith("stiff: METHOD STIFF took")
+    assert runs[0].advice.startswith("stiff: METHOD AUTO took")
     assert runs[1].advice is None  # said once
 
 

@@ -206,7 +206,9 @@ SAME_AS_DOP853 = {
 @needs_numba
 @pytest.mark.parametrize("name", list(SAME_AS_DOP853))
 def test_found_in_review_runs_as_dop853(name):
-    text = SAME_AS_DOP853[name] + "END\n"
+    # (RELERR 1E-6, as these were found: two implementations of one method agree to
+    # a few tolerances, and the stops below come where the step size collapses)
+    text = "RELERR 1.0E-6\nABSERR 1.0E-9\n" + SAME_AS_DOP853[name] + "END\n"
     a = run1(text, method="COMPILED")
     b = run1(text, method="DOP853")
     assert (a.status, a.message.split(":")[0]) == (b.status, b.message.split(":")[0])

@@ -102,8 +102,9 @@ def test_ctrl_c_keeps_the_finished_runs(tmp_path):
     are reported interrupted, exit 3 (the run already printed loses nothing)."""
     path = tmp_path / "two.amil"
     # K = 1 takes a few thousand steps, K = 1000 a thousand times more
+    # (RELERR 1E-6: the run times this test was sized with)
     path.write_text("PARAM K = (1.0, 1000.0, 2000.0)\nX = INTGRL(0.0, COS(K*TIME))\n"
-                    "TIMER FINTIM = 1.0E3, OUTDEL = 1.0\nPRINT X\nEND\n")
+                    "RELERR 1.0E-6\nTIMER FINTIM = 1.0E3, OUTDEL = 1.0\nPRINT X\nEND\n")
     env = dict(os.environ, PYTHONPATH=HERE)
     proc = subprocess.Popen([sys.executable, "-m", "amilpy.cli", "run", str(path), "--jobs", "2",
                              "--method", "RKS"], stdout=subprocess.PIPE,

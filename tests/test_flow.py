@@ -148,4 +148,7 @@ def test_a_data_value_as_a_state_of_one_flow():
     other = model.flow(rtol=1e-10, atol=1e-12, W=71.0)
     want, _ = other.advance(other.initial_state(), 0.0, 0.5)
     got = [end.y[one.state_names.index(n)] for n in other.state_names]
-    assert got == pytest.approx(list(want.y), rel=1e-9, abs=1e-12)
+    # two integrations of one motion, whose state vectors differ (W a state of one):
+    # LSODA's steps differ, and its global error on the hoist at RELERR 1e-10 is up to
+    # 2.6e-8 of the range (benchmarks/results/tolerances.md)
+    assert got == pytest.approx(list(want.y), rel=3e-8, abs=1e-12)

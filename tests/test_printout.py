@@ -64,7 +64,7 @@ def test_event_text_of_a_real_run():
 def test_header_shows_the_settings_of_every_route():
     assert "(METHOD RK4, DELT " in format_run(run1(
         "X = INTGRL(1.0, -X)\nTIMER FINTIM = 1.0, PRDEL = 0.5\nMETHOD RK4\nEND\n"))
-    assert "(METHOD AUTO, RELERR 1e-06, ABSERR 1e-09)" in format_run(run1(
+    assert "(METHOD AUTO, RELERR 1e-10, ABSERR 1e-13)" in format_run(run1(
         "X = INTGRL(1.0, -X)\nTIMER FINTIM = 1.0, PRDEL = 0.5\nEND\n"))
 
 

@@ -126,7 +126,7 @@ class Integrator(RunLoop):
                  opts: Options, started: float | None = None) -> None:
         super().__init__(model, plan, c, watch, opts, started)
         self.faults: list[Fault] = []  # arithmetic faults the integration has not passed
-        self._stiff_noted = False
+        self.stiff_from: float | None = None  # where an explicit pair became stiff
         self._recent: list[float] = []  # restart instants (chatter)
         self._last_step: float | None = None
         self._tiny = 0
@@ -136,6 +136,8 @@ class Integrator(RunLoop):
         self._kernel = None  # METHOD COMPILED: the model's compiled module, on first use
         self._stop_at_event = False
         self._paused: _Paused | None = None
+        self._grazing: dict[int, float] = {}  # (`_grazing_bands`)
+        self._exited: set[int] = set()  # the slides the last restart ended
         # a resumed stepper's steps and evaluations already counted in nsteps, nfev
         self._counted = self._counted_nfev = 0
 
@@ -391,6 +393,8 @@ class Integrator(RunLoop):
         pauses at t_end, when it goes on past it (see `integrate`)."""
         c, plan = self.c, self.plan
         e_prev = c.surf(cur.t, cur.y.tolist(), cur.m, cur.z) if plan.watch_idx else []
+        self._grazing = self._grazing_bands(cur, e_prev, self._exited)
+        self._exited = set()
         chunked = isinstance(stepper, Chunked)
         bulk = chunked and SLIDE not in cur.m and rec is not None
         compiled = isinstance(stepper, KernelStepper)
@@ -478,12 +482,54 @@ class Integrator(RunLoop):
         return self._watch_step(stepper, cur, ta, tb, yb, e_prev, seg_start)
 
     def _note_stiff(self, stepper: Stepper) -> None:
-        if stepper.stiff is not None and not self._stiff_noted:
-            self._stiff_noted = True
+        if stepper.stiff is not None and self.stiff_from is None:
+            self.stiff_from = stepper.stiff.t
             self.warnings.append(
                 f"stiff from TIME = {stepper.stiff.t:.6g}: the steps of METHOD "
                 f"{self.plan.method} are limited by stability, not accuracy (h*|lambda| = "
                 f"{stepper.stiff.h_lambda:.3g}): METHOD AUTO or STIFF needs far fewer steps")
+
+    def _grazing_bands(self, cur: Cursor, e0, exited: set[int]) -> dict[int, float]:
+        """The surfaces a segment starts on having just left a slide on them (a slide
+        keeps its surface at zero to within the integration's error), and how far to
+        their wrong side its first steps' errors may put them: a slide ends where the
+        motion's rate off the surface is zero (a stuck mass breaking away as the
+        spring force reaches the friction limit), so the surface moves off
+        quadratically and the first steps' errors can show it a few tolerance units
+        on the wrong side, which is no crossing."""
+        plan = self.plan
+        if not exited or not plan.route.uses_tolerances:
+            return {}
+        scale = plan.tol.atol + plan.tol.rtol * np.abs(cur.y)
+        near = [k for k in exited if cur.m[k] != SLIDE and
+                abs(e0[k]) <= 1e3 * float(np.max(scale, initial=0.0))]
+        out = {}
+        for k in near:
+            g = plan.watched[k].gradient
+            if g is None:
+                g = self._surface_gradient(cur, e0, k)
+            if g is not None:
+                band = 10.0 * float(np.abs(g) @ scale)
+                if abs(e0[k]) <= band:
+                    out[k] = band
+        return out
+
+    def _surface_gradient(self, cur: Cursor, e0, k: int) -> np.ndarray | None:
+        """d e_k/d y by differences (a surface not written linearly in the states: a
+        variable defined as one), for a small model."""
+        n = len(cur.y)
+        if n > 64:
+            return None
+        g = np.empty(n)
+        for i in range(n):
+            d = 1e-7 * max(abs(cur.y[i]), 1.0)
+            y = cur.y.copy()
+            y[i] += d
+            try:
+                g[i] = (self.c.surf(cur.t, y.tolist(), cur.m, cur.z)[k] - e0[k]) / d
+            except (ArithmeticError, ValueError):
+                return None
+        return g if np.isfinite(g).all() else None
 
     def _watch_step(self, stepper: Stepper, cur: Cursor, ta: float, tb: float,
                     yb: np.ndarray, e_prev, seg_start: float) -> _Step:
@@ -495,9 +541,14 @@ class Integrator(RunLoop):
         hits, silent = [], []
         for k in self.plan.watch_idx:
             if m[k] != SLIDE and watch.crossed(k, m[k], e_b[k]):
+                band = self._grazing.get(k)
+                if band is not None and abs(e_b[k]) <= band:
+                    continue  # a tangential departure's first steps: within their error
                 # a branch that feeds nothing the states see now (a switch inside an
                 # unused branch): follow its sign, no need to stop and restart
                 (silent if watch.silent(k, tb, yb, m, z) else hits).append(k)
+            elif k in self._grazing and abs(e_b[k]) > self._grazing[k]:
+                del self._grazing[k]  # (clear of the surface: any crossing counts)
         slide_exit = watch.slide_exits(m, tb, yb, z)
         if hits or slide_exit:
             # departed: no crossing to bracket, sign at tb
@@ -558,6 +609,7 @@ class Integrator(RunLoop):
         c, watch, m, z = self.c, self.watch, cur.m, cur.z
         tb, yb = step.tb, step.yb
         new_m = watch.choose_modes(tb, yb, z, m, step.triggered, forced=step.exits)
+        self._exited = set(step.exits)
         for k in step.triggered:
             w = self.plan.watched[k]
             if (w.purpose is Purpose.TERMT and new_m[k] > 0) or \

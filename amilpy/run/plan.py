@@ -24,9 +24,23 @@ from ..result import EventKind
 from ..routes import DEFAULT, Route, StepPointError, route_for, step_point_mode
 from ..surfaces import linear_gradient, sign
 
+# RELERR and ABSERR when a listing sets none (RELERR/ABSERR, ACSL's MERROR/XERROR):
+# tight enough that every digit of the printout (7 significant) is right. Measured
+# (benchmarks/tolerances.py, results/tolerances.md): AUTO's global error runs 10 to 300
+# times RELERR; at 1e-10 it is at most 2.7e-8 on the shipped models, models/examples
+# and the published listings (the goal: 5e-7). The ACSL form a decade tighter, as
+# Magnolia itself (MERROR 1e-11, with CVODE): its authors' published numbers are that
+# exact, and an impact located on LSODA's trajectory (SCHEDULE .XN.) is then right to
+# 2e-10 s. ABSERR a thousandth of RELERR: at RELERR x 1 (Magnolia's XERROR is of that
+# kind) states smaller than 1e-3 are 3 to 50 times less exact.
+TOLERANCES = {"csmp": (1e-10, 1e-13), "acsl": (1e-11, 1e-14)}
+# A route whose own tolerance is tighter than RELERR (BDF's: a decade) gets a default
+# that keeps it at this or above: SciPy's BDF gives up ("required step size is less
+# than spacing between numbers") at 1e-10 and tighter on the Exercise 4 clutch, so its
+# default RELERR is 1e-8
+LOCAL_FLOOR = 1e-9
+
 DEFAULTS = {
-    "rtol": 1e-6,
-    "atol": 1e-9,
     "max_steps": 5_000_000,
     "max_events": 200_000,
     "max_rows": 2_000_000,
@@ -135,15 +149,23 @@ class Tolerances:
     abserr_each: dict[str, float] = field(default_factory=dict)
 
     @classmethod
-    def build(cls, spec: ir.RunSpec, opts: Options, states: list[str]) -> Tolerances:
+    def build(cls, spec: ir.RunSpec, opts: Options, states: list[str],
+              form: str = "csmp", route: Route | None = None) -> Tolerances:
+        """`form`: the listing's form ("csmp" or "acsl"), whose defaults apply, as
+        `route` takes them (LOCAL_FLOOR)."""
         def side(option, scalar, each, default):
             base = option or scalar or default
             named = {} if option else {n: v for n, v in each.items() if n in states}
             vector = np.array([named.get(n, base) for n in states], dtype=float)
             return base, named, vector
 
-        relerr, r_each, rtol = side(opts.rtol, spec.relerr, spec.relerr_each, DEFAULTS["rtol"])
-        abserr, a_each, atol = side(opts.atol, spec.abserr, spec.abserr_each, DEFAULTS["atol"])
+        rel, ab = TOLERANCES[form]
+        if route is not None and route.local_tolerance < 1.0 and \
+                rel * route.local_tolerance < LOCAL_FLOOR:
+            scale = LOCAL_FLOOR / (rel * route.local_tolerance)
+            rel, ab = rel * scale, ab * scale
+        relerr, r_each, rtol = side(opts.rtol, spec.relerr, spec.relerr_each, rel)
+        abserr, a_each, atol = side(opts.atol, spec.abserr, spec.abserr_each, ab)
         return cls(rtol, atol, relerr, abserr, r_each, a_each)
 
     def describe(self) -> str:
@@ -363,7 +385,8 @@ def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: Compiled,
     # steps this short make no progress: FINTIM*1e-12 is ~4000 ulps of FINTIM
     return RunPlan(
         route=route, method=method, timer=timer, t0=t0, fintim=fintim,
-        tol=Tolerances.build(spec, opts, c.state_names), grid=grid,
+        tol=Tolerances.build(spec, opts, c.state_names,
+                             "acsl" if model.acsl is not None else "csmp", route), grid=grid,
         watched=tuple(watched),
         watch_idx=tuple(k for k, w in enumerate(watched) if not w.breakpoint_only),
         breakpoints=tuple(breakpoints), roots=roots, resets=tuple(resets),

@@ -176,7 +176,8 @@ class _Run:
         run = self.rec.run(
             self.spec, self.constants, integ.events, status, text, notes + integ.warnings,
             dict(nsteps=integ.nsteps, nfev=integ.nfev, nevents=len(integ.events),
-                 seconds=_clock.perf_counter() - self.started),
+                 seconds=_clock.perf_counter() - self.started,
+                 stiff_from=getattr(integ, "stiff_from", None)),
             cur.t, cur.y, cur.z, cur.m, terminal, extrema)
         if status != Status.FAILED and (self.model.terminal or self.model.terminal_code
                                         or (self.model.acsl and self.model.acsl.terminal)):

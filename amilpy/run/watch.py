@@ -22,7 +22,7 @@ import numpy as np
 
 from ..codegen import Compiled
 from ..surfaces import sign
-from .plan import SLIDE, RunPlan, SurfaceKind
+from .plan import SLIDE, Purpose, RunPlan, SurfaceKind
 from .slide import MAX_SLIDING, combine, corner_modes, slide_weights
 
 _XTOL = 4 * np.finfo(float).eps
@@ -186,7 +186,9 @@ class SurfaceWatch:
     def silent(self, k: int, t: float, y: np.ndarray, m, z) -> bool:
         """True if surface k's branch does not change the derivatives here."""
         w = self.watched[k]
-        if w.purpose.stops or w.kind is not SurfaceKind.SIGN:
+        # (a memory's condition changes nothing the derivatives see now, but what the
+        # memory keeps is taken where it flips: located, as every switch)
+        if w.purpose.stops or w.purpose is Purpose.MEMORY or w.kind is not SurfaceKind.SIGN:
             return False
         mp, mm = list(m), list(m)
         mp[k], mm[k] = 1.0, -1.0

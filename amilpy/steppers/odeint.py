@@ -387,8 +387,9 @@ class OdeintStepper(Chunked):
             return
         first_wrong, modes, memory = self.watch
         key = (tuple(modes), tuple(memory))
-        if key != self._exam_key:
-            # (a new chunk, or a branch the loop followed without a restart)
+        if key != self._exam_key or self._exam_bad <= self.t:
+            # (a new chunk, a branch the loop followed without a restart, or the first
+            # instant on the wrong side taken as one where nothing happens after all)
             T, Y = self.T[self.pos:], self.Y[self.pos:]
             bad = first_wrong(T, Y)
             self._exam_key, self._exam_to = key, self.t

@@ -17,7 +17,10 @@ ERR = {"AUTO": 2e-6, "RKS": 1e-6, "DOP853": 1e-6, "COMPILED": 1e-6, "LSODA": 1e-
     ("PARAM A = 1.0E9\nX = INTGRL(1.0, -A*X)\nTIMER FINTIM = 1.0E-9\nPRINT X\nEND\n", 1.0),
     ("PARAM A = 1.0E-9\nX = INTGRL(1.0, -A*X)\nTIMER FINTIM = 1.0E9\nPRINT X\nEND\n", 1.0),
     ("X = INTGRL(1.0E300, -X)\nTIMER FINTIM = 1.0\nPRINT X\nEND\n", 1e300),
-    ("ABSERR 1.0E-310\nX = INTGRL(1.0E-300, -X)\nTIMER FINTIM = 1.0\nPRINT X\nEND\n", 1e-300),
+    # (RELERR 1E-6: RELERR*X must stay a normal float for LSODA's error weights, and
+    # 1E-10 * 1E-300 is a subnormal one)
+    ("RELERR 1.0E-6\nABSERR 1.0E-310\nX = INTGRL(1.0E-300, -X)\nTIMER FINTIM = 1.0\nPRINT X\n"
+     "END\n", 1e-300),
 ], ids=["fintim1e-9", "fintim1e9", "x1e300", "x1e-300"])
 def test_decay_at_extreme_scales(text, scale, method):
     r, = amilpy.loads(text).run(method=method)
