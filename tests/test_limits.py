@@ -90,7 +90,8 @@ def _fake_run(**kw) -> Run:
     base = dict(label="RUN 1", params={}, constants={}, times=np.zeros(1),
                 values={}, outdel_mask=np.ones(1, bool), prdel_mask=np.ones(1, bool),
                 events=[], status=Status.FINISHED, message="", final={},
-                stats={"nfev": 10**6, "seconds": 5.0}, method="RKS", rtol=1e-6, atol=1e-9)
+                stats={"nfev": 10**6, "seconds": 5.0, "stiff_from": 0.1}, method="RKS",
+                rtol=1e-6, atol=1e-9)
     base.update(kw)
     return Run(**base)
 
@@ -99,8 +100,8 @@ def test_advice_probe_never_follows_a_failed_run_nor_exceeds_the_time_left(monke
     calls = []
 
     def fake_simulate(model, spec, opts, cache=None):
-        calls.append(opts)  # the explicit probe 100 times dearer than Radau
-        return _fake_run(stats={"nfev": 100 if opts.method == "RADAU" else 10**4,
+        calls.append(opts)  # the explicit probe 100 times dearer than AUTO
+        return _fake_run(stats={"nfev": 100 if opts.method == "AUTO" else 10**4,
                                 "seconds": 1.0})
 
     monkeypatch.setattr(advice, "simulate", fake_simulate)
@@ -114,7 +115,7 @@ def test_advice_probe_never_follows_a_failed_run_nor_exceeds_the_time_left(monke
     # with 10 s of which the run took 5: the probes get the 5 left, and its steps
     assert advice.stiffness_advice(model, spec, spent, Options(max_time=10.0,
                                                                 max_steps=1000)) is not None
-    assert [o.method for o in calls] == ["RKS", "RADAU"]
+    assert [o.method for o in calls] == ["RKS", "AUTO"]
     assert calls[0].max_time == pytest.approx(5.0) and calls[1].max_time == pytest.approx(4.0)
     assert all(o.max_steps == 1000 for o in calls)
 
