@@ -415,6 +415,10 @@ class Integrator(RunLoop):
         c, watch, m, z = self.c, self.watch, cur.m, cur.z
         tb, yb = step.tb, step.yb
         new_m = watch.choose_modes(tb, yb, z, m, step.triggered, forced=step.exits)
+        if c.z0:
+            memory = c.mem(tb, yb.tolist(), m, new_m, z)
+            new_m = watch.after_memory(tb, yb, new_m, z, memory)
+            z[:] = memory
         for k in step.triggered:
             w = self.plan.watched[k]
             if (w.purpose is Purpose.TERMT and new_m[k] > 0) or \
@@ -423,8 +427,6 @@ class Integrator(RunLoop):
                 self.stop_reason = k  # a SCHEDULE: the caller runs its DISCRETE, goes on
         n_events = len(self.events)
         self.record_changes(tb, yb, m, new_m, z, step.triggered)
-        if c.z0:
-            z[:] = c.mem(tb, yb.tolist(), m, new_m, z)
         changed = new_m != m
         m[:] = new_m
         y = watch.apply_resets(yb, m, tb, z)

@@ -56,7 +56,9 @@ def start_cursor(c: Compiled, plan: RunPlan, watch: SurfaceWatch, opts: Options,
         m = watch.choose_modes(t0, y, z, [0.0] * len(plan.watched), set(), first=True)
     y = watch.apply_resets(y, m, t0, z)
     if c.z0:
-        z = c.mem(t0, y.tolist(), m, m, z)
+        memory = c.mem(t0, y.tolist(), m, m, z)
+        m = watch.after_memory(t0, y, list(m), z, memory)
+        z = memory
     return Cursor(t0, y, list(m), list(z))
 
 

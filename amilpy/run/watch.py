@@ -131,6 +131,20 @@ class SurfaceWatch:
                 break
         return new
 
+    def after_memory(self, t: float, y: np.ndarray, m: list[float], z_before, z_after
+                     ) -> list[float]:
+        """Modes m, chosen with the memory z_before, once the memory is z_after (a
+        restart updates it: a new day's weather, a sample held): a surface whose
+        sign moved with it takes its new sign (or the way the motion goes, if the
+        memory put it on zero); the others keep the modes they were given."""
+        if list(z_before) == list(z_after):
+            return m
+        yl = y.tolist()
+        before = self.c.modes_literal(t, yl, m, z_before)
+        after = self.c.modes_literal(t, yl, m, z_after)
+        kept = {k: mode for k, mode in enumerate(m) if before[k] == after[k]}
+        return self.choose_modes(t, y, z_after, m, set(), forced=kept)
+
     def direction(self, k: int, t: float, y: np.ndarray, m, z, old) -> float:
         """Which side of surface k the motion goes to from a point on it."""
         try:
