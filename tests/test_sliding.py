@@ -91,3 +91,27 @@ def test_stick_slip_with_two_friction_terms_on_one_velocity(method):
     assert np.max(np.abs(r["X"] - x)) <= tol
     leave = [e.time for e in r.events if e.old == 0.5]
     assert leave == pytest.approx([0.5], abs=1e-6)
+
+
+GAP = """Y = INTGRL(-1.0, 1.0)
+S = FSW(Y, -1.0, 0.0, 1.0)
+C = INSW(S*Y - 0.5, 0.0, 1.0)
+X = INTGRL(0.0, C)
+TIMER FINTIM = 3.0, OUTDEL = 3.0
+END
+"""
+
+
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "DOP853", "RADAU", "COMPILED"])
+@pytest.mark.parametrize("form", ["FSW"])
+def test_a_switch_read_only_by_another_surface_never_hides_its_crossing(method, form):
+    # Y = t - 1 crosses the gap |Y| < 0.5 from t = 0.5 to 1.5; C is 1 outside it, so
+    # X(3) = 0.5 + 1.5 = 2 exactly. S (or ABS's own switch) changes no derivative: its
+    # crossing at t = 1 is followed without an event. The motion is linear, so one
+    # step can span the whole gap: the contact at 1.5 was then read with S's branch
+    # from before t = 1 (-Y - 0.5 < 0, still in the gap) and missed (X = 0.5).
+    text = GAP if form == "FSW" else \
+        GAP.replace("S = FSW(Y, -1.0, 0.0, 1.0)\n", "").replace("S*Y", "ABS(Y)")
+    r = run1(text, method=method, advice=False)
+    assert r["X"][-1] == pytest.approx(2.0, abs=1e-12)
+    assert [e.time for e in r.events] == pytest.approx([0.5, 1.5], abs=1e-12)

@@ -14,7 +14,7 @@ import math
 import time as _clock
 from bisect import bisect_left, bisect_right
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -72,6 +72,8 @@ class _Step:
     exits: dict[int, float]  # sliding surfaces leaving, to which side
     truncated: bool
     e_b: list[float]  # the watched surfaces at tb
+    # hits whose branch changes no derivative (cut only for a surface that reads them)
+    quiet: set[int] = field(default_factory=set)
 
 
 class RunLoop:
@@ -355,7 +357,12 @@ class Integrator(RunLoop):
             if m[k] != SLIDE and watch.crossed(k, m[k], e_b[k]):
                 # a branch that feeds nothing the states see now (a switch inside an
                 # unused branch): follow its sign, no need to stop and restart
-                (silent if watch.silent(k, tb, yb, m, z) else hits).append(k)
+                if watch.silent(k, tb, yb, m, z):
+                    silent.append(k)
+                    continue
+                hits.append(k)
+                if watch.quiet(k, tb, yb, m, z):
+                    step.quiet.add(k)  # cut for another surface that reads it: no event
         slide_exit = watch.slide_exits(m, tb, yb, z)
         if hits or slide_exit:
             # departed: no crossing to bracket, sign at tb
@@ -426,7 +433,7 @@ class Integrator(RunLoop):
                     (w.purpose is Purpose.SCHEDULE and w.fires(m[k], new_m[k])):
                 self.stop_reason = k  # a SCHEDULE: the caller runs its DISCRETE, goes on
         n_events = len(self.events)
-        self.record_changes(tb, yb, m, new_m, z, step.triggered)
+        self.record_changes(tb, yb, m, new_m, z, step.triggered, step.quiet)
         changed = new_m != m
         m[:] = new_m
         y = watch.apply_resets(yb, m, tb, z)
@@ -450,10 +457,12 @@ class Integrator(RunLoop):
             return True
         return False
 
-    def record_changes(self, t: float, y: np.ndarray, m, new_m, z, at_zero: set[int]) -> None:
-        """An event for every watched surface whose branch changes at t."""
+    def record_changes(self, t: float, y: np.ndarray, m, new_m, z, at_zero: set[int],
+                       quiet: set[int] = frozenset()) -> None:
+        """An event for every watched surface whose branch changes at t (`quiet`:
+        located, but changing no derivative: not an event)."""
         for k in range(len(self.plan.watched)):
-            if new_m[k] == m[k]:
+            if new_m[k] == m[k] or k in quiet:
                 continue
             if k not in at_zero and self.watch.silent(k, t, y, new_m, z):
                 continue  # a branch nothing uses now: not an event

@@ -34,6 +34,7 @@ class SurfaceWatch:
         self.watched = plan.watched
         self.resets = plan.resets
         self.lookahead_h = plan.lookahead_h
+        self.watch_idx = plan.watch_idx
         self.events = plan.events
         self.y0 = c.y0
 
@@ -197,8 +198,9 @@ class SurfaceWatch:
         ahead = self.c.modes_literal(t + h, (y + h * f).tolist(), m, z)[k]
         return ahead if abs(ahead - lit) <= 1 else lit
 
-    def silent(self, k: int, t: float, y: np.ndarray, m, z) -> bool:
-        """True if surface k's branch does not change the derivatives here."""
+    def quiet(self, k: int, t: float, y: np.ndarray, m, z) -> bool:
+        """True if surface k's branch does not change the derivatives here: a change
+        of it is no event."""
         w = self.watched[k]
         if w.purpose.stops or w.kind is not SurfaceKind.SIGN:
             return False
@@ -210,6 +212,24 @@ class SurfaceWatch:
                 self.c.rhs(t, yl, [*m[:k], 0.0, *m[k + 1:]], z) == self.c.rhs(t, yl, mp, z)
         except (ArithmeticError, ValueError):
             return False
+
+    def silent(self, k: int, t: float, y: np.ndarray, m, z) -> bool:
+        """True if surface k's branch changes neither the derivatives here nor the
+        side another watched surface is on: a crossing of it is followed without
+        stopping. A switch that another's surface reads (ABS(Y) in INSW(ABS(Y) - DH,
+        ...)) is quiet, and silent unless that surface crossed because of it in the
+        same step: then the step is cut at its crossing, so the other is located."""
+        if not self.quiet(k, t, y, m, z):
+            return False
+        mp, mm = list(m), list(m)
+        mp[k], mm[k] = 1.0, -1.0
+        yl = y.tolist()
+        try:
+            ep, em = self.c.surf(t, yl, mp, z), self.c.surf(t, yl, mm, z)
+        except (ArithmeticError, ValueError):
+            return False
+        return all(self.crossed(j, m[j], ep[j]) == self.crossed(j, m[j], em[j])
+                   for j in self.watch_idx if j != k and m[j] != SLIDE)
 
     def apply_resets(self, y: np.ndarray, m: list[float], t: float | None = None,
                      z=None) -> np.ndarray:
