@@ -50,6 +50,21 @@ def test_knee_closed_form_and_its_crossing():
 
 
 @needs_numba
+def test_an_argument_bound_once_compiles():
+    # DEADSP reads X twice: the compiler binds X - 0.3 once, inside the expression
+    # (w1 := X - 0.3), which numba cannot type; the translation makes it a statement.
+    # X = exp(-t) leaves the dead zone [-0.2, 0.2] of X - 0.3 at t = ln 2, and
+    # Y = integral of X - 0.5 until then
+    text = ("X = INTGRL(1.0, -X)\nD = DEADSP(-0.2, 0.2, X - 0.3)\nY = INTGRL(0.0, D)\n"
+            "TIMER FINTIM = 1.0, OUTDEL = 0.1\nEND\n")
+    r = run1(text, method="COMPILED", rtol=1e-10, atol=1e-12)
+    assert r.status == "finished" and not r.warnings, r.warnings
+    assert [e.time for e in r.events] == pytest.approx([math.log(2.0)], abs=1e-12)
+    t = min(r.t[-1], math.log(2.0))
+    assert r["Y"][-1] == pytest.approx(1.0 - math.exp(-t) - 0.5 * t, abs=1e-9)
+
+
+@needs_numba
 @pytest.mark.parametrize("model", ["machine_unit", "crank_slider_startup"])
 def test_same_steps_as_scipy_dop853(model):
     # the kernel is SciPy's DOP853 (coefficients, error norm, step control, first
