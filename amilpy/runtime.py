@@ -440,6 +440,14 @@ HELPERS: dict[str, Callable] = {
 }
 
 
+def _vector_level(np):
+    def level_of(v):  # surfaces.level elementwise
+        v = np.asarray(v, dtype=float)
+        k = np.ceil(v - 0.5)
+        return np.where(v <= k - 0.5, k - 1.0, np.where(v > k + 0.5, k + 1.0, k))
+    return level_of
+
+
 @functools.lru_cache(maxsize=1)
 def vector_helpers() -> dict[str, Callable]:
     """HELPERS elementwise on NumPy arrays: the runner evaluates the generated surface
@@ -461,6 +469,6 @@ def vector_helpers() -> dict[str, Callable]:
         "LINT": lambda table, x: each(lambda v: lint(table, v))(x),
         "WDAY": lambda table, x: each(lambda v: weather_day(table, v))(x),
         "PULSE_ON": each(pulse_on), "IMPULS_STEP": each(impulse_step),
-        "LEVEL": lambda v: np.ceil(np.asarray(v) - 0.5), "SGN": np.sign,
+        "LEVEL": _vector_level(np), "SGN": np.sign,
         "WHERE": np.where, "ALL": many(np.logical_and), "ANY": many(np.logical_or),
     }
