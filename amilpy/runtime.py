@@ -30,6 +30,21 @@ def fortran_aint(x: float) -> float:
     return float(math.trunc(x))
 
 
+def fortran_nint(x: float) -> float:
+    """Fortran NINT/ANINT: the nearest whole number, halves rounded away from 0
+    (exact: |x| - floor(|x|) is computed without rounding)."""
+    a = abs(x)
+    n = math.floor(a)
+    if a - n >= 0.5:
+        n += 1
+    return math.copysign(float(n), x)
+
+
+def fortran_dim(x: float, y: float) -> float:
+    """Fortran DIM: x - y if x > y, else 0 (the positive difference)."""
+    return x - y if x > y else 0.0
+
+
 def fortran_amod(a: float, b: float) -> float:
     """Fortran MOD: the remainder with the sign of a (NaN for b = 0)."""
     try:

@@ -250,19 +250,32 @@ def test_memory_kept_step_by_step_says_it_ran_as_dop853():
 def test_every_math_function_with_a_compiled_form_compiles():
     # every helper the translation spells is used, so the run is the kernel's (no
     # warning that it ran as DOP853) and gives DOP853's rows: each function means
-    # in numba what it means in `amilpy.runtime`
+    # in numba what it means in `amilpy.runtime`. In sorted code AINT ... DIM are
+    # switches (their templates, an argument bound once: ABS(X - 0.3)); inside the
+    # PROCEDURE they read W, assigned in its IF, so they are their plain forms there
     text = """X = INTGRL(0.5, -X)
 A = SQRT(X) + EXP(X) + ALOG(X) + ALOG10(X) + SIN(X) + COS(X) + TAN(X)
 B = ASIN(X) + ACOS(X) + ATAN(X) + TANH(X) + ATAN2(X, 1.0) + SINH(X) + COSH(X)
 C = AINT(10.0*X) + FLOAT(2) + AMOD(10.0*X, 0.3) + SIGN(2.0, X - 0.3) + NOTNUL(X - X)
-D = AMAX1(X, 0.2) + AMIN1(X, 0.2) + X**1.5 + ABS(X - 0.3)
-Y = INTGRL(0.0, A + B + C + D)
+D = AMAX1(X, 0.2) + AMIN1(X, 0.2, 0.3) + X**1.5 + ABS(X - 0.3) + NINT(10.0*X) + DIM(X, 0.3)
+PROCEDURE E, W = PLAIN(X)
+   W = 0.0
+   IF (X > 0.0) THEN
+      W = 10.0*X
+   ENDIF
+   E = AINT(W) + AMOD(W, 0.3) + SIGN(2.0, W - 3.0) + NINT(W) + DIM(W, 3.0) + ABS(W - 3.0)
+   E = E + AMAX1(W, 3.0, 2.0) + AMIN1(W, 3.0)
+ENDPRO
+Y = INTGRL(0.0, A + B + C + D + E)
 TIMER FINTIM = 2.0, OUTDEL = 0.1
 END
 """
-    a = run1(text, method="COMPILED", rtol=1e-9, atol=1e-12)
-    b = run1(text, method="DOP853", rtol=1e-9, atol=1e-12)
-    assert a.status == "finished" and not a.warnings, a.warnings
-    # AINT, AMOD and SIGN jump where X crosses their edges (not switches the loop
-    # locates): both routes step over them, so their rows agree to the tolerance
+    a = run1(text, method="COMPILED", rtol=1e-9, atol=1e-12, advice=False)
+    b = run1(text, method="DOP853", rtol=1e-9, atol=1e-12, advice=False)
+    assert a.status == "finished" and not [w for w in a.warnings if "DOP853" in w], a.warnings
+    # the switches' crossings are located by both routes (the same events, to the
+    # solver's tolerance); the plain forms in the PROCEDURE jump where W crosses
+    # their edges, stepped over: the rows agree to the tolerance
+    assert [e.text for e in a.events] == [e.text for e in b.events]
+    assert [e.time for e in a.events] == pytest.approx([e.time for e in b.events], abs=1e-9)
     assert np.max(np.abs(a["Y"] - b["Y"])) <= 1e-6 * np.max(np.abs(b["Y"]))

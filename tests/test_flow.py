@@ -148,4 +148,7 @@ def test_a_data_value_as_a_state_of_one_flow():
     other = model.flow(rtol=1e-10, atol=1e-12, W=71.0)
     want, _ = other.advance(other.initial_state(), 0.0, 0.5)
     got = [end.y[one.state_names.index(n)] for n in other.state_names]
-    assert got == pytest.approx(list(want.y), rel=1e-9, abs=1e-12)
+    # 1e-8: each flow is within 1.2e-8 (V2, relative) of a solve at RELERR 1e-13 over
+    # these 22 contact events; closer agreement would only say that both took the same
+    # steps, which ABS(Y), a switch followed between steps in the gap, does not promise
+    assert got == pytest.approx(list(want.y), rel=1e-8, abs=1e-12)

@@ -103,7 +103,7 @@ END
 
 
 @pytest.mark.parametrize("method", ["AUTO", "RKS", "DOP853", "RADAU", "COMPILED"])
-@pytest.mark.parametrize("form", ["FSW"])
+@pytest.mark.parametrize("form", ["FSW", "ABS"])
 def test_a_switch_read_only_by_another_surface_never_hides_its_crossing(method, form):
     # Y = t - 1 crosses the gap |Y| < 0.5 from t = 0.5 to 1.5; C is 1 outside it, so
     # X(3) = 0.5 + 1.5 = 2 exactly. S (or ABS's own switch) changes no derivative: its

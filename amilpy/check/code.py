@@ -16,11 +16,13 @@ Two kinds of code:
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 
 from .. import ir
 from .. import syntax as ast
 from ..diagnostics import Reporter, Span
+from ..library import Kind, lookup
 from ..syntax import deep_enough
 from .lower import Lowering
 from .names import PURE, Names
@@ -188,10 +190,12 @@ class _Unit:
         names.check_calls(expr, UNIT_CALLS, "an IF or PROCEDURAL block")
         value = substitute(expr, env)
         literal = bool(opaque & set(read_names(value)))
-        if literal and any(isinstance(n, ast.BinOp) and n.op in ast.RELATIONAL[:4]
-                           for n in ast.walk(value)):
+        switch = next((n for n in ast.walk(value) if _switch_in_sorted_code(n)), None) \
+            if literal else None
+        if switch is not None:
+            what = "this test" if isinstance(switch, ast.BinOp) else f"{switch.func} here"
             self.code.low.warn(
-                "this test reads a value assigned inside an IF or a loop before it: it is "
+                f"{what} reads a value assigned inside an IF or a loop before it: it is "
                 "made where it stands, never located", expr.span,
                 "compute that value before the block, or test it with FSW/INSW")
         if condition and not literal:
@@ -256,29 +260,46 @@ class _Unit:
         return out
 
 
-def condition_surface(e: ast.Node) -> ast.Node:
+def _switch_in_sorted_code(node: ast.Node) -> bool:
+    """A relational test (`A > B`) or a switch's call (FSW, ABS, AMAX1, ...): what
+    sorted code locates, and a test made where it stands does not."""
+    if isinstance(node, ast.BinOp):
+        return node.op in ast.RELATIONAL[:4]
+    if isinstance(node, ast.Call):
+        func = lookup(node.func)
+        return func is not None and func.kind in (Kind.SWITCH, Kind.TIME)
+    return False
+
+
+def condition_surface(e: ast.Node, leaf: Callable[[ast.Node], ast.Node] = lambda x: x
+                      ) -> ast.Node:
     """A condition as a continuous surface that is positive where the condition
     holds (TERMT, FINISH relations): `A > B` is A - B, `A .AND. B` the smaller of
     the two surfaces, `A .OR. B` the larger, `.NOT. A` its negative, a number
-    itself. Where no such surface exists (==, .EQV.), the truth minus 1/2."""
+    itself. Where no such surface exists (==, .EQV.), the truth minus 1/2.
+
+    `leaf` lowers the listing's own expressions (A, B); the smaller, larger and
+    absolute values this puts around them are the surface's own arithmetic, left
+    as plain calls (a surface is located, never integrated: its kinks are harmless)."""
     span = e.span
     if isinstance(e, ast.BinOp):
         if e.op in (">", ">="):
-            return ast.BinOp("-", e.left, e.right, span)
+            return ast.BinOp("-", leaf(e.left), leaf(e.right), span)
         if e.op in ("<", "<="):
-            return ast.BinOp("-", e.right, e.left, span)
+            return ast.BinOp("-", leaf(e.right), leaf(e.left), span)
         if e.op == "/=":
-            return ast.Call("ABS", (ast.BinOp("-", e.left, e.right, span),), span)
+            return ast.Call("ABS", (ast.BinOp("-", leaf(e.left), leaf(e.right), span),), span)
         if e.op in ("AND", "OR"):
             return ast.Call("AMIN1" if e.op == "AND" else "AMAX1",
-                            (condition_surface(e.left), condition_surface(e.right)), span)
+                            (condition_surface(e.left, leaf),
+                             condition_surface(e.right, leaf)), span)
     if isinstance(e, ast.Not):
-        return ast.Neg(condition_surface(e.operand), span)
+        return ast.Neg(condition_surface(e.operand, leaf), span)
     if isinstance(e, ast.Num) and ast.is_logical(e):
         return ast.Num(1.0 if e.value > 0 else -1.0, span, e.text)
     if ast.is_logical(e):
-        return ast.BinOp("-", e, ast.Num(0.5, span, "0.5"), span)
-    return e
+        return ast.BinOp("-", leaf(e), ast.Num(0.5, span, "0.5"), span)
+    return leaf(e)
 
 
 def _as_condition(expr: ast.Node) -> ast.Node:

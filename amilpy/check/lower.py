@@ -257,11 +257,17 @@ class Lowering:
 
     def switch(self, call: ast.Call, target: str) -> int:
         func = lookup(call.func, len(call.args))
+        description = describe(call)
+        if func.folds and len(call.args) > 2:
+            # AMAX1(A, B, C) is AMAX1(AMAX1(A, B), C): a switch per argument after the
+            # first, each on the running result and the next argument
+            inner = ast.Call(call.func, call.args[:-1], call.span)
+            call = ast.Call(call.func, (inner, call.args[-1]), call.span)
         self.note_before_run(func, call)
         args = self.args(call, target)
         index = len(self.switches)
         surfaces = [self.surface(instantiate(t, args, call.span), func.surface_kind, index,
-                                 ir.Purpose.SWITCH, call.span, describe(call),
+                                 ir.Purpose.SWITCH, call.span, description,
                                  surface_text(t, call))
                     for t in func.surfaces]
         self.switches.append(ir.Switch(index, func.name, args, tuple(surfaces), call.span,
@@ -307,8 +313,9 @@ class Lowering:
         text = self.written(st.expr.span) or expr_text(None, st.expr, TEXT_LIMIT)
         where = f"{'FINISH ' + text if finish else f'TERMT({text})'} at line {st.span.line}"
         description = f"{st.message} ({where})" if st.message else where
-        index = self.surface(self.expr(condition_surface(cond), "TERMT"), ir.SurfaceKind.SIGN,
-                             None, ir.Purpose.TERMT, st.span, description, text)
+        surface = condition_surface(cond, lambda e: self.expr(e, "TERMT"))
+        index = self.surface(surface, ir.SurfaceKind.SIGN, None, ir.Purpose.TERMT, st.span,
+                             description, text)
         if isinstance(cond, ast.BinOp) and cond.op in (">=", "<="):
             self.closed.add(index)
         return index

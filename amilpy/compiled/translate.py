@@ -25,7 +25,8 @@ from ..codegen import Compiled
 # outside [-1, 1], where Python's raises), amilpy's own helpers compiled as written.
 # RESPELLED are those whose Python form catches an exception numba cannot: numba's
 # plain operation gives the NaN or infinity they return.
-AS_WRITTEN = frozenset({"SQRT", "ALOG", "ALOG10", "AINT", "SIGN", "NOTNUL", "SGN", "LEVEL"})
+AS_WRITTEN = frozenset({"SQRT", "ALOG", "ALOG10", "AINT", "NINT", "DIM", "SIGN", "NOTNUL", "SGN",
+                        "LEVEL"})
 _BUILTINS = {abs: "abs", max: "max", min: "min", float: "float"}
 RESPELLED: dict[str, str] = {
     "EXP": "math.exp", "SINH": "math.sinh", "COSH": "math.cosh",
