@@ -304,11 +304,19 @@ def _locate(surf, k, mode, level, ta, tb, ga, gb, h, cubic, F, m, z, p, e, yt):
 
 
 @_jit
+def _side(k, e, level):
+    """Where a surface's value puts it (`SurfaceWatch.side`)."""
+    if level[k]:
+        return 1.0 if e < 0.0 else 0.0
+    return 1.0 if e > 0.0 else (-1.0 if e < 0.0 else 0.0)
+
+
+@_jit
 def _silent(rhs, surf, k, t, y, m, z, p, f1, f2, watch, level, e1, e2):
     """Whether surface k's branch matters here: 0 it changes the derivatives, 1 it
     changes nothing (`SurfaceWatch.silent`), 2 it changes no derivative but the side
     another watched surface is on (`SurfaceWatch.quiet` and not `silent`: the loop
-    cuts the step there, with no event)."""
+    cuts the step there, with no event of its own)."""
     mk = m[k]
     m[k] = 1.0
     rhs(t, y, m, z, p, f1)
@@ -325,7 +333,7 @@ def _silent(rhs, surf, k, t, y, m, z, p, f1, f2, watch, level, e1, e2):
         m[k] = -1.0
         surf(t, y, m, z, p, e2)
         for j in watch:
-            if j != k and _crossed(j, m[j], e1[j], level) != _crossed(j, m[j], e2[j], level):
+            if j != k and _side(j, e1[j], level) != _side(j, e2[j], level):
                 found = 2
     m[k] = mk
     return found

@@ -217,8 +217,9 @@ class SurfaceWatch:
         """True if surface k's branch changes neither the derivatives here nor the
         side another watched surface is on: a crossing of it is followed without
         stopping. A switch that another's surface reads (ABS(Y) in INSW(ABS(Y) - DH,
-        ...)) is quiet, and silent unless that surface crossed because of it in the
-        same step: then the step is cut at its crossing, so the other is located."""
+        ...)) is quiet, and silent unless that surface is on another side because of
+        it (crossed in the same step, or a relation's 1 become 0 under RSW): then the
+        step is cut at its crossing, so the other is located or chosen again."""
         if not self.quiet(k, t, y, m, z):
             return False
         mp, mm = list(m), list(m)
@@ -228,8 +229,16 @@ class SurfaceWatch:
             ep, em = self.c.surf(t, yl, mp, z), self.c.surf(t, yl, mm, z)
         except (ArithmeticError, ValueError):
             return False
-        return all(self.crossed(j, m[j], ep[j]) == self.crossed(j, m[j], em[j])
+        return all(self.side(j, ep[j]) == self.side(j, em[j])
                    for j in self.watch_idx if j != k and m[j] != SLIDE)
+
+    def side(self, k: int, e: float) -> float:
+        """Where surface k's value e puts it: its sign, or for a level surface (its
+        distance to the band's edges) whether it has left its band. A value that
+        moves onto zero (RSW's condition, 1 or 0) changes side."""
+        if self.watched[k].kind is SurfaceKind.LEVEL:
+            return float(e < 0.0)
+        return sign(e)
 
     def apply_resets(self, y: np.ndarray, m: list[float], t: float | None = None,
                      z=None) -> np.ndarray:
