@@ -214,6 +214,24 @@ def test_dry_friction_costs_what_fsw_costs_at_the_default_tolerance():
     assert s.stats["nsteps"] == f.stats["nsteps"] and len(s.events) == len(f.events) == 7
 
 
+def test_the_clutch_with_its_friction_written_with_sign():
+    # Exercise 4's rotor friction as classic listings write it, MF*SIGN(1.0, W1),
+    # instead of FSW(W1, -MF, LIMIT(-MF, MF, MNET), MF): at rest the slide's weights
+    # give the friction that holds the rotor (MNET, the LIMIT branch), so both runs
+    # take the same 1375 steps over 0.1 s, with the same events and rows (as plain
+    # arithmetic: 1,000,100 steps, and the run failed at its start)
+    text = open(f"{ROOT}/models/ex4_clutch.amil", encoding="utf-8").read()
+    text = text.replace("FINTIM = 0.5", "FINTIM = 0.1")
+    fsw = amilpy.loads(text, name="c.amil").run(advice=False)[0]
+    sgn = amilpy.loads(text.replace("FSW(W1, -MF, LIMIT(-MF, MF, MNET), MF)",
+                                    "MF*SIGN(1.0, W1)"), name="c.amil").run(advice=False)[0]
+    assert sgn.ok and sgn.stats["nsteps"] == fsw.stats["nsteps"]
+    assert [(e.time, e.kind, e.old, e.new) for e in sgn.events] == \
+        [(e.time, e.kind, e.old, e.new) for e in fsw.events]
+    for name in ("W1", "W2", "IA", "MC"):
+        assert sgn[name] == pytest.approx(fsw[name], rel=1e-12, abs=1e-15), name
+
+
 # ------------------------------------------------------------ kinks, located
 def test_abs_of_a_sine_is_located_at_each_zero():
     # |sin 3t| has a kink at k*pi/3: each is located to a few ulps of TIME (Brent's
@@ -400,9 +418,37 @@ def test_step_point_mode_reads_each_switch_on_the_spot():
                                          abs=1e-15)
 
 
-def test_a_call_that_reads_a_value_assigned_inside_a_block_is_made_where_it_stands():
-    # W is assigned inside the IF: a surface must be a function of what the block
-    # reads, so AINT(W) is the plain value, with the warning a test there gets
+def test_a_call_that_reads_a_value_a_loop_assigned_is_made_where_it_stands():
+    # W is the sum a DO loop makes: no expression of what the block reads gives it,
+    # so AINT(W) cannot be a surface; it is the plain value, with the warning a test
+    # there gets (a value an IF assigns on every path is what the IF selects: below)
+    model = amilpy.loads("""PROGRAM p
+  CINTERVAL CINT = 0.1
+  DERIVATIVE
+    X = INTEG(1.0, 0.0)
+    PROCEDURAL (E, W = X)
+      W = 0.0
+      DO K = 1, 4
+        W = W + X
+      ENDDO
+      E = AINT(W)
+    END
+    TERMT(T >= 1.0)
+  END
+END
+""", "p.csl")
+    assert any("AINT here reads a value assigned inside an IF or a loop before it: it is "
+               "made where it stands, never located" in w.message for w in model.ir.warnings)
+    assert model.ir.switches == []
+    run, = model.run(rtol=1e-10, atol=1e-12, advice=False)
+    assert list(run["E"]) == [runtime.fortran_aint(4.0 * x) for x in run["X"]]
+
+
+def test_a_call_on_a_value_an_if_selects_is_located():
+    # W = 4X where X > 0.5, else 0, on every path: after the IF, W is RSW(X > 0.5, 4X,
+    # 0.) of what the block reads, so AINT(W) is a switch: its jumps at 4X = 3 and 4
+    # (X = 0.75, 1) are located; at X = 0.5 W jumps from 0 to 2 with the IF's choice,
+    # and AINT(W) with it (an event each)
     model = amilpy.loads("""X = INTGRL(0.0, 1.0)
 PROCEDURE E, W = P(X)
    W = 0.0
@@ -411,15 +457,21 @@ PROCEDURE E, W = P(X)
    ENDIF
    E = AINT(W)
 ENDPRO
-TIMER FINTIM = 1.0, OUTDEL = 0.1
+I = INTGRL(0.0, E)
+TIMER FINTIM = 1.2, OUTDEL = 0.1
 END
 """, name="p.amil")
-    assert any("AINT here reads a value assigned inside an IF or a loop before it: it is "
-               "made where it stands, never located" in w.message for w in model.ir.warnings)
-    assert [s.func for s in model.ir.switches] == [".GT."]  # the IF's test alone
+    assert not model.ir.warnings
     run, = model.run(rtol=1e-10, atol=1e-12, advice=False)
-    assert list(run["E"]) == [runtime.fortran_aint(4.0 * t) if t > 0.5 else 0.0
-                              for t in run["X"]]
+    assert [e.switch for e in run.events] == ["RSW(X > 0.5, ...) at line 4"] + \
+        ["AINT(W) at line 7"] * 3
+    assert [e.time for e in run.events] == pytest.approx([0.5, 0.5, 0.75, 1.0],
+                                                         abs=ulps(1.0))
+    # I = 2(t - .5) to .75, then 0.5 + 3(t - .75) to 1, then 1.25 + 4(t - 1)
+    t = run.t
+    want = np.where(t < 0.5, 0.0, np.where(t < 0.75, 2 * (t - 0.5),
+                    np.where(t < 1.0, 0.5 + 3 * (t - 0.75), 1.25 + 4 * (t - 1.0))))
+    assert run["I"] == pytest.approx(want, abs=1e-9)
 
 
 def test_interval_expressions_may_use_the_plain_forms():

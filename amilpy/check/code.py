@@ -6,12 +6,14 @@ Two kinds of code:
   FUNCTION bodies): names may be reassigned; every test is made where it stands
   (`literal` lowering: no surface, nothing located);
 - **a sorting unit** (an IF or PROCEDURAL block of sorted code): one unit for the
-  sort, written order inside. Its conditions and switches are switching surfaces,
-  located like FSW; a surface must be a function of what the unit reads, so a name
-  the unit assigned before on its straight-line path is replaced by the expression
-  it was given (`substitute`). A test that reads a name assigned inside a nested
-  branch or a loop of the unit cannot be written that way: it is made where it
-  stands, with a warning.
+  sort, written order inside. Its conditions and switches (FSW, ABS, AINT, ...) are
+  switching surfaces, located like FSW; a surface must be a function of what the unit
+  reads, so a name the unit assigned before on its straight-line path is replaced by
+  the expression it was given (`substitute`), and a name an IF assigned on every path
+  by what the IF selects, RSW(condition, value, ...) over the IF's own conditions. A
+  test that reads a name assigned inside a loop of the unit (or by an IF on some
+  paths only) cannot be written that way: it is made where it stands, with a
+  warning.
 """
 
 from __future__ import annotations
@@ -221,19 +223,28 @@ class _Unit:
                     env[target] = value
                     opaque.discard(target)
             elif isinstance(st, ast.If):
-                branches = []
+                branches, after = [], []
                 inner: set[str] = set()
                 for b in st.branches:
                     cond = None if b.cond is None else \
                         self.expr(b.cond, None, env, opaque, condition=True)
                     here = path + ((b.cond,) if b.cond is not None else ())
-                    branches.append((cond, tuple(self.block(b.body, dict(env), set(opaque),
-                                                            here))))
+                    benv, bopaque = dict(env), set(opaque)
+                    branches.append((cond, tuple(self.block(b.body, benv, bopaque, here))))
+                    after.append((b.cond, benv, bopaque))
                     inner.update(assigned_names(b.body))
                 out.append(ir.IfThen(tuple(branches), st.span))
+                # (where the IF starts: a surface over it reads as RSW(...), not as
+                # the IF's first line)
+                at = Span(st.span.line, st.span.column)
                 for n in inner:
-                    env.pop(n, None)
-                opaque |= inner
+                    value = _selected(n, env, opaque, after, at)
+                    if value is None:
+                        env.pop(n, None)
+                        opaque.add(n)
+                    else:
+                        env[n] = value
+                        opaque.discard(n)
             elif isinstance(st, ast.Loop):
                 step = st.step if st.step is not None else ast.Num(1.0, st.span, "1")
                 changed = set(assigned_names(st.body)) | {st.var}
@@ -258,6 +269,30 @@ class _Unit:
                 self.code.rep.error(f"{what} cannot stand inside an IF or PROCEDURAL block "
                                     f"of {self.section}", st.span)
         return out
+
+
+def _selected(name: str, env: dict, opaque: set, after: list, span: Span) -> ast.Node | None:
+    """A name an IF assigns, as what the IF selects: RSW(c1, v1, RSW(c2, v2, v)) over
+    its conditions and the name's value at the end of each branch (v: the ELSE's, or
+    the value from before the IF where a path does not assign it), so that a test
+    after the IF is a surface of what the unit reads, switched by the IF's own
+    conditions. None where a value is not such an expression (assigned in a loop or
+    a nested IF that is not, or not known before the IF on a path that keeps it)."""
+    def known(values: dict, hidden: set) -> ast.Node | None:
+        return None if name in hidden else values.get(name)
+
+    *tests, (last, last_env, last_opaque) = after
+    if last is None:
+        value = known(last_env, last_opaque)
+    else:
+        tests.append((last, last_env, last_opaque))
+        value = known(env, opaque)
+    for cond, values, hidden in reversed(tests):
+        chosen, cond = known(values, hidden), substitute(cond, env)
+        if value is None or chosen is None or opaque & set(read_names(cond)):
+            return None
+        value = ast.Call("RSW", (_as_condition(cond), chosen, value), span)
+    return value
 
 
 def _switch_in_sorted_code(node: ast.Node) -> bool:

@@ -39,10 +39,13 @@ def surface_text(template: str, call: ast.Call, states: tuple[str, ...] = ()) ->
     return expr_text(None, instantiate(template, call.args, call.span, states), TEXT_LIMIT)
 
 
-def describe(call: ast.Call) -> str:
+def describe(call: ast.Call, written: Callable[[Span], str | None] = lambda span: None
+             ) -> str:
     """A switch for a reader: `FSW(W1, ...) at line 57` (the function and its first
-    argument as written)."""
-    first = expr_text(None, call.args[0], TEXT_LIMIT) if call.args else ""
+    argument as written: `written` gives the listing's text of a span, which a name
+    a block replaced by its value still has)."""
+    first = (call.arg_spans and written(call.arg_spans[0])) or \
+        (expr_text(None, call.args[0], TEXT_LIMIT) if call.args else "")
     more = ", ..." if len(call.args) > 1 else ""
     return f"{call.func}({first}{more}) at line {call.span.line}"
 
@@ -209,7 +212,7 @@ class Lowering:
         # a state function's surfaces (over its arguments and its own states) are
         # what its states' `runs` read (MODINT's hold and reset, LIMINT's bounds)
         modes = tuple(self.surface(instantiate(t, args, sp, names), func.surface_kind, None,
-                                   ir.Purpose.SWITCH, sp, describe(call),
+                                   ir.Purpose.SWITCH, sp, describe(call, self.written),
                                    surface_text(t, call, names))
                       for t in func.surfaces)
         for k, spec in enumerate(func.states):
@@ -247,7 +250,8 @@ class Lowering:
         index = len(self.memories)
         surfaces = tuple(
             self.surface(instantiate(t, args, call.span), func.surface_kind, index,
-                         ir.Purpose.MEMORY, call.span, describe(call), surface_text(t, call))
+                         ir.Purpose.MEMORY, call.span, describe(call, self.written),
+                         surface_text(t, call))
             for t in func.surfaces)
         nslots = int(constant_value(instantiate(func.memory.slots, call.args, call.span), {}))
         self.memories.append(ir.Memory(index, func.name, args, self.nslots, nslots, surfaces,
@@ -257,7 +261,7 @@ class Lowering:
 
     def switch(self, call: ast.Call, target: str) -> int:
         func = lookup(call.func, len(call.args))
-        description = describe(call)
+        description = describe(call, self.written)
         if func.folds and len(call.args) > 2:
             # AMAX1(A, B, C) is AMAX1(AMAX1(A, B), C): a switch per argument after the
             # first, each on the running result and the next argument
