@@ -42,10 +42,14 @@ def surface_text(template: str, call: ast.Call, states: tuple[str, ...] = ()) ->
 def describe(call: ast.Call, written: Callable[[Span], str | None] = lambda span: None
              ) -> str:
     """A switch for a reader: `FSW(W1, ...) at line 57` (the function and its first
-    argument as written: `written` gives the listing's text of a span, which a name
-    a block replaced by its value still has)."""
-    first = (call.arg_spans and written(call.arg_spans[0])) or \
-        (expr_text(None, call.args[0], TEXT_LIMIT) if call.args else "")
+    argument as written; where a block replaced its names by their values, the
+    listing's own text of it, which `written` gives: AINT(W), not AINT(RSW(...)))."""
+    first = expr_text(None, call.args[0], TEXT_LIMIT) if call.args else ""
+    given = call.arg_spans[0] if call.args and call.arg_spans else None
+    text = written(given) if given is not None and call.args[0].span != given else None
+    if text:
+        text = text.upper()
+        first = text if len(text) <= TEXT_LIMIT else text[:TEXT_LIMIT - 3] + "..."
     more = ", ..." if len(call.args) > 1 else ""
     return f"{call.func}({first}{more}) at line {call.span.line}"
 
