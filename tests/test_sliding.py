@@ -6,6 +6,8 @@ import numpy as np
 import pytest
 from conftest import METHODS, run1
 
+import amilpy
+
 RELAY = "FSW(X, -1.0, 0.0, 1.0)"
 # Sliding is located switching. METHOD EULER runs in step-point mode by default (the
 # classic translators' loop: a relay there chatters from step to step, as it did in
@@ -115,3 +117,15 @@ def test_a_switch_read_only_by_another_surface_never_hides_its_crossing(method, 
     r = run1(text, method=method, advice=False)
     assert r["X"][-1] == pytest.approx(2.0, abs=1e-12)
     assert [e.time for e in r.events] == pytest.approx([0.5, 1.5], abs=1e-12)
+
+
+def test_more_surfaces_sliding_at_the_start_than_allowed_is_a_failed_run():
+    # eight masses at rest, each held by dry friction (1.5 > the drive): the start
+    # would slide on more than MAX_SLIDING surfaces at once; the run says so (it was
+    # an uncaught exception), and so does a flow asked for its initial state
+    text = "\n".join(f"V{i} = INTGRL(0.0, (SIN(TIME) - 1.5*SIGN(1.0, V{i}))/{i + 1}.0)"
+                     for i in range(8)) + "\nTIMER FINTIM = 2.0\nEND\n"
+    r = run1(text, advice=False)
+    assert r.status == "failed" and "switching surfaces slide at once (at most 6)" in r.message
+    with pytest.raises(amilpy.AmilError, match="slide at once"):
+        amilpy.loads(text, name="s.amil").flow().initial_state()

@@ -32,6 +32,7 @@ from .edges import expected_event, locate_crossings
 from .faults import Fault, fault_text
 from .plan import SLIDE, Options, Purpose, RunPlan, SurfaceKind, time_breakpoints
 from .record import Recorder
+from .slide import MAX_SLIDING
 from .watch import SurfaceWatch, TooManySlides, wrong_side
 
 _EPS = float(np.finfo(float).eps)
@@ -193,7 +194,7 @@ class Integrator(RunLoop):
                 faults.append(Fault(exc, t, y.tolist(), list(m), list(z)))
                 return [math.nan] * n
             except TooManySlides as exc:
-                raise Stop(Failure.SLIDES, t, count=exc.count, limit=6) from None
+                raise Stop(Failure.SLIDES, t, count=exc.count, limit=MAX_SLIDING) from None
         return f
 
     def _start_segment(self, cur: Cursor, seg_end: float, rec: Recorder | None,
