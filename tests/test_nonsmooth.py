@@ -98,6 +98,32 @@ def test_the_vector_forms_are_the_plain_forms_on_columns(name):
     assert np.array_equal(got, want), name
 
 
+def test_the_generated_code_on_columns_is_the_code_on_rows():
+    # AUTO records whole chunks of rows at once: the surfaces and outputs are the same
+    # generated code run on NumPy columns (templates with their modes frozen, and the
+    # plain forms inside AINT's and TERMT's surfaces); row by row it gives the same
+    from amilpy.run.prepare import prepare
+
+    model = amilpy.loads("""X = INTGRL(-1.3, 1.0)
+Y = INTGRL(0.4, X)
+A = ABS(X) + SIGN(2.0, Y) + AMAX1(X, Y, 0.1) + AMIN1(X, -Y) + DIM(X, Y)
+B = AINT(3.0*X) + NINT(3.0*Y) + AMOD(5.0*X, 1.5)
+TERMT(X > 2.0 .AND. ABS(Y) > 3.0)
+TIMER FINTIM = 2.0, OUTDEL = 0.1
+END
+""", name="v.amil")
+    c = prepare(model.ir, model.ir.runs[0]).compiled
+    t = np.linspace(0.0, 2.0, 41)
+    cols = [-1.3 + 1.0 * t, 0.4 - 1.3 * t + 0.5 * t * t]
+    m = c.modes_literal(0.7, [col[14] for col in cols], [0.0] * len(c.watched), [])
+    surf = np.column_stack([np.broadcast_to(v, t.shape) for v in c.surf_v(t, cols, m, [])])
+    out = np.column_stack([np.broadcast_to(v, t.shape) for v in c.out_v(t, cols, m, [])])
+    for i in range(t.size):
+        row = [col[i] for col in cols]
+        assert list(surf[i]) == c.surf(t[i], row, m, []), i
+        assert list(out[i]) == c.out(t[i], row, m, []), i
+
+
 def test_the_references_show_every_one():
     text = (ROOT_DOCS / "functions.md").read_text("utf-8")
     language = (ROOT_DOCS / "language.md").read_text("utf-8")
