@@ -245,7 +245,7 @@ def test_the_clutch_with_its_friction_written_with_sign():
     # instead of FSW(W1, -MF, LIMIT(-MF, MF, MNET), MF): at rest the slide's weights
     # give the friction that holds the rotor (MNET, the LIMIT branch), so both runs
     # take the same 1375 steps over 0.1 s, with the same events and rows (as plain
-    # arithmetic: 1,000,100 steps, and the run failed at its start)
+    # arithmetic: a step-size underflow at TIME = 5E-12, after 1,000,100 steps)
     text = open(f"{ROOT}/models/ex4_clutch.amil", encoding="utf-8").read()
     text = text.replace("FINTIM = 0.5", "FINTIM = 0.1")
     fsw = amilpy.loads(text, name="c.amil").run(advice=False)[0]
