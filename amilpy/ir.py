@@ -224,7 +224,8 @@ class Surface:
 class Switch:
     index: int
     func: str  # canonical name: FCNSW, INSW, OUTSW, COMPAR, LIMIT, DEADSP, QNTZR,
-    #            STEP, RAMP, SINE, AND, IOR, NOR, NAND, EOR, NOT, EQUIV
+    #            STEP, RAMP, SINE, AND, IOR, NOR, NAND, EOR, NOT, EQUIV, the relations
+    #            (.GT., ...), ABS, SIGN, AMAX1, AMIN1, DIM, AINT, NINT, AMOD
     args: tuple[Expr, ...]
     surfaces: tuple[int, ...]
     span: Span

@@ -5,9 +5,12 @@ an accepted step, and its run-time function. The checker lowers a call and the
 compiler emits it by reading the entry; nothing else knows a function by name.
 
 Kinds (the contract's sections 5 and 12):
-  math    a plain function of its arguments (ABS, SIN, AMAX1, NOTNUL, ...)
+  math    a smooth function of its arguments (SIN, SQRT, ATAN2, NOTNUL, ...)
   state   introduces states (INTGRL, REALPL, LEDLAG, CMPXPL, MODINT, LIMINT)
-  switch  a branch selected by the sign of one or more surfaces (FSW, LIMIT, RSW, ...)
+  switch  a branch selected by the sign of one or more surfaces (FSW, LIMIT, RSW, ...);
+          Fortran's non-smooth arithmetic (SIGN, ABS, AMAX1/AMIN1, DIM, AINT, NINT,
+          AMOD) is a switch too, with a plain form (`scalar`, `vector`) for where it is
+          evaluated once
   time    a switch on TIME alone (STEP, RAMP, SINE/HARM, the PULSE train): its
           surfaces change sign at instants known before the run (breakpoints)
   memory  keeps values from the last accepted step (HSTRSS, BCKLSH, ZHOLD, RST, PULSE,
@@ -27,7 +30,14 @@ language's functions or of `runtime.HELPERS` (a surface may call a helper too:
 PULSE's train). A template whose text starts with `*` gives several slots at once.
 
 A signature names its arguments; `[, E]` marks optional ones at the end and
-`...)` any number from the last named one on.
+`...)` any number from the last named one on (a switch's templates read the first
+two: a call with more is the function of the first two, then of that and the next,
+and so on: AMAX1(A, B, C) is AMAX1(AMAX1(A, B), C)).
+
+A switch with a plain form means, with the modes its surfaces have on the spot
+(`surfaces.sign`, `surfaces.level`), exactly what the plain form means, at the
+edges too (tests/test_nonsmooth.py checks it): its templates are what the
+integrator sees between crossings, the plain form what code that runs once reads.
 """
 
 from __future__ import annotations
@@ -106,8 +116,9 @@ class Func:
     surface_kind: SurfaceKind = SurfaceKind.SIGN
     states: tuple[StateSpec, ...] = ()
     memory: MemorySpec | None = None
-    # math: the function on floats, and on NumPy arrays (a NumPy attribute name,
-    # or a factory given the numpy module)
+    # the plain form (math functions, and the non-smooth switches where they are
+    # evaluated once): the function on floats, and on NumPy arrays (a NumPy attribute
+    # name, or a factory given the numpy module)
     scalar: Callable | None = None
     vector: str | Callable[[Any], Callable] | None = None
     # tables: the run-time interpolation (a `runtime.HELPERS` name)
@@ -154,6 +165,18 @@ class Func:
         if i in self.nonnegative_args and not value >= 0:
             return f"{self.arg_names[i]} of {self.name} must not be negative (got {value:g})"
         return None
+
+    @property
+    def plain(self) -> bool:
+        """Whether the function has a plain form: a function of its arguments alone,
+        which code evaluated once (INITIAL, a test made where it stands) calls."""
+        return self.scalar is not None
+
+    @property
+    def folds(self) -> bool:
+        """A switch of any number of arguments: its templates read two (see the
+        module's docstring)."""
+        return self.kind is Kind.SWITCH and self.nargs[1] is None
 
     @property
     def outputs(self) -> int:
@@ -219,7 +242,7 @@ def check_template_set(f: Func) -> None:
     lo, hi = f.nargs
     n = hi if hi is not None else max(lo, 8)
     nstates, nsurf = len(f.states), len(f.surfaces)
-    calls = frozenset(rt.HELPERS) | {n for n, g in FUNCTIONS.items() if g.kind is Kind.MATH}
+    calls = frozenset(rt.HELPERS) | {n for n, g in FUNCTIONS.items() if g.plain}
 
     def check(text: str, **kw: Any) -> None:
         check_template(text, f.name, args=n, calls=calls, **kw)
@@ -250,21 +273,21 @@ def check_template_set(f: Func) -> None:
 
 
 def runtime_name(func: Func) -> str:
-    """The name generated code calls a math form by: its own, or NAME_n for the
+    """The name generated code calls a plain form by: its own, or NAME_n for the
     variant of n arguments."""
     return func.name if FUNCTIONS.get(func.name) is func else f"{func.name}_{func.nargs[0]}"
 
 
-def _math_forms():
+def _plain_forms():
     for entry in FUNCTIONS.values():
         for f in (entry, *entry.variants):
-            if f.kind is Kind.MATH:
+            if f.plain:
                 yield runtime_name(f), f
 
 
 def math_functions() -> dict[str, Callable]:
-    """Run-time name -> the function on floats, for every math form."""
-    return {name: f.scalar for name, f in _math_forms()}
+    """Run-time name -> the function on floats, for every plain form."""
+    return {name: f.scalar for name, f in _plain_forms()}
 
 
 def vector_functions() -> dict[str, Callable]:
@@ -273,7 +296,7 @@ def vector_functions() -> dict[str, Callable]:
 
     out: dict[str, Callable] = {
         name: getattr(np, f.vector) if isinstance(f.vector, str) else f.vector(np)
-        for name, f in _math_forms()}
+        for name, f in _plain_forms()}
     out.update(rt.vector_helpers())
     return out
 
@@ -288,13 +311,27 @@ def _vector_many(ufunc: str):
     return lambda np: (lambda *args: functools.reduce(getattr(np, ufunc), args))
 
 
+def _vector_dim(np):
+    def dim(x, y):
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        return np.where(x > y, x - y, 0.0)
+    return dim
+
+
+def _vector_nint(np):
+    def nint(x):
+        a = np.abs(np.asarray(x, dtype=float))
+        n = np.floor(a)
+        return np.copysign(np.where(a - n >= 0.5, n + 1.0, n), x)
+    return nint
+
+
 # --- mathematical (Fortran meanings) -----------------------------------------
 def _math(signature: str, scalar: Callable, vector, *aliases: str, doc: str = "") -> None:
     register(Func(signature[:signature.index("(")], Kind.MATH, signature, doc, aliases,
                   scalar=scalar, vector=vector))
 
 
-_math("ABS(X)", abs, "abs")
 _math("SQRT(X)", rt.safe_sqrt, "sqrt", doc="NaN below 0")
 _math("EXP(X)", rt.safe_exp, "exp")
 _math("ALOG(X)", rt.safe_log, "log", "LOG", doc="natural logarithm")
@@ -311,15 +348,51 @@ _math("ATAN(X)", math.atan, "arctan")
 _math("SINH(X)", rt.nan_on_domain(math.sinh), "sinh")
 _math("COSH(X)", rt.nan_on_domain(math.cosh), "cosh")
 _math("TANH(X)", math.tanh, "tanh")
-_math("AINT(X)", rt.fortran_aint, "trunc", "INT", doc="truncation toward 0")
 _math("FLOAT(X)", float, lambda np: (lambda x: np.asarray(x, dtype=float)))
 _math("ATAN2(Y, X)", math.atan2, "arctan2")
-_math("AMOD(A, B)", rt.fortran_amod, "fmod", "MOD", doc="remainder with the sign of A")
-_math("SIGN(A, B)", rt.fortran_sign, _vector_sign, doc="|A| with the sign of B")
-_math("AMAX1(X1, X2, ...)", max, _vector_many("maximum"), "MAX", "AMAX0", "MAX1")
-_math("AMIN1(X1, X2, ...)", min, _vector_many("minimum"), "MIN", "AMIN0", "MIN1")
 _math("NOTNUL(X)", rt.notnul, lambda np: (lambda x: np.where(np.asarray(x) == 0.0, 1.0, x)),
       doc="1 if X = 0, else X: Y/NOTNUL(X) never divides by 0")
+
+
+# --- non-smooth arithmetic (Fortran meanings): switches in sorted code ------------
+# Where the integrator evaluates them (DYNAMIC, DERIVATIVE) their kinks and jumps are
+# switching surfaces like FSW's: crossings located, events listed, Filippov sliding
+# where both sides push back (MT*SIGN(1.0, W) at rest). Where they are evaluated once
+# their plain form runs. Kinks are sign surfaces (A - B for AMAX1, AMIN1 and DIM: one
+# surface where both are written on the same arguments). Jumps are one LEVEL surface
+# each, whose mode is the whole number k the value holds in a band: level(v) =
+# ceil(v - 1/2) takes k on (k - 1/2, k + 1/2], so v = 0.5 - |X| gives k = -floor(|X|),
+# exactly (|X| = 2 is band -2, where AINT is 2), and AINT is -k*sign(X). The sign is
+# read on the spot: within a band other than 0, |X| >= 1 and X keeps its sign; in band
+# 0 the value is 0 whatever the sign. X = 0 is the inner edge of band 0, which the
+# surface (|X| there) touches and never crosses: no event where AINT does not jump.
+def _nonsmooth(signature: str, scalar: Callable, vector, values: str, surfaces: tuple[str, ...],
+               *aliases: str, doc: str, kind: SurfaceKind = SurfaceKind.SIGN) -> None:
+    register(Func(signature[:signature.index("(")], Kind.SWITCH, signature, doc, aliases,
+                  values=(values,), surfaces=surfaces, surface_kind=kind, scalar=scalar,
+                  vector=vector))
+
+
+_nonsmooth("ABS(X)", abs, "abs", "(-A if M0 < 0 else A)", ("A",), doc="|X|")
+_nonsmooth("SIGN(A, B)", rt.fortran_sign, _vector_sign,
+           "((A if M0 >= 0 else -A) if M1 >= 0 else (-A if M0 >= 0 else A))", ("A", "B"),
+           doc="|A| if B >= 0, else -|A|")
+_nonsmooth("AMAX1(X1, X2, ...)", max, _vector_many("maximum"), "(B if M0 < 0 else A)",
+           ("A - B",), "MAX", "AMAX0", "MAX1", doc="the largest argument")
+_nonsmooth("AMIN1(X1, X2, ...)", min, _vector_many("minimum"), "(A if M0 < 0 else B)",
+           ("A - B",), "MIN", "AMIN0", "MIN1", doc="the smallest argument")
+_nonsmooth("DIM(X, Y)", rt.fortran_dim, _vector_dim, "((A - B) if M0 > 0 else 0.0)",
+           ("A - B",), "IDIM", doc="X - Y if X > Y, else 0")
+_nonsmooth("AINT(X)", rt.fortran_aint, "trunc", "(-M0 * SGN(A))", ("0.5 - ABS(A)",), "INT",
+           doc="truncation toward 0", kind=SurfaceKind.LEVEL)
+# NINT: floor(|X| + 1/2) = -level(-|X|), halves away from 0
+_nonsmooth("NINT(X)", rt.fortran_nint, _vector_nint, "(-M0 * SGN(A))", ("-ABS(A)",),
+           "ANINT", doc="the nearest whole number, halves away from 0",
+           kind=SurfaceKind.LEVEL)
+# AMOD: A - B*AINT(A/B), AINT of A/B as above (B*SGN(A/B) is SGN(A)*|B|)
+_nonsmooth("AMOD(A, B)", rt.fortran_amod, "fmod", "(A + M0 * SGN(A) * ABS(B))",
+           ("0.5 - ABS(A / B)",), "MOD", doc="remainder with the sign of A",
+           kind=SurfaceKind.LEVEL)
 
 # --- states -------------------------------------------------------------------
 register(Func("INTGRL", Kind.STATE, "INTGRL(IC, X)", "Y = IC + integral of X",

@@ -30,6 +30,21 @@ def fortran_aint(x: float) -> float:
     return float(math.trunc(x))
 
 
+def fortran_nint(x: float) -> float:
+    """Fortran NINT/ANINT: the nearest whole number, halves rounded away from 0
+    (exact: |x| - floor(|x|) is computed without rounding)."""
+    a = abs(x)
+    n = math.floor(a)
+    if a - n >= 0.5:
+        n += 1
+    return math.copysign(float(n), x)
+
+
+def fortran_dim(x: float, y: float) -> float:
+    """Fortran DIM: x - y if x > y, else 0 (the positive difference)."""
+    return x - y if x > y else 0.0
+
+
 def fortran_amod(a: float, b: float) -> float:
     """Fortran MOD: the remainder with the sign of a (NaN for b = 0)."""
     try:
@@ -440,6 +455,14 @@ HELPERS: dict[str, Callable] = {
 }
 
 
+def _vector_level(np):
+    def level_of(v):  # surfaces.level elementwise
+        v = np.asarray(v, dtype=float)
+        k = np.ceil(v - 0.5)
+        return np.where(v <= k - 0.5, k - 1.0, np.where(v > k + 0.5, k + 1.0, k))
+    return level_of
+
+
 @functools.lru_cache(maxsize=1)
 def vector_helpers() -> dict[str, Callable]:
     """HELPERS elementwise on NumPy arrays: the runner evaluates the generated surface
@@ -461,6 +484,6 @@ def vector_helpers() -> dict[str, Callable]:
         "LINT": lambda table, x: each(lambda v: lint(table, v))(x),
         "WDAY": lambda table, x: each(lambda v: weather_day(table, v))(x),
         "PULSE_ON": each(pulse_on), "IMPULS_STEP": each(impulse_step),
-        "LEVEL": lambda v: np.ceil(np.asarray(v) - 0.5), "SGN": np.sign,
+        "LEVEL": _vector_level(np), "SGN": np.sign,
         "WHERE": np.where, "ALL": many(np.logical_and), "ANY": many(np.logical_or),
     }

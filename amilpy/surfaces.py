@@ -27,8 +27,14 @@ def sign(x: float) -> float:
 
 
 def level(v: float) -> float:
-    """QNTZR's level k, with (k - 1/2) < v <= (k + 1/2) (round half down)."""
-    return float(math.ceil(v - 0.5))
+    """QNTZR's level k, with (k - 1/2) < v <= (k + 1/2) (round half down), exactly:
+    v - 1/2 rounds (-0.49999999999999994 - 0.5 is -1.0), so the band is checked."""
+    k = math.ceil(v - 0.5)
+    if v <= k - 0.5:
+        k -= 1
+    elif v > k + 0.5:
+        k += 1
+    return float(k)
 
 
 def truth(x: float) -> bool:

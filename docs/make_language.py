@@ -96,6 +96,10 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
      "DOY, ... read from the CABO file NLD1.990"),
     ("CSMP, FST", "`X = FSW(E, A, B, C)`, `INSW(E, A, B)`", "switches on E, every change of "
      "branch located (not stepped over)"),
+    ("all", "`F = MT*SIGN(1.0, W)`, `ABS(X)`, `AMAX1(A, B, C)`, `AINT(X)`, `A > B`",
+     "in sorted code switches like FSW: kinks and jumps located, dry friction at rest "
+     "slides (`docs/functions.md`); in INITIAL, TERMINAL and written-order code their "
+     "plain Fortran values"),
 )
 
 FORMS = """\
@@ -211,7 +215,9 @@ def methods() -> str:
             + _table(("METHOD", "what it is", "step set by", "ACSL IALG"), rows))
 
 
-_KINDS = {"MATH": "arithmetic", "STATE": "integrators (each call is a state)",
+_KINDS = {"MATH": "arithmetic",
+          "NONSMOOTH": "arithmetic with kinks and jumps (switches in sorted code)",
+          "STATE": "integrators (each call is a state)",
           "SWITCH": "switches (every change of branch located)",
           "TIME": "functions of time (their instants are breakpoints)",
           "IMPULSE": "impulses", "MEMORY": "functions with memory",
@@ -225,7 +231,9 @@ def functions() -> str:
             continue  # the relational operators' switches, written A .GT. B
         for form in (f, *f.variants):
             doc = (form.doc or "").replace("|", "\\|")
-            groups.setdefault(f.kind.name, []).append(
+            # the non-smooth arithmetic (ABS, SIGN, AMAX1, ...) apart from FSW and LIMIT
+            kind = "NONSMOOTH" if f.kind is library.Kind.SWITCH and f.plain else f.kind.name
+            groups.setdefault(kind, []).append(
                 (f"`{form.signature}`", ", ".join(f"`{a}`" for a in f.aliases) or "", doc))
     parts = ["## Functions\n\nEvery function amilpy runs, by kind (one entry each in "
              "`amilpy/library.py`). A call with the wrong arguments is answered with the "

@@ -50,6 +50,21 @@ def test_knee_closed_form_and_its_crossing():
 
 
 @needs_numba
+def test_an_argument_bound_once_compiles():
+    # DEADSP reads X twice: the compiler binds X - 0.3 once, inside the expression
+    # (w1 := X - 0.3), which numba cannot type; the translation makes it a statement.
+    # X = exp(-t) leaves the dead zone [-0.2, 0.2] of X - 0.3 at t = ln 2, and
+    # Y = integral of X - 0.5 until then
+    text = ("X = INTGRL(1.0, -X)\nD = DEADSP(-0.2, 0.2, X - 0.3)\nY = INTGRL(0.0, D)\n"
+            "TIMER FINTIM = 1.0, OUTDEL = 0.1\nEND\n")
+    r = run1(text, method="COMPILED", rtol=1e-10, atol=1e-12)
+    assert r.status == "finished" and not r.warnings, r.warnings
+    assert [e.time for e in r.events] == pytest.approx([math.log(2.0)], abs=1e-12)
+    t = min(r.t[-1], math.log(2.0))
+    assert r["Y"][-1] == pytest.approx(1.0 - math.exp(-t) - 0.5 * t, abs=1e-9)
+
+
+@needs_numba
 @pytest.mark.parametrize("model", ["machine_unit", "crank_slider_startup"])
 def test_same_steps_as_scipy_dop853(model):
     # the kernel is SciPy's DOP853 (coefficients, error norm, step control, first
@@ -237,19 +252,32 @@ def test_memory_kept_step_by_step_says_it_ran_as_dop853():
 def test_every_math_function_with_a_compiled_form_compiles():
     # every helper the translation spells is used, so the run is the kernel's (no
     # warning that it ran as DOP853) and gives DOP853's rows: each function means
-    # in numba what it means in `amilpy.runtime`
+    # in numba what it means in `amilpy.runtime`. In sorted code AINT ... DIM are
+    # switches (their templates, an argument bound once: ABS(X - 0.3)); inside the
+    # PROCEDURE they read W, assigned in its IF, so they are their plain forms there
     text = """X = INTGRL(0.5, -X)
 A = SQRT(X) + EXP(X) + ALOG(X) + ALOG10(X) + SIN(X) + COS(X) + TAN(X)
 B = ASIN(X) + ACOS(X) + ATAN(X) + TANH(X) + ATAN2(X, 1.0) + SINH(X) + COSH(X)
 C = AINT(10.0*X) + FLOAT(2) + AMOD(10.0*X, 0.3) + SIGN(2.0, X - 0.3) + NOTNUL(X - X)
-D = AMAX1(X, 0.2) + AMIN1(X, 0.2) + X**1.5 + ABS(X - 0.3)
-Y = INTGRL(0.0, A + B + C + D)
+D = AMAX1(X, 0.2) + AMIN1(X, 0.2, 0.3) + X**1.5 + ABS(X - 0.3) + NINT(10.0*X) + DIM(X, 0.3)
+PROCEDURE E, W = PLAIN(X)
+   W = 0.0
+   IF (X > 0.0) THEN
+      W = 10.0*X
+   ENDIF
+   E = AINT(W) + AMOD(W, 0.3) + SIGN(2.0, W - 3.0) + NINT(W) + DIM(W, 3.0) + ABS(W - 3.0)
+   E = E + AMAX1(W, 3.0, 2.0) + AMIN1(W, 3.0)
+ENDPRO
+Y = INTGRL(0.0, A + B + C + D + E)
 TIMER FINTIM = 2.0, OUTDEL = 0.1
 END
 """
-    a = run1(text, method="COMPILED", rtol=1e-9, atol=1e-12)
-    b = run1(text, method="DOP853", rtol=1e-9, atol=1e-12)
-    assert a.status == "finished" and not a.warnings, a.warnings
-    # AINT, AMOD and SIGN jump where X crosses their edges (not switches the loop
-    # locates): both routes step over them, so their rows agree to the tolerance
+    a = run1(text, method="COMPILED", rtol=1e-9, atol=1e-12, advice=False)
+    b = run1(text, method="DOP853", rtol=1e-9, atol=1e-12, advice=False)
+    assert a.status == "finished" and not [w for w in a.warnings if "DOP853" in w], a.warnings
+    # the switches' crossings are located by both routes (the same events, to the
+    # solver's tolerance); the plain forms in the PROCEDURE jump where W crosses
+    # their edges, stepped over: the rows agree to the tolerance
+    assert [e.text for e in a.events] == [e.text for e in b.events]
+    assert [e.time for e in a.events] == pytest.approx([e.time for e in b.events], abs=1e-9)
     assert np.max(np.abs(a["Y"] - b["Y"])) <= 1e-6 * np.max(np.abs(b["Y"]))

@@ -131,13 +131,18 @@ def test_weather_from_a_cabo_file_in_step_point_mode(tmp_path):
         assert doy == round(t)  # day of 2018 = floor(TIME)
 
 
-def test_weather_with_located_finish_is_exact_between_day_starts(tmp_path):
+@pytest.mark.parametrize("rate", ["AMAX1(0., (TMMN+TMMX)/2. - TBASE)",
+                                  "INSW((TMMN+TMMX)/2. - TBASE, 0., (TMMN+TMMX)/2. - TBASE)"])
+def test_weather_with_located_finish_is_exact_between_day_starts(tmp_path, rate):
     # the daily values are constant over each day and every day's start is a
     # breakpoint: the integral is exact, and the crossing of 800 lies inside day
-    # 156 at 156 + (800 - TSUM(156)) / rate(156), located to 1e-9 by AUTO and RKS
+    # 156 at 156 + (800 - TSUM(156)) / rate(156), located to 1e-9 by AUTO and RKS.
+    # Both spellings of the rate are switches on the day's weather: a new day's
+    # value decides the branch from the day's start (the branch chosen with the day
+    # before's value integrated a day at the wrong rate: 157.16)
     os.makedirs(tmp_path / "weather")
     shutil.copy(WEATHER / "TZ2.018", tmp_path / "weather" / "tz2.018")  # any case
-    path = _listing(tmp_path, CROP)
+    path = _listing(tmp_path, CROP.replace("AMAX1(0., (TMMN+TMMX)/2. - TBASE)", rate))
     rows = cabo.days(WEATHER / "TZ2.018")
     end, ref = _crop_reference(rows)
     tsum = ref[end - 1][0]

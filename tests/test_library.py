@@ -165,3 +165,16 @@ def test_a_memory_condition_is_read_on_the_spot_when_nothing_is_watched():
     r = run1("X = INTGRL(0.0, 1.0)\nH = ZHOLD(X - 0.5, X)\nTIMER FINTIM = 1, OUTDEL = 0.1\n"
              "END\n", events=False)
     assert r.ok and r["H"][-1] == pytest.approx(1.0) and r["H"][3] == 0.0
+
+
+def test_a_level_is_exact_at_its_band_edges():
+    # QNTZR's level k holds (k - 1/2, k + 1/2]; v - 1/2 rounds (-0.49999999999999994
+    # - 0.5 is -1.0, which made the level -1), so the band is checked: scalar and
+    # elementwise alike
+    from amilpy.runtime import vector_helpers
+    from amilpy.surfaces import level
+
+    v = [-0.49999999999999994, -0.5, 0.5, 0.49999999999999994, 1.5, -1.5, 2.5000000000000004]
+    want = [0.0, -1.0, 0.0, 0.0, 1.0, -2.0, 3.0]
+    assert [level(x) for x in v] == want
+    assert list(vector_helpers()["LEVEL"](np.array(v))) == want

@@ -112,6 +112,19 @@ def test_rsw_on_a_number_and_on_a_state():
     assert [round(e.time, 9) for e in r.events if "RSW(X" in e.switch] == [0.5]
 
 
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "DOP853", "COMPILED"])
+def test_rsw_on_a_relation_takes_its_branch_where_the_relation_turns(method):
+    """RSW(X > 0, 1, 2) of X = 1 - t: the relation is a switch on X whose 1 or 0 is
+    RSW's condition. The relation changes no derivative itself, so it was followed at
+    the end of its step, where RSW's condition became 0 unseen: 1 to the end, Y(2) =
+    2. Its crossing is cut and RSW decides again there: Y = t, then 1 + 2(t - 1)."""
+    r = probe("X = INTGRL(1.0, -1.0)\nY = INTGRL(0.0, RSW(X > 0.0, 1.0, 2.0))", fintim=2.0,
+              method=method, advice=False)
+    assert r["Y"] == pytest.approx(np.where(r.t <= 1.0, r.t, 2.0 * r.t - 1.0), abs=1e-12)
+    assert [(e.time, e.text) for e in r.events] == [(pytest.approx(1.0, abs=1e-15),
+                                                     "X > 0.0")]
+
+
 # ----------------------------------------------------------------------- BCKLSH
 def test_backlash_is_hstrss_with_symmetric_play():
     """BCKLSH(IC, DL, X) = HSTRSS(IC, -DL, DL, X): the output follows X - DL rising

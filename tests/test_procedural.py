@@ -339,3 +339,40 @@ def test_csmp_terminal_with_a_do_loop():
     run = run1("X = INTGRL(0.0, 1.0)\nTERMINAL\nS = 0.0\nDO I = 1, 4\nS = S + X*I\nEND DO\n"
                + END)
     assert run.terminal["S"] == pytest.approx(10.0)
+
+
+def test_a_test_on_a_value_an_if_selected_is_located():
+    # W = |S| (S = sin t) by an IF on every path; the test W > 0.5 after it reads W as
+    # the IF selects it, RSW(S > 0, S, -S), a surface of what the block reads: located
+    # where |sin t| = 0.5, on both signs of S (it was made where it stood, with a
+    # warning). Z is the time |sin t| > 0.5 has held: 2(pi - 2 asin 0.5) by t = 6
+    text = """PROGRAM p
+  CINTERVAL CINT = 0.1
+  DERIVATIVE
+    S = INTEG(C, 0.0)
+    C = INTEG(-S, 1.0)
+    PROCEDURAL (F, W = S)
+      IF (S > 0.0) THEN
+        W = S
+      ELSE
+        W = -S
+      END IF
+      IF (W > 0.5) THEN
+        F = 1.0
+      ELSE
+        F = 0.0
+      END IF
+    END
+    Z = INTEG(F, 0.0)
+    TERMT(T >= 6.0)
+  END
+END
+"""
+    model = amilpy.loads(text, "p.csl")
+    assert not model.ir.warnings
+    run, = model.run(rtol=1e-10, atol=1e-12, advice=False)
+    a = math.asin(0.5)
+    crossings = [e.time for e in run.events if e.switch == "W > 0.5 at line 12"]
+    assert crossings == pytest.approx([a, math.pi - a, math.pi + a, 2 * math.pi - a],
+                                      abs=1e-9)
+    assert run["Z"][-1] == pytest.approx(2 * (math.pi - 2 * a), abs=1e-8)

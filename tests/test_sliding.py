@@ -6,6 +6,8 @@ import numpy as np
 import pytest
 from conftest import METHODS, run1
 
+import amilpy
+
 RELAY = "FSW(X, -1.0, 0.0, 1.0)"
 # Sliding is located switching. METHOD EULER runs in step-point mode by default (the
 # classic translators' loop: a relay there chatters from step to step, as it did in
@@ -91,3 +93,39 @@ def test_stick_slip_with_two_friction_terms_on_one_velocity(method):
     assert np.max(np.abs(r["X"] - x)) <= tol
     leave = [e.time for e in r.events if e.old == 0.5]
     assert leave == pytest.approx([0.5], abs=1e-6)
+
+
+GAP = """Y = INTGRL(-1.0, 1.0)
+S = FSW(Y, -1.0, 0.0, 1.0)
+C = INSW(S*Y - 0.5, 0.0, 1.0)
+X = INTGRL(0.0, C)
+TIMER FINTIM = 3.0, OUTDEL = 3.0
+END
+"""
+
+
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "DOP853", "RADAU", "COMPILED"])
+@pytest.mark.parametrize("form", ["FSW", "ABS"])
+def test_a_switch_read_only_by_another_surface_never_hides_its_crossing(method, form):
+    # Y = t - 1 crosses the gap |Y| < 0.5 from t = 0.5 to 1.5; C is 1 outside it, so
+    # X(3) = 0.5 + 1.5 = 2 exactly. S (or ABS's own switch) changes no derivative: its
+    # crossing at t = 1 is followed without an event. The motion is linear, so one
+    # step can span the whole gap: the contact at 1.5 was then read with S's branch
+    # from before t = 1 (-Y - 0.5 < 0, still in the gap) and missed (X = 0.5).
+    text = GAP if form == "FSW" else \
+        GAP.replace("S = FSW(Y, -1.0, 0.0, 1.0)\n", "").replace("S*Y", "ABS(Y)")
+    r = run1(text, method=method, advice=False)
+    assert r["X"][-1] == pytest.approx(2.0, abs=1e-12)
+    assert [e.time for e in r.events] == pytest.approx([0.5, 1.5], abs=1e-12)
+
+
+def test_more_surfaces_sliding_at_the_start_than_allowed_is_a_failed_run():
+    # eight masses at rest, each held by dry friction (1.5 > the drive): the start
+    # would slide on more than MAX_SLIDING surfaces at once; the run says so (it was
+    # an uncaught exception), and so does a flow asked for its initial state
+    text = "\n".join(f"V{i} = INTGRL(0.0, (SIN(TIME) - 1.5*SIGN(1.0, V{i}))/{i + 1}.0)"
+                     for i in range(8)) + "\nTIMER FINTIM = 2.0\nEND\n"
+    r = run1(text, advice=False)
+    assert r.status == "failed" and "switching surfaces slide at once (at most 6)" in r.message
+    with pytest.raises(amilpy.AmilError, match="slide at once"):
+        amilpy.loads(text, name="s.amil").flow().initial_state()

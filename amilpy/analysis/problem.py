@@ -40,7 +40,7 @@ from .. import ir
 from .. import syntax as ast
 from ..check.order import reads
 from ..diagnostics import AmilError, nearest
-from ..library import Kind, lookup
+from ..library import lookup
 from ..run import Flow, State
 
 # tolerances of the analyses when the caller gives none (the listing's RELERR is
@@ -108,7 +108,7 @@ def constant(text: str, flow: Flow, what: str, extra: dict[str, float] | None = 
                             + (f"; did you mean {hint}?" if hint else ""))
         if isinstance(node, ast.Call):
             func = lookup(node.func)
-            if func is None or func.kind is not Kind.MATH:
+            if func is None or not func.plain:
                 raise AmilError(f"{what} {text!r}: {node.func} is not a plain function of "
                                 "constants")
     value = evaluate_constant(flow.model, expr, known, {}, statement.span)

@@ -6,21 +6,25 @@ Two kinds of code:
   FUNCTION bodies): names may be reassigned; every test is made where it stands
   (`literal` lowering: no surface, nothing located);
 - **a sorting unit** (an IF or PROCEDURAL block of sorted code): one unit for the
-  sort, written order inside. Its conditions and switches are switching surfaces,
-  located like FSW; a surface must be a function of what the unit reads, so a name
-  the unit assigned before on its straight-line path is replaced by the expression
-  it was given (`substitute`). A test that reads a name assigned inside a nested
-  branch or a loop of the unit cannot be written that way: it is made where it
-  stands, with a warning.
+  sort, written order inside. Its conditions and switches (FSW, ABS, AINT, ...) are
+  switching surfaces, located like FSW; a surface must be a function of what the unit
+  reads, so a name the unit assigned before on its straight-line path is replaced by
+  the expression it was given (`substitute`), and a name an IF assigned on every path
+  by what the IF selects, RSW(condition, value, ...) over the IF's own conditions. A
+  test that reads a name assigned inside a loop of the unit (or by an IF on some
+  paths only) cannot be written that way: it is made where it stands, with a
+  warning.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 
 from .. import ir
 from .. import syntax as ast
 from ..diagnostics import Reporter, Span
+from ..library import Kind, lookup
 from ..syntax import deep_enough
 from .lower import Lowering
 from .names import PURE, Names
@@ -188,10 +192,12 @@ class _Unit:
         names.check_calls(expr, UNIT_CALLS, "an IF or PROCEDURAL block")
         value = substitute(expr, env)
         literal = bool(opaque & set(read_names(value)))
-        if literal and any(isinstance(n, ast.BinOp) and n.op in ast.RELATIONAL[:4]
-                           for n in ast.walk(value)):
+        switch = next((n for n in ast.walk(value) if _switch_in_sorted_code(n)), None) \
+            if literal else None
+        if switch is not None:
+            what = "this test" if isinstance(switch, ast.BinOp) else f"{switch.func} here"
             self.code.low.warn(
-                "this test reads a value assigned inside an IF or a loop before it: it is "
+                f"{what} reads a value assigned inside an IF or a loop before it: it is "
                 "made where it stands, never located", expr.span,
                 "compute that value before the block, or test it with FSW/INSW")
         if condition and not literal:
@@ -217,19 +223,28 @@ class _Unit:
                     env[target] = value
                     opaque.discard(target)
             elif isinstance(st, ast.If):
-                branches = []
+                branches, after = [], []
                 inner: set[str] = set()
                 for b in st.branches:
                     cond = None if b.cond is None else \
                         self.expr(b.cond, None, env, opaque, condition=True)
                     here = path + ((b.cond,) if b.cond is not None else ())
-                    branches.append((cond, tuple(self.block(b.body, dict(env), set(opaque),
-                                                            here))))
+                    benv, bopaque = dict(env), set(opaque)
+                    branches.append((cond, tuple(self.block(b.body, benv, bopaque, here))))
+                    after.append((b.cond, benv, bopaque))
                     inner.update(assigned_names(b.body))
                 out.append(ir.IfThen(tuple(branches), st.span))
+                # (where the IF starts: a surface over it reads as RSW(...), not as
+                # the IF's first line)
+                at = Span(st.span.line, st.span.column)
                 for n in inner:
-                    env.pop(n, None)
-                opaque |= inner
+                    value = _selected(n, env, opaque, after, at)
+                    if value is None:
+                        env.pop(n, None)
+                        opaque.add(n)
+                    else:
+                        env[n] = value
+                        opaque.discard(n)
             elif isinstance(st, ast.Loop):
                 step = st.step if st.step is not None else ast.Num(1.0, st.span, "1")
                 changed = set(assigned_names(st.body)) | {st.var}
@@ -256,29 +271,70 @@ class _Unit:
         return out
 
 
-def condition_surface(e: ast.Node) -> ast.Node:
+def _selected(name: str, env: dict, opaque: set, after: list, span: Span) -> ast.Node | None:
+    """A name an IF assigns, as what the IF selects: RSW(c1, v1, RSW(c2, v2, v)) over
+    its conditions and the name's value at the end of each branch (v: the ELSE's, or
+    the value from before the IF where a path does not assign it), so that a test
+    after the IF is a surface of what the unit reads, switched by the IF's own
+    conditions. None where a value is not such an expression (assigned in a loop or
+    a nested IF that is not, or not known before the IF on a path that keeps it)."""
+    def known(values: dict, hidden: set) -> ast.Node | None:
+        return None if name in hidden else values.get(name)
+
+    *tests, (last, last_env, last_opaque) = after
+    if last is None:
+        value = known(last_env, last_opaque)
+    else:
+        tests.append((last, last_env, last_opaque))
+        value = known(env, opaque)
+    for cond, values, hidden in reversed(tests):
+        chosen, cond = known(values, hidden), substitute(cond, env)
+        if value is None or chosen is None or opaque & set(read_names(cond)):
+            return None
+        value = ast.Call("RSW", (_as_condition(cond), chosen, value), span)
+    return value
+
+
+def _switch_in_sorted_code(node: ast.Node) -> bool:
+    """A relational test (`A > B`) or a switch's call (FSW, ABS, AMAX1, ...): what
+    sorted code locates, and a test made where it stands does not."""
+    if isinstance(node, ast.BinOp):
+        return node.op in ast.RELATIONAL[:4]
+    if isinstance(node, ast.Call):
+        func = lookup(node.func)
+        return func is not None and func.kind in (Kind.SWITCH, Kind.TIME)
+    return False
+
+
+def condition_surface(e: ast.Node, leaf: Callable[[ast.Node], ast.Node] = lambda x: x
+                      ) -> ast.Node:
     """A condition as a continuous surface that is positive where the condition
     holds (TERMT, FINISH relations): `A > B` is A - B, `A .AND. B` the smaller of
     the two surfaces, `A .OR. B` the larger, `.NOT. A` its negative, a number
-    itself. Where no such surface exists (==, .EQV.), the truth minus 1/2."""
+    itself. Where no such surface exists (==, .EQV.), the truth minus 1/2.
+
+    `leaf` lowers the listing's own expressions (A, B); the smaller, larger and
+    absolute values this puts around them are the surface's own arithmetic, left
+    as plain calls (a surface is located, never integrated: its kinks are harmless)."""
     span = e.span
     if isinstance(e, ast.BinOp):
         if e.op in (">", ">="):
-            return ast.BinOp("-", e.left, e.right, span)
+            return ast.BinOp("-", leaf(e.left), leaf(e.right), span)
         if e.op in ("<", "<="):
-            return ast.BinOp("-", e.right, e.left, span)
+            return ast.BinOp("-", leaf(e.right), leaf(e.left), span)
         if e.op == "/=":
-            return ast.Call("ABS", (ast.BinOp("-", e.left, e.right, span),), span)
+            return ast.Call("ABS", (ast.BinOp("-", leaf(e.left), leaf(e.right), span),), span)
         if e.op in ("AND", "OR"):
             return ast.Call("AMIN1" if e.op == "AND" else "AMAX1",
-                            (condition_surface(e.left), condition_surface(e.right)), span)
+                            (condition_surface(e.left, leaf),
+                             condition_surface(e.right, leaf)), span)
     if isinstance(e, ast.Not):
-        return ast.Neg(condition_surface(e.operand), span)
+        return ast.Neg(condition_surface(e.operand, leaf), span)
     if isinstance(e, ast.Num) and ast.is_logical(e):
         return ast.Num(1.0 if e.value > 0 else -1.0, span, e.text)
     if ast.is_logical(e):
-        return ast.BinOp("-", e, ast.Num(0.5, span, "0.5"), span)
-    return e
+        return ast.BinOp("-", leaf(e), ast.Num(0.5, span, "0.5"), span)
+    return leaf(e)
 
 
 def _as_condition(expr: ast.Node) -> ast.Node:

@@ -39,10 +39,17 @@ def surface_text(template: str, call: ast.Call, states: tuple[str, ...] = ()) ->
     return expr_text(None, instantiate(template, call.args, call.span, states), TEXT_LIMIT)
 
 
-def describe(call: ast.Call) -> str:
+def describe(call: ast.Call, written: Callable[[Span], str | None] = lambda span: None
+             ) -> str:
     """A switch for a reader: `FSW(W1, ...) at line 57` (the function and its first
-    argument as written)."""
+    argument as written; where a block replaced its names by their values, the
+    listing's own text of it, which `written` gives: AINT(W), not AINT(RSW(...)))."""
     first = expr_text(None, call.args[0], TEXT_LIMIT) if call.args else ""
+    given = call.arg_spans[0] if call.args and call.arg_spans else None
+    text = written(given) if given is not None and call.args[0].span != given else None
+    if text:
+        text = text.upper()
+        first = text if len(text) <= TEXT_LIMIT else text[:TEXT_LIMIT - 3] + "..."
     more = ", ..." if len(call.args) > 1 else ""
     return f"{call.func}({first}{more}) at line {call.span.line}"
 
@@ -209,7 +216,7 @@ class Lowering:
         # a state function's surfaces (over its arguments and its own states) are
         # what its states' `runs` read (MODINT's hold and reset, LIMINT's bounds)
         modes = tuple(self.surface(instantiate(t, args, sp, names), func.surface_kind, None,
-                                   ir.Purpose.SWITCH, sp, describe(call),
+                                   ir.Purpose.SWITCH, sp, describe(call, self.written),
                                    surface_text(t, call, names))
                       for t in func.surfaces)
         for k, spec in enumerate(func.states):
@@ -247,7 +254,8 @@ class Lowering:
         index = len(self.memories)
         surfaces = tuple(
             self.surface(instantiate(t, args, call.span), func.surface_kind, index,
-                         ir.Purpose.MEMORY, call.span, describe(call), surface_text(t, call))
+                         ir.Purpose.MEMORY, call.span, describe(call, self.written),
+                         surface_text(t, call))
             for t in func.surfaces)
         nslots = int(constant_value(instantiate(func.memory.slots, call.args, call.span), {}))
         self.memories.append(ir.Memory(index, func.name, args, self.nslots, nslots, surfaces,
@@ -257,11 +265,17 @@ class Lowering:
 
     def switch(self, call: ast.Call, target: str) -> int:
         func = lookup(call.func, len(call.args))
+        description = describe(call, self.written)
+        if func.folds and len(call.args) > 2:
+            # AMAX1(A, B, C) is AMAX1(AMAX1(A, B), C): a switch per argument after the
+            # first, each on the running result and the next argument
+            inner = ast.Call(call.func, call.args[:-1], call.span)
+            call = ast.Call(call.func, (inner, call.args[-1]), call.span)
         self.note_before_run(func, call)
         args = self.args(call, target)
         index = len(self.switches)
         surfaces = [self.surface(instantiate(t, args, call.span), func.surface_kind, index,
-                                 ir.Purpose.SWITCH, call.span, describe(call),
+                                 ir.Purpose.SWITCH, call.span, description,
                                  surface_text(t, call))
                     for t in func.surfaces]
         self.switches.append(ir.Switch(index, func.name, args, tuple(surfaces), call.span,
@@ -307,8 +321,9 @@ class Lowering:
         text = self.written(st.expr.span) or expr_text(None, st.expr, TEXT_LIMIT)
         where = f"{'FINISH ' + text if finish else f'TERMT({text})'} at line {st.span.line}"
         description = f"{st.message} ({where})" if st.message else where
-        index = self.surface(self.expr(condition_surface(cond), "TERMT"), ir.SurfaceKind.SIGN,
-                             None, ir.Purpose.TERMT, st.span, description, text)
+        surface = condition_surface(cond, lambda e: self.expr(e, "TERMT"))
+        index = self.surface(surface, ir.SurfaceKind.SIGN, None, ir.Purpose.TERMT, st.span,
+                             description, text)
         if isinstance(cond, ast.BinOp) and cond.op in (">=", "<="):
             self.closed.add(index)
         return index

@@ -112,7 +112,9 @@ class Names:
                                f"from 1 to {MAX_STORE}", arg.span,
                                f"e.g. {func.signature.replace(what, '100', 1)}")
         self.check_argument_values(node, func)
-        if allow is not None and func.kind not in allow:
+        # where only plain functions may stand (INTERVAL), a switch's plain form may too
+        if allow is not None and func.kind not in allow and \
+                not (func.plain and Kind.MATH in allow):
             self.rep.error(f"{node.func} cannot be used in {section}", node.span,
                            "compute its argument in the block and put the call after it, "
                            "outside" if section.startswith("an IF") else

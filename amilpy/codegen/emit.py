@@ -189,8 +189,10 @@ class Emitter(Visitor):
         if func is None:  # a run-time helper a library template calls (PULSE_ON)
             return py.Call(py.Name("_" + e.func, py.Load()), [self.emit(a) for a in e.args],
                            [])
-        if func.kind in (Kind.SWITCH, Kind.TIME):  # literal use (INITIAL/TERMINAL)
-            return self.literal_switch(func, e.args)
+        if func.kind in (Kind.SWITCH, Kind.TIME) and not func.plain:
+            return self.literal_switch(func, e.args)  # literal use (INITIAL/TERMINAL)
+        # a plain form: a function of its arguments (ABS, SIN), or a non-smooth switch
+        # where it is evaluated once (lowering left it a call)
         args = [self.emit(a) for a in e.args]
         values = [const_value(a) for a in args]
         if all(v is not None for v in values):

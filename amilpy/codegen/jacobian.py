@@ -88,6 +88,7 @@ def _rule(name: str, a: py.expr) -> py.expr | None:
         "_SGN": lambda: c(0.0),
         "_LEVEL": lambda: c(0.0),
         "_AINT": lambda: c(0.0),
+        "_NINT": lambda: c(0.0),
         "_FLOAT": lambda: c(1.0),
     }
     make = rules.get(name)

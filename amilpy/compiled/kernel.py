@@ -304,20 +304,39 @@ def _locate(surf, k, mode, level, ta, tb, ga, gb, h, cubic, F, m, z, p, e, yt):
 
 
 @_jit
-def _silent(rhs, k, t, y, m, z, p, f1, f2):
-    """Surface k's branch does not change the derivatives here (`SurfaceWatch.silent`)."""
+def _side(k, e, level):
+    """Where a surface's value puts it (`SurfaceWatch.side`)."""
+    if level[k]:
+        return 1.0 if e < 0.0 else 0.0
+    return 1.0 if e > 0.0 else (-1.0 if e < 0.0 else 0.0)
+
+
+@_jit
+def _silent(rhs, surf, k, t, y, m, z, p, f1, f2, watch, level, e1, e2):
+    """Whether surface k's branch matters here: 0 it changes the derivatives, 1 it
+    changes nothing (`SurfaceWatch.silent`), 2 it changes no derivative but the side
+    another watched surface is on (`SurfaceWatch.quiet` and not `silent`: the loop
+    cuts the step there, with no event of its own)."""
     mk = m[k]
     m[k] = 1.0
     rhs(t, y, m, z, p, f1)
-    same = True
+    found = 1
     for value in (-1.0, 0.0):
         m[k] = value
         rhs(t, y, m, z, p, f2)
         for i in range(y.size):
             if f1[i] != f2[i]:
-                same = False
+                found = 0
+    if found == 1:
+        m[k] = 1.0
+        surf(t, y, m, z, p, e1)
+        m[k] = -1.0
+        surf(t, y, m, z, p, e2)
+        for j in watch:
+            if j != k and _side(j, e1[j], level) != _side(j, e2[j], level):
+                found = 2
     m[k] = mk
-    return same
+    return found
 
 
 @_jit
@@ -445,13 +464,17 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
         for k in watch:
             flip[k] = False
             if _crossed(k, m[k], e_b[k], level):
-                if handled[k] >= QUIET and _silent(rhs, k, t_new, y_new, m, z, p, ft, scratch):
+                matters = 0
+                if handled[k] >= QUIET:
+                    matters = _silent(rhs, surf, k, t_new, y_new, m, z, p, ft, scratch, watch,
+                                      level, e0, e1)
+                    nfev += 3
+                if matters == 1:
                     # a branch nothing uses now: followed, no restart (as the loop does)
                     flip[k] = True
                     quiet += 1
-                    nfev += 3
                     continue
-                if handled[k] != PLAIN:
+                if handled[k] != PLAIN or matters == 2:
                     simple = False
                 first = k
             elif m[k] == 0.0 and not level[k] and abs(e_b[k]) > 1e-12 * (1.0 + abs(e_a[k])) \

@@ -25,7 +25,8 @@ from ..codegen import Compiled
 # outside [-1, 1], where Python's raises), amilpy's own helpers compiled as written.
 # RESPELLED are those whose Python form catches an exception numba cannot: numba's
 # plain operation gives the NaN or infinity they return.
-AS_WRITTEN = frozenset({"SQRT", "ALOG", "ALOG10", "AINT", "SIGN", "NOTNUL", "SGN", "LEVEL"})
+AS_WRITTEN = frozenset({"SQRT", "ALOG", "ALOG10", "AINT", "NINT", "DIM", "SIGN", "NOTNUL", "SGN",
+                        "LEVEL"})
 _BUILTINS = {abs: "abs", max: "max", min: "min", float: "float"}
 RESPELLED: dict[str, str] = {
     "EXP": "math.exp", "SINH": "math.sinh", "COSH": "math.cosh",
@@ -91,6 +92,49 @@ class _Rewrite(py.NodeTransformer):
         return [*out, py.Return(None)]
 
 
+class _Unbind(py.NodeTransformer):
+    """An argument the compiler binds once inside an expression, `((w1 := X), ...,
+    value)[-1]` (`Emitter.bind`), which numba cannot type, as `w1 = X` before the
+    statement: `hoisted`, innermost first. Generated code is pure and numba's faults
+    are NaN or an infinity, so a binding made where its branch is not taken changes
+    nothing."""
+
+    def __init__(self) -> None:
+        self.hoisted: list[py.stmt] = []
+
+    def visit_NamedExpr(self, node: py.NamedExpr) -> py.expr:
+        self.generic_visit(node)
+        self.hoisted.append(py.Assign([py.Name(node.target.id, py.Store())], node.value))
+        return py.Name(node.target.id, py.Load())
+
+    def visit_Subscript(self, node: py.Subscript) -> py.expr:
+        bound = isinstance(node.value, py.Tuple) and \
+            any(isinstance(e, py.NamedExpr) for e in node.value.elts)
+        self.generic_visit(node)
+        return node.value.elts[-1] if bound else node
+
+
+def _unbound(body: list[py.stmt]) -> list[py.stmt]:
+    """Statements with their expressions' bindings made statements before them (the
+    bodies of `if` and `for` likewise; a `for` reads its range once)."""
+    out: list[py.stmt] = []
+    for stmt in body:
+        unbind = _Unbind()
+        for name, value in py.iter_fields(stmt):
+            if name in ("body", "orelse"):
+                setattr(stmt, name, _unbound(value))
+            elif isinstance(value, py.expr):
+                setattr(stmt, name, unbind.visit(value))
+            elif isinstance(value, list):
+                setattr(stmt, name, [unbind.visit(v) if isinstance(v, py.expr) else v
+                                     for v in value])
+        if unbind.hoisted and isinstance(stmt, py.While):
+            raise Unsupported("a loop whose test binds a value")
+        out.extend(unbind.hoisted)
+        out.append(stmt)
+    return out
+
+
 def _locals(fn: py.FunctionDef) -> set[str]:
     names = {a.arg for a in fn.args.args}
     for node in py.walk(fn):
@@ -114,7 +158,7 @@ def _function(fn: py.FunctionDef, name: str, parameters: dict[str, int]
                     py.Name(stmt.value.id, py.Load()), py.Constant(i), py.Load())))
         else:
             body.append(stmt)
-    fn.body = body
+    fn.body = _unbound(body)
     rewrite = _Rewrite(parameters, _locals(fn))
     fn = rewrite.visit(fn)
     fn.name = name

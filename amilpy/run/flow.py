@@ -54,6 +54,7 @@ from .loop import Cursor, Integrator, Stop
 from .plan import Options
 from .prepare import Cache, prepare
 from .simulate import start_cursor
+from .slide import MAX_SLIDING
 from .steppoint import StepPoint
 from .variational import Tangent
 from .watch import SurfaceWatch, TooManySlides
@@ -172,9 +173,11 @@ class Flow:
                     self.plan.watched), z) if m is None else m
                 return Cursor(when, y, list(m), list(z))
             return start_cursor(self.c, self.plan, self.watch, self.opts, y, z, m, t)
-        except (ArithmeticError, ValueError) as exc:
+        except (ArithmeticError, ValueError, TooManySlides) as exc:
             when = self.plan.t0 if t is None else t
-            raise AmilError(f"cannot start at TIME = {when:g}: {exc}") from None
+            why = f"{exc.count} switching surfaces slide at once (at most {MAX_SLIDING})" \
+                if isinstance(exc, TooManySlides) else exc
+            raise AmilError(f"cannot start at TIME = {when:g}: {why}") from None
 
     def advance(self, state: State, t0: float, t1: float, *, stop_at_event: bool = False,
                 sensitivity: bool = False, columns=None, scale=None, observer=None):

@@ -14,7 +14,7 @@ import math
 import time as _clock
 from bisect import bisect_left, bisect_right
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -41,7 +41,8 @@ from .edges import expected_event, locate_crossings
 from .faults import Fault, fault_text
 from .plan import SLIDE, Options, Purpose, RunPlan, SurfaceKind, time_breakpoints
 from .record import Recorder
-from .watch import SurfaceWatch, TooManySlides, crossings, wrong_side
+from .slide import MAX_SLIDING
+from .watch import SurfaceWatch, TooManySlides, crossings
 
 _EPS = float(np.finfo(float).eps)
 
@@ -98,6 +99,8 @@ class _Step:
     exits: dict[int, float]  # sliding surfaces leaving, to which side
     truncated: bool
     e_b: list[float]  # the watched surfaces at tb
+    # hits whose branch changes no derivative (cut only for a surface that reads them)
+    quiet: set[int] = field(default_factory=set)
 
 
 class RunLoop:
@@ -281,7 +284,7 @@ class Integrator(RunLoop):
                 faults.append(Fault(exc, t, y.tolist(), list(m), list(z)))
                 return [math.nan] * n
             except TooManySlides as exc:
-                raise Stop(Failure.SLIDES, t, count=exc.count, limit=6) from None
+                raise Stop(Failure.SLIDES, t, count=exc.count, limit=MAX_SLIDING) from None
         return f
 
     def _start_segment(self, cur: Cursor, seg_end: float, rec: Recorder | None,
@@ -546,7 +549,12 @@ class Integrator(RunLoop):
                     continue  # a tangential departure's first steps: within their error
                 # a branch that feeds nothing the states see now (a switch inside an
                 # unused branch): follow its sign, no need to stop and restart
-                (silent if watch.silent(k, tb, yb, m, z) else hits).append(k)
+                if watch.silent(k, tb, yb, m, z):
+                    silent.append(k)
+                    continue
+                hits.append(k)
+                if watch.quiet(k, tb, yb, m, z):
+                    step.quiet.add(k)  # cut for another surface that reads it: no event
             elif k in self._grazing and abs(e_b[k]) > self._grazing[k]:
                 del self._grazing[k]  # (clear of the surface: any crossing counts)
         slide_exit = watch.slide_exits(m, tb, yb, z)
@@ -610,6 +618,11 @@ class Integrator(RunLoop):
         tb, yb = step.tb, step.yb
         new_m = watch.choose_modes(tb, yb, z, m, step.triggered, forced=step.exits)
         self._exited = set(step.exits)
+        z_before = list(z)
+        if c.z0:
+            memory = c.mem(tb, yb.tolist(), m, new_m, z)
+            new_m = watch.after_memory(tb, yb, new_m, z, memory)
+            z[:] = memory
         for k in step.triggered:
             w = self.plan.watched[k]
             if (w.purpose is Purpose.TERMT and new_m[k] > 0) or \
@@ -617,12 +630,10 @@ class Integrator(RunLoop):
                     (w.purpose is Purpose.SCHEDULE and w.fires(m[k], new_m[k])):
                 self.stop_reason = k  # a SCHEDULE: the caller runs its DISCRETE, goes on
         n_events = len(self.events)
-        self.record_changes(tb, yb, m, new_m, z, step.triggered)
+        self.record_changes(tb, yb, m, new_m, z, step.triggered, step.quiet)
         changed = new_m != m
         if rec is not None and changed:
-            rec.sample(tb, yb, m, z)  # (RANGE reads both sides of a jump)
-        if c.z0:
-            z[:] = c.mem(tb, yb.tolist(), m, new_m, z)
+            rec.sample(tb, yb, m, z_before)  # (RANGE reads both sides of a jump)
         m[:] = new_m
         y = watch.apply_resets(yb, m, tb, z)
         cur.t, cur.y = tb, y
@@ -647,10 +658,12 @@ class Integrator(RunLoop):
             return True
         return False
 
-    def record_changes(self, t: float, y: np.ndarray, m, new_m, z, at_zero: set[int]) -> None:
-        """An event for every watched surface whose branch changes at t."""
+    def record_changes(self, t: float, y: np.ndarray, m, new_m, z, at_zero: set[int],
+                       quiet: set[int] = frozenset()) -> None:
+        """An event for every watched surface whose branch changes at t (`quiet`:
+        located, but changing no derivative: not an event)."""
         for k in range(len(self.plan.watched)):
-            if new_m[k] == m[k]:
+            if new_m[k] == m[k] or k in quiet:
                 continue
             if k not in at_zero and self.watch.silent(k, t, y, new_m, z):
                 continue  # a branch nothing uses now: not an event

@@ -26,6 +26,7 @@ from .peaks import Context, locate_range
 from .plan import SLIDE, Options, RunPlan
 from .prepare import Cache, Prepared, prepare
 from .record import Recorder
+from .slide import MAX_SLIDING
 from .steppoint import StepPoint
 from .watch import SurfaceWatch, TooManySlides
 
@@ -56,7 +57,9 @@ def start_cursor(c: Compiled, plan: RunPlan, watch: SurfaceWatch, opts: Options,
         m = watch.choose_modes(t0, y, z, [0.0] * len(plan.watched), set(), first=True)
     y = watch.apply_resets(y, m, t0, z)
     if c.z0:
-        z = c.mem(t0, y.tolist(), m, m, z)
+        memory = c.mem(t0, y.tolist(), m, m, z)
+        m = watch.after_memory(t0, y, list(m), z, memory)
+        z = memory
     return Cursor(t0, y, list(m), list(z))
 
 
@@ -90,6 +93,11 @@ class _Run:
                 integ.events.clear()
                 return self.finish(Status.FAILED, message(Failure.CANNOT_START, t=plan.t0,
                                                           detail=text), cur, {})
+            except TooManySlides as exc:  # (seven masses stuck by dry friction at rest)
+                integ.events.clear()
+                return self.finish(Status.FAILED, message(Failure.SLIDES, t=plan.t0,
+                                                          count=exc.count, limit=MAX_SLIDING),
+                                   cur, {})
         return self._integrate(cur)
 
     def _start(self, y: np.ndarray, z: list[float]) -> Cursor:
@@ -119,7 +127,7 @@ class _Run:
             return self.finish(status, text, cur, {})
         except TooManySlides as exc:
             status, text = Status.FAILED, message(Failure.SLIDES, t=cur.t, count=exc.count,
-                                                  limit=6)
+                                                  limit=MAX_SLIDING)
         except (ArithmeticError, ValueError) as exc:
             # arithmetic in generated code (surfaces, outputs), or SciPy refusing the
             # non-finite values an earlier fault gave: the run ends here, with what it

@@ -34,6 +34,7 @@ class SurfaceWatch:
         self.watched = plan.watched
         self.resets = plan.resets
         self.lookahead_h = plan.lookahead_h
+        self.watch_idx = plan.watch_idx
         self.events = plan.events
         self.y0 = c.y0
 
@@ -131,6 +132,20 @@ class SurfaceWatch:
                 break
         return new
 
+    def after_memory(self, t: float, y: np.ndarray, m: list[float], z_before, z_after
+                     ) -> list[float]:
+        """Modes m, chosen with the memory z_before, once the memory is z_after (a
+        restart updates it: a new day's weather, a sample held): a surface whose
+        sign moved with it takes its new sign (or the way the motion goes, if the
+        memory put it on zero); the others keep the modes they were given."""
+        if list(z_before) == list(z_after):
+            return m
+        yl = y.tolist()
+        before = self.c.modes_literal(t, yl, m, z_before)
+        after = self.c.modes_literal(t, yl, m, z_after)
+        kept = {k: mode for k, mode in enumerate(m) if before[k] == after[k]}
+        return self.choose_modes(t, y, z_after, m, set(), forced=kept)
+
     def direction(self, k: int, t: float, y: np.ndarray, m, z, old) -> float:
         """Which side of surface k the motion goes to from a point on it."""
         try:
@@ -183,8 +198,9 @@ class SurfaceWatch:
         ahead = self.c.modes_literal(t + h, (y + h * f).tolist(), m, z)[k]
         return ahead if abs(ahead - lit) <= 1 else lit
 
-    def silent(self, k: int, t: float, y: np.ndarray, m, z) -> bool:
-        """True if surface k's branch does not change the derivatives here."""
+    def quiet(self, k: int, t: float, y: np.ndarray, m, z) -> bool:
+        """True if surface k's branch does not change the derivatives here: a change
+        of it is no event."""
         w = self.watched[k]
         # (a memory's condition changes nothing the derivatives see now, but what the
         # memory keeps is taken where it flips: located, as every switch)
@@ -198,6 +214,33 @@ class SurfaceWatch:
                 self.c.rhs(t, yl, [*m[:k], 0.0, *m[k + 1:]], z) == self.c.rhs(t, yl, mp, z)
         except (ArithmeticError, ValueError):
             return False
+
+    def silent(self, k: int, t: float, y: np.ndarray, m, z) -> bool:
+        """True if surface k's branch changes neither the derivatives here nor the
+        side another watched surface is on: a crossing of it is followed without
+        stopping. A switch that another's surface reads (ABS(Y) in INSW(ABS(Y) - DH,
+        ...)) is quiet, and silent unless that surface is on another side because of
+        it (crossed in the same step, or a relation's 1 become 0 under RSW): then the
+        step is cut at its crossing, so the other is located or chosen again."""
+        if not self.quiet(k, t, y, m, z):
+            return False
+        mp, mm = list(m), list(m)
+        mp[k], mm[k] = 1.0, -1.0
+        yl = y.tolist()
+        try:
+            ep, em = self.c.surf(t, yl, mp, z), self.c.surf(t, yl, mm, z)
+        except (ArithmeticError, ValueError):
+            return False
+        return all(self.side(j, ep[j]) == self.side(j, em[j])
+                   for j in self.watch_idx if j != k and m[j] != SLIDE)
+
+    def side(self, k: int, e: float) -> float:
+        """Where surface k's value e puts it: its sign, or for a level surface (its
+        distance to the band's edges) whether it has left its band. A value that
+        moves onto zero (RSW's condition, 1 or 0) changes side."""
+        if self.watched[k].kind is SurfaceKind.LEVEL:
+            return float(e < 0.0)
+        return sign(e)
 
     def apply_resets(self, y: np.ndarray, m: list[float], t: float | None = None,
                      z=None) -> np.ndarray:

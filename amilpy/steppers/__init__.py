@@ -22,9 +22,9 @@ from .odeint import LOG_BUDGET, UNLIMITED, Evaluations, OdeintStepper
 FIXED: dict[str, type[FixedStepper]] = {
     cls.__name__: cls for cls in (RK4, Euler, Heun, AdamsBashforth2)}
 
-__all__ = ["LOG_BUDGET", "Chunked", "Clock", "Evaluations", "FIXED", "Hermite", "OdeintStepper", "Rhs", "ScipyStepper",
-           "SegmentJacobian", "StepFailure", "Stepper", "Stiffness", "first_bad",
-           "make_stepper", "solver_tolerance"]
+__all__ = ["LOG_BUDGET", "Chunked", "Clock", "Evaluations", "FIXED", "Hermite",
+           "OdeintStepper", "Rhs", "ScipyStepper", "SegmentJacobian", "StepFailure", "Stepper",
+           "Stiffness", "first_bad", "make_stepper", "solver_tolerance"]
 
 
 def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float, *,
