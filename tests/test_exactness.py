@@ -192,3 +192,63 @@ def test_acsl_instant_that_changes_a_rate_restarts_there() -> None:
     t = run.t
     want = np.where(t <= 4.0, np.exp(-0.5 * t), np.exp(-2.0 - 1.0 * (t - 4.0)))
     assert np.max(np.abs(run["Y"] - want)) < 2e-6
+
+
+# --- events located to a few ulps at the default tolerances -----------------------------
+
+BALL = """\
+PROGRAM bouncing ball
+  CONSTANT G = 9.81, E = 0.8, H0 = 10.0, TSTOP = 10.0
+  CINTERVAL CINT = 0.5
+  DERIVATIVE
+    V = INTEG(-G, 0.0)
+    H = INTEG(V, H0)
+    SCHEDULE BOUNCE .XN. H
+    TERMT(T >= TSTOP, 'time limit')
+  END
+  DISCRETE BOUNCE
+    V = -E*V
+  END
+END
+"""
+
+
+def ball_impacts(g: float = 9.81, e: float = 0.8, h0: float = 10.0, t_end: float = 10.0
+                 ) -> list[float]:
+    """The flights are parabolas: the first impact at sqrt(2 h0/g), then each flight
+    lasts 2 v/g with v the rebound speed."""
+    t, v = math.sqrt(2.0 * h0 / g), math.sqrt(2.0 * g * h0)
+    out = []
+    while t < t_end:
+        out.append(t)
+        v *= e
+        t += 2.0 * v / g
+    return out
+
+
+@pytest.mark.parametrize("route", ROUTES + ["LSODA", "BDF"])
+def test_bouncing_ball_impacts_at_the_default_tolerances(route: str) -> None:
+    # Every Runge-Kutta route integrates a parabola exactly: its impacts are the
+    # locator's alone, a few ulps of TIME. LSODA (AUTO's odeint, SciPy's LSODA class)
+    # starts each flight at order 1: its impacts carry its trajectory's error, 1.7e-10
+    # s at the ACSL form's default RELERR 1e-11. BDF's default is RELERR 1e-8 (SciPy's
+    # BDF gives up tighter on the Exercise 4 drives): 0.8 RELERR, 8e-9 s.
+    run, = amilpy.loads(BALL, "ball.csl").run(method=route)
+    got = [e.time for e in run.events if e.kind == "discrete"]
+    want = ball_impacts()
+    assert len(got) == len(want) == 7
+    bound = {"BDF": 1e-8, "AUTO": 1e-9, "LSODA": 1e-9}.get(route, 64 * 2.2e-16 * 10.0)
+    assert max(abs(a - b) for a, b in zip(got, want, strict=True)) <= bound, route
+
+
+def test_default_tolerances_make_the_printed_digits_right() -> None:
+    # The clutch drive at the defaults against its exact solution (matrix exponentials
+    # between located switches): every state within 5e-7 of its range, which every
+    # digit of the %.6E printout needs (measured on every listing amilpy runs:
+    # benchmarks/tolerances.py)
+    run, = amilpy.load(CLUTCH).run(fintim=RUN_LENGTH)
+    assert run.settings == "RELERR 1e-10, ABSERR 1e-13"
+    ref = ex4.simulate(ex4.clutch_chain(), RUN_LENGTH, rtol=1e-13, atol=1e-20).sample(run.t)
+    for name, key in (("IA", "IA"), ("W1", "W1"), ("W2", "W2"), ("TH", "TH1")):
+        scale = float(np.max(np.abs(ref[key])))
+        assert float(np.max(np.abs(run[name] - ref[key]))) <= 5e-7 * scale, name

@@ -168,6 +168,8 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
     timer["FINTIM"] = fintim
     grid = steppoint.grid(t0, timer) if step_point else make_grid(t0, t0 + fintim, cint, cint)
     plan = make_plan(model, spec, opts, compiled, timer, grid, step_point, t0=t0)
+    if unbounded:  # (a hundredth of a run of 100 output intervals: the length is unknown)
+        plan = replace(plan, max_step=min(plan.max_step, cint))
     return AcslPrepared({**constants, **values}, compiled, plan, schedules, stop, unbounded)
 
 
@@ -362,8 +364,7 @@ class AcslRun(_Run):
         timer = dict(plan.timer, OUTDEL=cint, PRDEL=cint)
         if route_for(plan.method) is not None and route_for(plan.method).fixed:
             timer["DELT"] = cint / max(1, math.ceil(cint / plan.timer["DELT"] - 1e-9))
-        self.plan = replace(plan, grid=Grid(times, every, every), timer=timer,
-                            max_step=min(timer["DELMAX"], cint))
+        self.plan = replace(plan, grid=Grid(times, every, every), timer=timer)
         self.rec.plan = self.integ.plan = self.plan
         self.rec.times = self.integ.check_times = times
 

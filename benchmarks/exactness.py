@@ -1,0 +1,290 @@
+"""Exact by default (issue 21): the default route on the six shipped models, its time and
+its error against the exact references, whatever the output grid; and what watching the
+switching surfaces at every integrator step costs on each candidate way of doing it.
+
+    OPENBLAS_NUM_THREADS=1 python benchmarks/exactness.py [--repeats 5] [--out DIR]
+    PYTHONPATH=/path/to/older/checkout python benchmarks/exactness.py --rtol 1e-10 ...
+
+Table 1 (`default route`): METHOD AUTO at RELERR `--rtol` (default: the listing's
+default, which is 1e-10 now), ABSERR = RELERR x `--atol-ratio` (1e-3, as the defaults):
+CPU time of a run (`time.process_time`, the median of `--repeats`, the model compiled
+before), evaluations, events, and the error of every state on the OUTDEL grid against
+`cases.py`'s exact references (max |y - y_ref| / max |y_ref|); then the same model with
+OUTDEL 20 times coarser: its events and its error on the grid rows it shares with the
+reference. The script reads amilpy's public API only, so the same script run on the code
+before (PYTHONPATH pointing at a checkout of it, `--rtol` given) is the "before" column.
+
+Table 2 (`candidates`): ways to look at every switching surface after every step
+(issue 21 point 1), on the six models' right-hand sides with the branches as they are at
+t = 0 and no event handled, to FINTIM, rows on the OUTDEL grid: the cost floor of each
+way, side by side, without the loop around it.
+
+* `odeint` - Fortran/C LSODA through `scipy.integrate.odeint` over the output grid: no
+  surface looked at between the rows (AUTO before this issue);
+* `odeint+log` - the same call, every evaluation logged, the accepted step ends recovered
+  from the log and the surfaces evaluated at all of them over NumPy columns (AUTO now);
+* `lsoda 1-step` - the same C LSODA called for one step at a time
+  (`scipy.integrate._odepack.lsoda`, itask 5), the surfaces after each step (the leanest
+  Python loop around LSODA: what per-step checking costs at the least);
+* `LSODA class` - SciPy's `LSODA` OdeSolver stepped by hand, the surfaces after each step
+  (METHOD LSODA's stepper);
+* `CVODE roots` - SUNDIALS CVODE (BDF) with its own root finding on the surfaces
+  (`scikit-sundae`), when it is installed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import statistics
+import sys
+import time
+import warnings
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+
+from cases import all_cases, error_on_grid  # noqa: E402
+
+SHIPPED = ["ex4_elastic", "ex4_clutch", "ex4_torque_meter", "hoist_backlash",
+           "crank_slider_startup", "machine_unit"]
+
+
+def _cpu(fn, repeats: int) -> tuple[float, object]:
+    times, out = [], None
+    for _ in range(repeats):
+        t0 = time.process_time()
+        out = fn()
+        times.append(time.process_time() - t0)
+    return statistics.median(times), out
+
+
+def coarser(text: str, outdel: float, factor: float) -> str:
+    """The listing with OUTDEL `factor` times coarser."""
+    import re
+
+    new, n = re.subn(r"OUTDEL\s*=\s*[0-9.Ee+-]+", f"OUTDEL = {outdel * factor!r}", text)
+    assert n == 1, "one OUTDEL in the TIMER statement"
+    return new
+
+
+def default_route(names, rtol, atol_ratio, repeats) -> list[dict]:
+    import amilpy
+
+    cases = all_cases()
+    rows = []
+    for name in names:
+        case = cases[name]
+        kw = {} if rtol is None else {"rtol": rtol, "atol": rtol * atol_ratio}
+        model = amilpy.loads(case.text, case.name)
+        model.run(advice=False, **kw)
+        seconds, runs = _cpu(lambda m=model: m.run(advice=False, **kw), repeats)
+        r = runs[0]
+        coarse = amilpy.loads(coarser(case.text, case.outdel, 20.0), case.name)
+        rc = coarse.run(advice=False, **kw)[0]
+        rows.append({
+            "model": name, "settings": r.settings, "ms": 1e3 * seconds,
+            "nfev": r.stats.get("nfev"), "events": len(r.events),
+            "error": error_on_grid(case, r.t, {n: r[n] for n in case.states}),
+            "coarse events": len(rc.events),
+            "coarse error": _coarse_error(case, rc)})
+        print(f"{name:22s} {rows[-1]['ms']:8.1f} ms  nfev {rows[-1]['nfev']:7d}  "
+              f"events {rows[-1]['events']:4d}  error {rows[-1]['error']:.1e}  | OUTDEL x20: "
+              f"events {rows[-1]['coarse events']:4d}  error {rows[-1]['coarse error']:.1e}",
+              flush=True)
+    return rows
+
+
+def _coarse_error(case, run) -> float:
+    """The error on the rows a coarse run shares with the reference grid."""
+    g, ref = case.ref()
+    idx = np.searchsorted(g, run.t - 1e-9 * case.outdel)
+    idx = np.clip(idx, 0, len(g) - 1)
+    ok = np.abs(g[idx] - run.t) <= 1e-7 * case.outdel
+    scales = case.scales()
+    return max(float(np.max(np.abs(run[n][ok] - ref[n][idx[ok]]))) / (1e-12 + scales[n])
+               for n in case.states)
+
+
+# --------------------------------------------------------------------- candidates
+
+def _model(case, rtol, atol):
+    import amilpy
+    from amilpy.run.plan import Options
+    from amilpy.run.prepare import prepare
+
+    model = amilpy.loads(case.text, case.name)
+    p = prepare(model.ir, model.ir.runs[0], Options(rtol=rtol, atol=atol), model.cache)
+    c, plan = p.compiled, p.plan
+    m = [1.0] * len(plan.watched)
+    z = list(c.z0)
+    return c, plan, m, z
+
+
+def candidates(names, rtol, atol_ratio, repeats) -> list[dict]:
+    from scipy.integrate import LSODA, odeint
+    from scipy.integrate._odepack import lsoda as lsoda_c
+
+    try:
+        from sksundae.cvode import CVODE
+    except ImportError:
+        CVODE = None
+    cases = all_cases()
+    rows = []
+    for name in names:
+        case = cases[name]
+        atol = rtol * atol_ratio
+        c, plan, m, z = _model(case, rtol, atol)
+        y0 = np.array(c.y0, float)
+        n = len(y0)
+        T = plan.grid.times
+        t_end = float(T[-1])
+        rhs, surf, surf_v = c.rhs, c.surf, c.surf_v
+        watch = list(plan.watch_idx) or list(range(len(plan.watched)))
+
+        def f(t, y):
+            return rhs(t, y.tolist(), m, z)
+
+        def plain():
+            ys, info = odeint(f, y0, T, rtol=rtol, atol=atol, tfirst=True, full_output=True,
+                              mxstep=10**6)
+            return int(info["nfe"][-1])
+
+        def logged():
+            log_t, log_y = [], []
+
+            def g(t, y):
+                yl = y.tolist()
+                log_t.append(t)
+                log_y.append(yl)
+                return rhs(t, yl, m, z)
+            ys, info = odeint(g, y0, T, rtol=rtol, atol=atol, tfirst=True, full_output=True,
+                              mxstep=10**6)
+            t = np.asarray(log_t)
+            later = np.minimum.accumulate(t[::-1])[::-1]
+            keep = np.flatnonzero((t <= np.append(later[1:], np.inf)) &
+                                  np.append(t[1:] != t[:-1], True))
+            S = t[keep]
+            SY = np.array([log_y[k] for k in keep.tolist()])
+            if len(plan.watched):
+                surf_v(S, list(SY.T), m, z)
+            return int(info["nfe"][-1])
+
+        def one_step():
+            lrw = max(20 + 16 * n, 22 + 9 * n + n * n)
+            rwork, iwork = np.zeros(lrw), np.zeros(20 + n, np.int32)
+            iwork[5], iwork[7], iwork[8] = 10**6, 12, 5
+            rwork[0] = t_end  # tcrit
+            sd, si = np.zeros(240), np.zeros(48, np.int32)
+            istate, t, y = 1, 0.0, y0.copy()
+            while t < t_end:
+                y, t, istate = lsoda_c(f, y, t, t_end, rtol, atol, 5, istate, rwork, iwork,
+                                       None, 2, (), 1, (), sd, si)
+                if istate < 0:
+                    raise RuntimeError(f"lsoda istate {istate}")
+                if watch:
+                    surf(t, y.tolist(), m, z)
+            return int(iwork[11])
+
+        def scipy_class():
+            s = LSODA(f, 0.0, y0, t_end, rtol=rtol, atol=atol)
+            while s.status == "running":
+                s.step()
+                if watch:
+                    surf(s.t, s.y.tolist(), m, z)
+            return s.nfev
+
+        ways = [("odeint", plain), ("odeint+log", logged), ("lsoda 1-step", one_step),
+                ("LSODA class", scipy_class)]
+        if CVODE is not None and watch:
+            k = len(plan.watched)
+
+            def cvode():
+                def rhsfn(t, y, yp):
+                    yp[:] = rhs(t, y.tolist(), m, z)
+
+                def events(t, y, e):
+                    e[:] = surf(t, y.tolist(), m, z)
+                events.terminal = [False] * k
+                solver = CVODE(rhsfn, rtol=rtol, atol=atol, eventsfn=events, num_events=k,
+                               max_num_steps=10**6)
+                sol = solver.solve(T, y0)
+                return int(getattr(sol, "nfev", 0) or 0)
+            ways.append(("CVODE roots", cvode))
+        row = {"model": name}
+        for label, fn in ways:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                try:
+                    seconds, nfev = _cpu(fn, repeats)
+                    row[label] = (1e3 * seconds, nfev)
+                except Exception as exc:  # noqa: BLE001 - a way that cannot run this model
+                    row[label] = (math.nan, str(exc)[:40])
+        rows.append(row)
+        print(name, {k: (round(v[0], 1), v[1]) for k, v in row.items() if k != "model"},
+              flush=True)
+    return rows
+
+
+def markdown(table1, table2, args) -> str:
+    import platform
+
+    import scipy
+
+    import amilpy
+
+    load = " ".join(f"{x:.2f}" for x in os.getloadavg())
+    out = [f"# Exact by default: the default route and the per-step watch\n",
+           f"`{' '.join(['python', 'benchmarks/exactness.py'] + sys.argv[1:])}` - amilpy "
+           f"from `{os.path.dirname(amilpy.__file__)}`, Python {platform.python_version()}, "
+           f"SciPy {scipy.__version__}, NumPy {np.__version__}, load average {load}; CPU "
+           f"time, median of {args.repeats}.\n",
+           "## The default route (METHOD AUTO)\n",
+           "| model | settings | ms | evaluations | events | error | OUTDEL x20: events "
+           "| error |", "|---|---|---:|---:|---:|---:|---:|---:|"]
+    for r in table1:
+        out.append(f"| {r['model']} | {r['settings']} | {r['ms']:.1f} | {r['nfev']} | "
+                   f"{r['events']} | {r['error']:.1e} | {r['coarse events']} | "
+                   f"{r['coarse error']:.1e} |")
+    if table2:
+        ways = [k for k in table2[0] if k != "model"]
+        out += ["", f"## Watching every step: the candidates (RELERR {args.cand_rtol:g}, "
+                "branches as at t = 0, no event handled)\n",
+                "| model | " + " | ".join(f"{w} ms (evals)" for w in ways) + " |",
+                "|---|" + "---:|" * len(ways)]
+        for r in table2:
+            out.append(f"| {r['model']} | " + " | ".join(
+                f"{r[w][0]:.1f} ({r[w][1]})" if isinstance(r[w][1], int) else f"- ({r[w][1]})"
+                for w in ways) + " |")
+    return "\n".join(out) + "\n"
+
+
+def main(argv=None) -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--models", nargs="*", default=SHIPPED)
+    p.add_argument("--rtol", type=float, default=None,
+                   help="RELERR of table 1 (default: the listing's default)")
+    p.add_argument("--atol-ratio", type=float, default=1e-3)
+    p.add_argument("--cand-rtol", type=float, default=1e-10, help="RELERR of table 2")
+    p.add_argument("--repeats", type=int, default=5)
+    p.add_argument("--no-candidates", action="store_true")
+    p.add_argument("--out", default=None, help="write exactness.md here")
+    args = p.parse_args(argv)
+    t1 = default_route(args.models, args.rtol, args.atol_ratio, args.repeats)
+    t2 = [] if args.no_candidates else candidates(args.models, args.cand_rtol, args.atol_ratio,
+                                                  args.repeats)
+    text = markdown(t1, t2, args)
+    print(text)
+    if args.out:
+        os.makedirs(args.out, exist_ok=True)
+        with open(os.path.join(args.out, "exactness.md"), "w", encoding="utf-8") as fh:
+            fh.write(text)
+
+
+if __name__ == "__main__":
+    main()
