@@ -173,7 +173,7 @@ def explain(compiled, exc: BaseException, t: float, y, m, z) -> FaultReport | No
     if found is None or found[2] is not compiled.statements:
         return None
     statement, name, table = found
-    if name not in ("rhs", "surf", "out", "mem", "modes"):
+    if name not in ("rhs", "surf", "out", "mem", "modes", "smp"):
         return None
     fn, sites = _checking_function(compiled, name)
     args = (t, list(y), list(m), list(m), list(z)) if name == "mem" else \

@@ -413,6 +413,7 @@ class Integrator(RunLoop):
                 if chunked:
                     rec.samples(*stepper.samples(step.tb), cur.m, cur.z)
                 self._rows_inside(rec, stepper, f, ta, cur.y, step.tb, step.yb, cur)
+            self.sample_memory(stepper, cur, step.tb)
             if observer is not None:
                 observer(ta, step.tb, stepper.interpolant(), list(cur.m), list(cur.z))
             tb, yb = step.tb, step.yb
@@ -598,7 +599,29 @@ class Integrator(RunLoop):
                 if bad is not None:
                     raise Stop(Failure.NOT_FINITE, ta, name=self.c.state_names[bad],
                                detail="")
+            self.sample_memory(stepper, cur, to)
             rec.grid_row(to, yo, cur.m, cur.z)
+
+    def sample_memory(self, stepper: Stepper, cur: Cursor, upto: float) -> None:
+        """Memory that samples the trajectory (DELAY's store) gets every instant it asks
+        for inside the last accepted step, before `upto`, at the state the dense
+        output gives there: X at (g, y(g)), not a straight line between the step's
+        ends. Called before each row inside the step (the row reads that past) and
+        once the step is taken, before the memory update at its end."""
+        c = self.c
+        if c.next_sample is None:
+            return
+        g = c.next_sample(cur.z)
+        if not g < upto:
+            return
+        dense = stepper.interpolant()
+        while g < upto:
+            y = np.asarray(dense(g), dtype=float)
+            cur.z[:] = c.sample(g, y.tolist(), cur.m, cur.z)
+            after = c.next_sample(cur.z)
+            if not after > g:
+                break
+            g = after
 
     # ----------------------------------------------------------------- restarts
     def _restart(self, cur: Cursor, step: _Step, h: float, at_output: bool,

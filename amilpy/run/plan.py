@@ -212,7 +212,7 @@ class RunPlan:
     roots: dict[int, float]  # watched position -> its breakpoint
     resets: tuple[Reset, ...]
     chunked: bool  # AUTO drives odeint over chunks of output instants
-    max_step: float  # never step over more than an output interval
+    max_step: float  # never step over more than an output interval (nor a delay read)
     h_floor: float  # steps shorter than this make no progress
     floor_origin: str  # where h_floor comes from, for the message
     lookahead_h: float  # the step of a look-ahead (the branch the motion takes)
@@ -391,7 +391,7 @@ def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: Compiled,
         watch_idx=tuple(k for k, w in enumerate(watched) if not w.breakpoint_only),
         breakpoints=tuple(breakpoints), roots=roots, resets=tuple(resets),
         chunked=route.stepper == "odeint" and not c.memory_every_step,
-        max_step=min(timer["DELMAX"], max(timer["OUTDEL"], timer["PRDEL"])),
+        max_step=min(timer["DELMAX"], max(timer["OUTDEL"], timer["PRDEL"]), c.step_limit),
         h_floor=timer["DELMIN"] if floor_given else 1e-12 * (fintim - t0),
         floor_origin="TIMER DELMIN" if floor_given else
         "the default floor FINTIM*1E-12; TIMER DELMIN lowers it",
