@@ -467,7 +467,7 @@ register(Func("DELAY", Kind.MEMORY, "DELAY(N, P, X)",
               literal_args=(0,), constant_args=(1,),
               memory=MemorySpec("2*A + 13", ("*DELAY_INIT(A + 2)",),
                                 "DELAY(TIME, B, C, C, 1.0, Z, OFFSET, A + 2)",
-                                ("*DELAY_STORE(TIME, B / A, C, Z, OFFSET, A + 2)",),
+                                ("*DELAY_STORE(TIME, B / A, B, C, Z, OFFSET, A + 2)",),
                                 samples=rt.DELAY_NEXT, horizon="B"),
               variants=(
                   # ACSL: IC until TIME - TDL reaches t0, then X(t - TDL(t)) from NMX
@@ -482,7 +482,7 @@ register(Func("DELAY", Kind.MEMORY, "DELAY(N, P, X)",
                        memory=MemorySpec(
                            "2*D + 13", ("*DELAY_INIT(D + 2)",),
                            "(DELAY(TIME, C, A, B, 0.0, Z, OFFSET, D + 2) if M0 >= 0 else B)",
-                           ("*DELAY_STORE(TIME, AMAX1(E, C / D), A, Z, OFFSET, D + 2)",),
+                           ("*DELAY_STORE(TIME, AMAX1(E, C / D), C, A, Z, OFFSET, D + 2)",),
                            samples=rt.DELAY_NEXT, horizon="C")),
               )))
 

@@ -349,10 +349,15 @@ _COUNT, _T0, _X0, _H, _ANCHOR_T, _ANCHOR_J, _NEXT, _TLAST, _XLAST, _RING = range
 DELAY_NEXT = _NEXT  # the slot the library names as the store's next sampling instant
 
 
-class HistoryLost(ValueError):
+class HelperFault(ValueError):
+    """A run-time helper's fault that says itself what is wrong (the fault report
+    quotes it, with the statement, instead of the generated call)."""
+
+
+class HistoryLost(HelperFault):
     """A DELAY read further back than its store holds (a TDL that grew beyond what
-    NMX points DMIN apart cover): the run stops with this message, never a value
-    made up."""
+    NMX points DMIN apart cover): a fault, never a value made up. The store's update
+    raises it too, so the run stops there even where only outputs read the value."""
 
 
 def delay_init(k: float) -> list[float]:
@@ -363,11 +368,12 @@ def delay_init(k: float) -> list[float]:
     return slots
 
 
-def delay_store(t: float, h: float, x: float, z, o: int, k: float) -> list[float]:
+def delay_store(t: float, h: float, d: float, x: float, z, o: int, k: float) -> list[float]:
     """The store after the trajectory reached (t, X) (a sampling instant or a step's
     end): every sampling instant since the newest point is recorded, on the straight
     line from it (exact at t itself), and (t, X) becomes the newest point. `h` is
-    the spacing asked for now; a new one is anchored at the newest point."""
+    the spacing asked for now; a new one applies after the sample due next. `d` is
+    the delay now: a past the ring no longer holds stops the run (`HistoryLost`)."""
     k = int(k)
     s = list(z[o:o + _RING + 2 * k])
     if not (h > 0.0 and h < math.inf):
@@ -384,10 +390,9 @@ def delay_store(t: float, h: float, x: float, z, o: int, k: float) -> list[float
         return s
     count = int(s[_COUNT])
     if h != s[_H]:
-        # a new spacing (ACSL's TDL/NMX as TDL changes): the next sample one spacing
-        # after the newest point
-        s[_H], s[_ANCHOR_T], s[_ANCHOR_J] = h, t_last, float(count - 1)
-        s[_NEXT] = t_last + h
+        # a new spacing (ACSL's TDL/NMX as TDL changes) from the sample due next on
+        due = s[_NEXT] if s[_NEXT] < math.inf else t_last + h
+        s[_H], s[_ANCHOR_T], s[_ANCHOR_J], s[_NEXT] = h, due, float(count), due
     anchor, j0, nxt = s[_ANCHOR_T], s[_ANCHOR_J], s[_NEXT]
     if nxt <= t:
         # only the last K instants matter: skip those a long step would overwrite
@@ -403,7 +408,18 @@ def delay_store(t: float, h: float, x: float, z, o: int, k: float) -> list[float
             nxt = anchor + (count - j0) * h
         s[_COUNT], s[_NEXT] = float(count), nxt
     s[_TLAST], s[_XLAST] = t, x
+    if count > k and t - d >= s[_T0]:
+        oldest = s[_RING + 2 * (count % k)]
+        if t - d < oldest:
+            raise HistoryLost(_lost(t, t - d, k, oldest))
     return s
+
+
+def _lost(t: float, s: float, k: int, oldest: float) -> str:
+    return (f"at TIME = {t:.9g} it reads TIME - delay = {s:.9g}, older than the {k - 2} "
+            f"points of its store keep (back to TIME = {oldest:.9g}); with a delay that "
+            "grows, give DMIN so that NMX*DMIN covers the longest delay: "
+            "DELAY(X, IC, TDL, NMX, DMIN)")
 
 
 def delay(t: float, d: float, x: float, ic: float, held: float, z, o: int,
@@ -416,7 +432,7 @@ def delay(t: float, d: float, x: float, ic: float, held: float, z, o: int,
     if not d >= 0.0:
         if d != d:
             return math.nan
-        raise ValueError(f"the delay must not be negative (got {d:.6g} at TIME = {t:.9g})")
+        raise HelperFault(f"the delay must not be negative (got {d:.6g} at TIME = {t:.9g})")
     count = int(z[o + _COUNT])
     if count == 0:
         return x if held else ic
@@ -437,11 +453,7 @@ def delay(t: float, d: float, x: float, ic: float, held: float, z, o: int,
         return z[i + 1] + (x_last - z[i + 1]) * ((s - tn) / (t_last - tn))
     oldest = max(0, count - k)
     if s < z[ring + 2 * (oldest % k)]:
-        raise HistoryLost(
-            f"TIME - delay = {s:.9g} is older than the store of {k - 2} points keeps "
-            f"(back to TIME = {z[ring + 2 * (oldest % k)]:.9g}); with a delay that grows, "
-            "give DMIN so that NMX*DMIN covers the longest delay: "
-            "DELAY(X, IC, TDL, NMX, DMIN)")
+        raise HistoryLost(_lost(t, s, k, z[ring + 2 * (oldest % k)]))
     # sample lo at or before s, hi after it: first a guess from the spacing (exact on
     # a regular grid), then halving
     lo, hi = oldest, newest

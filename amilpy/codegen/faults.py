@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 from .. import ir
 from ..diagnostics import Span
+from ..runtime import HelperFault
 from ..syntax import deep_enough
 from ..unparse import expr_text
 
@@ -216,6 +217,8 @@ def _value(v: float) -> str:
 
 def _describe(model: ir.Model, site: _Site, fault: _Fault) -> str:
     """The failed operation in the listing's notation, with its operand values."""
+    if isinstance(fault.exc, HelperFault):
+        return str(fault.exc)
     what = {ZeroDivisionError: "division by zero", OverflowError: "overflow"}.get(
         type(fault.exc), "math domain error")
     texts = [_text(model, s) for s in site.operands]
