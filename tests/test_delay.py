@@ -247,3 +247,16 @@ def test_the_vector_form_reads_the_store_as_the_scalar_one():
         for name in ("D", "A"):
             k = names.index(name)
             assert columns[k][i] == row[k], name
+
+
+@pytest.mark.parametrize("call", ["DELAY(7, 0.5, X)", "DELAY(X, 0.0, 0.5, 7)",
+                                  "DELAY(X, 0.0, 0.5, 7, 0.1)"])
+def test_the_store_has_the_slots_its_entry_gives(call):
+    """One layout: the entry's slot count is what the store's helpers fill (7 points
+    and one to spare, as (t, X) pairs, after the header)."""
+    m = amilpy.loads(f"X = INTGRL(0.0, 1.0)\nD = {call}\nTIMER FINTIM = 1.0\nEND\n")
+    mem, = m.ir.memories
+    c = Compiler(m.ir, {}, {}, {}).build()
+    assert mem.nslots == len(c.z0) == 2 * 7 + 13
+    z = c.mem(0.0, [0.0], [1.0] * len(c.watched), [1.0] * len(c.watched), c.z0)
+    assert len(z) == len(c.z0) and c.next_sample(z) > 0.0
