@@ -29,10 +29,11 @@ how long a draw is held; SITE: the call site's number); TIME; INF; and calls of 
 language's functions or of `runtime.HELPERS` (a surface may call a helper too:
 PULSE's train). A template whose text starts with `*` gives several slots at once.
 
-A signature names its arguments; `[, E]` marks optional ones at the end and
-`...)` any number from the last named one on (a switch's templates read the first
-two: a call with more is the function of the first two, then of that and the next,
-and so on: AMAX1(A, B, C) is AMAX1(AMAX1(A, B), C)).
+A signature names its arguments; `[, E]` marks optional ones at the end (a template
+reads one the call leaves out as 0) and `...)` any number from the last named one on
+(a switch's templates read the first two: a call with more is the function of the
+first two, then of that and the next, and so on: AMAX1(A, B, C) is
+AMAX1(AMAX1(A, B), C)).
 
 A switch with a plain form means, with the modes its surfaces have on the spot
 (`surfaces.sign`, `surfaces.level`), exactly what the plain form means, at the
@@ -101,6 +102,14 @@ class MemorySpec:
     every_step: bool = True
     # the slot that holds a future instant at which the model switches (PULSE's end)
     wakes: int | None = None
+    # the slot that holds the next instant at which the memory samples the trajectory
+    # (DELAY's store): the loop evaluates the `update` templates there, inside each
+    # accepted step, at the state the dense output gives (`Compiled.sample`)
+    samples: int | None = None
+    # a template over the arguments: how far back the value reads (DELAY's delay);
+    # where it is known before the run and the derivatives read the value, no step is
+    # longer (each stage then reads a past the store holds)
+    horizon: str = ""
 
 
 @dataclass(frozen=True)
@@ -270,6 +279,8 @@ def check_template_set(f: Func) -> None:
         check(mem.value, modes=nsurf, slots=True)
         for t in mem.update:
             check(t, modes=nsurf, slots=True, update=True)
+        if mem.horizon:
+            check(mem.horizon, arithmetic=True)
 
 
 def runtime_name(func: Func) -> str:
@@ -522,28 +533,31 @@ register(Func("DERIV", Kind.MEMORY, "DERIV(IC, X)", "dX/dt, Y(0)=IC", ("DERIVT",
               memory=MemorySpec("5", ("0.0", "0.0", "0.0", "0.0", "A"),
                                 "DERIV(B, TIME, Z0, Z1, Z2, Z3, Z4)",
                                 ("B", "TIME", "Z0", "Z1", "VALUE"))))
+# DELAY's store (runtime.delay_store): a ring of (t, X) samples, K = N + 2 (NMX + 2) of
+# them, one spacing apart: the loop samples X from its dense output at every instant
+# the store asks for (slot DELAY_NEXT), the update after a step records the step's end
 register(Func("DELAY", Kind.MEMORY, "DELAY(N, P, X)",
               "X(t0) for t < t0+P, else X(t-P) from N points stored over P, interpolated",
               literal_args=(0,), constant_args=(1,),
-              memory=MemorySpec("A + 6", ("*DELAY_INIT(A)",),
-                                "DELAY(TIME, B, C, Z, OFFSET, A)",
-                                ("*DELAY_STORE(TIME, B, C, Z, OFFSET, A)",)),
+              memory=MemorySpec("2*A + 13", ("*DELAY_INIT(A + 2)",),
+                                "DELAY(TIME, B, C, C, 1.0, Z, OFFSET, A + 2)",
+                                ("*DELAY_STORE(TIME, B / A, B, C, Z, OFFSET, A + 2)",),
+                                samples=rt.DELAY_NEXT, horizon="B"),
               variants=(
-                  # ACSL: IC until t0 + TDL, then X(t - TDL) from a store of NMX points
-                  # over TDL (DMIN, ACSL's smallest spacing, is read and not needed).
-                  # Slots: the instant the delayed X starts (the loop wakes there: X(t0)
-                  # may differ from IC), whether it has, then CSMP's store.
+                  # ACSL: IC until TIME - TDL reaches t0, then X(t - TDL(t)) from NMX
+                  # points at least DMIN apart (and TDL/NMX: they span the delay);
+                  # TDL may change in time. The surface TIME - TDL makes the run
+                  # restart where the value jumps from IC to X(t0) (a breakpoint
+                  # when TDL is constant).
                   Func("DELAY", Kind.MEMORY, "DELAY(X, IC, TDL, NMX[, DMIN])",
-                       "IC for t < t0+TDL, else X(t-TDL) from NMX points stored over TDL, "
-                       "interpolated",
-                       literal_args=(3,), constant_args=(2,), positive_args=(2,),
+                       "IC for t - TDL < t0, else X(t - TDL) from NMX points at least DMIN "
+                       "apart, interpolated",
+                       literal_args=(3,), positive_args=(2,), surfaces=("TIME - C",),
                        memory=MemorySpec(
-                           "D + 8", ("INF", "0.0", "*DELAY_INIT(D)"),
-                           "(DELAY(TIME, C, A, Z, OFFSET + 2, D) if Z1 > 0.0 else B)",
-                           ("((TIME + C) if Z2 == 0.0 else Z0)",
-                            "(1.0 if TIME >= Z0 else 0.0)",
-                            "*DELAY_STORE(TIME, C, A, Z, OFFSET + 2, D)"),
-                           wakes=0)),
+                           "2*D + 13", ("*DELAY_INIT(D + 2)",),
+                           "(DELAY(TIME, C, A, B, 0.0, Z, OFFSET, D + 2) if M0 >= 0 else B)",
+                           ("*DELAY_STORE(TIME, AMAX1(E, C / D), C, A, Z, OFFSET, D + 2)",),
+                           samples=rt.DELAY_NEXT, horizon="C")),
               )))
 
 # --- random: one stream per call site, a draw held for an output interval --------

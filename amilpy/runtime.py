@@ -346,76 +346,144 @@ def impulse_at(t: float, start: float, period: float) -> float:
     return 1.0 if abs(start + k * period - t) <= 1e-9 * max(period, abs(t) * 1e-3) else 0.0
 
 
-# DELAY(N, P, X) keeps X on a grid of N + 1 instants spaced P/N (CSMP's store of N
-# points over the delay) in N + 6 memory slots from `o`:
-#   o: 1.0 once started   o+1: t0   o+2, o+3: the last accepted (t, X)
-#   o+4: the index j of the next grid instant t0 + j*P/N to record
-#   o+5 ...: the ring of the last N + 1 grid values (value j at j mod (N + 1))
-_STARTED, _T0, _TLAST, _XLAST, _NEXT, _RING = range(6)
+# DELAY's store, both forms: X sampled every H (the spacing the call asks for: P/N for
+# CSMP's DELAY(N, P, X), max(DMIN, TDL/NMX) for ACSL's DELAY(X, IC, TDL, NMX, DMIN)),
+# kept as (t, X) pairs in a ring of K entries, read at t - delay by linear
+# interpolation. The run loop takes every sampling instant inside an accepted step
+# from its dense output (`Compiled.sample`: X at (g, y(g))); a step's end is recorded
+# by the memory update after the step, which also fills any instant the loop did not
+# sample (step-point mode) on the straight line from the last point. Slots from `o`:
+#   o: how many samples were taken (0: the store has not started)
+#   o+1, o+2: t0 and X(t0), the first sample (CSMP's value before t0 + P)
+#   o+3: the spacing H in force; o+4, o+5: its anchor (an instant and the number of
+#        the sample due there): sample j is due at anchor + (j - number)*H
+#   o+6: the next sampling instant (the loop reads it: `MemorySpec.samples`)
+#   o+7, o+8: the newest point (t, X): a sample or a step's end
+#   o+9 ...: the ring, sample j at o + 9 + 2*(j mod K) (its t, then its X)
+_COUNT, _T0, _X0, _H, _ANCHOR_T, _ANCHOR_J, _NEXT, _TLAST, _XLAST, _RING = range(10)
+DELAY_NEXT = _NEXT  # the slot the library names as the store's next sampling instant
 
 
-def delay_init(n: float) -> list[float]:
-    """The slots of a DELAY store that has not started (started at the first
-    accepted instant, t0, with X(t0) as the whole history)."""
-    return [0.0] * (int(n) + 6)
+class HelperFault(ValueError):
+    """A run-time helper's fault that says itself what is wrong (the fault report
+    quotes it, with the statement, instead of the generated call)."""
 
 
-def delay(t: float, p: float, x: float, z, o: int, n: float) -> float:
-    """X(t - P) from the store (linear between grid values, then to the last accepted
-    point); X(t0) before t0 + P; the current X before the store has started."""
-    if z[o + _STARTED] == 0.0:
-        return x
-    n = int(n)
-    t0 = z[o + _T0]
-    s = t - p
-    ring = o + _RING
-    if not s > t0:
-        return z[ring]
-    h = p / n
-    j_next = int(z[o + _NEXT])
-    u = (s - t0) / h
-    j = int(u)
-    if j + 1 < j_next:
-        # both ends recorded; a grid value older than the ring holds (the store is full)
-        j = max(j, j_next - n - 1)
-        a, b = z[ring + j % (n + 1)], z[ring + (j + 1) % (n + 1)]
-        f = min(max(u - j, 0.0), 1.0)
-        return a + (b - a) * f
-    # between the last grid value and the last accepted point (or after it: held)
-    g = t0 + (j_next - 1) * h
-    a = z[ring + (j_next - 1) % (n + 1)]
-    t_last, x_last = z[o + _TLAST], z[o + _XLAST]
-    if not t_last > g or s >= t_last:
-        return x_last if s >= t_last else a
-    return a + (x_last - a) * (s - g) / (t_last - g)
+class HistoryLost(HelperFault):
+    """A DELAY read further back than its store holds (a TDL that grew beyond what
+    NMX points DMIN apart cover): a fault, never a value made up. The store's update
+    raises it too, so the run stops there even where only outputs read the value."""
 
 
-def delay_store(t: float, p: float, x: float, z, o: int, n: float) -> list[float]:
-    """The store after an accepted step ending at (t, X): every grid instant the
-    step passed is recorded, linear between the step's ends."""
-    n = int(n)
-    slots = list(z[o:o + n + 6])
-    ring = _RING
-    if slots[_STARTED] == 0.0:
-        slots[_STARTED], slots[_T0], slots[_TLAST], slots[_XLAST] = 1.0, t, t, x
-        slots[_NEXT] = 1.0
-        slots[ring:] = [x] * (n + 1)
-        return slots
-    t0, t_last, x_last = slots[_T0], slots[_TLAST], slots[_XLAST]
-    if not t > t_last:
-        slots[_XLAST] = x
-        return slots
-    h = p / n
-    j = int(slots[_NEXT])
-    # only the last N + 1 instants matter: skip the ones a long step overwrites
-    j = max(j, int((t - t0) / h) - n)
-    while t0 + j * h <= t:
-        g = t0 + j * h
-        slots[ring + j % (n + 1)] = x_last + (x - x_last) * (g - t_last) / (t - t_last)
-        j += 1
-    slots[_NEXT] = float(j)
-    slots[_TLAST], slots[_XLAST] = t, x
+def delay_init(k: float) -> list[float]:
+    """The slots of a store of K samples that has not started (it starts at the
+    first memory update, at t0)."""
+    slots = [0.0] * (_RING + 2 * int(k))
+    slots[_NEXT] = math.inf  # (nothing to sample before the start)
     return slots
+
+
+def delay_store(t: float, h: float, d: float, x: float, z, o: int, k: float) -> list[float]:
+    """The store after the trajectory reached (t, X) (a sampling instant or a step's
+    end): every sampling instant since the newest point is recorded, on the straight
+    line from it (exact at t itself), and (t, X) becomes the newest point. `h` is
+    the spacing asked for now; a new one applies after the sample due next. `d` is
+    the delay now: a past the ring no longer holds stops the run (`HistoryLost`)."""
+    k = int(k)
+    s = list(z[o:o + _RING + 2 * k])
+    if not (h > 0.0 and h < math.inf):
+        h = math.inf  # (a delay that is not positive: the read says so)
+    if s[_COUNT] == 0.0:
+        s[_COUNT], s[_T0], s[_X0], s[_H], s[_ANCHOR_T], s[_ANCHOR_J] = 1.0, t, x, h, t, 0.0
+        s[_NEXT], s[_TLAST], s[_XLAST] = t + h, t, x
+        s[_RING], s[_RING + 1] = t, x
+        return s
+    t_last, x_last = s[_TLAST], s[_XLAST]
+    if not t > t_last:
+        if t == t_last:
+            s[_XLAST] = x  # (a restart: X in the new branches)
+        return s
+    count = int(s[_COUNT])
+    if h != s[_H]:
+        # a new spacing (ACSL's TDL/NMX as TDL changes) from the sample due next on
+        due = s[_NEXT] if s[_NEXT] < math.inf else t_last + h
+        s[_H], s[_ANCHOR_T], s[_ANCHOR_J], s[_NEXT] = h, due, float(count), due
+    anchor, j0, nxt = s[_ANCHOR_T], s[_ANCHOR_J], s[_NEXT]
+    if nxt <= t:
+        # only the last K instants matter: skip those a long step would overwrite
+        skip = int((t - nxt) / h) - k
+        if skip > 0:
+            count += skip
+            nxt = anchor + (count - j0) * h
+        dt = t - t_last
+        while nxt <= t:
+            i = _RING + 2 * (count % k)
+            s[i], s[i + 1] = nxt, x_last + (x - x_last) * ((nxt - t_last) / dt)
+            count += 1
+            nxt = anchor + (count - j0) * h
+        s[_COUNT], s[_NEXT] = float(count), nxt
+    s[_TLAST], s[_XLAST] = t, x
+    if count > k and t - d >= s[_T0]:
+        oldest = s[_RING + 2 * (count % k)]
+        if t - d < oldest:
+            raise HistoryLost(_lost(t, t - d, k, oldest))
+    return s
+
+
+def _lost(t: float, s: float, k: int, oldest: float) -> str:
+    return (f"at TIME = {t:.9g} it reads TIME - delay = {s:.9g}, older than the {k - 2} "
+            f"points of its store keep (back to TIME = {oldest:.9g}); with a delay that "
+            "grows, give DMIN so that NMX*DMIN covers the longest delay: "
+            "DELAY(X, IC, TDL, NMX, DMIN)")
+
+
+def delay(t: float, d: float, x: float, ic: float, held: float, z, o: int,
+          k: float) -> float:
+    """X(t - d) from the store: linear between the samples, then from the newest
+    sample to the newest point and on to the current (t, X). Before the store's start
+    (t - d < t0) IC, or X(t0) when `held` (CSMP); the current X (CSMP) or IC before
+    the store has started. A delay that is negative, or a read older than the ring
+    holds, is a fault that names the statement."""
+    if not d >= 0.0:
+        if d != d:
+            return math.nan
+        raise HelperFault(f"the delay must not be negative (got {d:.6g} at TIME = {t:.9g})")
+    count = int(z[o + _COUNT])
+    if count == 0:
+        return x if held else ic
+    s = t - d
+    if not s >= z[o + _T0]:
+        if s != s:
+            return math.nan
+        return z[o + _X0] if held else ic
+    t_last, x_last = z[o + _TLAST], z[o + _XLAST]
+    if s >= t_last:
+        return x_last + (x - x_last) * ((s - t_last) / (t - t_last)) if t > t_last else x_last
+    k = int(k)
+    ring = o + _RING
+    newest = count - 1
+    i = ring + 2 * (newest % k)
+    tn = z[i]
+    if s >= tn:
+        return z[i + 1] + (x_last - z[i + 1]) * ((s - tn) / (t_last - tn))
+    oldest = max(0, count - k)
+    if s < z[ring + 2 * (oldest % k)]:
+        raise HistoryLost(_lost(t, s, k, z[ring + 2 * (oldest % k)]))
+    # sample lo at or before s, hi after it: first a guess from the spacing (exact on
+    # a regular grid), then halving
+    lo, hi = oldest, newest
+    h = z[o + _H]
+    guess = newest - 1 - int((tn - s) / h) if h < math.inf else lo
+    if lo <= guess < hi and z[ring + 2 * (guess % k)] <= s < z[ring + 2 * ((guess + 1) % k)]:
+        lo, hi = guess, guess + 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if z[ring + 2 * (mid % k)] <= s:
+            lo = mid
+        else:
+            hi = mid
+    a, b = ring + 2 * (lo % k), ring + 2 * (hi % k)
+    return z[a + 1] + (z[b + 1] - z[a + 1]) * ((s - z[a]) / (z[b] - z[a]))
 
 
 # ------------------------------------------------- helpers of the generated code
@@ -480,7 +548,7 @@ def vector_helpers() -> dict[str, Callable]:
         "AFGEN": lambda table, x: np.interp(x, table[0], table[1]),
         "NLFGEN": lambda table, x: each(lambda v: nlfgen(table, v))(x),
         "DERIV": each(deriv), "IMPULS": each(impulse_at), "POW": np.power,
-        "DELAY": each(delay, excluded={3, 4, 5}),
+        "DELAY": each(delay, excluded={5, 6, 7}),
         "LINT": lambda table, x: each(lambda v: lint(table, v))(x),
         "WDAY": lambda table, x: each(lambda v: weather_day(table, v))(x),
         "PULSE_ON": each(pulse_on), "IMPULS_STEP": each(impulse_step),

@@ -83,7 +83,7 @@ def default_route(names, rtol, atol_ratio, repeats) -> list[dict]:
         kw = {} if rtol is None else {"rtol": rtol, "atol": rtol * atol_ratio}
         model = amilpy.loads(case.text, case.name)
         model.run(advice=False, **kw)
-        seconds, runs = _cpu(lambda m=model: m.run(advice=False, **kw), repeats)
+        seconds, runs = _cpu(lambda m=model, kw=kw: m.run(advice=False, **kw), repeats)
         r = runs[0]
         coarse = amilpy.loads(coarser(case.text, case.outdel, 20.0), case.name)
         rc = coarse.run(advice=False, **kw)[0]
@@ -127,97 +127,11 @@ def _model(case, rtol, atol):
 
 
 def candidates(names, rtol, atol_ratio, repeats) -> list[dict]:
-    from scipy.integrate import LSODA, odeint
-    from scipy.integrate._odepack import lsoda as lsoda_c
-
-    try:
-        from sksundae.cvode import CVODE
-    except ImportError:
-        CVODE = None
     cases = all_cases()
     rows = []
     for name in names:
-        case = cases[name]
-        atol = rtol * atol_ratio
-        c, plan, m, z = _model(case, rtol, atol)
-        y0 = np.array(c.y0, float)
-        n = len(y0)
-        T = plan.grid.times
-        t_end = float(T[-1])
-        rhs, surf, surf_v = c.rhs, c.surf, c.surf_v
-        watch = list(plan.watch_idx) or list(range(len(plan.watched)))
-
-        def f(t, y):
-            return rhs(t, y.tolist(), m, z)
-
-        def plain():
-            ys, info = odeint(f, y0, T, rtol=rtol, atol=atol, tfirst=True, full_output=True,
-                              mxstep=10**6)
-            return int(info["nfe"][-1])
-
-        def logged():
-            log_t, log_y = [], []
-
-            def g(t, y):
-                yl = y.tolist()
-                log_t.append(t)
-                log_y.append(yl)
-                return rhs(t, yl, m, z)
-            ys, info = odeint(g, y0, T, rtol=rtol, atol=atol, tfirst=True, full_output=True,
-                              mxstep=10**6)
-            t = np.asarray(log_t)
-            later = np.minimum.accumulate(t[::-1])[::-1]
-            keep = np.flatnonzero((t <= np.append(later[1:], np.inf)) &
-                                  np.append(t[1:] != t[:-1], True))
-            S = t[keep]
-            SY = np.array([log_y[k] for k in keep.tolist()])
-            if len(plan.watched):
-                surf_v(S, list(SY.T), m, z)
-            return int(info["nfe"][-1])
-
-        def one_step():
-            lrw = max(20 + 16 * n, 22 + 9 * n + n * n)
-            rwork, iwork = np.zeros(lrw), np.zeros(20 + n, np.int32)
-            iwork[5], iwork[7], iwork[8] = 10**6, 12, 5
-            rwork[0] = t_end  # tcrit
-            sd, si = np.zeros(240), np.zeros(48, np.int32)
-            istate, t, y = 1, 0.0, y0.copy()
-            while t < t_end:
-                y, t, istate = lsoda_c(f, y, t, t_end, rtol, atol, 5, istate, rwork, iwork,
-                                       None, 2, (), 1, (), sd, si)
-                if istate < 0:
-                    raise RuntimeError(f"lsoda istate {istate}")
-                if watch:
-                    surf(t, y.tolist(), m, z)
-            return int(iwork[11])
-
-        def scipy_class():
-            s = LSODA(f, 0.0, y0, t_end, rtol=rtol, atol=atol)
-            while s.status == "running":
-                s.step()
-                if watch:
-                    surf(s.t, s.y.tolist(), m, z)
-            return s.nfev
-
-        ways = [("odeint", plain), ("odeint+log", logged), ("lsoda 1-step", one_step),
-                ("LSODA class", scipy_class)]
-        if CVODE is not None and watch:
-            k = len(plan.watched)
-
-            def cvode():
-                def rhsfn(t, y, yp):
-                    yp[:] = rhs(t, y.tolist(), m, z)
-
-                def events(t, y, e):
-                    e[:] = surf(t, y.tolist(), m, z)
-                events.terminal = [False] * k
-                solver = CVODE(rhsfn, rtol=rtol, atol=atol, eventsfn=events, num_events=k,
-                               max_num_steps=10**6)
-                sol = solver.solve(T, y0)
-                return int(getattr(sol, "nfev", 0) or 0)
-            ways.append(("CVODE roots", cvode))
         row = {"model": name}
-        for label, fn in ways:
+        for label, fn in _ways(cases[name], rtol, rtol * atol_ratio):
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 try:
@@ -231,6 +145,95 @@ def candidates(names, rtol, atol_ratio, repeats) -> list[dict]:
     return rows
 
 
+def _ways(case, rtol: float, atol: float) -> list[tuple[str, object]]:
+    """The candidate ways, as functions of no argument returning their evaluations."""
+    from scipy.integrate import LSODA, odeint
+    from scipy.integrate._odepack import lsoda as lsoda_c
+
+    c, plan, m, z = _model(case, rtol, atol)
+    y0 = np.array(c.y0, float)
+    n = len(y0)
+    T = plan.grid.times
+    t_end = float(T[-1])
+    rhs, surf, surf_v = c.rhs, c.surf, c.surf_v
+    watch = list(plan.watch_idx) or list(range(len(plan.watched)))
+
+    def f(t, y):
+        return rhs(t, y.tolist(), m, z)
+
+    def plain():
+        ys, info = odeint(f, y0, T, rtol=rtol, atol=atol, tfirst=True, full_output=True,
+                          mxstep=10**6)
+        return int(info["nfe"][-1])
+
+    def logged():
+        log_t, log_y = [], []
+
+        def g(t, y):
+            yl = y.tolist()
+            log_t.append(t)
+            log_y.append(yl)
+            return rhs(t, yl, m, z)
+        ys, info = odeint(g, y0, T, rtol=rtol, atol=atol, tfirst=True, full_output=True,
+                          mxstep=10**6)
+        t = np.asarray(log_t)
+        later = np.minimum.accumulate(t[::-1])[::-1]
+        keep = np.flatnonzero((t <= np.append(later[1:], np.inf)) &
+                              np.append(t[1:] != t[:-1], True))
+        S = t[keep]
+        SY = np.array([log_y[k] for k in keep.tolist()])
+        if len(plan.watched):
+            surf_v(S, list(SY.T), m, z)
+        return int(info["nfe"][-1])
+
+    def one_step():
+        lrw = max(20 + 16 * n, 22 + 9 * n + n * n)
+        rwork, iwork = np.zeros(lrw), np.zeros(20 + n, np.int32)
+        iwork[5], iwork[7], iwork[8] = 10**6, 12, 5
+        rwork[0] = t_end  # tcrit
+        sd, si = np.zeros(240), np.zeros(48, np.int32)
+        istate, t, y = 1, 0.0, y0.copy()
+        while t < t_end:
+            y, t, istate = lsoda_c(f, y, t, t_end, rtol, atol, 5, istate, rwork, iwork,
+                                   None, 2, (), 1, (), sd, si)
+            if istate < 0:
+                raise RuntimeError(f"lsoda istate {istate}")
+            if watch:
+                surf(t, y.tolist(), m, z)
+        return int(iwork[11])
+
+    def scipy_class():
+        s = LSODA(f, 0.0, y0, t_end, rtol=rtol, atol=atol)
+        while s.status == "running":
+            s.step()
+            if watch:
+                surf(s.t, s.y.tolist(), m, z)
+        return s.nfev
+
+    ways = [("odeint", plain), ("odeint+log", logged), ("lsoda 1-step", one_step),
+            ("LSODA class", scipy_class)]
+    try:
+        from sksundae.cvode import CVODE
+    except ImportError:
+        return ways
+    if watch:
+        k = len(plan.watched)
+
+        def cvode():
+            def rhsfn(t, y, yp):
+                yp[:] = rhs(t, y.tolist(), m, z)
+
+            def events(t, y, e):
+                e[:] = surf(t, y.tolist(), m, z)
+            events.terminal = [False] * k
+            solver = CVODE(rhsfn, rtol=rtol, atol=atol, eventsfn=events, num_events=k,
+                           max_num_steps=10**6)
+            sol = solver.solve(T, y0)
+            return int(getattr(sol, "nfev", 0) or 0)
+        ways.append(("CVODE roots", cvode))
+    return ways
+
+
 def markdown(table1, table2, args) -> str:
     import platform
 
@@ -239,7 +242,7 @@ def markdown(table1, table2, args) -> str:
     import amilpy
 
     load = " ".join(f"{x:.2f}" for x in os.getloadavg())
-    out = [f"# Exact by default: the default route and the per-step watch\n",
+    out = ["# Exact by default: the default route and the per-step watch\n",
            f"`{' '.join(['python', 'benchmarks/exactness.py'] + sys.argv[1:])}` - amilpy "
            f"from `{os.path.dirname(amilpy.__file__)}`, Python {platform.python_version()}, "
            f"SciPy {scipy.__version__}, NumPy {np.__version__}, load average {load}; CPU "

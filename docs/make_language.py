@@ -74,7 +74,8 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
     ("ACSL", "`A .AND. B`, `A && B`, `X .NE. Y`, `X != Y`", "`A AND B`, `X /= Y`"),
     ("ACSL", "`PULSE(TZ, P, W)`, `HARM(TZ, W, P)`, `RSW(C, A, B)`, `BCKLSH(IC, DL, X)`",
      "a pulse train, `SINE(TZ, W, P)`, a switch on C, `HSTRSS(IC, -DL, DL, X)`"),
-    ("ACSL", "`DELAY(X, IC, TDL, NMX)`", "`DELAY` with the value IC before t0 + TDL"),
+    ("ACSL", "`DELAY(X, IC, TDL, NMX)`", "`DELAY` with the value IC before t0 + TDL (TDL may "
+     "change in time)"),
     ("ACSL", "`ALGORITHM IALG = 3` (Euler)", "`METHOD RECT` in step-point mode"),
     ("CSMP III", "`MACRO Y = LAG2(T, X) ... ENDMAC`, `A = LAG2(0.1, U)`", "the body "
      "expanded at each call (its own states and locals per call)"),

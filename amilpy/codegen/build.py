@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import ast as py
 import copy
+import math
 from collections.abc import Callable
 from itertools import count
 
@@ -17,12 +18,12 @@ from .. import ir, templates
 from .. import syntax as syn
 from ..diagnostics import AmilError, Diagnostic, Span
 from ..library import lookup, vector_functions
-from ..surfaces import is_affine
+from ..surfaces import constant_value, is_affine
 from ..syntax import deep_enough
 from ..templates import instantiate
 from .compiled import Compiled
 from .consts import evaluate_constant, initial_slots
-from .emit import Emitter, Setting, needs
+from .emit import Emitter, Setting, needs, needs_memories
 from .faults import STATEMENTS, Statement
 from .pytree import (
     Folder,
@@ -314,14 +315,81 @@ class Compiler:
         body.append(py.Return(py.List(new, py.Load())))
         return function("mem", ("t", "y", "m", "mn", "z"), body)
 
+    def sample(self) -> py.FunctionDef:
+        """The memory slots at a sampling instant inside a step (t, and the state the
+        dense output gives there): the memories that sample the trajectory (DELAY's
+        store) updated as after a step, every other slot as it is."""
+        model = self.model
+        em = self.emitter("mem")
+        sampled = [(mem, func) for mem, func in zip(model.memories, self.entries, strict=True)
+                   if func.memory.samples is not None]
+        body = self.prologue() + self.algebra([a for mem, _ in sampled for a in mem.args], em)
+        z = py.Name("z", py.Load())
+        new: list[py.expr] = []
+        for mem, func in zip(model.memories, self.entries, strict=True):
+            if func.memory.samples is None:
+                new.append(py.Starred(py.Subscript(z, py.Slice(
+                    py.Constant(mem.slot), py.Constant(mem.slot + mem.nslots)), py.Load()),
+                    py.Load()))
+                continue
+            args = [em.emit(a) for a in mem.args]
+            modes = em.memory_modes(mem, func, args)
+            line = self.line("memory", mem.target, mem.span)
+            for text in func.memory.update:
+                e = on_line(em.fill(text, args, modes, modes, mem), line)
+                new.append(on_line(py.Starred(e, py.Load()), line) if templates.spread(text)
+                           else e)
+        if self.kept:
+            nz = sum(m.nslots for m in model.memories)
+            new.append(py.Starred(py.Subscript(z, py.Slice(py.Constant(nz), None), py.Load()),
+                                  py.Load()))
+        body.append(py.Return(py.List(new, py.Load())))
+        return function("smp", ("t", "y", "m", "z"), body)
+
+    def sampling(self) -> Callable[[list[float]], float] | None:
+        """z -> the next instant at which some memory samples the trajectory (None:
+        no memory does)."""
+        slots = [m.slot + f.memory.samples for m, f in zip(self.model.memories, self.entries,
+                                                          strict=True)
+                 if f.memory.samples is not None]
+        if not slots:
+            return None
+        if len(slots) == 1:
+            slot = slots[0]
+            return lambda z: z[slot]
+        return lambda z: min(z[k] for k in slots)
+
+    def step_limit(self, constants: dict[str, float]) -> float:
+        """The longest step the derivatives allow: no longer than a delay they read
+        that is known before the run (`MemorySpec.horizon`), so that every stage reads
+        a past the store holds; inf if none."""
+        model = self.model
+        read = needs_memories(model, [s.deriv for s in model.states])
+        limit = math.inf
+        for mem, func in zip(model.memories, self.entries, strict=True):
+            if func.memory.horizon and mem.index in read:
+                value = constant_value(instantiate(func.memory.horizon, mem.args, mem.span),
+                                       constants)
+                if value is not None and value > 0.0:
+                    limit = min(limit, value)
+        return limit
+
     def check_arguments(self) -> None:
-        """Constant arguments that must be positive or not negative (PULSE's P and W),
-        now that the run's constants are known; a fault is located at the call."""
+        """Arguments that must be positive or not negative (PULSE's P and W), now that
+        the run's constants are known; a fault is located at the call. One that may
+        change in time (ACSL DELAY's TDL) is checked here where it is a constant, else
+        by its function as the run goes."""
         model = self.model
         for inst in (*model.switches, *model.memories):
             func = lookup(inst.func, len(inst.args))
             for i in (*func.positive_args, *func.nonnegative_args):
-                fault = func.argument_fault(i, self.constant(inst.args[i], inst.span))
+                if i in func.constant_args:
+                    value = self.constant(inst.args[i], inst.span)
+                else:
+                    value = constant_value(inst.args[i], self.constants)
+                    if value is None:
+                        continue
+                fault = func.argument_fault(i, value)
                 if fault:
                     raise AmilError([Diagnostic(fault, inst.span,
                                                 f"{func.signature}: {func.doc}")],
@@ -398,6 +466,9 @@ class Compiler:
         out_names = self.outputs if self.outputs is not None else model.variables
         fns = [self.rhs(), self.surfaces(), self.modes(), self.outputs_function(out_names),
                self.memory()]
+        self.samples = any(f.memory.samples is not None for f in self.entries)
+        if self.samples:
+            fns.append(self.sample())
         self.settles = any(s.onto for s in model.states)
         if self.settles:
             fns.append(self.settle())
@@ -457,6 +528,8 @@ class Compiler:
                   for fname in self.code_sections},
             rhs_memory=memory_read(self.module.body[0], sum(m.nslots for m in model.memories),
                                    list(self.kept)),
+            sample=scalar["smp"] if self.samples else None, next_sample=self.sampling(),
+            step_limit=binder.step_limit(constants),
         )
 
     def trains(self) -> tuple[list[tuple[float, float]], set[int]]:

@@ -4,6 +4,7 @@ fault in them (`Compiler` in build.py makes these)."""
 from __future__ import annotations
 
 import ast as py
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -39,6 +40,13 @@ class Compiled:
     memory_every_step: bool = False
     # (z, t) -> instants after t at which memory makes the model switch (PULSE ends)
     memory_times: Callable | None = None
+    # memory that samples the trajectory inside each accepted step (DELAY's store):
+    # sample(t, y, m, z) -> z with those slots updated at (t, y); next_sample(z) -> the
+    # next instant one of them asks for (None: no memory samples)
+    sample: Callable | None = None
+    next_sample: Callable | None = None
+    # no step longer than this: a delay the derivatives read, known before the run
+    step_limit: float = math.inf
     # line k of the generated code is statements[k - 1] (None: scaffolding)
     statements: list[Statement | None] = field(default_factory=list)
     # (t, y, m, z) -> the states put where their function holds them (LIMINT's

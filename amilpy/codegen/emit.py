@@ -322,7 +322,9 @@ class _Fill(py.NodeTransformer):
         if name in fixed:
             return fixed[name]()
         if len(name) == 1:
-            return self.args[ARGUMENTS.index(name)]
+            i = ARGUMENTS.index(name)
+            # an optional argument the call leaves out reads as 0 (DELAY's DMIN)
+            return self.args[i] if i < len(self.args) else number(0.0)
         k = int(name[1:])
         if name[0] == "M":
             return self.modes[k]
@@ -376,6 +378,16 @@ class _Needs(Visitor):
             # the switches of its conditions: their surfaces read algebra too
             self.pending.extend(n for st in unit.body for n in syn.walk(st)
                                 if isinstance(n, ir.SwitchValue))
+
+
+def needs_memories(model: ir.Model, roots: list[syn.Node]) -> set[int]:
+    """The memory instances whose values some expressions read, transitively."""
+    visitor = _Needs(model)
+    visitor.pending.extend(roots)
+    while visitor.pending:
+        for node in syn.walk(visitor.pending.pop()):
+            visitor.visit(node)
+    return {i for kind, i in visitor.seen if kind == "m"}
 
 
 def needs(model: ir.Model, roots: list[syn.Node]) -> list[ir.Equation]:

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 from .. import ir
 from ..diagnostics import Span
+from ..runtime import HelperFault
 from ..syntax import deep_enough
 from ..unparse import expr_text
 
@@ -173,7 +174,7 @@ def explain(compiled, exc: BaseException, t: float, y, m, z) -> FaultReport | No
     if found is None or found[2] is not compiled.statements:
         return None
     statement, name, table = found
-    if name not in ("rhs", "surf", "out", "mem", "modes"):
+    if name not in ("rhs", "surf", "out", "mem", "modes", "smp"):
         return None
     fn, sites = _checking_function(compiled, name)
     args = (t, list(y), list(m), list(m), list(z)) if name == "mem" else \
@@ -216,6 +217,8 @@ def _value(v: float) -> str:
 
 def _describe(model: ir.Model, site: _Site, fault: _Fault) -> str:
     """The failed operation in the listing's notation, with its operand values."""
+    if isinstance(fault.exc, HelperFault):
+        return str(fault.exc)
     what = {ZeroDivisionError: "division by zero", OverflowError: "overflow"}.get(
         type(fault.exc), "math domain error")
     texts = [_text(model, s) for s in site.operands]

@@ -416,6 +416,7 @@ class Integrator(RunLoop):
                 if chunked:
                     rec.samples(*stepper.samples(step.tb), cur.m, cur.z)
                 self._rows_inside(rec, stepper, f, ta, cur.y, step.tb, step.yb, cur)
+            self.sample_memory(stepper, cur, step.tb)
             if observer is not None:
                 observer(ta, step.tb, stepper.interpolant(), list(cur.m), list(cur.z))
             tb, yb = step.tb, step.yb
@@ -426,6 +427,12 @@ class Integrator(RunLoop):
                 # a breakpoint: the surfaces on TIME that reach zero here decide anew
                 step.triggered |= {k for k, root in self.roots.items() if root == tb}
             restart = step.triggered or step.departed or (at_boundary and tb < t_end)
+            if restart:
+                # a breakpoint a few ulps ahead decides here too: the next segment would
+                # take it as passed (a switch located on it: X = 1 - TIME reaching 0.5
+                # where STEP(0.5) does)
+                step.triggered |= {k for k, root in self.roots.items()
+                                   if tb <= root <= tb * (1 + 1e-15) + 1e-300}
             if rec is not None and not at_output and not restart:
                 # every step's end is one of RANGE's samples (a restart's, in its new
                 # branches, is kept by the restart)
@@ -566,6 +573,10 @@ class Integrator(RunLoop):
             for k, side in slide_exit:
                 roots[k] = watch.locate_slide_exit(k, side, m, z, interp, ta, tb)
             t_star = min(roots.values(), default=tb)
+            # a crossing a few ulps before a breakpoint is at the breakpoint: both decide
+            # there, exactly where the row of that instant shows them
+            t_star = next((r for r in sorted(self.roots.values())
+                           if t_star <= r <= min(tb, t_star * (1 + 1e-15) + 1e-300)), t_star)
             if t_star < tb:
                 # the solver has moved past t_star: it must restart
                 stepper.truncate(t_star)
@@ -606,7 +617,29 @@ class Integrator(RunLoop):
                 if bad is not None:
                     raise Stop(Failure.NOT_FINITE, ta, name=self.c.state_names[bad],
                                detail="")
+            self.sample_memory(stepper, cur, to)
             rec.grid_row(to, yo, cur.m, cur.z)
+
+    def sample_memory(self, stepper: Stepper, cur: Cursor, upto: float) -> None:
+        """Memory that samples the trajectory (DELAY's store) gets every instant it asks
+        for inside the last accepted step, before `upto`, at the state the dense
+        output gives there: X at (g, y(g)), not a straight line between the step's
+        ends. Called before each row inside the step (the row reads that past) and
+        once the step is taken, before the memory update at its end."""
+        c = self.c
+        if c.next_sample is None:
+            return
+        g = c.next_sample(cur.z)
+        if not g < upto:
+            return
+        dense = stepper.interpolant()
+        while g < upto:
+            y = np.asarray(dense(g), dtype=float)
+            cur.z[:] = c.sample(g, y.tolist(), cur.m, cur.z)
+            after = c.next_sample(cur.z)
+            if not after > g:
+                break
+            g = after
 
     # ----------------------------------------------------------------- restarts
     def _restart(self, cur: Cursor, step: _Step, h: float, at_output: bool,

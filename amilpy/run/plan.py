@@ -395,8 +395,9 @@ def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: Compiled,
         # every step's surfaces are looked at and its rows come from its dense output),
         # a hundredth of the run does, as the default OUTDEL did: a state below its
         # ABSERR is not held by the error test, and a step past an explicit method's
-        # stability boundary then grows it (X = 1E-300*EXP(-TIME) over 100 s)
-        max_step=min(timer["DELMAX"], (fintim - t0) / 100.0),
+        # stability boundary then grows it (X = 1E-300*EXP(-TIME) over 100 s); nor a
+        # delay the derivatives read (every stage reads a past that is stored)
+        max_step=min(timer["DELMAX"], (fintim - t0) / 100.0, c.step_limit),
         h_floor=timer["DELMIN"] if floor_given else 1e-12 * (fintim - t0),
         floor_origin="TIMER DELMIN" if floor_given else
         "the default floor FINTIM*1E-12; TIMER DELMIN lowers it",
