@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 
 from amilpy import language, library, routes
+from amilpy.run.plan import TOLERANCES
 
 OUT = Path(__file__).resolve().parent / "language.md"
 
@@ -189,8 +190,11 @@ def keywords() -> str:
     rows += [("output: " + canon, spellings) for canon, spellings
              in _spellings(language.REPORT_KEYWORDS)]
     rows.append(("TIMER keys", ", ".join(f"`{k}`" for k in language.TIMER_KEYS)))
+    (rel, ab), (arel, aab) = TOLERANCES["csmp"], TOLERANCES["acsl"]
     rows.append(("tolerances", ", ".join(f"`{k}`" for k in language.TOLERANCE_KEYWORDS)
-                 + " (one value, or per state: `RELERR X = 1E-6`)"))
+                 + f" (one value, or per state: `RELERR X = 1E-6`); when a listing gives "
+                 f"none, RELERR {rel:.0E}, ABSERR {ab:.0E} (ACSL form: {arel:.0E}, "
+                 f"{aab:.0E}): every printed digit right"))
     rows.append(("ACSL integration control", ", ".join(
         f"`{k}`" for k in language.CONTROL_KEYWORDS)))
     rows.append(("declarations", ", ".join(f"`{k}`" for k in language.TYPE_KEYWORDS)))

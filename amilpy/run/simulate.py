@@ -123,6 +123,9 @@ class _Run:
             cur.t = stop.t
             self._keep_last_good(cur)
         except KeyboardInterrupt:
+            # (the rows of the step under way may reach past where it began: the run
+            # was computed to the last of them)
+            cur.t = max(cur.t, rec.last_t if rec.last_t is not None else cur.t)
             status, text = Status.FAILED, message(Failure.INTERRUPTED, t=cur.t)
             return self.finish(status, text, cur, {})
         except TooManySlides as exc:

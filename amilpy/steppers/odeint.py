@@ -282,16 +282,16 @@ class OdeintStepper(Chunked):
         if left <= 0:
             self._failure = StepFailure(Failure.STEPS, self.t)
             return
-        ts = self.checks[self.next_check:self.next_check + self._chunk_size(left)]
         end = self.t + self._horizon
         self._horizon *= 4.0
-        if ts[0] > end:
+        if self.checks[self.next_check] > end:
             # (a grid coarser than the horizon: the chunk ends at `end`, an instant of
-            # its own)
+            # its own; the count of instants a chunk takes grows when it takes them)
             ts, checks = self._anchored(np.array([end]))
             checks[-1] = False
         else:
-            ts, checks = self._anchored(ts)
+            ts, checks = self._anchored(
+                self.checks[self.next_check:self.next_check + self._chunk_size(left)])
         grid = np.concatenate(([self.t], ts))
         options = {"mxstep": min(MXSTEP, left)}
         if math.isfinite(self.max_step):
