@@ -22,6 +22,7 @@ from scipy.optimize import minimize_scalar
 import amilpy
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
+WEATHER_DIR = Path(__file__).resolve().parent / "listings" / "weather"  # synthetic CABO files
 ROUTES = ["AUTO", "RKS", "DOP853", "STIFF", "COMPILED"]
 
 
@@ -192,6 +193,87 @@ def test_acsl_instant_that_changes_a_rate_restarts_there() -> None:
     t = run.t
     want = np.where(t <= 4.0, np.exp(-0.5 * t), np.exp(-2.0 - 1.0 * (t - 4.0)))
     assert np.max(np.abs(run["Y"] - want)) < 2e-6
+
+
+# --- draws and weather days: a restart only where the derivatives see a change -----------
+
+DRAWN = """\
+TITLE DECAY AND A DRAW HELD FOR EACH OUTPUT INTERVAL
+PARAM K = 2.0
+X = INTGRL(1.0, {rate})
+{reading}
+TIMER FINTIM = 10.0, OUTDEL = 0.1
+END
+STOP
+"""
+
+
+def test_a_draw_only_printed_costs_no_restart() -> None:
+    # 100 draws, each due at an output instant: a restart at each cost 1926
+    # evaluations where the decay alone takes 455; the run goes on through them and
+    # prints the stream's own draws (normal_draw(seed, site 0, 0, k) on interval k)
+    from amilpy.runtime import normal_draw
+
+    printed = amilpy.loads(DRAWN.format(rate="-K*X", reading="G = GAUSS(0.0, 1.0)\n"
+                                        "Y = X + 0.01*G")).run(seed=3)[0]
+    plain = amilpy.loads(DRAWN.format(rate="-K*X", reading="")).run()[0]
+    assert printed.stats["nfev"] == plain.stats["nfev"]
+    assert np.array_equal(printed["G"], [normal_draw(3, 0, 0, k) for k in range(101)])
+    assert np.array_equal(printed["X"], plain["X"])
+    assert np.max(np.abs(printed["X"] - np.exp(-2.0 * printed.t))) < 1e-10
+
+
+def test_a_draw_the_derivatives_read_restarts_where_it_changes() -> None:
+    # X' = -K X + G with G held at g_k on [t_k, t_k + h): exactly
+    # X(t_k + h) = g_k/K + (X(t_k) - g_k/K) exp(-K h), a recurrence over the draws
+    run = amilpy.loads(DRAWN.format(rate="-K*X + G", reading="G = GAUSS(0.0, 1.0)")
+                       ).run(seed=3)[0]
+    x, decay, want = 1.0, math.exp(-2.0 * 0.1), [1.0]
+    for g in run["G"][:-1]:
+        x = g / 2.0 + (x - g / 2.0) * decay
+        want.append(x)
+    assert np.max(np.abs(run["X"] - want)) < 1e-9  # RELERR 1e-10 over 100 restarts
+
+
+FST_WEATHER = """\
+TITLE FST LOGISTIC GROWTH, THE DAY'S MEAN TEMPERATURE {printed}
+WEATHER WTRDIR = 'C:\\DATA\\NOWHERE\\'; CNTR = 'TZ'; ISTN = 2
+WEATHER IYEAR = 2018
+TIMER STTIME = 100.; FINTIM = 300.; DELT = 1.; PRDEL = 10.
+PARAM RGR = 0.05; WMAX = 100.
+W = INTGRL(1., {rate})
+TAVG = (TMMN + TMMX)/2.
+PRINT W, TAVG
+END
+STOP
+"""
+
+
+def test_weather_days_restart_only_where_the_derivatives_read_the_weather() -> None:
+    # printed only: the integration goes through the 200 day starts without a restart
+    # (3144 evaluations when each was one, 277 now: the logistic's own); read by
+    # the rate (W grows only on days warmer than 24.5): a restart at every day start,
+    # and W is the product of each day's exact logistic factor
+    from references import cabo
+
+    days = cabo.days(WEATHER_DIR / "TZ2.018")
+    printed = amilpy.loads(FST_WEATHER.format(printed="PRINTED", rate="RGR*W*(1. - W/WMAX)"),
+                           "printed").run(weather_dir=str(WEATHER_DIR), advice=False)[0]
+    t = printed.t
+    assert np.max(np.abs(printed["W"] - 100.0 / (1.0 + 99.0 * np.exp(-0.05 * (t - 100.0))))
+                  ) < 1e-7  # RELERR 1e-10 of W ~ 100, over 200 days
+    assert printed["TAVG"].tolist() == [(days[int(d)][1] + days[int(d)][2]) / 2.0 for d in t]
+    assert printed.stats["nfev"] < 300
+
+    grows = "INSW(TAVG - 24.5, 0., RGR*W*(1. - W/WMAX))"
+    read = amilpy.loads(FST_WEATHER.format(printed="READ", rate=grows), "read").run(
+        weather_dir=str(WEATHER_DIR), advice=False)[0]
+    w, want = 1.0, {100: 1.0}
+    for d in range(100, 300):
+        if (days[d][1] + days[d][2]) / 2.0 >= 24.5:
+            w = 100.0 / (1.0 + (100.0 / w - 1.0) * math.exp(-0.05))
+        want[d + 1] = w
+    assert np.max(np.abs(read["W"] - [want[round(d)] for d in read.t])) < 1e-7
 
 
 # --- events located to a few ulps at the default tolerances -----------------------------

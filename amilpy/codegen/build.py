@@ -17,7 +17,7 @@ from itertools import count
 from .. import ir, templates
 from .. import syntax as syn
 from ..diagnostics import AmilError, Diagnostic, Span
-from ..library import lookup, vector_functions
+from ..library import WEATHER_HOLD, lookup, vector_functions
 from ..surfaces import constant_value, is_affine
 from ..syntax import deep_enough
 from ..templates import instantiate
@@ -506,6 +506,9 @@ class Compiler:
             # statements (IF, loops) cannot run on columns: one row at a time
             vector["surf_vec"], vector["out_vec"] = by_rows(scalar["surf"]), \
                 by_rows(scalar["out"])
+        seen = frozenset().union(*(
+            memory_read(fn, sum(m.nslots for m in model.memories), list(self.kept))
+            for fn in self.module.body[:2]))  # rhs and surf
         return Compiled(
             state_names=[s.name for s in model.states],
             y0=[binder.constant(s.ic, s.span) for s in model.states],
@@ -520,14 +523,18 @@ class Compiler:
             impulses=binder.impulses(), source=self.source, tables=self.global_tables,
             surf_v=vector["surf_vec"], out_v=vector["out_vec"],
             memory_every_step=any(f.memory.every_step for f in self.entries),
-            memory_times=self.memory_times(), statements=self.statements, model=model,
+            memory_times=self.memory_times(),
+            memory_trains=[(0.0, 1.0)] if model.weather else [],
+            statements=self.statements, model=model,
             module=self.module, namespace=scalar, shared=self.shared, binder=self,
             trains=trains, train_surfaces=train_surfaces,
             settle=scalar["settle"] if self.settles else None, kept=list(self.kept),
             code={fname: (self.code_sections[fname], scalar[fname])
                   for fname in self.code_sections},
-            rhs_memory=memory_read(self.module.body[0], sum(m.nslots for m in model.memories),
-                                   list(self.kept)),
+            seen_memory=seen, seen_times=any(
+                seen.intersection(range(m.slot, m.slot + m.nslots))
+                for m, f in zip(model.memories, self.entries, strict=True)
+                if f.memory.wakes is not None or m.func == WEATHER_HOLD),
             sample=scalar["smp"] if self.samples else None, next_sample=self.sampling(),
             step_limit=binder.step_limit(constants),
         )
@@ -545,8 +552,6 @@ class Compiler:
                 surfaces.update(watched)
                 trains.extend(tuple(self.constant(instantiate(t, sw.args, sw.span), sw.span)
                                     for t in pair) for pair in func.breaks)
-        if self.model.weather:
-            trains.append((0.0, 1.0))  # FST's weather changes at every day's start
         return trains, surfaces
 
     def affine(self) -> set[int]:
@@ -570,14 +575,17 @@ class Compiler:
                 for e in exprs for node in syn.walk(e) if isinstance(node, ir.Impulse)]
 
     def memory_times(self) -> Callable[[list[float], float], list[float]]:
-        """Memory that holds a future instant at which the model switches (PULSE
-        holds its output until the instant kept in its slot)."""
+        """The next instants at which memory changes: those its slots hold (PULSE
+        holds its output until the instant kept in its slot, a draw until the next is
+        due), and FST's weather at every day's start (the day is floor(TIME))."""
         slots = [m.slot + f.memory.wakes for m, f in zip(self.model.memories, self.entries,
                                                         strict=True)
                  if f.memory.wakes is not None]
+        daily = bool(self.model.weather)
 
         def times(z: list[float], t: float) -> list[float]:
-            return [z[s] for s in slots if z[s] > t]
+            held = [z[s] for s in slots if z[s] > t]
+            return held + [math.floor(t) + 1.0] if daily else held
         return times
 
     def constant(self, expr, span: Span) -> float:

@@ -60,10 +60,17 @@ class Compiled:
     # that code by function name: (its IR, fn(t, y, m, z, ev) -> (y, z, values))
     kept: list[str] = field(default_factory=list)
     code: dict[str, tuple[ir.Code, Callable]] = field(default_factory=dict)
-    # the slots of z the derivatives read: memory written elsewhere (an output held by
-    # ZHOLD, a name DYNAMIC computes for the printout) changes nothing the integrator
-    # sees, so a run need not restart for it
-    rhs_memory: frozenset[int] = frozenset()
+    # the slots of z the derivatives and the watched surfaces read: memory written
+    # elsewhere (an output held by ZHOLD, a name DYNAMIC computes for the printout, a
+    # draw only printed) changes nothing the integrator sees, so a run need not
+    # restart for it
+    seen_memory: frozenset[int] = frozenset()
+    # (first instant, period) of the memory's instants known before the run (FST's
+    # weather: every day's start), where a chunked integration pauses (`memory_times`)
+    memory_trains: list[tuple[float, float]] = field(default_factory=list)
+    # whether the integrator sees a memory that changes at its own instants (a draw
+    # the derivatives read): then such an instant is most likely a restart
+    seen_times: bool = False
     model: ir.Model | None = field(default=None, repr=False)
     module: py.Module | None = field(default=None, repr=False)  # the scalar functions' tree
     namespace: dict = field(default_factory=dict, repr=False)

@@ -39,7 +39,7 @@ from ..steppers.compiled import KernelStepper
 from ..steppers.jacobian import SegmentJacobian
 from .edges import expected_event, locate_crossings
 from .faults import Fault, fault_text
-from .plan import SLIDE, Options, Purpose, RunPlan, SurfaceKind, time_breakpoints
+from .plan import SLIDE, Options, Purpose, RunPlan, SurfaceKind, time_breakpoints, train_instants
 from .record import Recorder
 from .slide import MAX_SLIDING
 from .watch import SurfaceWatch, TooManySlides, crossings
@@ -180,21 +180,25 @@ class Integrator(RunLoop):
         while cur.t < t_end and self.stop_reason is None:
             if stop_at_event and len(self.events) > n_events:
                 break
-            held = self._resume(cur, t_end, rec, observer)
+            stop, pausing = self._next_stop(cur, t_end, pause, observer is not None)
+            held = self._resume(cur, stop, rec, observer)
             if held is not None:
                 stepper, f, seg_end, seg_start = held
             else:
-                seg_end = self._segment_end(cur, t_end, pause and observer is None)
-                stepper, f = self._start_segment(cur, seg_end, rec, observer is not None, t_end)
+                seg_end = self._segment_end(cur, stop, pausing)
+                # (where it pauses, if it may start afresh there: the caller's code,
+                # or a memory the integrator sees changing)
+                stepper, f = self._start_segment(cur, seg_end, rec, observer is not None,
+                                                 stop if pause or self.c.seen_times else None)
                 seg_start = cur.t
-            if seg_end > t_end and not (isinstance(stepper, Chunked) and
-                                        stepper.stop_at(t_end)):
-                # (a chunk that cannot stop there: a segment ending at t_end)
-                seg_end = self._segment_end(cur, t_end)
+            if seg_end > stop and not (isinstance(stepper, Chunked) and
+                                       stepper.stop_at(stop)):
+                # (a chunk that cannot stop there: a segment ending at the stop)
+                seg_end = self._segment_end(cur, stop)
                 stepper, f = self._start_segment(cur, seg_end, rec, observer is not None)
                 seg_start = cur.t
             try:
-                self._segment(cur, stepper, f, seg_end, t_end, rec, observer, stop_at_event,
+                self._segment(cur, stepper, f, seg_end, stop, rec, observer, stop_at_event,
                               seg_start)
             finally:
                 self.nfev += stepper.nfev - self._counted_nfev
@@ -212,23 +216,44 @@ class Integrator(RunLoop):
             return None
         if observer is not None or rec is not p.rec or cur is not p.cur or cur.t != p.t or \
                 tuple(cur.m) != p.modes or not np.array_equal(cur.y, p.y) or \
-                tuple(cur.z[k] for k in sorted(self.c.rhs_memory)) != p.read or \
+                tuple(cur.z[k] for k in sorted(self.c.seen_memory)) != p.read or \
                 self._segment_end(cur, t_end, True) < p.seg_end:
             self._counted = self._counted_nfev = 0
             return None
         return p.stepper, p.f, p.seg_end, p.seg_start
 
     # ---------------------------------------------------------------- segments
+    def _pausing(self, cur: Cursor) -> bool:
+        """Whether a segment from `cur` can stop at an instant and go on (chunked)."""
+        return self.plan.chunked and SLIDE not in cur.m and len(cur.y) > 0
+
+    def _next_stop(self, cur: Cursor, t_end: float, pause: bool, observed: bool
+                   ) -> tuple[float, bool]:
+        """Where the next segment stops, and whether it pauses there: t_end, or the
+        first instant before it at which a memory may change (a draw due, a new day's
+        weather, PULSE's end), where a chunked segment pauses. The memory's update
+        there restarts the run only if it changes what the integrator sees (`_restart`):
+        a draw only printed costs no restart."""
+        if observed:
+            return t_end, False  # (an observer wants every step of each segment)
+        if self._pausing(cur):
+            wakes = [e for e in self._pulse_ends(cur.z, cur.t) if e < t_end]
+            if wakes:
+                return min(wakes), True
+        return t_end, pause
+
     def _segment_end(self, cur: Cursor, t_end: float, pause: bool = False) -> float:
         """Where a segment from `cur` ends: t_end (unless the segment may pause there:
-        a chunked one, then the run's end), a breakpoint, a memory's instant."""
+        a chunked one, then the run's end), a breakpoint, a memory's instant (where a
+        chunked segment pauses instead, `_next_stop`)."""
         k = bisect_right(self.breakpoints, cur.t * (1 + 1e-15) + 1e-300)
-        chunked = pause and self.plan.chunked and SLIDE not in cur.m and len(cur.y) > 0
+        chunked = pause and self._pausing(cur)
         seg_end = self.plan.fintim if chunked and t_end <= self.plan.fintim else t_end
         if k < len(self.breakpoints):
             seg_end = min(seg_end, self.breakpoints[k])
-        for end in self._pulse_ends(cur.z, cur.t):
-            seg_end = min(seg_end, end)
+        if not chunked:
+            for end in self._pulse_ends(cur.z, cur.t):
+                seg_end = min(seg_end, end)
         return seg_end
 
     def _pulse_ends(self, z, t: float) -> list[float]:
@@ -317,9 +342,14 @@ class Integrator(RunLoop):
             times = self.check_times
             lo = bisect_right(times, cur.t, rec.out_i if rec else 0)
             checks = times[lo:bisect_left(times, seg_end, lo)]
+            if self.c.memory_trains:
+                # (the instants it pauses at, known now: inserted later, each would cost
+                # an integration of its own)
+                checks = np.union1d(checks, train_instants(self.c.memory_trains, cur.t,
+                                                           seg_end))
         # with nothing to watch nothing is thrown away after a chunk: one odeint call
         # per segment (a FINISH would throw away the rest of the run), unless it may
-        # pause (the caller's code may start afresh)
+        # pause and start afresh (the caller's code, a memory the integrator sees)
         pausing = t_end is not None and seg_end > t_end
         chunk = 16 if plan.watch_idx or pausing else 1 << 30
         stepper = make_stepper(
@@ -328,33 +358,34 @@ class Integrator(RunLoop):
             checks=checks, chunk=chunk, max_steps=self.opts.max_steps - self.nsteps,
             expect=expected_event(self._recent, cur.t), jac=self._jacobian(cur, f),
             kernel=self._kernel_arguments(cur, dense, rec), log=log,
-            watch=(self._first_wrong(cur), cur.m, cur.z) if plan.watch_idx else None)
+            watch=(self._wrong_at(cur), cur.m, cur.z) if plan.watch_idx else None)
         return stepper, f
 
-    def _first_wrong(self, cur: Cursor) -> Callable[..., int]:
-        """`first_wrong(T, Y, samples=False)`: the index of the first of the instants T
+    def _wrong_at(self, cur: Cursor) -> Callable[..., tuple[int, int]]:
+        """`wrong_at(T, Y) -> (first, loud)`: the index of the first of the instants T
         (states Y, as rows) at which a watched surface is on the wrong side of the
-        branches in force (len(T) if none). For `samples` (step ends between output
-        instants) a surface whose branch is silent where it is first and last on the
-        wrong side there is passed over: the loop would follow its sign without a
-        restart, and an instant shows where it stays crossed."""
+        branches in force, and of the first at which one that matters is (len(T) if
+        none). One matters unless its branch is silent (where it is first and last on
+        the wrong side there): the loop follows its sign without a restart, and an
+        output instant shows where it stays crossed."""
         c, plan, watch, m, z = self.c, self.plan, self.watch, cur.m, cur.z
 
-        def first_wrong(T: np.ndarray, Y: np.ndarray, samples: bool = False) -> int:
+        def is_silent(k: int, T: np.ndarray, Y: np.ndarray, ends) -> bool:
+            return all(watch.silent(k, float(T[i]), Y[i], m, z) for i in ends)
+
+        def wrong_at(T: np.ndarray, Y: np.ndarray) -> tuple[int, int]:
             if not len(T):
-                return 0
+                return 0, 0
             with np.errstate(all="ignore"):
                 E = [column(v, len(T)) for v in c.surf_v(T, list(Y.T), m, z)]
             found = crossings(plan, E, m)
-            if samples:
-                for k in list(found):
-                    ends = np.flatnonzero(found[k])[[0, -1]]
-                    if all(watch.silent(k, float(T[i]), Y[i], m, z) for i in ends):
-                        del found[k]
             if not found:
-                return len(T)
-            return min(int(np.argmax(mask)) for mask in found.values())
-        return first_wrong
+                return len(T), len(T)
+            first = {k: int(np.argmax(mask)) for k, mask in found.items()}
+            loud = [i for k, i in first.items()
+                    if not is_silent(k, T, Y, np.flatnonzero(found[k])[[0, -1]])]
+            return min(first.values()), min(loud, default=len(T))
+        return wrong_at
 
     def _kernel_arguments(self, cur: Cursor, dense: bool, rec: Recorder | None = None
                           ) -> dict | None:
@@ -426,7 +457,8 @@ class Integrator(RunLoop):
             if at_boundary and tb < t_end:
                 # a breakpoint: the surfaces on TIME that reach zero here decide anew
                 step.triggered |= {k for k, root in self.roots.items() if root == tb}
-            restart = step.triggered or step.departed or (at_boundary and tb < t_end)
+            restart = step.triggered or step.departed or (at_boundary and tb < t_end) or \
+                any(e <= tb for e in self._pulse_ends(cur.z, cur.t))  # a memory's instant
             if restart:
                 # a breakpoint a few ulps ahead decides here too: the next segment would
                 # take it as passed (a switch located on it: X = 1 - TIME reaching 0.5
@@ -453,12 +485,12 @@ class Integrator(RunLoop):
                 # paused at t_end: the caller's instant; the segment goes on from here
                 self._paused = _Paused(stepper, f, seg_end, seg_start, cur, tb, yb,
                                        tuple(cur.m), tuple(cur.z[k] for k in
-                                                           sorted(c.rhs_memory)), rec)
+                                                           sorted(c.seen_memory)), rec)
                 return
             if self.opts.progress is not None and self._iterations % 200 == 0:
                 self.opts.progress(cur.t, plan.fintim, len(self.events),
                                    self.nsteps + stepper.nstep - self._counted)
-            if any(cur.t < e < seg_end for e in self._pulse_ends(cur.z, cur.t)):
+            if any(cur.t < e < min(seg_end, t_end) for e in self._pulse_ends(cur.z, cur.t)):
                 return
 
     def _check_limits(self, t: float, stepper: Stepper) -> None:
@@ -682,7 +714,8 @@ class Integrator(RunLoop):
             return True
         if stop_at_event and len(self.events) > n_events:
             return True
-        if changed or at_boundary or step.truncated or not np.array_equal(y, yb):
+        seen = any(z_before[k] != z[k] for k in c.seen_memory)  # (a draw, a new day)
+        if changed or seen or at_boundary or step.truncated or not np.array_equal(y, yb):
             self._recent.append(tb)
             if len(self.events) > self.opts.max_events:
                 raise Stop(Failure.EVENTS, tb, limit=self.opts.max_events)
@@ -747,7 +780,7 @@ class Integrator(RunLoop):
         if n and self.plan.watch_idx:
             wrong = stepper.first_wrong()  # the stepper's own look at the surfaces
             if wrong is None:
-                wrong = self._first_wrong(cur)(T[:n], Y[:n])
+                wrong = self._wrong_at(cur)(T[:n], Y[:n])[0]
             n = min(n, wrong)
         if n == 0:
             return e_prev

@@ -416,10 +416,17 @@ def time_breakpoints(c: Compiled, watched: list[Watched], t0: float, t1: float
             root = _affine_root(c, k, t0, t1)
             if root is not None and t0 < root < t1:
                 roots[k] = root
-    points = list(roots.values())
     # IMPULS instants, and the instants where a train's surfaces change sign (these
     # take their new sign there: no root to polish)
-    for start, period in [*c.impulses, *c.trains]:
+    points = list(roots.values()) + train_instants([*c.impulses, *c.trains], t0, t1)
+    return roots, sorted(set(points))
+
+
+def train_instants(trains: list[tuple[float, float]], t0: float, t1: float) -> list[float]:
+    """The instants start + k*period (k >= 0; a period of 0: start alone) of each
+    train in (t0, t1), a million at most per train, unsorted."""
+    points = []
+    for start, period in trains:
         if period > 0:
             k0 = max(0, math.ceil((t0 - start) / period))
             n = int(min((t1 - start) / period, k0 + 1_000_000))
@@ -427,7 +434,7 @@ def time_breakpoints(c: Compiled, watched: list[Watched], t0: float, t1: float
                           if t0 < start + k * period < t1)
         elif t0 < start < t1:
             points.append(start)
-    return roots, sorted(set(points))
+    return points
 
 
 def _affine_root(c: Compiled, k: int, t0: float, t1: float) -> float | None:

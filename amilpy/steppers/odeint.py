@@ -21,6 +21,7 @@ are also the samples the RANGE search reads between output instants (`samples`).
 from __future__ import annotations
 
 import bisect
+import gc
 import math
 import warnings
 
@@ -144,11 +145,12 @@ class OdeintStepper(Chunked):
     stops near its step limit instead of finishing a chunk of 4096 instants.
 
     `log` and `watch` (the module's doc): the evaluations the vector field logs, and
-    `watch = (first_wrong, modes, memory)`, where `first_wrong(T, Y)` is the index of
-    the first of the instants T (states Y) at which a surface is on the wrong side of
-    the branches in force (len(T) if none) and `modes`/`memory` the lists the loop
-    changes in place (a branch followed without a restart), read to know when an
-    examination is out of date.
+    `watch = (wrong_at, modes, memory)`, where `wrong_at(T, Y)` gives the index of the
+    first of the instants T (states Y) at which a surface is on the wrong side of the
+    branches in force, and of the first at which one that matters is (one whose branch
+    is silent the loop follows without a restart); len(T) for none. `modes`/`memory`
+    are the lists the loop changes in place (a branch followed without a restart),
+    read to know when an examination is out of date.
     """
 
     def __init__(self, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float, checks, *,
@@ -302,11 +304,17 @@ class OdeintStepper(Chunked):
             options["tcrit"] = np.array([self.t_bound])
         if self.log is not None:
             self.log.start()
+            # (the log holds a list per evaluation: the cyclic collector would go over
+            # all of them again and again while the chunk runs, for nothing)
+            collecting = gc.isenabled()
+            gc.disable()
         try:
             ys, info = self._odeint(self.y, grid, **options)
         finally:
             if self.log is not None:
                 self.log.on = False
+                if collecting:
+                    gc.enable()
         if info["message"] != "Integration successful.":
             self._keep_passed(ts, ys, info, left)
             self._log_steps()
@@ -385,18 +393,17 @@ class OdeintStepper(Chunked):
         (INSERT_AHEAD, in case it turns out on the right side after all)."""
         if self.watch is None or self.pos >= len(self.T):
             return
-        first_wrong, modes, memory = self.watch
+        wrong_at, modes, memory = self.watch
         key = (tuple(modes), tuple(memory))
         if key != self._exam_key or self._exam_bad <= self.t:
             # (a new chunk, a branch the loop followed without a restart, or the first
             # instant on the wrong side taken as one where nothing happens after all)
             T, Y = self.T[self.pos:], self.Y[self.pos:]
-            bad = first_wrong(T, Y)
+            bad, loud = wrong_at(T, Y)
             self._exam_key, self._exam_to = key, self.t
             self._exam_bad = float(T[bad]) if bad < len(T) else math.inf
             # the last instant before the first on the wrong side of a surface that
             # matters (one whose branch nothing uses is followed where it flips)
-            loud = first_wrong(T, Y, samples=True)
             self._exam_limit = float(T[loud - 1]) if 0 < loud < len(T) else \
                 self.t if loud == 0 else float(T[-1])
         limit = self._exam_limit
@@ -404,7 +411,7 @@ class OdeintStepper(Chunked):
             return
         lo = int(np.searchsorted(self.S, max(self.t, self._exam_to), side="right"))
         hi = int(np.searchsorted(self.S, limit, side="left"))
-        wrong = first_wrong(self.S[lo:hi], self.SY[lo:hi], samples=True) if hi > lo else 0
+        wrong = wrong_at(self.S[lo:hi], self.SY[lo:hi])[1] if hi > lo else 0
         if wrong >= hi - lo:
             self._exam_to = limit
             return
@@ -418,7 +425,7 @@ class OdeintStepper(Chunked):
             # (the first instant on the wrong side may now be one of them)
             j = int(np.searchsorted(self.T, tau, side="left"))
             T, Y = self.T[j:j + len(points)], self.Y[j:j + len(points)]
-            bad = first_wrong(T, Y)
+            bad = wrong_at(T, Y)[0]
             if bad < len(T):
                 self._exam_bad = min(self._exam_bad, float(T[bad]))
 
@@ -593,7 +600,7 @@ class OdeintStepper(Chunked):
         hi = int(np.searchsorted(self.S, self.t, side="left"))
         if hi <= lo:
             return None
-        k = lo + self.watch[0](self.S[lo:hi], self.SY[lo:hi], samples=True)
+        k = lo + self.watch[0](self.S[lo:hi], self.SY[lo:hi])[1]
         start = float(self.S[k - 1]) if k > lo else self.t_old
         end = float(self.S[k]) if k < hi else self.t
         return start, end
