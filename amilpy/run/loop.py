@@ -272,10 +272,6 @@ class Integrator(RunLoop):
         rhs, sliding, field = self.c.rhs, SLIDE in m, self.watch.field
         rolled = rolled_rhs(self.c)  # a large model's repeated equations on arrays
 
-        if log is None:
-            log = Evaluations()  # (never on)
-        log_t, log_y, logged = log.t.append, log.y.append, log.t
-
         def f(t, y):
             if deadline is not None:
                 calls[0] += 1
@@ -286,19 +282,8 @@ class Integrator(RunLoop):
                 if sliding:
                     return field(t, y, m, z)
                 if rolled:
-                    if log.on:
-                        log_t(t)
-                        log_y(y.copy())
-                        if len(logged) > log.limit:
-                            log.compact()
                     return rolled(t, y, m, z)
-                yl = y.tolist()
-                if log.on:
-                    log_t(t)
-                    log_y(yl)
-                    if len(logged) > log.limit:
-                        log.compact()
-                return rhs(t, yl, m, z)
+                return rhs(t, y.tolist(), m, z)
             except (ArithmeticError, ValueError) as exc:
                 try:
                     on = self.watch.at_zero(t, y, m, z)
@@ -310,7 +295,36 @@ class Integrator(RunLoop):
                 return [math.nan] * n
             except TooManySlides as exc:
                 raise Stop(Failure.SLIDES, t, count=exc.count, limit=MAX_SLIDING) from None
+        if log is not None:
+            log.fun = self._logged(f, log, rhs if not (sliding or rolled or deadline) else None,
+                                   m, z)
         return f
+
+    @staticmethod
+    def _logged(f: Callable, log: Evaluations, rhs: Callable | None, m, z) -> Callable:
+        """f, keeping every evaluation in `log` (a chunk's own odeint call uses it);
+        given `rhs`, the compiled derivatives straight (f for a fault only)."""
+        log_t, log_y, logged = log.t.append, log.y.append, log.t
+        if rhs is None:
+            def slow(t, y):
+                log_t(t)
+                log_y(y.copy())
+                if len(logged) > log.limit:
+                    log.compact()
+                return f(t, y)
+            return slow
+
+        def fast(t, y):
+            yl = y.tolist()
+            log_t(t)
+            log_y(yl)
+            if len(logged) > log.limit:
+                log.compact()
+            try:
+                return rhs(t, yl, m, z)
+            except (ArithmeticError, ValueError):
+                return f(t, y)
+        return fast
 
     def _start_segment(self, cur: Cursor, seg_end: float, rec: Recorder | None,
                        dense: bool = False, t_end: float | None = None
@@ -370,9 +384,6 @@ class Integrator(RunLoop):
         output instant shows where it stays crossed."""
         c, plan, watch, m, z = self.c, self.plan, self.watch, cur.m, cur.z
 
-        def is_silent(k: int, T: np.ndarray, Y: np.ndarray, ends) -> bool:
-            return all(watch.silent(k, float(T[i]), Y[i], m, z) for i in ends)
-
         def wrong_at(T: np.ndarray, Y: np.ndarray) -> tuple[int, int]:
             if not len(T):
                 return 0, 0
@@ -381,10 +392,15 @@ class Integrator(RunLoop):
             found = crossings(plan, E, m)
             if not found:
                 return len(T), len(T)
-            first = {k: int(np.argmax(mask)) for k, mask in found.items()}
-            loud = [i for k, i in first.items()
-                    if not is_silent(k, T, Y, np.flatnonzero(found[k])[[0, -1]])]
-            return min(first.values()), min(loud, default=len(T))
+            # (the surfaces in the order they cross: the first loud one is the answer,
+            # and a crossing is mostly an event, so one look at silence is enough)
+            first = sorted((int(np.argmax(mask)), k) for k, mask in found.items())
+            for i, k in first:
+                last = int(len(T) - 1 - np.argmax(found[k][::-1]))
+                if not (watch.silent(k, float(T[i]), Y[i], m, z) and
+                        watch.silent(k, float(T[last]), Y[last], m, z)):
+                    return first[0][0], i
+            return first[0][0], len(T)
         return wrong_at
 
     def _kernel_arguments(self, cur: Cursor, dense: bool, rec: Recorder | None = None

@@ -39,15 +39,16 @@ UNLIMITED = 2**62
 
 class Evaluations:
     """The derivative evaluations of one odeint call, in call order: TIME and the
-    state (a list, or an array for a large model). The run loop's vector field adds
-    to `t` and `y` while `on` (only during a chunk's own integration), and calls
-    `compact` when `t` is longer than `limit`: the step ends known by then are kept
-    as arrays, so a long call holds its steps, not every evaluation."""
+    state (a list, or an array for a large model). `fun` is the run loop's vector
+    field adding to `t` and `y` (a chunk's own integration calls it, the others the
+    plain one), and calling `compact` when `t` is longer than `limit`: the step ends
+    known by then are kept as arrays, so a long call holds its steps, not every
+    evaluation."""
 
-    __slots__ = ("on", "t", "y", "limit", "_done_t", "_done_y")
+    __slots__ = ("fun", "t", "y", "limit", "_done_t", "_done_y")
 
     def __init__(self, limit: int = 1 << 30) -> None:
-        self.on = False
+        self.fun: Rhs | None = None
         self.t: list[float] = []
         self.y: list = []
         self.limit = limit
@@ -59,7 +60,6 @@ class Evaluations:
         self.y.clear()
         self._done_t.clear()
         self._done_y.clear()
-        self.on = True
 
     @staticmethod
     def _ends(t: np.ndarray) -> np.ndarray:
@@ -92,7 +92,6 @@ class Evaluations:
     def step_ends(self, t0: float, t1: float) -> tuple[np.ndarray, np.ndarray]:
         """The accepted step ends in (t0, t1] and their states (the last evaluation at
         each)."""
-        self.on = False
         t = np.asarray(self.t, dtype=float)
         keep = self._ends(t) if len(t) else np.empty(0, int)
         ts = np.concatenate([*self._done_t, t[keep]])
@@ -176,14 +175,15 @@ class OdeintStepper(Chunked):
         self.pos = 0  # ... and how many of them the loop has taken
         self.next_check = 0
         self.chunk = chunk
-        # how far in time a chunk reaches at least before it ends at an instant of its
-        # own when the output grid is coarser: after a restart, a little past the next
-        # event the loop expects, else 64 steps of the one before the restart, then
-        # four times further each chunk (as the chunk's count of instants grows); else
-        # the chunk would run to the segment's end, past the next switch, and be
-        # thrown away there
+        # how far in time a chunk reaches at most (it ends there, at an instant of its
+        # own when the output grid is coarser): after a restart, a little past the
+        # next event the loop expects, else 64 steps of the one before the restart,
+        # then four times further each time it is reached; else a chunk would run
+        # to the segment's end, past the next switch, and be thrown away there
         self._horizon = 1.05 * expect if expect is not None else \
             64.0 * first_step if first_step and log is not None else math.inf
+        self._reach = t0 + self._horizon  # where the chunks end for now
+        self._expected = expect is not None
         if expect is not None and len(self.checks) > 1:
             # cover the expected time to the next event, and a few instants more
             n = bisect.bisect_right(self.checks, t0 + 1.05 * expect)
@@ -233,13 +233,14 @@ class OdeintStepper(Chunked):
                 n = min(n, max(1, int(LOG_BUDGET / floats)))
         return n
 
-    def _odeint(self, y0: np.ndarray, grid, **options):
-        """odeint from y0 through grid, with the model's Jacobian when there is one
-        (dense for a small model, else banded in a renumbering that narrows the band);
-        the rows come back in the states' own order."""
+    def _odeint(self, y0: np.ndarray, grid, fun: Rhs | None = None, **options):
+        """odeint from y0 through grid (of `fun`, else the stepper's own vector field),
+        with the model's Jacobian when there is one (dense for a small model, else
+        banded in a renumbering that narrows the band); the rows come back in the
+        states' own order."""
         from scipy.integrate import odeint
 
-        fun = self.fun
+        fun = fun or self.fun
         if self.jac is not None:
             if len(y0) <= DENSE_UP_TO:
                 options["Dfun"] = self.jac.dense
@@ -284,16 +285,23 @@ class OdeintStepper(Chunked):
         if left <= 0:
             self._failure = StepFailure(Failure.STEPS, self.t)
             return
-        end = self.t + self._horizon
-        self._horizon *= 4.0
+        if self.t >= self._reach or not self._expected:
+            # (an expected event is expected where it is expected: a chunk that ends
+            # at an instant before it leaves the horizon where it was)
+            self._reach = self.t + self._horizon
+            self._horizon *= 4.0
+        end = self._reach
         if self.checks[self.next_check] > end:
             # (a grid coarser than the horizon: the chunk ends at `end`, an instant of
             # its own; the count of instants a chunk takes grows when it takes them)
             ts, checks = self._anchored(np.array([end]))
             checks[-1] = False
         else:
-            ts, checks = self._anchored(
-                self.checks[self.next_check:self.next_check + self._chunk_size(left)])
+            ts = self.checks[self.next_check:self.next_check + self._chunk_size(left)]
+            # (and the chunk ends by the horizon: what it integrates past a crossing
+            # is thrown away)
+            ts = ts[:int(np.searchsorted(ts, end, side="right"))]
+            ts, checks = self._anchored(ts)
         grid = np.concatenate(([self.t], ts))
         options = {"mxstep": min(MXSTEP, left)}
         if math.isfinite(self.max_step):
@@ -309,12 +317,10 @@ class OdeintStepper(Chunked):
             collecting = gc.isenabled()
             gc.disable()
         try:
-            ys, info = self._odeint(self.y, grid, **options)
+            ys, info = self._odeint(self.y, grid, self.log.fun if self.log else None, **options)
         finally:
-            if self.log is not None:
-                self.log.on = False
-                if collecting:
-                    gc.enable()
+            if self.log is not None and collecting:
+                gc.enable()
         if info["message"] != "Integration successful.":
             self._keep_passed(ts, ys, info, left)
             self._log_steps()
