@@ -123,6 +123,9 @@ class Func:
     values: tuple[str, ...] = ()
     surfaces: tuple[str, ...] = ()
     surface_kind: SurfaceKind = SurfaceKind.SIGN
+    # Fortran arithmetic (ABS, SIGN, MIN, AMOD...): a switch for the integrator's sake;
+    # where only outputs read it, it is evaluated where it stands and makes no event
+    arithmetic: bool = False
     states: tuple[StateSpec, ...] = ()
     memory: MemorySpec | None = None
     # the plain form (math functions, and the non-smooth switches where they are
@@ -380,8 +383,8 @@ _math("NOTNUL(X)", rt.notnul, lambda np: (lambda x: np.where(np.asarray(x) == 0.
 def _nonsmooth(signature: str, scalar: Callable, vector, values: str, surfaces: tuple[str, ...],
                *aliases: str, doc: str, kind: SurfaceKind = SurfaceKind.SIGN) -> None:
     register(Func(signature[:signature.index("(")], Kind.SWITCH, signature, doc, aliases,
-                  values=(values,), surfaces=surfaces, surface_kind=kind, scalar=scalar,
-                  vector=vector))
+                  values=(values,), surfaces=surfaces, surface_kind=kind, arithmetic=True,
+                  scalar=scalar, vector=vector))
 
 
 _nonsmooth("ABS(X)", abs, "abs", "(-A if M0 < 0 else A)", ("A",), doc="|X|")

@@ -541,8 +541,10 @@ def test_bad_calls_are_located_errors():
     with pytest.raises(amilpy.AmilError) as err:
         amilpy.loads("X = INTGRL(0.0, AMAX1(X))\nTIMER FINTIM = 1.0\nEND\n", name="m.amil")
     assert "AMAX1 takes at least 2 arguments, got 1" in err.value.render()
-    # AMOD(A, 0) divides by zero where it is evaluated: the run says where
-    r = run1("X = INTGRL(1.0, 1.0)\nY = AMOD(X, 0.0)\nTIMER FINTIM = 1.0\nEND\n")
+    # AMOD(A, 0) divides by zero where it is evaluated (for the derivative of Z): the
+    # run says where
+    r = run1("X = INTGRL(1.0, 1.0)\nY = AMOD(X, 0.0)\nZ = INTGRL(0.0, Y)\n"
+             "TIMER FINTIM = 1.0\nEND\n")
     assert r.status == "failed" and "AMOD(X, ...) at line 2" in r.message \
         and "division by zero" in r.message
 
@@ -562,3 +564,24 @@ def test_the_shipped_models_list_no_event_of_their_arithmetic():
         run, = model.run(advice=False)
         assert run.ok and len(run.events) == count, path
         assert not any(e.switch.startswith(("ABS", "AMAX1")) for e in run.events), path
+
+
+def test_arithmetic_only_printed_is_not_an_event():
+    """ABS in a printed formula changes nothing integrated: it is evaluated where it
+    stands at each row (exact), makes no event and no restart, while the same ABS
+    read by a derivative is located at each of its zeros (X = cos(2 pi t): 0.25, 0.75
+    and 1.25). Neither form changes the states."""
+    base = ("PARAM W = 6.283185307179586\nX = INTGRL(1.0, V)\nV = INTGRL(0.0, -W**2*X)\n"
+            "A = ABS(X) + DIM(X, 0.5)\n{}TIMER FINTIM = 1.5, OUTDEL = 0.01\n"
+            "PRINT X, A\nEND\n")
+    printed = run1(base.format(""))
+    t = printed["TIME"]
+    x = np.cos(2 * np.pi * t)
+    assert printed.events == []
+    # the states to the default tolerance's global error (a few 1e-9 here)
+    assert printed["X"] == pytest.approx(x, abs=1e-8)
+    assert printed["A"] == pytest.approx(np.abs(x) + np.maximum(x - 0.5, 0.0), abs=1e-8)
+    read = run1(base.format("Z = INTGRL(0.0, A)\n"))
+    abs_times = [e.time for e in read.events if e.switch.startswith("ABS")]
+    assert abs_times == pytest.approx([0.25, 0.75, 1.25], abs=1e-9)
+    assert read["A"] == pytest.approx(printed["A"], abs=1e-8)

@@ -23,7 +23,7 @@ from ..syntax import deep_enough
 from ..templates import instantiate
 from .compiled import Compiled
 from .consts import evaluate_constant, initial_slots
-from .emit import Emitter, Setting, needs, needs_memories
+from .emit import Emitter, Setting, needs, needs_memories, printed_only_surfaces
 from .faults import STATEMENTS, Statement
 from .pytree import (
     Folder,
@@ -119,7 +119,9 @@ class Compiler:
         self.const_modes = const_modes
         self.outputs = outputs
         self.events = events
-        self.watched = [s.index for s in model.surfaces if s.index not in const_modes]
+        printed = printed_only_surfaces(model)
+        self.watched = [s.index for s in model.surfaces
+                        if s.index not in const_modes and s.index not in printed]
         if not events:
             # only FINISH/TERMT stay watched: they stop the run, they switch nothing
             self.watched = [i for i in self.watched

@@ -390,6 +390,34 @@ def needs_memories(model: ir.Model, roots: list[syn.Node]) -> set[int]:
     return {i for kind, i in visitor.seen if kind == "m"}
 
 
+def printed_only_surfaces(model: ir.Model) -> set[int]:
+    """The surfaces of Fortran arithmetic (ABS, SIGN, MIN, AMOD...) whose values only
+    outputs read: no derivative, memory, stopping or scheduling surface, MODINT or
+    LIMINT reads them, even through other switches. Nothing integrated changes where
+    they flip, so they are not watched: an output reads them where they stand (the
+    exact value at each row), and the run is not cut at every kink of a printed
+    formula (a chain of ABS in outputs made 344 restarts and events). The switch
+    functions (FSW, QNTZR...) stay watched: their instants are the event list's.
+    Written-order code (IF blocks, ACSL sections) keeps them all."""
+    if model.units or model.acsl is not None or model.terminal_code:
+        return set()
+    visitor = _Needs(model)
+    visitor.pending.extend(s.deriv for s in model.states)
+    visitor.pending.extend(a for m in model.memories for a in m.args)
+    visitor.pending.extend(s.expr for s in model.surfaces if s.purpose != ir.Purpose.SWITCH)
+    while visitor.pending:
+        for node in syn.walk(visitor.pending.pop()):
+            visitor.visit(node)
+    kept = {s.index for s in model.surfaces if s.purpose != ir.Purpose.SWITCH}
+    kept.update(i for m in model.memories for i in m.surfaces)
+    kept.update(i for s in model.states for i in (*s.reset_surfaces, *s.modes))
+    kept.update(i for kind, k in visitor.seen if kind == "s"
+                for i in model.switches[k].surfaces)
+    kept.update(i for sw in model.switches
+                if not getattr(lookup(sw.func), "arithmetic", False) for i in sw.surfaces)
+    return {s.index for s in model.surfaces if s.index not in kept}
+
+
 def needs(model: ir.Model, roots: list[syn.Node]) -> list[ir.Equation]:
     """The sorted algebraic equations that the given expressions read, transitively."""
     visitor = _Needs(model)
