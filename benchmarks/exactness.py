@@ -3,7 +3,7 @@ its error against the exact references, whatever the output grid; and what watch
 switching surfaces at every integrator step costs on each candidate way of doing it.
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/exactness.py [--repeats 5] [--out DIR]
-    PYTHONPATH=/path/to/older/checkout python benchmarks/exactness.py --rtol 1e-10 ...
+    python benchmarks/exactness.py --before /path/to/older/checkout --rtol 1e-10 ...
 
 Table 1 (`default route`): METHOD AUTO at RELERR `--rtol` (default: the listing's
 default, which is 1e-10 now), ABSERR = RELERR x `--atol-ratio` (1e-3, as the defaults):
@@ -11,8 +11,11 @@ CPU time of a run (`time.process_time`, the median of `--repeats`, the model com
 before), evaluations, events, and the error of every state on the OUTDEL grid against
 `cases.py`'s exact references (max |y - y_ref| / max |y_ref|); then the same model with
 OUTDEL 20 times coarser: its events and its error on the grid rows it shares with the
-reference. The script reads amilpy's public API only, so the same script run on the code
-before (PYTHONPATH pointing at a checkout of it, `--rtol` given) is the "before" column.
+reference. The script reads amilpy's public API only, so it measures older code too:
+`--before PATH` (a checkout of it) adds its columns, at the same RELERR and at its own
+defaults; each model's runs then take turns, one fresh process per tree and round, this
+tree's and the older one's alternating (`--repeats` rounds, the median), so the
+machine's drift falls on both alike.
 
 Table 2 (`candidates`): ways to look at every switching surface after every step
 (issue 21 point 1), on the six models' right-hand sides with the branches as they are at
@@ -73,30 +76,67 @@ def coarser(text: str, outdel: float, factor: float) -> str:
     return new
 
 
-def default_route(names, rtol, atol_ratio, repeats) -> list[dict]:
+def measure(name: str, rtol, atol_ratio: float, repeats: int) -> dict:
+    """One model on the default route, in this process's amilpy."""
     import amilpy
 
-    cases = all_cases()
-    rows = []
-    for name in names:
-        case = cases[name]
-        kw = {} if rtol is None else {"rtol": rtol, "atol": rtol * atol_ratio}
-        model = amilpy.loads(case.text, case.name)
-        model.run(advice=False, **kw)
-        seconds, runs = _cpu(lambda m=model, kw=kw: m.run(advice=False, **kw), repeats)
-        r = runs[0]
-        coarse = amilpy.loads(coarser(case.text, case.outdel, 20.0), case.name)
-        rc = coarse.run(advice=False, **kw)[0]
-        rows.append({
-            "model": name, "settings": r.settings, "ms": 1e3 * seconds,
+    case = all_cases()[name]
+    kw = {} if rtol is None else {"rtol": rtol, "atol": rtol * atol_ratio}
+    model = amilpy.loads(case.text, case.name)
+    model.run(advice=False, **kw)
+    seconds, runs = _cpu(lambda m=model, kw=kw: m.run(advice=False, **kw), repeats)
+    r = runs[0]
+    coarse = amilpy.loads(coarser(case.text, case.outdel, 20.0), case.name)
+    rc = coarse.run(advice=False, **kw)[0]
+    return {"model": name, "settings": r.settings, "ms": 1e3 * seconds,
             "nfev": r.stats.get("nfev"), "events": len(r.events),
             "error": error_on_grid(case, r.t, {n: r[n] for n in case.states}),
-            "coarse events": len(rc.events),
-            "coarse error": _coarse_error(case, rc)})
-        print(f"{name:22s} {rows[-1]['ms']:8.1f} ms  nfev {rows[-1]['nfev']:7d}  "
-              f"events {rows[-1]['events']:4d}  error {rows[-1]['error']:.1e}  | OUTDEL x20: "
-              f"events {rows[-1]['coarse events']:4d}  error {rows[-1]['coarse error']:.1e}",
-              flush=True)
+            "coarse events": len(rc.events), "coarse error": _coarse_error(case, rc)}
+
+
+def _in_child(tree: str | None, name: str, rtol, atol_ratio: float) -> dict:
+    """`measure` in a fresh process whose amilpy is the one in `tree` (None: this
+    one), one timed run after a first one."""
+    import json
+    import subprocess
+
+    # amilpy imported first, from `tree`: cases.py puts this tree on the path after
+    code = ("import json, sys\n"
+            + (f"sys.path.insert(0, {tree!r})\n" if tree else "")
+            + "import amilpy\n"
+            f"sys.path.insert(1, {HERE!r})\n"
+            "import exactness\n"
+            f"row = exactness.measure({name!r}, {rtol!r}, {atol_ratio!r}, 1)\n"
+            "row['amilpy'] = amilpy.__file__\n"
+            "print(json.dumps(row))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=tree or os.getcwd())
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def default_route(names, rtol, atol_ratio, repeats, before: str | None = None
+                  ) -> list[dict]:
+    rows = []
+    for name in names:
+        if before is None:
+            row = measure(name, rtol, atol_ratio, repeats)
+        else:
+            runs: dict[str, list[dict]] = {"now": [], "before": [], "before, defaults": []}
+            for _ in range(repeats):
+                runs["now"].append(_in_child(None, name, rtol, atol_ratio))
+                runs["before"].append(_in_child(before, name, rtol, atol_ratio))
+                runs["before, defaults"].append(_in_child(before, name, None, atol_ratio))
+            row = dict(runs["now"][0], ms=statistics.median(r["ms"] for r in runs["now"]))
+            for key in ("before", "before, defaults"):
+                row[key] = dict(runs[key][0],
+                                ms=statistics.median(r["ms"] for r in runs[key]))
+        rows.append(row)
+        print(f"{name:22s} {row['ms']:8.1f} ms  nfev {row['nfev']:7d}  "
+              f"events {row['events']:4d}  error {row['error']:.1e}  | OUTDEL x20: "
+              f"events {row['coarse events']:4d}  error {row['coarse error']:.1e}"
+              + "".join(f"  | {k}: {row[k]['ms']:.1f} ms, error {row[k]['error']:.1e}, "
+                        f"OUTDEL x20 events {row[k]['coarse events']}"
+                        for k in ("before", "before, defaults") if k in row), flush=True)
     return rows
 
 
@@ -254,6 +294,20 @@ def markdown(table1, table2, args) -> str:
         out.append(f"| {r['model']} | {r['settings']} | {r['ms']:.1f} | {r['nfev']} | "
                    f"{r['events']} | {r['error']:.1e} | {r['coarse events']} | "
                    f"{r['coarse error']:.1e} |")
+    if table1 and "before" in table1[0]:
+        out += ["", f"## Before and after: the default route, `{args.before}` as before\n",
+                "Each column a fresh process per round, the rounds alternating; `now / "
+                "before`: the ratio of the times at the same RELERR.\n",
+                "| model | now ms | before ms (same RELERR) | now / before | before: error "
+                "| before: OUTDEL x20 events (of) | before at its defaults: settings | ms "
+                "| error | OUTDEL x20 events |",
+                "|---|---:|---:|---:|---:|---:|---|---:|---:|---:|"]
+        for r in table1:
+            b, d = r["before"], r["before, defaults"]
+            out.append(f"| {r['model']} | {r['ms']:.1f} | {b['ms']:.1f} | "
+                       f"{r['ms'] / b['ms']:.2f} | {b['error']:.1e} | {b['coarse events']} "
+                       f"({r['events']}) | {d['settings']} | {d['ms']:.1f} | "
+                       f"{d['error']:.1e} | {d['coarse events']} |")
     if table2:
         ways = [k for k in table2[0] if k != "model"]
         out += ["", f"## Watching every step: the candidates (RELERR {args.cand_rtol:g}, "
@@ -267,7 +321,7 @@ def markdown(table1, table2, args) -> str:
     return "\n".join(out) + "\n"
 
 
-def main(argv=None) -> None:
+def main(argv=None) -> tuple[list[dict], list[dict]]:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--models", nargs="*", default=SHIPPED)
     p.add_argument("--rtol", type=float, default=None,
@@ -277,8 +331,10 @@ def main(argv=None) -> None:
     p.add_argument("--repeats", type=int, default=5)
     p.add_argument("--no-candidates", action="store_true")
     p.add_argument("--out", default=None, help="write exactness.md here")
+    p.add_argument("--before", default=None,
+                   help="a checkout of older amilpy code: its columns side by side")
     args = p.parse_args(argv)
-    t1 = default_route(args.models, args.rtol, args.atol_ratio, args.repeats)
+    t1 = default_route(args.models, args.rtol, args.atol_ratio, args.repeats, args.before)
     t2 = [] if args.no_candidates else candidates(args.models, args.cand_rtol, args.atol_ratio,
                                                   args.repeats)
     text = markdown(t1, t2, args)
@@ -287,6 +343,7 @@ def main(argv=None) -> None:
         os.makedirs(args.out, exist_ok=True)
         with open(os.path.join(args.out, "exactness.md"), "w", encoding="utf-8") as fh:
             fh.write(text)
+    return t1, t2
 
 
 if __name__ == "__main__":

@@ -228,3 +228,18 @@ def test_tolerances_runs(tmp_path):
     text = out.read_text()
     assert "| oral_dosing | ACSL |" in text and "equal bit for bit" in text
     assert "## Bouncing ball" in text
+
+
+def test_exactness_runs(tmp_path):
+    """benchmarks/exactness.py on the crank start-up, with this tree as its own
+    "before" (the columns side by side in fresh processes): the default route within
+    the issue's 5e-7 of the exact reference, and the same events at OUTDEL x20."""
+    import exactness
+
+    root = os.path.dirname(BENCH)
+    (row,), _ = exactness.main(["--models", "crank_slider_startup", "--repeats", "1",
+                                "--no-candidates", "--before", root, "--out", str(tmp_path)])
+    assert row["error"] < 5e-7 and row["coarse events"] == row["events"]
+    assert row["before"]["nfev"] == row["nfev"]  # the same code, run again
+    assert row["before"]["amilpy"].startswith(root)
+    assert "now / before" in (tmp_path / "exactness.md").read_text()

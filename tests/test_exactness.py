@@ -126,6 +126,35 @@ def test_clutch_events_and_range_do_not_depend_on_the_grid(route: str, outdel: s
     assert abs(mc_max - ref["MC max"]) < 1e-5 * ref["MC max"], (mc_max, ref["MC max"])
 
 
+@cache
+def hoist_edges(fintim: float) -> list[float]:
+    from references import hoist
+
+    return hoist.simulate(hoist.Hoist(), 70.0, (0.0, fintim), rtol=1e-13, atol=1e-15).edges
+
+
+@pytest.mark.parametrize("outdel", ["1.0E-3", "0.05", "0.25"])
+def test_hoist_contacts_do_not_depend_on_the_grid(outdel: str) -> None:
+    # The hoist's teeth meet or part 18 times in 0.8 s; at OUTDEL 0.05 a single
+    # interval holds the first contact (9.694 ms) and the first steps after Y(0) = 0,
+    # where ABS(Y) leaves zero. The crossing is located in the LSODA step where the
+    # contact surface crosses, not where ABS(Y) leaves zero (the first contact was put
+    # at 8.77 ms), and ABS(Y) leaving zero is no event on any grid. Edges to 1e-9 s of
+    # the reference (rtol 1e-13, located by its own events): a contact edge moves at
+    # |dY/dt| ~ 0.1 m/s, 1e-9 s is 1e-10 of the 4.35 mm half gap.
+    model = with_outdel(MODELS / "hoist_backlash.amil",
+                        "FINTIM = 5.0, PRDEL = 0.05, OUTDEL = 1.0E-3",
+                        f"FINTIM = 0.8, PRDEL = 0.05, OUTDEL = {outdel}")
+    run, = model.run()
+    assert run.status == "finished", run.message
+    contacts = [e.time for e in run.events if e.switch.startswith("INSW(ABS(Y)")]
+    assert all(e.switch.startswith(("INSW(ABS(Y)", "DEADSP")) for e in run.events), \
+        [str(e) for e in run.events]
+    ref = hoist_edges(0.8)
+    assert len(contacts) == len(ref) == 18
+    assert max(abs(a - b) for a, b in zip(contacts, ref, strict=True)) < 1e-9
+
+
 # --- grids that cannot be right are refused ------------------------------------------------
 
 def test_an_output_interval_longer_than_the_run_is_refused() -> None:

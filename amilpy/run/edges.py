@@ -57,11 +57,11 @@ def locate_crossings(watch: SurfaceWatch, stepper, hits: list[int], m, z, ta: fl
     # fell outside (a first estimate on a cubic over many of LSODA's steps)
     for _ in range(2):
         first = min(roots.values())
-        interp = stepper.refine(first)
+        interp = stepper.refine(first, set(roots))
         better, _ = _roots(watch, list(roots), m, z, interp, ta, tb, segment_start, None,
                            ends)
         roots.update(better)
-        if not better or stepper.resolved(min(roots.values())):
+        if not better or stepper.resolved(min(roots.values()), set(roots)):
             break
     return roots, departed
 

@@ -376,20 +376,22 @@ class Integrator(RunLoop):
         return stepper, f
 
     def _wrong_at(self, cur: Cursor) -> Callable[..., tuple[int, int]]:
-        """`wrong_at(T, Y) -> (first, loud)`: the index of the first of the instants T
-        (states Y, as rows) at which a watched surface is on the wrong side of the
-        branches in force, and of the first at which one that matters is (len(T) if
-        none). One matters unless its branch is silent (where it is first and last on
-        the wrong side there): the loop follows its sign without a restart, and an
-        output instant shows where it stays crossed."""
+        """`wrong_at(T, Y, only=None) -> (first, loud)`: the index of the first of the
+        instants T (states Y, as rows) at which a watched surface (of `only`, if given)
+        is on the wrong side of the branches in force, and of the first at which one
+        that matters is (len(T) if none). One matters unless its branch is silent
+        (where it is first and last on the wrong side there): the loop follows its sign
+        without a restart, and an output instant shows where it stays crossed."""
         c, plan, watch, m, z = self.c, self.plan, self.watch, cur.m, cur.z
 
-        def wrong_at(T: np.ndarray, Y: np.ndarray) -> tuple[int, int]:
+        def wrong_at(T: np.ndarray, Y: np.ndarray, only=None) -> tuple[int, int]:
             if not len(T):
                 return 0, 0
             with np.errstate(all="ignore"):
                 E = [column(v, len(T)) for v in c.surf_v(T, list(Y.T), m, z)]
             found = crossings(plan, E, m)
+            if only is not None:
+                found = {k: mask for k, mask in found.items() if k in only}
             if not found:
                 return len(T), len(T)
             # (the surfaces in the order they cross: the first loud one is the answer,
@@ -749,6 +751,11 @@ class Integrator(RunLoop):
                 continue
             if k not in at_zero and self.watch.silent(k, t, y, new_m, z):
                 continue  # a branch nothing uses now: not an event
+            if m[k] == 0.0 and k not in at_zero and self.watch.quiet(k, t, y, new_m, z):
+                # leaving an exact zero (ABS(Y) from Y(0) = 0) that no derivative
+                # feels: seen at whatever step end comes first, so not an event (the
+                # event list would otherwise depend on the output grid)
+                continue
             self._event(t, k, m[k], new_m[k])
 
     def _event(self, t: float, k: int, old: float, new: float) -> None:

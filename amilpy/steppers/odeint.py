@@ -563,16 +563,17 @@ class OdeintStepper(Chunked):
         dense.sharpen(terms)
         return True
 
-    def refine(self, t: float):
+    def refine(self, t: float, surfaces=None):
         """Integrate from the interval's start to a narrow window around t (one odeint
         call) and make its exact ends nodes of the dense output; returns it. Where
         LSODA took several steps in the interval, the window is the step its step ends
-        say the crossing is in (the first on the wrong side, and the one before),
-        with a narrow window around t inside it."""
+        say the crossing of `surfaces` (watched positions; None: any) is in (the first
+        on the wrong side, and the one before), with a narrow window around t inside
+        it."""
         dense = self.interpolant()
         h = self.t - self.t_old
         points = [max(self.t_old, t - self.WINDOW * h), min(self.t, t + self.WINDOW * h)]
-        step = self._crossing_step()
+        step = self._crossing_step(surfaces)
         if step is not None:
             lo, hi = step
             w = 0.05 * (hi - lo)
@@ -586,27 +587,30 @@ class OdeintStepper(Chunked):
                     dense.insert(x, yx, self._deriv(x, yx))
         return dense
 
-    def resolved(self, t: float) -> bool:
+    def resolved(self, t: float, surfaces=None) -> bool:
         """Whether the dense output around t is a narrow window's: a cubic over a
         tenth of LSODA's step there at most (a cubic over a whole step of a high
         order is off by up to (h*omega)^4/384 of the motion)."""
         dense = self.interpolant()
         k = min(max(bisect.bisect_left(dense.t, t), 1), len(dense.t) - 1)
-        step = self._crossing_step()
+        step = self._crossing_step(surfaces)
         h = step[1] - step[0] if step is not None else self.t - self.t_old
         return dense.t[k] - dense.t[k - 1] <= 0.11 * h
 
-    def _crossing_step(self) -> tuple[float, float] | None:
-        """The LSODA step of the present interval a crossing is in, by its step ends:
-        from the one before the first on the wrong side to that one (to the interval's
-        end if none is); None when LSODA took one step or none here."""
+    def _crossing_step(self, surfaces=None) -> tuple[float, float] | None:
+        """The LSODA step of the present interval a crossing of `surfaces` is in, by
+        its step ends: from the one before the first on the wrong side to that one
+        (to the interval's end if none is); None when LSODA took one step or none
+        here. (Only the surfaces being located: another one's departure from zero in
+        the interval's first step is not where they cross.)"""
         if self.watch is None or not len(self.S):
             return None
         lo = int(np.searchsorted(self.S, self.t_old, side="right"))
         hi = int(np.searchsorted(self.S, self.t, side="left"))
         if hi <= lo:
             return None
-        k = lo + self.watch[0](self.S[lo:hi], self.SY[lo:hi])[1]
+        first, loud = self.watch[0](self.S[lo:hi], self.SY[lo:hi], surfaces)
+        k = lo + (first if surfaces is not None else loud)
         start = float(self.S[k - 1]) if k > lo else self.t_old
         end = float(self.S[k]) if k < hi else self.t
         return start, end
