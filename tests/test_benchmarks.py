@@ -87,6 +87,7 @@ def test_exact_reference_agrees_with_dop853():
     assert agreement < 1e-10
 
 
+@pytest.mark.slow  # about 30 s (numba compiles the ceiling)
 def test_ceiling_agrees_with_reference_and_its_events():
     """The compiled ceiling (ceiling.py, numba) reaches the references of the hoist and
     the clutch drive within 1e-4 and switches as often as they do: 111 contact edges;
@@ -158,6 +159,7 @@ def test_percall_runs(tmp_path):
     assert (tmp_path / "percall.md").stat().st_size > 0
 
 
+@pytest.mark.slow  # about 16 s
 def test_skip_effects_runs(tmp_path):
     import skip_effects
 
@@ -166,6 +168,7 @@ def test_skip_effects_runs(tmp_path):
     assert (tmp_path / "skip_effects.md").stat().st_size > 0
 
 
+@pytest.mark.slow  # about 10 s of fresh processes
 def test_startup_runs(tmp_path):
     import startup
 
@@ -195,6 +198,7 @@ def test_response_vs_sweep_runs(tmp_path):
     assert (tmp_path / "response_vs_sweep.md").stat().st_size > 0
 
 
+@pytest.mark.slow  # about 17 s (numba)
 def test_compiled_benchmark_runs(tmp_path):
     pytest.importorskip("numba")
     import compiled as bench

@@ -65,6 +65,7 @@ def test_extreme_input_messages(extreme_results):
         assert "nested too deeply" in extreme_results[deep].detail
 
 
+@pytest.mark.slow  # about 20 s: hundreds of listings, each in a process of its own
 def test_mutation_fuzz_bounded():
     """MUTATIONS mutated listings (seed 0) spread over models/ and tests/golden/."""
     cases = list(mutate.generate(MUTATIONS, seed=0))
@@ -86,6 +87,7 @@ def test_mutation_setting_fintim_to_infinity(root):
     assert r.kind == "ok-1" and "FINTIM" in r.detail, r.detail
 
 
+@pytest.mark.slow  # about 25 s: the whole corpus, each case in a process of its own
 def test_lookalikes_nesting_and_long_sums_are_errors_or_runs():
     # what an independent campaign found and the mutations of the time missed:
     # look-alike characters (each named, never read as its ASCII twin), nested

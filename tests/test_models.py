@@ -315,6 +315,7 @@ def _sweep_amilpy(ws: list[float], y0: dict[str, float], runs_per_point: int) ->
 EQUILIBRIUM = {"X10": float(139.25443 / (74e4 * hoist.KGCM)), "Y0": 0.0087 / 2 + 0.02}
 
 
+@pytest.mark.slow  # about 20 s: 9 points of 10 s each, both sides (test_sweep.py covers it)
 def test_hoist_hysteresis_coarse() -> None:
     # from the loaded equilibrium up across the upper fold (72.05) and back down in
     # 0.5 rad/s steps: at 70 and 71 rad/s the two sweeps sit on different branches.

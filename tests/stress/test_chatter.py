@@ -67,7 +67,9 @@ def test_relay_sliding_line(method):
     assert [e.kind for e in r.events].count("slide") == 1
 
 
-@pytest.mark.parametrize("method", C.METHODS)
+# BDF and RADAU take 8-16 s here: run with the slow tests
+@pytest.mark.parametrize("method", [pytest.param(m, marks=pytest.mark.slow)
+                                    if m in ("BDF", "RADAU") else m for m in C.METHODS])
 def test_relay_with_lag_is_bounded(method):
     """A relay through a lag switches ever faster (Zeno); the run must end in
     bounded events (and, by its limit, time) with a clear message, or finish. (How

@@ -22,7 +22,9 @@ def model():
     return amilpy.loads(C.OSCILLATOR.format(periods=f"{PERIODS}.0"), name="osc.amil")
 
 
-@pytest.mark.parametrize("method", C.METHODS)
+# RADAU over 10,000 periods takes about 25 s: run with the slow tests
+@pytest.mark.parametrize("method", [pytest.param(m, marks=pytest.mark.slow) if m == "RADAU"
+                                    else m for m in C.METHODS])
 def test_amplitude_drift(model, method, record_property):
     r, = model.run(method=method)
     drift = C.amplitude_drift(r)
