@@ -15,7 +15,6 @@ from . import cli as base
 from .console import Progress, write_out
 from .diagnostics import nearest
 from .output.writers import Outputs
-from .run.flow import FlowFailed
 
 
 def _span(text: str) -> tuple[str, float, float]:
@@ -120,6 +119,7 @@ def _done(command: str, path: str, model, result, args, signals, text) -> int:
 
 def cmd_modes(args, path: str, signals) -> int:
     from .output.analysis import modes_text
+    from .run.flow import FlowFailed  # (here: `check` builds these parsers, runs nothing)
 
     model, params = _prepare(args, path)
     progress = Progress(not args.quiet)
@@ -137,6 +137,7 @@ def cmd_modes(args, path: str, signals) -> int:
 def cmd_periodic(args, path: str, signals) -> int:
     from .analysis import NotConverged
     from .output.analysis import orbit_text
+    from .run.flow import FlowFailed
 
     model, params = _prepare(args, path)
     progress = Progress(not args.quiet)
@@ -161,6 +162,7 @@ def cmd_periodic(args, path: str, signals) -> int:
 def cmd_response(args, path: str, signals) -> int:
     from .analysis import NotConverged
     from .output.analysis import response_text
+    from .run.flow import FlowFailed
 
     name, start, stop = args.span
     model, params = _prepare(args, path)

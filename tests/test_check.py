@@ -148,3 +148,25 @@ def test_a_long_surface_text_is_shortened():
     s = m.surfaces[0]
     assert s.text.startswith("W0 + W1 + W2") and s.text.endswith("...")
     assert len(s.text) <= 60 and len(s.description) < 90
+
+
+@pytest.mark.parametrize("listing", ["ok", "bad"])
+def test_check_imports_neither_scipy_nor_matplotlib(tmp_path, listing):
+    """`amilpy check` parses and checks: it needs neither the integrators nor the
+    plots, and importing them costs more than the check itself (SciPy's integrate
+    alone about 0.3 s). Guards every path: a clean listing and one with an error."""
+    import subprocess
+    import sys
+
+    path = tmp_path / "m.amil"
+    path.write_text("X = INTGRL(1.0, -K*X)\nPARAM K = 2.0\nTIMER FINTIM = 1.0\nEND\n"
+                    if listing == "ok" else "X = INTGRL(1.0, -K*X\nTIMER FINTIM = 1.0\nEND\n")
+    code = ("import sys\nfrom amilpy.cli import main\n"
+            f"rc = main(['check', {str(path)!r}])\n"
+            "heavy = sorted({m.split('.')[0] for m in sys.modules} & {'scipy', 'matplotlib'})\n"
+            "print(rc, ','.join(heavy) or '-')\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120)
+    rc, heavy = done.stdout.split()[-2:]
+    assert heavy == "-", done.stdout
+    assert rc == ("0" if listing == "ok" else "1"), done.stdout + done.stderr
