@@ -173,3 +173,20 @@ def test_printout_to_a_string_and_a_stream_agree():
     out = io.StringIO()
     write_runs(out, [run])
     assert out.getvalue() == format_run(run, 1, 1)
+
+
+def test_printer_plot_of_values_spanning_every_float():
+    # Y from -1E308 to 1E308: max - min overflows to inf, and the symbol's column was
+    # inf/inf (a ValueError from the printout); now each row has its symbol, from the
+    # left edge at -1E308 through the zero line to the right edge at 1E308
+    from amilpy.output.printout import printer_plot
+
+    run = run1("PARAM A = 1.0E300\nX = INTGRL(0.0, 1.0)\nY = A*(2.0*X - 1.0)*1.0E8\n"
+               "TIMER FINTIM = 1.0, OUTDEL = 0.1\nPRTPLT Y\nEND\n")
+    from amilpy.output.printout import PLOT_WIDTH
+
+    lines = printer_plot(run, ["Y"]).splitlines()
+    fields = [ln[-PLOT_WIDTH:] for ln in lines[-11:]]
+    assert all(f.count("*") == 1 for f in fields), fields
+    assert fields[0].index("*") == 0 and fields[-1].index("*") == PLOT_WIDTH - 1
+    assert fields[5].index("*") == PLOT_WIDTH // 2  # Y = 0 on the zero line

@@ -46,7 +46,10 @@ def printer_plot(run: Run, names: list[str], label: str | None = None) -> str:
         lo, hi = lo - 1.0, hi + 1.0
 
     def column(v: float) -> int:
-        return int(round((v - lo) / (hi - lo) * (PLOT_WIDTH - 1)))
+        # halves first: hi - lo overflows when the values span more than the largest
+        # float (-1E308 .. 1E308), and inf/inf is no column
+        frac = (0.5 * v - 0.5 * lo) / (0.5 * hi - 0.5 * lo)
+        return int(round(min(max(frac, 0.0), 1.0) * (PLOT_WIDTH - 1)))
 
     zero = column(0.0) if lo < 0.0 < hi else None
     out = io.StringIO()
