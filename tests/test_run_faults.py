@@ -37,6 +37,8 @@ def test_a_fault_at_the_start_names_its_statement(method):
              "TIMER FINTIM = 1.0\nEND\n", method=method, advice=False)
     assert r.status == "failed"
     assert r.message == "integration failed at TIME = 0: A (line 4): division by zero: P = 0"
+    # the row at the fault: the states as they start, what cannot be computed NaN
+    assert r["X"][0] == 0.0 and r["Y"][0] == 0.0 and np.isnan(r["A"][0])
 
 
 @pytest.mark.parametrize("method", METHODS)

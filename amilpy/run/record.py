@@ -292,6 +292,10 @@ class Recorder:
         # an instant whose row the caller takes itself, after its events (ACSL form)
         self.hold: float | None = None
         index = {n: i for i, n in enumerate(c.out_names)}
+        states = {n: i for i, n in enumerate(c.state_names)}
+        # (column, state) of the printed states: a row whose outputs fault still
+        # shows them, they were integrated
+        self._state_columns = [(index[n], states[n]) for n in c.out_names if n in states]
         named = [n for n in dict.fromkeys(range_names) if n in index]
         self.extrema = Extrema(named, [index[n] for n in named])
         # the state after every restart, where a RANGE variable may have a kink
@@ -308,7 +312,12 @@ class Recorder:
         try:
             return self.watch.outputs(t, y, m, z)
         except (ArithmeticError, ValueError):
-            return [math.nan] * len(self.c.out_names)
+            # a variable that cannot be computed here (a division by zero the run
+            # stops on) is NaN; the states are what they are
+            values = [math.nan] * len(self.c.out_names)
+            for j, i in self._state_columns:
+                values[j] = float(y[i])
+            return values
 
     def shown_modes(self, t: float, y: np.ndarray, m, z) -> list[float]:
         """At a switching instant a row shows the branch in force from then on; a
