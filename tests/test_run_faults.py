@@ -67,3 +67,19 @@ def test_a_fault_in_a_derivative_blames_no_other_state():
     assert r.status == "failed"
     assert r.message == ("integration failed at TIME = 0: W2 (line 5): division by zero: "
                          "JL = 0"), r.message
+
+
+@pytest.mark.parametrize("method", ["RKS", "DOP853", "RADAU", "AUTO"])
+def test_a_blow_up_prints_no_numpy_warning(method):
+    # X' = 1E300*X**2 overflows in the first step: the run fails with its message,
+    # and NumPy's overflow warnings from inside SciPy's step (with a SciPy source line
+    # on the user's screen) are not printed
+    import warnings
+
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        r = run1("X = INTGRL(1.0, 1.0E300*X*X)\nTIMER FINTIM = 2.0\nEND\n", method=method,
+                 advice=False)
+    assert r.status == "failed"
+    assert not [w for w in seen if issubclass(w.category, RuntimeWarning)], \
+        [str(w.message) for w in seen]

@@ -115,7 +115,11 @@ class _Run:
         c, plan, rec, integ = self.c, self.plan, self.rec, self.integ
         try:
             status, text = Status.FINISHED, ""
-            stopped = self.advance(cur)
+            # (an overflow inside a solver's step is what the loop finds as a state or
+            # derivative that is not finite, and says so, with TIME and the variable:
+            # NumPy's warning about it, with a SciPy source line, is noise)
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                stopped = self.advance(cur)
             if stopped is not None:
                 status, text = Status.STOPPED, message(Status.STOPPED, t=cur.t, what=stopped)
         except Stop as stop:
