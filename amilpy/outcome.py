@@ -23,6 +23,7 @@ class Failure(Enum):
     UNSTABLE = "a fixed-step method made a decaying mode grow"
     SOLVER = "the solver gave up"
     STEP_UNDERFLOW = "the step size fell below its floor"
+    STEP_SPACING = "the solver's step fell to the spacing of floats"
     SLIDES = "too many surfaces slide at once"
     FAULT = "an arithmetic fault in the model's statements"
     CANNOT_START = "an arithmetic fault before the first step"
@@ -52,6 +53,9 @@ MESSAGES: dict[Failure | Status, str] = {
     Failure.STEP_UNDERFLOW: _FAILED + "step size underflow: 100 steps shorter than {floor:.3g} "
                                       "s ({origin}); {name} = {value:.6g} (a finite-time "
                                       "singularity?)",
+    Failure.STEP_SPACING: _FAILED + "step size underflow: the step fell to the spacing of "
+                                    "the floats at this TIME; {name} = {value:.6g} (a "
+                                    "finite-time singularity?)",
     Failure.SLIDES: _FAILED + "{count} switching surfaces slide at once (at most {limit})",
     Failure.FAULT: _FAILED + "{detail}",
     Failure.CANNOT_START: "cannot start at TIME = {t:.9g}: {detail}",

@@ -83,3 +83,13 @@ def test_a_blow_up_prints_no_numpy_warning(method):
     assert r.status == "failed"
     assert not [w for w in seen if issubclass(w.category, RuntimeWarning)], \
         [str(w.message) for w in seen]
+
+
+def test_a_step_at_the_spacing_of_floats_is_a_step_size_underflow():
+    # DOP853 on X' = 1E300*X**2 from X = 1: SciPy gives up with "Required step size is
+    # less than spacing between numbers"; the run says what that is, and where
+    r = run1("X = INTGRL(1.0, 1.0E300*X*X)\nTIMER FINTIM = 2.0\nEND\n", method="DOP853",
+             advice=False)
+    assert r.status == "failed"
+    assert "step size underflow: the step fell to the spacing of the floats" in r.message
+    assert "X = 1 (a finite-time singularity?)" in r.message, r.message

@@ -88,7 +88,10 @@ class ScipyStepper(Stepper):
         solver = self.solver
         msg = solver.step()
         if solver.status == "failed":
-            return StepFailure(Failure.SOLVER, self.t, msg or "the integrator failed")
+            # (SciPy's "Required step size is less than spacing between numbers.")
+            kind = Failure.STEP_SPACING if msg and "spacing between numbers" in msg \
+                else Failure.SOLVER
+            return StepFailure(kind, self.t, msg or "the integrator failed")
         self._steps += 1
         self.t_old = solver.t_old
         self.t = solver.t
