@@ -93,3 +93,13 @@ def test_a_step_at_the_spacing_of_floats_is_a_step_size_underflow():
     assert r.status == "failed"
     assert "step size underflow: the step fell to the spacing of the floats" in r.message
     assert "X = 1 (a finite-time singularity?)" in r.message, r.message
+
+
+def test_an_overflow_inside_radaus_step_names_the_state():
+    # RADAU's Newton matrix overflows on X' = 1E300*X**2 and SciPy refuses it ("array
+    # must not contain infs or NaNs"): the run names the state, as every route does
+    r = run1("X = INTGRL(1.0, 1.0E300*X*X)\nTIMER FINTIM = 2.0\nEND\n", method="RADAU",
+             advice=False)
+    assert r.status == "failed"
+    assert r.message.startswith("integration failed at TIME = 0: X is no longer finite"), \
+        r.message
