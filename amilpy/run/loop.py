@@ -942,11 +942,9 @@ class Integrator(RunLoop):
                         detail=failure.detail, safe=failure.safe_delt)
         if failure.kind is Failure.STEPS:
             return Stop(Failure.STEPS, failure.t, limit=self.opts.max_steps)
-        if failure.kind is Failure.STEP_SPACING and len(stepper.y):
-            big = int(np.argmax(np.abs(stepper.y)))
-            return self.fault_or(Stop(Failure.STEP_SPACING, stepper.t,
-                                      name=self.c.state_names[big],
-                                      value=float(stepper.y[big])))
+        if failure.kind is Failure.STEP_SPACING and name is not None:
+            return self.fault_or(Stop(Failure.STEP_SPACING, stepper.t, name=name,
+                                      value=float(stepper.y[failure.index])))
         if failure.kind is Failure.NOT_FINITE and name is not None:
             return self.fault_or(Stop(Failure.NOT_FINITE, stepper.t, name=name,
                                        detail=f": {failure.detail}"))

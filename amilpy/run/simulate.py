@@ -144,13 +144,6 @@ class _Run:
                 self.model, c, Fault(exc, cur.t, cur.y.tolist(), cur.m, cur.z)))
             if c.fault_line(exc) is None:
                 stop = integ.fault_or(stop)
-                if stop.kind is Failure.FAULT and "infs or NaNs" in str(exc) and \
-                        len(cur.y) and not integ.faults:
-                    # SciPy refusing what overflowed inside its own step (RADAU's
-                    # Newton matrix): say which state, as for any other route
-                    big = int(np.argmax(np.abs(cur.y)))
-                    stop = Stop(Failure.NOT_FINITE, cur.t, name=c.state_names[big],
-                                detail=f" (inside METHOD {plan.method}'s step: {exc})")
             text = message(stop.kind, t=stop.t, **stop.fields)
             self._keep_last_good(cur)
         if status == Status.FINISHED and rec.out_i < len(plan.grid.times):

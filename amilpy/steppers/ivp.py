@@ -84,14 +84,25 @@ class ScipyStepper(Stepper):
     def nstep(self) -> int:
         return self._steps
 
+    def _largest(self) -> int:
+        """The state a blow-up is named by: the largest, where the stepper stands."""
+        return int(np.argmax(np.abs(self.y)))
+
     def step(self) -> StepFailure | None:
         solver = self.solver
-        msg = solver.step()
+        try:
+            msg = solver.step()
+        except ValueError as exc:
+            # (the model's own faults are the vector field's: this is SciPy refusing
+            # what overflowed inside its step, RADAU's and BDF's Newton matrix)
+            if "infs or NaNs" not in str(exc) or not len(self.y):
+                raise
+            return StepFailure(Failure.NOT_FINITE, self.t, str(exc), index=self._largest())
         if solver.status == "failed":
             # (SciPy's "Required step size is less than spacing between numbers.")
-            kind = Failure.STEP_SPACING if msg and "spacing between numbers" in msg \
-                else Failure.SOLVER
-            return StepFailure(kind, self.t, msg or "the integrator failed")
+            if msg and "spacing between numbers" in msg and len(self.y):
+                return StepFailure(Failure.STEP_SPACING, self.t, msg, index=self._largest())
+            return StepFailure(Failure.SOLVER, self.t, msg or "the integrator failed")
         self._steps += 1
         self.t_old = solver.t_old
         self.t = solver.t
