@@ -144,7 +144,12 @@ class SurfaceWatch:
         before = self.c.modes_literal(t, yl, m, z_before)
         after = self.c.modes_literal(t, yl, m, z_after)
         kept = {k: mode for k, mode in enumerate(m) if before[k] == after[k]}
-        return self.choose_modes(t, y, z_after, m, set(), forced=kept)
+        if len(kept) == len(m):
+            return m
+        # (choose_modes takes a surface that is not triggered where its sign is: one
+        # just left by a slide, a few ulps on the other side, would flip back)
+        new = self.choose_modes(t, y, z_after, m, set(), forced=kept)
+        return [kept.get(k, mode) for k, mode in enumerate(new)]
 
     def direction(self, k: int, t: float, y: np.ndarray, m, z, old) -> float:
         """Which side of surface k the motion goes to from a point on it."""
