@@ -415,7 +415,16 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
     status = BUFFER
     while True:
         if steps >= STEPS_PER_CALL or nev + nm > ev_t.size or \
-                (sampling and nsmp + 2 > smp_T.size):
+                (sampling and nsmp + 2 > smp_T.size) or (rows >= out_T.size and gi < ngrid):
+            status = BUFFER
+            break
+        # the last grid instant the rows buffer has room for (a buffer as long as the
+        # rest of the run would cost in proportion to the run): a step that may go past
+        # it is the next call's, with the buffer empty; only a step longer than the
+        # whole buffer ends there
+        last_row = gi + out_T.size - rows - 1
+        row_cap = grid[last_row] if last_row < ngrid and grid[last_row] > t else np.inf
+        if rows > 0 and t + min(h_abs, max_step) > row_cap:
             status = BUFFER
             break
         if sc[NSTEPS] + steps >= max_steps:
@@ -436,6 +445,8 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
             t_new = t + h_abs
             if t_new > t_bound:
                 t_new = t_bound
+            if t_new > row_cap:
+                t_new = row_cap
             h = t_new - t
             _stages(rhs, t, y, f, h, m, z, p, K, y_new, ys)
             nfev += N_STAGES

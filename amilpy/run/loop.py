@@ -361,11 +361,13 @@ class Integrator(RunLoop):
                 # an integration of its own)
                 checks = np.union1d(checks, train_instants(self.c.memory_trains, cur.t,
                                                            seg_end))
-        # with nothing to watch nothing is thrown away after a chunk: one odeint call
-        # per segment (a FINISH would throw away the rest of the run), unless it may
-        # pause and start afresh (the caller's code, a memory the integrator sees)
+        # with nothing to watch nothing is thrown away after a chunk: long chunks (a
+        # FINISH would throw away the rest of the run), unless it may pause and start
+        # afresh (the caller's code, a memory the integrator sees); never the whole
+        # segment in one call, whose output and counts would take 200 bytes a row of
+        # a long run
         pausing = t_end is not None and seg_end > t_end
-        chunk = 16 if plan.watch_idx or pausing else 1 << 30
+        chunk = 16 if plan.watch_idx or pausing else 4096
         stepper = make_stepper(
             plan.route.name, f, cur.t, cur.y, seg_end, rtol=plan.tol.rtol, atol=plan.tol.atol,
             delt=plan.timer["DELT"], max_step=plan.max_step, first_step=self._last_step,

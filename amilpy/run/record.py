@@ -23,11 +23,22 @@ from .watch import SurfaceWatch
 
 class Rows:
     """The recorded output rows, in order: single rows from the step-by-step path,
-    whole blocks from an odeint chunk (kept as arrays, never split into lists)."""
+    whole blocks from an odeint chunk. Kept column by column, in parts of BATCH rows
+    or more, so the `Run`'s columns are put together one at a time at the end, each
+    freeing its parts as it is made: a long run holds its rows about once, never as
+    blocks, a table and columns at the same time."""
+
+    BATCH = 32768  # (a column's part then takes 256 kB: memory of its own, which goes
+    # back to the system when it is freed, not a heap that stays as large as it was)
+    SINGLE = 4096  # single rows kept as lists at most
 
     def __init__(self, width: int) -> None:
         self.width = width
-        self.blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        self.t_parts: list[np.ndarray] = []
+        self.g_parts: list[np.ndarray] = []
+        self.columns: list[list[np.ndarray]] = [[] for _ in range(width)]
+        self.blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # not merged yet
+        self.in_blocks = 0
         self.t: list[float] = []
         self.g: list[int] = []
         self.v: list[list[float]] = []
@@ -38,23 +49,52 @@ class Rows:
         self.g.append(g)
         self.v.append(values)
         self.last_t = t
+        if len(self.t) >= self.SINGLE:  # (as arrays, a row takes a tenth of the memory)
+            self._flush()
 
     def _flush(self) -> None:
         if self.t:
-            self.blocks.append((np.asarray(self.t, float), np.asarray(self.g, int),
-                                np.asarray(self.v, float).reshape(len(self.t), self.width)))
+            v = np.asarray(self.v, float).reshape(len(self.t), self.width)
+            self._block(np.asarray(self.t, float), np.asarray(self.g, int), v)
             self.t, self.g, self.v = [], [], []
+
+    def _block(self, t: np.ndarray, g: np.ndarray, values: np.ndarray) -> None:
+        # (copies: a view would keep the whole array it is a view of alive, a
+        # stepper's chunk)
+        self.blocks.append((np.array(t, float), np.array(g, int), np.array(values, float)))
+        self.in_blocks += len(t)
+        if self.in_blocks >= self.BATCH:
+            self._merge()
+
+    def _merge(self) -> None:
+        if not self.blocks:
+            return
+        t, g, v = (np.concatenate(p) for p in zip(*self.blocks, strict=True))
+        self.blocks, self.in_blocks = [], 0
+        self.t_parts.append(t)
+        self.g_parts.append(g)
+        for column, values in zip(self.columns, v.T, strict=True):
+            column.append(values.copy())
 
     def add_block(self, t: np.ndarray, g: np.ndarray, values: np.ndarray) -> None:
         self._flush()
-        self.blocks.append((t, g, values))
+        self._block(t, g, values)
         self.last_t = float(t[-1])
 
-    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def take(self) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+        """TIME, the grid indices and each column, as arrays; the rows are given
+        away (the parts of a column are freed as soon as it is put together)."""
         self._flush()
-        if not self.blocks:
-            return np.empty(0), np.empty(0, int), np.empty((0, self.width))
-        return tuple(np.concatenate(parts) for parts in zip(*self.blocks, strict=True))
+        self._merge()
+        t = np.concatenate(self.t_parts) if self.t_parts else np.empty(0)
+        g = np.concatenate(self.g_parts) if self.g_parts else np.empty(0, int)
+        self.t_parts, self.g_parts = [], []
+        out = []
+        for k in range(self.width):
+            parts, self.columns[k] = self.columns[k], []
+            out.append(np.concatenate(parts) if parts else np.empty(0))
+            del parts
+        return t, g, out
 
 
 @dataclass(frozen=True)
@@ -415,8 +455,8 @@ class Recorder:
             terminal: dict[str, float], extrema: dict[str, tuple]) -> Run:
         names = self.c.out_names
         grid = self.plan.grid
-        times, g, table = self.rows.arrays()
-        values = {n: table[:, i].copy() for i, n in enumerate(names)}
+        times, g, columns = self.rows.take()
+        values = dict(zip(names, columns, strict=True))
         last = np.zeros(len(g), bool)
         if len(g):
             last[-1] = True  # the stop instant (FINISH, TERMT, failure) is always shown

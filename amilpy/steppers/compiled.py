@@ -80,6 +80,7 @@ class KernelStepper(Stepper):
     the kernel locates itself)."""
 
     EVENTS_PER_CALL = 64
+    ROWS_BUFFER = 4096  # rows a kernel call fills at most
 
     def __init__(self, kernel, fun: Rhs | None, t0: float, y0: np.ndarray, t_bound: float, *,
                  rtol, atol, max_step: float, first_step: float | None, max_steps: int,
@@ -132,6 +133,7 @@ class KernelStepper(Stepper):
         # every step's end as a sample for RANGE (when it is asked for)
         s = max(64, min(4096, 2_000_000 // max(n, 1))) if sampling else 0
         self._smp = (np.empty(s), np.empty((s, n)), np.empty((s, len(m_arr))))
+        self._rows: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     @property
     def nfev(self) -> int:
@@ -152,9 +154,14 @@ class KernelStepper(Stepper):
         keeps it now."""
         m_arr = np.asarray(m, dtype=float)
         self.z = np.asarray(z, dtype=float)
-        left = max(len(grid) - gi, 0)
-        T, Y = np.empty(left), np.empty((left, len(self._y)))
-        M = np.empty((left, len(m_arr)))
+        if self._rows is None:
+            # (reused: the rows are copied out of it; `advance` in the kernel ends its
+            # steps where the buffer is full)
+            size = max(1, min(max(len(grid) - gi, 0), self.ROWS_BUFFER,
+                              4_000_000 // max(len(self._y) + len(m_arr), 1)))
+            self._rows = (np.empty(size), np.empty((size, len(self._y))),
+                          np.empty((size, len(m_arr))))
+        T, Y, M = self._rows
         et, ek, en, ey, em = self._ev
         # the surfaces where the kernel stands, in the branches now in force (the loop
         # may have changed a silent one)
@@ -177,8 +184,9 @@ class KernelStepper(Stepper):
             self._failure = StepFailure(Failure.STEPS, float(self.sc[AT]))
         elif status == SMALL:
             self._take_over()
-        return Advance(status, T[:rows], Y[:rows], M[:rows], et[:nev].copy(),
-                       ek[:nev].copy(), en[:nev].copy(), ey[:nev].copy(), em[:nev].copy(),
+        return Advance(status, T[:rows].copy(), Y[:rows].copy(), M[:rows].copy(),
+                       et[:nev].copy(), ek[:nev].copy(), en[:nev].copy(), ey[:nev].copy(),
+                       em[:nev].copy(),
                        m_arr, st[:ns].copy(), sy[:ns].copy(), sm[:ns].copy())
 
     def _take_over(self) -> None:

@@ -122,6 +122,46 @@ ANCHORS_PER_CHUNK = 65536  # (more would be many more than the chunk has steps)
 INSERT_AHEAD = 3
 
 
+class Instants:
+    """The check instants a stepper has still to integrate, in order: the loop's grid
+    (a view of it, never copied: a copy at every restart would cost, in time and in
+    the rows that keep views of it, in proportion to the run's length) merged with
+    the few instants put in since (`stop_at`) and the segment's end."""
+
+    __slots__ = ("grid", "i", "extra")
+
+    def __init__(self, grid, end: float) -> None:
+        self.grid = np.asarray(grid, dtype=float)
+        self.i = 0
+        self.extra = [end]  # sorted; the end is always the last
+
+    def first(self) -> float:
+        g = float(self.grid[self.i]) if self.i < len(self.grid) else math.inf
+        return min(g, self.extra[0])
+
+    def ahead(self, n: int) -> np.ndarray:
+        """The next n instants (fewer at the end), a new array."""
+        ts = np.concatenate([self.grid[self.i:self.i + n], self.extra[:n]])
+        if len(self.extra) > 1:
+            ts.sort(kind="stable")
+        return ts[:n]
+
+    def count_upto(self, t: float) -> int:
+        return bisect.bisect_right(self.grid, t, self.i) - self.i + \
+            bisect.bisect_right(self.extra, t)
+
+    def passed(self, t: float) -> None:
+        """The instants up to t are integrated."""
+        self.i = bisect.bisect_right(self.grid, t, self.i)
+        del self.extra[:bisect.bisect_right(self.extra, t)]
+
+    def put(self, t: float) -> None:
+        """t becomes one of the instants (once)."""
+        j = bisect.bisect_left(self.grid, t, self.i)
+        if not (j < len(self.grid) and self.grid[j] == t) and t not in self.extra:
+            bisect.insort(self.extra, t)
+
+
 class OdeintStepper(Chunked):
     """One `odeint` call integrates through many check instants with no Python
     between its internal steps (only the right-hand side is Python), which is
@@ -166,14 +206,13 @@ class OdeintStepper(Chunked):
         self.y_old = self.y
         self.t_bound = t_bound
         # the loop passes the instants strictly inside (t0, t_bound), in order
-        self.checks = np.append(np.asarray(checks, dtype=float), t_bound)
+        self.checks = Instants(checks, t_bound)
         self.rtol, self.atol = solver_tolerance(rtol), solver_tolerance(atol)
         self.max_step = max_step
         self.first_step = first_step
         self.T = np.empty(0)  # the check instants integrated so far ...
         self.Y = np.empty((0, len(self.y)))  # ... their states ...
         self.pos = 0  # ... and how many of them the loop has taken
-        self.next_check = 0
         self.chunk = chunk
         # how far in time a chunk reaches at most (it ends there, at an instant of its
         # own when the output grid is coarser): after a restart, a little past the
@@ -184,9 +223,9 @@ class OdeintStepper(Chunked):
             64.0 * first_step if first_step and log is not None else math.inf
         self._reach = t0 + self._horizon  # where the chunks end for now
         self._expected = expect is not None
-        if expect is not None and len(self.checks) > 1:
+        if expect is not None and len(self.checks.grid):
             # cover the expected time to the next event, and a few instants more
-            n = bisect.bisect_right(self.checks, t0 + 1.05 * expect)
+            n = self.checks.count_upto(t0 + 1.05 * expect)
             self.chunk = max(4, n + 3)
         self.max_steps = max_steps
         self._nfev = 0
@@ -291,13 +330,13 @@ class OdeintStepper(Chunked):
             self._reach = self.t + self._horizon
             self._horizon *= 4.0
         end = self._reach
-        if self.checks[self.next_check] > end:
+        if self.checks.first() > end:
             # (a grid coarser than the horizon: the chunk ends at `end`, an instant of
             # its own; the count of instants a chunk takes grows when it takes them)
             ts, checks = self._anchored(np.array([end]))
             checks[-1] = False
         else:
-            ts = self.checks[self.next_check:self.next_check + self._chunk_size(left)]
+            ts = self.checks.ahead(self._chunk_size(left))
             # (and the chunk ends by the horizon: what it integrates past a crossing
             # is thrown away)
             ts = ts[:int(np.searchsorted(ts, end, side="right"))]
@@ -332,7 +371,9 @@ class OdeintStepper(Chunked):
         self.T, self.Y, self.pos = ts[:good], ys[1:good + 1], 0
         self._steps += int(nst[good - 1]) if good else left
         self._instants += good
-        self.next_check += int(np.count_nonzero(checks[:good]))
+        passed = ts[:good][checks[:good]]
+        if len(passed):
+            self.checks.passed(float(passed[-1]))
         if good < len(ts):
             self._failure = StepFailure(Failure.STEPS, float(ts[good - 1]) if good else self.t)
         self._evals += int(info["nfe"][-1])
@@ -462,11 +503,7 @@ class OdeintStepper(Chunked):
         if len(T) and t <= T[-1]:
             j = int(np.searchsorted(T, t, side="left"))
             return True if T[j] == t else self._insert([t])
-        # one of the instants still to integrate
-        rest = self.checks[self.next_check:]
-        j = int(np.searchsorted(rest, t, side="left"))
-        if not (j < len(rest) and rest[j] == t):
-            self.checks = np.insert(self.checks, self.next_check + j, t)
+        self.checks.put(t)  # one of the instants still to integrate
         return True
 
     def first_wrong(self) -> int | None:

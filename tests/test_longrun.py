@@ -1,0 +1,73 @@
+"""A long run holds its rows once: memory in proportion to what it records, on every
+route, guarded by an address-space limit (never by a timing).
+
+The listing: a mass between two springs with a gap of 0.2 (K = 1e4): four contact
+edges a period, about 1,190 restarts in 20 s, and 200,001 rows at OUTDEL 1e-4. Before
+issue 29, AUTO copied the rest of the output grid at every restart and its rows kept
+views of the copies: 1.0 GB resident for this run, and a MemoryError under this
+limit (tried on that code). The rows themselves are 200,001 x (3 columns + TIME +
+grid index) x 8 bytes = 8 MB, and each route's address space grew by 18-20 MB over
+the run (measured); the limit leaves 150 MB above what the process had mapped after
+a first short run (imports, generated code, numba's kernel), so only a run whose
+memory grows faster than its rows can fail it.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+LISTING = """\
+TITLE  A mass between two springs with a gap: four contact edges a period
+PARAM  K = 1.0E4, G = 0.1
+INCON  X0 = 1.0
+X = INTGRL(X0, V)
+V = INTGRL(0.0, -K*DEADSP(-G, G, X))
+TIMER  FINTIM = 20.0, OUTDEL = 1.0E-4, PRDEL = 1.0
+PRINT  X, V
+RANGE  X
+END
+"""
+
+PROBE = textwrap.dedent("""
+    import math, resource, sys
+    import amilpy
+    m = amilpy.load(sys.argv[1])
+    method = sys.argv[2]
+    m.run(method=method, fintim=1.0, advice=False, rtol=1e-6, atol=1e-9)
+    with open("/proc/self/status") as f:
+        vm = next(int(line.split()[1]) for line in f if line.startswith("VmSize:"))
+    limit = vm * 1024 + 150 * 2**20
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    r, = m.run(method=method, advice=False, rtol=1e-6, atol=1e-9)
+    lo, hi = r.range["X"][0], r.range["X"][2]
+    print(r.status, len(r.t), len(r.events), lo, hi)
+""")
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/status"), reason="needs Linux's /proc")
+@pytest.mark.parametrize("method", ["AUTO", "COMPILED",
+                                    pytest.param("DOP853", marks=pytest.mark.slow)])
+def test_a_long_run_holds_its_rows_once(tmp_path, method):
+    if method == "COMPILED":
+        pytest.importorskip("numba")
+    path = tmp_path / "gap.amil"
+    path.write_text(LISTING, encoding="utf-8")
+    out = subprocess.run([sys.executable, "-c", PROBE, str(path), method],
+                         capture_output=True, text=True,
+                         env=dict(os.environ, OPENBLAS_NUM_THREADS="1"))
+    assert out.returncode == 0, out.stderr[-2000:]
+    status, rows, events, lo, hi = out.stdout.split()
+    assert status == "finished" and int(rows) == 200_001
+    # the closed form: in contact X - G = 0.9 cos(100 t), half a period of the
+    # spring (pi / 100 s) each time; it leaves at |V| = 90 and crosses the gap of
+    # 0.2 in 0.2 / 90 s; two contacts and two crossings a period, 4 edges
+    period = 2.0 * 3.141592653589793 / 100 + 2.0 * 0.2 / 90
+    assert abs(int(events) - 4 * 20.0 / period) <= 4
+    # energy is kept: X turns at -(0.9 + G) and +(0.9 + G) (RELERR 1e-6 over 20 s)
+    assert float(lo) == pytest.approx(-1.0, abs=1e-4)
+    assert float(hi) == pytest.approx(1.0, abs=1e-4)
