@@ -184,6 +184,21 @@ def test_no_compiled_form_runs_as_dop853_and_says_why():
     assert np.array_equal(a["X"], b["X"])
 
 
+@needs_numba
+def test_a_large_model_says_why_it_is_not_compiled():
+    # numba's compile time grows faster than the function: 15 s for 400 equations,
+    # 315 s for the 1000-mass chain's 2,999 (measured); past 400 the run is DOP853's
+    # at once, and says so once, with the count
+    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
+    from scale import chain_listing
+
+    r, = amilpy.loads(chain_listing(200)).run(method="COMPILED", advice=False)
+    assert r.status == "finished"
+    assert r.warnings == ["METHOD COMPILED: this model has no compiled form: its right "
+                          "side has 599 equations, more than the 400 numba compiles in "
+                          "15 s (3,000 take it 5 min); it ran as DOP853"]
+
+
 def test_without_numba_the_route_is_dop853(monkeypatch):
     monkeypatch.setattr(compiled, "available", lambda: False)
     monkeypatch.setattr(compiled, "_BY_SOURCE", {})  # (this process may have built it)

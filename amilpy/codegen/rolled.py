@@ -20,6 +20,7 @@ usual, or gives the same non-finite value.
 from __future__ import annotations
 
 import ast as py
+import copy
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import FunctionType
@@ -114,7 +115,8 @@ def build(module: py.Module, n: int) -> Callable | None:
     groups: dict[tuple, list[tuple[_Statement, _Shape]]] = {}
     for s in statements:
         shape = _Shape(values)
-        key_tree = shape.visit(s.expr)
+        # (on a copy: the module's own tree is what METHOD COMPILED translates)
+        key_tree = shape.visit(copy.deepcopy(s.expr))
         key = (s.level, s.target < 0, py.dump(key_tree))
         groups.setdefault(key, []).append((s, shape))
     if len(statements) < MIN_PER_GROUP * len(groups):
@@ -134,7 +136,7 @@ def build(module: py.Module, n: int) -> Callable | None:
                 scope[f"_I{g}_{kind}{k}"] = np.array([values_of(sh)[k] for _, sh in members])
         for k in range(len(first.floats)):
             scope[f"_I{g}_C{k}"] = np.array([sh.floats[k] for _, sh in members])
-        expr = _Vector(g).visit(_Shape(values).visit(members[0][0].expr))
+        expr = _Vector(g).visit(_Shape(values).visit(copy.deepcopy(members[0][0].expr)))
         targets = np.array([s.target for s, _ in members])
         scope[f"_O{g}"] = targets if targets[0] >= 0 else -1 - targets
         out = "V" if targets[0] >= 0 else "D"

@@ -53,6 +53,22 @@ def _helper(name: str, obj: object) -> tuple[str, str | None]:
 _STATE_ARGS = ("y", "m", "z")  # what the generated functions unpack by position
 
 
+# numba's time to compile one function grows faster than the function (the N-mass
+# chain's first run in a new process, kernel cached: 5 s at 100 equations, 15 s at
+# 400, 315 s at 3,000); past this a run would wait minutes before its first step
+MAX_EQUATIONS = 400
+
+
+def _equations(rhs: py.FunctionDef) -> int:
+    """The right side's assignments and returned derivatives."""
+    n = sum(isinstance(s, py.Assign) and not isinstance(s.targets[0], py.Tuple)
+            for s in rhs.body)
+    ret = rhs.body[-1] if rhs.body else None
+    if isinstance(ret, py.Return) and isinstance(ret.value, (py.List, py.Tuple)):
+        n += len(ret.value.elts)
+    return n
+
+
 class Unsupported(Exception):
     """The model uses something the compiled route has no spelling for."""
 
@@ -174,6 +190,10 @@ def translate(c: Compiled) -> Translation:
     found = {f.name: f for f in c.module.body if isinstance(f, py.FunctionDef)}
     if "rhs" not in found or "surf" not in found:
         raise Unsupported("no right-hand side was generated")
+    equations = _equations(found["rhs"])
+    if equations > MAX_EQUATIONS:
+        raise Unsupported(f"its right side has {equations} equations, more than the "
+                          f"{MAX_EQUATIONS} numba compiles in 15 s (3,000 take it 5 min)")
     names = tuple(sorted(k for k, v in c.namespace.items()
                          if k.startswith("p_") and isinstance(v, float)))
     parameters = {n: i for i, n in enumerate(names)}
