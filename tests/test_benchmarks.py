@@ -138,6 +138,17 @@ def test_ceiling_agrees_with_reference_and_its_events():
     assert m["status"] == "finished" and m["error"] < 1e-6 and m["events"] == 3
 
 
+def test_longrun_runs(tmp_path):
+    """The long-run table on one short point: a fresh process, its memory read."""
+    import longrun
+
+    rows = longrun.main(models=["machine_unit"], fintims=[20.0], methods=["AUTO"],
+                        out_dir=str(tmp_path))
+    r, = rows
+    assert r["status"] == "finished" and r["rows"] == 20_001 and r["peak"] >= r["base"] > 0
+    assert (tmp_path / "longrun.md").read_text().count("| machine_unit | AUTO (AUTO) |") == 1
+
+
 def test_scale_runs(tmp_path):
     """The N-mass chain benchmark on a 5-mass chain, two routes each side."""
     import scale
