@@ -334,13 +334,21 @@ def cmd_run(args, path: str, signals: Signals) -> int:
         write_out(lambda out: out.write(model.python_source(weather_dir=args.weather_dir,
                                                             **params) + "\n"))
     progress = Progress(not args.quiet)
+    finished = 0
+
+    def done(i: int, n: int) -> None:  # (in the order they finish, when farmed)
+        nonlocal finished
+        finished += 1
+        if n > 1:
+            progress.line(f"run {i + 1} finished ({finished} of {n})")
+
     try:
         runs = model.run(method=args.method, rtol=args.rtol, atol=args.atol,
                          progress=progress, max_time=args.max_time, max_steps=args.max_steps,
                          max_events=args.max_events, fintim=args.fintim,
                          advice=not args.no_advice, step_point=args.step_point,
                          seed=args.seed, weather_dir=args.weather_dir, jobs=_jobs(args),
-                         scheduler=args.scheduler,
+                         scheduler=args.scheduler, done=done,
                          **params)
     finally:
         progress.done()

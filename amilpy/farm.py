@@ -104,15 +104,28 @@ def _install(token: str, blob: bytes, ignore_interrupt: bool = False) -> None:
         import signal
 
         # a forked worker has the command line's handlers: Ctrl-C is the parent's to
-        # handle, and the parent's terminate() must end the worker
+        # handle, and the parent's terminate() must end the worker; the signals were
+        # blocked while it started (`_STARTING`), and are taken as set here
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         for sig in (signal.SIGTERM, getattr(signal, "SIGHUP", None)):
             if sig is not None:
                 signal.signal(sig, signal.SIG_DFL)
+        if hasattr(signal, "pthread_sigmask"):
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, _starting_signals())
     if token not in _MODELS:
         from .run import Cache
 
         _MODELS[token] = (pickle.loads(blob), Cache())  # noqa: S301 - our own pickle
+
+
+def _starting_signals() -> set:
+    """The signals held back while the workers start: one arriving in a worker
+    before its initializer set its handlers ran the command line's handler there,
+    and the pool waited for that worker for ever."""
+    import signal
+
+    return {s for s in (signal.SIGINT, signal.SIGTERM, getattr(signal, "SIGHUP", None))
+            if s is not None}
 
 
 def execute(token: str, task: Task) -> Outcome:
@@ -151,6 +164,7 @@ def extent(run: Run, measure: str) -> tuple[float, float]:
 def _on_processes(model: ir.Model, tasks: list[Task], jobs: int,
                   done: Callable | None) -> list[Outcome]:
     import multiprocessing as mp
+    import signal
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
     blob = pickle.dumps(model)
@@ -158,10 +172,21 @@ def _on_processes(model: ir.Model, tasks: list[Task], jobs: int,
     # fork where there is one: the workers start with amilpy, NumPy and SciPy imported
     context = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else None)
     out: list[Outcome | None] = [None] * len(tasks)
-    pool = ProcessPoolExecutor(max_workers=min(jobs, len(tasks)), mp_context=context,
-                               initializer=_install, initargs=(token, blob, True))
-    futures = {pool.submit(execute, token, task): i for i, task in enumerate(tasks)}
+    # (the workers are forked at the first submit, with this thread's signal mask: a
+    # signal that comes meanwhile waits, here for the loop below, in a worker for
+    # its initializer)
+    blocking = hasattr(signal, "pthread_sigmask")
+    if blocking:
+        signal.pthread_sigmask(signal.SIG_BLOCK, _starting_signals())
+    pool = None
     try:
+        try:
+            pool = ProcessPoolExecutor(max_workers=min(jobs, len(tasks)), mp_context=context,
+                                       initializer=_install, initargs=(token, blob, True))
+            futures = {pool.submit(execute, token, task): i for i, task in enumerate(tasks)}
+        finally:
+            if blocking:  # (one held back is raised here, and handled below)
+                signal.pthread_sigmask(signal.SIG_UNBLOCK, _starting_signals())
         for future in as_completed(futures):
             i = futures[future]
             try:
@@ -172,7 +197,8 @@ def _on_processes(model: ir.Model, tasks: list[Task], jobs: int,
                 done(i, out[i])
     except KeyboardInterrupt:
         # Ctrl-C: the finished runs are kept; the workers are ended, their runs lost
-        pool.shutdown(wait=False, cancel_futures=True)
+        if pool is not None:
+            pool.shutdown(wait=False, cancel_futures=True)
         for child in mp.active_children():
             child.terminate()
         return [o if o is not None else Outcome(

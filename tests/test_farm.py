@@ -5,6 +5,7 @@ with its parameters and the others are kept."""
 from __future__ import annotations
 
 import os
+import select
 import signal
 import subprocess
 import sys
@@ -96,6 +97,25 @@ def test_grid_from_the_command_line(tmp_path):
     assert len(rows) == 1 + 3 * 2
 
 
+def _read_until(fd: int, text: str | None, proc, timeout: float = 300.0) -> str:
+    """What a pseudo-terminal gives until `text` appears (None: until it closes)."""
+    got, end = "", time.monotonic() + timeout
+    while time.monotonic() < end and (text is None or text not in got):
+        ready, _, _ = select.select([fd], [], [], 1.0)
+        if not ready:
+            if proc.poll() is not None and text is not None:
+                break
+            continue
+        try:
+            chunk = os.read(fd, 4096)
+        except OSError:  # (EIO: the other end closed)
+            break
+        if not chunk:
+            break
+        got += chunk.decode(errors="replace")
+    return got
+
+
 @pytest.mark.skipif(default_jobs() < 2, reason="needs two cores to interrupt two runs")
 def test_ctrl_c_keeps_the_finished_runs(tmp_path):
     """Ctrl-C during a farmed run: the runs that finished are printed, the others
@@ -106,17 +126,60 @@ def test_ctrl_c_keeps_the_finished_runs(tmp_path):
     path.write_text("PARAM K = (1.0, 1000.0, 2000.0)\nX = INTGRL(0.0, COS(K*TIME))\n"
                     "RELERR 1.0E-6\nTIMER FINTIM = 1.0E3, OUTDEL = 1.0\nPRINT X\nEND\n")
     env = dict(os.environ, PYTHONPATH=HERE)
+    # stderr on a terminal, where the progress line says when a run has finished: the
+    # interrupt waits for that (a fixed sleep failed on a busy machine)
+    leader, follower = os.openpty()
     proc = subprocess.Popen([sys.executable, "-m", "amilpy.cli", "run", str(path), "--jobs", "2",
                              "--method", "RKS"], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=env,
-                            start_new_session=True)
-    time.sleep(3.0)
+                            stderr=follower, text=True, env=env, start_new_session=True)
+    os.close(follower)
+    err = _read_until(leader, "run 1 finished", proc)
     os.killpg(proc.pid, signal.SIGINT)
-    out, err = proc.communicate(timeout=60)
-    assert proc.returncode == 3
+    out, _ = proc.communicate(timeout=120)
+    err += _read_until(leader, None, proc)
+    os.close(leader)
+    assert proc.returncode == 3, err
     assert "run 'K = 1000': interrupted before it finished" in err
     first = out.split("RUN 2")[0]
     assert "1.000000E+03" in first  # run 1 printed to its end, TIME = 1000
+
+
+@pytest.mark.slow  # (about 10 s: 13 interrupted commands)
+@pytest.mark.skipif(default_jobs() < 2, reason="needs two cores to farm two runs")
+def test_ctrl_c_at_any_instant_of_a_farmed_run_ends_it(tmp_path):
+    """Ctrl-C at instants from 0.3 s to 1.5 s after the command starts (loading,
+    generating code, forking the workers, running): the command always ends, within
+    a minute, and once the command line has its handlers (every instant here but a
+    slow start's first), with exit 3 and no traceback. A Ctrl-C that came while the
+    workers were being forked ran the command line's handler in a worker, and the
+    command waited for it for ever; the workers now start with the signals held back.
+    While loading, the command ends killed by SIGINT, as a shell expects.
+    (The instants are a scan, not a wait: what is asserted holds at every one.)"""
+    path = tmp_path / "two.amil"
+    path.write_text("PARAM K = (1.0, 1000.0, 2000.0)\nX = INTGRL(0.0, COS(K*TIME))\n"
+                    "RELERR 1.0E-6\nTIMER FINTIM = 1.0E3, OUTDEL = 1.0\nPRINT X\nEND\n")
+    env = dict(os.environ, PYTHONPATH=HERE)
+    codes = []
+    for k in range(13):
+        proc = subprocess.Popen([sys.executable, "-m", "amilpy.cli", "run", str(path),
+                                 "--jobs", "2", "--method", "RKS", "--quiet"],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                env=env, start_new_session=True)
+        time.sleep(0.3 + 0.1 * k)
+        os.killpg(proc.pid, signal.SIGINT)
+        try:
+            _, err = proc.communicate(timeout=60)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+            pytest.fail(f"Ctrl-C {0.3 + 0.1 * k:.1f} s after the start: still running 60 s later")
+        codes.append(proc.returncode)
+        if "Traceback" in err:  # (before the command line's handlers: Python's own
+            # interrupt, in its imports)
+            assert k < 3 and "KeyboardInterrupt" in err, (proc.returncode, err[-500:])
+        else:  # (3: runs interrupted; killed by SIGINT, as a shell expects, while loading)
+            assert proc.returncode in (3, -signal.SIGINT) and "interrupted" in err, err
+    assert codes[-1] == 3
 
 
 def test_dask_cluster_equals_serial():

@@ -138,6 +138,7 @@ def test_rolled_fault_is_the_scalar_codes():
         f(0.0, y, [], [])
 
 
+@pytest.mark.slow  # (about 13 s on this machine)
 def test_chain_of_1000_runs_in_seconds():
     """The 1000-mass chain (3000 equations) on AUTO: the banded Jacobian (reverse
     Cuthill-McKee renumbering) and the rolled right side take it from half a minute

@@ -177,6 +177,7 @@ def test_elastic_matches_reference_and_closed_form(bv: float) -> None:
         assert r.final[name] == pytest.approx(ss[key], rel=1e-6), name
 
 
+@pytest.mark.slow  # (about 10 s on this machine)
 def test_torque_meter_reading_and_chain() -> None:
     r = run("ex4_torque_meter.amil", **TIGHT)
     tr = ex4.simulate(ex4.meter_chain(), 2.5)

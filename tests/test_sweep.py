@@ -24,6 +24,7 @@ def test_parse_range():
             parse_range(bad)
 
 
+@pytest.mark.slow  # (about 16 s on this machine)
 def test_hoist_sweep_matches_reference_and_shows_hysteresis():
     # up across the upper fold (72.05 rad/s by damped harmonic balance) and back down;
     # 10 s a point, measured over the last 3 s, TIME and the state carried on.
