@@ -495,6 +495,13 @@ def _one(command, args, path: str, signals: Signals) -> int:
     except KeyboardInterrupt:
         print(f"amilpy: {path}: interrupted", file=sys.stderr)
         return EXIT_FAILED
+    except ImportError:
+        # an interrupt inside a compiled module's initialization (SciPy's, imported
+        # when a run first needs it) comes out as "ImportError: initialization failed"
+        if signals.received is None:
+            raise
+        print(f"amilpy: {path}: interrupted", file=sys.stderr)
+        return EXIT_FAILED
     except TimeLimit:
         print(f"amilpy: {path}: reading, checking and compiling the listing took longer "
               f"than --max-time {args.max_time:g} s", file=sys.stderr)

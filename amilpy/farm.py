@@ -18,6 +18,7 @@ bit.
 from __future__ import annotations
 
 import hashlib
+import math
 import os
 import pickle
 from collections.abc import Callable
@@ -49,7 +50,8 @@ class Task:
 
 @dataclass
 class Outcome:
-    """What a task gave: the run (or None), a sweep's (min, max, status, t0, t_end),
+    """What a task gave: the run (or None), a sweep's (min, max, status, t0, t_end,
+    unsteadiness),
     or the error that stopped it (the task's label is not in it: the caller says
     which run or point it was)."""
 
@@ -150,7 +152,8 @@ def _execute(model: ir.Model, cache, task: Task) -> Outcome:
     t0 = float(run.times[0]) if len(run.times) else float("nan")
     lo, hi = extent(run, task.measure)
     return Outcome(run=run if task.keep_run else None,
-                   point=(lo, hi, str(run.status), t0, float(run.t_end)))
+                   point=(lo, hi, str(run.status), t0, float(run.t_end),
+                          unsteadiness(run, task.measure, task.settle)))
 
 
 def extent(run: Run, measure: str) -> tuple[float, float]:
@@ -159,6 +162,24 @@ def extent(run: Run, measure: str) -> tuple[float, float]:
     damped resonance falls between rows at any OUTDEL."""
     lo, _, hi, _ = run.extrema.get(measure, (float("nan"),) * 4)
     return lo, hi
+
+
+def unsteadiness(run: Run, measure: str, settle: float) -> float:
+    """How far `measure` is from a settled oscillation after the settling time: the
+    difference of its half peak-to-peak over the two halves of that window, from the
+    rows (their sampling error is alike in both halves). A jump search sets a step
+    of the characteristic against it: an orbit still drifting, or one that is not
+    periodic, moves from point to point by about this much."""
+    t = run.times
+    if not len(t):
+        return math.nan
+    t0 = float(t[0]) + settle
+    mid = 0.5 * (t0 + float(t[-1]))
+    y = np.asarray(run.values[measure], dtype=float)
+    first, second = y[(t >= t0) & (t <= mid)], y[t >= mid]
+    if len(first) < 2 or len(second) < 2:
+        return math.nan
+    return 0.5 * abs(float(np.ptp(first)) - float(np.ptp(second)))
 
 
 def _on_processes(model: ir.Model, tasks: list[Task], jobs: int,

@@ -27,6 +27,7 @@ class SweepPoint:
     t_start: float
     t_end: float
     second: float | None = None  # a grid's second value at this point
+    unsteady: float = math.nan  # `farm.unsteadiness`: how far from settled it was
 
     @property
     def amplitude(self) -> float:
@@ -34,8 +35,15 @@ class SweepPoint:
         return 0.5 * (self.maximum - self.minimum)
 
 
-JUMP_FACTOR = 5.0  # a jump changes the amplitude this many times more than its neighbours
-NEIGHBOURS = 3  # steps each side whose changes measure the noise
+JUMP_FACTOR = 5.0  # a jump misses both sides' trends by this many times their noise
+SIDE = 3  # points each side of a jump whose trend it is set against
+# the noise of a quadratic's extrapolation one step on, in units of the points' own:
+# 3 a[k] - 3 a[k-1] + a[k-2] - a[k+1], sqrt(9 + 9 + 1 + 1)
+EXTRAPOLATION_GAIN = math.sqrt(20.0)
+# a point whose own window moved by this share of the step around it had not settled
+# (the forced Duffing oscillator's point past its lower fold: 0.069 of 0.708)
+HALFWAY = 0.05
+NOISE_POINTS = 4  # a side's noise: the largest miss of this many of its own extrapolations
 
 
 @dataclass(frozen=True)
@@ -47,7 +55,7 @@ class Jump:
     stop: float  # ... and after it
     before: float  # the amplitude at `start`
     after: float  # ... and at `stop`
-    ratio: float  # the change over the typical change of the neighbouring steps
+    ratio: float  # how far it misses the trends of both sides, over their noise
 
     @property
     def rise(self) -> bool:
@@ -82,33 +90,99 @@ class Sweep:
         return [(f"{self.second} = {w:g}", *self.branch("up", w))
                 for w in dict.fromkeys(p.second for p in self.points)]
 
-    def jumps(self) -> dict[str, Jump | None]:
-        """For each direction swept, its jump: the largest change of amplitude
-        between neighbouring values, if it exceeds JUMP_FACTOR times the typical
-        (median) change of the NEIGHBOURS steps each side; else None. Directions
-        with fewer than three points to compare are left out (no noise to judge by)."""
-        out: dict[str, Jump | None] = {}
+    def jumps(self) -> dict[str, list[Jump]]:
+        """For each direction swept (with enough points: SIDE on each side of a step),
+        its jumps: the steps where the measured amplitude leaves the branch it was on
+        (`jumps_along`). A grid has none (no one line to search along)."""
+        out: dict[str, list[Jump]] = {}
         if self.second is not None:
-            return out  # a grid: no one line to search along
+            return out
         for direction in ("up", "down"):
-            v, a = self.branch(direction)
-            if direction == "up" and self.carry_state and len(v):
-                v, a = v[1:], a[1:]
-            if len(v) < 3:
+            pts = [p for p in self.points if p.direction == direction and p.second is None]
+            if direction == "up" and self.carry_state:
+                pts = pts[1:]
+            if len(pts) < 2 * SIDE:
                 continue
-            d = np.diff(a)
-            best = None
-            for k in range(len(d)):
-                near = np.abs(np.delete(d[max(0, k - NEIGHBOURS): k + NEIGHBOURS + 1],
-                                        min(k, NEIGHBOURS)))
-                noise = max(float(np.median(near)), 1e-12 * float(np.max(np.abs(a))), 1e-300)
-                ratio = abs(float(d[k])) / noise
-                if ratio > JUMP_FACTOR and (best is None or abs(d[k]) > abs(d[best[0]])):
-                    best = (k, ratio)
-            out[direction] = None if best is None else Jump(
-                direction, float(v[best[0]]), float(v[best[0] + 1]), float(a[best[0]]),
-                float(a[best[0] + 1]), best[1])
+            v = np.array([p.value for p in pts])
+            a = np.array([p.amplitude for p in pts])
+            u = np.array([p.unsteady for p in pts])
+            out[direction] = [Jump(direction, float(v[i]), float(v[j]), float(a[i]),
+                                   float(a[j]), ratio) for i, j, ratio in jumps_along(v, a, u)]
         return out
+
+
+def _extrapolated(v: np.ndarray, a: np.ndarray, idx: list[int], x: float) -> float:
+    """The quadratic through the points idx, at x."""
+    (x0, x1, x2), (y0, y1, y2) = v[idx], a[idx]
+    return float(y0 * (x - x1) * (x - x2) / ((x0 - x1) * (x0 - x2))
+                 + y1 * (x - x0) * (x - x2) / ((x1 - x0) * (x1 - x2))
+                 + y2 * (x - x0) * (x - x1) / ((x2 - x0) * (x2 - x1)))
+
+
+def _side_noise(v: np.ndarray, a: np.ndarray, u: np.ndarray, points: list[int],
+                step: int) -> float | None:
+    """How well a side's own trend predicts it: the largest error of extrapolating
+    each of `points` from the three beyond it (step -1: those before, +1: after),
+    and at least the points' unsteadiness carried through the extrapolation; None
+    when neither is known (a side of SIDE points whose unsteadiness is not given)."""
+    points = [j for j in points if 0 <= j < len(v)]
+    errors = []
+    for j in points:
+        idx = [j + step, j + 2 * step, j + 3 * step]
+        if 0 <= min(idx) and max(idx) < len(v):
+            errors.append(abs(a[j] - _extrapolated(v, a, idx, v[j])))
+    spread = [x for x in u[points] if x == x]
+    if not errors and not spread:
+        return None
+    return max(float(np.max(errors)) if errors else 0.0,
+               EXTRAPOLATION_GAIN * float(np.max(spread)) if spread else 0.0)
+
+
+def jumps_along(v: np.ndarray, a: np.ndarray, u: np.ndarray) -> list[tuple[int, int, float]]:
+    """The jumps of amplitudes a at values v (u: each point's unsteadiness), as
+    (first index, last index, ratio). A step k -> k+1 is a jump when a[k+1] misses
+    the quadratic through the SIDE points up to k by JUMP_FACTOR times what that
+    trend misses by one step further back (or the points' unsteadiness carried
+    through, if larger), and a[k] likewise misses the trend of the SIDE points from
+    k+1 on, read backwards. A point caught halfway (its run ended before the orbit
+    had moved to the new branch, so its amplitude lies between the branches or its
+    window moved by HALFWAY of the step) may stand between the two: the trend after
+    the jump is then taken from the points after it; the jump is the step where the
+    branch was left.
+    Steep slopes and sharp bends are not jumps: their trend foretells them. A step
+    with fewer than SIDE points on either side is not judged."""
+    n = len(a)
+    scale = float(np.max(np.abs(a))) if n else 0.0
+    tiny = 1e-12 * scale + 1e-300
+    found: list[tuple[int, int, float]] = []
+    reached = -1  # the last point of the jump found last
+    for k in range(SIDE - 1, n - SIDE):
+        left = [k, k - 1, k - 2]
+        noise = _side_noise(v, a, u, [k - i for i in range(NOISE_POINTS)], -1)
+        if noise is None:
+            continue
+        miss = abs(a[k + 1] - _extrapolated(v, a, left, v[k + 1]))
+        ratio_left = miss / max(noise, tiny)
+        if ratio_left <= JUMP_FACTOR:
+            continue
+        best, last = 0.0, k + 1
+        for skip in (0, 1):
+            right = [k + 1 + skip, k + 2 + skip, k + 3 + skip]
+            if right[-1] >= n:
+                continue
+            if skip and not (min(a[k], a[k + 2]) < a[k + 1] < max(a[k], a[k + 2]) or
+                             u[k + 1] >= HALFWAY * abs(a[k + 2] - a[k])):
+                continue  # (only a point halfway, or one still moving, is passed over)
+            noise = _side_noise(v, a, u, [right[0] + i for i in range(NOISE_POINTS)], 1)
+            if noise is None:
+                continue
+            ratio = abs(a[k] - _extrapolated(v, a, right, v[k])) / max(noise, tiny)
+            if ratio > best:
+                best, last = ratio, k + 1 + skip
+        if best > JUMP_FACTOR and k > reached:  # (else the same jump, seen again)
+            found.append((k, k + 1, min(ratio_left, best)))
+            reached = last
+    return found
 
 
 MAX_POINTS = 100_000
@@ -209,7 +283,9 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
             nan = math.nan
             result.points.append(SweepPoint(value, direction, nan, nan, "failed", nan, nan, w))
             continue
-        result.points.append(SweepPoint(value, direction, *outcome.point, w))
+        lo, hi, status, t0, t_end, unsteady = outcome.point
+        result.points.append(SweepPoint(value, direction, lo, hi, status, t0, t_end, w,
+                                        unsteady))
         if keep_runs:
             result.runs.append(outcome.run)
     return result
@@ -218,7 +294,7 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
 def _carried(model, result: Sweep, sequence, options, params, keep_runs: bool,
              progress) -> None:
     """One point after the other, each from the previous one's final state."""
-    from .farm import extent
+    from .farm import extent, unsteadiness
     from .run import simulate
 
     start = None
@@ -228,7 +304,9 @@ def _carried(model, result: Sweep, sequence, options, params, keep_runs: bool,
         t0 = float(run.times[0])
         lo, hi = extent(run, result.measure)
         result.points.append(SweepPoint(value, direction, lo, hi, str(run.status), t0,
-                                        float(run.t_end)))
+                                        float(run.t_end),
+                                        unsteady=unsteadiness(run, result.measure,
+                                                              result.settle)))
         if keep_runs:
             result.runs.append(run)
         if progress is not None:

@@ -387,3 +387,27 @@ def test_step_point_and_seed_options(model, tmp_path, capsys):
         assert main(["run", str(noisy), "--seed", seed, "--quiet", "--csv", str(path)]) == 0
         out[len(out)] = path.read_text()
     assert out[0] == out[1] != out[2]
+
+
+def test_an_interrupt_inside_a_module_import_is_an_interruption(capsys):
+    """Ctrl-C while SciPy's compiled modules initialize (imported when a run first
+    needs them) comes out of the import as "ImportError: initialization failed" (seen
+    in CI, 1.2 s into a farmed run): the command says it was interrupted and exits 3,
+    with no traceback; an ImportError with no interrupt behind it is not hidden."""
+    import signal
+
+    from amilpy.cli import EXIT_FAILED, _one
+    from amilpy.console import Signals
+
+    def interrupted_import(args, path, signals):
+        signals.received = signal.SIGINT
+        raise ImportError("initialization failed")
+
+    assert _one(interrupted_import, None, "m.amil", Signals()) == EXIT_FAILED
+    assert capsys.readouterr().err == "amilpy: m.amil: interrupted\n"
+
+    def broken_import(args, path, signals):
+        raise ImportError("initialization failed")
+
+    with pytest.raises(ImportError):
+        _one(broken_import, None, "m.amil", Signals())

@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from collections.abc import Iterator
 
-from ..sweep import JUMP_FACTOR, NEIGHBOURS, Sweep
+from ..sweep import SIDE, Sweep
 from . import words as W
 from .plot import save_png
 
@@ -47,18 +47,19 @@ def jump_lines(result: Sweep) -> list[str]:
     jumps = result.jumps()
     for direction in dict.fromkeys(p.direction for p in result.points):
         if direction not in jumps:
-            out.append(f"sweeping {direction}: too few points to tell a jump (it takes 3, "
-                       "so that a change can be set against its neighbours')")
+            out.append(f"sweeping {direction}: too few points to tell a jump (it takes "
+                       f"{2 * SIDE}, so that a step can be set against the trend of "
+                       f"{SIDE} points on each side)")
             continue
-        jump = jumps[direction]
-        if jump is None:
-            out.append(f"no jump sweeping {direction}: no change of HALF P-P stands out "
-                       f"{JUMP_FACTOR:g} times from those of the {NEIGHBOURS} steps each side")
-            continue
-        out.append(f"jump {'up' if jump.rise else 'down'} sweeping {direction}: between "
-                   f"{name} = {jump.start:g} and {jump.stop:g}, HALF P-P "
-                   f"{jump.before:.4g} -> {jump.after:.4g} ({jump.ratio:.3g} times the "
-                   "neighbouring changes)")
+        if not jumps[direction]:
+            out.append(f"no jump sweeping {direction}: every step of HALF P-P follows the "
+                       f"trend of the {SIDE} points on one side or the other (the first "
+                       f"and last {SIDE - 1} steps are not judged)")
+        for jump in jumps[direction]:
+            out.append(f"jump {'up' if jump.rise else 'down'} sweeping {direction}: between "
+                       f"{name} = {jump.start:g} and {jump.stop:g}, HALF P-P "
+                       f"{jump.before:.4g} -> {jump.after:.4g} ({jump.ratio:.3g} times what "
+                       "the trends on both sides miss by)")
     return out
 
 
