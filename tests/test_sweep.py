@@ -58,7 +58,10 @@ def test_sweep_command_writes_table_csv_and_plot(tmp_path, capsys):
     out = capsys.readouterr().out
     assert out.startswith("SWEEP OF W, Y MEASURED AFTER 0.5 S")
     rows = csv.read_text().splitlines()
-    assert rows[0].startswith("DIRECTION,W,MIN_Y,MAX_Y,HALF_PP_Y")
+    assert rows[0] == ("DIRECTION,W,MIN_Y,MAX_Y,HALF_PP_Y,STATUS,TIME_START,TIME_END,"
+                       "HALF_PP_DRIFT_Y")
+    # each point's drift is the half peak-to-peak's change over its settled window
+    assert all(0.0 <= float(r.split(",")[-1]) < 1.0 for r in rows[1:])
     assert [r.split(",")[1] for r in rows[1:]] == ["60.0", "61.0", "62.0"]
     assert (tmp_path / "hoist_backlash_sweep.png").read_bytes()[:4] == b"\x89PNG"
 

@@ -70,10 +70,12 @@ def format_sweep(result: Sweep) -> str:
 def csv_rows(result: Sweep) -> tuple[list[str], Iterator[list]]:
     m = result.measure
     second = [result.second] if result.second else []
+    # (DRIFT: how much HALF_PP moved between the two halves of the settled window, the
+    # noise the jump search sets each step against; large: the point had not settled)
     header = ["DIRECTION", result.name, *second, f"MIN_{m}", f"MAX_{m}", f"HALF_PP_{m}",
-              "STATUS", "TIME_START", "TIME_END"]
+              "STATUS", "TIME_START", "TIME_END", f"HALF_PP_DRIFT_{m}"]
     rows = ([p.direction, p.value, *([p.second] if second else []), p.minimum, p.maximum,
-             p.amplitude, p.status, p.t_start, p.t_end] for p in result.points)
+             p.amplitude, p.status, p.t_start, p.t_end, p.unsteady] for p in result.points)
     return header, rows
 
 
