@@ -337,14 +337,22 @@ def loads(text: str, name: str = "<listing>") -> Model:
     return Model(check(program, name))
 
 
+# a 10,000-mass chain's listing is 2 MB
+MAX_LISTING_BYTES = 64 * 2**20
+
+
 def load(path: str | os.PathLike) -> Model:
     """Parse and check a listing file (UTF-8)."""
     path = os.fspath(path)
     try:
         with open(path, "rb") as fh:
-            raw = fh.read()
+            # (a device such as /dev/zero never ends: read what a listing can be)
+            raw = fh.read(MAX_LISTING_BYTES + 1)
     except OSError as exc:
         raise AmilError(f"cannot read {path}: {exc.strerror}", path) from None
+    if len(raw) > MAX_LISTING_BYTES:
+        raise AmilError(f"longer than {MAX_LISTING_BYTES // 2**20} MB, which no listing is "
+                        "(a device?): give the listing's file", path)
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:

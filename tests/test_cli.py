@@ -411,3 +411,11 @@ def test_an_interrupt_inside_a_module_import_is_an_interruption(capsys):
 
     with pytest.raises(ImportError):
         _one(broken_import, None, "m.amil", Signals())
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/zero"), reason="needs /dev/zero")
+def test_a_device_given_as_the_listing_is_refused(capsys):
+    # /dev/zero never ends: it was read until the machine ran out of memory
+    assert main(["check", "/dev/zero"]) == 1
+    assert capsys.readouterr().err.startswith(
+        "/dev/zero: error: longer than 64 MB, which no listing is (a device?)")
