@@ -21,7 +21,15 @@ import os
 import sys
 
 from . import __version__
-from .console import Progress, Signals, TimeLimit, time_limit, tolerant_streams, write_out
+from .console import (
+    STDOUT_FAILED,
+    Progress,
+    Signals,
+    TimeLimit,
+    time_limit,
+    tolerant_streams,
+    write_out,
+)
 from .diagnostics import AmilError, nearest
 from .output.files import OutputError
 from .output.writers import DIALECTS, WRITERS, Outputs, PlotOptions, dest, writers_for
@@ -544,8 +552,13 @@ def main(argv: list[str] | None = None) -> int:
             code = max(code, _one(command, args, path, signals))
             if signals.received:
                 break  # an interrupt stops the files not yet started too
+        if STDOUT_FAILED:
+            print(f"amilpy: cannot write the printout to standard output: "
+                  f"{STDOUT_FAILED[0]}", file=sys.stderr)
+            code = max(code, EXIT_OUTPUT)
         return code
     finally:
+        STDOUT_FAILED.clear()
         signals.restore()
 
 

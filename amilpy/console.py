@@ -112,22 +112,35 @@ RETRY = 0.02  # seconds between two rings of an expired time_limit
 
 
 def tolerant_streams() -> None:
-    """Characters the console cannot show become "?" instead of an error."""
-    for stream in (sys.stdout, sys.stderr):
+    """Characters the console cannot show become "?" instead of an error; a standard
+    stream that was closed when the command started writes nowhere (the files are
+    still written)."""
+    for name in ("stdout", "stderr"):
+        stream = getattr(sys, name)
+        if stream is None:
+            setattr(sys, name, open(os.devnull, "w", encoding="utf-8"))  # noqa: SIM115
+            continue
         try:
             stream.reconfigure(errors="replace")
         except (AttributeError, ValueError):  # not a TextIOWrapper, or closed
             pass
 
 
+# why the printout could not be written (a full disk behind stdout), for the exit code
+STDOUT_FAILED: list[str] = []
+
+
 def write_out(text_writer, out: TextIO | None = None) -> bool:
     """Run `text_writer(stream)` on stdout; False if the reader went away (a closed
-    pipe), after which stdout is sent to /dev/null so the exit is quiet."""
+    pipe: quietly) or the stream failed (a full disk: said once, in STDOUT_FAILED),
+    after which stdout is sent to /dev/null so the exit is quiet."""
     out = out or sys.stdout
     try:
         text_writer(out)
         out.flush()
-    except BrokenPipeError:
+    except OSError as exc:
+        if not isinstance(exc, BrokenPipeError) and not STDOUT_FAILED:
+            STDOUT_FAILED.append(exc.strerror or str(exc))
         try:
             devnull = os.open(os.devnull, os.O_WRONLY)
             os.dup2(devnull, out.fileno())

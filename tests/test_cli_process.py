@@ -120,3 +120,59 @@ def test_no_matplotlib_warning_with_a_display_but_no_gui(tmp_path):
                           capture_output=True, text=True, env=env, timeout=120)
     assert done.returncode == 0 and done.stderr == "", done.stderr
     assert (tmp_path / "m.png").exists()
+
+
+SMALL = "X = INTGRL(1.0, -X)\nTIMER FINTIM = 1.0, OUTDEL = 0.1\nPRINT X\nEND\n"
+
+
+@pytest.mark.parametrize("closed", ["stdout", "stderr"])
+def test_a_closed_standard_stream_still_writes_the_files(tmp_path, closed):
+    """`amilpy run m.amil --csv out.csv >&-` gave a traceback ('NoneType' object has
+    no attribute 'write'), and with stderr closed nothing was written at all: the
+    stream that is closed writes nowhere, the CSV is written whole, exit 0."""
+    (tmp_path / "m.amil").write_text(SMALL)
+    fd = 1 if closed == "stdout" else 2
+    done = subprocess.run(["/bin/sh", "-c", f'"$@" {fd}>&-', "sh", *AMILPY, "run", "m.amil",
+                           "--csv", "out.csv"], cwd=tmp_path, env=ENV, capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert "Traceback" not in done.stdout + done.stderr
+    assert (tmp_path / "out.csv").read_text().count("\n") == 12  # header + 11 rows
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+def test_a_full_standard_output_is_said_and_exits_4(tmp_path):
+    (tmp_path / "m.amil").write_text(SMALL)
+    with open("/dev/full", "w") as full:
+        done = subprocess.run([*AMILPY, "run", "m.amil", "--csv", "out.csv"], cwd=tmp_path,
+                              env=ENV, stdout=full, stderr=subprocess.PIPE, text=True,
+                              timeout=120)
+    assert done.returncode == 4
+    assert done.stderr == ("amilpy: cannot write the printout to standard output: No space "
+                           "left on device\n")
+    assert (tmp_path / "out.csv").read_text().count("\n") == 12
+
+
+def test_csv_to_standard_output_goes_where_the_shell_sends_it(tmp_path):
+    """`amilpy run m.amil --csv /dev/stdout > all.txt` renamed a temporary onto
+    all.txt, which the printout (written through the shell's descriptor) then missed:
+    the CSV is written through that descriptor too, before the printout."""
+    (tmp_path / "m.amil").write_text(SMALL)
+    done = subprocess.run(["/bin/sh", "-c", '"$@" > all.txt', "sh", *AMILPY, "run",
+                           "m.amil", "--csv", "/dev/stdout"], cwd=tmp_path, env=ENV,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    lines = (tmp_path / "all.txt").read_text().splitlines()
+    assert lines[:2] == ["TIME,X", "0.0,1.0"] and len(lines) > 13
+    assert any(line.startswith("RUN ") for line in lines[12:])  # the printout after it
+
+
+def test_a_dangling_link_at_an_output_path_makes_no_folders(tmp_path):
+    (tmp_path / "m.amil").write_text(SMALL)
+    (tmp_path / "out.csv").symlink_to(tmp_path / "nowhere" / "deeper" / "x.csv")
+    done = subprocess.run([*AMILPY, "run", "m.amil", "--csv", "out.csv", "--quiet"],
+                          cwd=tmp_path, env=ENV, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 4
+    assert "it is a symbolic link to" in done.stderr and "whose folder does not exist" in \
+        done.stderr
+    assert not (tmp_path / "nowhere").exists()

@@ -22,6 +22,7 @@ from __future__ import annotations
 import errno
 import os
 import stat
+import sys
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -93,14 +94,72 @@ def _file_mode(path: str) -> int:
         return 0o666 & ~umask
 
 
+# names of a stream the shell opened (`--csv /dev/stdout > out.txt`): written where
+# they stand, appended to; a temporary renamed onto what they lead to would replace
+# the shell's file (and the printout in it) with an unlinked one
+STREAMS = ("/dev/stdout", "/dev/stderr", "/dev/null")
+STREAM_FOLDERS = ("/dev/fd/", "/proc/self/fd/")
+
+
+def _own_stream(path: str):
+    """sys.stdout or sys.stderr if `path` names the file it writes to, else None."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            a, b = os.stat(path), os.fstat(stream.fileno())
+        except (OSError, ValueError, AttributeError):
+            continue
+        if (a.st_dev, a.st_ino) == (b.st_dev, b.st_ino) and hasattr(stream, "buffer"):
+            return stream
+    return None
+
+
+def _to_devnull(stream) -> None:
+    """What is left to write to `stream` goes nowhere (its reader has gone)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, stream.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):
+        pass
+
+
+def is_stream(path: str) -> bool:
+    path = os.path.abspath(path)
+    return path in STREAMS or path.startswith(STREAM_FOLDERS)
+
+
 @contextmanager
 def atomic_open(path: str, text: bool = False, encoding: str = "utf-8",
                 newline: str | None = "") -> Iterator[IO]:
     """Open a temporary beside `path` for writing; on a clean exit it replaces
-    `path` (binary unless `text`). Rows can be streamed into it."""
+    `path` (binary unless `text`). Rows can be streamed into it. A stream's name
+    (`is_stream`) is written in place."""
+    if is_stream(path):
+        own = _own_stream(path)
+        try:
+            if own is not None:  # (through the same file offset as the printout)
+                own.flush()
+                out = own if text else own.buffer
+                yield out
+                out.flush()
+            else:
+                with open(path, "a" if text else "ab",
+                          **({"encoding": encoding, "newline": newline} if text else {})) \
+                        as fh:
+                    yield fh
+        except BrokenPipeError:  # (the reader went away, as `| head` does: quietly)
+            _to_devnull(own)
+        except OSError as exc:
+            raise OutputError(path, _reason(exc)) from None
+        return
     ensure_directory(os.path.dirname(os.path.abspath(path)))
     target = resolve_target(path)
-    directory = ensure_directory(os.path.dirname(target) or ".")
+    folder = os.path.dirname(target) or "."
+    if target != os.path.abspath(path) and not os.path.isdir(folder):
+        # (a symbolic link whose target's folder is missing: not made for it)
+        raise OutputError(path, f"it is a symbolic link to {target}, whose folder does not "
+                                "exist")
+    directory = ensure_directory(folder)
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(target)}.", suffix=".amilpy-tmp",
                                    dir=directory)
