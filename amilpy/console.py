@@ -111,10 +111,30 @@ def time_limit(seconds: float | None):
 RETRY = 0.02  # seconds between two rings of an expired time_limit
 
 
+# control characters a listing may carry into a printout or a message (ESC starts a
+# terminal's escape sequences: clear the screen, retitle the window, ...): shown as
+# "?"; amilpy's own output needs only the line ends, tabs and the progress line's \r
+CONTROL = {c: "?" for c in [*range(0x20), 0x7F, *range(0x80, 0xA0)] if c not in (9, 10, 13)}
+
+
+class Visible:
+    """A text stream whose control characters are shown as "?" (everything else is
+    the stream's own: its buffer, descriptor, encoding)."""
+
+    def __init__(self, stream: TextIO) -> None:
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        return self._stream.write(text.translate(CONTROL))
+
+    def __getattr__(self, name: str):
+        return getattr(self._stream, name)
+
+
 def tolerant_streams() -> None:
-    """Characters the console cannot show become "?" instead of an error; a standard
-    stream that was closed when the command started writes nowhere (the files are
-    still written)."""
+    """Characters the console cannot show become "?" instead of an error, and so do
+    control characters from a listing (`Visible`); a standard stream that was closed
+    when the command started writes nowhere (the files are still written)."""
     for name in ("stdout", "stderr"):
         stream = getattr(sys, name)
         if stream is None:
@@ -124,6 +144,8 @@ def tolerant_streams() -> None:
             stream.reconfigure(errors="replace")
         except (AttributeError, ValueError):  # not a TextIOWrapper, or closed
             pass
+        if not isinstance(stream, Visible):
+            setattr(sys, name, Visible(stream))
 
 
 # why the printout could not be written (a full disk behind stdout), for the exit code

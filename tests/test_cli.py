@@ -419,3 +419,29 @@ def test_a_device_given_as_the_listing_is_refused(capsys):
     assert main(["check", "/dev/zero"]) == 1
     assert capsys.readouterr().err.startswith(
         "/dev/zero: error: longer than 64 MB, which no listing is (a device?)")
+
+
+def test_control_characters_from_a_listing_are_not_sent_to_the_terminal(tmp_path, capsys):
+    # a TITLE carrying ESC sequences (clear the screen, retitle the window) was
+    # printed raw; they are shown as "?" in the printout and in messages
+    path = tmp_path / "esc.amil"
+    path.write_text("TITLE EVIL \x1b[2J\x1b]0;pwned\x07 TITLE\nX = INTGRL(1.0, -X)\n"
+                    "TIMER FINTIM = 1.0, OUTDEL = 0.5\nPRINT X\nEND\n")
+    assert main(["run", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "EVIL ?[2J?]0;pwned? TITLE" in out
+    assert not any(c in out for c in "\x1b\x07")
+    bad = tmp_path / "bad.amil"
+    bad.write_text("X = INTGRL(1.0, -X) \x1b[31m+\nEND\n")
+    assert main(["check", str(bad)]) == 1
+    err = capsys.readouterr().err
+    assert "\x1b" not in err and "?[31m" in err
+
+
+def test_termt_in_a_macro_body_is_an_error_not_a_traceback(tmp_path, capsys):
+    path = tmp_path / "mac.amil"
+    path.write_text("MACRO Y = M(X)\nY = X\nTERMT(X .GT. 1.0)\nENDMAC\nA = INTGRL(0.0, 1.0)\n"
+                    "B = M(A)\nTIMER FINTIM = 2.0, OUTDEL = 0.5\nPRINT A\nEND\n")
+    assert main(["run", str(path)]) == 1
+    err = capsys.readouterr().err
+    assert "3:1: error: a MACRO body holds assignments only" in err and "Traceback" not in err

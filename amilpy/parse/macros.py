@@ -98,12 +98,14 @@ class Expander:
             return []
         self.calls[macro.name] = k = self.calls.get(macro.name, 0) + 1
         self.call_spans.setdefault(macro.name, []).append(st.span)
-        assigned = {t for s in macro.body for t in s.targets}
+        # (a body statement that is not an assignment is already an error: check_body)
+        body_assigns = [s for s in macro.body if isinstance(s, ast.Assign)]
+        assigned = {t for s in body_assigns for t in s.targets}
         names = {o: t for o, t in zip(macro.outputs, st.targets, strict=True)}
         names |= {n: f"{macro.name}#{k}.{n}" for n in assigned - set(macro.outputs)}
         values = dict(zip(macro.params, call.args, strict=True))
         out = []
-        for body in macro.body:
+        for body in body_assigns:
             self.made += 1
             if self.made > MAX_EXPANSIONS:
                 self.errors.append(Diagnostic(
