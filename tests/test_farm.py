@@ -149,8 +149,9 @@ def test_ctrl_c_keeps_the_finished_runs(tmp_path):
 def test_ctrl_c_at_any_instant_of_a_farmed_run_ends_it(tmp_path):
     """Ctrl-C at instants from 0.3 s to 1.5 s after the command starts (loading,
     generating code, forking the workers, running): the command always ends, within
-    a minute, and once the command line has its handlers (every instant here but a
-    slow start's first), with exit 3 and no traceback. A Ctrl-C that came while the
+    a minute, and once the command line has its handlers (after its imports: 0.2 s
+    here with compiled bytecode, longer in a fresh install), with exit 3 and no
+    traceback. A Ctrl-C that came while the
     workers were being forked ran the command line's handler in a worker, and the
     command waited for it for ever; the workers now start with the signals held back.
     While loading, the command ends killed by SIGINT, as a shell expects.
@@ -161,10 +162,14 @@ def test_ctrl_c_at_any_instant_of_a_farmed_run_ends_it(tmp_path):
     env = dict(os.environ, PYTHONPATH=HERE)
     codes = []
     for k in range(13):
+        # (SIGINT as a shell leaves it to a command it starts in the foreground: a test
+        # runner's worker may ignore it, and a child inherits that until amilpy's
+        # own handler is installed, so a Ctrl-C during its imports would be lost)
         proc = subprocess.Popen([sys.executable, "-m", "amilpy.cli", "run", str(path),
                                  "--jobs", "2", "--method", "RKS", "--quiet"],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                env=env, start_new_session=True)
+                                env=env, start_new_session=True,
+                                preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
         time.sleep(0.3 + 0.1 * k)
         os.killpg(proc.pid, signal.SIGINT)
         try:
@@ -175,8 +180,9 @@ def test_ctrl_c_at_any_instant_of_a_farmed_run_ends_it(tmp_path):
             pytest.fail(f"Ctrl-C {0.3 + 0.1 * k:.1f} s after the start: still running 60 s later")
         codes.append(proc.returncode)
         if "Traceback" in err:  # (before the command line's handlers: Python's own
-            # interrupt, in its imports)
-            assert k < 3 and "KeyboardInterrupt" in err, (proc.returncode, err[-500:])
+            # interrupt, in its imports, however long they take on this machine)
+            assert "KeyboardInterrupt" in err and ", in main" not in err, \
+                (proc.returncode, err[-500:])
         else:  # (3: runs interrupted; killed by SIGINT, as a shell expects, while loading)
             assert proc.returncode in (3, -signal.SIGINT) and "interrupted" in err, err
     assert codes[-1] == 3
