@@ -523,6 +523,14 @@ def _one(command, args, path: str, signals: Signals) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:  # (before the command's own handlers: building the parser)
+        print("amilpy: interrupted", file=sys.stderr)
+        return EXIT_FAILED
+
+
+def _main(argv: list[str] | None) -> int:
     tolerant_streams()
     parser = _parser()
     try:

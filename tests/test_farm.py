@@ -179,8 +179,8 @@ def test_ctrl_c_at_any_instant_of_a_farmed_run_ends_it(tmp_path):
             proc.communicate()
             pytest.fail(f"Ctrl-C {0.3 + 0.1 * k:.1f} s after the start: still running 60 s later")
         codes.append(proc.returncode)
-        if "Traceback" in err:  # (before the command line's handlers: Python's own
-            # interrupt, in its imports, however long they take on this machine)
+        if "Traceback" in err:  # (Python's own interrupt while it imports amilpy's
+            # modules, however long that takes on this machine; once main() runs, none)
             assert "KeyboardInterrupt" in err and ", in main" not in err, \
                 (proc.returncode, err[-500:])
         else:  # (3: runs interrupted; killed by SIGINT, as a shell expects, while loading)
