@@ -19,6 +19,8 @@ import time
 from contextlib import contextmanager
 from typing import TextIO
 
+from .output.files import to_devnull
+
 HANDLED = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP")
                 if hasattr(signal, name))
 
@@ -163,11 +165,7 @@ def write_out(text_writer, out: TextIO | None = None) -> bool:
     except OSError as exc:
         if not isinstance(exc, BrokenPipeError) and not STDOUT_FAILED:
             STDOUT_FAILED.append(exc.strerror or str(exc))
-        try:
-            devnull = os.open(os.devnull, os.O_WRONLY)
-            os.dup2(devnull, out.fileno())
-        except (OSError, ValueError, AttributeError):
-            pass
+        to_devnull(out)
         return False
     return True
 

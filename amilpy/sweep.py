@@ -76,9 +76,13 @@ class Sweep:
     second: str | None = None  # a grid: the second data value swept
     errors: list[str] = field(default_factory=list)  # points that could not run, why
 
+    def along(self, direction: str, second: float | None = None) -> list[SweepPoint]:
+        """The points of one direction (of one value of a grid's second data value)."""
+        return [p for p in self.points if p.direction == direction and p.second == second]
+
     def branch(self, direction: str, second: float | None = None
                ) -> tuple[np.ndarray, np.ndarray]:
-        pts = [p for p in self.points if p.direction == direction and p.second == second]
+        pts = self.along(direction, second)
         return (np.array([p.value for p in pts]), np.array([p.amplitude for p in pts]))
 
     def lines(self) -> list[tuple[str, np.ndarray, np.ndarray]]:
@@ -98,7 +102,7 @@ class Sweep:
         if self.second is not None:
             return out
         for direction in ("up", "down"):
-            pts = [p for p in self.points if p.direction == direction and p.second is None]
+            pts = self.along(direction)
             if direction == "up" and self.carry_state:
                 pts = pts[1:]
             if len(pts) < 2 * SIDE:

@@ -113,7 +113,7 @@ def _own_stream(path: str):
     return None
 
 
-def _to_devnull(stream) -> None:
+def to_devnull(stream) -> None:
     """What is left to write to `stream` goes nowhere (its reader has gone)."""
     try:
         devnull = os.open(os.devnull, os.O_WRONLY)
@@ -148,7 +148,7 @@ def atomic_open(path: str, text: bool = False, encoding: str = "utf-8",
                         as fh:
                     yield fh
         except BrokenPipeError:  # (the reader went away, as `| head` does: quietly)
-            _to_devnull(own)
+            to_devnull(own)
         except OSError as exc:
             raise OutputError(path, _reason(exc)) from None
         return

@@ -59,9 +59,9 @@ class Rows:
             self.t, self.g, self.v = [], [], []
 
     def _block(self, t: np.ndarray, g: np.ndarray, values: np.ndarray) -> None:
-        # (copies: a view would keep the whole array it is a view of alive, a
-        # stepper's chunk)
-        self.blocks.append((np.array(t, float), np.array(g, int), np.array(values, float)))
+        # (TIME may be a view of a stepper's chunk, which it would keep alive until the
+        # merge: copied; the indices and the table are the block's own)
+        self.blocks.append((np.array(t, float), g, values))
         self.in_blocks += len(t)
         if self.in_blocks >= self.BATCH:
             self._merge()
