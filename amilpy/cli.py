@@ -20,7 +20,7 @@ import math
 import os
 import sys
 
-from . import __version__
+from . import __version__, interrupts
 from .console import (
     STDOUT_FAILED,
     Progress,
@@ -488,7 +488,14 @@ COMMANDS = {"run": cmd_run, "sweep": cmd_sweep, "report": cmd_report, "check": c
 
 def _one(command, args, path: str, signals: Signals) -> int:
     try:
-        return command(args, path, signals)
+        code = command(args, path, signals)
+        if interrupts.pending():
+            # (swallowed where no loop looked again: after the last run, say; what
+            # the command wrote is complete)
+            interrupts.handled()
+            print(f"amilpy: {path}: interrupted", file=sys.stderr)
+            code = max(code, EXIT_FAILED)
+        return code
     except UsageError as exc:
         print(f"amilpy: {path}: {exc}", file=sys.stderr)
         return EXIT_USAGE
@@ -501,6 +508,7 @@ def _one(command, args, path: str, signals: Signals) -> int:
         print(exc.render(), file=sys.stderr)
         return EXIT_MODEL
     except KeyboardInterrupt:
+        interrupts.handled()
         print(f"amilpy: {path}: interrupted", file=sys.stderr)
         return EXIT_FAILED
     except ImportError:
@@ -508,6 +516,7 @@ def _one(command, args, path: str, signals: Signals) -> int:
         # when a run first needs it) comes out as "ImportError: initialization failed"
         if signals.received is None:
             raise
+        interrupts.handled()
         print(f"amilpy: {path}: interrupted", file=sys.stderr)
         return EXIT_FAILED
     except TimeLimit:

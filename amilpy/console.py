@@ -19,6 +19,7 @@ import time
 from contextlib import contextmanager
 from typing import TextIO
 
+from . import interrupts
 from .output.files import to_devnull
 
 HANDLED = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP")
@@ -39,6 +40,7 @@ class Signals:
         if self.holding:
             self.held_back = signum
         else:
+            interrupts.arrived(signum)  # (raised again if a library swallows it)
             raise KeyboardInterrupt
 
     def install(self) -> None:
@@ -49,6 +51,7 @@ class Signals:
                 pass
 
     def restore(self) -> None:
+        interrupts.handled()  # (nothing is left to end)
         for sig, handler in self.previous.items():
             signal.signal(sig, handler)
         self.previous.clear()

@@ -26,7 +26,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import ir
+from . import interrupts, ir
 from .diagnostics import AmilError
 from .result import Run
 
@@ -208,6 +208,7 @@ def _on_processes(model: ir.Model, tasks: list[Task], jobs: int,
         finally:
             if blocking:  # (one held back is raised here, and handled below)
                 signal.pthread_sigmask(signal.SIG_UNBLOCK, _starting_signals())
+        interrupts.check()  # (one swallowed while the pool started)
         for future in as_completed(futures):
             i = futures[future]
             try:
@@ -216,12 +217,20 @@ def _on_processes(model: ir.Model, tasks: list[Task], jobs: int,
                 out[i] = Outcome(error=f"the worker failed: {exc}")
             if done is not None:
                 done(i, out[i])
+            interrupts.check()
     except KeyboardInterrupt:
         # Ctrl-C: the finished runs are kept; the workers are ended, their runs lost
-        if pool is not None:
-            pool.shutdown(wait=False, cancel_futures=True)
+        interrupts.handled()
         for child in mp.active_children():
             child.terminate()
+        if pool is not None:
+            # (and the pool's thread, which then sees its workers gone, joined: a
+            # shutdown that does not wait forgets it, and Python's exit would wake it
+            # through a pipe it is closing, printing a traceback after the last line)
+            try:
+                pool.shutdown(wait=True, cancel_futures=True)
+            except KeyboardInterrupt:  # (a second Ctrl-C: the runs kept matter more)
+                pass
         return [o if o is not None else Outcome(
             error="interrupted before it finished", interrupted=True) for o in out]
     pool.shutdown()

@@ -146,9 +146,6 @@ def test_ctrl_c_keeps_the_finished_runs(tmp_path):
 
 @pytest.mark.slow  # (about 10 s: 13 interrupted commands)
 @pytest.mark.skipif(default_jobs() < 2, reason="needs two cores to farm two runs")
-@pytest.mark.xfail(strict=False, reason="known defect, open: an interrupt that lands in "
-                   "a library's import guarded by 'except ImportError' is swallowed and "
-                   "the run goes on (seen once at 0.4 s)")
 def test_ctrl_c_at_any_instant_of_a_farmed_run_ends_it(tmp_path):
     """Ctrl-C at instants from 0.3 s to 1.5 s after the command starts (loading,
     generating code, forking the workers, running): the command always ends, within

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import ir
+from .. import interrupts, ir
 from ..codegen import Compiled
 from ..codegen.jacobian import for_compiled as jacobian_for
 from ..codegen.rolled import for_compiled as rolled_rhs
@@ -514,6 +514,7 @@ class Integrator(RunLoop):
                 return
 
     def _check_limits(self, t: float, stepper: Stepper) -> None:
+        interrupts.check()
         self._iterations += 1
         if self.nsteps + stepper.nstep - self._counted >= self.opts.max_steps:
             raise Stop(Failure.STEPS, t, limit=self.opts.max_steps)
@@ -843,6 +844,7 @@ class Integrator(RunLoop):
         stepper.consume(n)
         self._passed(stepper.t)
         cur.t, cur.y = stepper.t, stepper.y
+        interrupts.check()
         if self.deadline is not None and _clock.perf_counter() > self.deadline:
             raise Stop(Failure.TIME_LIMIT, cur.t, limit=self.opts.max_time)
         if self.opts.progress is not None:

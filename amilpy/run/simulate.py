@@ -14,7 +14,7 @@ import time as _clock
 
 import numpy as np
 
-from .. import ir
+from .. import interrupts, ir
 from ..codegen import Compiled, evaluate_constant
 from ..diagnostics import AmilError
 from ..outcome import Failure, message
@@ -127,6 +127,7 @@ class _Run:
             cur.t = stop.t
             self._keep_last_good(cur)
         except KeyboardInterrupt:
+            interrupts.handled()
             # (the rows of the step under way may reach past where it began: the run
             # was computed to the last of them)
             cur.t = max(cur.t, rec.last_t if rec.last_t is not None else cur.t)

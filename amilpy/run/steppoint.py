@@ -29,7 +29,7 @@ import time as _clock
 
 import numpy as np
 
-from .. import ir
+from .. import interrupts, ir
 from ..codegen import Compiled
 from ..diagnostics import AmilError, Diagnostic
 from ..outcome import Failure
@@ -261,6 +261,7 @@ class StepPoint(RunLoop):
 
     def _check_limits(self, t: float) -> None:
         """Every 256 steps (and at the step limit): limits, deadline, progress."""
+        interrupts.check()
         if self.nsteps >= self.opts.max_steps:
             raise Stop(Failure.STEPS, t, limit=self.opts.max_steps)
         if self.deadline is not None and _clock.perf_counter() > self.deadline:
