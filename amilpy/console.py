@@ -21,6 +21,7 @@ from typing import TextIO
 
 from . import interrupts
 from .output.files import to_devnull
+from .output.words import visible
 
 HANDLED = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP")
                 if hasattr(signal, name))
@@ -116,11 +117,6 @@ def time_limit(seconds: float | None):
 RETRY = 0.02  # seconds between two rings of an expired time_limit
 
 
-# control characters a listing may carry into a printout or a message (ESC starts a
-# terminal's escape sequences: clear the screen, retitle the window, ...): shown as
-# "?"; amilpy's own output needs only the line ends, tabs and the progress line's \r
-CONTROL = {c: "?" for c in [*range(0x20), 0x7F, *range(0x80, 0xA0)] if c not in (9, 10, 13)}
-
 
 class Visible:
     """A text stream whose control characters are shown as "?" (everything else is
@@ -130,7 +126,7 @@ class Visible:
         self._stream = stream
 
     def write(self, text: str) -> int:
-        return self._stream.write(text.translate(CONTROL))
+        return self._stream.write(visible(text))
 
     def __getattr__(self, name: str):
         return getattr(self._stream, name)

@@ -168,9 +168,14 @@ def highlight_listing(text: str, formatter: str = "terminal", **options: Any) ->
     if AmilLexer is None:
         if formatter == "html":
             return f'<div class="highlight"><pre>{html.escape(text)}</pre></div>\n'
-        if formatter == "latex":
-            body = text if text.endswith("\n") else text + "\n"
-            return "\\begin{Verbatim}\n" + body + "\\end{Verbatim}\n"
+        if formatter == "latex":  # (escaped: a line "\\end{Verbatim}" stays text)
+            import io
+
+            from amilpy.output.report.latex import verbatim
+
+            out = io.StringIO()
+            verbatim(text.splitlines(), out, ",numbers=left" if options.get("linenos") else "")
+            return out.getvalue()
         return text
     from pygments import highlight
 

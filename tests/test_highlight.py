@@ -184,7 +184,10 @@ def test_highlight_listing_without_pygments(monkeypatch):
     assert hl.highlight_listing(text) == text
     assert hl.highlight_listing(text, "html") == (
         '<div class="highlight"><pre>X = A &amp; \n  *B\n</pre></div>\n')
-    assert hl.highlight_listing(text, "latex") == "\\begin{Verbatim}\n" + text + "\\end{Verbatim}\n"
+    # (the one Verbatim writer of the LaTeX report: a listing's \\ { } as characters)
+    assert hl.highlight_listing(text + "{\\end}\n", "latex") == (
+        "\\begin{Verbatim}[commandchars=\\\\\\{\\},fontsize=\\small]\n" + text
+        + "\\char123{}\\char92{}end\\char125{}\n\\end{Verbatim}\n")
     assert hl.style_defs("html") == ""
 
 

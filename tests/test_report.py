@@ -131,7 +131,7 @@ def test_printer_plots_in_every_format(wide):
     assert md.count("PRINTER PLOT   * ALPHA1   + ALPHA3") == 2  # one per run
     body = (out / "wide_report_body.tex").read_text(encoding="utf-8")
     assert body.count("PRINTER PLOT   * ALPHA1   + ALPHA3") == 2
-    assert "\\begin{Verbatim}[fontsize=\\scriptsize]\nANGLES [RAD]" in body
+    assert "\\begin{Verbatim}[commandchars=\\\\\\{\\},fontsize=\\scriptsize]\nANGLES [RAD]" in body
     text = pdf_text(written["pdf"])
     assert text is None or text.count("PRINTER PLOT") == 2
 

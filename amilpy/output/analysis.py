@@ -11,7 +11,7 @@ import numpy as np
 
 from ..run.jacobian import DIFFERENCES
 from . import words as W
-from .plot import save_png
+from .plot import literal_text, save_png
 
 ZERO_MODE = "zero (rigid-body or cyclic)"
 
@@ -145,6 +145,7 @@ def orbit_csv(orbit) -> tuple[list[str], Iterator[list]]:
     return header, iter([row])
 
 
+@literal_text
 def plot_orbit(orbit, path: str, model=None) -> str:
     from matplotlib.figure import Figure
 
@@ -230,6 +231,7 @@ def _runs(points: Sequence, measure: str) -> list[tuple[bool, list, list]]:
     return pieces
 
 
+@literal_text
 def plot_response(resp, path: str, model=None, reference=None) -> str:
     """Half peak-to-peak of the first measure against the value: stable solid,
     unstable dashed, folds marked. `reference`: extra curves to compare, each

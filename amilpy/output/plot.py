@@ -13,6 +13,7 @@ saved without pyplot, so saving never touches the user's backend.
 
 from __future__ import annotations
 
+import functools
 import io
 import math
 import os
@@ -79,6 +80,20 @@ def zoom_window(run: Run) -> tuple[float, float] | None:
 # ------------------------------------------------------------------ drawing
 
 
+def literal_text(drawing):
+    """Every text a figure takes from a listing (TITLE, LABEL, units, names) is
+    drawn as written. A `$` would start matplotlib's mathtext: a stray
+    `$\\sqrt{` failed the whole plot with a ValueError, a well-formed one drew a
+    formula the author did not write, and `text.usetex` would hand it to TeX."""
+    @functools.wraps(drawing)
+    def literally(*args, **kwargs):
+        import matplotlib
+
+        with matplotlib.rc_context({"text.parse_math": False, "text.usetex": False}):
+            return drawing(*args, **kwargs)
+    return literally
+
+
 def _figure(show: bool, **kw):
     if show:
         import matplotlib.pyplot as plt
@@ -115,6 +130,7 @@ def _axis_groups(names: Sequence[str], scales: dict[str, float], subplots: bool
     return [list(names)]
 
 
+@literal_text
 def draw(runs: Sequence[Run], spec: FigureSpec, labels: Sequence[str] | None = None,
          notes: dict[str, tuple[str, str]] | None = None, subplots: bool = False,
          show: bool = False, numbers: Sequence[int] | None = None):
@@ -304,6 +320,7 @@ def _interactive_backends(matplotlib) -> list[str]:
 # ---------------------------------------------------------------- notebooks
 
 
+@literal_text
 def plot_run(run: Run, names: Sequence[str], ax=None, label: str | None = None):
     """`Run.plot`: variables against TIME on `ax` (a new one if None). Lines are
     labelled by name, and by `label` (default: the run's own label unless it is
@@ -317,7 +334,9 @@ def plot_run(run: Run, names: Sequence[str], ax=None, label: str | None = None):
     for name in names or [n for n in run.values if "#" not in n]:
         ax.plot(run.t, run[name], label=name.upper() + (f" ({label})" if label else ""))
     ax.set_xlabel("TIME [s]")
-    ax.set_title(W.shorten(run.titles[0] if run.titles else run.label, TITLE_CHARS))
+    # (the caller's axes made their title's text before: it is told too)
+    ax.set_title(W.shorten(run.titles[0] if run.titles else run.label, TITLE_CHARS),
+                 parse_math=False)
     ax.grid(True, alpha=0.3)
     ax.legend()
     return ax

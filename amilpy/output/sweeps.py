@@ -7,7 +7,7 @@ from collections.abc import Iterator
 
 from ..sweep import SIDE, Sweep
 from . import words as W
-from .plot import save_png
+from .plot import literal_text, save_png
 
 
 def units(model, result: Sweep) -> tuple[str, str]:
@@ -79,6 +79,7 @@ def csv_rows(result: Sweep) -> tuple[list[str], Iterator[list]]:
     return header, rows
 
 
+@literal_text
 def plot_sweep(result: Sweep, path: str, title: str | None = None,
                axis_units: tuple[str, str] = ("", "")) -> str:
     from matplotlib.figure import Figure

@@ -104,6 +104,20 @@ def detect_language(texts: Iterable[str], environ: dict[str, str] | None = None)
     return code if code in WORDS else "en"
 
 
+# ------------------------------------------------------------- listing text
+
+# control characters a listing may carry into a printout, a message, a figure or a
+# report (ESC starts a terminal's escape sequences: clear the screen, retitle the
+# window, ...): shown as "?"; amilpy's own output needs only the line ends, tabs and
+# the progress line's \r
+CONTROL = {c: "?" for c in [*range(0x20), 0x7F, *range(0x80, 0xA0)] if c not in (9, 10, 13)}
+
+
+def visible(text: str) -> str:
+    """`text` with its control characters shown as "?"."""
+    return text.translate(CONTROL)
+
+
 # ------------------------------------------------------------------ units
 
 _BRACKET = re.compile(r"\[([^\[\]]+)\]")
@@ -115,14 +129,14 @@ mpa bar rad deg rpm hz khz f uf k c l""".split())
 
 def label_unit(label: str | None) -> str:
     """The unit a LABEL gives in brackets ("... [RAD/S]" -> "RAD/S"), or ""."""
-    found = _BRACKET.findall(label or "")
+    found = _BRACKET.findall(visible(label or ""))
     return found[-1].strip() if found else ""
 
 
 def comment_fields(comment: str) -> tuple[str, str]:
     """A trailing `!` comment as (unit, description): `[V*s/rad] back-EMF` or
     `V*s/rad: back-EMF` give the unit V*s/rad; any other text is a description."""
-    text = comment.strip()
+    text = visible(comment).strip()
     m = re.match(r"\[([^\[\]]*)\]\s*(.*)$", text)
     if m:
         return m.group(1).strip(), m.group(2).strip()
@@ -204,7 +218,7 @@ def run_heading(run: Run, index: int, label: str, words: dict[str, str]) -> str:
 def shorten(text: str, limit: int) -> str:
     """At most `limit` characters, cut at a word with an ellipsis (for a plot title:
     the report and printout keep the whole text)."""
-    text = " ".join(text.split())
+    text = " ".join(visible(text).split())
     if len(text) <= limit:
         return text
     cut = text[: limit - 1]

@@ -49,6 +49,7 @@ def _latex(doc: Document, out_dir: str, stem: str) -> list[str]:
 
     body = os.path.join(out_dir, f"{stem}_report_body.tex")
     path = os.path.join(out_dir, f"{stem}_report.tex")
+    latex.check_file_name(stem, path)
     with atomic_open(body, text=True, newline="\n") as fh:
         latex.body(doc, out_dir, fh)
     with atomic_open(path, text=True, newline="\n") as fh:

@@ -15,6 +15,8 @@ import unicodedata
 from typing import TextIO
 
 from .. import tables as T
+from ..files import OutputError
+from ..words import visible
 from .document import Code, Document, Figure, Heading, TableBlock, Text
 
 PACKAGES = ("booktabs", "longtable", "graphicx", "fancyvrb", "color")
@@ -27,9 +29,9 @@ _SPECIAL = {"\\": "\\textbackslash{}", "&": "\\&", "%": "\\%", "$": "\\$", "#": 
 
 def tex(text: str) -> str:
     """Text for LaTeX: special characters escaped, Greek letters as math (pdflatex
-    has no glyphs for them in T1 text)."""
+    has no glyphs for them in T1 text), control characters as "?"."""
     out = []
-    for ch in text:
+    for ch in visible(text):
         if ch in _SPECIAL:
             out.append(_SPECIAL[ch])
         elif "\u0391" <= ch <= "\u03c9":
@@ -77,18 +79,40 @@ def table(t: T.Table, out: TextIO) -> None:
         out.write(f"{tex(note)}\n\n")
 
 
-def _verbatim(lines: list[str], out: TextIO) -> None:
+# In a Verbatim with commandchars, a listing's text can neither end the environment
+# (a line "\end{Verbatim}") nor run a command: its \, { and } are characters by number.
+_VERBATIM = str.maketrans({"\\": "\\char92{}", "{": "\\char123{}", "}": "\\char125{}"})
+
+
+# What TeX reads as markup in a file name given to \\input or \\includegraphics
+# (where it cannot be escaped): a listing's name with one of them would run commands.
+_NOT_IN_NAMES = set("\\{}%#$&^~")
+
+
+def check_file_name(stem: str, path: str) -> None:
+    """Refuse a listing's name that the LaTeX files would have to name raw."""
+    bad = sorted({ch for ch in stem if ch in _NOT_IN_NAMES or ord(ch) < 0x20 or ch == "\x7f"})
+    if bad:
+        raise OutputError(path, f"the listing's name {visible(stem)!r} has "
+                          f"{' '.join(visible(ch) for ch in bad)}, which LaTeX would read "
+                          "as commands in the file names the report gives it: copy the "
+                          "listing to a name without them")
+
+
+def verbatim(lines: list[str], out: TextIO, options: str = "") -> None:
+    """Lines as they are, in a fancyvrb Verbatim (`options` after its own)."""
     longest = max((len(line) for line in lines), default=0)
     size = "\\small" if longest <= 90 else "\\scriptsize" if longest <= 125 else "\\tiny"
-    out.write(f"\\begin{{Verbatim}}[fontsize={size}]\n")
-    out.write("".join(line + "\n" for line in lines))
+    out.write(f"\\begin{{Verbatim}}[commandchars=\\\\\\{{\\}},fontsize={size}{options}]\n")
+    out.write("".join(visible(line).translate(_VERBATIM) + "\n" for line in lines))
     out.write("\\end{Verbatim}\n")
 
 
 def body(doc: Document, out_dir: str, out: TextIO) -> None:
-    from ...highlight import highlight_listing, style_defs
+    from ...highlight import AmilLexer, highlight_listing, style_defs
 
-    out.write(f"% amilpy report: {doc.title}\n% needs \\usepackage{{{','.join(PACKAGES)}}}\n")
+    out.write(f"% amilpy report: {tex(doc.title)}\n"
+              f"% needs \\usepackage{{{','.join(PACKAGES)}}}\n")
     # the listing's colours (Pygments' macros): definitions, allowed in a body
     out.write(style_defs("latex") + "\n")
     for b in doc.blocks:
@@ -97,10 +121,13 @@ def body(doc: Document, out_dir: str, out: TextIO) -> None:
             out.write(f"\\{command}*{{{tex(b.text)}}}\n")
         elif isinstance(b, Text):
             out.write(f"\\textbf{{{tex(b.text)}}}\n\n" if b.strong else f"{tex(b.text)}\n\n")
-        elif isinstance(b, Code) and b.kind == "listing":
-            out.write(highlight_listing("\n".join(b.lines) + "\n", "latex", linenos=True))
+        elif isinstance(b, Code) and b.kind == "listing" and AmilLexer is not None:
+            out.write(highlight_listing(visible("\n".join(b.lines)) + "\n", "latex",
+                                        linenos=True))
+        elif isinstance(b, Code) and b.kind == "listing":  # (no Pygments)
+            verbatim(b.lines, out, ",numbers=left")
         elif isinstance(b, Code):
-            _verbatim(b.lines, out)
+            verbatim(b.lines, out)
         elif isinstance(b, TableBlock):
             table(b.table, out)
         elif isinstance(b, Figure):

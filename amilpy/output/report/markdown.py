@@ -6,8 +6,10 @@ from __future__ import annotations
 import os
 import re
 from typing import TextIO
+from urllib.parse import quote
 
 from .. import tables as T
+from ..words import visible
 from .document import Code, Document, Figure, Heading, TableBlock, Text
 
 # What Markdown would read as markup: emphasis, code, table cells, links, HTML tags.
@@ -16,7 +18,15 @@ _SPECIAL = re.compile(r"[\\*`|\[\]]|(?<![A-Za-z0-9])_|_(?![A-Za-z0-9])|<(?=[A-Za
 
 
 def escape(text: str) -> str:
-    return _SPECIAL.sub(lambda m: "\\" + m.group(0), text)
+    """Text as Markdown shows it: no markup, no HTML tag, no control character."""
+    return _SPECIAL.sub(lambda m: "\\" + m.group(0), visible(text))
+
+
+def fence(lines: list[str]) -> str:
+    """A code fence longer than any run of backticks in `lines` (CommonMark), so no
+    line of a listing can close it and let what follows be read as Markdown/HTML."""
+    longest = max((len(run) for line in lines for run in re.findall("`+", line)), default=0)
+    return "`" * max(3, longest + 1)
 
 
 def table(t: T.Table, out: TextIO) -> None:
@@ -39,13 +49,15 @@ def render(doc: Document, out_dir: str, out: TextIO) -> None:
         elif isinstance(b, Text):
             out.write(f"**{escape(b.text)}**\n\n" if b.strong else f"{escape(b.text)}\n\n")
         elif isinstance(b, Code):
-            fence = "```amil" if b.kind == "listing" else "```"
-            out.write(fence + "\n" + "".join(line + "\n" for line in b.numbered()) + "```\n\n")
+            lines = [visible(line) for line in b.numbered()]
+            mark = fence(lines)
+            out.write(mark + ("amil" if b.kind == "listing" else "") + "\n"
+                      + "".join(line + "\n" for line in lines) + mark + "\n\n")
         elif isinstance(b, TableBlock):
             table(b.table, out)
         elif isinstance(b, Figure):
             figure += 1
-            rel = os.path.relpath(b.path, out_dir).replace(os.sep, "/")
+            rel = quote(os.path.relpath(b.path, out_dir).replace(os.sep, "/"))
             name = f"{doc.words['figure']} {figure}"
             out.write(f"![{name}]({rel})\n\n*{name}: {escape(b.caption)}*\n\n")
         else:  # pragma: no cover - every block kind is rendered above

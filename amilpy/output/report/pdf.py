@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 from .. import tables as T
 from ..files import atomic_write
+from ..plot import literal_text
+from ..words import visible
 from .document import Code, Document, Figure, Heading, TableBlock, Text
 
 PAGE = (8.27, 11.69)  # A4, inches
@@ -100,6 +102,7 @@ def pages(doc: Document) -> list[list[Line]]:
     return [p for p in out if p]
 
 
+@literal_text
 def render(doc: Document, path: str) -> int:
     """Write the PDF; return its number of pages."""
     from matplotlib.backends.backend_pdf import PdfPages
@@ -115,7 +118,7 @@ def render(doc: Document, path: str) -> int:
             fig = MplFigure(figsize=PAGE)
             for i, line in enumerate(page):
                 size = max(MIN_FONT, FONT * min(1.0, CHARS / line.chars))
-                fig.text(LEFT, TOP - i * step, line.text, family="DejaVu Sans Mono",
+                fig.text(LEFT, TOP - i * step, visible(line.text), family="DejaVu Sans Mono",
                          fontsize=size, va="top",
                          weight="bold" if line.style in ("title", "heading", "strong",
                                                          "head") else "normal")
@@ -128,7 +131,7 @@ def render(doc: Document, path: str) -> int:
             ax = fig.add_axes((0.05, 0.35, 0.9, 0.6))
             ax.imshow(imread(block.path))
             ax.axis("off")
-            caption = f"{doc.words['figure']} {k}: {block.caption}"
+            caption = visible(f"{doc.words['figure']} {k}: {block.caption}")
             fig.text(0.08, 0.33, "\n".join(textwrap.wrap(caption, 110)), fontsize=9,
                      va="top")
             _footer(fig, doc, len(text_pages) + k)
