@@ -296,3 +296,72 @@ END
     assert [e.text for e in a.events] == [e.text for e in b.events]
     assert [e.time for e in a.events] == pytest.approx([e.time for e in b.events], abs=1e-9)
     assert np.max(np.abs(a["Y"] - b["Y"])) <= 1e-6 * np.max(np.abs(b["Y"]))
+
+
+def test_the_cache_folder_is_made_private_and_a_shared_one_refused(tmp_path):
+    """The compiled models' folder holds Python files that are imported and numba
+    index files that are unpickled: it is made 0700, and one that other users can
+    write (AMILPY_CACHE pointed at a shared folder) is refused, with why."""
+    fresh = tmp_path / "mine" / "compiled"
+    assert compiled.private_folder(fresh) is None
+    assert (fresh.stat().st_mode & 0o777) == 0o700
+    assert (fresh.parent.stat().st_mode & 0o777) == 0o700
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    shared.chmod(0o777)
+    why = compiled.private_folder(shared / "compiled")
+    assert why == f"{shared} can be written by other users (mode 777)"
+
+
+@needs_numba
+def test_a_shared_cache_folder_runs_as_dop853_and_says_why(tmp_path, monkeypatch):
+    """Nothing is written to or loaded from a folder others can write: the run is
+    DOP853's, with the rows DOP853 gives, and one warning naming the folder."""
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    shared.chmod(0o777)
+    monkeypatch.setenv(compiled.ENV_CACHE, str(shared))
+    monkeypatch.setattr(compiled, "_BY_SOURCE", {})
+    monkeypatch.setattr(compiled, "_LOADED", {})
+    a = run1(KNEE, method="COMPILED")
+    b = run1(KNEE, method="DOP853")
+    assert len(a.warnings) == 1 and "not private" in a.warnings[0]
+    assert f"{shared} can be written by other users" in a.warnings[0]
+    assert "ran as DOP853" in a.warnings[0]
+    assert np.array_equal(a["X"], b["X"])
+    assert not any((shared / "compiled").glob("*.py"))
+
+
+DAMAGED_CACHE_RUN = """
+import sys, amilpy
+run, = amilpy.loads(sys.argv[1]).run(method="COMPILED", advice=False)
+print(run.status, run.warnings, float(run["X"][-1]))
+"""
+
+
+@needs_numba
+def test_a_damaged_numba_cache_is_compiled_again(tmp_path):
+    """numba reads its cache with pickle and lets a damaged file raise: every METHOD
+    COMPILED run then failed at TIME = 0 ("unregistered extension code"). With the
+    kernel's and the model's cache files overwritten with noise, the run is compiled
+    again and is the same run. (In a process of its own, with numba's and amilpy's
+    caches in this test's folder: the kernel is compiled twice, about 20 s.)"""
+    import subprocess
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"),
+               AMILPY_CACHE=str(tmp_path / "amilpy"), PYTHONPATH=ROOT)
+
+    def run() -> str:
+        done = subprocess.run([sys.executable, "-c", DAMAGED_CACHE_RUN, KNEE], env=env,
+                              capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stderr[-2000:]
+        return done.stdout
+
+    first = run()
+    assert first.startswith("finished [] ")
+    files = [*(tmp_path / "numba").rglob("*.nb[ic]"), *(tmp_path / "amilpy").rglob("*.nb[ic]")]
+    assert any("kernel" in f.name for f in files) and any("amilpy_model" in f.name
+                                                          for f in files)
+    for f in files:
+        f.write_bytes(os.urandom(40))
+    assert run() == first
