@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 from . import ir
 from .check import check
-from .diagnostics import AmilError, Diagnostic, nearest
+from .diagnostics import AmilError, Diagnostic, did_you_mean, with_hint
 from .parse import parse
 from .routes import route_for
 
@@ -89,10 +89,9 @@ class Model:
         for key, value in params.items():
             name = key.upper()
             if name not in known:
-                hint = nearest(name, known)
                 raise AmilError([Diagnostic(
                     f"{name} is not a PARAM/CONST/INCON value of this model",
-                    None, f"did you mean {hint}?" if hint else
+                    None, did_you_mean(name, known) or
                     "only data values can be set from outside")], self.ir.path)
             try:
                 overrides[name] = float(value)
@@ -296,9 +295,8 @@ class Model:
         out = [n.upper() for n in names] or [default_measure(self.ir)]
         for n in out:
             if n not in self.ir.variables:
-                hint = nearest(n, set(self.ir.variables))
-                raise AmilError(f"{n} is not a variable of the model"
-                                + (f"; did you mean {hint}?" if hint else ""))
+                raise AmilError(with_hint(f"{n} is not a variable of the model", n,
+                                          self.ir.variables))
         return out
 
     @staticmethod

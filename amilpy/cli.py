@@ -30,7 +30,7 @@ from .console import (
     tolerant_streams,
     write_out,
 )
-from .diagnostics import AmilError, nearest
+from .diagnostics import AmilError, with_hint
 from .output.files import OutputError
 from .output.writers import DIALECTS, WRITERS, Outputs, PlotOptions, dest, writers_for
 from .routes import method_names, methods_help, route_for
@@ -267,9 +267,8 @@ def _check_sets(model, params: dict[str, float]) -> None:
     known = set(model.ir.data_names)
     for name in params:
         if name not in known:
-            hint = nearest(name, known)
-            raise UsageError(f"--set {name}: not a PARAM/CONST/INCON value of this listing"
-                             + (f"; did you mean {hint}?" if hint else ""))
+            raise UsageError(with_hint(f"--set {name}: not a PARAM/CONST/INCON value of "
+                                       "this listing", name, known))
 
 
 def _plot_choice(args, model) -> PlotOptions:
@@ -396,13 +395,11 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
     model, params = _load(args, path)
     for swept in [name] + ([grid[0]] if grid else []):
         if swept not in model.ir.data_names:
-            hint = nearest(swept, set(model.ir.data_names))
-            raise UsageError(f"{swept} is not a PARAM/CONST/INCON value of this listing"
-                             + (f"; did you mean {hint}?" if hint else ""))
+            raise UsageError(with_hint(f"{swept} is not a PARAM/CONST/INCON value of this "
+                                       "listing", swept, model.ir.data_names))
     if args.measure and args.measure.upper() not in model.ir.variables:
-        hint = nearest(args.measure, set(model.ir.variables))
-        raise UsageError(f"--measure {args.measure}: not a variable of this listing"
-                         + (f"; did you mean {hint}?" if hint else ""))
+        raise UsageError(with_hint(f"--measure {args.measure}: not a variable of this "
+                                   "listing", args.measure, model.ir.variables))
     progress = Progress(not args.quiet)
     total = 2 * len(values) - 1 if args.both_ways else \
         len(values) * (len(grid[1]) if grid else 1)

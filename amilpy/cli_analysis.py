@@ -13,7 +13,7 @@ import sys
 
 from . import cli as base
 from .console import Progress, write_out
-from .diagnostics import nearest
+from .diagnostics import with_hint
 from .output.writers import Outputs
 
 
@@ -96,9 +96,8 @@ def _prepare(args, path: str):
     base._check_sets(model, params)
     for name in getattr(args, "measure", []):
         if name.upper() not in model.ir.variables:
-            hint = nearest(name, set(model.ir.variables))
-            raise base.UsageError(f"--measure {name}: not a variable of this listing"
-                                  + (f"; did you mean {hint}?" if hint else ""))
+            raise base.UsageError(with_hint(f"--measure {name}: not a variable of this "
+                                            "listing", name, model.ir.variables))
     return model, params
 
 
@@ -167,9 +166,8 @@ def cmd_response(args, path: str, signals) -> int:
     name, start, stop = args.span
     model, params = _prepare(args, path)
     if name not in model.ir.data_names:
-        hint = nearest(name, set(model.ir.data_names))
-        raise base.UsageError(f"{name} is not a PARAM/CONST/INCON value of this listing"
-                              + (f"; did you mean {hint}?" if hint else ""))
+        raise base.UsageError(with_hint(f"{name} is not a PARAM/CONST/INCON value of this "
+                                        "listing", name, model.ir.data_names))
     progress = Progress(not args.quiet)
 
     def point(value: float, count: int, residual: float) -> None:

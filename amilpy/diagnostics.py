@@ -8,6 +8,7 @@ the source line, a caret under the offending text and a hint.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 from .language import split_lines
@@ -135,9 +136,21 @@ class Reporter:
             raise AmilError(ordered, self.path, self.source)
 
 
-def nearest(name: str, candidates: list[str] | set[str]) -> str | None:
+def nearest(name: str, candidates: Iterable[str]) -> str | None:
     """The known name closest to a misspelt one, if any is close enough to suggest."""
     import difflib
 
     hits = difflib.get_close_matches(name.upper(), sorted(candidates), n=1, cutoff=0.6)
     return hits[0] if hits else None
+
+
+def did_you_mean(name: str, candidates: Iterable[str]) -> str:
+    """"did you mean X?" for the known name closest to a misspelt one, or ""."""
+    hint = nearest(name, candidates)
+    return f"did you mean {hint}?" if hint else ""
+
+
+def with_hint(message: str, name: str, candidates: Iterable[str]) -> str:
+    """`message`, and "; did you mean X?" when a known name is close to `name`."""
+    hint = did_you_mean(name, candidates)
+    return f"{message}; {hint}" if hint else message

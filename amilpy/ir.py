@@ -39,6 +39,11 @@ class Purpose(str, Enum):
     def __str__(self) -> str:
         return self.value
 
+    @property
+    def stops(self) -> bool:
+        """The run loop ends its step where such a surface is crossed."""
+        return self in (Purpose.FINISH, Purpose.TERMT, Purpose.SCHEDULE)
+
 
 class Depends(str, Enum):
     """What a surface's value moves with (classified by `surfaces.classify`)."""

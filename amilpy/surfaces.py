@@ -26,6 +26,40 @@ def sign(x: float) -> float:
     return 1.0 if x > 0 else (-1.0 if x < 0 else 0.0)
 
 
+# How the motion leaves a switching surface it stands on, from the surface's rate
+# of change under its + branch (dp) and under its - branch (dm): the one rule, read
+# by the run loop (run/watch.py) and compiled into the numba kernel
+# (compiled/kernel.py), which leaves to the loop what it cannot decide alone.
+UP, DOWN = 1.0, -1.0  # both branches carry the motion to that side
+STILL = 0.0  # neither branch moves the surface (both rates negligible)
+SLIDES = 2.0  # both branches carry it back onto the surface: it slides along it
+REPELS = 3.0  # both carry it away: it keeps going the way it was going
+UNCLEAR = 4.0  # a rate within its noise: the motion stays on the surface
+STILL_RATE = 1e-13  # a rate below this fraction of the larger one is negligible
+RATE_NOISE = 1e-9  # relative noise of a rate computed by differences
+
+
+def leaving(dp: float, dm: float, exact: bool) -> float:
+    """UP, DOWN, STILL, SLIDES, REPELS or UNCLEAR for rates `dp`, `dm` (`exact`:
+    from the surface's gradient, with no difference noise). Plain float arithmetic
+    (numba compiles it as it is)."""
+    scale = max(abs(dp), abs(dm))
+    if not scale > 1e-300 or (abs(dp) <= STILL_RATE * scale
+                              and abs(dm) <= STILL_RATE * scale):
+        return STILL
+    eps = 0.0 if exact else RATE_NOISE * scale
+    up, down = dp > eps, dm < -eps
+    if up and down:
+        return REPELS
+    if up:
+        return UP
+    if down:
+        return DOWN
+    if dp < -eps and dm > eps:
+        return SLIDES
+    return UNCLEAR
+
+
 def level(v: float) -> float:
     """QNTZR's level k, with (k - 1/2) < v <= (k + 1/2) (round half down), exactly:
     v - 1/2 rounds (-0.49999999999999994 - 0.5 is -1.0), so the band is checked."""

@@ -39,7 +39,7 @@ import numpy as np
 from .. import ir
 from .. import syntax as ast
 from ..check.order import reads
-from ..diagnostics import AmilError, nearest
+from ..diagnostics import AmilError, with_hint
 from ..library import lookup
 from ..run import Flow, State
 
@@ -102,10 +102,9 @@ def constant(text: str, flow: Flow, what: str, extra: dict[str, float] | None = 
     known = {**flow.compiled.constants, **(extra or {})}
     for node in ast.walk(expr):
         if isinstance(node, ast.Name) and node.name not in known:
-            hint = nearest(node.name, set(known))
-            raise AmilError(f"{what} {text!r}: {node.name} is not a constant of this listing "
-                            "(the data, TIMER and INITIAL values and PI are)"
-                            + (f"; did you mean {hint}?" if hint else ""))
+            raise AmilError(with_hint(f"{what} {text!r}: {node.name} is not a constant of "
+                                      "this listing (the data, TIMER and INITIAL values "
+                                      "and PI are)", node.name, known))
         if isinstance(node, ast.Call):
             func = lookup(node.func)
             if func is None or not func.plain:
@@ -243,9 +242,8 @@ class Problem:
         self.angle: int | None = None
         if closure.angle is not None:
             if closure.angle not in names or names.index(closure.angle) in skip:
-                hint = nearest(closure.angle, set(names))
-                raise AmilError(f"--angle {closure.angle}: not a state of this listing"
-                                + (f"; did you mean {hint}?" if hint else ""))
+                raise AmilError(with_hint(f"--angle {closure.angle}: not a state of this "
+                                          "listing", closure.angle, names))
             self.angle = names.index(closure.angle)
             if self.angle in self.free:
                 raise AmilError(f"--angle {closure.angle}: no derivative depends on it, so "

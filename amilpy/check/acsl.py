@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from .. import ir
 from .. import syntax as ast
-from ..diagnostics import Reporter, Span, nearest
+from ..diagnostics import Reporter, Span, did_you_mean
 from ..language import DEFAULT_CINT, TIME
 from ..library import Kind, lookup
 from ..surfaces import classify
@@ -269,10 +269,9 @@ class _Check:
         for st in self.parts.statements():
             for node in ast.walk(st):
                 if isinstance(node, ast.Schedule) and node.section not in discretes:
-                    hint = nearest(node.section, set(discretes))
                     self.rep.error(f"SCHEDULE names {node.section}, which is no DISCRETE "
                                    "section", node.span,
-                                   f"did you mean {hint}?" if hint else
+                                   did_you_mean(node.section, discretes) or
                                    f"define it: DISCRETE {node.section} ... END")
 
     def tolerances(self, states: set[str]) -> None:

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field, replace
 
 from .. import ir
 from .. import syntax as ast
-from ..diagnostics import Reporter, Span, nearest
+from ..diagnostics import Reporter, Span, did_you_mean
 from ..language import (
     DRIVERS,
     IGNORED_TIMER_KEYS,
@@ -318,11 +318,11 @@ class RunGroups(Visitor):
                 self.timer_spans[s.name] = s.span
                 continue
             if s.name not in TIMER_KEYS:
-                hint = nearest(s.name, set(TIMER_KEYS) | {START_KEY})
                 self.rep.error(
                     f"unknown TIMER setting {s.name}",
                     s.span,
-                    f"did you mean {hint}?" if hint else "TIMER takes " + ", ".join(TIMER_KEYS),
+                    did_you_mean(s.name, {*TIMER_KEYS, START_KEY})
+                    or "TIMER takes " + ", ".join(TIMER_KEYS),
                 )
             elif not math.isfinite(s.value):
                 self.rep.error(f"{s.name} must be a finite number (got {s.value:g})", s.span)
@@ -333,11 +333,11 @@ class RunGroups(Visitor):
 
     def visit_Method(self, st: ast.Method) -> None:
         if route_for(st.name) is None:
-            hint = nearest(st.name, set(method_names()))
             self.rep.error(
                 f"unknown integration method {st.name}",
                 st.span,
-                (f"did you mean {hint}? " if hint else "") + "known: " + ", ".join(method_names()),
+                " ".join(filter(None, [did_you_mean(st.name, method_names()),
+                                       "known: " + ", ".join(method_names())])),
             )
         self.method = st.name
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 
 from .. import syntax as ast
-from ..diagnostics import Reporter, Span, nearest
+from ..diagnostics import Reporter, Span, did_you_mean, nearest
 from ..language import (
     KNOWN_BEFORE_RUN,
     REFUSED_FUNCTIONS,
@@ -150,9 +150,8 @@ class Names:
                            f"(arrays) are not supported", node.span,
                            "write one scalar per element (X1, X2, ...)")
             return
-        hint = nearest(node.func, callable_names() | set(self.functions))
         self.rep.error(f"unknown function {node.func}", node.span,
-                       f"did you mean {hint}?" if hint else
+                       did_you_mean(node.func, callable_names() | set(self.functions)) or
                        "see the function list in docs/language.md")
 
     def check_table_argument(self, node: ast.Call) -> None:
@@ -160,11 +159,11 @@ class Names:
         if isinstance(first, ast.Name) and first.name in self.table_names:
             return
         label = first.name if isinstance(first, ast.Name) else "its first argument"
-        hint = nearest(label, self.table_names) if isinstance(first, ast.Name) else None
+        hint = did_you_mean(label, self.table_names) if isinstance(first, ast.Name) else ""
         self.rep.error(
             f"{node.func} needs a FUNCTION table as first argument; {label} is not one",
             first.span,
-            f"did you mean {hint}?" if hint else "define it with FUNCTION NAME = x1,y1, x2,y2, ...",
+            hint or "define it with FUNCTION NAME = x1,y1, x2,y2, ...",
         )
 
     def decimal_comma(self, node: ast.Call) -> str | None:
@@ -239,18 +238,16 @@ class Names:
                 named.append((st.x, st.x_span))
             for n, s in named:
                 if n not in report_known and n != TIME:
-                    hint = nearest(n, report_known - {TIME})
                     self.rep.error(f"{st.kind} names {n}, which the model never defines", s,
-                                   f"did you mean {hint}?" if hint else None)
+                                   did_you_mean(n, report_known - {TIME}) or None)
         for st in self.data.finish_relations:
             for node in ast.walk(st.expr):
                 if isinstance(node, ast.Name) and node.name not in known:
                     self.undefined(node, known)
         for s in self.data.finish:
             if s.name not in known:
-                hint = nearest(s.name, known)
                 self.rep.error(f"FINISH names {s.name}, which the model never defines", s.span,
-                               f"did you mean {hint}?" if hint else None)
+                               did_you_mean(s.name, known) or None)
         for kind, s in self.data.tolerances:
             if s.name in states:
                 continue
@@ -289,9 +286,8 @@ class Names:
                            "time is TIME in this form; a file that starts with PROGRAM or "
                            "MODEL is in ACSL form, where time is T")
             return
-        hint = nearest(node.name, known - {"DELMIN", "DELMAX"})
         self.rep.error(
             f"{node.name} is used but never defined", node.span,
-            (f"did you mean {hint}? " if hint else "")
-            + "give it a value with PARAM/CONST/INCON or an equation",
+            " ".join(filter(None, [did_you_mean(node.name, known - {"DELMIN", "DELMAX"}),
+                                   "give it a value with PARAM/CONST/INCON or an equation"])),
         )

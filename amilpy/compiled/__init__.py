@@ -145,7 +145,10 @@ def _kernel_module() -> ModuleType:
     try:
         from . import kernel
     except Exception:  # noqa: BLE001 - whatever a damaged pickle raises
+        from .. import surfaces  # (the leaving rule, compiled with the kernel)
+
         _forget_cache(Path(__file__).with_name("kernel.py"))
+        _forget_cache(Path(surfaces.__file__))
         from . import kernel
     return kernel
 

@@ -29,6 +29,7 @@ import numpy as np
 from numba import njit, types
 from scipy.integrate._ivp import dop853_coefficients as _dc
 
+from ..surfaces import DOWN, REPELS, UP, leaving
 from .layout import (
     AT,
     BOUND,
@@ -73,6 +74,7 @@ EXPONENT = -1.0 / 8.0  # the error estimator's order is 7
 
 # NaN and infinities, not exceptions, where arithmetic fails (as the model's own code)
 _jit = njit(cache=True, error_model="numpy")
+_leaving = _jit(leaving)  # (the run loop's own rule, compiled)
 
 _F8, _I8 = types.float64, types.int64
 _V, _M = types.float64[::1], types.float64[:, ::1]  # C-ordered vectors and matrices
@@ -355,18 +357,11 @@ def _direction(rhs, surf, k, old, t, y, m, z, p, lookahead, f, yt, e0, e1):
         surf(t + lookahead, yt, m, z, p, e1)
         rates[side] = (e1[k] - e0[k]) / lookahead
     m[k] = mk
-    dp, dm = rates[0], rates[1]
-    scale = max(abs(dp), abs(dm))
-    if not (scale > 1e-300) or (abs(dp) <= 1e-13 * scale and abs(dm) <= 1e-13 * scale):
-        return 0.0
-    eps = 1e-9 * scale
-    up, down = dp > eps, dm < -eps
-    if up and down:
+    way = _leaving(rates[0], rates[1], False)
+    if way == REPELS:
         return -old
-    if up:
-        return 1.0
-    if down:
-        return -1.0
+    if way == UP or way == DOWN:
+        return way
     return 0.0
 
 

@@ -12,7 +12,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from enum import Enum
 
 import numpy as np
 
@@ -79,25 +78,8 @@ class Options:
     weather_dirs: tuple[str, ...] = ()
 
 
-class SurfaceKind(str, Enum):
-    """How a surface's value selects its branch."""
-
-    SIGN = "sign"  # mode -1, 0 or +1 from the sign
-    LEVEL = "level"  # QNTZR: the mode is the quantisation level
-
-
-class Purpose(str, Enum):
-    """What a surface is for."""
-
-    SWITCH = "switch"
-    MEMORY = "memory"
-    FINISH = "finish"
-    TERMT = "termt"
-    SCHEDULE = "schedule"  # ACSL's SCHEDULE s .XP. e: the loop stops there for DISCRETE s
-
-    @property
-    def stops(self) -> bool:
-        return self in (Purpose.FINISH, Purpose.TERMT, Purpose.SCHEDULE)
+# (the IR's: what a surface is for and how it selects a branch, one definition)
+SurfaceKind, Purpose = ir.SurfaceKind, ir.Purpose
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..codegen import Compiled
-from ..surfaces import sign
+from ..surfaces import DOWN, REPELS, SLIDES, STILL, UP, leaving, sign
 from .plan import SLIDE, Purpose, RunPlan, SurfaceKind
 from .slide import MAX_SLIDING, combine, corner_modes, slide_weights
 
@@ -163,28 +163,20 @@ class SurfaceWatch:
             m0[k] = 0.0
             f0 = np.asarray(self.field(t, y, m0, z), dtype=float)
             return sign(self.surface_rate(k, t, y, f0, m0, z))
-        tiny = 1e-300
-        scale = max(abs(dp), abs(dm))
-        if scale <= tiny or (abs(dp) <= 1e-13 * scale and abs(dm) <= 1e-13 * scale):
-            # Neither branch moves the surface. With other surfaces sliding, that is
-            # their compensation (two friction terms on one velocity): this one
-            # slides with them and the joint weights decide; else it stays at zero.
+        way = leaving(dp, dm, exact=self.watched[k].gradient is not None)
+        if way == STILL:
+            # With other surfaces sliding, that is their compensation (two friction
+            # terms on one velocity): this one slides with them and the joint
+            # weights decide; else it stays at zero.
             others = any(v == SLIDE for j, v in enumerate(m) if j != k)
             return SLIDE if others and self.events else 0.0
-        # noise level of a rate computed by differences
-        eps = 0.0 if self.watched[k].gradient is not None else 1e-9 * scale
-        up, down = dp > eps, dm < -eps
-        if up and down:  # repelling: keep going the way it was going
+        if way == REPELS:  # keep going the way it was going
             if old is not None and old != 0.0 and old != SLIDE:
                 return -old
             return 1.0 if dp >= -dm else -1.0
-        if up:
-            return 1.0
-        if down:
-            return -1.0
-        if dp < -eps and dm > eps and self.events:
-            return SLIDE
-        return 0.0
+        if way == SLIDES:
+            return SLIDE if self.events else 0.0
+        return way if way in (UP, DOWN) else 0.0
 
     def at_zero(self, t: float, y: np.ndarray, m, z) -> list[float]:
         """m with every sign surface that is exactly zero at (t, y) in its X = 0
