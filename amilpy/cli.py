@@ -31,6 +31,7 @@ from .console import (
     write_out,
 )
 from .diagnostics import AmilError, with_hint
+from .language import fortran_float
 from .output.files import OutputError
 from .output.writers import DIALECTS, WRITERS, Outputs, PlotOptions, dest, writers_for
 from .routes import method_names, methods_help, route_for
@@ -47,7 +48,7 @@ class UsageError(Exception):
 
 def _number(text: str) -> float:
     try:
-        return float(text.replace("D", "E").replace("d", "e"))
+        return fortran_float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
 
@@ -254,7 +255,7 @@ def _parse_sets(items: list[str]) -> dict[str, float]:
             raise UsageError(f"--set takes NAME=VALUE, got {item!r}")
         name, value = item.split("=", 1)
         try:
-            number = float(value.replace("D", "E").replace("d", "e"))
+            number = fortran_float(value)
         except ValueError:
             raise UsageError(f"--set {name}: {value!r} is not a number") from None
         if not math.isfinite(number):

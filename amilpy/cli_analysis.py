@@ -14,6 +14,7 @@ import sys
 from . import cli as base
 from .console import Progress, write_out
 from .diagnostics import with_hint
+from .language import fortran_float
 from .output.writers import Outputs
 
 
@@ -21,7 +22,7 @@ def _span(text: str) -> tuple[str, float, float]:
     """NAME=START:STOP -> (NAME, START, STOP)."""
     try:
         name, spec = text.split("=", 1)
-        start, stop = (float(x.replace("D", "E").replace("d", "e")) for x in spec.split(":"))
+        start, stop = (fortran_float(x) for x in spec.split(":"))
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"write the range NAME=START:STOP, e.g. W=67.5:73, got {text!r}") from None

@@ -74,6 +74,12 @@ WEATHER_KEYS: tuple[str, ...] = ("WTRDIR", "CNTR", "ISTN", "IYEAR")
 LINE_BREAK = re.compile(r"\r\n|\r|\n")
 
 
+def fortran_float(text: str) -> float:
+    """A number as listings and command lines write it, Fortran's D exponent
+    (1.5D-3) read as E; ValueError if the text is not a number."""
+    return float(text.replace("D", "E").replace("d", "e"))
+
+
 def split_lines(text: str) -> list[str]:
     """The lines of a listing, numbered as diagnostics and the parser number them."""
     return LINE_BREAK.split(text)

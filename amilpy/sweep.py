@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .diagnostics import AmilError
+from .language import fortran_float
 from .result import Run
 
 
@@ -197,8 +198,7 @@ def parse_range(text: str) -> tuple[str, list[float]]:
     is an AmilError saying what to write (the command line makes it a usage error)."""
     try:
         name, spec = text.split("=", 1)
-        start, stop, step = (float(x.replace("D", "E").replace("d", "e"))
-                             for x in spec.split(":"))
+        start, stop, step = (fortran_float(x) for x in spec.split(":"))
     except ValueError:
         raise AmilError("write it NAME=START:STOP:STEP, e.g. W=60:80:0.5") from None
     if not name.strip().isidentifier():

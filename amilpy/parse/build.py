@@ -15,6 +15,7 @@ from ..language import (
     REPORT_KEYWORDS,
     SECTIONS,
     TYPE_KEYWORDS,
+    fortran_float,
 )
 from ..syntax import MAX_DEPTH
 from .blocks import Close, ElseHead, Head
@@ -30,10 +31,6 @@ _OPERATORS = {".EQ.": "==", "==": "==", ".NE.": "/=", "/=": "/=", "~=": "/=",
               ".GE.": ">=", ">=": ">=", ".AND.": "AND", "&&": "AND", ".OR.": "OR",
               "||": "OR", ".EQV.": "EQV", ".NEQV.": "NEQV"}
 _LOGIC = ("rel", "land", "lor", "eqv")
-
-
-def _number(text: str) -> float:
-    return float(text.replace("D", "E").replace("d", "e"))
 
 
 def string_value(token: str) -> str:
@@ -242,7 +239,7 @@ class Builder:
 
     def value(self, node) -> float:
         if node.data == "negative":
-            return -_number(str(node.children[0]))
+            return -fortran_float(str(node.children[0]))
         if node.data == "truth":
             return 1.0 if str(node.children[0]).upper() == ".TRUE." else 0.0
         if node.data == "string":
@@ -251,7 +248,7 @@ class Builder:
                 "strings are TERMT messages, WEATHER/TRANSLATION values and comments; put "
                 "the text in a TERMT message or a comment"))
             return 0.0
-        return _number(str(node.children[0]))
+        return fortran_float(str(node.children[0]))
 
     def st_data(self, node) -> ast.Data:
         keyword = DATA_KEYWORDS[str(node.children[0]).upper()]
@@ -463,7 +460,7 @@ class Builder:
         kind = node.data
         if kind == "number":
             tok = node.children[0]
-            return ast.Num(_number(str(tok)), self.span(node), str(tok))
+            return ast.Num(fortran_float(str(tok)), self.span(node), str(tok))
         if kind == "name":
             return ast.Name(str(node.children[0]).upper(), self.span(node))
         if kind == "call":
