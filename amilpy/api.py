@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 from . import ir
 from .check import check
 from .diagnostics import AmilError, Diagnostic, did_you_mean, with_hint
+from .outcome import was_interrupted
 from .parse import parse
 from .routes import route_for
 
@@ -166,7 +167,7 @@ class Model:
                 run.advice = stiffness_advice(self.ir, spec, run, opts, self.cache)
                 advised = run.advice is not None  # say it once
             runs.append(run)
-            if run.message.startswith("interrupted"):
+            if was_interrupted(run.message):
                 break  # Ctrl-C: keep what was computed, start nothing new
             if done is not None and not farmed:
                 done(k, len(specs))

@@ -439,7 +439,7 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
     elif failed and not result.errors:
         print(f"amilpy: {path}: {len(failed)} point(s) failed, first at {name} = "
               f"{failed[0].value:g}", file=sys.stderr)
-    return max(code, EXIT_FAILED if failed else EXIT_OK)
+    return max(code, EXIT_FAILED if failed or result.errors else EXIT_OK)
 
 
 def cmd_report(args, path: str, signals: Signals) -> int:

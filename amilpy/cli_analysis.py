@@ -188,7 +188,11 @@ def cmd_response(args, path: str, signals) -> int:
     finally:
         progress.done()
     code = _done("response", path, model, resp, args, signals, response_text)
-    if not resp.complete:
+    if resp.interrupted:
+        print(f"amilpy: {path}: interrupted after {name} = {resp.points[-1].value:.7g}; "
+              "what was found is printed and written", file=sys.stderr)
+        code = max(code, base.EXIT_FAILED)
+    elif not resp.complete:
         print(f"amilpy: {path}: the curve could not be followed past {name} = "
               f"{resp.points[-1].value:.7g}; what was found is printed and written",
               file=sys.stderr)

@@ -28,6 +28,7 @@ import numpy as np
 
 from . import interrupts, ir
 from .diagnostics import AmilError
+from .outcome import was_interrupted
 from .result import Run
 
 # per worker process: token -> (model, its Cache)
@@ -89,6 +90,9 @@ def farm(model: ir.Model, tasks: list[Task], jobs: int = 1, scheduler: str | Non
             out.append(_execute(model, cache, task))
             if done is not None:
                 done(i, out[-1])
+            if out[-1].interrupted:  # Ctrl-C: keep what was computed, start nothing new
+                return out + [Outcome(error="interrupted before it started", interrupted=True)
+                              for _ in tasks[i + 1:]]
         return out
     return _on_processes(model, tasks, jobs, done)
 
@@ -147,13 +151,15 @@ def _execute(model: ir.Model, cache, task: Task) -> Outcome:
         return Outcome(error=exc.render())
     except Exception as exc:  # noqa: BLE001 - reported with its parameters, others kept
         return Outcome(error=f"{type(exc).__name__}: {exc}")
+    stopped = was_interrupted(run.message)
     if task.measure is None:
-        return Outcome(run=run)
+        return Outcome(run=run, interrupted=stopped)
     t0 = float(run.times[0]) if len(run.times) else float("nan")
     lo, hi = extent(run, task.measure)
     return Outcome(run=run if task.keep_run else None,
                    point=(lo, hi, str(run.status), t0, float(run.t_end),
-                          unsteadiness(run, task.measure, task.settle)))
+                          unsteadiness(run, task.measure, task.settle)),
+                   interrupted=stopped)
 
 
 def extent(run: Run, measure: str) -> tuple[float, float]:

@@ -69,6 +69,12 @@ MESSAGES: dict[Failure | Status, str] = {
 }
 
 
+def was_interrupted(text: str) -> bool:
+    """A run's message says it was interrupted (Ctrl-C, SIGTERM, SIGHUP): what
+    runs after it should not start."""
+    return text.startswith(MESSAGES[Failure.INTERRUPTED].split()[0])  # ("interrupted ...")
+
+
 def message(kind: Failure | Status, **fields: object) -> str:
     """The sentence a user reads for an outcome, from its template and data."""
     return MESSAGES[kind].format(**fields)

@@ -280,8 +280,16 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
         if progress is not None:
             progress(finished[0], len(sequence), sequence[i][0])
 
-    for (value, direction, w), task, outcome in zip(sequence, tasks, farm(
-            model.ir, tasks, jobs, scheduler, done, model.cache), strict=True):
+    outcomes = farm(model.ir, tasks, jobs, scheduler, done, model.cache)
+    for k, ((value, direction, w), task, outcome) in enumerate(zip(sequence, tasks, outcomes,
+                                                                    strict=True)):
+        if outcome.point is None and outcome.interrupted:
+            # Ctrl-C: the points computed are kept, the rest were never run
+            rest = [t.label for t, o in zip(tasks[k:], outcomes[k:], strict=True)
+                    if o.point is None]
+            result.errors.append(f"interrupted: {rest[0]}" + (
+                f" to {rest[-1]} ({len(rest)} points)" if len(rest) > 1 else "") + " not run")
+            break
         if outcome.point is None:
             result.errors.append(f"{task.label}: {outcome.error or 'not run'}")
             nan = math.nan

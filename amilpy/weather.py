@@ -58,6 +58,9 @@ class WeatherYear:
     lines: dict[int, int] = field(default_factory=dict)  # day -> line in the file
 
 
+CYCLE_DAYS = 146_097  # the days of 400 years of the Gregorian calendar
+
+
 def days_in(year: int) -> int:
     return 366 if year % 4 == 0 and (year % 100 != 0 or year % 400 == 0) else 365
 
@@ -162,6 +165,10 @@ class Weather:
         if not math.isfinite(t):
             raise AmilError(f"no weather at TIME = {t}")
         year, day = self.spec.year, int(math.floor(t))
+        # whole 400-year cycles of the calendar at once (a TIME of 1E15 days would
+        # take 3E12 turns of the loops below)
+        cycles = (day - 1) // CYCLE_DAYS
+        year, day = year + 400 * cycles, day - CYCLE_DAYS * cycles
         while day > days_in(year):
             day -= days_in(year)
             year += 1

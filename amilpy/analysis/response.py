@@ -42,6 +42,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import interrupts
 from ..diagnostics import AmilError
 from ..result import EventKind
 from . import folds
@@ -103,6 +104,7 @@ class Response:
     points: list[Point] = field(default_factory=list)  # along the curve, folds in place
     notes: list[str] = field(default_factory=list)  # flags, what could not be followed
     complete: bool = True  # the curve reached an end of the range
+    interrupted: bool = False  # Ctrl-C (SIGTERM, SIGHUP) ended it: the points so far kept
     names: list[str] = field(default_factory=list)  # the states, in Point.start order
 
     @property
@@ -283,6 +285,17 @@ class Continuation:
         self.count = 1
         lo, hi = min(self.start, self.stop), max(self.start, self.stop)
         trail, ds = [node], DS0
+        try:
+            self.follow(out, node, tangent, trail, ds, lo, hi)
+        except KeyboardInterrupt:  # the points found are kept, as a run's rows are
+            interrupts.handled()
+            out.complete, out.interrupted = False, True
+        return out
+
+    def follow(self, out: Response, node: _Node, tangent: np.ndarray, trail: list[_Node],
+               ds: float, lo: float, hi: float) -> None:
+        """Along the curve from `node` until an end of [lo, hi], a point it cannot
+        pass, or MAX_POINTS."""
         while len(out.points) < MAX_POINTS:
             self.jumped = False
             nxt, ds, tangent = self.step(trail, tangent, ds, out)
@@ -306,7 +319,6 @@ class Continuation:
                 tangent = self.turned(node, nxt, tangent)
             trail = [nxt] if self.jumped else (trail + [nxt])[-3:]
             node = nxt
-        return out
 
     def begin(self) -> tuple[_Node, np.ndarray]:
         """The first point (settled, then Newton) and the tangent towards STOP."""

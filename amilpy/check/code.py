@@ -127,6 +127,12 @@ class CodeLowering:
                               tuple(self.block(st.body, section)), st.span)
         if isinstance(st, ast.Procedural):  # in written-order code: a plain group
             return self.block(st.body, section)
+        if isinstance(st, (ast.Termt, ast.Schedule)) and section.startswith("FUNCTION"):
+            what = "TERMT" if isinstance(st, ast.Termt) else "SCHEDULE"
+            self.rep.error(f"{what} cannot stand in {section}", st.span,
+                           "a FUNCTION only computes its value: write the TERMT or "
+                           "SCHEDULE where the FUNCTION is called")
+            return None
         if isinstance(st, ast.Schedule):
             if st.kind != "AT":
                 self.rep.error(f"SCHEDULE .{st.kind}. stands only in DERIVATIVE", st.span,

@@ -416,10 +416,11 @@ class RunGroups(Visitor):
             self.rep.error(f"WEATHER needs {', '.join(missing)}", self.weather_span,
                            "e.g. WEATHER CNTR = 'NLD'; ISTN = 1; IYEAR = 1990")
             return None
-        for key in ("ISTN", "IYEAR"):
+        for key, low, high in (("ISTN", 0, 1e9), ("IYEAR", 1, 9999)):
             value = items[key].value
-            if isinstance(value, str) or value != int(value):
-                self.rep.error(f"{key} must be a whole number", items[key].span)
+            if isinstance(value, str) or not (low <= value <= high) or value != int(value):
+                self.rep.error(f"{key} must be a whole number from {low} to {high:g}",
+                               items[key].span)
                 return None
         wtrdir = items.get("WTRDIR")
         return WeatherSpec(str(items["CNTR"].value).strip().upper(), int(items["ISTN"].value),

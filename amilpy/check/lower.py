@@ -360,11 +360,12 @@ class _Lowerer(Visitor):
         if op in RELATIONS and not self.literal:
             return ir.SwitchValue(self.lowering.relational(expr, self.target), expr.span)
         if op == "/" and all(isinstance(x, ast.Num) and x.text.isdigit()
-                             for x in (expr.left, expr.right)):
+                             for x in (expr.left, expr.right)) and expr.right.value:
+            # (a division by a literal 0 is the fault's to report, where it happens)
             self.lowering.warn(
                 f"{expr.left.text}/{expr.right.text} is a division of whole numbers: it is "
                 f"{expr.left.value / expr.right.value:g} here (Fortran would give "
-                f"{int(expr.left.value / expr.right.value) if expr.right.value else 0})",
+                f"{int(expr.left.value / expr.right.value)})",
                 expr.span, "write the numbers with a point (1./2.) to say a real division is "
                 "meant")
         if op in ("==", "/=") and not self.literal and _reads_names(expr):

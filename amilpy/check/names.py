@@ -80,9 +80,11 @@ class Names:
     def check_call(self, node: ast.Call, allow, section: str) -> None:
         entry = lookup(node.func)
         if entry is None and node.func in self.functions:
-            if len(node.args) != self.functions[node.func]:
-                self.rep.error(f"FUNCTION {node.func} takes {self.functions[node.func]} "
-                               f"arguments, got {len(node.args)}", node.span)
+            wanted = self.functions[node.func]
+            if len(node.args) != wanted:
+                self.rep.error(f"FUNCTION {node.func} takes {wanted} "
+                               f"argument{'s' if wanted != 1 else ''}, got {len(node.args)}",
+                               node.span)
             return
         if entry is None:
             self.unknown_function(node)

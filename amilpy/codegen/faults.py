@@ -166,6 +166,9 @@ def _checking_function(compiled, name: str):
     return compiled.checking[name]
 
 
+_SCALAR = {"surf_vec": "surf", "out_vec": "out"}
+
+
 @deep_enough()
 def explain(compiled, exc: BaseException, t: float, y, m, z) -> FaultReport | None:
     """The statement that raised `exc` and the operation that failed (see
@@ -174,6 +177,9 @@ def explain(compiled, exc: BaseException, t: float, y, m, z) -> FaultReport | No
     if found is None or found[2] is not compiled.statements:
         return None
     statement, name, table = found
+    # (the functions over many rows at once are their scalar ones', statement by
+    # statement: the scalar one is re-evaluated at the point given)
+    name = _SCALAR.get(name, name)
     if name not in ("rhs", "surf", "out", "mem", "modes", "smp"):
         return None
     fn, sites = _checking_function(compiled, name)

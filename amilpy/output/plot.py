@@ -118,6 +118,21 @@ def _scale(values: list[np.ndarray]) -> float:
     return float(max(finite)) if finite else 0.0
 
 
+# Past this, matplotlib's tick arithmetic overflows (a range of 2 * 1.7E308 is not a
+# float): such an axis is drawn in units of a power of ten, named in its label.
+HUGE = 1e300
+
+
+def _factor(scale: float) -> float:
+    """The power of ten an axis whose largest |value| is `scale` is drawn in (1 for
+    any ordinary axis)."""
+    return 1.0 if not scale >= HUGE else 10.0 ** math.floor(math.log10(scale))
+
+
+def _in_units(factor: float) -> str:
+    return "" if factor == 1.0 else f" (x 1E{round(math.log10(factor))})"
+
+
 def _axis_groups(names: Sequence[str], scales: dict[str, float], subplots: bool
                  ) -> list[list[str]]:
     """All variables on one axis, unless asked or their scales differ by more than
@@ -154,17 +169,21 @@ def draw(runs: Sequence[Run], spec: FigureSpec, labels: Sequence[str] | None = N
     axes = fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0]
     several = len(runs) > 1
     style = {n: STYLES[i % len(STYLES)] for i, n in enumerate(names)}
+    # (TIME is not scaled: the window and the event lines are in TIME)
+    x_factor = 1.0 if spec.x is None else _factor(_scale([x for x, _ in data.values()]))
     for ax, group in zip(axes, groups, strict=True):
+        factor = _factor(max((scales[n] for n in group), default=0.0))
         for k in range(len(runs)):
             for n in group:
                 if (k, n) not in data:
                     continue
-                x, y = data[k, n]
+                x, y = data[k, n][0] / x_factor, data[k, n][1] / factor
                 colour = f"C{(numbers[k] - 1) % 10}" if several else f"C{names.index(n) % 10}"
                 ax.plot(x, y, color=colour, linestyle=style[n], linewidth=1.2,
                         label=n if not several else f"{n}, {labels[k]}")
         unit = W.unit_of(group, spec.label, notes)
-        ax.set_ylabel(W.shorten(", ".join(group), 40) + (f" [{unit}]" if unit else ""))
+        ax.set_ylabel(W.shorten(", ".join(group), 40) + (f" [{unit}]" if unit else "")
+                      + _in_units(factor))
         ax.grid(True, alpha=0.3)
         if spec.window is not None and spec.x is None:
             ax.set_xlim(*spec.window)
@@ -181,7 +200,7 @@ def draw(runs: Sequence[Run], spec: FigureSpec, labels: Sequence[str] | None = N
                        for k in range(len(runs))], labels, fontsize=8)
         elif len(group) > 1:
             ax.legend(fontsize=8)
-    axes[-1].set_xlabel(_x_label(spec, notes))
+    axes[-1].set_xlabel(_x_label(spec, notes) + _in_units(x_factor))
     title = spec.label or (runs[0].titles[0] if runs and runs[0].titles else ", ".join(names))
     if spec.zoom and spec.window is not None:
         title = f"{title} (TIME {spec.window[0]:.4g} to {spec.window[1]:.4g} s)"

@@ -398,9 +398,12 @@ class AcslRun(_Run):
                 continue
             if cur.t >= plan.fintim:
                 if self.prepared.unbounded:
+                    termt = any(w.purpose is Purpose.TERMT for w in plan.watched)
                     raise Stop(Failure.FAULT, cur.t, detail=(
-                        f"no TERMT ended the run after {MAX_INTERVALS} output intervals; "
-                        "add TERMT(T >= TSTOP) or TIMER FINTIM"))
+                        f"no TERMT ended the run within {MAX_INTERVALS} output intervals "
+                        "(the most a run keeps); " + (
+                            "make CINT longer, or its TERMT come sooner" if termt else
+                            "add TERMT(T >= TSTOP) or TIMER FINTIM")))
                 return None
             if cur.t >= t_next:
                 self.instant(cur)

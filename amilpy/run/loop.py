@@ -23,6 +23,7 @@ from ..codegen import Compiled
 from ..codegen.jacobian import for_compiled as jacobian_for
 from ..codegen.rolled import for_compiled as rolled_rhs
 from ..compiled.layout import LOOP, PLAIN, QUIET
+from ..diagnostics import AmilError
 from ..outcome import Failure
 from ..result import Event
 from ..steppers import (
@@ -45,6 +46,7 @@ from .slide import MAX_SLIDING
 from .watch import SurfaceWatch, TooManySlides, crossings
 
 _EPS = float(np.finfo(float).eps)
+MAX_WINDOW = 1e8  # output intervals of an integration outside the run (an analysis's)
 
 # (ta, tb, dense output, modes, memory) of every accepted step, for analyses
 Observer = Callable[[float, float, Callable, list, list], None]
@@ -157,6 +159,12 @@ class Integrator(RunLoop):
             self.roots, points = time_breakpoints(self.c, list(plan.watched), t0, t1)
             self.breakpoints = tuple(points)
             step = min(plan.timer["OUTDEL"], plan.timer["PRDEL"])
+            span = (t1 - t0) / step
+            if not span <= MAX_WINDOW:  # (NaN and infinities too)
+                raise AmilError(
+                    f"integrating from TIME = {t0:g} to {t1:g} spans {span:.3g} output "
+                    f"intervals of {step:g} s, more than the {MAX_WINDOW:.0e} an analysis "
+                    "looks at: ask for less time (--settle, --period, --at), or raise OUTDEL")
             k0, k1 = math.floor((t0 - plan.t0) / step), math.ceil((t1 - plan.t0) / step)
             self.check_times = plan.t0 + step * np.arange(k0, k1 + 1)
 
@@ -835,10 +843,13 @@ class Integrator(RunLoop):
         e_last = self.c.surf(float(T[-1]), Y[-1].tolist(), m, z) \
             if self.plan.watch_idx else e_prev
         TR, YR = T[rows], Y[rows]
-        with np.errstate(all="ignore"):
-            outs = self.c.out_v(TR, list(YR.T), m, z)
         if k:
-            rec.block(TR, YR, output_table(outs, k), m, z, samples)
+            try:
+                with np.errstate(all="ignore"):
+                    table = output_table(self.c.out_v(TR, list(YR.T), m, z), k)
+            except ArithmeticError:  # (a variable the derivatives do not read faults)
+                table = rec.output_rows(TR, YR, [m] * k, z)
+            rec.block(TR, YR, table, m, z, samples)
         else:
             rec.samples(*samples, m, z)
         stepper.consume(n)
@@ -867,7 +878,11 @@ class Integrator(RunLoop):
             got = stepper.advance(m, z, times, gi)
             if rec is not None and len(got.T):
                 # (each row's branches too: RANGE re-integrates from rows)
-                rec.block(got.T, got.Y, self._compiled_outputs(got, z), got.M, z)
+                try:
+                    table = self._compiled_outputs(got, z)
+                except ArithmeticError:  # (a variable the derivatives do not read)
+                    table = rec.output_rows(got.T, got.Y, got.M, z)
+                rec.block(got.T, got.Y, table, got.M, z)
             if rec is not None and len(got.S):
                 rec.samples_with_modes(got.S, got.SY, got.SM, z)
             ranged = rec is not None and bool(rec.extrema.names)

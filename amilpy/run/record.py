@@ -343,6 +343,8 @@ class Recorder:
         # rows before this TIME are not searched (a sweep's settling time); the
         # first row after it is then an end of the searched window, like a run's start
         self.range_from = range_from
+        # the first fault of a variable in a row (shown as NaN there), for a warning
+        self.output_fault: str | None = None
 
     @property
     def last_t(self) -> float | None:
@@ -351,13 +353,25 @@ class Recorder:
     def outputs(self, t: float, y: np.ndarray, m, z) -> list[float]:
         try:
             return self.watch.outputs(t, y, m, z)
-        except (ArithmeticError, ValueError):
+        except (ArithmeticError, ValueError) as exc:
             # a variable that cannot be computed here (a division by zero the run
-            # stops on) is NaN; the states are what they are
+            # stops on, or in a variable the derivatives do not read) is NaN; the
+            # states are what they are
+            if self.output_fault is None:
+                report = self.c.explain_fault(exc, t, list(y), m, z)
+                self.output_fault = f"{report or exc} at TIME = {t:.9g}"
             values = [math.nan] * len(self.c.out_names)
             for j, i in self._state_columns:
                 values[j] = float(y[i])
             return values
+
+    def output_rows(self, T: np.ndarray, Y: np.ndarray, M, z) -> np.ndarray:
+        """The output table of rows (TIME T, states Y, each row's modes M) one row at
+        a time: where the code over all rows at once meets a fault, the rows before
+        it and after it are still right, and the variables that fault are NaN."""
+        return np.array([self.outputs(float(t), y, list(m), z)
+                         for t, y, m in zip(T, Y, M, strict=True)]).reshape(
+                             len(T), len(self.c.out_names))
 
     def shown_modes(self, t: float, y: np.ndarray, m, z) -> list[float]:
         """At a switching instant a row shows the branch in force from then on; a

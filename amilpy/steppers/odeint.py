@@ -608,6 +608,8 @@ class OdeintStepper(Chunked):
         on the wrong side, and the one before), with a narrow window around t inside
         it."""
         dense = self.interpolant()
+        if not isinstance(dense, Nodes):
+            return dense  # (the fallback's step: its own solver's dense output)
         h = self.t - self.t_old
         points = [max(self.t_old, t - self.WINDOW * h), min(self.t, t + self.WINDOW * h)]
         step = self._crossing_step(surfaces)
@@ -629,6 +631,8 @@ class OdeintStepper(Chunked):
         tenth of LSODA's step there at most (a cubic over a whole step of a high
         order is off by up to (h*omega)^4/384 of the motion)."""
         dense = self.interpolant()
+        if not isinstance(dense, Nodes):
+            return True  # (the fallback's step: nothing here can narrow it)
         k = min(max(bisect.bisect_left(dense.t, t), 1), len(dense.t) - 1)
         step = self._crossing_step(surfaces)
         h = step[1] - step[0] if step is not None else self.t - self.t_old
