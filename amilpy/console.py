@@ -20,6 +20,7 @@ from contextlib import contextmanager
 from typing import TextIO
 
 from . import interrupts
+from .interrupts import TimeLimit, time_limit  # noqa: F401 - (the command line's)
 from .output.files import to_devnull
 from .output.words import visible
 
@@ -71,50 +72,6 @@ class Signals:
         return signal.Signals(signum).name
 
 
-class TimeLimit(BaseException):
-    """A block ran past its wall-clock limit (`time_limit`). Like KeyboardInterrupt
-    it is no Exception, so no `except Exception` on the way can swallow it."""
-
-
-@contextmanager
-def time_limit(seconds: float | None):
-    """Interrupt the block with TimeLimit after `seconds` of wall clock. Reading,
-    checking and compiling a listing is one long call into lark and the code
-    generator with no place to look at a clock, so SIGALRM does it; where there
-    is none (Windows, a thread other than the main one) the block is not bounded."""
-    # a limit of over a year is no limit (and past time_t, setitimer overflows)
-    if not seconds or seconds > 3e7 or not hasattr(signal, "setitimer"):
-        yield
-        return
-
-    def expired(signum: int, frame) -> None:
-        # The handler may run inside a weakref callback or a __del__, where Python
-        # prints an exception and drops it: ring again shortly until one lands.
-        signal.setitimer(signal.ITIMER_REAL, RETRY)
-        raise TimeLimit
-
-    try:
-        previous = signal.signal(signal.SIGALRM, expired)
-    except ValueError:  # not the main thread
-        yield
-        return
-    hook = sys.unraisablehook
-
-    def quiet(unraisable) -> None:  # a dropped ring is not worth a message
-        if not isinstance(unraisable.exc_value, TimeLimit):
-            hook(unraisable)
-
-    sys.unraisablehook = quiet
-    signal.setitimer(signal.ITIMER_REAL, seconds)
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, previous)
-        sys.unraisablehook = hook
-
-
-RETRY = 0.02  # seconds between two rings of an expired time_limit
 
 
 

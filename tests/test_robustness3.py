@@ -226,3 +226,30 @@ def test_an_interrupted_response_keeps_the_curve_so_far():
     assert resp.interrupted and not resp.complete
     assert len(resp.points) == 3 and resp.points[-1].value == pytest.approx(seen[-1])
     assert np.all(np.diff([p.value for p in resp.points]) > 0)
+
+
+# ------------------------------------------------------------ wall-clock limit
+
+def test_a_time_limit_keeps_the_rows_of_auto():
+    """--max-time ended AUTO inside one odeint call of 4,096 output instants, and all
+    of them were lost (the printout held the row at TIME 0 only). Under a limit a
+    chunk now takes at most 2 % of it: the rows up to near the end are kept, and
+    they are right (X = cos(100 t))."""
+    run = run1("X = INTGRL(1.0, V)\nV = INTGRL(0.0, -1.0E4*X)\n"
+               "TIMER FINTIM = 20000.0, OUTDEL = 1.0\nPRINT X\nEND\n", max_time=2.0)
+    assert not run.ok and "wall-clock limit of 2 s reached" in run.message
+    assert len(run.t) >= 2 and run.t[-1] <= run.t_end
+    assert np.max(np.abs(run["X"] - np.cos(100.0 * run.t))) < 1e-3
+
+
+def test_a_time_limit_ends_a_procedural_loop_that_never_looks_at_the_clock():
+    """A PROCEDURAL block of 1E12 iterations ran on past --max-time (the loop looks
+    at its deadline between steps, and the first evaluation never ended). A SIGALRM
+    a little after the limit (`simulate.backstop`) ends it; the run says so."""
+    run = run1("PROGRAM P\n  CONSTANT N = 1.0E6\n  CINTERVAL CINT = 0.5\n  DERIVATIVE\n"
+               "    X = INTEG(1.0, 0.0)\n    PROCEDURAL (S = X)\n      S = 0.0\n"
+               "      DO I = 1, N\n        DO J = 1, N\n          S = S + SIN(S + X)\n"
+               "        END DO\n      END DO\n    END\n    TERMT(T .GE. 2.0)\n  END\nEND\n",
+               max_time=0.5)
+    assert not run.ok and run.message == ("integration failed at TIME = 0: wall-clock "
+                                          "limit of 0.5 s reached")

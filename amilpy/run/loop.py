@@ -46,6 +46,7 @@ from .slide import MAX_SLIDING
 from .watch import SurfaceWatch, TooManySlides, crossings
 
 _EPS = float(np.finfo(float).eps)
+CHUNK_SHARE = 0.02  # of --max-time, the most one odeint chunk may take
 MAX_WINDOW = 1e8  # output intervals of an integration outside the run (an analysis's)
 
 # (ta, tb, dense output, modes, memory) of every accepted step, for analyses
@@ -373,16 +374,18 @@ class Integrator(RunLoop):
         # FINISH would throw away the rest of the run), unless it may pause and start
         # afresh (the caller's code, a memory the integrator sees); never the whole
         # segment in one call, whose output and counts would take 200 bytes a row of
-        # a long run
+        # a long run; nor under a time limit, until the chunks' time is known
         pausing = t_end is not None and seg_end > t_end
-        chunk = 16 if plan.watch_idx or pausing else 4096
+        chunk = 16 if plan.watch_idx or pausing or self.opts.max_time else 4096
         stepper = make_stepper(
             plan.route.name, f, cur.t, cur.y, seg_end, rtol=plan.tol.rtol, atol=plan.tol.atol,
             delt=plan.timer["DELT"], max_step=plan.max_step, first_step=self._last_step,
             checks=checks, chunk=chunk, max_steps=self.opts.max_steps - self.nsteps,
             expect=expected_event(self._recent, cur.t), jac=self._jacobian(cur, f),
             kernel=self._kernel_arguments(cur, dense, rec), log=log,
-            watch=(self._wrong_at(cur), cur.m, cur.z) if plan.watch_idx else None)
+            watch=(self._wrong_at(cur), cur.m, cur.z) if plan.watch_idx else None,
+            # (a chunk the time limit ends inside is lost: none may take long)
+            chunk_seconds=CHUNK_SHARE * self.opts.max_time if self.opts.max_time else None)
         return stepper, f
 
     def _wrong_at(self, cur: Cursor) -> Callable[..., tuple[int, int]]:

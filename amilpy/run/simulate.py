@@ -31,6 +31,12 @@ from .steppoint import StepPoint
 from .watch import SurfaceWatch, TooManySlides
 
 
+def backstop(max_time: float | None) -> float | None:
+    """When a run's wall-clock limit interrupts code that never looks at the clock:
+    a little after the run loop's own look would have ended it."""
+    return None if not max_time else max_time + max(1.0, 0.1 * max_time)
+
+
 def simulate(model: ir.Model, spec: ir.RunSpec, options: Options | None = None,
              cache: Cache | None = None) -> Run:
     """Integrate one run of a checked model. Faults in the data raise AmilError;
@@ -78,6 +84,21 @@ class _Run:
         self.started = started
 
     def run(self) -> Run:
+        """The run, within its wall-clock limit even where no loop looks at the clock
+        (`backstop`): what was computed is kept."""
+        try:
+            with interrupts.time_limit(backstop(self.opts.max_time)):
+                return self._run()
+        except interrupts.TimeLimit:  # (before the integration: INITIAL, the start)
+            interrupts.silence_alarm()
+            t0 = self.plan.t0
+            cur = Cursor(t0, np.array(self.c.y0, dtype=float), [0.0] * len(self.plan.watched),
+                         list(self.c.z0))
+            self.integ.events.clear()
+            return self.finish(Status.FAILED, message(Failure.TIME_LIMIT, t=t0,
+                                                      limit=self.opts.max_time), cur, {})
+
+    def _run(self) -> Run:
         c, plan, integ, start = self.c, self.plan, self.integ, self.opts.start
         y = np.array(start["y"] if start else c.y0, dtype=float)
         z = list(start["z"]) if start else list(c.z0)
@@ -126,6 +147,14 @@ class _Run:
             status, text = Status.FAILED, message(stop.kind, t=stop.t, **stop.fields)
             cur.t = stop.t
             self._keep_last_good(cur)
+        except interrupts.TimeLimit:
+            # (the loop looks at its deadline between chunks; this is a PROCEDURAL
+            # loop or one long step that never came back to look: `run`)
+            interrupts.silence_alarm()
+            cur.t = max(cur.t, rec.last_t if rec.last_t is not None else cur.t)
+            status, text = Status.FAILED, message(Failure.TIME_LIMIT, t=cur.t,
+                                                  limit=self.opts.max_time)
+            return self.finish(status, text, cur, {})
         except KeyboardInterrupt:
             interrupts.handled()
             # (the rows of the step under way may reach past where it began: the run

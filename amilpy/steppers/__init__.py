@@ -32,7 +32,8 @@ def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float
                  first_step: float | None = None, checks=None, chunk: int = 16,
                  max_steps: int = UNLIMITED, expect: float | None = None,
                  jac: SegmentJacobian | None = None, kernel=None,
-                 log: Evaluations | None = None, watch=None) -> Stepper:
+                 log: Evaluations | None = None, watch=None,
+                 chunk_seconds: float | None = None) -> Stepper:
     """The stepper for a canonical route name (see `routes.ROUTES`).
 
     `rtol`, `atol`: per-state tolerances (variable-step routes); `delt`: the fixed
@@ -43,7 +44,8 @@ def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float
     `jac`: the vector field's Jacobian, for the implicit routes (None: differences);
     `kernel`: for the compiled route, its `KernelStepper` arguments (None: the route
     runs on its SciPy class); `log`, `watch`: the odeint stepper's evaluation log and
-    surface check (see `OdeintStepper`).
+    surface check (see `OdeintStepper`); `chunk_seconds`: the wall-clock one odeint
+    call may take (under a time limit).
     """
     r = BY_NAME[route]
     if len(y0) == 0:
@@ -56,7 +58,7 @@ def make_stepper(route: str, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float
         return OdeintStepper(fun, t0, y0, t_bound, checks, rtol=rtol, atol=atol,
                              max_step=max_step, first_step=first_step, chunk=chunk,
                              max_steps=max_steps, expect=expect, jac=jac, log=log,
-                             watch=watch)
+                             watch=watch, chunk_seconds=chunk_seconds)
     if r.stepper == "compiled" and kernel is not None:
         from .compiled import KernelStepper
 

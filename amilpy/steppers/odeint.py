@@ -23,6 +23,7 @@ from __future__ import annotations
 import bisect
 import gc
 import math
+import time
 import warnings
 
 import numpy as np
@@ -197,7 +198,7 @@ class OdeintStepper(Chunked):
                  first_step: float | None, chunk: int = 16,
                  max_steps: int = UNLIMITED, expect: float | None = None,
                  jac: SegmentJacobian | None = None, log: Evaluations | None = None,
-                 watch=None) -> None:
+                 watch=None, chunk_seconds: float | None = None) -> None:
         self.fun = fun
         self.jac = jac
         self._banded: Banded | None = None
@@ -231,6 +232,10 @@ class OdeintStepper(Chunked):
         self._nfev = 0
         self._steps = 0  # internal steps of the chunks so far
         self._instants = 0  # check instants those steps covered
+        # the wall-clock a chunk may take (under a time limit: a chunk that the limit
+        # ends is lost, one odeint call, so none may be long), and the time so far
+        self._chunk_seconds = chunk_seconds
+        self._seconds = 0.0
         self._dense: Nodes | None = None
         self._derivs: dict[float, np.ndarray] = {}  # f at recent rows
         self._before: tuple[float, np.ndarray] | None = None  # the row before t_old
@@ -264,6 +269,8 @@ class OdeintStepper(Chunked):
     def _chunk_size(self, left: int) -> int:
         n = self.chunk
         self.chunk = min(max(self.chunk, 4) * 4, 4096)
+        if self._instants and self._chunk_seconds is not None and self._seconds > 0:
+            n = min(n, max(1, int(self._chunk_seconds * self._instants / self._seconds)))
         if self._instants:
             per_instant = max(self._steps / self._instants, 1.0)
             n = min(n, max(1, int(left / per_instant)))
@@ -355,9 +362,11 @@ class OdeintStepper(Chunked):
             # all of them again and again while the chunk runs, for nothing)
             collecting = gc.isenabled()
             gc.disable()
+        started = time.perf_counter()
         try:
             ys, info = self._odeint(self.y, grid, self.log.fun if self.log else None, **options)
         finally:
+            self._seconds += time.perf_counter() - started
             if self.log is not None and collecting:
                 gc.enable()
         if info["message"] != "Integration successful.":
