@@ -19,6 +19,7 @@ import argparse
 import math
 import os
 import sys
+import warnings
 
 from . import __version__, interrupts
 from .console import (
@@ -37,6 +38,8 @@ from .output.writers import DIALECTS, WRITERS, Outputs, PlotOptions, dest, write
 from .routes import method_names, methods_help, route_for
 
 EXIT_OK, EXIT_MODEL, EXIT_USAGE, EXIT_FAILED, EXIT_OUTPUT = 0, 1, 2, 3, 4
+# the modules whose warnings the command line does not show (see `_main`)
+LIBRARIES = r"(scipy|numpy|matplotlib|numba|lark)(\.|$)"
 
 
 class UsageError(Exception):
@@ -561,12 +564,18 @@ def _main(argv: list[str] | None) -> int:
     command = {**COMMANDS, **ANALYSES}[args.command]
     signals = Signals()
     signals.install()
+    # A library's warning (SciPy's "excess accuracy requested", NumPy's overflow in
+    # matplotlib's ticks) is noise on a user's terminal, pointing into code they did
+    # not write: amilpy says in its own words what came of it (the run's notes and
+    # messages)
     try:
         code = EXIT_OK
-        for path in paths:
-            code = max(code, _one(command, args, path, signals))
-            if signals.received:
-                break  # an interrupt stops the files not yet started too
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", module=LIBRARIES)
+            for path in paths:
+                code = max(code, _one(command, args, path, signals))
+                if signals.received:
+                    break  # an interrupt stops the files not yet started too
         if STDOUT_FAILED:
             print(f"amilpy: cannot write the printout to standard output: "
                   f"{STDOUT_FAILED[0]}", file=sys.stderr)

@@ -253,3 +253,47 @@ def test_a_time_limit_ends_a_procedural_loop_that_never_looks_at_the_clock():
                max_time=0.5)
     assert not run.ok and run.message == ("integration failed at TIME = 0: wall-clock "
                                           "limit of 0.5 s reached")
+
+
+# ------------------------------------------------------------ library warnings
+
+TOO_TIGHT = ("RELERR 1.0E-17\nABSERR 1.0E-30\nX = INTGRL(1.0, -X)\n"
+             "F = FSW(X - 0.5, -1.0, 0.0, 1.0)\nY = INTGRL(1.0, F)\n"
+             "TIMER FINTIM = 1.5, OUTDEL = 0.25\nPRINT X, Y\nEND\n")
+
+
+@pytest.mark.parametrize("method", ["AUTO", "LSODA", "RKS", "BDF"])
+def test_a_relerr_below_double_precision_is_raised_and_said(method):
+    """RELERR 1E-17 made LSODA fail at its first step ("excess accuracy requested",
+    then "Unexpected istate in LSODA") after SciPy's own warnings. The tolerance is
+    raised to what the solver takes, one note says so, and the run is right:
+    X = exp(-t), the switch at ln 2."""
+    run = run1(TOO_TIGHT, method=method)
+    assert run.ok, run.message
+    assert np.allclose(run["X"], np.exp(-run.t), rtol=1e-9, atol=0)
+    assert abs(run.events[0].time - math.log(2.0)) < 1e-9
+    assert [w for w in run.warnings if w.startswith("RELERR 1e-17 is below what double "
+                                                    "precision can hold")]
+
+
+def test_the_command_line_shows_no_library_warning(tmp_path, capsys):
+    """SciPy's, NumPy's and matplotlib's warnings point into code the user did not
+    write; the command line leaves them out (and restores the warning filters)."""
+    import warnings
+
+    before = list(warnings.filters)
+    path = tmp_path / "far.amil"
+    # (a first step towards an output instant 1E299 away: SciPy's LSODA warns of
+    # repeated convergence failures, then fails, which the run says)
+    path.write_text("X = INTGRL(0.0, V)\nV = INTGRL(0.0, SIN(TIME) - 0.1*V - X)\n"
+                    "TIMER FINTIM = 1.0E300, OUTDEL = 1.0E299\nPRINT X, V\nEND\n")
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        amilpy.load(str(path)).run(advice=False)
+    assert any("lsoda" in str(w.message) for w in seen)  # (the API passes them on)
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        assert main(["run", str(path), "--quiet"]) == 3
+    err = capsys.readouterr().err
+    assert "Warning" not in err and "integration failed at TIME = 0" in err, err
+    assert warnings.filters == before

@@ -40,7 +40,15 @@ from ..steppers.compiled import KernelStepper
 from ..steppers.jacobian import SegmentJacobian
 from .edges import expected_event, locate_crossings
 from .faults import Fault, fault_text
-from .plan import SLIDE, Options, Purpose, RunPlan, SurfaceKind, time_breakpoints, train_instants
+from .plan import (
+    SLIDE,
+    Options,
+    Purpose,
+    RunPlan,
+    SurfaceKind,
+    time_breakpoints,
+    train_instants,
+)
 from .record import Recorder
 from .slide import MAX_SLIDING
 from .watch import SurfaceWatch, TooManySlides, crossings
@@ -119,6 +127,9 @@ class RunLoop:
         self.deadline = self.started + opts.max_time if opts.max_time else None
         self.events: list[Event] = []
         self.warnings: list[str] = []
+        if plan.route.uses_tolerances and plan.tol.floored is not None:
+            self.warnings.append(f"RELERR {plan.tol.floored:g} is below what double "
+                                 f"precision can hold: {plan.tol.floor:.3g} was used")
         self.nsteps = 0
         self.nfev = 0
         self.last_good: tuple[float, np.ndarray, list[float]] | None = None

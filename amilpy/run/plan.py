@@ -113,6 +113,12 @@ class Watched:
         return EventKind.LEVEL if self.kind is SurfaceKind.LEVEL else EventKind.SWITCH
 
 
+# The least relative tolerance every solver takes in double precision: SciPy's
+# solve_ivp raises less to 100 ulps, and LSODA refuses even that ("excess accuracy
+# requested": its test wants the tolerance over 100 ulps of the state)
+RTOL_FLOOR = 1000 * float(np.finfo(float).eps)
+
+
 @dataclass(frozen=True)
 class Tolerances:
     """RELERR and ABSERR per state, as the variable-step routes take them.
@@ -129,6 +135,12 @@ class Tolerances:
     abserr: float
     relerr_each: dict[str, float] = field(default_factory=dict)
     abserr_each: dict[str, float] = field(default_factory=dict)
+    # the least RELERR asked for, where it is below the floor (`floor`, used instead)
+    floored: float | None = None
+
+    @property
+    def floor(self) -> float:
+        return float(self.rtol.min()) if len(self.rtol) else RTOL_FLOOR
 
     @classmethod
     def build(cls, spec: ir.RunSpec, opts: Options, states: list[str],
@@ -148,7 +160,11 @@ class Tolerances:
             rel, ab = rel * scale, ab * scale
         relerr, r_each, rtol = side(opts.rtol, spec.relerr, spec.relerr_each, rel)
         abserr, a_each, atol = side(opts.atol, spec.abserr, spec.abserr_each, ab)
-        return cls(rtol, atol, relerr, abserr, r_each, a_each)
+        # (the floor is the solver's: a route that tightens RELERR for its own
+        # estimator gets a floor as much higher)
+        floor = RTOL_FLOOR / (route.local_tolerance if route is not None else 1.0)
+        floored = float(rtol.min()) if len(rtol) and rtol.min() < floor else None
+        return cls(np.maximum(rtol, floor), atol, relerr, abserr, r_each, a_each, floored)
 
     def describe(self) -> str:
         """For the printout header: "RELERR 1e-06 (X 0.001), ABSERR 1e-09"."""
