@@ -86,6 +86,19 @@ def test_a_fault_in_a_variable_the_derivatives_do_not_read_keeps_the_states(meth
     assert [w for w in run.warnings if "Q (line 3): division by zero: Z = 0" in w]
 
 
+@pytest.mark.parametrize("method", ["AUTO", "RKS"])
+def test_a_fault_in_one_output_leaves_the_others(method):
+    """DN = DELAY(10, -1.0, X) cannot be computed (a negative delay): X = SIN(TIME),
+    which DN reads and nothing reads from DN, was NaN in every row with it, and the
+    run said nothing. Now only DN is NaN, and a note names its statement."""
+    run = run1("X = SIN(TIME)\nY = INTGRL(0.0, 1.0)\nDN = DELAY(10, -1.0, X)\n"
+               "TIMER FINTIM = 2.0, OUTDEL = 0.5\nPRINT X, Y, DN\nEND\n", method=method)
+    assert run.ok and np.allclose(run["X"], np.sin(run.t), rtol=0, atol=1e-15)
+    assert np.allclose(run["Y"], run.t) and np.isnan(run["DN"]).all()
+    assert [w for w in run.warnings if w.startswith(
+        "DN (line 3): the delay must not be negative (got -1 at TIME = 0)")]
+
+
 def test_a_function_of_one_argument_says_argument(tmp_path, capsys):
     code = _run(tmp_path, "PROGRAM P\n  FUNCTION S = F(X)\n    S = 2.0*X\n  END\n"
                 "  DERIVATIVE\n    X = INTEG(1.0, 0.0)\n    Y = F(X, X)\n"

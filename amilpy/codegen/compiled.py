@@ -9,7 +9,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from .. import ir
-from .faults import FaultReport, Statement, explain, statement_of
+from .faults import FaultReport, Statement, explain, statement_of, tolerant
 
 
 @dataclass
@@ -98,6 +98,10 @@ class Compiled:
         e.g. "W2 (line 16): division by zero: JL = 0". None if the fault did not
         happen in this model's generated code."""
         return explain(self, exc, t, y, m, z)
+
+    def outputs_tolerant(self, t: float, y, m, z) -> list[float]:
+        """The outputs at one point, each statement that faults NaN and no other."""
+        return tolerant(self, "out")(t, y, m, z)
 
 
 def fault_line(exc: BaseException) -> int | None:

@@ -166,6 +166,46 @@ def _checking_function(compiled, name: str):
     return compiled.checking[name]
 
 
+class _Tolerant(py.NodeTransformer):
+    """Each statement of a function's body in a try: one that faults gives NaN to
+    what it assigns, and the statements after it go on (NaN flows through them)."""
+
+    def visit_FunctionDef(self, fn: py.FunctionDef) -> py.FunctionDef:
+        fn.body = [self._guarded(st) for st in fn.body]
+        return fn
+
+    @staticmethod
+    def _guarded(st: py.stmt) -> py.stmt:
+        if isinstance(st, py.Return):
+            return st
+        targets = sorted({n.id for n in py.walk(st)
+                          if isinstance(n, py.Name) and isinstance(n.ctx, py.Store)})
+        if not targets:
+            return st
+        nan = [py.Assign([py.Name(t, py.Store())], py.Constant(math.nan)) for t in targets]
+        faults = py.Tuple([py.Name("ArithmeticError", py.Load()),
+                           py.Name("ValueError", py.Load())], py.Load())
+        return py.Try(body=[st], handlers=[py.ExceptHandler(faults, None, nan)],
+                      orelse=[], finalbody=[])
+
+
+def tolerant(compiled, name: str):
+    """The copy of one generated function in which a statement that faults makes
+    its own variables NaN and no others (built once, on the first fault): a row
+    whose DN = DELAY(...) cannot be computed still shows X = SIN(TIME)."""
+    key = ("tolerant", name)
+    if key not in compiled.checking:
+        fn = next(f for f in compiled.module.body if f.name == name)
+        memo = {id(n.amil_src): n.amil_src for n in py.walk(fn) if hasattr(n, "amil_src")}
+        tree = py.Module(body=[_Tolerant().visit(copy.deepcopy(fn, memo))], type_ignores=[])
+        py.fix_missing_locations(tree)
+        scope = dict(compiled.namespace)
+        scope.update(ArithmeticError=ArithmeticError, ValueError=ValueError)
+        exec(compile(tree, "<amilpy tolerant>", "exec"), scope)  # noqa: S102 - our own tree
+        compiled.checking[key] = scope[name]
+    return compiled.checking[key]
+
+
 _SCALAR = {"surf_vec": "surf", "out_vec": "out"}
 
 

@@ -358,9 +358,12 @@ class Recorder:
             # stops on, or in a variable the derivatives do not read) is NaN; the
             # states are what they are
             if self.output_fault is None:
-                report = self.c.explain_fault(exc, t, list(y), m, z)
-                self.output_fault = f"{report or exc} at TIME = {t:.9g}"
-            values = [math.nan] * len(self.c.out_names)
+                text = str(self.c.explain_fault(exc, t, list(y), m, z) or exc)
+                self.output_fault = text if "TIME =" in text else f"{text} at TIME = {t:.9g}"
+            try:  # (each statement that faults NaN, and no other)
+                values = [float(v) for v in self.c.outputs_tolerant(t, y.tolist(), m, z)]
+            except (ArithmeticError, ValueError):
+                values = [math.nan] * len(self.c.out_names)
             for j, i in self._state_columns:
                 values[j] = float(y[i])
             return values

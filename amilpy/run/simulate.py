@@ -180,8 +180,8 @@ class _Run:
             rec.row(plan.fintim, cur.y, cur.m, cur.z, len(plan.grid.times) - 1)
         integ.warnings.extend(table_warnings(c.tables))
         if rec.output_fault is not None:
-            integ.warnings.append(f"{rec.output_fault}; in the rows where it cannot be "
-                                  "computed, every variable but the states is NaN")
+            integ.warnings.append(f"{rec.output_fault}; it is NaN in the rows where it "
+                                  "cannot be computed, and so is what is computed from it")
         if plan.step_point:
             return self.finish(status, text, cur, integ.range_values())
         ctx = Context(self.model, plan, c, self.watch, self.opts, self.started)
