@@ -310,3 +310,16 @@ def test_the_command_line_shows_no_library_warning(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "Warning" not in err and "integration failed at TIME = 0" in err, err
     assert warnings.filters == before
+
+
+def test_a_period_shorter_than_the_output_interval_is_no_orbit(tmp_path, capsys):
+    """`periodic --period 1e-6` on a motion looked at every 0.1 s "converged" in one
+    Newton step to an orbit of half peak-to-peak 1E-16, called neutral: over a time
+    that short every state comes back to itself. It is refused, saying why."""
+    path = tmp_path / "osc.amil"
+    path.write_text("PARAM W = 1.0\nX = INTGRL(0.0, V)\nV = INTGRL(0.0, COS(W*TIME) - 0.1*V - X)\n"
+                    "TIMER FINTIM = 10.0, OUTDEL = 0.1\nOUTPUT X\nEND\n")
+    assert main(["periodic", str(path), "--period", "1e-6"]) == 1
+    err = capsys.readouterr().err
+    assert "shorter than the output interval (0.1 s)" in err
+    assert main(["periodic", str(path), "--period", "2*PI/W"]) == 0

@@ -271,7 +271,20 @@ class Problem:
                 self._lengths[lam] = (None, constant(c.advance, self.flow,
                                                      f"--angle {c.angle}=", extra))
             else:
-                self._lengths[lam] = (constant(c.period, self.flow, "--period", extra), None)
+                period = constant(c.period, self.flow, "--period", extra)
+                timer = self.flow.plan.timer
+                step = min(timer["OUTDEL"], timer["PRDEL"])
+                if period < step:
+                    # (the motion is looked at, its switches found and its extremes
+                    # taken, at the output instants: over less than one of them any
+                    # state comes back to itself within the tolerance, orbit or not)
+                    at = f" at {self.parameter} = {lam:g}" if self.parameter else ""
+                    raise AmilError(
+                        f"--period {c.period!r} is {period:g} s{at}, shorter than the "
+                        f"output interval ({step:g} s) at which the motion is looked at: "
+                        "give the period of the forcing, or make OUTDEL in the listing's "
+                        "TIMER a small part of the period")
+                self._lengths[lam] = (period, None)
         self.fixed_period, self.advance = self._lengths[lam]
 
     # ------------------------------------------------------------ unknowns
