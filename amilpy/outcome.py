@@ -33,6 +33,7 @@ class Failure(Enum):
     TIME_LIMIT = "the wall-clock limit"
     CHATTER = "a switch chatters"
     INTERRUPTED = "interrupted (Ctrl-C)"
+    ZENO = "events accumulate before a finite TIME"
 
 
 _FAILED = "integration failed at TIME = {t:.9g}: "
@@ -66,6 +67,10 @@ MESSAGES: dict[Failure | Status, str] = {
     Failure.TIME_LIMIT: _FAILED + "wall-clock limit of {limit:g} s reached",
     Failure.CHATTER: _FAILED + "{what}: 200 restarts within {span:.3g} s at TIME = {t:.9g}",
     Failure.INTERRUPTED: "interrupted at TIME = {t:.9g}",
+    Failure.ZENO: "the events of {what} accumulate at TIME = {t:.9g}, each interval "
+                  "{ratio:.3g} times the one before (Zeno): no run goes past that instant "
+                  "as the listing is written, so the rows after it are left out; say in the "
+                  "listing what happens there (the ball comes to rest, say)",
 }
 
 

@@ -323,3 +323,48 @@ def test_a_period_shorter_than_the_output_interval_is_no_orbit(tmp_path, capsys)
     err = capsys.readouterr().err
     assert "shorter than the output interval (0.1 s)" in err
     assert main(["periodic", str(path), "--period", "2*PI/W"]) == 0
+
+
+# ------------------------------------------------------------------- Zeno
+
+ZENO_BALL = """PROGRAM a ball bouncing with restitution 0.5
+  CONSTANT G = 9.81, E = 0.5
+  CINTERVAL CINT = 0.25
+  DERIVATIVE
+    H = INTEG(V, 1.0)
+    V = INTEG(-G, 0.0)
+    SCHEDULE BOUNCE .XN. H
+    TERMT(T .GE. 3.0)
+  END
+  DISCRETE BOUNCE
+    V = -E*V
+    H = 0.0
+  END
+  PRINT H, V
+END
+"""
+
+
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "RADAU"])
+def test_a_ball_driven_to_zeno_does_not_fall_through_the_floor(method):
+    """Its bounces accumulate at 3*sqrt(2/g) (a fall, then flights of 2*sqrt(2/g)
+    times 1/2, 1/4, ...). Every route missed a bounce at some point and printed the
+    ball falling through the floor to H = -13 at TIME 3, with no message. Now the
+    run ends at the accumulation point (to 1e-6 s) with the rows before it, none
+    below the floor, and says why."""
+    run = run1(ZENO_BALL, method=method)
+    limit = 3.0 * math.sqrt(2.0 / 9.81)
+    assert not run.ok and "accumulate at TIME = " in run.message and "(Zeno)" in run.message
+    assert abs(run.t_end - limit) < 1e-6
+    assert run.t[-1] <= limit and (run["H"] >= -1e-9).all()
+
+
+def test_events_that_keep_their_pace_are_no_accumulation():
+    """A relay that switches at a steady pace (an undamped oscillator on FSW) and a
+    damped one whose reversals do not shrink geometrically run to FINTIM."""
+    relay = run1("X = INTGRL(1.0, V)\nV = INTGRL(0.0, -FSW(X, -1.0, 0.0, 1.0))\n"
+                 "TIMER FINTIM = 60.0, OUTDEL = 0.1\nPRINT X\nEND\n")
+    assert relay.ok and len(relay.events) > 10
+    damped = run1("X = INTGRL(1.0, V)\nV = INTGRL(0.0, -X - 0.3*V + FSW(V, 0.1, 0.0, -0.1))\n"
+                  "TIMER FINTIM = 30.0, OUTDEL = 0.1\nPRINT X\nEND\n")
+    assert damped.ok

@@ -29,6 +29,7 @@ from .record import Recorder
 from .slide import MAX_SLIDING
 from .steppoint import StepPoint
 from .watch import SurfaceWatch, TooManySlides
+from .zeno import accumulation, cut
 
 
 def backstop(max_time: float | None) -> float | None:
@@ -183,9 +184,24 @@ class _Run:
             integ.warnings.append(f"{rec.output_fault}; it is NaN in the rows where it "
                                   "cannot be computed, and so is what is computed from it")
         if plan.step_point:
-            return self.finish(status, text, cur, integ.range_values())
-        ctx = Context(self.model, plan, c, self.watch, self.opts, self.started)
-        return self.finish(status, text, cur, locate_range(ctx, rec.extrema, rec.restarts))
+            run = self.finish(status, text, cur, integ.range_values())
+        else:
+            ctx = Context(self.model, plan, c, self.watch, self.opts, self.started)
+            run = self.finish(status, text, cur, locate_range(ctx, rec.extrema, rec.restarts))
+        return self._zeno(run)
+
+    @staticmethod
+    def _zeno(run: Run) -> Run:
+        """A run that went past an accumulation of events ends there (`zeno`)."""
+        if run.status == Status.FAILED:
+            return run
+        found = accumulation(run.events, run.t_end)
+        if found is not None:
+            cut(run, found.t)
+            run.status = Status.FAILED
+            run.message = message(Failure.ZENO, t=found.t, what=found.what,
+                                  ratio=found.ratio)
+        return run
 
     def first_row(self, cur: Cursor) -> None:
         """The row at t0 (the ACSL form runs the events due at t0 first)."""
