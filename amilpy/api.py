@@ -336,12 +336,15 @@ def loads(text: str, name: str = "<listing>") -> Model:
     return Model(check(program, name))
 
 
+# what a listing that is not UTF-8 is read as: the lab's Windows machines write it
+LEGACY_ENCODING = ("cp1250", "Windows-1250 (Central European)")
 # a 10,000-mass chain's listing is 2 MB
 MAX_LISTING_BYTES = 64 * 2**20
 
 
 def load(path: str | os.PathLike) -> Model:
-    """Parse and check a listing file (UTF-8)."""
+    """Parse and check a listing file: UTF-8, else read as Windows-1250 (the lab's
+    Windows machines save Polish comments and titles so), with a note."""
     path = os.fspath(path)
     try:
         with open(path, "rb") as fh:
@@ -353,15 +356,28 @@ def load(path: str | os.PathLike) -> Model:
         raise AmilError(f"longer than {MAX_LISTING_BYTES // 2**20} MB, which no listing is "
                         "(a device?): give the listing's file", path)
     try:
-        text = raw.decode("utf-8")
+        return loads(raw.decode("utf-8"), path)
     except UnicodeDecodeError as exc:
-        line = raw[: exc.start].count(b"\n") + 1
-        col = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
         from .diagnostics import Span
 
-        raise AmilError([Diagnostic("the file is not valid UTF-8", Span(line, col),
-                                    "save the listing as UTF-8")], path) from None
-    return loads(text, path)
+        line = raw[: exc.start].count(b"\n") + 1
+        col = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
+        encoding, name = LEGACY_ENCODING
+        try:
+            text = raw.decode(encoding)
+        except UnicodeDecodeError:  # (bytes Windows-1250 leaves undefined: ISO-8859-2)
+            encoding, name = "iso-8859-2", "ISO-8859-2"
+            text = raw.decode(encoding)
+        note = Diagnostic(f"the file is not UTF-8 (from here on): it was read as {name}",
+                          Span(line, col), "save the listing as UTF-8 to be sure of its "
+                          "characters", severity="warning")
+    try:
+        model = loads(text, path)
+    except AmilError as err:
+        err.diagnostics.append(note)
+        raise
+    model.ir.warnings.append(note)
+    return model
 
 
 def _check_method(method: str | None) -> None:

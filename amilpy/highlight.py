@@ -62,11 +62,20 @@ else:
 
         name = "AMIL"
         aliases = ["amil", "csmp"]
-        filenames = ["*.amil"]
+        filenames = ["*.amil", "*.csl", "*.fst"]  # (the ACSL and FST forms too)
         mimetypes = ["text/x-amil"]
         # Keywords and names are case-insensitive in the language, so the whole
         # lexer is; MULTILINE lets `^` and `$` see line boundaries.
         flags = re.MULTILINE | re.IGNORECASE
+
+        @staticmethod
+        def analyse_text(text: str) -> float:
+            """How much `text` looks like a listing (Pygments' guess between lexers
+            that share an extension: .fst is F*'s too)."""
+            marks = re.findall(r"^\s*(TIMER|INTGRL|INTEG|DYNAMIC|DERIVATIVE|TERMT|"
+                               r"TRANSLATION_GENERAL|STOP|END|PARAM|CONSTANT)\b", text,
+                               re.IGNORECASE | re.MULTILINE)
+            return min(1.0, 0.3 * len(set(m.upper() for m in marks)))
 
         def __init__(self, **options: Any) -> None:
             # Pygments strips leading and trailing blank lines by default; a

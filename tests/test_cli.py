@@ -135,10 +135,37 @@ def test_failed_integration_exits_3_and_keeps_rows(tmp_path, capsys):
 
 
 def test_invalid_utf8(tmp_path, capsys):
+    """Bytes that are not UTF-8 are read as Windows-1250 (then ISO-8859-2), with a
+    note where they start; in code they are then characters the language refuses,
+    at their place."""
     path = tmp_path / "bin.amil"
     path.write_bytes(b"X = 1.0\nY = \xff\xfe\n")
     assert main(["check", str(path)]) == 1
-    assert ":2:5: error: the file is not valid UTF-8" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert ":2:5: error: character '\u02d9' is not allowed here" in err
+    assert ":2:5: warning: the file is not UTF-8 (from here on): it was read as Windows-1250" \
+        in err
+
+
+def test_a_windows_1250_listing_is_read(tmp_path, capsys):
+    """The lab's Windows machines save listings in Windows-1250: a Polish TITLE and
+    comment are read as written, the run is the UTF-8 file's, and a note says how
+    the file was read (issue 28 point 6)."""
+    text = ("TITLE SPRZ\u0118G\u0141O CIERNE \u2013 \u0106WICZENIE 4\n"
+            "X = INTGRL(1.0, -X)  ! [rad/s] pr\u0119dko\u015b\u0107 wa\u0142u\n"
+            "TIMER FINTIM = 1.0, OUTDEL = 0.5\nPRINT X\nEND\n")
+    legacy, utf8 = tmp_path / "cp.amil", tmp_path / "u8.amil"
+    legacy.write_bytes(text.encode("cp1250"))
+    utf8.write_text(text, encoding="utf-8")
+    assert main(["run", str(legacy)]) == 0
+    out = capsys.readouterr().out
+    assert "SPRZ\u0118G\u0141O CIERNE \u2013 \u0106WICZENIE 4" in out
+    assert "NOTE: line 1: the file is not UTF-8 (from here on): it was read as Windows-1250" \
+        in out
+    assert main(["run", str(utf8)]) == 0
+    rows = [line for line in out.splitlines() if line.startswith("  ")]
+    assert rows and rows == [line for line in capsys.readouterr().out.splitlines()
+                             if line.startswith("  ")]
 
 
 def test_ctrl_c_keeps_the_rows_and_exits_3(tmp_path, capsys, monkeypatch):

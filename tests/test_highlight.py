@@ -153,7 +153,21 @@ def test_names_come_from_the_library():
 def test_registered_names():
     assert AmilLexer.name == "AMIL"
     assert set(AmilLexer.aliases) == {"amil", "csmp"}
-    assert AmilLexer.filenames == ["*.amil"]
+    # the ACSL (.csl) and FST (.fst) forms are listings amilpy reads too (issue 28.7);
+    # the VS Code grammar registers the same extensions
+    assert AmilLexer.filenames == ["*.amil", "*.csl", "*.fst"]
+    package = json.loads((ROOT / "editors" / "vscode" / "package.json").read_text("utf-8"))
+    extensions = package["contributes"]["languages"][0]["extensions"]
+    assert extensions == [f.lstrip("*") for f in AmilLexer.filenames]
+    from pygments.lexers import get_lexer_for_filename, guess_lexer_for_filename
+
+    for name in ("clutch.amil", "pbpk.csl"):
+        assert get_lexer_for_filename(name).name == "AMIL", name
+    # (.fst is F*'s too: the text decides, as Pygments' guess does)
+    text = (ROOT / "models" / "examples" / "fst_wheat.fst").read_text("utf-8")
+    assert guess_lexer_for_filename("sucros.fst", text).name == "AMIL"
+    assert guess_lexer_for_filename("proof.fst", "module M\nlet x : int = 1\n").name \
+        != "AMIL"
 
 
 @pytest.mark.parametrize("kind", ["terminal", "html", "latex"])
@@ -223,7 +237,7 @@ def test_vscode_extension_files_are_valid_json():
     contributed = package["contributes"]["grammars"][0]
     assert contributed["scopeName"] == "source.amil"
     assert (EDITOR / contributed["path"]).resolve() == TMGRAMMAR.resolve()
-    assert package["contributes"]["languages"][0]["extensions"] == [".amil"]
+    assert package["contributes"]["languages"][0]["extensions"] == [".amil", ".csl", ".fst"]
 
 
 def test_textmate_regexes_compile():
