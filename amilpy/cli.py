@@ -260,7 +260,10 @@ def _parse_sets(items: list[str]) -> dict[str, float]:
         try:
             number = fortran_float(value)
         except ValueError:
-            raise UsageError(f"--set {name}: {value!r} is not a number") from None
+            comma = "," in value and value.replace(",", ".", 1).replace(".", "", 1).isdigit()
+            raise UsageError(f"--set {name}: {value!r} is not a number" + (
+                f"; the decimal separator is a point: {value.replace(',', '.', 1)}"
+                if comma else "")) from None
         if not math.isfinite(number):
             raise UsageError(f"--set {name}: the value must be finite, got {value!r}")
         out[name.strip().upper()] = number

@@ -125,7 +125,9 @@ class Reporter:
         hint: str | None = None,
         related: tuple[tuple[Span, str], ...] = (),
     ) -> None:
-        self.diagnostics.append(Diagnostic(message, span, hint, "error", related))
+        d = Diagnostic(message, span, hint, "error", related)
+        if d not in self.diagnostics:  # (two checks meeting one fault say it once)
+            self.diagnostics.append(d)
 
     def raise_if_any(self) -> None:
         if self.diagnostics:

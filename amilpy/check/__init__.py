@@ -37,6 +37,34 @@ from .units import (
 __all__ = ["check"]
 
 
+def _dynamic_in_initial(statements: list, rep: Reporter) -> list:
+    """The INITIAL statements that call INTGRL (or another function of DYNAMIC),
+    said once: several of them are most often the model's equations under an
+    INITIAL whose DYNAMIC line was forgotten (four errors, one per INTGRL, hid that)."""
+    from ..library import lookup
+
+    def dynamic_call(st) -> ast.Call | None:
+        for n in ast.walk(st.expr):
+            if isinstance(n, ast.Call):
+                f = lookup(n.func)
+                if f is not None and f.kind not in PURE:
+                    return n
+        return None
+
+    found = [(st, call) for st in statements if isinstance(st, ast.Assign)
+             and (call := dynamic_call(st)) is not None]
+    if found:
+        (_, first), rest = found[0], found[1:]
+        rep.error(f"{first.func} cannot be used in INITIAL" + (
+            f" (nor can {len(rest)} more statement{'s' if len(rest) > 1 else ''} here)"
+            if rest else ""), first.span,
+            "states, memory functions and IMPULS belong in DYNAMIC: if the model's "
+            "equations follow its data, write DYNAMIC on a line before them"
+            + (f" (before line {found[0][0].span.line})" if found[0][0].span else ""),
+            tuple((call.span, f"{call.func} in INITIAL too") for _, call in rest))
+    return [st for st, _ in found]
+
+
 @deep_enough()
 def check(program: ast.Program, name: str | None = None) -> ir.Model:
     """The checked, sorted model of a parsed listing; raises AmilError with every
@@ -75,10 +103,13 @@ def _check_csmp(program: ast.Program, name: str | None) -> ir.Model:
     # INITIAL: plain assignments, evaluated once, sorted
     stores = declared_stores(program.statements)  # INTEGER (FIXED), LOGICAL names
     initial: list[ir.Equation] = []
+    misplaced = _dynamic_in_initial(parts["INITIAL"], rep)
     for st in parts["INITIAL"]:
         st = stored(st, stores)
         for target, span in zip(st.targets, st.target_spans, strict=True):
             names.define(target, span, "INITIAL")
+        if any(st is m or st == m for m in misplaced):
+            continue  # (said once, above)
         if not names.check_calls(st.expr, PURE, "INITIAL"):
             continue
         if len(st.targets) > 1:

@@ -16,6 +16,7 @@ from ..language import (
     SECTIONS,
     TYPE_KEYWORDS,
     fortran_float,
+    split_lines,
 )
 from ..syntax import MAX_DEPTH
 from .blocks import Close, ElseHead, Head
@@ -216,6 +217,15 @@ class Builder:
 
     def st_labelled(self, node) -> None:
         label = str(node.children[0]).strip()
+        span = self.span(node)
+        lines = split_lines(self.source)
+        line = lines[span.line - 1] if 0 < span.line <= len(lines) else ""
+        rest = line[span.column - 1:].lstrip()[len(label):].lstrip()
+        if rest.startswith(":="):  # (Pascal's and Algol's assignment, not a label)
+            self.errors.append(Diagnostic(
+                "':=' is not this language's assignment", span,
+                f"write {label} = {rest[2:].split('!')[0].strip() or '...'}"))
+            return
         self.refuse(f"the statement label {label}", self.span(node),
                     "remove it: GO TO and labelled loops are not supported; write IF (c) "
                     "THEN ... END IF or DO i = a, b ... END DO")

@@ -15,11 +15,13 @@ from ..diagnostics import Diagnostic, Span
 # small bad listings that end in the same parser state as the user's text.
 EXAMPLES: dict[str, tuple[str, list[str]]] = {
     "missing closing parenthesis": (
-        "every '(' needs a matching ')' before the end of the statement",
+        "every '(' needs a matching ')' before the end of the statement; a statement "
+        "continued on the next line ends its line with ...",
         ["X = SIN(Y\n", "X = (A + B\n", "X = INTGRL(0.0, Y\n", "X = A*(B - C\n"],
     ),
     "missing value after the operator": (
-        "an operator must be followed by a number, a name or '('",
+        "an operator must be followed by a number, a name or '('; a statement "
+        "continued on the next line ends its line with ...",
         ["X = A +\n", "X = A *\n", "X = A /\n", "X = A **\n", "X = -\n"],
     ),
     "missing expression after '='": (
