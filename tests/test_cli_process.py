@@ -2,6 +2,7 @@
 that cannot show every character, a display with no GUI. Each runs `amilpy` in a
 real subprocess, since these are things only a process meets."""
 
+import importlib.util
 import os
 import resource
 import signal
@@ -74,7 +75,13 @@ def test_a_closed_pipe_still_writes_the_files(tmp_path):
     assert (tmp_path / "m.png").read_bytes()[:4] == b"\x89PNG"
 
 
-def test_a_full_disk_exits_4_names_the_file_and_leaves_no_temporary(tmp_path):
+@pytest.mark.parametrize("flag, name", [
+    ("--csv", "x.csv"),
+    # (XlsxWriter writes a zip through a temporary of its own: issue 30 found a
+    # traceback there)
+    pytest.param("--xlsx", "x.xlsx", marks=pytest.mark.skipif(
+        importlib.util.find_spec("xlsxwriter") is None, reason="XlsxWriter not installed"))])
+def test_a_full_disk_exits_4_names_the_file_and_leaves_no_temporary(tmp_path, flag, name):
     listing = tmp_path / "m.amil"
     listing.write_text("X = INTGRL(1.0, -X)\nTIMER FINTIM = 10.0, OUTDEL = 0.01\nPRINT X\n"
                        "END\n")
@@ -84,11 +91,11 @@ def test_a_full_disk_exits_4_names_the_file_and_leaves_no_temporary(tmp_path):
     def small_files():  # a disk that is full after 4 kB, for this process only
         resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))
 
-    done = subprocess.run([*AMILPY, "run", str(listing), "--csv", str(out / "x.csv")],
+    done = subprocess.run([*AMILPY, "run", str(listing), flag, str(out / name)],
                           preexec_fn=small_files, capture_output=True, text=True, env=ENV,
                           timeout=120)
     assert done.returncode == 4, done.stderr
-    assert (f"amilpy: cannot write {out / 'x.csv'}: the file is larger than this process "
+    assert (f"amilpy: cannot write {out / name}: the file is larger than this process "
             "may write") in done.stderr
     assert "Traceback" not in done.stderr
     assert list(out.iterdir()) == []  # no half file, no hidden temporary
