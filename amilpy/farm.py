@@ -243,6 +243,24 @@ def _on_processes(model: ir.Model, tasks: list[Task], jobs: int,
     return [o if o is not None else Outcome(error="not run") for o in out]
 
 
+CONNECT_SECONDS = 30.0  # for the scheduler to answer, and for its first worker
+
+
+def _check_address(address: str) -> None:
+    """Refuse what is no scheduler's address before a Client is made of it: one
+    that fails on a malformed address is left half made, and its clean-up at exit
+    waited on a stopped event loop (the command hung after its message)."""
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    try:
+        scheme, location = parse_address(address)
+        if scheme in ("tcp", "tls", "ws", "wss", "ucx"):
+            parse_host_port(location)
+    except (ValueError, TypeError) as exc:
+        raise AmilError(f"--scheduler {address!r} is not a scheduler's address ({exc}): "
+                        "write it as tcp://HOST:PORT") from None
+
+
 def _on_dask(model: ir.Model, tasks: list[Task], address: str,
              done: Callable | None) -> list[Outcome]:
     try:
@@ -251,11 +269,18 @@ def _on_dask(model: ir.Model, tasks: list[Task], address: str,
         raise AmilError("--scheduler needs Dask: pip install 'amilpy[cluster]'") from None
     blob = pickle.dumps(model)
     token = _token(blob)
+    _check_address(address)
     try:
-        client = Client(address, timeout=30, set_as_default=False)
-    except OSError as exc:
+        client = Client(address, timeout=CONNECT_SECONDS, set_as_default=False)
+    except (OSError, ValueError, TypeError) as exc:
         raise AmilError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
     try:
+        try:  # (a scheduler with no worker would take the runs and never run them)
+            client.wait_for_workers(1, timeout=CONNECT_SECONDS)
+        except (TimeoutError, OSError):
+            raise AmilError(f"the Dask scheduler at {address} has no workers (waited "
+                            f"{CONNECT_SECONDS:g} s): start one, e.g. dask worker "
+                            f"{address}") from None
         shipped = client.scatter((token, blob), broadcast=True)  # once per worker
         futures = [client.submit(_dask_task, shipped, task, pure=False) for task in tasks]
         index = {f.key: i for i, f in enumerate(futures)}

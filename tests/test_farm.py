@@ -201,3 +201,28 @@ def test_dask_cluster_equals_serial():
                              scheduler=cluster.scheduler_address)
     assert all(_same(a, b) for a, b in zip(serial, farmed, strict=True))
     assert points.points == model.sweep("W", [4.0, 5.0, 6.0], measure="X").points
+
+
+def test_a_scheduler_address_that_is_none_is_refused_at_once():
+    """`--scheduler nonsense` gave distributed's ValueError with a traceback, and the
+    command then hung at exit (the half-made Client's clean-up waited on a stopped
+    event loop). It is refused before any Client is made."""
+    pytest.importorskip("distributed")
+    from amilpy.diagnostics import AmilError
+
+    with pytest.raises(AmilError, match="'nonsense' is not a scheduler's address"):
+        amilpy.loads(LISTS).run(advice=False, scheduler="nonsense")
+
+
+def test_a_scheduler_with_no_workers_is_said_not_waited_on(monkeypatch):
+    """A scheduler with no worker takes the runs and never runs them: the command
+    waited for ever. Now it waits CONNECT_SECONDS for a worker, then says so."""
+    distributed = pytest.importorskip("distributed")
+    from amilpy import farm
+    from amilpy.diagnostics import AmilError
+
+    monkeypatch.setattr(farm, "CONNECT_SECONDS", 1.0)
+    with distributed.LocalCluster(n_workers=0, processes=False,
+                                  dashboard_address=None) as cluster:
+        with pytest.raises(AmilError, match="has no workers"):
+            amilpy.loads(LISTS).run(advice=False, scheduler=cluster.scheduler_address)
