@@ -368,3 +368,17 @@ def test_events_that_keep_their_pace_are_no_accumulation():
     damped = run1("X = INTGRL(1.0, V)\nV = INTGRL(0.0, -X - 0.3*V + FSW(V, 0.1, 0.0, -0.1))\n"
                   "TIMER FINTIM = 30.0, OUTDEL = 0.1\nPRINT X\nEND\n")
     assert damped.ok
+
+
+@pytest.mark.parametrize("cint", ["1.0E-300", "5.0E-324"])
+def test_a_tiny_cint_is_refused_saying_so(cint):
+    """CINT = 1E-300 ended the run with "X is no longer finite after TIME = 0" (it
+    was), 5E-324 with "cannot be evaluated before the run: division by zero" and a
+    hint to check a line it did not give."""
+    from amilpy.diagnostics import AmilError
+
+    with pytest.raises(AmilError, match=r"the output interval CINT = .* is too small "
+                                        r"\(the least is 1e-100 s"):
+        amilpy.loads(f"PROGRAM P\n  CINTERVAL CINT = {cint}\n  DERIVATIVE\n"
+                     "    X = INTEG(1.0, 1.0)\n    TERMT(T .GE. 1.0)\n  END\nEND\n",
+                     "t.csl").run(advice=False)

@@ -46,6 +46,8 @@ from .plan import (
 from .prepare import Cache, Prepared, before_run, constant_modes, random_seed
 from .simulate import _Run
 
+MIN_INTERVAL = 1e-100  # the least CINT a run takes
+
 
 @dataclass(frozen=True)
 class AcslPrepared(Prepared):
@@ -134,6 +136,12 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
     if not (cint is not None and math.isfinite(cint) and cint > 0):
         raise AmilError(f"the output interval {acsl.cint_name} = {cint} must be positive",
                         model.path)
+    if not (cint >= MIN_INTERVAL and acsl.t0 + cint > acsl.t0):
+        # (the solvers' own step floors are far above it: below, a run failed with
+        # "X is no longer finite", or a division by zero with no line)
+        raise AmilError(f"the output interval {acsl.cint_name} = {cint:g} is too small "
+                        f"(the least is {MIN_INTERVAL:g} s, and a step TIME can take from "
+                        f"{acsl.t0:g}): make it longer", model.path)
     method = _method(model, spec, opts, constants)
     spec = replace(spec, method=method)
     timer = _timer(model, spec, opts, constants, cint)
@@ -165,6 +173,11 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
         fintim = given
     else:
         fintim, unbounded = MAX_INTERVALS * cint, True
+    if not fintim / cint <= MAX_INTERVALS:
+        raise AmilError(f"{acsl.cint_name} = {cint:g} gives {fintim / cint:.3g} output "
+                        f"intervals to TIME = {t0 + fintim:g}, more than the "
+                        f"{MAX_INTERVALS:,} a run keeps: make {acsl.cint_name} longer",
+                        model.path)
     timer["FINTIM"] = fintim
     grid = steppoint.grid(t0, timer) if step_point else make_grid(t0, t0 + fintim, cint, cint)
     plan = make_plan(model, spec, opts, compiled, timer, grid, step_point, t0=t0)
