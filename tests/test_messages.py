@@ -55,3 +55,17 @@ def test_a_decimal_comma_on_the_command_line_gets_its_hint(tmp_path, capsys):
     path.write_text("PARAM B = 1.0\nX = INTGRL(1.0, -B*X)\nTIMER FINTIM = 1.0\nEND\n")
     assert main(["run", str(path), "--set", "B=1,5"]) == 2
     assert "the decimal separator is a point: 1.5" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("text, name", [
+    ("X = INTGRL(TIME + 1.0, 1.0)\nTIMER FINTIM = 1.0\nEND\n", "TIME"),
+    ("PROGRAM P\n  DERIVATIVE\n    X = INTEG(1.0, T + 1.0)\n    TERMT(T .GE. 1.0)\n  END\n"
+     "END\n", "T")])
+def test_time_in_an_initial_value_is_named_as_the_listing_names_it(text, name):
+    """An initial value that reads the time was refused as "t is not known before the
+    run starts": the generated code's name, which no listing has."""
+    with pytest.raises(AmilError) as caught:
+        amilpy.loads(text, "m.csl" if name == "T" else "m.amil").run(advice=False)
+    (d,) = caught.value.diagnostics
+    assert d.message == f"{name} is not known before the run starts"
+    assert "write the start's value" in d.hint

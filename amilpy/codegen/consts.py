@@ -106,6 +106,13 @@ def _run(model: ir.Model, evaluate_it, span: Span):
                         model.path, model.source) from None
     except NameError as exc:
         name = str(exc).split("'")[1] if "'" in str(exc) else str(exc)
+        if name == "t":  # (the generated code's time: the listing's TIME, or ACSL's T)
+            time = "T" if model.acsl is not None else "TIME"
+            raise AmilError([Diagnostic(
+                f"{time} is not known before the run starts", span,
+                f"an initial value is taken before {time} runs: write the start's value "
+                "(0, unless the listing gives another start)")],
+                model.path, model.source) from None
         raise AmilError([Diagnostic(
             f"{name.removeprefix('v_')} is not known before the run starts", span,
             "an initial value or INITIAL statement can use numbers, data values and INITIAL "
