@@ -322,8 +322,8 @@ def _finish(path: str, written: list[str], errors: list[str], quiet: bool,
     for message in errors:
         print(f"amilpy: {message}", file=sys.stderr)
     if signals.held_back:
-        print(f"amilpy: {path}: {signals.name(signals.held_back)} received while writing: "
-              "the files are complete; stopped", file=sys.stderr)
+        print(f"amilpy: {path}: {signals.name(signals.held_back)} held back until the "
+              "files were complete; stopped", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OUTPUT if errors else EXIT_OK
 

@@ -36,14 +36,22 @@ class Signals:
         self.held_back: int | None = None  # one that came while files were written
         self.holding = False
         self.previous: dict[int, object] = {}
+        self.count = 0  # the signals that came outside the writing of files
 
     def _handler(self, signum: int, frame) -> None:
         self.received = signum
         if self.holding:
             self.held_back = signum
-        else:
-            interrupts.arrived(signum)  # (raised again if a library swallows it)
-            raise KeyboardInterrupt
+            return
+        self.count += 1
+        if self.count == 2:
+            # A second Ctrl-C (a user pressing twice) came while the first was being
+            # turned into a partial result: raised there, it lost the rows and the
+            # files. It waits for the files instead; a third ends the command.
+            self.held_back = signum
+            return
+        interrupts.arrived(signum)  # (raised again if a library swallows it)
+        raise KeyboardInterrupt
 
     def install(self) -> None:
         for sig in HANDLED:

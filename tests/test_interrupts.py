@@ -120,3 +120,19 @@ def test_the_command_line_ends_a_swallowed_interrupt_in_a_run(tmp_path, monkeypa
     err = capsys.readouterr().err
     assert code == cli.EXIT_FAILED and len(calls) == 1
     assert "run 'K = 1': interrupted at TIME = " in err and "K = 4" not in err
+
+
+def test_a_second_ctrl_c_waits_for_the_files_and_a_third_ends_the_command():
+    """A user pressing Ctrl-C twice: the second came while the first was being turned
+    into a partial run and, raised there, lost the rows and every file (the probe:
+    exit 3, no CSV). The second is now held back until the files are written (then
+    the command stops, exit 3); a third is raised, for a command that does not end."""
+    from amilpy.console import Signals
+
+    signals = Signals()
+    with pytest.raises(KeyboardInterrupt):
+        signals._handler(signal.SIGINT, None)
+    signals._handler(signal.SIGINT, None)  # (held back: no exception)
+    assert signals.held_back == signal.SIGINT
+    with pytest.raises(KeyboardInterrupt):
+        signals._handler(signal.SIGINT, None)
