@@ -103,13 +103,14 @@ def _check_csmp(program: ast.Program, name: str | None) -> ir.Model:
     # INITIAL: plain assignments, evaluated once, sorted
     stores = declared_stores(program.statements)  # INTEGER (FIXED), LOGICAL names
     initial: list[ir.Equation] = []
-    misplaced = _dynamic_in_initial(parts["INITIAL"], rep)
+    misplaced = {id(st) for st in _dynamic_in_initial(parts["INITIAL"], rep)}
     for st in parts["INITIAL"]:
+        said = id(st) in misplaced  # (said once, above)
         st = stored(st, stores)
         for target, span in zip(st.targets, st.target_spans, strict=True):
             names.define(target, span, "INITIAL")
-        if any(st is m or st == m for m in misplaced):
-            continue  # (said once, above)
+        if said:
+            continue
         if not names.check_calls(st.expr, PURE, "INITIAL"):
             continue
         if len(st.targets) > 1:

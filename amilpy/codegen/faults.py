@@ -153,17 +153,25 @@ def _source(node: py.AST) -> object:
 def _checking_function(compiled, name: str):
     """The checking copy of one generated function (built once, on the first fault)."""
     if name not in compiled.checking:
-        fn = next(f for f in compiled.module.body if f.name == name)
-        # the IR nodes the tree remembers are shared, not copied
-        memo = {id(n.amil_src): n.amil_src for n in py.walk(fn) if hasattr(n, "amil_src")}
         checking = _Checking()
-        tree = py.Module(body=[checking.visit(copy.deepcopy(fn, memo))], type_ignores=[])
-        py.fix_missing_locations(tree)
-        scope = dict(compiled.namespace)
-        scope.update(_HELPERS)
-        exec(compile(tree, "<amilpy checking>", "exec"), scope)  # noqa: S102 - our own tree
-        compiled.checking[name] = (scope[name], checking.sites)
+        compiled.checking[name] = (_rebuilt(compiled, name, checking, _HELPERS, "checking"),
+                                   checking.sites)
     return compiled.checking[name]
+
+
+def _rebuilt(compiled, name: str, transformer: py.NodeTransformer, helpers: dict,
+             what: str):
+    """A copy of the generated function `name`, its tree changed by `transformer`,
+    compiled in the model's namespace with `helpers` beside it."""
+    fn = next(f for f in compiled.module.body if f.name == name)
+    # the IR nodes the tree remembers are shared, not copied
+    memo = {id(n.amil_src): n.amil_src for n in py.walk(fn) if hasattr(n, "amil_src")}
+    tree = py.Module(body=[transformer.visit(copy.deepcopy(fn, memo))], type_ignores=[])
+    py.fix_missing_locations(tree)
+    scope = dict(compiled.namespace)
+    scope.update(helpers)
+    exec(compile(tree, f"<amilpy {what}>", "exec"), scope)  # noqa: S102 - our own tree
+    return scope[name]
 
 
 class _Tolerant(py.NodeTransformer):
@@ -195,14 +203,8 @@ def tolerant(compiled, name: str):
     whose DN = DELAY(...) cannot be computed still shows X = SIN(TIME)."""
     key = ("tolerant", name)
     if key not in compiled.checking:
-        fn = next(f for f in compiled.module.body if f.name == name)
-        memo = {id(n.amil_src): n.amil_src for n in py.walk(fn) if hasattr(n, "amil_src")}
-        tree = py.Module(body=[_Tolerant().visit(copy.deepcopy(fn, memo))], type_ignores=[])
-        py.fix_missing_locations(tree)
-        scope = dict(compiled.namespace)
-        scope.update(ArithmeticError=ArithmeticError, ValueError=ValueError)
-        exec(compile(tree, "<amilpy tolerant>", "exec"), scope)  # noqa: S102 - our own tree
-        compiled.checking[key] = scope[name]
+        compiled.checking[key] = _rebuilt(compiled, name, _Tolerant(), {
+            "ArithmeticError": ArithmeticError, "ValueError": ValueError}, "tolerant")
     return compiled.checking[key]
 
 

@@ -173,7 +173,7 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
         fintim = given
     else:
         fintim, unbounded = MAX_INTERVALS * cint, True
-    if not fintim / cint <= MAX_INTERVALS:
+    if not fintim / cint <= MAX_INTERVALS + 1:  # (+ the row past a TERMT instant)
         raise AmilError(f"{acsl.cint_name} = {cint:g} gives {fintim / cint:.3g} output "
                         f"intervals to TIME = {t0 + fintim:g}, more than the "
                         f"{MAX_INTERVALS:,} a run keeps: make {acsl.cint_name} longer",

@@ -15,6 +15,7 @@ import time as _clock
 from bisect import bisect_left, bisect_right
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 
@@ -858,12 +859,11 @@ class Integrator(RunLoop):
             if self.plan.watch_idx else e_prev
         TR, YR = T[rows], Y[rows]
         if k:
-            try:
+            def over_rows() -> np.ndarray:
                 with np.errstate(all="ignore"):
-                    table = output_table(self.c.out_v(TR, list(YR.T), m, z), k)
-            except ArithmeticError:  # (a variable the derivatives do not read faults)
-                table = rec.output_rows(TR, YR, [m] * k, z)
-            rec.block(TR, YR, table, m, z, samples)
+                    return output_table(self.c.out_v(TR, list(YR.T), m, z), k)
+
+            rec.block(TR, YR, rows_table(over_rows, rec, TR, YR, [m] * k, z), m, z, samples)
         else:
             rec.samples(*samples, m, z)
         stepper.consume(n)
@@ -892,10 +892,8 @@ class Integrator(RunLoop):
             got = stepper.advance(m, z, times, gi)
             if rec is not None and len(got.T):
                 # (each row's branches too: RANGE re-integrates from rows)
-                try:
-                    table = self._compiled_outputs(got, z)
-                except ArithmeticError:  # (a variable the derivatives do not read)
-                    table = rec.output_rows(got.T, got.Y, got.M, z)
+                table = rows_table(partial(self._compiled_outputs, got, z), rec, got.T,
+                                   got.Y, got.M, z)
                 rec.block(got.T, got.Y, table, got.M, z)
             if rec is not None and len(got.S):
                 rec.samples_with_modes(got.S, got.SY, got.SM, z)
@@ -1001,6 +999,17 @@ def kernel_arguments(kernel, c: Compiled, plan: RunPlan, m, z, plain: bool,
             "watch": np.array(plan.watch_idx, dtype=np.int64), "handled": handled,
             "level": level, "lookahead": plan.lookahead_h,
             "stability_limit": plan.route.stability_limit, "h_floor": plan.h_floor}
+
+
+def rows_table(over_rows: Callable[[], np.ndarray], rec: Recorder, T: np.ndarray,
+               Y: np.ndarray, M, z) -> np.ndarray:
+    """The output table of rows, from the code over all rows at once (`over_rows`),
+    or, where that meets a fault (a variable the derivatives do not read), one row
+    at a time, the variables that fault NaN (`Recorder.output_rows`)."""
+    try:
+        return over_rows()
+    except ArithmeticError:
+        return rec.output_rows(T, Y, M, z)
 
 
 def output_table(outs, n: int) -> np.ndarray:

@@ -148,21 +148,20 @@ class _Run:
             status, text = Status.FAILED, message(stop.kind, t=stop.t, **stop.fields)
             cur.t = stop.t
             self._keep_last_good(cur)
-        except interrupts.TimeLimit:
-            # (the loop looks at its deadline between chunks; this is a PROCEDURAL
-            # loop or one long step that never came back to look: `run`)
-            interrupts.silence_alarm()
+        except (interrupts.TimeLimit, KeyboardInterrupt) as ended:
+            # Ctrl-C, or the wall-clock limit where the loop never came back to look at
+            # its deadline (a PROCEDURAL loop, one long step: `run`). The rows of the
+            # step under way may reach past where it began: the run was computed to
+            # the last of them.
+            if isinstance(ended, KeyboardInterrupt):
+                interrupts.handled()
+                failure = Failure.INTERRUPTED
+            else:
+                interrupts.silence_alarm()
+                failure = Failure.TIME_LIMIT
             cur.t = max(cur.t, rec.last_t if rec.last_t is not None else cur.t)
-            status, text = Status.FAILED, message(Failure.TIME_LIMIT, t=cur.t,
-                                                  limit=self.opts.max_time)
-            return self.finish(status, text, cur, {})
-        except KeyboardInterrupt:
-            interrupts.handled()
-            # (the rows of the step under way may reach past where it began: the run
-            # was computed to the last of them)
-            cur.t = max(cur.t, rec.last_t if rec.last_t is not None else cur.t)
-            status, text = Status.FAILED, message(Failure.INTERRUPTED, t=cur.t)
-            return self.finish(status, text, cur, {})
+            return self.finish(Status.FAILED, message(failure, t=cur.t,
+                                                      limit=self.opts.max_time), cur, {})
         except TooManySlides as exc:
             status, text = Status.FAILED, message(Failure.SLIDES, t=cur.t, count=exc.count,
                                                   limit=MAX_SLIDING)

@@ -84,14 +84,14 @@ def table(t: T.Table, out: TextIO) -> None:
 _VERBATIM = str.maketrans({"\\": "\\char92{}", "{": "\\char123{}", "}": "\\char125{}"})
 
 
-# What TeX reads as markup in a file name given to \\input or \\includegraphics
+# What TeX reads as markup in a file name given to \input or \includegraphics
 # (where it cannot be escaped): a listing's name with one of them would run commands.
 _NOT_IN_NAMES = set("\\{}%#$&^~")
 
 
 def check_file_name(stem: str, path: str) -> None:
     """Refuse a listing's name that the LaTeX files would have to name raw."""
-    bad = sorted({ch for ch in stem if ch in _NOT_IN_NAMES or ord(ch) < 0x20 or ch == "\x7f"})
+    bad = sorted({ch for ch in stem if ch in _NOT_IN_NAMES or visible(ch) != ch})
     if bad:
         raise OutputError(path, f"the listing's name {visible(stem)!r} has "
                           f"{' '.join(visible(ch) for ch in bad)}, which LaTeX would read "
@@ -109,7 +109,7 @@ def verbatim(lines: list[str], out: TextIO, options: str = "") -> None:
 
 
 def body(doc: Document, out_dir: str, out: TextIO) -> None:
-    from ...highlight import AmilLexer, highlight_listing, style_defs
+    from ...highlight import highlight_listing, style_defs
 
     out.write(f"% amilpy report: {tex(doc.title)}\n"
               f"% needs \\usepackage{{{','.join(PACKAGES)}}}\n")
@@ -121,11 +121,9 @@ def body(doc: Document, out_dir: str, out: TextIO) -> None:
             out.write(f"\\{command}*{{{tex(b.text)}}}\n")
         elif isinstance(b, Text):
             out.write(f"\\textbf{{{tex(b.text)}}}\n\n" if b.strong else f"{tex(b.text)}\n\n")
-        elif isinstance(b, Code) and b.kind == "listing" and AmilLexer is not None:
+        elif isinstance(b, Code) and b.kind == "listing":  # (without Pygments: `verbatim`)
             out.write(highlight_listing(visible("\n".join(b.lines)) + "\n", "latex",
                                         linenos=True))
-        elif isinstance(b, Code) and b.kind == "listing":  # (no Pygments)
-            verbatim(b.lines, out, ",numbers=left")
         elif isinstance(b, Code):
             verbatim(b.lines, out)
         elif isinstance(b, TableBlock):
