@@ -47,6 +47,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from enum import Enum
+from functools import cache
 from typing import Any
 
 from . import runtime as rt
@@ -216,6 +217,7 @@ class Func:
         return str(n[0]) if len(n) == 1 else ", ".join(map(str, n[:-1])) + f" or {n[-1]}"
 
 
+@cache
 def _names(inner: str) -> tuple[str, ...]:
     inner = inner.replace("[", "").replace("]", "")
     return tuple(a.strip() for a in inner.split(",") if a.strip() not in ("", "..."))
@@ -223,6 +225,13 @@ def _names(inner: str) -> tuple[str, ...]:
 
 FUNCTIONS: dict[str, Func] = {}
 ALIASES: dict[str, str] = {}
+_generation = [0]  # registrations so far: what is derived from FUNCTIONS is cached by it
+
+
+def generation() -> int:
+    """Changes whenever an entry is registered (a cache of the registry's views
+    compares it)."""
+    return _generation[0]
 
 
 def register(func: Func) -> Func:
@@ -232,6 +241,7 @@ def register(func: Func) -> Func:
     FUNCTIONS[func.name] = func
     for alias in func.aliases:
         ALIASES[alias] = func.name
+    _generation[0] += 1
     return func
 
 

@@ -14,6 +14,7 @@ family, so adding a node fails at import wherever it is not handled.
 
 from __future__ import annotations
 
+import gc
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -47,6 +48,21 @@ def deep_enough() -> Iterator[None]:
             sys.setrecursionlimit(old)
 
 
+@contextmanager
+def no_collection() -> Iterator[None]:
+    """Python's cyclic garbage collector held off (for the block). The front end
+    makes millions of small objects that live on (syntax and Python trees); each
+    full collection walks every one, which took a quarter of a large model's
+    reading and building. Nothing it makes is garbage in a cycle worth finding."""
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was:
+            gc.enable()
+
+
 class Node:
     """Base of every syntax and IR node."""
 
@@ -54,6 +70,8 @@ class Node:
     # the fields that hold sub-nodes (a node or a tuple of nodes), in source order;
     # node classes set it without an annotation, so no dataclass takes it for a field
     child_fields: ClassVar[tuple[str, ...]] = ()
+    # a class that says its children itself (`children` overridden): `walk` asks it
+    own_children: ClassVar[bool] = False
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -61,6 +79,7 @@ class Node:
         if name in NODES and NODES[name] is not cls and NODES[name].__module__ != cls.__module__:
             raise TypeError(f"two node classes named {name}: visitors dispatch on the name")
         NODES[name] = cls
+        cls.own_children = cls.children is not Node.children
 
     def children(self) -> tuple[Node, ...]:
         out: list[Node] = []
@@ -78,10 +97,32 @@ def walk(node: Node) -> Iterator[Node]:
     any depth). IR instances (a switch's arguments) are not entered: they live on
     the instance, not under the node that reads its value."""
     stack = [node]
+    pop, push = stack.pop, stack.append
     while stack:
-        n = stack.pop()
+        n = pop()
         yield n
-        stack.extend(reversed(n.children()))
+        if n.own_children:
+            stack.extend(reversed(n.children()))
+            continue
+        fields = n.child_fields
+        if not fields:  # (a number, a name: most nodes)
+            continue
+        if len(fields) == 1:
+            value = getattr(n, fields[0])
+            if value.__class__ is tuple:
+                stack.extend(value[::-1])
+            else:
+                push(value)
+            continue
+        below: list[Node] = []
+        for f in fields:
+            value = getattr(n, f)
+            if value.__class__ is tuple:
+                below.extend(value)
+            else:
+                below.append(value)
+        below.reverse()
+        stack.extend(below)
 
 
 class Visitor:

@@ -83,6 +83,39 @@ def test_walk_is_iterative_and_in_source_order():
     assert [n.name for n in syntax.walk(call) if isinstance(n, syntax.Name)] == ["A", "B"]
 
 
+def _walk_by_children(node):
+    """walk as it is defined: every node, then its `children()` in order."""
+    out, stack = [], [node]
+    while stack:
+        n = stack.pop()
+        out.append(n)
+        stack.extend(reversed(n.children()))
+    return out
+
+
+@pytest.mark.parametrize("path", ["models/ex4_clutch.amil", "models/hoist_backlash.amil",
+                                  "models/examples/oral_dosing.csl",
+                                  "models/examples/fst_wheat.fst",
+                                  "models/examples/csmp_diode_filter.amil"])
+def test_walk_visits_what_children_says(path):
+    """`walk` reads the child fields itself (it is the front end's busiest loop);
+    it must visit exactly the nodes, in the order, that `children()` gives, also
+    for the classes that define `children()` themselves (IF branches, IR nodes)."""
+    from pathlib import Path
+
+    from amilpy.parse import parse
+
+    file = Path(__file__).resolve().parents[1] / path
+    model = amilpy.load(file).ir
+    roots = list(parse(file.read_text(), str(file)).statements)
+    roots += [e.expr for e in model.dynamic] + [s.deriv for s in model.states]
+    roots += [a for sw in model.switches for a in sw.args]
+    if_block = syntax.If((syntax.Branch(syntax.Name("C", SP), (), SP),
+                          syntax.Branch(None, (), SP)), SP)
+    for root in [*roots, if_block]:
+        assert list(syntax.walk(root)) == _walk_by_children(root)
+
+
 def test_children_of_ir_nodes_do_not_enter_instances():
     # a switch's arguments live on the instance: its value node has no children
     assert ir.SwitchValue(0, SP).children() == ()

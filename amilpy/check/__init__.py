@@ -17,7 +17,7 @@ from .. import ir
 from .. import syntax as ast
 from ..diagnostics import AmilError, Reporter
 from ..surfaces import classify
-from ..syntax import deep_enough
+from ..syntax import deep_enough, no_collection
 from . import order
 from .code import CodeLowering, assigned_names
 from .groups import RunGroups, reject_late_equations, sections, split_groups
@@ -66,6 +66,7 @@ def _dynamic_in_initial(statements: list, rep: Reporter) -> list:
 
 
 @deep_enough()
+@no_collection()
 def check(program: ast.Program, name: str | None = None) -> ir.Model:
     """The checked, sorted model of a parsed listing; raises AmilError with every
     fault found."""

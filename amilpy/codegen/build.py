@@ -19,7 +19,7 @@ from .. import syntax as syn
 from ..diagnostics import AmilError, Diagnostic, Span
 from ..library import WEATHER_HOLD, lookup, vector_functions
 from ..surfaces import constant_value, is_affine
-from ..syntax import deep_enough
+from ..syntax import deep_enough, no_collection
 from ..templates import instantiate
 from .compiled import Compiled
 from .consts import evaluate_constant, initial_slots
@@ -450,6 +450,7 @@ class Compiler:
         return out
 
     @deep_enough()
+    @no_collection()
     def build(self) -> Compiled:
         try:
             return self._build()
@@ -481,12 +482,18 @@ class Compiler:
         fns += [vectorised(fns[1], "surf_vec"), vectorised(fns[3], "out_vec")] + extra
         module = Folder().visit(py.Module(body=fns, type_ignores=[]))
         place(module)
-        py.fix_missing_locations(module)
         assert_closed(module)
-        self.source = py.unparse(module)
+        self._source: str | None = None
         self.code = compile(module, model.path or model.name, "exec")
         self.module, self.out_names = module, list(out_names)
         return self.bind(self.constants)
+
+    @deep_enough()
+    def source_text(self) -> str:
+        """The generated module as Python text, written once."""
+        if self._source is None:
+            self._source = py.unparse(self.module)
+        return self._source
 
     def bind(self, constants: dict[str, float]) -> Compiled:
         """The built code for one run's constants: executed with its parameters' values
@@ -522,7 +529,7 @@ class Compiler:
             surf=scalar["surf"], out=scalar["out"], mem=scalar["mem"],
             watched=self.watched, const_modes=self.const_modes,
             modes_literal=scalar["modes"], affine_time=binder.affine(),
-            impulses=binder.impulses(), source=self.source, tables=self.global_tables,
+            impulses=binder.impulses(), tables=self.global_tables,
             surf_v=vector["surf_vec"], out_v=vector["out_vec"],
             memory_every_step=any(f.memory.every_step for f in self.entries),
             memory_times=self.memory_times(),

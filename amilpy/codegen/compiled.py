@@ -30,7 +30,6 @@ class Compiled:
     modes_literal: Callable  # (t, y, m, z) -> list of literal modes of watched surfaces
     affine_time: set[int]  # surfaces affine in TIME: their roots are breakpoints
     impulses: list[tuple[float, float]]
-    source: str
     tables: dict[str, tuple] = field(default_factory=dict)
     # surf and out over NumPy columns: y is a list of arrays, t an array
     surf_v: Callable | None = None
@@ -79,6 +78,12 @@ class Compiled:
     # code built from `module` on first use, for every binding of it (see `rebound`)
     shared: dict = field(default_factory=dict, repr=False)
     binder: object = field(default=None, repr=False)  # the Compiler, for `rebound`
+
+    @property
+    def source(self) -> str:
+        """The generated scalar functions as Python text (written on first use: most
+        runs never need it, and a large model's takes long to write)."""
+        return self.binder.source_text()
 
     def rebound(self, constants: dict[str, float]) -> Compiled:
         """These functions for a run whose constants differ from these only in the

@@ -35,6 +35,8 @@ def evaluate_constant(model: ir.Model, expr, constants: dict[str, float], tables
     from .. import syntax as syn
     from .pytree import parameter
 
+    if type(expr) is syn.Num:  # (most initial conditions: no code to make)
+        return float(expr.value)
     names = frozenset(n.name for n in syn.walk(expr)
                       if isinstance(n, syn.Name) and n.name in constants)
     key = (id(expr), names, tuple(sorted(tables)))

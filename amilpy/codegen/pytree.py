@@ -9,21 +9,31 @@ import copy
 import math
 from collections.abc import Callable
 
-from ..library import math_functions
+from ..library import generation, math_functions
 from ..runtime import HELPERS, safe_pow
+from ..syntax import deep_enough
 
 # the arguments of every generated function; with the v_/h_ locals of model
 # names, the mN/nN/zN/wN locals and the _NAME callables, all generated code reads
 ARGS = ("t", "y", "m", "mn", "z", "ev")
 
 
+_NAMESPACE: list = [None, None, frozenset()]  # [generation, namespace, its allowed names]
+
+
+def _current() -> list:
+    if _NAMESPACE[0] != (generation(), len(HELPERS)):
+        out: dict[str, object] = {f"_{k}": v for k, v in math_functions().items()}
+        out.update({f"_{k}": v for k, v in HELPERS.items()})
+        _NAMESPACE[:] = [(generation(), len(HELPERS)), out, frozenset(out) | frozenset(ARGS)]
+    return _NAMESPACE
+
+
 def namespace() -> dict[str, object]:
     """Every callable generated code can reach: the language's math functions and
-    the run-time helpers, each as _NAME (read from the library at each build, so an
-    entry registered later is there too)."""
-    out: dict[str, object] = {f"_{k}": v for k, v in math_functions().items()}
-    out.update({f"_{k}": v for k, v in HELPERS.items()})
-    return out
+    the run-time helpers, each as _NAME (as the library stands now: an entry
+    registered later is there too). A fresh dictionary, for the caller to fill."""
+    return dict(_current()[1])
 
 
 def local(name: str) -> str:
@@ -67,53 +77,67 @@ def const_value(node: py.expr) -> float | None:
     return None
 
 
-class Folder(py.NodeTransformer):
-    """Constant folding on the generated tree (keeps float semantics)."""
+class Folder:
+    """Constant folding on the generated tree (keeps float semantics), bottom-up, in
+    place (ast.NodeTransformer's generic walk took longer than the rest of a
+    large model's build)."""
 
-    def visit(self, node):
-        new = super().visit(node)
-        # a folded statement root keeps its line (see `on_line`)
-        if new is not node and hasattr(node, "amil_line") and new is not None:
-            new.amil_line = node.amil_line
-        return new
+    def visit(self, node: py.AST) -> py.AST:
+        return _fold(node)
 
-    def visit_BinOp(self, node):
-        self.generic_visit(node)
-        a, b = const_value(node.left), const_value(node.right)
-        if isinstance(node.op, py.Pow) and a is not None and isinstance(node.right, py.Constant):
-            v = safe_pow(a, float(node.right.value))
-            return py.copy_location(number(v), node) if math.isfinite(v) else node
-        if a is not None and b is not None and not isinstance(node.op, py.Pow):
-            try:
-                if isinstance(node.op, py.Add):
-                    v = a + b
-                elif isinstance(node.op, py.Sub):
-                    v = a - b
-                elif isinstance(node.op, py.Mult):
-                    v = a * b
-                elif isinstance(node.op, py.Div):
-                    v = a / b
-                else:
-                    return node
-            except (ArithmeticError, ValueError):
-                return node  # left to the run, which reports it where it happens
-            return py.copy_location(number(v), node)
-        return node
 
-    def visit_UnaryOp(self, node):
-        self.generic_visit(node)
-        if isinstance(node.op, py.USub):
-            inner = node.operand
-            if isinstance(inner, py.UnaryOp) and isinstance(inner.op, py.USub):
-                return inner.operand
-        return node
-
-    def visit_IfExp(self, node):
-        self.generic_visit(node)
+def _fold(node: py.AST) -> py.AST:
+    for name in node._fields:
+        value = getattr(node, name, None)
+        if value.__class__ is list:
+            for i, x in enumerate(value):
+                if isinstance(x, py.AST):
+                    new = _fold(x)
+                    if new is not x:
+                        value[i] = new
+        elif isinstance(value, py.AST):
+            new = _fold(value)
+            if new is not value:
+                setattr(node, name, new)
+    kind = node.__class__
+    if kind is py.BinOp:
+        new = _fold_binop(node)
+    elif kind is py.UnaryOp:
+        inner = node.operand
+        new = inner.operand if (isinstance(node.op, py.USub) and isinstance(inner, py.UnaryOp)
+                                and isinstance(inner.op, py.USub)) else node
+    elif kind is py.IfExp:
         test = truth(node.test)
-        if test is None:
-            return node
-        return node.body if test else node.orelse
+        new = node if test is None else node.body if test else node.orelse
+    else:
+        return node
+    # a folded statement root keeps its line (see `on_line`)
+    if new is not node and hasattr(node, "amil_line"):
+        new.amil_line = node.amil_line
+    return new
+
+
+def _fold_binop(node: py.BinOp) -> py.expr:
+    a, b = const_value(node.left), const_value(node.right)
+    if isinstance(node.op, py.Pow) and a is not None and isinstance(node.right, py.Constant):
+        v = safe_pow(a, float(node.right.value))
+        return py.copy_location(number(v), node) if math.isfinite(v) else node
+    if a is not None and b is not None and not isinstance(node.op, py.Pow):
+        try:
+            if isinstance(node.op, py.Add):
+                v = a + b
+            elif isinstance(node.op, py.Sub):
+                v = a - b
+            elif isinstance(node.op, py.Mult):
+                v = a * b
+            elif isinstance(node.op, py.Div):
+                v = a / b
+            else:
+                return node
+        except (ArithmeticError, ValueError):
+            return node  # left to the run, which reports it where it happens
+        return py.copy_location(number(v), node)
+    return node
 
 
 def truth(node) -> bool | None:
@@ -146,21 +170,53 @@ def on_line(node: py.AST, line: int) -> py.AST:
     return node
 
 
+def children(node: py.AST) -> list[py.AST]:
+    """The nodes right under `node` (as ast.iter_child_nodes, at twice its speed: a
+    large model's module has hundreds of thousands of nodes)."""
+    out: list[py.AST] = []
+    for name in node._fields:
+        value = getattr(node, name, None)
+        if value.__class__ is list:
+            out.extend(x for x in value if isinstance(x, py.AST))
+        elif isinstance(value, py.AST):
+            out.append(value)
+    return out
+
+
+def nodes(root: py.AST) -> list[py.AST]:
+    """Every node under `root`, root included (as ast.walk, faster)."""
+    out, stack = [root], [root]
+    while stack:
+        below = children(stack.pop())
+        out.extend(below)
+        stack.extend(below)
+    return out
+
+
+_LOCATED: dict[type, bool] = {}  # node type -> whether it has a source location
+
+
 def place(module: py.Module) -> None:
     """Give every node the line of the statement it belongs to (`on_line`; line 1
     for the scaffolding), so the code object's own line table says which statement
-    an instruction belongs to."""
+    an instruction belongs to; every node gets a location (no
+    `ast.fix_missing_locations` needed after)."""
+    located = _LOCATED
     for fn in module.body:
         fn.lineno = fn.end_lineno = 1
         fn.col_offset = fn.end_col_offset = 0
-        stack: list[tuple[py.AST, int]] = [(child, 1) for child in py.iter_child_nodes(fn)]
+        stack: list[tuple[py.AST, int]] = [(child, 1) for child in children(fn)]
         while stack:
             node, line = stack.pop()
             line = getattr(node, "amil_line", line)
-            if isinstance(node, (py.expr, py.stmt, py.excepthandler, py.arg)):
+            kind = node.__class__
+            has = located.get(kind)
+            if has is None:
+                has = located[kind] = "lineno" in kind._attributes
+            if has:
                 node.lineno = node.end_lineno = line
                 node.col_offset = node.end_col_offset = 0
-            stack.extend((child, line) for child in py.iter_child_nodes(node))
+            stack.extend((child, line) for child in children(node))
 
 
 def function(name: str, args: tuple[str, ...], body: list[py.stmt]) -> py.FunctionDef:
@@ -175,31 +231,55 @@ def function(name: str, args: tuple[str, ...], body: list[py.stmt]) -> py.Functi
     )
 
 
+@deep_enough()
 def vectorised(fn: py.FunctionDef, name: str) -> py.FunctionDef:
-    """A copy of a generated function whose conditionals work elementwise."""
-
-    class Where(py.NodeTransformer):
-        def visit_IfExp(self, node):
-            self.generic_visit(node)
-            return py.Call(py.Name("_WHERE", py.Load()), [node.test, node.body, node.orelse], [])
-
-        def visit_BoolOp(self, node):
-            self.generic_visit(node)
-            fn = "_ALL" if isinstance(node.op, py.And) else "_ANY"
-            return py.Call(py.Name(fn, py.Load()), node.values, [])
-
-    # the IR nodes the tree remembers (emit's `amil_src`) are shared, not copied
-    memo = {id(n.amil_src): n.amil_src for n in py.walk(fn) if hasattr(n, "amil_src")}
-    new = Where().visit(copy.deepcopy(fn, memo))
+    """A copy of a generated function whose conditionals work elementwise. Only the
+    nodes above a conditional are copied; the rest (most of a large model) is
+    shared with `fn`, as are the IR nodes the tree remembers (emit's `amil_src`)."""
+    new = copy.copy(_elementwise(fn))
+    if new is fn:
+        new = copy.copy(fn)
     new.name = name
     return new
+
+
+def _elementwise(node: py.AST) -> py.AST:
+    """`node` with IfExp as _WHERE(...) and and/or as _ALL/_ANY(...) calls; the
+    same node when nothing under it changes."""
+    changed: dict[str, object] = {}
+    for field in node._fields:
+        value = getattr(node, field, None)
+        if value.__class__ is list:
+            new = [_elementwise(v) if isinstance(v, py.AST) else v for v in value]
+            if any(a is not b for a, b in zip(new, value, strict=True)):
+                changed[field] = new
+        elif isinstance(value, py.AST):
+            new = _elementwise(value)
+            if new is not value:
+                changed[field] = new
+    if isinstance(node, py.IfExp):
+        parts = [changed.get(f, getattr(node, f)) for f in ("test", "body", "orelse")]
+        out = py.Call(py.Name("_WHERE", py.Load()), parts, [])
+    elif isinstance(node, py.BoolOp):
+        fn = "_ALL" if isinstance(node.op, py.And) else "_ANY"
+        out = py.Call(py.Name(fn, py.Load()), changed.get("values", node.values), [])
+    elif not changed:
+        return node
+    else:
+        out = copy.copy(node)
+        for field, value in changed.items():
+            setattr(out, field, value)
+        return out
+    if hasattr(node, "amil_line"):
+        out.amil_line = node.amil_line
+    return out
 
 
 def assert_closed(module: py.Module, also: Callable[[str], bool] | None = None) -> None:
     """Generated code reads only the compiler's names: no attributes, no builtins.
     `also`: names a later stage adds (the Jacobian's derivative locals)."""
-    allowed = set(namespace()) | set(ARGS)
-    for node in py.walk(module):
+    allowed = _current()[2]
+    for node in nodes(module):
         if isinstance(node, (py.Attribute, py.Import, py.ImportFrom, py.Global, py.Lambda)):
             raise AssertionError(f"generated code contains {type(node).__name__}")
         if isinstance(node, py.Name) and isinstance(node.ctx, py.Load):

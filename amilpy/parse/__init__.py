@@ -15,7 +15,7 @@ from importlib import resources
 from .. import syntax as ast
 from ..diagnostics import AmilError, Diagnostic, Span
 from ..language import ACSL_HEADS, split_lines
-from ..syntax import MAX_DEPTH
+from ..syntax import MAX_DEPTH, no_collection
 from .blocks import Nester
 from .build import Builder
 from .errors import syntax_diagnostic
@@ -45,6 +45,7 @@ def _parser():
 _continues = continues
 
 
+@no_collection()
 def parse(text: str, path: str | None = None) -> ast.Program:
     """Parse a listing. Raises `AmilError` with every syntax fault located."""
     from lark.exceptions import UnexpectedInput

@@ -32,6 +32,7 @@ from ..language import MAX_INTERVALS
 from ..outcome import Failure
 from ..result import Event, EventKind
 from ..routes import IALG_METHODS, route_for
+from ..syntax import no_collection
 from . import steppoint
 from .loop import Cursor, Stop
 from .plan import (
@@ -122,6 +123,7 @@ def _initial(model: ir.Model, spec: ir.RunSpec, cache: Cache):
     return base, values, calls.schedules, stop
 
 
+@no_collection()
 def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> AcslPrepared:
     acsl = model.acsl
     base, values, schedules, stop = _initial(model, spec, cache)

@@ -28,6 +28,7 @@ from ..codegen import (
 from ..diagnostics import AmilError, Diagnostic, Span
 from ..language import SEED_NAME
 from ..surfaces import level, sign
+from ..syntax import no_collection
 from . import steppoint
 from .plan import (
     Options,
@@ -139,6 +140,7 @@ def with_weather(model: ir.Model, spec: ir.RunSpec, timer: dict[str, float], opt
     return replace(spec, tables={**spec.tables, **cache.get("weather", key, read)})
 
 
+@no_collection()
 def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> Prepared:
     try:
         timer = timer_values(spec, opts.fintim, opts.max_rows)
