@@ -154,3 +154,50 @@ def test_a_data_value_as_a_state_of_one_flow():
     # RELERR 1e-13 over these 22 contact events, and AUTO's global error on the hoist
     # at RELERR 1e-10 is up to 2.6e-8 of the range (benchmarks/results/tolerances.md)
     assert got == pytest.approx(list(want.y), rel=3e-8, abs=1e-12)
+
+
+def test_observers_of_a_step_share_one_evaluation_of_its_dense_output():
+    """The variational equations, the grazing guard and a measure each sample every
+    step; `Observers` evaluates the step's dense output once at all their instants
+    (SciPy's costs about the same for twenty instants as for one). What each reads
+    is what it would have read by itself: the same instants, the same states (the
+    ends exactly ta and tb)."""
+    from scipy.integrate import DenseOutput, solve_ivp
+
+    from amilpy.run.dense import Observers, sample, sample_step
+
+    sol = solve_ivp(lambda t, y: [y[1], -y[0]], (0.0, 1.0), [1.0, 0.0], method="DOP853",
+                    dense_output=True)
+    calls = []
+
+    class Counted(DenseOutput):  # a step's interpolant, counting its evaluations
+        def _call_impl(self, t):
+            calls.append(np.ndim(t))
+            return sol.sol(t)
+
+    counted = Counted(0.0, 1.0)
+
+    seen = {}
+
+    class Looker:
+        def __init__(self, name, fractions):
+            self.name, self.fractions = name, np.asarray(fractions, dtype=float)
+
+        def __call__(self, ta, tb, interp, m, z):
+            seen[self.name] = (sample_step(interp, ta, tb, self.fractions), interp(ta),
+                               interp(tb))
+
+    gauss = Looker("gauss", [0.0, 0.1127, 0.5, 0.8873, 1.0])
+    even = Looker("even", np.arange(9) / 8)
+    plain = []  # an observer that declares nothing still sees the interpolant
+    inner = Observers([even, lambda ta, tb, interp, m, z: plain.append(interp(0.55))])
+    Observers([gauss, inner])(0.3, 0.7, counted, [], [])
+    assert calls == [1, 0]  # one call for every declared instant, one for the plain one
+    for looker in (gauss, even):
+        (times, states), at_a, at_b = seen[looker.name]
+        expected = 0.3 + (0.7 - 0.3) * looker.fractions
+        expected[0], expected[-1] = 0.3, 0.7
+        assert np.array_equal(times, expected)
+        assert np.array_equal(states, sample(sol.sol, expected))
+        assert np.array_equal(at_a, sol.sol(0.3)) and np.array_equal(at_b, sol.sol(0.7))
+    assert np.array_equal(plain[0], sol.sol(0.55))

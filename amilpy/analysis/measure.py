@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..run import Flow, State
-from ..run.dense import sample
+from ..run.dense import sample_step
 from ..run.loop import column
 from ..run.plan import SLIDE
 
@@ -86,11 +86,13 @@ class Tracker:
                 out[r] = column(cols[self.out_idx[name]], len(t))
         return out
 
+    fractions = _NODES  # of each step, where it samples (`run.dense.Observers`)
+
     def __call__(self, ta: float, tb: float, interp, m, z) -> None:
         if tb <= ta:
             return
-        t = ta + (tb - ta) * _NODES
-        v = self._values(t, sample(interp, t), m, z)
+        t, ys = sample_step(interp, ta, tb, _NODES)
+        v = self._values(t, ys, m, z)
         self.integral += 0.5 * (tb - ta) * (v[:, 1:-1] @ _GL_W)
         self.steps.append((t, v, interp, list(m), list(z)))
 

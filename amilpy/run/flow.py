@@ -48,6 +48,7 @@ from .. import ir
 from ..diagnostics import AmilError
 from ..outcome import message
 from ..result import Event
+from .dense import Observers
 from .grazing import Grazing, Missed
 from .jacobian import jacobian_at
 from .loop import Cursor, Integrator, Stop
@@ -199,12 +200,7 @@ class Flow:
                 floor = np.maximum(floor, scale)
             tangent = Tangent(self.c, self.watch, floor, n,
                               range(n) if columns is None else columns)
-            seen = observer
-
-            def observer(ta, tb, interp, m, z):
-                tangent(ta, tb, interp, m, z)
-                if seen is not None:
-                    seen(ta, tb, interp, m, z)
+            observer = Observers([tangent, observer])
         end, events = self._advance(np.array(state.y, dtype=float), state, t0, t1,
                                     stop_at_event, observer)
         if not sensitivity:
@@ -229,11 +225,8 @@ class Flow:
             if self.grazing and not self.plan.step_point:
                 guard = Grazing(self.c, self.plan, self.watch,
                                 {k for k, n in misses.items() if n >= GIVE_UP})
-
-                def seen(ta, tb, interp, m, z, guard=guard):
-                    guard(ta, tb, interp, m, z)  # first: a missed dip aborts the step
-                    if observer is not None:
-                        observer(ta, tb, interp, m, z)
+                seen = Observers([guard, observer])  # the guard first: a missed dip
+                # aborts the step
             try:
                 integ.integrate(cur, end, stop_at_event=stop_at_event, observer=seen)
             except Missed as miss:

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from .dense import sample
+from .dense import sample_step
 from .loop import column
 from .plan import Purpose, RunPlan, SurfaceKind
 
@@ -52,8 +52,7 @@ class Grazing:
     def __call__(self, ta: float, tb: float, interp, m, z) -> None:
         if not self.watched or not tb > ta:
             return
-        times = ta + (tb - ta) * self.fractions
-        ys = sample(interp, times)
+        times, ys = sample_step(interp, ta, tb, self.fractions)
         with np.errstate(all="ignore"):
             values = self.c.surf_v(times, list(ys), m, z)
         n = len(times)

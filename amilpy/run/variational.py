@@ -30,7 +30,7 @@ import math
 import numpy as np
 from scipy.linalg import expm
 
-from .dense import sample
+from .dense import sample, sample_step
 from .jacobian import STEP, jacobian_at
 from .plan import SLIDE
 
@@ -56,11 +56,27 @@ def magnus6(a1: np.ndarray, a2: np.ndarray, a3: np.ndarray, h: float) -> np.ndar
 class Tangent:
     """Observer of a flow: Phi = d y(t)/d y(t0)[:, columns] (see the module)."""
 
+    fractions = np.concatenate([[0.0], _C, [1.0]])  # of each step, where it samples
+
     def __init__(self, c, watch, floor: np.ndarray, n: int, columns) -> None:
         self.c, self.watch, self.floor = c, watch, floor
-        self.phi = np.eye(n)[:, list(columns)]
+        self._phi = np.eye(n)[:, list(columns)]
+        # steps on one linear branch (the same Jacobian A throughout) are carried
+        # as one: exp((h1 + h2 + ...) A), taken when A changes or Phi is read
+        self._pending: list | None = None  # [A, the steps' total length]
         self.prev: tuple | None = None  # (tb, y(tb), modes, memory) of the last step
         self.failed: str | None = None
+
+    @property
+    def phi(self) -> np.ndarray:
+        self._flush()
+        return self._phi
+
+    def _flush(self) -> None:
+        if self._pending is not None:
+            a, h = self._pending
+            self._pending = None
+            self._phi = expm(h * a) @ self._phi
 
     def jacobian(self, t: float, y: np.ndarray, m, z) -> np.ndarray:
         rhs = self.c.rhs
@@ -78,18 +94,35 @@ class Tangent:
             if self.failed is not None:
                 return
         if tb > ta:
-            self.phi = self._propagate(ta, tb, interp, m, z, 0) @ self.phi
+            step = self._propagate(ta, tb, interp, m, z, 0)
+            if step is not None:
+                self._flush()
+                self._phi = step @ self._phi
         self.prev = (tb, np.asarray(interp(tb), dtype=float), list(m), list(z))
 
-    def _propagate(self, ta: float, tb: float, interp, m, z, depth: int) -> np.ndarray:
+    def _propagate(self, ta: float, tb: float, interp, m, z, depth: int) -> np.ndarray | None:
+        """exp(Omega) over [ta, tb]; None when the step is on a linear branch and
+        was added to the pending one (depth 0 only)."""
         h = tb - ta
-        t1, t2, t3 = ta + _C * h
-        ys = sample(interp, (t1, t2, t3))
+        if depth:
+            t1, t2, t3 = ta + _C * h
+            ys = sample(interp, (t1, t2, t3))
+        else:  # (the instants the step's observers share)
+            times, ys = sample_step(interp, ta, tb, self.fractions)
+            (t1, t2, t3), ys = times[1:4], ys[:, 1:4]
         a1 = self.jacobian(t1, ys[:, 0], m, z)
         a3 = self.jacobian(t3, ys[:, 2], m, z)
         change = float(np.max(np.abs(a3 - a1)))
         if change <= 1e-13 * float(np.max(np.abs(a1))):
-            return expm(h * a1)  # the same Jacobian along the step: a linear branch
+            # the same Jacobian along the step: a linear branch
+            if depth:
+                return expm(h * a1)
+            if self._pending is not None and np.array_equal(self._pending[0], a1):
+                self._pending[1] += h
+            else:
+                self._flush()
+                self._pending = [a1, h]
+            return None
         if h * change > VARIATION and depth < MAX_DEPTH:
             mid = 0.5 * (ta + tb)
             return self._propagate(mid, tb, interp, m, z, depth + 1) @ \
@@ -118,7 +151,7 @@ class Tangent:
             s = self._saltation(k, t, y, current, after, mem, z)
             if s is None:
                 return
-            self.phi = s @ self.phi
+            self._phi = s @ self.phi  # (the steps before the switch first)
             current, mem = after, z
 
     def _saltation(self, k: int, t: float, y: np.ndarray, before, after, z_before, z_after
