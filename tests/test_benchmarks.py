@@ -149,6 +149,20 @@ def test_longrun_runs(tmp_path):
     assert (tmp_path / "longrun.md").read_text().count("| machine_unit | AUTO (AUTO) |") == 1
 
 
+def test_frontend_runs_each_checkout_in_its_own_process(tmp_path):
+    """The front-end table on a 5-mass chain and one model, this checkout against
+    itself given as the 'before' one: a fresh process each, the checkout's own amilpy
+    (the probe asserts where amilpy came from)."""
+    import frontend
+    from cases import ROOT
+
+    rows = frontend.main(sizes=(5,), models=("machine_unit",), repeats=1, before=ROOT,
+                         out_dir=str(tmp_path))
+    assert [r["statements"] for r in rows] == [14, 8]
+    assert all(r["now_total"] > 0 and r["before_total"] > 0 for r in rows)
+    assert "| chain N = 5 | 14 |" in (tmp_path / "frontend.md").read_text()
+
+
 def test_scale_runs(tmp_path):
     """The N-mass chain benchmark on a 5-mass chain, two routes each side."""
     import scale
