@@ -38,6 +38,36 @@ def test_generated_code_is_closed():
                for n in names)
 
 
+@pytest.mark.parametrize("bad", ["open", "__import__", "os.system"])
+def test_the_build_checks_closedness_in_its_placing_walk(bad, monkeypatch):
+    """The build checks that generated code reads only the compiler's names in the
+    same walk that gives every node its line (`place(..., closed=True)`): a name or
+    an attribute the compiler did not put there stops the build, as assert_closed
+    would."""
+    from amilpy.codegen import build as codegen_build
+    from amilpy.codegen.pytree import assert_closed, place
+    from amilpy.run import prepare
+
+    injected = ast.parse(bad, mode="eval").body
+    emit = codegen_build.Compiler.outputs_function
+
+    def with_injection(self, names):
+        fn = emit(self, names)
+        fn.body.insert(0, ast.Expr(injected))  # as if an emitter had let text through
+        return fn
+
+    monkeypatch.setattr(codegen_build.Compiler, "outputs_function", with_injection)
+    m = amilpy.loads("X = INTGRL(1.0, -X)\nTIMER FINTIM = 1.0\nEND\n")
+    with pytest.raises(AssertionError, match="unknown name|contains Attribute"):
+        prepare(m.ir, m.ir.runs[0])
+    module = ast.Module(body=[ast.FunctionDef("f", ast.arguments([], [], None, [], [], None,
+                                                                 []), [ast.Expr(injected)],
+                                              [], None)], type_ignores=[])
+    for check in (assert_closed, lambda mod: place(mod, closed=True)):
+        with pytest.raises(AssertionError):
+            check(module)
+
+
 def test_generated_functions_have_no_builtins():
     from amilpy.run import prepare
 

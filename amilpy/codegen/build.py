@@ -27,7 +27,6 @@ from .emit import Emitter, Setting, needs, needs_memories, printed_only_surfaces
 from .faults import STATEMENTS, Statement
 from .pytree import (
     Folder,
-    assert_closed,
     function,
     local,
     namespace,
@@ -481,8 +480,7 @@ class Compiler:
         # (a memory function reading its condition), so if/else becomes a where()
         fns += [vectorised(fns[1], "surf_vec"), vectorised(fns[3], "out_vec")] + extra
         module = Folder().visit(py.Module(body=fns, type_ignores=[]))
-        place(module)
-        assert_closed(module)
+        place(module, closed=True)  # (and assert_closed's check, in the same walk)
         self._source: str | None = None
         self.code = compile(module, model.path or model.name, "exec")
         self.module, self.out_names = module, list(out_names)

@@ -196,15 +196,19 @@ def nodes(root: py.AST) -> list[py.AST]:
 _LOCATED: dict[type, bool] = {}  # node type -> whether it has a source location
 
 
-def place(module: py.Module) -> None:
+def place(module: py.Module, closed: bool = False) -> None:
     """Give every node the line of the statement it belongs to (`on_line`; line 1
     for the scaffolding), so the code object's own line table says which statement
     an instruction belongs to; every node gets a location (no
-    `ast.fix_missing_locations` needed after)."""
+    `ast.fix_missing_locations` needed after). `closed`: check on the way what
+    `assert_closed` checks (one walk of a large module instead of two)."""
     located = _LOCATED
+    allowed = _current()[2]
     for fn in module.body:
         fn.lineno = fn.end_lineno = 1
         fn.col_offset = fn.end_col_offset = 0
+        if closed:
+            _assert_node(fn, allowed)
         stack: list[tuple[py.AST, int]] = [(child, 1) for child in children(fn)]
         while stack:
             node, line = stack.pop()
@@ -216,6 +220,8 @@ def place(module: py.Module) -> None:
             if has:
                 node.lineno = node.end_lineno = line
                 node.col_offset = node.end_col_offset = 0
+            if closed:
+                _assert_node(node, allowed)
             stack.extend((child, line) for child in children(node))
 
 
@@ -275,16 +281,26 @@ def _elementwise(node: py.AST) -> py.AST:
     return out
 
 
+_FORBIDDEN = (py.Attribute, py.Import, py.ImportFrom, py.Global, py.Lambda)
+
+
+def _compiler_name(name: str, allowed: frozenset, also: Callable[[str], bool] | None) -> bool:
+    return (name in allowed or name.startswith(("v_", "h_", "_T_", "_U_", "p_"))
+            or (name[0] in "mnzw" and name[1:].isdigit())
+            or (also is not None and also(name)))
+
+
+def _assert_node(node: py.AST, allowed: frozenset, also=None) -> None:
+    if isinstance(node, _FORBIDDEN):
+        raise AssertionError(f"generated code contains {type(node).__name__}")
+    if node.__class__ is py.Name and isinstance(node.ctx, py.Load) and \
+            not _compiler_name(node.id, allowed, also):
+        raise AssertionError(f"generated code reads unknown name {node.id}")
+
+
 def assert_closed(module: py.Module, also: Callable[[str], bool] | None = None) -> None:
     """Generated code reads only the compiler's names: no attributes, no builtins.
     `also`: names a later stage adds (the Jacobian's derivative locals)."""
     allowed = _current()[2]
     for node in nodes(module):
-        if isinstance(node, (py.Attribute, py.Import, py.ImportFrom, py.Global, py.Lambda)):
-            raise AssertionError(f"generated code contains {type(node).__name__}")
-        if isinstance(node, py.Name) and isinstance(node.ctx, py.Load):
-            ok = (node.id in allowed or node.id.startswith(("v_", "h_", "_T_", "_U_", "p_"))
-                  or (node.id[0] in "mnzw" and node.id[1:].isdigit())
-                  or (also is not None and also(node.id)))
-            if not ok:
-                raise AssertionError(f"generated code reads unknown name {node.id}")
+        _assert_node(node, allowed, also)
