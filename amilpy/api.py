@@ -18,6 +18,7 @@ from .check import check
 from .diagnostics import AmilError, Diagnostic, did_you_mean, with_hint
 from .outcome import was_interrupted
 from .parse import parse
+from .progress import report
 from .routes import route_for
 
 if TYPE_CHECKING:
@@ -116,7 +117,7 @@ class Model:
             fintim: float | None = None, progress=None, advice: bool = True,
             step_point: bool | None = None, seed: float | None = None,
             weather_dir: str | list[str] | None = None,
-            jobs: int = 1, scheduler: str | None = None, done=None,
+            jobs: int = 1, scheduler: str | None = None,
             **params: float) -> list[Run]:
         """Run every run of the listing (value lists, END groups); data values
         given as keywords override the listing's for all of them.
@@ -133,7 +134,8 @@ class Model:
         them on instead (`amilpy[cluster]`). Either way the runs come back in their
         order, the same as run one after the other, and a run whose data cannot be
         evaluated comes back FAILED with its message (it does not stop the others).
-        `done(i, n)`: called as run i of n finishes."""
+        `progress` (`amilpy.progress`): given a Report of each run's TIME now and
+        then (runs here only), and one as each run finishes (task "runs")."""
         from .run import Options
 
         _check_method(method)
@@ -158,7 +160,7 @@ class Model:
         self._check_memory(specs, outputs, fintim)
         runs = []
         advised = False
-        farmed = self._farm(specs, opts, jobs, scheduler, done)
+        farmed = self._farm(specs, opts, jobs, scheduler, progress)
         for k, spec in enumerate(specs):
             run = farmed[k] if farmed else self._one(spec, opts, len(specs) > 1)
             if advice and not advised:
@@ -169,8 +171,8 @@ class Model:
             runs.append(run)
             if was_interrupted(run.message):
                 break  # Ctrl-C: keep what was computed, start nothing new
-            if done is not None and not farmed:
-                done(k, len(specs))
+            if not farmed:
+                report(progress, "runs", k + 1, len(specs), index=k)
         return runs
 
     def _check_memory(self, specs: list[ir.RunSpec], outputs: list[str] | None,
@@ -215,15 +217,21 @@ class Model:
             return failed_run(spec, resolve_route(spec, opts)[1], exc.render())
 
     def _farm(self, specs: list[ir.RunSpec], opts, jobs: int, scheduler: str | None,
-              done) -> list[Run] | None:
+              progress) -> list[Run] | None:
         """The runs, farmed out (see `amilpy.farm`); None to run them here, one by one."""
         if not scheduler and (jobs <= 1 or len(specs) <= 1):
             return None
         from .farm import failed_run, run_tasks
         from .run.plan import resolve_route
 
+        finished = [0]
+
+        def done(i: int, _outcome) -> None:  # (in the order they finish)
+            finished[0] += 1
+            report(progress, "runs", finished[0], len(specs), index=i)
+
         outcomes = run_tasks(self.ir, specs, opts, jobs, scheduler, cache=self.cache,
-                             done=None if done is None else lambda i, _: done(i, len(specs)))
+                             done=done)
         return [o.run if o.run is not None else failed_run(
             spec, resolve_route(spec, opts)[1],
             "interrupted before it finished" if o.interrupted else o.error or "not run")

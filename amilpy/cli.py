@@ -348,22 +348,13 @@ def cmd_run(args, path: str, signals: Signals) -> int:
         write_out(lambda out: out.write(model.python_source(weather_dir=args.weather_dir,
                                                             **params) + "\n"))
     progress = Progress(not args.quiet)
-    finished = 0
-
-    def done(i: int, n: int) -> None:  # (in the order they finish, when farmed)
-        nonlocal finished
-        finished += 1
-        if n > 1:
-            progress.line(f"run {i + 1} finished ({finished} of {n})")
-
     try:
         runs = model.run(method=args.method, rtol=args.rtol, atol=args.atol,
                          progress=progress, max_time=args.max_time, max_steps=args.max_steps,
                          max_events=args.max_events, fintim=args.fintim,
                          advice=not args.no_advice, step_point=args.step_point,
                          seed=args.seed, weather_dir=args.weather_dir, jobs=_jobs(args),
-                         scheduler=args.scheduler, done=done,
-                         **params)
+                         scheduler=args.scheduler, **params)
     finally:
         progress.done()
     stem, out_dir = _stem_and_dir(path, args.out)
@@ -410,17 +401,12 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
     progress = Progress(not args.quiet)
     total = 2 * len(values) - 1 if args.both_ways else \
         len(values) * (len(grid[1]) if grid else 1)
-
-    def point(i: int, n: int, value: float) -> None:
-        progress.prefix = f"{name} point {min(i + 1, n)}/{n}  "
-        progress.line(f"{name} = {value:g} done ({i}/{n})")
-
     progress.prefix = f"{name} point 1/{total}  "
     try:
         result = sweep(model, name, values, both_ways=args.both_ways,
                        carry_state=args.carry_state, settle=args.settle, measure=args.measure,
                        method=args.method, rtol=args.rtol, atol=args.atol, fintim=args.fintim,
-                       keep_runs=False, progress=point, run_progress=progress,
+                       keep_runs=False, progress=progress,
                        step_point=args.step_point, seed=args.seed,
                        weather_dirs=tuple(args.weather_dir),
                        jobs=1 if args.carry_state else _jobs(args), scheduler=args.scheduler,

@@ -141,14 +141,10 @@ def cmd_periodic(args, path: str, signals) -> int:
 
     model, params = _prepare(args, path)
     progress = Progress(not args.quiet)
-
-    def step(i: int, residual: float) -> None:
-        progress.line(f"periodic: Newton step {i}, residual {residual:.2e}")
-
     try:
         orbit = model.periodic(period=args.period, angle=args.angle, measure=args.measure,
                                settle=args.settle, method=args.method, rtol=args.rtol,
-                               atol=args.atol, progress=step, **params)
+                               atol=args.atol, progress=progress, **params)
     except NotConverged as exc:
         print(f"amilpy: {path}: no periodic orbit found: {exc}", file=sys.stderr)
         return base.EXIT_FAILED
@@ -170,15 +166,10 @@ def cmd_response(args, path: str, signals) -> int:
         raise base.UsageError(with_hint(f"{name} is not a PARAM/CONST/INCON value of this "
                                         "listing", name, model.ir.data_names))
     progress = Progress(not args.quiet)
-
-    def point(value: float, count: int, residual: float) -> None:
-        progress.line(f"response: {name} = {value:.7g}  point {count}  "
-                      f"residual {residual:.1e}")
-
     try:
         resp = model.response(name, start, stop, period=args.period, angle=args.angle,
                               measure=args.measure, settle=args.settle, method=args.method,
-                              rtol=args.rtol, atol=args.atol, progress=point, **params)
+                              rtol=args.rtol, atol=args.atol, progress=progress, **params)
     except NotConverged as exc:
         print(f"amilpy: {path}: no periodic orbit at {name} = {start:g}: {exc}",
               file=sys.stderr)

@@ -12,6 +12,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 import signal
 import sys
@@ -135,8 +136,10 @@ def write_out(text_writer, out: TextIO | None = None) -> bool:
 
 
 class Progress:
-    """A progress line on stderr for runs longer than about a second (TTY only).
-    `prefix` puts the sweep's point in front ("W = 70.5 (2/9)")."""
+    """A progress line on stderr for computations longer than about a second (TTY
+    only), from the `amilpy.progress` reports of every task: a run's TIME, the
+    independent runs finished, a sweep's points (shown in front of its runs'
+    TIME), a periodic orbit's Newton steps, a response curve's points."""
 
     def __init__(self, enabled: bool) -> None:
         self.enabled = enabled and sys.stderr.isatty()
@@ -146,17 +149,32 @@ class Progress:
         self.shown = False
         self.prefix = ""
 
-    def __call__(self, t: float, fintim: float, events: int, steps: int) -> None:
+    def __call__(self, report) -> None:
         if not self.enabled:
             return
-        now = self.clock()
-        if now - self.start < 1.0 or now - self.last < 0.2:
-            return
-        self.last = now
-        rate = steps / max(now - self.start, 1e-9)
-        share = 100 * t / fintim if fintim else 0.0
-        self.line(f"{self.prefix}TIME {t:.6g} / {fintim:g}  ({share:5.1f}%)  events {events}"
-                  f"  {rate:,.0f} steps/s")
+        task, done, total, facts = report.task, report.done, report.total, report.facts
+        if task == "run":
+            now = self.clock()
+            if now - self.start < 1.0 or now - self.last < 0.2:
+                return
+            self.last = now
+            rate = facts.get("steps", 0) / max(now - self.start, 1e-9)
+            share = 100 * done / total if total else 0.0
+            self.line(f"{self.prefix}TIME {done:.6g} / {total:g}  ({share:5.1f}%)  events "
+                      f"{facts.get('events', 0)}  {rate:,.0f} steps/s")
+        elif task == "runs":
+            if total and total > 1:
+                self.line(f"run {facts.get('index', 0) + 1} finished ({done:g} of {total:g})")
+        elif task == "sweep":
+            name, n = facts.get("name", ""), int(total or 0)
+            self.prefix = f"{name} point {min(int(done) + 1, n)}/{n}  "
+            self.line(f"{name} = {facts.get('value', math.nan):g} done ({done:g}/{n})")
+        elif task == "periodic":
+            self.line(f"periodic: Newton step {done:g}, residual "
+                      f"{facts.get('residual', math.nan):.2e}")
+        elif task == "response":
+            self.line(f"response: {facts.get('name', '')} = {facts.get('value', math.nan):.7g}"
+                      f"  point {done:g}  residual {facts.get('residual', math.nan):.1e}")
 
     def line(self, text: str) -> None:
         if self.enabled:

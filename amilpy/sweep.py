@@ -15,6 +15,7 @@ import numpy as np
 
 from .diagnostics import AmilError
 from .language import fortran_float
+from .progress import report
 from .result import Run
 
 
@@ -227,12 +228,12 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
           carry_state: bool = False, settle: float = 0.0, measure: str | None = None,
           method: str | None = None, rtol: float | None = None, atol: float | None = None,
           fintim: float | None = None, keep_runs: bool = False, progress=None,
-          run_progress=None, step_point: bool | None = None, seed: float | None = None,
+          step_point: bool | None = None, seed: float | None = None,
           weather_dirs: tuple[str, ...] = (), jobs: int = 1, scheduler: str | None = None,
           grid: tuple[str, list[float]] | None = None, **params: float) -> Sweep:
     """Run `model` once per value of data value `name` and measure `measure`.
-    `progress(i, n, value)` is called after each point, `run_progress` during each
-    run (as `Options.progress`; one process only). Points that do not carry the
+    `progress` (`amilpy.progress`) is given a Report after each point (task "sweep")
+    and during each run (task "run"; runs in this process only). Points that do not carry the
     state are independent: `jobs` worker processes or a Dask `scheduler` run them
     (see `amilpy.farm`), in any order, the result in the points' order. `grid`:
     (name, values) of a second data value: every pair of values is a point."""
@@ -259,7 +260,7 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
 
     def options(start=None) -> Options:
         return Options(method=method, rtol=rtol, atol=atol, start=start, fintim=fintim,
-                       progress=run_progress, extrema=(measure,), settle=settle,
+                       progress=progress, extrema=(measure,), settle=settle,
                        step_point=step_point, seed=seed, weather_dirs=weather_dirs)
 
     if carry_state:
@@ -277,8 +278,8 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
 
     def done(i: int, _outcome) -> None:
         finished[0] += 1
-        if progress is not None:
-            progress(finished[0], len(sequence), sequence[i][0])
+        report(progress, "sweep", finished[0], len(sequence), name=name,
+               value=sequence[i][0])
 
     outcomes = farm(model.ir, tasks, jobs, scheduler, done, model.cache)
     for k, ((value, direction, w), task, outcome) in enumerate(zip(sequence, tasks, outcomes,
@@ -321,8 +322,7 @@ def _carried(model, result: Sweep, sequence, options, params, keep_runs: bool,
                                                               result.settle)))
         if keep_runs:
             result.runs.append(run)
-        if progress is not None:
-            progress(i + 1, len(sequence), value)
+        report(progress, "sweep", i + 1, len(sequence), name=result.name, value=value)
         if not run.ok:
             break  # what follows would start from a failed state
         start = run.final_state

@@ -120,7 +120,8 @@ def sweep_errors(result, truth: dict) -> tuple[np.ndarray, list]:
             continue
         best = min(want, key=lambda a: abs(a - p.amplitude))
         errors.append(abs(p.amplitude - best) / best)
-    jumps = [(j.direction, j.start, j.stop) for j in result.jumps().values() if j]
+    jumps = [(j.direction, j.start, j.stop) for found in result.jumps().values()
+             for j in found]
     return np.array(errors), jumps
 
 

@@ -181,8 +181,8 @@ def test_ctrl_c_keeps_the_rows_and_exits_3(tmp_path, capsys, monkeypatch):
         def __init__(self, enabled):
             pass
 
-        def __call__(self, t, fintim, events, steps):
-            if t > 10.0:
+        def __call__(self, report):
+            if report.task == "run" and report.done > 10.0:
                 raise KeyboardInterrupt
 
         def done(self):

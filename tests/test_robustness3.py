@@ -230,9 +230,9 @@ def test_an_interrupted_response_keeps_the_curve_so_far():
     model = amilpy.loads(SWEEP.replace("FINTIM = 5.0", "FINTIM = 30.0"))
     seen = []
 
-    def progress(value, count, residual):
-        seen.append(value)
-        if count >= 3:
+    def progress(report):
+        seen.append(report.facts["value"])
+        if report.done >= 3:
             raise KeyboardInterrupt
 
     resp = model.response("W", 0.5, 1.5, period="2*PI/W", progress=progress)

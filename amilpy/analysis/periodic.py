@@ -22,12 +22,12 @@ it, is a `NotConverged` carrying the residual history, never an orbit.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..diagnostics import AmilError
+from ..progress import Progress, report
 from ..run import FlowFailed, State
 from ..run.dense import sample
 from .measure import Stats, measure
@@ -215,10 +215,10 @@ def _check_end(s: State, t: float) -> None:
 # -------------------------------------------------------------------- Newton
 
 def newton(problem: Problem, x: np.ndarray, base: State, t0: float,
-           progress: Callable[[int, float], None] | None = None
-           ) -> tuple[Evaluation, list[float]]:
+           progress: Progress | None = None) -> tuple[Evaluation, list[float]]:
     """Newton on the period map from unknowns x; (the converged evaluation with its
-    Jacobian, the scaled residuals)."""
+    Jacobian, the scaled residuals). `progress` is given a Report at every step
+    (task "periodic")."""
     wx, wr = problem.weights
     u = problem.symmetries.basis_x
     history: list[float] = []
@@ -226,8 +226,7 @@ def newton(problem: Problem, x: np.ndarray, base: State, t0: float,
     for it in range(MAX_NEWTON):
         norm = float(np.max(np.abs(ev.residual) / wr)) if ev.residual.size else 0.0
         history.append(norm)
-        if progress is not None:
-            progress(it, norm)
+        report(progress, "periodic", it, residual=norm)
         if ev.jacobian is None:
             ev = problem.evaluate(ev.x, base, t0, jacobian=True)
         if norm <= TOL:
@@ -288,8 +287,7 @@ def orbit_of(problem: Problem, ev: Evaluation, t0: float, history: list[float],
 
 def periodic(model, closure: Closure, measure_names: list[str], *, settle_time=None,
              method: str | None = None, rtol: float | None = None, atol: float | None = None,
-             progress: Callable[[int, float], None] | None = None,
-             **params: float) -> Orbit:
+             progress: Progress | None = None, **params: float) -> Orbit:
     """The periodic steady state of `model` (an api.Model); see the module."""
     problem, (base, t0, x) = settled(Problem(model, closure, params, method, rtol, atol),
                                      model, settle_time)

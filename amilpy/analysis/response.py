@@ -44,6 +44,7 @@ import numpy as np
 
 from .. import interrupts
 from ..diagnostics import AmilError
+from ..progress import report
 from ..result import EventKind
 from . import folds
 from .measure import Stats, Tracker
@@ -273,8 +274,8 @@ class Continuation:
         return self.correct(x, lam, row, value, kind)
 
     def say(self, lam: float, residual: float) -> None:
-        if self.progress is not None:
-            self.progress(lam, self.count, residual)
+        report(self.progress, "response", self.count, name=self.name, value=lam,
+               residual=residual)
 
     # ---------------------------------------------------------------- the curve
     def run(self) -> Response:
@@ -338,7 +339,7 @@ class Continuation:
         self.wx = wx / X_WEIGHT
         self.u = first.symmetries.basis_x
         ev, history = newton(first, x, self.base, self.t_start,
-                             lambda i, r: self.say(self.start, r))
+                             lambda r: self.say(self.start, r.facts["residual"]))
         node = self.node(ev.x, self.start, history[-1])
         node.heading = math.copysign(1.0, self.stop - self.start)
         towards = np.zeros(self.u.shape[1] + 1)

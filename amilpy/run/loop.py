@@ -26,6 +26,7 @@ from ..codegen.rolled import for_compiled as rolled_rhs
 from ..compiled.layout import LOOP, PLAIN, QUIET
 from ..diagnostics import AmilError
 from ..outcome import Failure
+from ..progress import report
 from ..result import Event
 from ..steppers import (
     LOG_BUDGET,
@@ -531,10 +532,13 @@ class Integrator(RunLoop):
                                                            sorted(c.seen_memory)), rec)
                 return
             if self.opts.progress is not None and self._iterations % 200 == 0:
-                self.opts.progress(cur.t, plan.fintim, len(self.events),
-                                   self.nsteps + stepper.nstep - self._counted)
+                self._report(cur.t, stepper)
             if any(cur.t < e < min(seg_end, t_end) for e in self._pulse_ends(cur.z, cur.t)):
                 return
+
+    def _report(self, t: float, stepper: Stepper) -> None:
+        report(self.opts.progress, "run", t, self.plan.fintim, events=len(self.events),
+               steps=self.nsteps + stepper.nstep - self._counted)
 
     def _check_limits(self, t: float, stepper: Stepper) -> None:
         interrupts.check()
@@ -872,9 +876,7 @@ class Integrator(RunLoop):
         interrupts.check()
         if self.deadline is not None and _clock.perf_counter() > self.deadline:
             raise Stop(Failure.TIME_LIMIT, cur.t, limit=self.opts.max_time)
-        if self.opts.progress is not None:
-            self.opts.progress(cur.t, self.plan.fintim, len(self.events),
-                               self.nsteps + stepper.nstep - self._counted)
+        self._report(cur.t, stepper)
         return e_last
 
     # --------------------------------------------------------- the compiled path
@@ -918,9 +920,7 @@ class Integrator(RunLoop):
             cur.t, cur.y = stepper.t, stepper.y
             self.last_good = (cur.t, cur.y, list(m))
             self._passed(cur.t)
-            if self.opts.progress is not None:
-                self.opts.progress(cur.t, self.plan.fintim, len(self.events),
-                                   self.nsteps + stepper.nstep - self._counted)
+            self._report(cur.t, stepper)
         if c.z0 and stepper.fallback is None:
             # the memory as the Python route keeps it after an accepted step (the
             # kernel reads it as it stands: see `advance`)

@@ -66,7 +66,7 @@ class Options:
     max_time: float | None = None  # wall-clock seconds
     start: dict | None = None  # continue from a previous run's final_state
     fintim: float | None = None  # run length instead of the listing's FINTIM
-    progress: Callable | None = None  # callable(t, fintim, events, steps) or None
+    progress: Callable | None = None  # `progress.Progress`: given a Report now and then
     # variables whose minimum and maximum are located like RANGE's (a sweep's measure)
     extrema: tuple[str, ...] = ()
     settle: float = 0.0  # RANGE and `extrema` count the rows from t0 + settle on

@@ -33,6 +33,7 @@ from .. import interrupts, ir
 from ..codegen import Compiled
 from ..diagnostics import AmilError, Diagnostic
 from ..outcome import Failure
+from ..progress import report
 from ..result import Event, EventKind
 from ..steppers import FIXED, first_bad
 from .faults import Fault, fault_text
@@ -267,4 +268,5 @@ class StepPoint(RunLoop):
         if self.deadline is not None and _clock.perf_counter() > self.deadline:
             raise Stop(Failure.TIME_LIMIT, t, limit=self.opts.max_time)
         if self.opts.progress is not None and self.nsteps % 2048 == 0:
-            self.opts.progress(t, self.plan.fintim, len(self.events), self.nsteps)
+            report(self.opts.progress, "run", t, self.plan.fintim, events=len(self.events),
+                   steps=self.nsteps)
