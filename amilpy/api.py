@@ -15,11 +15,11 @@ from typing import TYPE_CHECKING
 
 from . import ir
 from .check import check
-from .diagnostics import AmilError, Diagnostic, did_you_mean, with_hint
+from .diagnostics import AmilError, Diagnostic, UsageError, did_you_mean, with_hint
 from .outcome import was_interrupted
 from .parse import parse
 from .progress import report
-from .routes import route_for
+from .routes import METHODS, route_for
 
 if TYPE_CHECKING:
     from .result import Run
@@ -91,14 +91,14 @@ class Model:
         for key, value in params.items():
             name = key.upper()
             if name not in known:
-                raise AmilError([Diagnostic(
+                raise UsageError([Diagnostic(
                     f"{name} is not a PARAM/CONST/INCON value of this model",
                     None, did_you_mean(name, known) or
                     "only data values can be set from outside")], self.ir.path)
             try:
                 overrides[name] = float(value)
             except (TypeError, ValueError):
-                raise AmilError(f"{name} must be a number, got {value!r}") from None
+                raise UsageError(f"{name} must be a number, got {value!r}") from None
         specs = []
         for spec in self.ir.runs:
             if overrides:
@@ -141,13 +141,14 @@ class Model:
         _check_method(method)
         for label, tol in (("rtol", rtol), ("atol", atol)):
             if tol is not None and not tol > 0:
-                raise AmilError(f"{label} must be positive, got {tol}")
+                raise UsageError(f"{label} must be positive, got {tol}")
         if outputs is not None:
             outputs = [o.upper() for o in outputs]
             known = set(self.ir.variables)
             unknown = [o for o in outputs if o not in known]
             if unknown:
-                raise AmilError(f"{unknown[0]} is not a variable of the model")
+                raise UsageError(with_hint(f"{unknown[0]} is not a variable of the model",
+                                           unknown[0], known))
         opts = Options(method=method, rtol=rtol, atol=atol, events=events, outputs=outputs,
                        max_time=max_time, progress=progress, fintim=fintim,
                        step_point=step_point, seed=_seed(seed),
@@ -262,7 +263,7 @@ class Model:
         eigenvalues, natural frequencies, damping ratios, shapes, the Jacobian."""
         from .analysis.linear import modes
 
-        self._check_method(method)
+        _check_method(method)
         return modes(self, at, method=method, rtol=rtol, atol=atol, progress=progress,
                      **params)
 
@@ -275,7 +276,7 @@ class Model:
         from .analysis import Closure
         from .analysis.periodic import periodic
 
-        self._check_method(method)
+        _check_method(method)
         return periodic(self, Closure.of(period, angle), self._measures(measure),
                         settle_time=settle, method=method, rtol=rtol, atol=atol,
                         progress=progress, **params)
@@ -290,7 +291,7 @@ class Model:
         from .analysis import Closure
         from .analysis.response import response
 
-        self._check_method(method)
+        _check_method(method)
         self._specs({**params, name: start})  # an unknown name is an error here
         return response(self, name.upper(), float(start), float(stop),
                         Closure.of(period, angle), self._measures(measure),
@@ -304,14 +305,10 @@ class Model:
         out = [n.upper() for n in names] or [default_measure(self.ir)]
         for n in out:
             if n not in self.ir.variables:
-                raise AmilError(with_hint(f"{n} is not a variable of the model", n,
-                                          self.ir.variables))
+                raise UsageError(with_hint(f"{n} is not a variable of the model", n,
+                                           self.ir.variables))
         return out
 
-    @staticmethod
-    def _check_method(method: str | None) -> None:
-        if method is not None and route_for(method) is None:
-            raise AmilError(f"unknown integration method {method}")
 
     def __repr__(self) -> str:
         return f"<amilpy.Model {self.name!r}: {len(self.ir.states)} states, " \
@@ -391,5 +388,6 @@ def load(path: str | os.PathLike) -> Model:
 def _check_method(method: str | None) -> None:
     """The API's METHOD names are the listing's (routes.ROUTES)."""
     if method is not None and route_for(method) is None:
-        raise AmilError(f"unknown integration method {method}")
+        raise UsageError(with_hint(f"unknown integration method {method}", method.upper(),
+                                   METHODS))
 

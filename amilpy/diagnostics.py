@@ -70,6 +70,18 @@ class AmilError(Exception):
         return f"<pre style='color:#b00'>{escape(self.render())}</pre>"
 
 
+class UsageError(AmilError):
+    """A call that cannot be right whatever the listing says: a data value or
+    variable it does not have, an unknown method, a tolerance that is not positive,
+    options that exclude each other. Raised by the API where it checks its
+    arguments; the command line, which checks nothing the API checks, exits 2."""
+
+    def text(self) -> str:
+        """The message with its hint, on one line."""
+        d = self.diagnostics[0]
+        return f"{d.message}; {d.hint}" if d.hint else d.message
+
+
 def _source_excerpt(source: str | None, span: Span) -> list[str]:
     if source is None:
         return []

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .diagnostics import AmilError
+from .diagnostics import AmilError, UsageError, with_hint
 from .language import fortran_float
 from .progress import report
 from .result import Run
@@ -242,14 +242,16 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
     name = name.upper()
     for n in [name] + ([grid[0].upper()] if grid else []):
         if n not in model.ir.data_names:
-            raise AmilError(f"{n} is not a PARAM/CONST/INCON value of this model")
+            raise UsageError(with_hint(f"{n} is not a PARAM/CONST/INCON value of this model",
+                                       n, model.ir.data_names))
     if grid and (carry_state or both_ways):
-        raise AmilError("a grid of two data values cannot carry the state or sweep both "
-                        "ways: each point is a run of its own")
+        raise UsageError("a grid of two data values cannot carry the state or sweep both "
+                         "ways: each point is a run of its own")
     variables = model.ir.variables
     measure = (measure or default_measure(model.ir)).upper()
     if measure not in variables:
-        raise AmilError(f"{measure} is not a variable of the model")
+        raise UsageError(with_hint(f"{measure} is not a variable of the model", measure,
+                                   variables))
     second = grid[0].upper() if grid else None
     sequence = [(v, "up", None) for v in values]
     if grid:

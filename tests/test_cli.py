@@ -4,6 +4,7 @@ import os
 
 import pytest
 
+import amilpy
 from amilpy.cli import main
 
 DECAY = """TITLE DECAY
@@ -110,7 +111,8 @@ def test_unknown_set_name_is_a_usage_error(model, capsys):
     # line's mistake, not the listing's: exit 2, with the file and a hint
     assert main(["run", str(model), "--set", "KK=1"]) == 2
     err = capsys.readouterr().err
-    assert f"amilpy: {model}: --set KK:" in err and "did you mean K?" in err
+    assert f"amilpy: {model}: KK is not a PARAM/CONST/INCON value" in err and \
+        "did you mean K?" in err
 
 
 def test_missing_file(tmp_path, capsys):
@@ -424,7 +426,7 @@ def test_an_interrupt_inside_a_module_import_is_an_interruption(capsys):
     import signal
 
     from amilpy.cli import EXIT_FAILED, _one
-    from amilpy.console import Signals
+    from amilpy.cli.console import Signals
 
     def interrupted_import(args, path, signals):
         signals.received = signal.SIGINT
@@ -472,3 +474,42 @@ def test_termt_in_a_macro_body_is_an_error_not_a_traceback(tmp_path, capsys):
     assert main(["run", str(path)]) == 1
     err = capsys.readouterr().err
     assert "3:1: error: a MACRO body holds assignments only" in err and "Traceback" not in err
+
+
+# one validating API: the API raises UsageError for a call that cannot be right, the
+# command line checks none of it again and maps it to exit 2 (what argparse itself
+# reads, a number or one of the methods' names, it refuses as argparse does: exit 2)
+USAGE = [
+    (lambda m: m.run(KK=1.0), ["run", "--set", "KK=1"], "KK is not a PARAM", None),
+    (lambda m: m.run(method="RK9"), ["run", "--method", "RK9"], "unknown integration method",
+     "--method: unknown method 'RK9'"),
+    (lambda m: m.run(rtol=-1.0), ["run", "--rtol", "-1"], "rtol must be positive",
+     "--rtol: must be a positive number"),
+    (lambda m: m.sweep("KK", [1.0]), ["sweep", "KK=1:2:1"], "KK is not a PARAM", None),
+    (lambda m: m.sweep("K", [1.0], measure="XX"), ["sweep", "K=1:2:1", "--measure", "XX"],
+     "XX is not a variable", None),
+    (lambda m: m.sweep("K", [1.0], carry_state=True, grid=("K", [1.0])),
+     ["sweep", "K=1:2:1", "K=1:2:1", "--carry-state"], "cannot carry the state", None),
+    (lambda m: m.periodic(period="1.0", measure="XX"), ["periodic", "--period", "1.0",
+                                                        "--measure", "XX"],
+     "XX is not a variable", None),
+    (lambda m: m.response("KK", 1.0, 2.0, period="1.0"), ["response", "KK=1:2",
+                                                          "--period", "1.0"],
+     "KK is not a PARAM", None),
+]
+
+
+@pytest.mark.parametrize("call, argv, says, argparse_says", USAGE,
+                         ids=[" ".join(u[1][:2]) + " " + u[2][:12] for u in USAGE])
+def test_the_api_says_usage_errors_and_the_command_line_maps_them(
+        call, argv, says, argparse_says, model, capsys):
+    from amilpy.diagnostics import UsageError
+
+    with pytest.raises(UsageError, match=says):
+        call(amilpy.load(model))
+    command, *options = argv
+    code = main([command, str(model), *options])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert (argparse_says in err) if argparse_says else \
+        (f"amilpy: {model}: " in err and says in err), err

@@ -127,7 +127,7 @@ def test_a_second_ctrl_c_waits_for_the_files_and_a_third_ends_the_command():
     into a partial run and, raised there, lost the rows and every file (the probe:
     exit 3, no CSV). The second is now held back until the files are written (then
     the command stops, exit 3); a third is raised, for a command that does not end."""
-    from amilpy.console import Signals
+    from amilpy.cli.console import Signals
 
     signals = Signals()
     with pytest.raises(KeyboardInterrupt):

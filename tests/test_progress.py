@@ -7,7 +7,7 @@ import io
 import pytest
 
 import amilpy
-from amilpy.console import Progress
+from amilpy.cli.console import Progress
 from amilpy.progress import TASKS, Report
 
 # a forced, damped oscillator: its steady orbit has the forcing's period

@@ -20,10 +20,10 @@ import time
 from contextlib import contextmanager
 from typing import TextIO
 
-from . import interrupts
-from .interrupts import TimeLimit, time_limit  # noqa: F401 - (the command line's)
-from .output.files import to_devnull
-from .output.words import visible
+from .. import interrupts
+from ..interrupts import TimeLimit, time_limit  # noqa: F401 - (the command line's)
+from ..output.files import to_devnull
+from ..output.words import visible
 
 HANDLED = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP")
                 if hasattr(signal, name))

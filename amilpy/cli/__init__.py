@@ -1,5 +1,6 @@
 """The command line: `amilpy run`, `sweep`, `report`, `check`, and the analyses
-`modes`, `periodic`, `response` (cli_analysis.py).
+`modes`, `periodic`, `response` (analysis.py); signals, stdout and the progress line
+in console.py.
 
 Exit codes (the highest that applies, over every file given):
   0  success
@@ -21,7 +22,12 @@ import os
 import sys
 import warnings
 
-from . import __version__, interrupts
+from .. import __version__, interrupts
+from ..diagnostics import AmilError, UsageError
+from ..language import fortran_float
+from ..output.files import OutputError
+from ..output.writers import DIALECTS, WRITERS, Outputs, PlotOptions, dest, writers_for
+from ..routes import method_names, methods_help, route_for
 from .console import (
     STDOUT_FAILED,
     Progress,
@@ -31,19 +37,11 @@ from .console import (
     tolerant_streams,
     write_out,
 )
-from .diagnostics import AmilError, with_hint
-from .language import fortran_float
-from .output.files import OutputError
-from .output.writers import DIALECTS, WRITERS, Outputs, PlotOptions, dest, writers_for
-from .routes import method_names, methods_help, route_for
 
 EXIT_OK, EXIT_MODEL, EXIT_USAGE, EXIT_FAILED, EXIT_OUTPUT = 0, 1, 2, 3, 4
 # the modules whose warnings the command line does not show (see `_main`)
 LIBRARIES = r"(scipy|numpy|matplotlib|numba|lark)(\.|$)"
 
-
-class UsageError(Exception):
-    """A bad command line: exit 2 with the message (and the file, when known)."""
 
 
 # ------------------------------------------------------------- value checks
@@ -142,7 +140,7 @@ def _farm_options(p: argparse.ArgumentParser) -> None:
 
 
 def _jobs(args) -> int:
-    from .farm import default_jobs
+    from ..farm import default_jobs
 
     return args.jobs or default_jobs()
 
@@ -176,8 +174,8 @@ def _csv_dialect(p: argparse.ArgumentParser) -> None:
 
 
 def _parser() -> argparse.ArgumentParser:
-    from .output.report import FORMATS
-    from .output.words import LANGUAGES
+    from ..output.report import FORMATS
+    from ..output.words import LANGUAGES
 
     p = argparse.ArgumentParser(prog="amilpy", description="Run AMIL/CSMP-style simulation "
                                 "listings: printouts, plots, CSV, sweeps and lab reports.",
@@ -242,7 +240,7 @@ def _parser() -> argparse.ArgumentParser:
 
     chk = sub.add_parser("check", help="parse and check listings, do not run them")
     chk.add_argument("files", nargs="+", metavar="FILE", help="the listing(s) (.amil)")
-    from .cli_analysis import add_parsers
+    from .analysis import add_parsers
 
     add_parsers(sub)
     return p
@@ -270,21 +268,13 @@ def _parse_sets(items: list[str]) -> dict[str, float]:
     return out
 
 
-def _check_sets(model, params: dict[str, float]) -> None:
-    known = set(model.ir.data_names)
-    for name in params:
-        if name not in known:
-            raise UsageError(with_hint(f"--set {name}: not a PARAM/CONST/INCON value of "
-                                       "this listing", name, known))
-
-
 def _plot_choice(args, model) -> PlotOptions:
     if args.t_from is not None and args.t_to is not None and args.t_from >= args.t_to:
         raise UsageError(f"--from {args.t_from:g} must come before --to {args.t_to:g}")
     if args.runs and max(args.runs) > len(model.ir.runs):
         raise UsageError(f"--runs {max(args.runs)}: the listing has {len(model.ir.runs)} "
                          "run(s)")
-    from .output.plot import can_show
+    from ..output.plot import can_show
 
     show = getattr(args, "plot", False) and can_show()
     return PlotOptions(args.t_from, args.t_to, args.zoom_events, args.subplots, args.runs,
@@ -331,12 +321,11 @@ def _finish(path: str, written: list[str], errors: list[str], quiet: bool,
 def _load(args, path: str):
     """The listing read, checked and its first run compiled (into the model's cache,
     where the run finds it), within --max-time; and the --set values."""
-    from .api import load
+    from ..api import load
 
     with time_limit(getattr(args, "max_time", None)):
         model = load(path)
-        params = _parse_sets(args.set)
-        _check_sets(model, params)
+        params = _parse_sets(args.set)  # (the API says which names it does not have)
         model.python_source(weather_dir=getattr(args, "weather_dir", None), **params)
     return model, params
 
@@ -362,7 +351,7 @@ def cmd_run(args, path: str, signals: Signals) -> int:
                       plot=plot)
     written, errors = _write_outputs(outputs, args, signals)
     if not args.quiet and not signals.held_back:
-        from .output.printout import write_runs
+        from ..output.printout import write_runs
 
         write_out(lambda out: write_runs(out, runs, ascii_plots=args.ascii))
     code = _finish(path, written, errors, args.quiet, signals)
@@ -376,7 +365,7 @@ def cmd_run(args, path: str, signals: Signals) -> int:
 
 
 def cmd_sweep(args, path: str, signals: Signals) -> int:
-    from .sweep import parse_range, sweep
+    from ..sweep import parse_range, sweep
 
     if len(args.range) > 2:
         raise UsageError("give one range, or two for a grid (NAME=START:STOP:STEP each)")
@@ -387,17 +376,7 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
         except AmilError as exc:
             raise UsageError(f"the sweep range {text}: {exc}") from None
     (name, values), grid = ranges[0], (ranges[1] if len(ranges) > 1 else None)
-    if grid and (args.carry_state or args.both_ways):
-        raise UsageError("a grid (two ranges) cannot --carry-state or sweep --both-ways: "
-                         "each point is a run of its own")
-    model, params = _load(args, path)
-    for swept in [name] + ([grid[0]] if grid else []):
-        if swept not in model.ir.data_names:
-            raise UsageError(with_hint(f"{swept} is not a PARAM/CONST/INCON value of this "
-                                       "listing", swept, model.ir.data_names))
-    if args.measure and args.measure.upper() not in model.ir.variables:
-        raise UsageError(with_hint(f"--measure {args.measure}: not a variable of this "
-                                   "listing", args.measure, model.ir.variables))
+    model, params = _load(args, path)  # (the sweep checks its names and options)
     progress = Progress(not args.quiet)
     total = 2 * len(values) - 1 if args.both_ways else \
         len(values) * (len(grid[1]) if grid else 1)
@@ -418,7 +397,7 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
                       dialect=args.csv_dialect)
     written, errors = _write_outputs(outputs, args, signals)
     if not args.quiet and not signals.held_back:
-        from .output.sweeps import format_sweep
+        from ..output.sweeps import format_sweep
 
         write_out(lambda out: out.write(format_sweep(result)))
     code = _finish(path, written, errors, args.quiet, signals)
@@ -435,7 +414,7 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
 
 
 def cmd_report(args, path: str, signals: Signals) -> int:
-    from .output.report import FORMATS, write_report
+    from ..output.report import FORMATS, write_report
 
     formats = [f.strip().lower() for f in args.format.split(",") if f.strip()]
     bad = [f for f in formats if f not in FORMATS]
@@ -461,8 +440,8 @@ def cmd_report(args, path: str, signals: Signals) -> int:
 
 
 def cmd_check(args, path: str, signals: Signals) -> int:
-    from .api import load
-    from .diagnostics import render
+    from ..api import load
+    from ..diagnostics import render
 
     ir = load(path).ir
     write_out(lambda out: out.write(
@@ -486,8 +465,8 @@ def _one(command, args, path: str, signals: Signals) -> int:
             print(f"amilpy: {path}: interrupted", file=sys.stderr)
             code = max(code, EXIT_FAILED)
         return code
-    except UsageError as exc:
-        print(f"amilpy: {path}: {exc}", file=sys.stderr)
+    except UsageError as exc:  # (the command line's, or the API's)
+        print(f"amilpy: {path}: {exc.text()}", file=sys.stderr)
         return EXIT_USAGE
     except OutputError as exc:
         print(f"amilpy: {exc}", file=sys.stderr)
@@ -548,7 +527,7 @@ def _main(argv: list[str] | None) -> int:
         print(f"amilpy {args.command}: {several[0]} names one file; with several listings "
               "run them one at a time", file=sys.stderr)
         return EXIT_USAGE
-    from .cli_analysis import COMMANDS as ANALYSES
+    from .analysis import COMMANDS as ANALYSES
 
     command = {**COMMANDS, **ANALYSES}[args.command]
     signals = Signals()
@@ -573,7 +552,3 @@ def _main(argv: list[str] | None) -> int:
     finally:
         STDOUT_FAILED.clear()
         signals.restore()
-
-
-if __name__ == "__main__":
-    sys.exit(main())

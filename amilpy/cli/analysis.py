@@ -11,11 +11,10 @@ import argparse
 import math
 import sys
 
-from . import cli as base
+from .. import cli as base
+from ..language import fortran_float
+from ..output.writers import Outputs
 from .console import Progress, write_out
-from .diagnostics import with_hint
-from .language import fortran_float
-from .output.writers import Outputs
 
 
 def _span(text: str) -> tuple[str, float, float]:
@@ -90,16 +89,10 @@ def add_parsers(sub) -> None:
 
 
 def _prepare(args, path: str):
-    from .api import load
+    from ..api import load
 
     model = load(path)
-    params = base._parse_sets(args.set)
-    base._check_sets(model, params)
-    for name in getattr(args, "measure", []):
-        if name.upper() not in model.ir.variables:
-            raise base.UsageError(with_hint(f"--measure {name}: not a variable of this "
-                                            "listing", name, model.ir.variables))
-    return model, params
+    return model, base._parse_sets(args.set)  # (the API checks the names)
 
 
 def _failed(path: str, exc) -> int:
@@ -118,8 +111,8 @@ def _done(command: str, path: str, model, result, args, signals, text) -> int:
 
 
 def cmd_modes(args, path: str, signals) -> int:
-    from .output.analysis import modes_text
-    from .run.flow import FlowFailed  # (here: `check` builds these parsers, runs nothing)
+    from ..output.analysis import modes_text
+    from ..run.flow import FlowFailed  # (here: `check` builds these parsers, runs nothing)
 
     model, params = _prepare(args, path)
     progress = Progress(not args.quiet)
@@ -135,9 +128,9 @@ def cmd_modes(args, path: str, signals) -> int:
 
 
 def cmd_periodic(args, path: str, signals) -> int:
-    from .analysis import NotConverged
-    from .output.analysis import orbit_text
-    from .run.flow import FlowFailed
+    from ..analysis import NotConverged
+    from ..output.analysis import orbit_text
+    from ..run.flow import FlowFailed
 
     model, params = _prepare(args, path)
     progress = Progress(not args.quiet)
@@ -156,15 +149,12 @@ def cmd_periodic(args, path: str, signals) -> int:
 
 
 def cmd_response(args, path: str, signals) -> int:
-    from .analysis import NotConverged
-    from .output.analysis import response_text
-    from .run.flow import FlowFailed
+    from ..analysis import NotConverged
+    from ..output.analysis import response_text
+    from ..run.flow import FlowFailed
 
     name, start, stop = args.span
     model, params = _prepare(args, path)
-    if name not in model.ir.data_names:
-        raise base.UsageError(with_hint(f"{name} is not a PARAM/CONST/INCON value of this "
-                                        "listing", name, model.ir.data_names))
     progress = Progress(not args.quiet)
     try:
         resp = model.response(name, start, stop, period=args.period, angle=args.angle,
