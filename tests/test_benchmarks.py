@@ -279,3 +279,24 @@ def test_exactness_runs(tmp_path):
     assert row["before"]["nfev"] == row["nfev"]  # the same code, run again
     assert row["before"]["amilpy"].startswith(root)
     assert "now / before" in (tmp_path / "exactness.md").read_text()
+
+
+def test_response_vs_sweep_reads_every_jump_of_each_direction():
+    """`Sweep.jumps()` gives a list of jumps per direction; the benchmark's table lists
+    them all (the quick run above has too few points to find any)."""
+    import response_vs_sweep as rvs
+
+    from amilpy.sweep import Jump
+
+    class Swept:
+        points: list = []
+
+        @staticmethod
+        def jumps():
+            return {"up": [Jump("up", 72.0, 72.05, 0.02, 0.03, 9.0),
+                           Jump("up", 72.85, 72.9, 0.03, 0.02, 6.0)],
+                    "down": [Jump("down", 67.85, 67.8, 0.03, 0.01, 8.0)]}
+
+    errors, jumps = rvs.sweep_errors(Swept(), {})
+    assert len(errors) == 0
+    assert jumps == [("up", 72.0, 72.05), ("up", 72.85, 72.9), ("down", 67.85, 67.8)]
