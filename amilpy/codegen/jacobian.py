@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .pytree import Folder, assert_closed, const_value, function, namespace
+from .pytree import Folder, clone, const_value, function, namespace, nodes, place
 
 _ONE = py.Constant(1.0)
 
@@ -68,16 +68,16 @@ def _rule(name: str, a: py.expr) -> py.expr | None:
     def sub(x, y):
         return py.BinOp(x, py.Sub(), y)
 
-    a2 = mul(a, _clone(a))
+    a2 = mul(a, clone(a))
     rules = {
         "_SIN": lambda: call("_COS", a),
         "_COS": lambda: py.UnaryOp(py.USub(), call("_SIN", a)),
         "_EXP": lambda: call("_EXP", a),
         "_SINH": lambda: call("_COSH", a),
         "_COSH": lambda: call("_SINH", a),
-        "_TANH": lambda: sub(c(1.0), mul(call("_TANH", a), call("_TANH", _clone(a)))),
+        "_TANH": lambda: sub(c(1.0), mul(call("_TANH", a), call("_TANH", clone(a)))),
         "_TAN": lambda: py.BinOp(c(1.0), py.Add(), mul(call("_TAN", a),
-                                                        call("_TAN", _clone(a)))),
+                                                        call("_TAN", clone(a)))),
         "_ALOG": lambda: div(c(1.0), a),
         "_ALOG10": lambda: div(c(1.0 / math.log(10.0)), a),
         "_SQRT": lambda: div(c(0.5), call("_SQRT", a)),
@@ -146,7 +146,7 @@ class _Deriv:
             if parts[-1] is None and all(p is None for p in parts):
                 return None
             parts = [p if p is not None else py.Constant(0.0) for p in parts]
-            return py.Subscript(py.Tuple(parts, py.Load()), _clone(e.slice), py.Load())
+            return py.Subscript(py.Tuple(parts, py.Load()), clone(e.slice), py.Load())
         return None  # z[k]: memory, constant along a step
 
     def d_NamedExpr(self, e: py.NamedExpr, j: int):
@@ -170,7 +170,7 @@ class _Deriv:
         op = e.op
 
         def cp(x):
-            return _clone(x)
+            return clone(x)
 
         def mul(x, y):
             if const_value(x) == 1.0:
@@ -208,7 +208,7 @@ class _Deriv:
         if body is None and orelse is None:
             return None
         zero = py.Constant(0.0)
-        return py.IfExp(_clone(e.test), body or zero, orelse or zero)
+        return py.IfExp(clone(e.test), body or zero, orelse or zero)
 
     def d_Call(self, e: py.Call, j: int):
         name = e.func.id if isinstance(e.func, py.Name) else ""
@@ -216,7 +216,7 @@ class _Deriv:
             da = self.d(e.args[0], j)
             if da is None:
                 return None
-            rule = _rule(name, _clone(e.args[0]))
+            rule = _rule(name, clone(e.args[0]))
             if rule is not None:
                 return py.BinOp(rule, py.Mult(), da)
         return self._numeric(e, j)
@@ -229,8 +229,8 @@ class _Deriv:
             if da is None:
                 continue
             term = py.BinOp(py.Call(py.Name("_DIFF", py.Load()),
-                                    [_clone(e.func), py.Constant(k),
-                                     *[_clone(a) for a in e.args]], []), py.Mult(), da)
+                                    [clone(e.func), py.Constant(k),
+                                     *[clone(a) for a in e.args]], []), py.Mult(), da)
             total = term if total is None else py.BinOp(total, py.Add(), term)
         return total
 
@@ -248,7 +248,13 @@ class ModelJacobian:
     cols: np.ndarray
     constant: np.ndarray
     variable: Callable
-    source: str
+    tree: py.Module  # of `variable`, for `source`
+
+    @property
+    def source(self) -> str:
+        """The generated Jacobian as Python text (written when asked for: a large
+        model's takes as long to write as to build)."""
+        return py.unparse(self.tree)
 
     @property
     def nnz(self) -> int:
@@ -298,18 +304,18 @@ def build(module: py.Module, n: int, tables: dict | None = None,
 def bind(built: tuple, tables: dict | None = None, values: dict | None = None
          ) -> ModelJacobian:
     """The Jacobian's code (`code`) executed with one run's tables and parameters."""
-    compiled, n, rows, cols, constant, source = built
+    compiled, n, rows, cols, constant, tree = built
     scope: dict[str, object] = {"__builtins__": {}, **namespace(), "_DIFF": _diff,
                                 "_SGN0": _sgn0, **(tables or {}), **(values or {})}
     exec(compiled, scope)  # noqa: S102 - compiler-built tree, closed namespace
-    return ModelJacobian(n, rows, cols, constant, scope["jac"], source)
+    return ModelJacobian(n, rows, cols, constant, scope["jac"], tree)
 
 
 def code(module: py.Module, n: int) -> tuple:
     """The generated Jacobian of a module's `rhs`, compiled: (code, n, rows, cols,
     constant entries, source)."""
     rhs = next(f for f in module.body if isinstance(f, py.FunctionDef) and f.name == "rhs")
-    body = [_clone(s) for s in rhs.body]
+    body = [clone(s) for s in rhs.body]
     states: dict[str, int] = {}
     deriv = _Deriv(states)
     out: list[py.stmt] = []
@@ -359,11 +365,10 @@ def code(module: py.Module, n: int) -> tuple:
     out.append(py.Return(py.List(varying, py.Load())))
     fn = function("jac", ("t", "y", "m", "z"), _live(out))
     tree = py.Module(body=[fn], type_ignores=[])
-    py.fix_missing_locations(tree)
-    _closed(tree)
+    place(tree, closed=True, also=_ours)  # (every node a location, checked closed)
     rows = np.array([i for i, _, _ in entries], dtype=int)
     cols = np.array([j for _, j, _ in entries], dtype=int)
-    return compile(tree, "<jacobian>", "exec"), n, rows, cols, constant, py.unparse(tree)
+    return compile(tree, "<jacobian>", "exec"), n, rows, cols, constant, tree
 
 
 def for_compiled(c) -> ModelJacobian:
@@ -382,14 +387,14 @@ def _live(body: list[py.stmt]) -> list[py.stmt]:
     used: set[str] = set()
     kept: list[py.stmt] = []
     for stmt in reversed(body):
-        targets = [n.id for n in py.walk(stmt) if isinstance(n, py.Name) and
+        targets = [n.id for n in nodes(stmt) if isinstance(n, py.Name) and
                    isinstance(n.ctx, py.Store)] if isinstance(stmt, py.Assign) else []
         reads_args = isinstance(stmt, py.Assign) and isinstance(stmt.value, (py.Name,
                                                                              py.Subscript))
         if isinstance(stmt, py.Return) or reads_args and not targets or \
                 any(t in used for t in targets):
             kept.append(stmt)
-            used |= {n.id for n in py.walk(stmt) if isinstance(n, py.Name) and
+            used |= {n.id for n in nodes(stmt) if isinstance(n, py.Name) and
                      isinstance(n.ctx, py.Load)}
     return list(reversed(kept))
 
@@ -401,22 +406,9 @@ def _fold(e: py.expr) -> py.expr:
 _OURS = re.compile(r"d\d+_\w+|r\d+|_DIFF|_SGN0")
 
 
-def _closed(tree: py.Module) -> None:
-    """The rhs's own closedness check, with the derivative locals and helpers."""
-    assert_closed(tree, also=lambda name: _OURS.fullmatch(name) is not None)
-
-
-def _clone(node):
-    """A copy of a syntax tree, its nodes' fields only (no positions, no notes): far
-    cheaper than copy.deepcopy, which would also copy the IR each node remembers."""
-    if isinstance(node, py.AST):
-        new = type(node)()
-        for name in node._fields:
-            setattr(new, name, _clone(getattr(node, name, None)))
-        return new
-    if isinstance(node, list):
-        return [_clone(x) for x in node]
-    return node
+def _ours(name: str) -> bool:
+    """The names the Jacobian adds to the rhs's: derivative locals and helpers."""
+    return _OURS.fullmatch(name) is not None
 
 
 def finite_difference(f: Callable, t: float, y: np.ndarray, eps: float = 1e-7) -> np.ndarray:

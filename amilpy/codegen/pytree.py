@@ -196,19 +196,21 @@ def nodes(root: py.AST) -> list[py.AST]:
 _LOCATED: dict[type, bool] = {}  # node type -> whether it has a source location
 
 
-def place(module: py.Module, closed: bool = False) -> None:
+def place(module: py.Module, closed: bool = False,
+          also: Callable[[str], bool] | None = None) -> None:
     """Give every node the line of the statement it belongs to (`on_line`; line 1
     for the scaffolding), so the code object's own line table says which statement
     an instruction belongs to; every node gets a location (no
     `ast.fix_missing_locations` needed after). `closed`: check on the way what
-    `assert_closed` checks (one walk of a large module instead of two)."""
+    `assert_closed` checks, `also` as there (one walk of a large module instead of
+    two)."""
     located = _LOCATED
     allowed = _current()[2]
     for fn in module.body:
         fn.lineno = fn.end_lineno = 1
         fn.col_offset = fn.end_col_offset = 0
         if closed:
-            _assert_node(fn, allowed)
+            _assert_node(fn, allowed, also)
         stack: list[tuple[py.AST, int]] = [(child, 1) for child in children(fn)]
         while stack:
             node, line = stack.pop()
@@ -221,8 +223,22 @@ def place(module: py.Module, closed: bool = False) -> None:
                 node.lineno = node.end_lineno = line
                 node.col_offset = node.end_col_offset = 0
             if closed:
-                _assert_node(node, allowed)
+                _assert_node(node, allowed, also)
             stack.extend((child, line) for child in children(node))
+
+
+def clone(node):
+    """A copy of a syntax tree, its nodes' fields only (no positions, no notes): far
+    cheaper than copy.deepcopy, which would also copy the IR each node remembers
+    (`amil_src`)."""
+    if isinstance(node, py.AST):
+        new = type(node)()
+        for name in node._fields:
+            setattr(new, name, clone(getattr(node, name, None)))
+        return new
+    if isinstance(node, list):
+        return [clone(x) for x in node]
+    return node
 
 
 def function(name: str, args: tuple[str, ...], body: list[py.stmt]) -> py.FunctionDef:

@@ -20,7 +20,6 @@ usual, or gives the same non-finite value.
 from __future__ import annotations
 
 import ast as py
-import copy
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import FunctionType
@@ -28,7 +27,7 @@ from types import FunctionType
 import numpy as np
 
 from ..library import vector_functions
-from .pytree import assert_closed, function
+from .pytree import assert_closed, clone, function
 
 MIN_STATEMENTS = 400  # below this the scalar code is as fast (measured on the chain)
 MIN_PER_GROUP = 12  # statements per group on average, else nothing repeats enough
@@ -116,7 +115,7 @@ def build(module: py.Module, n: int) -> Callable | None:
     for s in statements:
         shape = _Shape(values)
         # (on a copy: the module's own tree is what METHOD COMPILED translates)
-        key_tree = shape.visit(copy.deepcopy(s.expr))
+        key_tree = shape.visit(clone(s.expr))
         key = (s.level, s.target < 0, py.dump(key_tree))
         groups.setdefault(key, []).append((s, shape))
     if len(statements) < MIN_PER_GROUP * len(groups):
@@ -136,7 +135,7 @@ def build(module: py.Module, n: int) -> Callable | None:
                 scope[f"_I{g}_{kind}{k}"] = np.array([values_of(sh)[k] for _, sh in members])
         for k in range(len(first.floats)):
             scope[f"_I{g}_C{k}"] = np.array([sh.floats[k] for _, sh in members])
-        expr = _Vector(g).visit(_Shape(values).visit(copy.deepcopy(members[0][0].expr)))
+        expr = _Vector(g).visit(_Shape(values).visit(clone(members[0][0].expr)))
         targets = np.array([s.target for s, _ in members])
         scope[f"_O{g}"] = targets if targets[0] >= 0 else -1 - targets
         out = "V" if targets[0] >= 0 else "D"
