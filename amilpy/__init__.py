@@ -5,9 +5,9 @@ codegen (-> Python callables) -> run (steppers, events) -> result -> printout/pl
 """
 
 from .api import Model, load, loads
-from .diagnostics import AmilError
+from .diagnostics import AmilError, UsageError
 
-__all__ = ["AmilError", "Event", "Model", "Run", "Status", "load", "loads"]
+__all__ = ["AmilError", "Event", "Model", "Run", "Status", "UsageError", "load", "loads"]
 __version__ = "0.1.0"
 
 

@@ -503,9 +503,7 @@ USAGE = [
                          ids=[" ".join(u[1][:2]) + " " + u[2][:12] for u in USAGE])
 def test_the_api_says_usage_errors_and_the_command_line_maps_them(
         call, argv, says, argparse_says, model, capsys):
-    from amilpy.diagnostics import UsageError
-
-    with pytest.raises(UsageError, match=says):
+    with pytest.raises(amilpy.UsageError, match=says):
         call(amilpy.load(model))
     command, *options = argv
     code = main([command, str(model), *options])
