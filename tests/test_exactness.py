@@ -367,3 +367,17 @@ def test_default_tolerances_make_the_printed_digits_right() -> None:
     for name, key in (("IA", "IA"), ("W1", "W1"), ("W2", "W2"), ("TH", "TH1")):
         scale = float(np.max(np.abs(ref[key])))
         assert float(np.max(np.abs(run[name] - ref[key]))) <= 5e-7 * scale, name
+
+
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "DOP853", "LSODA", "RADAU", "BDF", "STIFF"])
+@pytest.mark.parametrize("rtol", [1e-5, 1e-7])
+def test_a_switch_only_printed_shows_its_sign_at_every_row(method, rtol):
+    """A switch no derivative reads crosses silently (no event: its mode follows the
+    sign). Its mode was set where the step ended, and the rows inside that step were
+    printed with it: S = -1 at TIME 0.68 and 0.69 where X = 0.5066 and 0.5016 (RKS and
+    LSODA at RELERR 1e-7). Every row must show the sign of X - 0.5 where it is."""
+    text = ("TITLE DECAY\nX = INTGRL(1.0, -X)\nS = FSW(X - 0.5, -1.0, 0.0, 1.0)\n"
+            "TIMER FINTIM = 3.0, OUTDEL = 0.01\nPRINT X, S\nEND\n")
+    run, = amilpy.loads(text).run(method=method, rtol=rtol, atol=rtol * 1e-3)
+    rows = run.outdel_mask | run.prdel_mask
+    assert np.array_equal(run["S"][rows], np.sign(run["X"][rows] - 0.5))

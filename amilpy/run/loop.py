@@ -114,6 +114,9 @@ class _Step:
     e_b: list[float]  # the watched surfaces at tb
     # hits whose branch changes no derivative (cut only for a surface that reads them)
     quiet: set[int] = field(default_factory=set)
+    # surfaces that crossed silently in the step (their mode follows the sign, no
+    # event): the rows inside the step take each one's sign where the row is
+    silent: list[int] = field(default_factory=list)
 
 
 class RunLoop:
@@ -490,7 +493,8 @@ class Integrator(RunLoop):
             if rec is not None:
                 if chunked:
                     rec.samples(*stepper.samples(step.tb), cur.m, cur.z)
-                self._rows_inside(rec, stepper, f, ta, cur.y, step.tb, step.yb, cur)
+                self._rows_inside(rec, stepper, f, ta, cur.y, step.tb, step.yb, cur,
+                                  step.silent)
             self.sample_memory(stepper, cur, step.tb)
             if observer is not None:
                 observer(ta, step.tb, stepper.interpolant(), list(cur.m), list(cur.z))
@@ -668,6 +672,7 @@ class Integrator(RunLoop):
             step.exits = {k: side for k, side in slide_exit if k in step.triggered}
         if silent and not step.truncated:
             lit = c.modes_literal(step.tb, step.yb.tolist(), m, z)
+            step.silent = silent
             for k in silent:
                 m[k] = lit[k]
             e_b = c.surf(step.tb, step.yb.tolist(), m, z)
@@ -680,9 +685,11 @@ class Integrator(RunLoop):
         return step
 
     def _rows_inside(self, rec: Recorder, stepper: Stepper, f, ta: float, ya: np.ndarray,
-                     tb: float, yb: np.ndarray, cur: Cursor) -> None:
+                     tb: float, yb: np.ndarray, cur: Cursor, silent: list[int] = ()
+                     ) -> None:
         """Rows at the grid instants inside (ta, tb); the one at tb waits for the
-        new modes."""
+        new modes. A surface that crossed silently in the step (`silent`: its mode
+        is already the one at tb) shows at each row the sign it has there."""
         times = self.plan.grid.times
         while rec.out_i < len(times) and times[rec.out_i] < tb * (1 - 4e-16):
             to = float(times[rec.out_i])
@@ -698,7 +705,13 @@ class Integrator(RunLoop):
                     raise Stop(Failure.NOT_FINITE, ta, name=self.c.state_names[bad],
                                detail="")
             self.sample_memory(stepper, cur, to)
-            rec.grid_row(to, yo, cur.m, cur.z)
+            m = cur.m
+            if silent:
+                lit = self.c.modes_literal(to, yo.tolist(), cur.m, cur.z)
+                m = list(cur.m)
+                for k in silent:
+                    m[k] = lit[k]
+            rec.grid_row(to, yo, m, cur.z)
 
     def sample_memory(self, stepper: Stepper, cur: Cursor, upto: float) -> None:
         """Memory that samples the trajectory (DELAY's store) gets every instant it asks
