@@ -238,6 +238,37 @@ class Model:
             "interrupted before it finished" if o.interrupted else o.error or "not run")
             for o, spec in zip(outcomes, specs, strict=True)]
 
+    def check_accuracy(self, runs: list[Run], **params: float) -> list:
+        """Each of `runs` (this model's, as `run` gave them, with the same keyword
+        values) repeated with a 100 times smaller RELERR and ABSERR (a fixed-step
+        method: DELT / 4) and compared on the output grid: `run.accuracy.AccuracyCheck`
+        per run, whose `lines()` say in words which printed digits stand and which
+        variation is numerical."""
+        from .run import Options
+        from .run.accuracy import AccuracyCheck, compare, printed_names, tightened
+        from .run.plan import resolve_route
+
+        out = []
+        for spec, run in zip(self._specs(params), runs, strict=False):
+            if not run.ok:
+                out.append(AccuracyCheck(run.label, "", (), 0, 0, None, "the run failed"))
+                continue
+            opts = Options(method=run.method, fintim=None)
+            route, _ = resolve_route(spec, opts)
+            try:
+                tight_spec, tols, how = tightened(spec, run, route.fixed)
+            except ValueError as exc:
+                out.append(AccuracyCheck(run.label, "", (), 0, 0, None, str(exc)))
+                continue
+            opts = Options(method=run.method, rtol=tols.get("rtol"), atol=tols.get("atol"))
+            tight = self._one(tight_spec, opts, True)
+            if not tight.ok:
+                out.append(AccuracyCheck(run.label, how, (), 0, 0, None,
+                                         f"the tighter run failed: {tight.message}"))
+                continue
+            out.append(compare(run, tight, how, printed_names(run)))
+        return out
+
     def sweep(self, name: str, values, *, both_ways: bool = False, carry_state: bool = False,
               settle: float = 0.0, measure: str | None = None, method: str | None = None,
               rtol: float | None = None, atol: float | None = None,

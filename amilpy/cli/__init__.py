@@ -199,6 +199,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--quiet", action="store_true", help="no printout, only files and errors")
     run.add_argument("--no-advice", action="store_true",
                      help="do not probe for stiffness after an expensive explicit run")
+    run.add_argument("--check-accuracy", action="store_true",
+                     help="run each run again with RELERR/100 (a fixed step: DELT/4) and "
+                          "say which printed digits stand and which variation is numerical")
     _farm_options(run)
     _plot_options(run)
 
@@ -354,6 +357,13 @@ def cmd_run(args, path: str, signals: Signals) -> int:
         from ..output.printout import write_runs
 
         write_out(lambda out: write_runs(out, runs, ascii_plots=args.ascii))
+    if args.check_accuracy and not signals.held_back:
+        checks = model.check_accuracy(runs, **params)
+        write_out(lambda out: out.write("".join(
+            f"\nACCURACY CHECK, {c.label or 'run ' + str(k + 1)}"
+            + (f" ({c.how})" if c.how else "") + "\n"
+            + "".join(f"  {line}\n" for line in c.lines())
+            for k, c in enumerate(checks))))
     code = _finish(path, written, errors, args.quiet, signals)
     for r in runs:
         if r.advice and not args.quiet:
