@@ -238,12 +238,15 @@ class Model:
             "interrupted before it finished" if o.interrupted else o.error or "not run")
             for o, spec in zip(outcomes, specs, strict=True)]
 
-    def check_accuracy(self, runs: list[Run], **params: float) -> list:
+    def check_accuracy(self, runs: list[Run], *, fintim: float | None = None,
+                       step_point: bool | None = None, seed: float | None = None,
+                       weather_dir: str | list[str] | None = None,
+                       **params: float) -> list:
         """Each of `runs` (this model's, as `run` gave them, with the same keyword
-        values) repeated with a 100 times smaller RELERR and ABSERR (a fixed-step
-        method: DELT / 4) and compared on the output grid: `run.accuracy.AccuracyCheck`
-        per run, whose `lines()` say in words which printed digits stand and which
-        variation is numerical."""
+        values and options) repeated with a 100 times smaller RELERR and ABSERR (a
+        fixed-step method: DELT / 4) and compared on the output grid:
+        `run.accuracy.AccuracyCheck` per run, whose `lines()` say in words which
+        printed digits stand and which variation is numerical."""
         from .run import Options
         from .run.accuracy import AccuracyCheck, compare, printed_names, tightened
         from .run.plan import resolve_route
@@ -260,7 +263,9 @@ class Model:
             except ValueError as exc:
                 out.append(AccuracyCheck(run.label, "", (), 0, 0, None, str(exc)))
                 continue
-            opts = Options(method=run.method, rtol=tols.get("rtol"), atol=tols.get("atol"))
+            opts = Options(method=run.method, rtol=tols.get("rtol"), atol=tols.get("atol"),
+                           fintim=fintim, step_point=step_point, seed=_seed(seed),
+                           weather_dirs=_folders(weather_dir))
             tight = self._one(tight_spec, opts, True)
             if not tight.ok:
                 out.append(AccuracyCheck(run.label, how, (), 0, 0, None,

@@ -88,3 +88,16 @@ def test_the_command_line_prints_the_check(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "ACCURACY CHECK" in out and "(RELERR 1e-07, ABSERR" in out
     assert "X: " in out and "significant digits stand" in out and "events: the same 1" in out
+
+
+def test_the_check_runs_with_the_run_s_own_options():
+    # a random draw seeded from outside and a shorter FINTIM: the tighter run must draw
+    # the same numbers over the same span, or the comparison says nothing
+    text = ("TITLE NOISE\nX = INTGRL(0.0, GAUSS(1, 0.0, 1.0) - X)\nPRINT X\n"
+            "TIMER FINTIM = 10.0, OUTDEL = 0.1\nEND\n")
+    model = amilpy.loads(text)
+    runs = model.run(method="RKS", rtol=1e-6, atol=1e-9, seed=7, fintim=2.0)
+    check, = model.check_accuracy(runs, seed=7, fintim=2.0)
+    x, = check.variables
+    assert x.digits >= 5 and not x.numerical  # the same noise: only the tolerance differs
+    assert x.at <= 2.0 + 1e-12

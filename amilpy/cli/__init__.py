@@ -358,7 +358,9 @@ def cmd_run(args, path: str, signals: Signals) -> int:
 
         write_out(lambda out: write_runs(out, runs, ascii_plots=args.ascii))
     if args.check_accuracy and not signals.held_back:
-        checks = model.check_accuracy(runs, **params)
+        checks = model.check_accuracy(runs, fintim=args.fintim, step_point=args.step_point,
+                                      seed=args.seed, weather_dir=args.weather_dir,
+                                      **params)
         write_out(lambda out: out.write("".join(
             f"\nACCURACY CHECK, {c.label or 'run ' + str(k + 1)}"
             + (f" ({c.how})" if c.how else "") + "\n"
