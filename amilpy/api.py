@@ -245,8 +245,8 @@ class Model:
         """Each of `runs` (this model's, as `run` gave them, with the same keyword
         values and options) repeated with a 100 times smaller RELERR and ABSERR (a
         fixed-step method: DELT / 4) and compared on the output grid:
-        `run.accuracy.AccuracyCheck` per run, whose `lines()` say in words which
-        printed digits stand and which variation is numerical."""
+        `run.accuracy.AccuracyCheck` per run; `output.words.accuracy_lines` says in
+        words which printed digits stand and which variation is numerical."""
         from .run import Options
         from .run.accuracy import AccuracyCheck, compare, printed_names, tightened
         from .run.plan import resolve_route

@@ -10,6 +10,7 @@ import pytest
 
 import amilpy
 from amilpy.cli import main
+from amilpy.output.words import WORDS, accuracy_lines
 
 # X = exp(-TIME); Y counts the time since X fell below 0.5 (TIME ln 2: a located switch)
 DECAY = """TITLE DECAY
@@ -66,7 +67,7 @@ def test_a_variation_that_only_the_step_makes_is_called_numerical():
     assert e.largest == pytest.approx(exact, rel=1e-9) and e.at == 20.0
     assert e.numerical
     assert any(line.startswith("E: its variation") and "is numerical" in line
-               for line in check.lines())
+               for line in accuracy_lines(check, WORDS["en"]))
 
 
 def test_a_fixed_step_method_is_checked_with_a_quarter_of_delt():
@@ -101,3 +102,19 @@ def test_the_check_runs_with_the_run_s_own_options():
     x, = check.variables
     assert x.digits >= 5 and not x.numerical  # the same noise: only the tolerance differs
     assert x.at <= 2.0 + 1e-12
+
+
+def test_the_report_has_the_check_under_each_run_unless_asked_not_to(tmp_path):
+    path = tmp_path / "decay.amil"
+    path.write_text(DECAY)
+    assert main(["report", str(path), "--out", str(tmp_path / "r"), "--format", "md"]) == 0
+    text = (tmp_path / "r" / "decay_report.md").read_text()
+    assert "Accuracy check (RELERR 1e-12, ABSERR" in text
+    assert "X: " in text and "significant digits stand" in text
+    assert main(["report", str(path), "--out", str(tmp_path / "n"), "--format", "md",
+                 "--no-accuracy-check"]) == 0
+    assert "Accuracy check" not in (tmp_path / "n" / "decay_report.md").read_text()
+    assert main(["report", str(path), "--out", str(tmp_path / "p"), "--format", "md",
+                 "--lang", "pl"]) == 0
+    polish = (tmp_path / "p" / "decay_report.md").read_text(encoding="utf-8")
+    assert "Sprawdzenie dokładności" in polish and "cyfr znaczących" in polish

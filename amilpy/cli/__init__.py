@@ -238,6 +238,9 @@ def _parser() -> argparse.ArgumentParser:
     rep.add_argument("--lang", choices=LANGUAGES,
                      help="language of the headings (default: Polish when the TITLE/LABEL "
                           "text is, else the locale's, else English)")
+    rep.add_argument("--no-accuracy-check", action="store_true",
+                     help="leave out the accuracy check (each run again with RELERR/100, "
+                          "or DELT/4, which the report has by default)")
     _model_options(rep)
     _plot_options(rep)
 
@@ -358,13 +361,15 @@ def cmd_run(args, path: str, signals: Signals) -> int:
 
         write_out(lambda out: write_runs(out, runs, ascii_plots=args.ascii))
     if args.check_accuracy and not signals.held_back:
+        from ..output.words import WORDS, accuracy_lines
+
         checks = model.check_accuracy(runs, fintim=args.fintim, step_point=args.step_point,
                                       seed=args.seed, weather_dir=args.weather_dir,
                                       **params)
         write_out(lambda out: out.write("".join(
             f"\nACCURACY CHECK, {c.label or 'run ' + str(k + 1)}"
             + (f" ({c.how})" if c.how else "") + "\n"
-            + "".join(f"  {line}\n" for line in c.lines())
+            + "".join(f"  {line}\n" for line in accuracy_lines(c, WORDS["en"]))
             for k, c in enumerate(checks))))
     code = _finish(path, written, errors, args.quiet, signals)
     for r in runs:
@@ -438,9 +443,13 @@ def cmd_report(args, path: str, signals: Signals) -> int:
                      max_time=args.max_time, max_steps=args.max_steps,
                      max_events=args.max_events, step_point=args.step_point, seed=args.seed,
                      weather_dir=args.weather_dir, **params)
+    checks = None if args.no_accuracy_check else model.check_accuracy(
+        runs, fintim=args.fintim, step_point=args.step_point, seed=args.seed,
+        weather_dir=args.weather_dir, **params)
     errors: list[OutputError] = []
     with signals.held():
-        written = write_report(model, runs, path, args.out, formats, args.lang, plot, errors)
+        written = write_report(model, runs, path, args.out, formats, args.lang, plot, errors,
+                               checks)
     write_out(lambda out: out.write("".join(f"{fmt}: {', '.join(paths)}\n"
                                             for fmt, paths in written.items())))
     code = _finish(path, [], list(dict.fromkeys(str(e) for e in errors)), True, signals)

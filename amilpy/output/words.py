@@ -59,6 +59,16 @@ WORDS: dict[str, dict[str, str]] = {
         "printer plot": "Printer plot", "notes": "Notes", "line": "line",
         "against": "against", "around": "around",
         "partial report": "PARTIAL REPORT: a run failed; what it computed is shown",
+        "accuracy": "Accuracy check",
+        "acc digits": "{name}: {digits} significant digits stand with {how} (largest "
+                      "difference {largest:.2e} at TIME {at:.6g})",
+        "acc same": "{name}: the same to every digit with {how}",
+        "acc numerical": "{name}: its variation of {half:.2e} either way is numerical: it "
+                         "changes by {largest:.2e} (at TIME {at:.6g}) with {how}",
+        "acc events same": "events: the same {n}, the largest shift {shift:.2e} s with {how}",
+        "acc events differ": "events: {n} here, {m} with {how}: an event depends on the "
+                             "tolerance",
+        "acc not made": "accuracy check not made: {why}",
     },
     "pl": {
         "listing": "Listing programu", "data": "Dane i wartości początkowe",
@@ -72,8 +82,38 @@ WORDS: dict[str, dict[str, str]] = {
         "printer plot": "Wykres drukarkowy", "notes": "Uwagi", "line": "wiersz",
         "against": "w funkcji", "around": "wokół",
         "partial report": "RAPORT CZĘŚCIOWY: przebieg przerwany; pokazano to, co obliczono",
+        "accuracy": "Sprawdzenie dokładności",
+        "acc digits": "{name}: {digits} cyfr znaczących bez zmian przy {how} (największa "
+                      "różnica {largest:.2e} dla TIME {at:.6g})",
+        "acc same": "{name}: bez zmian przy {how}",
+        "acc numerical": "{name}: zmienność ±{half:.2e} jest numeryczna: zmienia się o "
+                         "{largest:.2e} (TIME {at:.6g}) przy {how}",
+        "acc events same": "przełączenia: te same ({n}), największe przesunięcie {shift:.2e} s "
+                           "przy {how}",
+        "acc events differ": "przełączenia: {n} tutaj, {m} przy {how}: przełączenie zależy "
+                             "od tolerancji",
+        "acc not made": "sprawdzenia dokładności nie wykonano: {why}",
     },
 }
+
+
+def accuracy_lines(check, words: dict[str, str]) -> list[str]:
+    """What an accuracy check (`run.accuracy.AccuracyCheck`) found, in words."""
+    if check.message:
+        return [words["acc not made"].format(why=check.message)]
+    out = []
+    for v in check.variables:
+        key = "acc numerical" if v.numerical else "acc same" if v.largest == 0 else \
+            "acc digits"
+        out.append(words[key].format(name=v.name, digits=v.digits, how=check.how,
+                                     largest=v.largest, at=v.at, half=v.variation / 2))
+    if check.events != check.events_tight:
+        out.append(words["acc events differ"].format(n=check.events, m=check.events_tight,
+                                                     how=check.how))
+    elif check.events:
+        out.append(words["acc events same"].format(n=check.events, shift=check.shift,
+                                                   how=check.how))
+    return out
 LANGUAGES = tuple(WORDS)
 
 # Polish written without diacritics (as on a line printer) still has these words.

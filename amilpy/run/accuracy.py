@@ -39,20 +39,11 @@ class VariableCheck:
     def numerical(self) -> bool:
         return self.variation > 0 and self.largest > NUMERICAL * self.variation
 
-    def words(self, how: str) -> str:
-        if self.numerical:
-            return (f"{self.name}: its variation of {self.variation / 2:.2e} either way is "
-                    f"numerical: it changes by {self.largest:.2e} (at TIME {self.at:.6g}) "
-                    f"with {how}")
-        if self.largest == 0:
-            return f"{self.name}: the same to every digit with {how}"
-        return (f"{self.name}: {self.digits} significant digits stand with {how} (largest "
-                f"difference {self.largest:.2e} at TIME {self.at:.6g})")
-
 
 @dataclass(frozen=True)
 class AccuracyCheck:
-    """A run against itself with a tighter tolerance (or shorter DELT)."""
+    """A run against itself with a tighter tolerance (or shorter DELT); in words:
+    `output.words.accuracy_lines`."""
 
     label: str
     how: str  # "RELERR 1e-12, ABSERR 1e-15" or "DELT 2.5e-04": what the check ran with
@@ -61,18 +52,6 @@ class AccuracyCheck:
     events_tight: int  # ... and in the tighter one
     shift: float | None  # the largest shift of a paired event (None: no events)
     message: str = ""  # why the check could not be made, when it could not
-
-    def lines(self) -> list[str]:
-        if self.message:
-            return [f"accuracy check not made: {self.message}"]
-        out = [v.words(self.how) for v in self.variables]
-        if self.events != self.events_tight:
-            out.append(f"events: {self.events} here, {self.events_tight} with {self.how}: "
-                       "an event depends on the tolerance")
-        elif self.events:
-            out.append(f"events: the same {self.events}, the largest shift "
-                       f"{self.shift:.2e} s with {self.how}")
-        return out
 
 
 def tightened(spec: ir.RunSpec, run: Run, fixed: bool) -> tuple[ir.RunSpec, dict, str]:

@@ -77,10 +77,12 @@ FORMATS: dict[str, Format] = {
 def write_report(model, runs: Sequence[Run], path: str, out_dir: str | None = None,
                  formats: Sequence[str] = ("md",), lang: str | None = None,
                  plot_options: PlotOptions | None = None,
-                 errors: list[OutputError] | None = None) -> dict[str, list[str]]:
+                 errors: list[OutputError] | None = None,
+                 checks: Sequence | None = None) -> dict[str, list[str]]:
     """Draw the figures and write the report of `runs` in each format; returns
     {format: paths written}. With `errors` given, an output that cannot be
-    written is recorded there and the others are still written."""
+    written is recorded there and the others are still written. `checks`: the
+    runs' accuracy checks (`Model.check_accuracy`), a section under each run."""
     from .. import words as W
     from ..plot import plot_figures
     from .document import build
@@ -107,7 +109,7 @@ def write_report(model, runs: Sequence[Run], path: str, out_dir: str | None = No
 
     figures = attempt(lambda: plot_figures(list(runs), out_dir, stem, plot_options,
                                            W.name_notes(model.ir), words))
-    doc = build(model, runs, figures, path, lang)
+    doc = build(model, runs, figures, path, lang, checks)
     for fmt in formats:
         attempt(lambda fmt=fmt: FORMATS[fmt].write(doc, out_dir, stem), fmt)
     return written

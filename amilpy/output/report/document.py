@@ -96,9 +96,9 @@ def data_rows(model, run: Run, words: dict[str, str]) -> list[tuple[str, float, 
 
 
 def build(model, runs: Sequence[Run], figures: Sequence[tuple[str, str]], path: str,
-          lang: str) -> Document:
+          lang: str, checks: Sequence | None = None) -> Document:
     """The report of `model` (an api.Model) and its runs; `figures` are (PNG path,
-    caption) pairs."""
+    caption) pairs; `checks` each run's accuracy check, if made."""
     words = W.WORDS[lang]
     ir = model.ir
     titles = runs[0].titles if runs and runs[0].titles else [os.path.basename(path)]
@@ -125,6 +125,11 @@ def build(model, runs: Sequence[Run], figures: Sequence[tuple[str, str]], path: 
             if table is not None:
                 doc.add(TableBlock(table))
         doc.add(*(Text(w) for w in run.warnings))
+        if checks is not None and k <= len(checks):
+            check = checks[k - 1]
+            doc.add(Text(words["accuracy"] + (f" ({check.how})" if check.how else ""),
+                         strong=True),
+                    *(Text(line) for line in W.accuracy_lines(check, words)))
         if not run.ok:
             doc.add(Text(f"{words['partial']}: {run.message}", strong=True))
     if figures:
