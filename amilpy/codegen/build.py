@@ -26,7 +26,7 @@ from .consts import evaluate_constant, initial_slots
 from .emit import Emitter, Setting, needs, needs_memories, printed_only_surfaces
 from .faults import STATEMENTS, Statement
 from .pytree import (
-    Folder,
+    fold,
     function,
     local,
     namespace,
@@ -479,7 +479,7 @@ class Compiler:
         # surf and out once more for NumPy columns: a condition there may be an array
         # (a memory function reading its condition), so if/else becomes a where()
         fns += [vectorised(fns[1], "surf_vec"), vectorised(fns[3], "out_vec")] + extra
-        module = Folder().visit(py.Module(body=fns, type_ignores=[]))
+        module = fold(py.Module(body=fns, type_ignores=[]))
         place(module, closed=True)  # (and assert_closed's check, in the same walk)
         self._source: str | None = None
         self.code = compile(module, model.path or model.name, "exec")

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .pytree import Folder, clone, const_value, function, namespace, nodes, place
+from .pytree import clone, const_value, fold, function, namespace, nodes, place
 
 _ONE = py.Constant(1.0)
 
@@ -342,7 +342,7 @@ def code(module: py.Module, n: int) -> tuple:
                 if dv is None:
                     deriv.known[f"d{j}_{name}"] = 0.0
                     continue
-                dv = _fold(dv)
+                dv = fold(dv)
                 if const_value(dv) is not None:
                     deriv.known[f"d{j}_{name}"] = const_value(dv)  # propagated, not stored
                 else:
@@ -358,7 +358,7 @@ def code(module: py.Module, n: int) -> tuple:
                         entries.append((i, j, dv))
         else:
             out.append(stmt)  # m and z unpacked
-    folded = [_fold(e) for _, _, e in entries]
+    folded = [fold(e) for _, _, e in entries]
     constant = np.array([const_value(e) if const_value(e) is not None else math.nan
                          for e in folded], dtype=float)
     varying = [e for e, c in zip(folded, constant, strict=True) if math.isnan(c)]
@@ -397,10 +397,6 @@ def _live(body: list[py.stmt]) -> list[py.stmt]:
             used |= {n.id for n in nodes(stmt) if isinstance(n, py.Name) and
                      isinstance(n.ctx, py.Load)}
     return list(reversed(kept))
-
-
-def _fold(e: py.expr) -> py.expr:
-    return Folder().visit(py.Expression(e)).body
 
 
 _OURS = re.compile(r"d\d+_\w+|r\d+|_DIFF|_SGN0")

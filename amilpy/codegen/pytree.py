@@ -8,6 +8,7 @@ import ast as py
 import copy
 import math
 from collections.abc import Callable
+from functools import lru_cache
 
 from ..library import generation, math_functions
 from ..runtime import HELPERS, safe_pow
@@ -18,22 +19,24 @@ from ..syntax import deep_enough
 ARGS = ("t", "y", "m", "mn", "z", "ev")
 
 
-_NAMESPACE: list = [None, None, frozenset()]  # [generation, namespace, its allowed names]
+@lru_cache(maxsize=1)
+def _built(_registry: tuple[int, int]) -> tuple[dict[str, object], frozenset[str]]:
+    """(the namespace, the names generated code may read) of one state of the
+    registries (`_current` says which)."""
+    out: dict[str, object] = {f"_{k}": v for k, v in math_functions().items()}
+    out.update({f"_{k}": v for k, v in HELPERS.items()})
+    return out, frozenset(out) | frozenset(ARGS)
 
 
-def _current() -> list:
-    if _NAMESPACE[0] != (generation(), len(HELPERS)):
-        out: dict[str, object] = {f"_{k}": v for k, v in math_functions().items()}
-        out.update({f"_{k}": v for k, v in HELPERS.items()})
-        _NAMESPACE[:] = [(generation(), len(HELPERS)), out, frozenset(out) | frozenset(ARGS)]
-    return _NAMESPACE
+def _current() -> tuple[dict[str, object], frozenset[str]]:
+    return _built((generation(), len(HELPERS)))
 
 
 def namespace() -> dict[str, object]:
     """Every callable generated code can reach: the language's math functions and
     the run-time helpers, each as _NAME (as the library stands now: an entry
     registered later is there too). A fresh dictionary, for the caller to fill."""
-    return dict(_current()[1])
+    return dict(_current()[0])
 
 
 def local(name: str) -> str:
@@ -77,26 +80,20 @@ def const_value(node: py.expr) -> float | None:
     return None
 
 
-class Folder:
+def fold(node: py.AST) -> py.AST:
     """Constant folding on the generated tree (keeps float semantics), bottom-up, in
-    place (ast.NodeTransformer's generic walk took longer than the rest of a
-    large model's build)."""
-
-    def visit(self, node: py.AST) -> py.AST:
-        return _fold(node)
-
-
-def _fold(node: py.AST) -> py.AST:
+    place; the node itself or what replaces it (ast.NodeTransformer's generic walk
+    took longer than the rest of a large model's build)."""
     for name in node._fields:
         value = getattr(node, name, None)
         if value.__class__ is list:
             for i, x in enumerate(value):
                 if isinstance(x, py.AST):
-                    new = _fold(x)
+                    new = fold(x)
                     if new is not x:
                         value[i] = new
         elif isinstance(value, py.AST):
-            new = _fold(value)
+            new = fold(value)
             if new is not value:
                 setattr(node, name, new)
     kind = node.__class__
@@ -205,7 +202,7 @@ def place(module: py.Module, closed: bool = False,
     `assert_closed` checks, `also` as there (one walk of a large module instead of
     two)."""
     located = _LOCATED
-    allowed = _current()[2]
+    allowed = _current()[1]
     for fn in module.body:
         fn.lineno = fn.end_lineno = 1
         fn.col_offset = fn.end_col_offset = 0
@@ -258,8 +255,8 @@ def vectorised(fn: py.FunctionDef, name: str) -> py.FunctionDef:
     """A copy of a generated function whose conditionals work elementwise. Only the
     nodes above a conditional are copied; the rest (most of a large model) is
     shared with `fn`, as are the IR nodes the tree remembers (emit's `amil_src`)."""
-    new = copy.copy(_elementwise(fn))
-    if new is fn:
+    new = _elementwise(fn)
+    if new is fn:  # (nothing elementwise in it: a copy under another name)
         new = copy.copy(fn)
     new.name = name
     return new
@@ -317,6 +314,6 @@ def _assert_node(node: py.AST, allowed: frozenset, also=None) -> None:
 def assert_closed(module: py.Module, also: Callable[[str], bool] | None = None) -> None:
     """Generated code reads only the compiler's names: no attributes, no builtins.
     `also`: names a later stage adds (the Jacobian's derivative locals)."""
-    allowed = _current()[2]
+    allowed = _current()[1]
     for node in nodes(module):
         _assert_node(node, allowed, also)

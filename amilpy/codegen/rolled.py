@@ -27,7 +27,7 @@ from types import FunctionType
 import numpy as np
 
 from ..library import vector_functions
-from .pytree import assert_closed, clone, function
+from .pytree import clone, function, place
 
 MIN_STATEMENTS = 400  # below this the scalar code is as fast (measured on the chain)
 MIN_PER_GROUP = 12  # statements per group on average, else nothing repeats enough
@@ -144,9 +144,8 @@ def build(module: py.Module, n: int) -> Callable | None:
     body.append(py.Return(py.Name("D", py.Load())))
     fn = function("rhs_rolled", ("t", "y", "m", "z"), body)
     tree = py.Module(body=[fn], type_ignores=[])
-    py.fix_missing_locations(tree)
-    assert_closed(tree, also=lambda name: name in ("V", "D", "M", "Z") or
-                  name.startswith(("_I", "_O", "w_")) or name in ("_EMPTY", "_ARRAY"))
+    place(tree, closed=True, also=lambda name: name in ("V", "D", "M", "Z") or
+          name.startswith(("_I", "_O", "w_")) or name in ("_EMPTY", "_ARRAY"))
     exec(compile(tree, "<rolled rhs>", "exec"), scope)  # noqa: S102 - compiler-built tree
     return scope["rhs_rolled"]
 

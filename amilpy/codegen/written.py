@@ -150,7 +150,7 @@ def compile_code(model: ir.Model, name_: str, codes, constants: dict[str, float]
     the code assigns or reads that are not constants start at `starts` or 0."""
     from ..syntax import walk
     from .faults import STATEMENTS, Statement
-    from .pytree import Folder, assert_closed, function, namespace, place
+    from .pytree import fold, function, namespace, place
 
     assigned = list(dict.fromkeys(n for c in codes for n in c.assigned))
     read = [n.name for c in codes for st in c.body for n in walk(st)
@@ -181,10 +181,8 @@ def compile_code(model: ir.Model, name_: str, codes, constants: dict[str, float]
         names = [*assigned, *(n for n in starts if n not in assigned)]
         body.append(py.Return(py.List([name(n) for n in names], py.Load())))
         fn = function(name_, ("t", "y", "m", "z", "ev"), body)
-    module = Folder().visit(py.Module(body=[fn], type_ignores=[]))
-    place(module)
-    py.fix_missing_locations(module)
-    assert_closed(module)
+    module = fold(py.Module(body=[fn], type_ignores=[]))
+    place(module, closed=True)
     scope = {"__builtins__": {}, **namespace(), **em.tables, STATEMENTS: table}
     exec(compile(module, model.path or model.name, "exec"), scope)  # noqa: S102
     fn = scope[name_]
