@@ -249,17 +249,14 @@ class Model:
         words which printed digits stand and which variation is numerical."""
         from .run import Options
         from .run.accuracy import AccuracyCheck, compare, printed_names, tightened
-        from .run.plan import resolve_route
 
         out = []
         for spec, run in zip(self._specs(params), runs, strict=False):
             if not run.ok:
                 out.append(AccuracyCheck(run.label, "", (), 0, 0, None, "the run failed"))
                 continue
-            opts = Options(method=run.method, fintim=None)
-            route, _ = resolve_route(spec, opts)
             try:
-                tight_spec, tols, how = tightened(spec, run, route.fixed)
+                tight_spec, tols, how = tightened(spec, run, route_for(run.method).fixed)
             except ValueError as exc:
                 out.append(AccuracyCheck(run.label, "", (), 0, 0, None, str(exc)))
                 continue

@@ -70,16 +70,15 @@ def tightened(spec: ir.RunSpec, run: Run, fixed: bool) -> tuple[ir.RunSpec, dict
 
 def compare(run: Run, tight: Run, how: str, names: list[str]) -> AccuracyCheck:
     """The two runs on their common output grid."""
-    grid = run.times[run.outdel_mask | run.prdel_mask]
-    grid_tight = tight.times[tight.outdel_mask | tight.prdel_mask]
+    rows, rows_tight = run.outdel_mask | run.prdel_mask, tight.outdel_mask | tight.prdel_mask
+    grid, grid_tight = run.times[rows], tight.times[rows_tight]
     n = min(len(grid), len(grid_tight))
     if n == 0 or not np.array_equal(grid[:n], grid_tight[:n]):
         return AccuracyCheck(run.label, how, (), len(run.events), len(tight.events), None,
                              "the two runs have no output instants in common")
     checks = []
     for name in names:
-        a = run.values[name][run.outdel_mask | run.prdel_mask][:n]
-        b = tight.values[name][tight.outdel_mask | tight.prdel_mask][:n]
+        a, b = run.values[name][rows][:n], tight.values[name][rows_tight][:n]
         finite = np.isfinite(a) & np.isfinite(b)
         if not finite.any():
             continue

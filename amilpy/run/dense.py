@@ -14,9 +14,8 @@ def sample(interp, times) -> np.ndarray:
     """The states at `times`: an array (states x instants)."""
     if isinstance(interp, DenseOutput):
         return np.asarray(interp(np.asarray(times, dtype=float)), dtype=float)
-    if isinstance(interp, Shared):
-        return np.asarray(interp.interp(np.asarray(times, dtype=float)), dtype=float) \
-            if isinstance(interp.interp, DenseOutput) else sample(interp.interp, times)
+    if isinstance(interp, Shared):  # (instants it does not hold: its interpolant's)
+        return sample(interp.interp, times)
     return np.column_stack([np.asarray(interp(t), dtype=float) for t in times])
 
 
