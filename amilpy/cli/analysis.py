@@ -95,9 +95,27 @@ def _prepare(args, path: str):
     return model, base._parse_sets(args.set)  # (the API checks the names)
 
 
-def _failed(path: str, exc) -> int:
-    print(f"amilpy: {path}: {exc}", file=sys.stderr)
-    return base.EXIT_FAILED
+def _computed(args, path: str, compute, not_found: str = "", prefix: str = ""):
+    """(compute(progress)'s result, None) with the progress line shown meanwhile, or
+    (None, the exit code) when the flow failed or, where `not_found` says how to put
+    it, no periodic orbit was found."""
+    from ..analysis import NotConverged
+    from ..run.flow import FlowFailed  # (here: `check` builds these parsers, runs nothing)
+
+    progress = Progress(not args.quiet)
+    progress.prefix = prefix
+    try:
+        return compute(progress), None
+    except NotConverged as exc:
+        if not not_found:
+            raise
+        print(f"amilpy: {path}: {not_found}: {exc}", file=sys.stderr)
+        return None, base.EXIT_FAILED
+    except FlowFailed as exc:
+        print(f"amilpy: {path}: {exc}", file=sys.stderr)
+        return None, base.EXIT_FAILED
+    finally:
+        progress.done()
 
 
 def _done(command: str, path: str, model, result, args, signals, text) -> int:
@@ -112,62 +130,41 @@ def _done(command: str, path: str, model, result, args, signals, text) -> int:
 
 def cmd_modes(args, path: str, signals) -> int:
     from ..output.analysis import modes_text
-    from ..run.flow import FlowFailed  # (here: `check` builds these parsers, runs nothing)
 
     model, params = _prepare(args, path)
-    progress = Progress(not args.quiet)
-    progress.prefix = f"modes: to TIME = {args.at:g}  "
-    try:
-        result = model.modes(at=args.at, method=args.method, rtol=args.rtol,
-                             atol=args.atol, progress=progress, **params)
-    except FlowFailed as exc:
-        return _failed(path, exc)
-    finally:
-        progress.done()
+    result, code = _computed(args, path, lambda progress: model.modes(
+        at=args.at, method=args.method, rtol=args.rtol, atol=args.atol, progress=progress,
+        **params), prefix=f"modes: to TIME = {args.at:g}  ")
+    if code is not None:
+        return code
     return _done("modes", path, model, result, args, signals, modes_text)
 
 
 def cmd_periodic(args, path: str, signals) -> int:
-    from ..analysis import NotConverged
     from ..output.analysis import orbit_text
-    from ..run.flow import FlowFailed
 
     model, params = _prepare(args, path)
-    progress = Progress(not args.quiet)
-    try:
-        orbit = model.periodic(period=args.period, angle=args.angle, measure=args.measure,
-                               settle=args.settle, method=args.method, rtol=args.rtol,
-                               atol=args.atol, progress=progress, **params)
-    except NotConverged as exc:
-        print(f"amilpy: {path}: no periodic orbit found: {exc}", file=sys.stderr)
-        return base.EXIT_FAILED
-    except FlowFailed as exc:
-        return _failed(path, exc)
-    finally:
-        progress.done()
+    orbit, code = _computed(args, path, lambda progress: model.periodic(
+        period=args.period, angle=args.angle, measure=args.measure, settle=args.settle,
+        method=args.method, rtol=args.rtol, atol=args.atol, progress=progress, **params),
+        not_found="no periodic orbit found")
+    if code is not None:
+        return code
     return _done("periodic", path, model, orbit, args, signals, orbit_text)
 
 
 def cmd_response(args, path: str, signals) -> int:
-    from ..analysis import NotConverged
     from ..output.analysis import response_text
-    from ..run.flow import FlowFailed
 
     name, start, stop = args.span
     model, params = _prepare(args, path)
-    progress = Progress(not args.quiet)
-    try:
-        resp = model.response(name, start, stop, period=args.period, angle=args.angle,
-                              measure=args.measure, settle=args.settle, method=args.method,
-                              rtol=args.rtol, atol=args.atol, progress=progress, **params)
-    except NotConverged as exc:
-        print(f"amilpy: {path}: no periodic orbit at {name} = {start:g}: {exc}",
-              file=sys.stderr)
-        return base.EXIT_FAILED
-    except FlowFailed as exc:
-        return _failed(path, exc)
-    finally:
-        progress.done()
+    resp, code = _computed(args, path, lambda progress: model.response(
+        name, start, stop, period=args.period, angle=args.angle, measure=args.measure,
+        settle=args.settle, method=args.method, rtol=args.rtol, atol=args.atol,
+        progress=progress, **params),
+        not_found=f"no periodic orbit at {name} = {start:g}")
+    if code is not None:
+        return code
     code = _done("response", path, model, resp, args, signals, response_text)
     if resp.interrupted:
         print(f"amilpy: {path}: interrupted after {name} = {resp.points[-1].value:.7g}; "
