@@ -143,12 +143,7 @@ class Model:
             if tol is not None and not tol > 0:
                 raise UsageError(f"{label} must be positive, got {tol}")
         if outputs is not None:
-            outputs = [o.upper() for o in outputs]
-            known = set(self.ir.variables)
-            unknown = [o for o in outputs if o not in known]
-            if unknown:
-                raise UsageError(with_hint(f"{unknown[0]} is not a variable of the model",
-                                           unknown[0], known))
+            outputs = self.known_names(outputs)
         opts = Options(method=method, rtol=rtol, atol=atol, events=events, outputs=outputs,
                        max_time=max_time, progress=progress, fintim=fintim,
                        step_point=step_point, seed=_seed(seed),
@@ -335,11 +330,19 @@ class Model:
         from .sweep import default_measure
 
         names = [names] if isinstance(names, str) else list(names)
-        out = [n.upper() for n in names] or [default_measure(self.ir)]
+        return self.known_names(names) or [default_measure(self.ir)]
+
+    def known_names(self, names, data: bool = False) -> list[str]:
+        """`names` (a name or several) upper-cased, each a variable of the model or,
+        with `data`, one of its data values; a UsageError naming the nearest name
+        otherwise."""
+        names = [names] if isinstance(names, str) else list(names)
+        known = list(self.ir.variables) + (list(self.ir.runs[0].data) if data else [])
+        out = [n.strip().upper() for n in names]
         for n in out:
-            if n not in self.ir.variables:
-                raise UsageError(with_hint(f"{n} is not a variable of the model", n,
-                                           self.ir.variables))
+            if n not in known:
+                what = "a variable or data value" if data else "a variable"
+                raise UsageError(with_hint(f"{n} is not {what} of the model", n, known))
         return out
 
 

@@ -233,7 +233,7 @@ def test_sweep_plot_has_units_on_both_axes(tmp_path):
     from amilpy.output.sweeps import plot_sweep
 
     result = _sweep([1.0, 2.0, 3.0], [0.1, 0.2, 0.3])
-    path = plot_sweep(result, str(tmp_path / "s.png"), axis_units=("rad/s", "RAD"))
+    [path] = plot_sweep(result, str(tmp_path / "s.png"), axis_units=("rad/s", "RAD"))
     assert open(path, "rb").read(4) == b"\x89PNG"
     from amilpy.output.sweeps import units
 

@@ -85,6 +85,24 @@ def _method(text: str) -> str:
     return text.upper()
 
 
+def _figure_formats(text: str) -> tuple[str, ...]:
+    from ..output.plot import FIGURE_FORMATS
+
+    formats = tuple(dict.fromkeys(f.strip().lower() for f in text.split(",") if f.strip()))
+    bad = [f for f in formats if f not in FIGURE_FORMATS]
+    if bad or not formats:
+        raise argparse.ArgumentTypeError(f"takes figure formats like png,svg,pdf (of "
+                                         f"{', '.join(FIGURE_FORMATS)}), got {text!r}")
+    return formats
+
+
+def _names(text: str) -> tuple[str, ...]:
+    names = tuple(dict.fromkeys(n.strip().upper() for n in text.split(",") if n.strip()))
+    if not names:
+        raise argparse.ArgumentTypeError(f"takes variable names like W1,MC, got {text!r}")
+    return names
+
+
 def _runs(text: str) -> tuple[int, ...]:
     try:
         numbers = tuple(int(x) for x in text.split(","))
@@ -158,6 +176,12 @@ def _plot_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--runs", type=_runs, metavar="1,3", help="plot only these runs")
 
 
+def _format_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--format", dest="figure_formats", type=_figure_formats, metavar="LIST",
+                   help="the figures' files, comma-separated of png, svg, pdf (vector: "
+                        "for a printed report); implies --plot (default png)")
+
+
 def _writer_options(p: argparse.ArgumentParser, command: str) -> None:
     for w in writers_for(command):
         if w.flag is None:
@@ -190,7 +214,15 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--out", metavar="DIR", help="where PREPARE's CSV and the PNGs go "
                                                   "(default: next to each listing)")
     _writer_options(run, "run")
+    run.add_argument("--vars", type=_names, metavar="A,B",
+                     help="the variables --csv and --xlsx write (default: every PRINT, "
+                          "OUTPUT and PREPARE variable)")
     _csv_dialect(run)
+    _format_option(run)
+    run.add_argument("--overlay", action="store_true",
+                     help="with several listings: draw them in the same figures (the "
+                          "first listing's OUTPUT statements, each listing a colour) as "
+                          "FIRST_vs_SECOND.png, instead of a figure set each")
     run.add_argument("--ascii", action="store_true",
                      help="line-printer plots in the printout (as PRTPLT does)")
     _model_options(run)
@@ -223,6 +255,7 @@ def _parser() -> argparse.ArgumentParser:
                                                  "listing)")
     _writer_options(sw, "sweep")
     _csv_dialect(sw)
+    _format_option(sw)
     _model_options(sw, run_limits=False)
     sw.add_argument("--quiet", action="store_true", help="no table, only files and errors")
     _farm_options(sw)
@@ -284,18 +317,25 @@ def _plot_choice(args, model) -> PlotOptions:
 
     show = getattr(args, "plot", False) and can_show()
     return PlotOptions(args.t_from, args.t_to, args.zoom_events, args.subplots, args.runs,
-                       show)
+                       show, getattr(args, "figure_formats", None) or ("png",))
 
 
-def _write_outputs(outputs: Outputs, args, signals: Signals) -> tuple[list[str], list[str]]:
-    """Every writer asked for, each on its own: (paths written, error messages)."""
+def figure_options(args) -> PlotOptions:
+    """The figure options of a command without a time window (sweep, the analyses)."""
+    return PlotOptions(formats=getattr(args, "figure_formats", None) or ("png",))
+
+
+def _write_outputs(outputs: Outputs, args, signals: Signals,
+                   skip: tuple[str, ...] = ()) -> tuple[list[str], list[str]]:
+    """Every writer asked for (less those named in `skip`), each on its own: (paths
+    written, error messages)."""
     written: list[str] = []
     errors: list[str] = []
     with signals.held():
         for w in writers_for(outputs.command):
             path = getattr(args, dest(w.flag), None) if w.flag else None
             asked = (w.wanted(outputs) if w.wanted else bool(path))
-            if not asked:
+            if not asked or w.name in skip:
                 continue
             try:
                 written.extend(w.write(outputs, path if isinstance(path, str) else None))
@@ -339,6 +379,7 @@ def _load(args, path: str):
 def cmd_run(args, path: str, signals: Signals) -> int:
     model, params = _load(args, path)
     plot = _plot_choice(args, model)
+    names = model.known_names(args.vars, data=True) if args.vars else None
     if args.show_python:
         write_out(lambda out: out.write(model.python_source(weather_dir=args.weather_dir,
                                                             **params) + "\n"))
@@ -354,8 +395,11 @@ def cmd_run(args, path: str, signals: Signals) -> int:
         progress.done()
     stem, out_dir = _stem_and_dir(path, args.out)
     outputs = Outputs("run", stem, out_dir, runs, model=model, dialect=args.csv_dialect,
-                      plot=plot)
-    written, errors = _write_outputs(outputs, args, signals)
+                      plot=plot, names=names)
+    if args.overlay:  # (drawn with the other listings' once all have run)
+        args.overlaid.append((stem, model, runs, plot))
+    written, errors = _write_outputs(outputs, args, signals,
+                                     skip=("png",) if args.overlay else ())
     if not args.quiet and not signals.held_back:
         from ..output.printout import write_runs
 
@@ -411,7 +455,7 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
         progress.done()
     stem, out_dir = _stem_and_dir(path, args.out)
     outputs = Outputs("sweep", stem, out_dir, sweep=result, model=model,
-                      dialect=args.csv_dialect)
+                      dialect=args.csv_dialect, plot=figure_options(args))
     written, errors = _write_outputs(outputs, args, signals)
     if not args.quiet and not signals.held_back:
         from ..output.sweeps import format_sweep
@@ -471,6 +515,27 @@ def cmd_check(args, path: str, signals: Signals) -> int:
     if ir.warnings:
         print(render(ir.warnings, path, ir.source), file=sys.stderr)
     return EXIT_OK
+
+
+def write_overlay(args, signals: Signals) -> int:
+    """The figures of `run --overlay`: every listing that ran, in the same axes."""
+    from ..output.plot import plot_overlay
+    from ..output.words import name_notes
+
+    listings = args.overlaid
+    notes: dict[str, tuple[str, str]] = {}
+    for _, model, _, _ in reversed(listings):  # (the first listing's units win)
+        notes.update(name_notes(model.ir))
+    first = args.files[0]
+    _, out_dir = _stem_and_dir(first, args.out)
+    written, errors = [], []
+    with signals.held():
+        try:
+            written = plot_overlay([(stem, runs) for stem, _, runs, _ in listings], out_dir,
+                                   listings[0][3], notes)
+        except OutputError as exc:
+            errors.append(str(exc))
+    return _finish(first, written, errors, args.quiet, signals)
 
 
 COMMANDS = {"run": cmd_run, "sweep": cmd_sweep, "report": cmd_report, "check": cmd_check}
@@ -548,6 +613,14 @@ def _main(argv: list[str] | None) -> int:
         print(f"amilpy {args.command}: {several[0]} names one file; with several listings "
               "run them one at a time", file=sys.stderr)
         return EXIT_USAGE
+    if getattr(args, "figure_formats", None) or getattr(args, "overlay", False):
+        args.plot = True  # (asking for figure files or an overlay asks for figures)
+    if getattr(args, "overlay", False):
+        if len(paths) < 2:
+            print(f"amilpy {args.command}: --overlay draws several listings in the same "
+                  "figures; give two or more", file=sys.stderr)
+            return EXIT_USAGE
+        args.overlaid = []
     from .analysis import COMMANDS as ANALYSES
 
     command = {**COMMANDS, **ANALYSES}[args.command]
@@ -565,6 +638,8 @@ def _main(argv: list[str] | None) -> int:
                 code = max(code, _one(command, args, path, signals))
                 if signals.received:
                     break  # an interrupt stops the files not yet started too
+            if getattr(args, "overlay", False) and args.overlaid and not signals.received:
+                code = max(code, write_overlay(args, signals))
         if STDOUT_FAILED:
             print(f"amilpy: cannot write the printout to standard output: "
                   f"{STDOUT_FAILED[0]}", file=sys.stderr)

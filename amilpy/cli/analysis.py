@@ -59,6 +59,8 @@ def _common(p: argparse.ArgumentParser, command: str, closure: bool = True) -> N
                                                     "the listing)")
     base._writer_options(p, command)
     base._csv_dialect(p)
+    if closure:  # (modes draws nothing)
+        base._format_option(p)
     p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
                    help="override a PARAM/CONST/INCON value (repeatable)")
     p.add_argument("--method", metavar="NAME", type=base._method,
@@ -121,7 +123,7 @@ def _computed(args, path: str, compute, not_found: str = "", prefix: str = ""):
 def _done(command: str, path: str, model, result, args, signals, text) -> int:
     stem, out_dir = base._stem_and_dir(path, getattr(args, "out", None))
     outputs = Outputs(command, stem, out_dir, model=model, analysis=result,
-                      dialect=args.csv_dialect)
+                      dialect=args.csv_dialect, plot=base.figure_options(args))
     written, errors = base._write_outputs(outputs, args, signals)
     if not args.quiet and not signals.held_back:
         write_out(lambda out: out.write(text(result, model)))

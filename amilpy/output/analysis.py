@@ -11,7 +11,7 @@ import numpy as np
 
 from ..run.jacobian import DIFFERENCES
 from . import words as W
-from .plot import literal_text, save_png
+from .plot import literal_text, save_figure
 
 ZERO_MODE = "zero (rigid-body or cyclic)"
 
@@ -146,7 +146,9 @@ def orbit_csv(orbit) -> tuple[list[str], Iterator[list]]:
 
 
 @literal_text
-def plot_orbit(orbit, path: str, model=None) -> str:
+def plot_orbit(orbit, path: str, model=None, formats: Sequence[str] = ()) -> list[str]:
+    """The measured variables over one period; saved as `path` (or in each of
+    `formats` beside it): the paths written."""
     from matplotlib.figure import Figure
 
     times, values = orbit.samples
@@ -164,7 +166,7 @@ def plot_orbit(orbit, path: str, model=None) -> str:
     axes[0].set_title(f"{W.shorten(_title(model), 90)}\none period: T = {orbit.period:.6g} s,"
                       f" {word} (largest |mu| {orbit.mu_max:.4g})", fontsize=10)
     fig.tight_layout()
-    return save_png(fig, path)
+    return save_figure(fig, path, formats)
 
 
 # ----------------------------------------------------------------- response
@@ -232,10 +234,12 @@ def _runs(points: Sequence, measure: str) -> list[tuple[bool, list, list]]:
 
 
 @literal_text
-def plot_response(resp, path: str, model=None, reference=None) -> str:
+def plot_response(resp, path: str, model=None, reference=None,
+                  formats: Sequence[str] = ()) -> list[str]:
     """Half peak-to-peak of the first measure against the value: stable solid,
     unstable dashed, folds marked. `reference`: extra curves to compare, each
-    (x, y, label) or (x, y, label, matplotlib format such as "v" or "k:")."""
+    (x, y, label) or (x, y, label, matplotlib format such as "v" or "k:"). Saved
+    as `path` (or in each of `formats` beside it): the paths written."""
     from matplotlib.figure import Figure
 
     m0 = resp.measures[0]
@@ -265,8 +269,8 @@ def plot_response(resp, path: str, model=None, reference=None) -> str:
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    return save_png(fig, path)
+    return save_figure(fig, path, formats)
 
 
-def png_path(out_dir: str, stem: str, what: str) -> str:
+def figure_path(out_dir: str, stem: str, what: str) -> str:
     return os.path.join(out_dir, f"{stem}_{what}.png")

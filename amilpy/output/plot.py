@@ -31,6 +31,9 @@ from .writers import PlotOptions
 SCALE_RATIO = 100.0  # variables further apart than this get an axis each
 STYLES = ("-", "--", ":", "-.", (0, (5, 1, 1, 1, 1, 1)), (0, (1, 3)), (0, (8, 2)))
 TITLE_CHARS = 90  # a longer TITLE/LABEL is shortened in the plot (not in the printout)
+# what `--format` offers for figures: PNG for a quick look and a word processor,
+# SVG and PDF (vector) for a report that is printed or zoomed
+FIGURE_FORMATS = ("png", "svg", "pdf")
 STARTUP = 1e-3  # events in this fraction of the run are start-up, not a transient
 EVENT_KINDS = (EventKind.SWITCH, EventKind.BREAKPOINT, EventKind.LEVEL, EventKind.SLIDE)
 
@@ -266,11 +269,56 @@ def plot_figures(runs: list[Run], out_dir: str, stem: str,
                  options: PlotOptions | None = None,
                  notes: dict[str, tuple[str, str]] | None = None,
                  words: dict[str, str] | None = None) -> list[tuple[str, str]]:
-    """Draw and save one PNG per OUTPUT statement (and a zoomed one per statement
-    with `zoom_events`); return (path, caption) of each."""
+    """Draw and save one figure per OUTPUT statement (and a zoomed one per statement
+    with `zoom_events`); return (path, caption) of each, the path in the first of
+    `options.formats`."""
+    return [(paths[0], text) for paths, text in
+            _saved_figures(runs, out_dir, stem, options, notes, words)]
+
+
+def window_suffix(window: tuple[float, float]) -> str:
+    """What a windowed figure's file name adds, so `--from/--to` never replaces the
+    whole run's figure: `_from_0.03_to_0.04`."""
+    return f"_from_{window[0]:.6g}_to_{window[1]:.6g}"
+
+
+def plot_overlay(listings: Sequence[tuple[str, Sequence[Run]]], out_dir: str,
+                 options: PlotOptions | None = None,
+                 notes: dict[str, tuple[str, str]] | None = None) -> list[str]:
+    """Several listings' runs in the same figures (`amilpy run a.amil b.amil
+    --overlay`): the first listing's OUTPUT statements, a colour per run, each named
+    by its listing's file name (and, where a listing has several runs, by the values
+    that tell them apart); a variable a listing lacks is left out for it. Saved as
+    `A_vs_B` in each of `options.formats`: the paths written."""
+    options = options or PlotOptions()
+    runs: list[Run] = []
+    labels: list[str] = []
+    for stem, its_runs in listings:
+        chosen, its_labels, _ = selected(its_runs, options.runs)
+        runs += chosen
+        labels += [stem if len(its_runs) == 1 else f"{stem}, {label}"
+                   for label in its_labels]
+    stem = "_vs_".join(s for s, _ in listings)
+    return [path for paths, _ in
+            _save_specs(runs, labels, list(range(1, len(runs) + 1)),
+                        figure_specs(listings[0][1][0]), out_dir, stem, options, notes)
+            for path in paths]
+
+
+def _saved_figures(runs: list[Run], out_dir: str, stem: str,
+                   options: PlotOptions | None = None,
+                   notes: dict[str, tuple[str, str]] | None = None,
+                   words: dict[str, str] | None = None) -> list[tuple[list[str], str]]:
     options = options or PlotOptions()
     chosen, labels, numbers = selected(runs, options.runs)
-    specs = figure_specs(runs[0])
+    return _save_specs(chosen, labels, numbers, figure_specs(runs[0]), out_dir, stem,
+                       options, notes, words)
+
+
+def _save_specs(chosen: list[Run], labels: list[str], numbers: list[int],
+                specs: list[FigureSpec], out_dir: str, stem: str, options: PlotOptions,
+                notes: dict[str, tuple[str, str]] | None = None,
+                words: dict[str, str] | None = None) -> list[tuple[list[str], str]]:
     window = None
     if options.start is not None or options.stop is not None:
         t0 = min(float(r.times[0]) for r in chosen)
@@ -280,15 +328,16 @@ def plot_figures(runs: list[Run], out_dir: str, stem: str,
     out = []
     for k, spec in enumerate(specs, start=1):
         stem_k = f"{stem}_{k}" if len(specs) > 1 else stem
-        todo = [(replace(spec, window=window), stem_k)]
+        todo = [(replace(spec, window=window),
+                 stem_k + (window_suffix(window) if window is not None else ""))]
         zoom = zoom_window(chosen[0]) if options.zoom_events and spec.x is None else None
         if zoom is not None:
             todo.append((replace(spec, window=zoom, zoom=True), f"{stem_k}_zoom"))
         for figure_spec, name in todo:
             fig = draw(chosen, figure_spec, labels, notes, options.subplots, options.show,
                        numbers)
-            path = save_png(fig, os.path.join(out_dir, f"{name}.png"))
-            out.append((path, caption(figure_spec, chosen, labels, words)))
+            paths = save_figure(fig, os.path.join(out_dir, name), options.formats)
+            out.append((paths, caption(figure_spec, chosen, labels, words)))
     if options.show:
         import matplotlib.pyplot as plt
 
@@ -298,15 +347,41 @@ def plot_figures(runs: list[Run], out_dir: str, stem: str,
 
 def plot_runs(runs: list[Run], out_dir: str, stem: str, options: PlotOptions | None = None,
               notes: dict[str, tuple[str, str]] | None = None) -> list[str]:
-    """`plot_figures`, the paths only."""
-    return [path for path, _ in plot_figures(runs, out_dir, stem, options, notes)]
+    """Every file `plot_figures` writes (each figure in each of `options.formats`)."""
+    return [path for paths, _ in _saved_figures(runs, out_dir, stem, options, notes)
+            for path in paths]
 
 
-def save_png(fig, path: str) -> str:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    atomic_write(path, buf.getvalue())
-    return path
+def save_figure(fig, path: str, formats: Sequence[str] = ()) -> list[str]:
+    """Save `fig` as `path`, or once per format of `formats` (path's stem with the
+    format's extension); the paths written, in that order. Vector formats keep
+    text as text (SVG: searchable; PDF: fonts embedded)."""
+    stem, ext = os.path.splitext(path)
+    ext = ext.lstrip(".").lower()
+    if ext not in FIGURE_FORMATS:  # (a stem with a dot in it: "hoist_from_0.5")
+        stem, ext = path, "png"
+    out = []
+    for fmt in formats or (ext,):
+        if fmt not in FIGURE_FORMATS:
+            raise ValueError(f"figure format {fmt!r}; the formats are "
+                             f"{', '.join(FIGURE_FORMATS)}")
+        buf = io.BytesIO()
+        # (SVG with its text as text, not paths: a report can search and restyle it;
+        # no date in it, so the same figure is the same file)
+        with _rc({"svg.fonttype": "none", "svg.hashsalt": "amilpy"}):
+            fig.savefig(buf, format=fmt, dpi=110,
+                        metadata={"Date": None} if fmt == "svg" else
+                        {"CreationDate": None} if fmt == "pdf" else None)
+        target = f"{stem}.{fmt}"
+        atomic_write(target, buf.getvalue())
+        out.append(target)
+    return out
+
+
+def _rc(settings: dict):
+    import matplotlib
+
+    return matplotlib.rc_context(settings)
 
 
 def can_show() -> bool:

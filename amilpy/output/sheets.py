@@ -59,9 +59,20 @@ def outdel_rows(run: Run, names: Sequence[str]) -> Iterator[tuple[float, ...]]:
         yield from zip(*block, strict=True)
 
 
-def csv_names(runs: Sequence[Run]) -> list[str]:
-    """The columns a CSV of these runs holds: PREPARE's names, else the printout's."""
-    return T.report_names(runs[0], "PREPARE") or T.printed_names(runs[0])
+def export_names(run: Run) -> list[str]:
+    """The columns --csv and --xlsx write unless told (`--vars`): every PRINT,
+    OUTPUT and PREPARE variable, an OUTPUT's X included, once each in the listing's
+    order;
+    with neither, the printout's. Not TIME (the first column anyway), nor a
+    TERMINAL value, which is no column of the grid."""
+    seen: dict[str, None] = {}
+    for r in run.reports:
+        if r.kind in ("PRINT", "OUTPUT", "PREPARE"):
+            seen.update(dict.fromkeys(r.names))
+            if getattr(r, "x", None):
+                seen[r.x] = None
+    names = [n for n in seen if n != "TIME" and (n in run.values or n not in run.terminal)]
+    return names or T.printed_names(run)
 
 
 def run_rows(runs: Sequence[Run], names: Sequence[str]) -> tuple[list[str], Iterator[list]]:
@@ -89,14 +100,14 @@ def partial_notes(runs: Sequence[Run]) -> list[str]:
 
 def write_csv(path: str, runs: Sequence[Run], names: Sequence[str] | None = None,
               dialect: str = "plain") -> None:
-    header, rows = run_rows(runs, list(names) if names is not None else csv_names(runs))
+    header, rows = run_rows(runs, list(names) if names is not None else export_names(runs[0]))
     write_csv_rows(path, header, rows, dialect, partial_notes(runs))
 
 
 def csv_text(runs: Sequence[Run], names: Sequence[str] | None = None,
              dialect: str = "plain") -> str:
     """The CSV of `write_csv` as a string (small runs: tests, notebooks)."""
-    header, rows = run_rows(runs, list(names) if names is not None else csv_names(runs))
+    header, rows = run_rows(runs, list(names) if names is not None else export_names(runs[0]))
     buf = io.StringIO()
     write_csv_stream(buf, header, rows, dialect, partial_notes(runs))
     return buf.getvalue()
@@ -115,7 +126,7 @@ def write_xlsx(path: str, runs: Sequence[Run], names: Sequence[str] | None = Non
     except ImportError:
         raise OutputError(path, "writing .xlsx needs XlsxWriter: pip install "
                                 "'amilpy[xlsx]' (or pip install XlsxWriter)") from None
-    names = list(names) if names is not None else csv_names(runs)
+    names = list(names) if names is not None else export_names(runs[0])
     labels = W.run_labels(runs)
     with atomic_open(path) as fh:
         book = xlsxwriter.Workbook(fh, {"constant_memory": True, "nan_inf_to_errors": True})

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 
 from ..sweep import SIDE, Sweep
 from . import words as W
-from .plot import literal_text, save_png
+from .plot import literal_text, save_figure
 
 
 def units(model, result: Sweep) -> tuple[str, str]:
@@ -81,7 +81,10 @@ def csv_rows(result: Sweep) -> tuple[list[str], Iterator[list]]:
 
 @literal_text
 def plot_sweep(result: Sweep, path: str, title: str | None = None,
-               axis_units: tuple[str, str] = ("", "")) -> str:
+               axis_units: tuple[str, str] = ("", ""), formats: Sequence[str] = ()
+               ) -> list[str]:
+    """The characteristic, saved as `path` (or in each of `formats` beside it): the
+    paths written."""
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(8, 4.8))
@@ -100,7 +103,7 @@ def plot_sweep(result: Sweep, path: str, title: str | None = None,
     ax.grid(True, alpha=0.3)
     ax.legend()
     fig.tight_layout()
-    return save_png(fig, path)
+    return save_figure(fig, path, formats)
 
 
 def sweep_png_path(out_dir: str, stem: str) -> str:

@@ -49,6 +49,7 @@ class PlotOptions:
     subplots: bool = False  # one axis per variable whatever the scales
     runs: tuple[int, ...] | None = None  # run numbers (1-based) to draw; None: all
     show: bool = False  # open windows after saving
+    formats: tuple[str, ...] = ("png",)  # --format: the files each figure is saved as
 
 
 @dataclass
@@ -64,6 +65,7 @@ class Outputs:
     model: object = None  # the api.Model (units, labels)
     dialect: str = "plain"  # --csv-dialect
     plot: PlotOptions = field(default_factory=PlotOptions)
+    names: list[str] | None = None  # --vars: the columns of --csv/--xlsx (None: the default)
 
 
 @dataclass(frozen=True)
@@ -79,23 +81,24 @@ class Writer:
 
 def _prepare(o: Outputs, _path: str | None) -> list[str]:
     from . import sheets
+    from .tables import report_names
 
     path = os.path.join(o.out_dir, f"{o.stem}.csv")
-    sheets.write_csv(path, o.runs, dialect=o.dialect)
+    sheets.write_csv(path, o.runs, report_names(o.runs[0], "PREPARE"), dialect=o.dialect)
     return [path]
 
 
 def _csv(o: Outputs, path: str | None) -> list[str]:
     from . import sheets
 
-    sheets.write_csv(path, o.runs, dialect=o.dialect)
+    sheets.write_csv(path, o.runs, o.names, dialect=o.dialect)
     return [path]
 
 
 def _xlsx(o: Outputs, path: str | None) -> list[str]:
     from . import sheets
 
-    sheets.write_xlsx(path, o.runs)
+    sheets.write_xlsx(path, o.runs, o.names)
     return [path]
 
 
@@ -122,7 +125,8 @@ def _sweep_png(o: Outputs, _path: str | None) -> list[str]:
     titles = o.model.ir.runs[0].titles if o.model is not None else []
     title = titles[0] if titles else None
     axis_units = units(o.model, o.sweep) if o.model is not None else ("", "")
-    return [plot_sweep(o.sweep, sweep_png_path(o.out_dir, o.stem), title, axis_units)]
+    return plot_sweep(o.sweep, sweep_png_path(o.out_dir, o.stem), title, axis_units,
+                      o.plot.formats)
 
 
 def _analysis_csv(o: Outputs, path: str | None) -> list[str]:
@@ -141,7 +145,8 @@ def _analysis_png(o: Outputs, _path: str | None) -> list[str]:
     from . import analysis
 
     draw = {"periodic": analysis.plot_orbit, "response": analysis.plot_response}[o.command]
-    return [draw(o.analysis, analysis.png_path(o.out_dir, o.stem, o.command), o.model)]
+    return draw(o.analysis, analysis.figure_path(o.out_dir, o.stem, o.command), o.model,
+                formats=o.plot.formats)
 
 
 WRITERS: tuple[Writer, ...] = (
@@ -150,14 +155,15 @@ WRITERS: tuple[Writer, ...] = (
            wanted=lambda o: any(r.kind == "PREPARE" for r in o.runs[0].reports)
            if o.runs else False),
     Writer("csv", "run", "--csv", True,
-           "write the OUTDEL-grid values of every run as CSV (a RUN column and the "
-           "changed values first when there are several runs)", _csv),
+           "write every PRINT and OUTPUT variable (or --vars) on the OUTDEL grid of "
+           "every run as CSV (a RUN column and the changed values first when there are "
+           "several runs)", _csv),
     Writer("xlsx", "run", "--xlsx", True,
            "write them as an Excel workbook, one sheet per run (needs XlsxWriter: "
            "pip install 'amilpy[xlsx]')", _xlsx),
     Writer("png", "run", "--plot", False,
-           "draw one figure per OUTPUT statement, saved as PNG next to the model or in "
-           "--out (and shown when a display can)", _png),
+           "draw one figure per OUTPUT statement, saved as PNG (or --format) next to the "
+           "model or in --out (and shown when a display can)", _png),
     Writer("sweep-csv", "sweep", "--csv", True,
            "write the sweep's table (one row per value) as CSV", _sweep_csv),
     Writer("sweep-png", "sweep", "--plot", False,
