@@ -2,6 +2,7 @@
 with its jump, against the plain-SciPy reference sweep of tests/references/hoist.py."""
 
 import math
+import os
 
 import numpy as np
 import pytest
@@ -258,3 +259,17 @@ def test_sweep_extrema_are_located_between_coarse_rows():
         exact = 1.0 / np.hypot(1.0 - w * w, 0.4 * w)
         assert p.maximum == pytest.approx(exact, rel=1e-6)
         assert p.minimum == pytest.approx(-exact, rel=1e-6)
+
+
+def test_the_docs_hoist_sweep_and_response_axes_carry_units():
+    # the shipped hoist's PARAM line says W is in rad/s; Y's LABEL says RAD: the
+    # docs' `amilpy sweep models/hoist_backlash.amil W=...` and `response` label
+    # their axes with both
+    from amilpy.output import analysis
+    from amilpy.output.sweeps import units
+
+    model = amilpy.load(os.path.join(ROOT, "models", "hoist_backlash.amil"))
+    result = _sweep([70.0, 71.0], [0.01, 0.02])
+    result.measure = "Y"
+    assert units(model, result) == ("rad/s", "RAD")
+    assert analysis.units(model, "W", "Y") == ("rad/s", "RAD")
