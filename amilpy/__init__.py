@@ -7,7 +7,8 @@ codegen (-> Python callables) -> run (steppers, events) -> result -> printout/pl
 from .api import Model, load, loads
 from .diagnostics import AmilError, UsageError
 
-__all__ = ["AmilError", "Event", "Model", "Run", "Status", "UsageError", "load", "loads"]
+__all__ = ["AmilError", "Event", "Model", "Run", "Status", "UsageError", "interact", "load",
+           "loads"]
 __version__ = "0.1.0"
 
 
@@ -17,4 +18,8 @@ def __getattr__(name: str):
         from . import result
 
         return getattr(result, name)
+    if name == "interact":  # (ipywidgets, an optional extra, only when asked for)
+        from .output.sliders import interact
+
+        return interact
     raise AttributeError(f"module 'amilpy' has no attribute {name!r}")
