@@ -191,6 +191,40 @@ def highlight_listing(text: str, formatter: str = "terminal", **options: Any) ->
     return highlight(text, AmilLexer(), _formatter(formatter, options))
 
 
+def latex_pieces(lines: list[str], pieces: list[tuple[int, int, int]]) -> list[str] | None:
+    """Each (line index, start, length) piece of `lines` highlighted for LaTeX
+    (Pygments' \\PY macros, for a fancyvrb Verbatim with commandchars), the
+    listing tokenized whole so a piece broken off a comment is still a comment;
+    None without Pygments."""
+    if AmilLexer is None:
+        return None
+    import io
+
+    from pygments.formatters import LatexFormatter
+
+    by_line: list[list[tuple[Any, str]]] = [[]]
+    lexer = AmilLexer(stripnl=False)
+    for ttype, value in lexer.get_tokens("\n".join(lines) + "\n"):
+        for k, part in enumerate(value.split("\n")):
+            if k:
+                by_line.append([])
+            if part:
+                by_line[-1].append((ttype, part))
+    formatter = LatexFormatter(nowrap=True)
+    out = []
+    for line, start, length in pieces:
+        piece, at = [], 0
+        for ttype, value in by_line[line] if line < len(by_line) else []:
+            a, b = max(start - at, 0), min(start + length - at, len(value))
+            if a < b:
+                piece.append((ttype, value[a:b]))
+            at += len(value)
+        buf = io.StringIO()
+        formatter.format(iter(piece), buf)
+        out.append(buf.getvalue().rstrip("\n"))
+    return out
+
+
 def style_defs(formatter: str = "html", **options: Any) -> str:
     """The CSS (html) or LaTeX macros (latex) that highlighted output needs.
 

@@ -151,8 +151,11 @@ def _axis_groups(names: Sequence[str], scales: dict[str, float], subplots: bool
 @literal_text
 def draw(runs: Sequence[Run], spec: FigureSpec, labels: Sequence[str] | None = None,
          notes: dict[str, tuple[str, str]] | None = None, subplots: bool = False,
-         show: bool = False, numbers: Sequence[int] | None = None):
-    """One figure of `spec` over `runs` (a matplotlib Figure)."""
+         show: bool = False, numbers: Sequence[int] | None = None, into=None,
+         height: float = 4.8):
+    """One figure of `spec` over `runs` (a matplotlib Figure), `height` inches tall
+    with one axis; `into`: a Figure or SubFigure to draw in instead (a report's
+    page), its margins set in inches."""
     from matplotlib.lines import Line2D
 
     notes = notes or {}
@@ -168,7 +171,7 @@ def draw(runs: Sequence[Run], spec: FigureSpec, labels: Sequence[str] | None = N
                 data[k, n] = (np.asarray(xs[part], float), np.asarray(run[n][part], float))
     scales = {n: _scale([v for (k, m), (_, v) in data.items() if m == n]) for n in names}
     groups = _axis_groups(names, scales, subplots)
-    fig = _figure(show, figsize=(8, 4.8 if len(groups) == 1 else 1.2 + 1.9 * len(groups)))
+    fig = into if into is not None else _figure(show, figsize=figure_size(len(groups), height))
     axes = fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0]
     several = len(runs) > 1
     style = {n: STYLES[i % len(STYLES)] for i, n in enumerate(names)}
@@ -213,8 +216,18 @@ def draw(runs: Sequence[Run], spec: FigureSpec, labels: Sequence[str] | None = N
     if partial:
         fig.text(0.99, 0.005, "; ".join(partial), ha="right", va="bottom", fontsize=7,
                  color="tab:red")
-    fig.tight_layout(rect=(0, 0.03 if partial else 0, 1, 1))
+    if into is None:
+        fig.tight_layout(rect=(0, 0.03 if partial else 0, 1, 1))
+    else:  # (a SubFigure has no layout of its own: margins for the labels, in inches)
+        w, h = (fig.bbox.width / fig.dpi, fig.bbox.height / fig.dpi)
+        fig.subplots_adjust(left=0.8 / w, right=1 - 0.15 / w, bottom=0.5 / h,
+                            top=1 - 0.3 / h, hspace=0.35 / (h / len(groups)))
     return fig
+
+
+def figure_size(axes: int, height: float = 4.8) -> tuple[float, float]:
+    """A figure's size in inches with `axes` axes stacked (`height`: with one)."""
+    return (8.0, height if axes == 1 else 1.2 + 1.9 * axes)
 
 
 def _x_label(spec: FigureSpec, notes: dict[str, tuple[str, str]]) -> str:
@@ -272,8 +285,28 @@ def plot_figures(runs: list[Run], out_dir: str, stem: str,
     """Draw and save one figure per OUTPUT statement (and a zoomed one per statement
     with `zoom_events`); return (path, caption) of each, the path in the first of
     `options.formats`."""
-    return [(paths[0], text) for paths, text in
+    return [(f.paths[0], f.caption) for f in
             _saved_figures(runs, out_dir, stem, options, notes, words)]
+
+
+@dataclass(frozen=True)
+class SavedFigure:
+    """A figure as written: its files (one per format), its caption, and how to
+    draw it again into another Figure or SubFigure (a report's page)."""
+
+    paths: list[str]
+    caption: str
+    redraw: object  # Callable[[Figure | SubFigure], object]
+    size: tuple[float, float]  # inches, as saved
+
+
+def report_figures(runs: list[Run], out_dir: str, stem: str,
+                   options: PlotOptions | None = None,
+                   notes: dict[str, tuple[str, str]] | None = None,
+                   words: dict[str, str] | None = None) -> list[SavedFigure]:
+    """`plot_figures` for a report: each figure with its files, caption and a way to
+    draw it again as vector graphics."""
+    return _saved_figures(runs, out_dir, stem, options, notes, words, keep=True)
 
 
 def window_suffix(window: tuple[float, float]) -> str:
@@ -299,26 +332,28 @@ def plot_overlay(listings: Sequence[tuple[str, Sequence[Run]]], out_dir: str,
         labels += [stem if len(its_runs) == 1 else f"{stem}, {label}"
                    for label in its_labels]
     stem = "_vs_".join(s for s, _ in listings)
-    return [path for paths, _ in
+    return [path for f in
             _save_specs(runs, labels, list(range(1, len(runs) + 1)),
                         figure_specs(listings[0][1][0]), out_dir, stem, options, notes)
-            for path in paths]
+            for path in f.paths]
 
 
 def _saved_figures(runs: list[Run], out_dir: str, stem: str,
                    options: PlotOptions | None = None,
                    notes: dict[str, tuple[str, str]] | None = None,
-                   words: dict[str, str] | None = None) -> list[tuple[list[str], str]]:
+                   words: dict[str, str] | None = None, keep: bool = False
+                   ) -> list[SavedFigure]:
     options = options or PlotOptions()
     chosen, labels, numbers = selected(runs, options.runs)
     return _save_specs(chosen, labels, numbers, figure_specs(runs[0]), out_dir, stem,
-                       options, notes, words)
+                       options, notes, words, keep)
 
 
 def _save_specs(chosen: list[Run], labels: list[str], numbers: list[int],
                 specs: list[FigureSpec], out_dir: str, stem: str, options: PlotOptions,
                 notes: dict[str, tuple[str, str]] | None = None,
-                words: dict[str, str] | None = None) -> list[tuple[list[str], str]]:
+                words: dict[str, str] | None = None, keep: bool = False
+                ) -> list[SavedFigure]:
     window = None
     if options.start is not None or options.stop is not None:
         t0 = min(float(r.times[0]) for r in chosen)
@@ -335,9 +370,13 @@ def _save_specs(chosen: list[Run], labels: list[str], numbers: list[int],
             todo.append((replace(spec, window=zoom, zoom=True), f"{stem_k}_zoom"))
         for figure_spec, name in todo:
             fig = draw(chosen, figure_spec, labels, notes, options.subplots, options.show,
-                       numbers)
+                       numbers, height=options.height)
             paths = save_figure(fig, os.path.join(out_dir, name), options.formats)
-            out.append((paths, caption(figure_spec, chosen, labels, words)))
+            redraw = functools.partial(draw, chosen, figure_spec, labels, notes,
+                                       options.subplots, False, numbers,
+                                       height=options.height) if keep else None
+            out.append(SavedFigure(paths, caption(figure_spec, chosen, labels, words), redraw,
+                                   tuple(fig.get_size_inches())))
     if options.show:
         import matplotlib.pyplot as plt
 
@@ -348,8 +387,8 @@ def _save_specs(chosen: list[Run], labels: list[str], numbers: list[int],
 def plot_runs(runs: list[Run], out_dir: str, stem: str, options: PlotOptions | None = None,
               notes: dict[str, tuple[str, str]] | None = None) -> list[str]:
     """Every file `plot_figures` writes (each figure in each of `options.formats`)."""
-    return [path for paths, _ in _saved_figures(runs, out_dir, stem, options, notes)
-            for path in paths]
+    return [path for f in _saved_figures(runs, out_dir, stem, options, notes)
+            for path in f.paths]
 
 
 def save_figure(fig, path: str, formats: Sequence[str] = ()) -> list[str]:

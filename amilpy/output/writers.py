@@ -50,6 +50,7 @@ class PlotOptions:
     runs: tuple[int, ...] | None = None  # run numbers (1-based) to draw; None: all
     show: bool = False  # open windows after saving
     formats: tuple[str, ...] = ("png",)  # --format: the files each figure is saved as
+    height: float = 4.8  # inches, a figure with one axis (8 wide)
 
 
 @dataclass

@@ -28,6 +28,9 @@ if TYPE_CHECKING:
     from .document import Document
 
 
+REPORT_FIGURE_HEIGHT = 4.2  # inches, by 8 wide
+
+
 @dataclass(frozen=True)
 class Format:
     name: str
@@ -83,9 +86,11 @@ def write_report(model, runs: Sequence[Run], path: str, out_dir: str | None = No
     {format: paths written}. With `errors` given, an output that cannot be
     written is recorded there and the others are still written. `checks`: the
     runs' accuracy checks (`Model.check_accuracy`), a section under each run."""
+    from dataclasses import replace
+
     from .. import words as W
-    from ..plot import plot_figures
-    from .document import build
+    from ..plot import report_figures
+    from .document import Figure, build
 
     stem = os.path.splitext(os.path.basename(path))[0]
     out_dir = ensure_directory(out_dir or os.path.dirname(os.path.abspath(path)))
@@ -107,8 +112,13 @@ def write_report(model, runs: Sequence[Run], path: str, out_dir: str | None = No
             written[key] = done
         return done
 
-    figures = attempt(lambda: plot_figures(list(runs), out_dir, stem, plot_options,
+    # (PNG for Markdown, PDF for LaTeX; the PDF report draws them again on its pages;
+    # a little less tall than on screen, so that two share a page with some text)
+    options = replace(plot_options or PlotOptions(), formats=("png", "pdf"),
+                      height=REPORT_FIGURE_HEIGHT)
+    saved = attempt(lambda: report_figures(list(runs), out_dir, stem, options,
                                            W.name_notes(model.ir), words))
+    figures = [Figure(f.paths[0], f.caption, f.paths[1], f.redraw, f.size) for f in saved]
     doc = build(model, runs, figures, path, lang, checks)
     for fmt in formats:
         attempt(lambda fmt=fmt: FORMATS[fmt].write(doc, out_dir, stem), fmt)

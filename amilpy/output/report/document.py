@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from ...result import Run
@@ -28,6 +28,24 @@ class Text:
     strong: bool = False  # a warning a reader must not miss (partial results)
 
 
+# Code on a page is this many characters wide, line number included: what the LaTeX
+# body's \small typewriter and the PDF's 7.5-point DejaVu Sans Mono fit in 17 cm.
+# A longer line goes on in the next row, which the continuation mark begins.
+CODE_CHARS = 100
+CONTINUED = "\u21aa"  # (a hooked arrow: "this row goes on from the one above")
+
+
+@dataclass(frozen=True)
+class Row:
+    """A row of code as set on a page: the gutter (a line number, blank, or the
+    continuation mark) and a piece of a line starting at `start` in it."""
+
+    gutter: str
+    text: str
+    line: int  # index of the line it comes from
+    start: int  # where in that line the piece starts
+
+
 @dataclass(frozen=True)
 class Code:
     lines: list[str]
@@ -40,6 +58,45 @@ class Code:
         width = len(str(len(self.lines)))
         return [f"{i:>{width}}  {line}" for i, line in enumerate(self.lines, start=1)]
 
+    def rows(self, chars: int = CODE_CHARS) -> list[Row]:
+        """The lines set `chars` wide: the listing numbered, a longer line broken
+        (after a space or a comma near the edge, where there is one) and its rows
+        after the first marked as continued. A printer plot is not broken (its
+        renderers set it smaller instead)."""
+        digits = len(str(len(self.lines))) if self.kind == "listing" else 0
+        gutter = digits + 2 if self.kind == "listing" else 2
+        width = max(chars - gutter, 20)
+        out = []
+        for i, line in enumerate(self.lines):
+            first = f"{i + 1:>{digits}}  " if self.kind == "listing" else ""
+            mark = " " * (gutter - 2) + CONTINUED + " "
+            if self.kind == "plot":
+                out.append(Row(first, line, i, 0))
+                continue
+            start = 0
+            for piece in _pieces(line, width if self.kind == "listing" else chars):
+                out.append(Row(first if start == 0 else mark, piece, i, start))
+                start += len(piece)
+        return out
+
+
+def _pieces(line: str, width: int) -> list[str]:
+    """`line` cut into pieces of at most `width` characters (the later ones two
+    narrower: the mark is wider than a character), after a space or a comma in the
+    last third of a piece where there is one. The pieces joined are the line."""
+    out = []
+    rest = line.rstrip()
+    limit = width
+    while len(rest) > limit:
+        low = limit * 2 // 3
+        cut = max(rest.rfind(" ", low, limit), rest.rfind(",", low, limit)) + 1
+        cut = cut if cut > 0 else limit
+        out.append(rest[:cut])
+        rest = rest[cut:]
+        limit = width - 2
+    out.append(rest)
+    return out
+
 
 @dataclass(frozen=True)
 class TableBlock:
@@ -48,8 +105,13 @@ class TableBlock:
 
 @dataclass(frozen=True)
 class Figure:
-    path: str
+    path: str  # the PNG (Markdown)
     caption: str
+    vector: str | None = None  # the same figure as PDF (LaTeX), when written
+    # draws the figure again into a matplotlib Figure or SubFigure (`into=`: the PDF
+    # report sets it on its page as vector graphics); None: only the files are there
+    redraw: Callable[..., object] | None = field(default=None, compare=False)
+    size: tuple[float, float] = (8.0, 4.8)  # inches, as drawn
 
 
 Block = Heading | Text | Code | TableBlock | Figure
@@ -95,10 +157,11 @@ def data_rows(model, run: Run, words: dict[str, str]) -> list[tuple[str, float, 
     return rows
 
 
-def build(model, runs: Sequence[Run], figures: Sequence[tuple[str, str]], path: str,
+def build(model, runs: Sequence[Run], figures: Sequence[Figure | tuple[str, str]], path: str,
           lang: str, checks: Sequence | None = None) -> Document:
-    """The report of `model` (an api.Model) and its runs; `figures` are (PNG path,
-    caption) pairs; `checks` each run's accuracy check, if made."""
+    """The report of `model` (an api.Model) and its runs; `figures` are Figure
+    blocks or (PNG path, caption) pairs; `checks` each run's accuracy check, if
+    made."""
     words = W.WORDS[lang]
     ir = model.ir
     titles = runs[0].titles if runs and runs[0].titles else [os.path.basename(path)]
@@ -133,5 +196,6 @@ def build(model, runs: Sequence[Run], figures: Sequence[tuple[str, str]], path: 
         if not run.ok:
             doc.add(Text(f"{words['partial']}: {run.message}", strong=True))
     if figures:
-        doc.add(Heading(words["plots"], 2), *(Figure(p, c) for p, c in figures))
+        doc.add(Heading(words["plots"], 2),
+                *(f if isinstance(f, Figure) else Figure(*f) for f in figures))
     return doc
