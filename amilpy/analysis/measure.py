@@ -25,8 +25,8 @@ import numpy as np
 
 from ..run import Flow, State
 from ..run.dense import sample_step
-from ..run.loop import column
 from ..run.plan import SLIDE
+from ..run.record import column
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(4)
 # where a step is sampled, as fractions of it: both ends and the Gauss nodes

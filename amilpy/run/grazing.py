@@ -23,8 +23,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from .dense import sample_step
-from .loop import column
 from .plan import Purpose, RunPlan, SurfaceKind
+from .record import column
 
 SAMPLES = 7  # instants inside a step
 CLOSE = 0.25  # an approach this close (of the surface's range over the step) is located

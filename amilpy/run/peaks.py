@@ -34,9 +34,10 @@ import numpy as np
 from .. import ir
 from ..codegen import Compiled
 from ..steppers import solver_tolerance
-from .loop import Cursor, Integrator, Stop, column, kernel_arguments
+from .fastpaths import kernel_arguments
+from .loop import Cursor, Integrator, Stop
 from .plan import SLIDE, Options, RunPlan, SurfaceKind
-from .record import Bracket, Extrema, vertices
+from .record import Bracket, Extrema, column, vertices
 from .watch import SurfaceWatch, TooManySlides, crossings
 
 SAMPLES = 33  # instants per zoom level on the AUTO route

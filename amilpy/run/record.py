@@ -297,11 +297,16 @@ class Extrema:
                 for j, name in enumerate(self.names)}
 
 
-def _column(v, n: int) -> np.ndarray:
+def column(v, n: int) -> np.ndarray:
     """A vector function's result as n values (a constant comes back as a float)."""
     if isinstance(v, np.ndarray) and v.shape == (n,):
         return v
     return np.full(n, float(v))
+
+
+def output_table(outs, n: int) -> np.ndarray:
+    """The vector output functions' results over n rows as an (n, outputs) table."""
+    return np.column_stack([column(v, n) for v in outs]) if outs else np.empty((n, 0))
 
 
 def vertices(t: np.ndarray, v: np.ndarray, mid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -443,7 +448,7 @@ class Recorder:
             outs = self.c.out_v(S, list(SY.T), m, z)
         table = np.zeros((len(S), len(outs)))
         for j in self.extrema.columns:
-            table[:, j] = _column(outs[j], len(S))
+            table[:, j] = column(outs[j], len(S))
         self.extrema.add_many(S, table, SY, m, z)
 
     def sample(self, t: float, y: np.ndarray, m, z) -> None:

@@ -78,6 +78,11 @@ class Stepper:
     t_old: float
     y: np.ndarray
     stiff: Stiffness | None = None
+    # What the run loop may do besides stepping one step at a time, declared here and
+    # never guessed from the class (the loop's `run.fastpaths` reads it): None; "batch"
+    # (a `Chunked` stepper: many accepted instants handed over at once); "ahead" (the
+    # compiled kernel: steps, locates and switches on its own, `advance`/`done`).
+    fast_path: str | None = None
 
     @property
     def nfev(self) -> int:  # pragma: no cover - interface
@@ -103,10 +108,22 @@ class Stepper:
         self.y = np.asarray(self.interpolant()(t), dtype=float)
         self.t = t
 
+    def stop_at(self, t: float) -> bool:
+        """Make t an instant the segment can pause at and go on from; False if it
+        cannot be (default: a stepper that goes one step at a time cannot)."""
+        return False
+
+    def samples(self, t: float) -> tuple[np.ndarray, np.ndarray] | None:
+        """Step ends strictly before t the stepper took on its own and not handed
+        out yet, and their states (RANGE's samples); None: it hands out every step."""
+        return None
+
 
 class Chunked(Stepper):
     """A stepper that integrates many check instants per call (the capability the
     loop uses to record clean stretches at once)."""
+
+    fast_path = "batch"
 
     def pending(self) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - interface
         """The check instants integrated and not yet taken, and their states."""

@@ -1,7 +1,7 @@
 """METHOD COMPILED: the numba kernel (`amilpy.compiled.kernel`) as a stepper.
 
 `advance` runs the kernel over as many output instants and plain crossings as it
-can (the run loop records its rows and events: `run.loop.Integrator._take_compiled`);
+can (the run loop records its rows and events: `run.fastpaths.FastPaths._take_ahead`);
 the step it holds back -- the segment's last, or one with a crossing the loop must
 decide -- is this stepper's `step()`, with the method's own dense output, so the
 loop treats it as it treats any SciPy step. If the kernel's step size collapses
@@ -79,6 +79,7 @@ class KernelStepper(Stepper):
     """The compiled DOP853 over one segment (branches frozen but for the crossings
     the kernel locates itself)."""
 
+    fast_path = "ahead"
     EVENTS_PER_CALL = 64
     ROWS_BUFFER = 4096  # rows a kernel call fills at most
 
