@@ -147,7 +147,8 @@ def _kernel_module() -> ModuleType:
     except Exception:  # noqa: BLE001 - whatever a damaged pickle raises
         from .. import surfaces  # (the leaving rule, compiled with the kernel)
 
-        _forget_cache(Path(__file__).with_name("kernel.py"))
+        for part in ("kernel.py", "dop853.py"):
+            _forget_cache(Path(__file__).with_name(part))
         _forget_cache(Path(surfaces.__file__))
         from . import kernel
     return kernel

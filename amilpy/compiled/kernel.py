@@ -26,10 +26,30 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, types
-from scipy.integrate._ivp import dop853_coefficients as _dc
+from numba import types
 
 from ..surfaces import DOWN, REPELS, UP, leaving
+from .dop853 import (  # noqa: F401 - first_step, MODEL: the entry points callers take
+    _B,
+    _F8,
+    _FN,
+    _I,
+    _I8,
+    _M,
+    _V,
+    MODEL,
+    N_EXTENDED,
+    N_STAGES,
+    ROWS,
+    _entry,
+    _jit,
+    _part,
+    _stiffness,
+    dense_terms,
+    first_step,
+    interpolate,
+    step,
+)
 from .layout import (
     AT,
     BOUND,
@@ -52,220 +72,10 @@ from .layout import (
     SMALL,
     STEP,
     STEPS,
-    STIFF_AT,
-    STIFF_H_LAMBDA,
 )
 
-N_STAGES = _dc.N_STAGES
-A = np.ascontiguousarray(_dc.A[:N_STAGES, :N_STAGES])
-B = np.ascontiguousarray(_dc.B)
-C = np.ascontiguousarray(_dc.C[:N_STAGES])
-E3 = np.ascontiguousarray(_dc.E3)
-E5 = np.ascontiguousarray(_dc.E5)
-D = np.ascontiguousarray(_dc.D)
-A_EXTRA = np.ascontiguousarray(_dc.A[N_STAGES + 1:])
-C_EXTRA = np.ascontiguousarray(_dc.C[N_STAGES + 1:])
-N_EXTENDED = _dc.N_STAGES_EXTENDED
-POWER = _dc.INTERPOLATOR_POWER
-ROWS = POWER + 4  # a step's interpolant: DOP853's terms, then both ends and their slopes
-
-SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
-EXPONENT = -1.0 / 8.0  # the error estimator's order is 7
-
-# NaN and infinities, not exceptions, where arithmetic fails (as the model's own code)
-_jit = njit(cache=True, error_model="numpy")
 _leaving = _jit(leaving)  # (the run loop's own rule, compiled)
-
-_F8, _I8 = types.float64, types.int64
-_V, _M = types.float64[::1], types.float64[:, ::1]  # C-ordered vectors and matrices
-# the model's functions: (t, y, m, z, p, out) -> None, the values written into out
-MODEL = types.void(_F8, _V, _V, _V, _V, _V)
-_FN = types.FunctionType(MODEL)
-_I, _B = types.int64[::1], types.boolean[::1]
-
-
-def _entry(restype, *argtypes):
-    """An entry point from Python, compiled when this module is imported (from
-    numba's cache after the first time), with the model's functions as pointers:
-    one machine code for every model."""
-    return njit(restype(*argtypes), cache=True, error_model="numpy")
-
-
 STEPS_PER_CALL = 20000  # the run loop looks at its deadline and progress between calls
-
-
-@_jit
-def _rms(v):
-    return math.sqrt(np.sum(v * v) / max(v.size, 1))
-
-
-@_entry(_F8, _FN, _F8, _V, _V, _F8, _F8, _V, _V, _V, _V, _V)
-def first_step(rhs, t, y, f, t_bound, max_step, rtol, atol, m, z, p):
-    """SciPy's `select_initial_step` for an 8th-order pair (error order 7)."""
-    n = y.size
-    interval = abs(t_bound - t)
-    if interval == 0.0:
-        return 0.0
-    scale = atol + np.abs(y) * rtol
-    d0 = _rms(y / scale)
-    d1 = _rms(f / scale)
-    h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
-    h0 = min(h0, interval)
-    y1 = y + h0 * f
-    f1 = np.empty(n)
-    rhs(t + h0, y1, m, z, p, f1)
-    d2 = _rms((f1 - f) / scale) / h0
-    if d1 <= 1e-15 and d2 <= 1e-15:
-        h1 = max(1e-6, h0 * 1e-3)
-    else:
-        h1 = (0.01 / max(d1, d2)) ** (1.0 / 8.0)
-    return min(100.0 * h0, h1, interval, max_step)
-
-
-@_jit
-def _stages(rhs, t, y, f, h, m, z, p, K, y_new, ys):
-    """One DOP853 step from (t, y) with f = rhs(t, y): K[0..12] and y_new (K[12] is
-    the derivative there); returns the error norm's square terms (err5, err3)."""
-    n = y.size
-    K[0, :] = f
-    for s in range(1, N_STAGES):
-        for i in range(n):
-            acc = 0.0
-            for j in range(s):
-                acc += A[s, j] * K[j, i]
-            ys[i] = y[i] + h * acc
-        rhs(t + C[s] * h, ys, m, z, p, K[s])
-    for i in range(n):
-        acc = 0.0
-        for j in range(N_STAGES):
-            acc += B[j] * K[j, i]
-        y_new[i] = y[i] + h * acc
-    rhs(t + h, y_new, m, z, p, K[N_STAGES])
-
-
-@_jit
-def _error_norm(y, y_new, K, h, rtol, atol):
-    n = y.size
-    e5 = 0.0
-    e3 = 0.0
-    for i in range(n):
-        scale = atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol[i]
-        a5 = 0.0
-        a3 = 0.0
-        for j in range(N_STAGES + 1):
-            a5 += E5[j] * K[j, i]
-            a3 += E3[j] * K[j, i]
-        a5 /= scale
-        a3 /= scale
-        e5 += a5 * a5
-        e3 += a3 * a3
-    if e5 == 0.0 and e3 == 0.0:
-        return 0.0
-    return abs(h) * e5 / math.sqrt((e5 + 0.01 * e3) * n)
-
-
-@_jit
-def dense_terms(rhs, t, y, h, y_new, f_new, m, z, p, K, F, ys):
-    """The step's interpolant, F[0..6] (SciPy's Dop853DenseOutput), with the three
-    extra stages it needs, and its ends with their derivatives (F[7..10], for the
-    cubic Hermite of `interpolate`)."""
-    n = y.size
-    for s in range(N_STAGES + 1, N_EXTENDED):
-        a = A_EXTRA[s - N_STAGES - 1]
-        for i in range(n):
-            acc = 0.0
-            for j in range(s):
-                acc += a[j] * K[j, i]
-            ys[i] = y[i] + h * acc
-        rhs(t + C_EXTRA[s - N_STAGES - 1] * h, ys, m, z, p, K[s])
-    for i in range(n):
-        F[POWER, i] = y[i]
-        F[POWER + 1, i] = K[0, i]
-        F[POWER + 2, i] = y_new[i]
-        F[POWER + 3, i] = f_new[i]
-        dy = y_new[i] - y[i]
-        F[0, i] = dy
-        F[1, i] = h * K[0, i] - dy
-        F[2, i] = 2.0 * dy - h * (f_new[i] + K[0, i])
-        for r in range(POWER - 3):
-            acc = 0.0
-            for j in range(N_EXTENDED):
-                acc += D[r, j] * K[j, i]
-            F[3 + r, i] = h * acc
-
-
-@_jit
-def dense_at(t_old, h, y_old, F, t, out):
-    """The interpolant at t (SciPy's evaluation order)."""
-    x = (t - t_old) / h
-    n = y_old.size
-    for i in range(n):
-        acc = 0.0
-        for r in range(POWER - 1, -1, -1):
-            acc += F[r, i]
-            if (POWER - 1 - r) % 2 == 0:
-                acc *= x
-            else:
-                acc *= 1.0 - x
-        out[i] = acc + y_old[i]
-
-
-@_entry(types.none, _F8, _F8, _M, types.boolean, _F8, _V)
-def interpolate(t_old, h, F, cubic, t, out):
-    """The step's state at t: DOP853's interpolant, or the cubic Hermite through its
-    ends where that is not to be trusted -- a stability-bound step (`cubic`; see
-    `steppers.ivp.ScipyStepper`) or a value that overflows inside."""
-    n = out.size
-    if not cubic:
-        dense_at(t_old, h, F[POWER], F, t, out)
-        finite = True
-        for i in range(n):
-            if not math.isfinite(out[i]):
-                finite = False
-        if finite:
-            return
-    s = (t - t_old) / h
-    h00 = (1.0 + 2.0 * s) * (1.0 - s) ** 2
-    h01 = s * s * (3.0 - 2.0 * s)
-    h10 = s * (1.0 - s) ** 2
-    h11 = s * s * (s - 1.0)
-    for i in range(n):
-        out[i] = h00 * F[POWER, i] + h01 * F[POWER + 2, i] + \
-            h * (h10 * F[POWER + 1, i] + h11 * F[POWER + 3, i])
-
-
-@_jit
-def _stiffness(y, y_new, K, h, sc, tested, t_new):
-    """Hairer's stiffness test (as `ScipyStepper._stiffness_test`): h*|lambda| from
-    the last stage (c = 1) and the new point, its counts and its findings in sc
-    (POSITIVE ... STIFF_H_LAMBDA, see `layout`)."""
-    if sc[POSITIVE] == 0.0 and tested % 4:
-        return
-    n = y.size
-    den = 0.0
-    num = 0.0
-    for i in range(n):
-        acc = 0.0
-        for j in range(N_STAGES - 1):
-            acc += A[N_STAGES - 1, j] * K[j, i]
-        d = y_new[i] - y[i] - h * acc
-        den += d * d
-        g = K[N_STAGES, i] - K[N_STAGES - 1, i]
-        num += g * g
-    if not (0.0 < den < np.inf):
-        return
-    sc[H_LAMBDA] = abs(h) * math.sqrt(num / den)
-    if sc[H_LAMBDA] > sc[LIMIT]:
-        sc[CALM] = 0.0
-        sc[POSITIVE] += 1.0
-        if sc[POSITIVE] == 15.0 and not sc[STIFF_AT] == sc[STIFF_AT]:
-            sc[STIFF_AT] = t_new
-            sc[STIFF_H_LAMBDA] = sc[H_LAMBDA]
-    else:
-        sc[CALM] += 1.0
-        if sc[CALM] == 6.0:
-            sc[POSITIVE] = 0.0
-
 
 @_jit
 def _crossed(k, mode, e, level):
@@ -365,6 +175,166 @@ def _direction(rhs, surf, k, old, t, y, m, z, p, lookahead, f, yt, e0, e1):
     return 0.0
 
 
+@_part
+def _finite(v):
+    for i in range(v.size):
+        if not math.isfinite(v[i]):
+            return False
+    return True
+
+
+@_part
+def _hold(y_new, f_new, F, held_y, held_f, held_F, sc, cubic, t_new, h_next):
+    """Hand the step to the run loop: its end, derivative, interpolant and length."""
+    held_y[:] = y_new
+    held_f[:] = f_new
+    held_F[:, :] = F
+    sc[CUBIC] = 1.0 if cubic else 0.0
+    sc[HELD_END] = t_new
+    sc[STEP] = h_next
+
+
+@_part
+def _room(grid, gi, rows, rows_size, t):
+    """The last grid instant the rows buffer has room for (a buffer as long as the
+    rest of the run would cost in proportion to the run): a step that may go past
+    it is the next call's, with the buffer empty; only a step longer than the whole
+    buffer ends there."""
+    last_row = gi + rows_size - rows - 1
+    return grid[last_row] if last_row < grid.size and grid[last_row] > t else np.inf
+
+
+@_part
+def _watch(rhs, surf, t_new, y_new, m, z, p, e_a, e_b, watch, handled, level, flip, ft,
+           scratch, e0, e1):
+    """The surfaces at a step's end (into e_b): (the last one crossed or departed
+    that the kernel must act on, -1 if none; whether each such can be switched here,
+    `simple`; how many crossed with a branch nothing uses, marked in `flip`, to be
+    followed without a restart; evaluations)."""
+    surf(t_new, y_new, m, z, p, e_b)
+    first = -1
+    simple = True
+    quiet = 0
+    nfev = 0
+    for k in watch:
+        flip[k] = False
+        if _crossed(k, m[k], e_b[k], level):
+            matters = 0
+            if handled[k] >= QUIET:
+                matters = _silent(rhs, surf, k, t_new, y_new, m, z, p, ft, scratch, watch,
+                                  level, e0, e1)
+                nfev += 3
+            if matters == 1:
+                flip[k] = True
+                quiet += 1
+                continue
+            if handled[k] != PLAIN or matters == 2:
+                simple = False
+            first = k
+        elif m[k] == 0.0 and not level[k] and abs(e_b[k]) > 1e-12 * (1.0 + abs(e_a[k])) \
+                and e_b[k] != 0.0:
+            simple = False  # departed from a surface it sat on
+            first = k
+    return first, simple, quiet, nfev
+
+
+@_part
+def _locate_all(surf, t, t_new, h, cubic, F, m, z, p, e_a, e_b, watch, level, tks, e0, yt):
+    """Where in (t, t_new] each crossed surface crosses (tks; inf for the others):
+    (the first instant, whether every one could be bracketed)."""
+    t_star = t_new
+    for k in watch:
+        tks[k] = np.inf
+        if _crossed(k, m[k], e_b[k], level):
+            if e_a[k] == 0.0 or _crossed(k, m[k], e_a[k], level):
+                return t_star, False  # began on it: nothing to bracket here
+            tks[k] = _locate(surf, k, m[k], level, t, t_new, e_a[k], e_b[k], h, cubic, F,
+                             m, z, p, e0, yt)
+            t_star = min(t_star, tks[k])
+    return t_star, True
+
+
+@_part
+def _switch(rhs, surf, t_star, yt, m, z, p, lookahead, watch, level, tks, m_old, m_new,
+            at_zero, ft, scratch, e0, e1):
+    """The branches after the crossings at t_star, into m_new (m as it was): the
+    surfaces at zero there (several cross at once at a dead zone's edge) each go the
+    way the motion takes them, in the branches decided before them, as
+    `SurfaceWatch.choose_modes`; the others must stay on their sides. Returns
+    (whether the kernel can switch them itself, evaluations)."""
+    close = 8.0 * 2.220446049250313e-16 * max(abs(t_star), 1e-300)
+    m_old[:] = m
+    simple = True
+    nfev = 0
+    for k in watch:
+        if tks[k] - t_star <= close:
+            new_mode = _direction(rhs, surf, k, m_old[k], t_star, yt, m, z, p, lookahead,
+                                  ft, scratch, e0, e1)
+            nfev += 2
+            if new_mode == 0.0 or new_mode == m_old[k]:
+                simple = False
+                break
+            m[k] = new_mode
+    if simple:
+        for k in watch:
+            at_zero[k] = tks[k] - t_star <= close
+        surf(t_star, yt, m, z, p, e0)
+        for k in watch:
+            if not at_zero[k] and (m[k] == 0.0 or e0[k] == 0.0 or
+                                   _crossed(k, m[k], e0[k], level)):
+                simple = False
+    m_new[:] = m
+    m[:] = m_old
+    return simple, nfev
+
+
+@_part
+def _rows(t, h, F, cubic, grid, gi, t_end, closed, y_end, m, out_T, out_Y, out_M, rows):
+    """The rows at the grid instants before t_end (`closed`: up to it, the one at
+    t_end taking y_end exactly), each in the branches m: (rows, gi)."""
+    while gi < grid.size and (grid[gi] < t_end or (closed and grid[gi] == t_end)):
+        out_T[rows] = grid[gi]
+        if grid[gi] == t_end:
+            out_Y[rows, :] = y_end
+        else:
+            interpolate(t, h, F, cubic, grid[gi], out_Y[rows])
+        out_M[rows, :] = m
+        rows += 1
+        gi += 1
+    return rows, gi
+
+
+@_part
+def _events(t_star, yt, m, m_new, watch, ev_t, ev_k, ev_new, ev_y, ev_m, nev):
+    """Log each branch that changes at t_star (with the branches before it) and
+    change it: the new count."""
+    for k in watch:
+        if m_new[k] != m[k]:
+            ev_t[nev] = t_star
+            ev_k[nev] = k
+            ev_new[nev] = m_new[k]
+            ev_y[nev, :] = yt
+            ev_m[nev, :] = m
+            nev += 1
+            m[k] = m_new[k]
+    return nev
+
+
+@_part
+def _restart(rhs, surf, t, t_star, yt, y, f, e_a, m, z, p, sc, steps):
+    """The integration restarts at t_star, in the new branches: the next step tries
+    the cut one's length, as the loop's; the stiffness test starts again, as a new
+    stepper's would. Returns (t, the step to try)."""
+    y[:] = yt
+    h = t_star - t
+    sc[POSITIVE] = 0.0
+    sc[CALM] = 0.0
+    sc[RESTARTED] = sc[NSTEPS] + steps
+    rhs(t_star, y, m, z, p, f)
+    surf(t_star, y, m, z, p, e_a)
+    return t_star, max(h, 1e-12 * max(abs(t_star), 1.0))
+
+
 @_entry(types.UniTuple(_I8, 5), _FN, _FN, _V, _V, _V, _V, _V, _V, _V, _V, _V, _I, _I, _B,
         _V, _I8, _V, _M, _M, _V, _I, _V, _M, _M, _V, _V, _M, _I8, _V, _M, _M)
 def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level, grid, gi,
@@ -380,31 +350,18 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
     nothing uses) is not logged. Unless smp_T is empty, every step's end that is not a
     crossing is a sample (smp_T, smp_Y, smp_M): the points RANGE reads between the rows
     (the run restarts at a crossing, which RANGE reads in its new branches)."""
-    n = y.size
+    n, ne, nm = y.size, e_a.size, m.size
     t, h_abs, t_bound = sc[AT], sc[STEP], sc[BOUND]
     max_step, lookahead = sc[MAX_STEP], sc[LOOKAHEAD]
     K = np.empty((N_EXTENDED, n))
-    y_new = np.empty(n)
-    yt = np.empty(n)
-    ft = np.empty(n)
-    scratch = np.empty(n)
-    ys = np.empty(n)  # a stage's argument
-    ne = e_a.size
-    e_b = np.empty(ne)
-    e0 = np.empty(ne)
-    e1 = np.empty(ne)
+    y_new, yt, ft, scratch, ys = np.empty(n), np.empty(n), np.empty(n), np.empty(n), \
+        np.empty(n)  # (ys: a stage's argument)
+    e_b, e0, e1 = np.empty(ne), np.empty(ne), np.empty(ne)
     F = np.empty((ROWS, n))
-    nm = m.size
     tks = np.full(nm, np.inf)
-    m_old = np.empty(nm)
-    m_new = np.empty(nm)
-    at_zero = np.zeros(nm, np.bool_)
-    flip = np.zeros(nm, np.bool_)
-    rows = 0
-    nev = 0
-    nsmp = 0
-    nfev = 0
-    steps = 0
+    m_old, m_new = np.empty(nm), np.empty(nm)
+    at_zero, flip = np.zeros(nm, np.bool_), np.zeros(nm, np.bool_)
+    rows, nev, nsmp, nfev, steps = 0, 0, 0, 0, 0
     ngrid = grid.size
     sampling = smp_T.size > 0
     status = BUFFER
@@ -413,12 +370,7 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
                 (sampling and nsmp + 2 > smp_T.size) or (rows >= out_T.size and gi < ngrid):
             status = BUFFER
             break
-        # the last grid instant the rows buffer has room for (a buffer as long as the
-        # rest of the run would cost in proportion to the run): a step that may go past
-        # it is the next call's, with the buffer empty; only a step longer than the
-        # whole buffer ends there
-        last_row = gi + out_T.size - rows - 1
-        row_cap = grid[last_row] if last_row < ngrid and grid[last_row] > t else np.inf
+        row_cap = _room(grid, gi, rows, out_T.size, t)
         if rows > 0 and t + min(h_abs, max_step) > row_cap:
             status = BUFFER
             break
@@ -432,67 +384,25 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
         if not h_abs > 0.0:
             status = SMALL  # NaN: the derivatives were not finite where it stands
             break
-        rejected = False
-        while True:
-            if not h_abs >= min_step:  # (NaN included)
-                status = SMALL
-                break
-            t_new = t + h_abs
-            if t_new > t_bound:
-                t_new = t_bound
-            if t_new > row_cap:
-                t_new = row_cap
-            h = t_new - t
-            _stages(rhs, t, y, f, h, m, z, p, K, y_new, ys)
-            nfev += N_STAGES
-            err = _error_norm(y, y_new, K, h, rtol, atol)
-            if err < 1.0:
-                factor = MAX_FACTOR if err == 0.0 else min(MAX_FACTOR, SAFETY * err ** EXPONENT)
-                if rejected:
-                    factor = min(1.0, factor)
-                h_next = abs(h) * factor
-                break
-            # a NaN or an infinity in the stages (a fault) shrinks the step too
-            factor = SAFETY * err ** EXPONENT if err == err and err < np.inf else MIN_FACTOR
-            h_abs = abs(h) * max(MIN_FACTOR, factor)
-            rejected = True
-        if status == SMALL:
+        ok, t_new, h, h_next, used = step(rhs, t, y, f, h_abs, min_step, min(t_bound, row_cap),
+                                          m, z, p, rtol, atol, K, y_new, ys)
+        nfev += used
+        if not ok:
+            h_abs = h_next  # (the last step tried)
+            status = SMALL
             break
         steps += 1
         f_new = K[N_STAGES]
         _stiffness(y, y_new, K, h, sc, sc[NSTEPS] + steps - sc[RESTARTED], t_new)
         # a stability-bound step: its rows and crossings from its ends only
         cubic = sc[POSITIVE] >= 15.0 and sc[H_LAMBDA] > sc[LIMIT]
-        surf(t_new, y_new, m, z, p, e_b)
-        first = -1
-        simple = True
-        quiet = 0
-        for k in watch:
-            flip[k] = False
-            if _crossed(k, m[k], e_b[k], level):
-                matters = 0
-                if handled[k] >= QUIET:
-                    matters = _silent(rhs, surf, k, t_new, y_new, m, z, p, ft, scratch, watch,
-                                      level, e0, e1)
-                    nfev += 3
-                if matters == 1:
-                    # a branch nothing uses now: followed, no restart (as the loop does)
-                    flip[k] = True
-                    quiet += 1
-                    continue
-                if handled[k] != PLAIN or matters == 2:
-                    simple = False
-                first = k
-            elif m[k] == 0.0 and not level[k] and abs(e_b[k]) > 1e-12 * (1.0 + abs(e_a[k])) \
-                    and e_b[k] != 0.0:
-                simple = False  # departed from a surface it sat on
-                first = k
+        first, simple, quiet, used = _watch(rhs, surf, t_new, y_new, m, z, p, e_a, e_b, watch,
+                                            handled, level, flip, ft, scratch, e0, e1)
+        nfev += used
         ends = t_new >= t_bound
-        bad = h < sc[FLOOR]  # (the loop counts them: TIMER DELMIN, a finite-time singularity)
-        for i in range(n):
-            if not math.isfinite(y_new[i]):
-                bad = True
-        if bad:  # held as a segment's last step is, nothing located
+        # a step too short (the loop counts them: TIMER DELMIN, a finite-time
+        # singularity) or not finite: held as a segment's last step is, nothing located
+        if h < sc[FLOOR] or not _finite(y_new):
             first = -1
             ends = True
         if first >= 0 or ends or (gi < ngrid and grid[gi] <= t_new):
@@ -500,86 +410,31 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
             nfev += 3
         t_star = t_new
         if first >= 0 and simple:
-            for k in watch:
-                tks[k] = np.inf
-                if _crossed(k, m[k], e_b[k], level):
-                    if e_a[k] == 0.0 or _crossed(k, m[k], e_a[k], level):
-                        simple = False  # began on it: nothing to bracket here
-                        break
-                    tks[k] = _locate(surf, k, m[k], level, t, t_new, e_a[k], e_b[k], h,
-                                     cubic, F, m, z, p, e0, yt)
-                    t_star = min(t_star, tks[k])
+            t_star, simple = _locate_all(surf, t, t_new, h, cubic, F, m, z, p, e_a, e_b,
+                                         watch, level, tks, e0, yt)
         if first >= 0 and simple:
             interpolate(t, h, F, cubic, t_star, yt)
-            for i in range(n):
-                if not math.isfinite(yt[i]):
-                    simple = False
+            simple = _finite(yt)
         if first >= 0 and simple:
-            # the surfaces at zero here (several cross at once at a dead zone's edge)
-            # each go the way the motion takes them, in the branches decided before
-            # them, as `SurfaceWatch.choose_modes`; the others must stay on their sides
-            close = 8.0 * 2.220446049250313e-16 * max(abs(t_star), 1e-300)
-            m_old[:] = m
-            for k in watch:
-                if tks[k] - t_star <= close:
-                    new_mode = _direction(rhs, surf, k, m_old[k], t_star, yt, m, z, p,
-                                          lookahead, ft, scratch, e0, e1)
-                    nfev += 2
-                    if new_mode == 0.0 or new_mode == m_old[k]:
-                        simple = False
-                        break
-                    m[k] = new_mode
-            if simple:
-                for k in watch:
-                    at_zero[k] = tks[k] - t_star <= close
-                surf(t_star, yt, m, z, p, e0)
-                for k in watch:
-                    if not at_zero[k] and (m[k] == 0.0 or e0[k] == 0.0 or
-                                           _crossed(k, m[k], e0[k], level)):
-                        simple = False
-            m_new[:] = m
-            m[:] = m_old
+            simple, used = _switch(rhs, surf, t_star, yt, m, z, p, lookahead, watch, level,
+                                   tks, m_old, m_new, at_zero, ft, scratch, e0, e1)
+            nfev += used
         if (first >= 0 and not simple) or (ends and first < 0):
             # the run loop takes this step: its rows inside, the crossing or the
             # segment's end, by its general rules
-            held_y[:] = y_new
-            held_f[:] = K[N_STAGES]
-            held_F[:, :] = F
-            sc[CUBIC] = 1.0 if cubic else 0.0
-            sc[HELD_END] = t_new
-            sc[STEP] = h_next
+            _hold(y_new, f_new, F, held_y, held_f, held_F, sc, cubic, t_new, h_next)
             status = HELD
             break
         if first >= 0:
-            # the rows before the crossing, in the branches before it ...
-            while gi < ngrid and grid[gi] < t_star:
-                out_T[rows] = grid[gi]
-                interpolate(t, h, F, cubic, grid[gi], out_Y[rows])
-                out_M[rows, :] = m
-                rows += 1
-                gi += 1
-            for k in watch:
-                if m_new[k] != m[k]:
-                    ev_t[nev] = t_star
-                    ev_k[nev] = k
-                    ev_new[nev] = m_new[k]
-                    ev_y[nev, :] = yt
-                    ev_m[nev, :] = m
-                    nev += 1
-                    m[k] = m_new[k]
-            # ... and the integration restarts there, in the new ones
-            y[:] = yt
-            h = t_star - t  # the next step tries the cut one's length, as the loop's
-            t = t_star
-            sc[POSITIVE] = 0.0  # the stiffness test starts again, as a new stepper's would
-            sc[CALM] = 0.0
-            sc[RESTARTED] = sc[NSTEPS] + steps
-            rhs(t, y, m, z, p, f)
+            # the rows before the crossing, in the branches before it, then the
+            # integration restarts there in the new ones
+            rows, gi = _rows(t, h, F, cubic, grid, gi, t_star, False, yt, m, out_T, out_Y,
+                             out_M, rows)
+            nev = _events(t_star, yt, m, m_new, watch, ev_t, ev_k, ev_new, ev_y, ev_m, nev)
+            t, h_abs = _restart(rhs, surf, t, t_star, yt, y, f, e_a, m, z, p, sc, steps)
             nfev += 1
-            surf(t, y, m, z, p, e_a)
-            h_abs = max(h, 1e-12 * max(abs(t), 1.0))
             continue
-        if quiet:
+        if quiet:  # (a branch nothing uses now: followed, no restart, as the loop does)
             for k in watch:
                 if flip[k]:
                     m[k] = 1.0 if e_b[k] > 0.0 else (-1.0 if e_b[k] < 0.0 else 0.0)
@@ -588,15 +443,8 @@ def advance(rhs, surf, y, f, e_a, m, z, p, sc, rtol, atol, watch, handled, level
             smp_Y[nsmp, :] = y_new
             smp_M[nsmp, :] = m
             nsmp += 1
-        while gi < ngrid and grid[gi] <= t_new:
-            out_T[rows] = grid[gi]
-            if grid[gi] == t_new:
-                out_Y[rows, :] = y_new
-            else:
-                interpolate(t, h, F, cubic, grid[gi], out_Y[rows])
-            out_M[rows, :] = m
-            rows += 1
-            gi += 1
+        rows, gi = _rows(t, h, F, cubic, grid, gi, t_new, True, y_new, m, out_T, out_Y, out_M,
+                         rows)
         t = t_new
         y[:] = y_new
         f[:] = f_new

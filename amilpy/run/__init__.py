@@ -5,7 +5,12 @@
                  breakpoints (plain data, decided once)
     watch.py     SurfaceWatch: branches, crossings located on the dense output,
                  the branch to enter, sliding (slide.py: several surfaces at once)
-    loop.py      Integrator: segments, steps, events, restarts, limits
+    loop.py      Integrator: segments, steps, events, restarts, limits; its parts:
+      cursor.py    where it stands (Cursor), Stop, what a step's watch found
+      segment.py   a segment's vector field and stepper
+      stepwatch.py an accepted step's checks and crossings, the rows inside it
+      restarts.py  new branches, events, resets, chatter; a failure's outcome
+      fastpaths.py the routes' fast paths, by what the stepper declares
     steppoint.py StepPoint: the classic fixed-step loop (step-point mode), its grid
                  and TIMER rules
     record.py    rows on the output grid, RANGE brackets, the Run
