@@ -127,7 +127,7 @@ class Model:
         takes METHOD EULER/RECT out of it; None: the listing's choice. `seed` seeds
         the random streams (GAUSS, UNIF, OU...) instead of the listing's RNSEED.
         `weather_dir`: folder(s) of CABO weather files for an FST listing's WEATHER,
-        looked in after the listing's own (see `amilpy.weather`).
+        looked in after the listing's own (see `amilpy.library.weather`).
 
         `jobs`: worker processes for the runs, which are independent (the command
         line uses every core); `scheduler`: the address of a Dask scheduler to run
@@ -160,7 +160,7 @@ class Model:
         for k, spec in enumerate(specs):
             run = farmed[k] if farmed else self._one(spec, opts, len(specs) > 1)
             if advice and not advised:
-                from .advice import stiffness_advice
+                from .run.advice import stiffness_advice
 
                 run.advice = stiffness_advice(self.ir, spec, run, opts, self.cache)
                 advised = run.advice is not None  # say it once
@@ -202,7 +202,7 @@ class Model:
 
         if not among_others:
             return simulate(self.ir, spec, opts, self.cache)
-        from .farm import failed_run
+        from .batch.farm import failed_run
         from .run.plan import resolve_route
 
         try:
@@ -214,10 +214,10 @@ class Model:
 
     def _farm(self, specs: list[ir.RunSpec], opts, jobs: int, scheduler: str | None,
               progress) -> list[Run] | None:
-        """The runs, farmed out (see `amilpy.farm`); None to run them here, one by one."""
+        """The runs, farmed out (see `amilpy.batch.farm`); None to run them here, one by one."""
         if not scheduler and (jobs <= 1 or len(specs) <= 1):
             return None
-        from .farm import failed_run, run_tasks
+        from .batch.farm import failed_run, run_tasks
         from .run.plan import resolve_route
 
         finished = [0]
@@ -273,9 +273,9 @@ class Model:
               step_point: bool | None = None, seed: float | None = None,
               weather_dir: str | list[str] | None = None,
               jobs: int = 1, scheduler: str | None = None, **params: float):
-        """One run per value of data value `name` (see `amilpy.sweep.sweep`; `jobs`,
+        """One run per value of data value `name` (see `amilpy.batch.sweep.sweep`; `jobs`,
         `scheduler` as for `run`, for a sweep that does not carry its state)."""
-        from .sweep import sweep
+        from .batch.sweep import sweep
 
         _check_method(method)
         return sweep(self, name, [float(v) for v in values], both_ways=both_ways,
@@ -327,7 +327,7 @@ class Model:
                         progress=progress, **params)
 
     def _measures(self, names) -> list[str]:
-        from .sweep import default_measure
+        from .batch.sweep import default_measure
 
         names = [names] if isinstance(names, str) else list(names)
         return self.known_names(names) or [default_measure(self.ir)]

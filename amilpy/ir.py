@@ -12,9 +12,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from enum import Enum
 
-from . import syntax
 from .diagnostics import Span
-from .syntax import Expr, Node
+from .parse import syntax
+from .parse.syntax import Expr, Node
 
 
 class SurfaceKind(str, Enum):

@@ -102,7 +102,7 @@ class Run:
     warnings: list[str] = field(default_factory=list)
     t_end: float = 0.0
     final_state: dict = field(default_factory=dict)  # for continuing a run (sweeps)
-    advice: str | None = None  # a note on the method (see advice.py)
+    advice: str | None = None  # a note on the method (see run/advice.py)
     # what the route ran with, for the printout header: "RELERR 1e-06, ABSERR 1e-09"
     # for a variable-step route, "DELT 0.000625" for a fixed-step one
     settings: str = ""

@@ -3,7 +3,7 @@
     OPENBLAS_NUM_THREADS=1 python benchmarks/parallel.py [--jobs 1 2 4] [--scheduler ADDR]
 
 The grid: W = 60 ... 79 rad/s (20 values) by ZETA = 0.002 ... 0.02 (10 values), one
-run of the shipped hoist listing per pair (`amilpy.sweep.sweep` with `grid=`, what
+run of the shipped hoist listing per pair (`amilpy.batch.sweep.sweep` with `grid=`, what
 `amilpy sweep hoist_backlash.amil W=60:79:1 ZETA=0.002:0.02:0.002` runs), each
 measured as the sweep measures it. Wall time for each number of worker processes,
 the speed-up over one, and a check that every point equals the serial one bit for
@@ -30,8 +30,8 @@ ZETA = [round(0.002 * (k + 1), 6) for k in range(10)]
 def main(jobs=None, scheduler: str | None = None, out_dir: str | None = None,
          fintim: float | None = None, w=None, zeta=None) -> dict:
     import amilpy
-    from amilpy.farm import default_jobs
-    from amilpy.sweep import sweep
+    from amilpy.batch.farm import default_jobs
+    from amilpy.batch.sweep import sweep
 
     w, zeta = w or W, zeta or ZETA
     cores = default_jobs()

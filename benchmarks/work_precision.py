@@ -103,8 +103,8 @@ def probe_cost(case: Case, rtol: float = 1e-6, repeats: int = 3) -> list[dict]:
     run's length), each the median of repeats; `advice` whether it would run at all
     (the run took `advice.SLOW` seconds or more)."""
     import amilpy
-    from amilpy import advice as advice_module
     from amilpy.run import Options
+    from amilpy.run import advice as advice_module
 
     threshold = getattr(advice_module, "SLOW", 0.0)  # (no such threshold before)
 

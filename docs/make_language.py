@@ -241,7 +241,7 @@ def functions() -> str:
             groups.setdefault(kind, []).append(
                 (f"`{form.signature}`", ", ".join(f"`{a}`" for a in f.aliases) or "", doc))
     parts = ["## Functions\n\nEvery function amilpy runs, by kind (one entry each in "
-             "`amilpy/library.py`). A call with the wrong arguments is answered with the "
+             "`amilpy/library/`). A call with the wrong arguments is answered with the "
              "signature below."]
     for kind, title in _KINDS.items():
         if kind in groups:

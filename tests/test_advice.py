@@ -14,7 +14,7 @@ END
 
 
 def test_stiff_model_on_rks_gets_advice_once(monkeypatch):
-    from amilpy import advice
+    from amilpy.run import advice
 
     monkeypatch.setattr(advice, "SLOW", 0.0)  # this run takes well under a second
     runs = amilpy.loads(STIFF.replace("END", "METHOD RKS\nEND\nPARAM C = 2.0E6\nEND")).run()
@@ -27,8 +27,7 @@ def test_a_quick_run_is_not_probed():
     SLOW seconds or more pays it, however many evaluations it made."""
     from dataclasses import replace
 
-    from amilpy import advice
-    from amilpy.run import Options
+    from amilpy.run import Options, advice
 
     model = amilpy.loads(STIFF)
     run, = model.run(method="RKS", advice=False)

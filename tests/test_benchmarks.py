@@ -286,7 +286,7 @@ def test_response_vs_sweep_reads_every_jump_of_each_direction():
     them all (the quick run above has too few points to find any)."""
     import response_vs_sweep as rvs
 
-    from amilpy.sweep import Jump
+    from amilpy.batch.sweep import Jump
 
     class Swept:
         points: list = []

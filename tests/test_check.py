@@ -87,7 +87,7 @@ def test_limit_shares_its_surfaces_with_a_dead_zone_on_the_same_input():
 def _work(listing: str) -> tuple[int, int]:
     """(visits of syntax/IR nodes, characters of generated code) for check + compile."""
     from amilpy.codegen import Compiler
-    from amilpy.syntax import Visitor
+    from amilpy.parse.syntax import Visitor
 
     calls = [0]
     visit = Visitor.visit

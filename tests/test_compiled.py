@@ -267,7 +267,7 @@ def test_memory_kept_step_by_step_says_it_ran_as_dop853():
 def test_every_math_function_with_a_compiled_form_compiles():
     # every helper the translation spells is used, so the run is the kernel's (no
     # warning that it ran as DOP853) and gives DOP853's rows: each function means
-    # in numba what it means in `amilpy.runtime`. In sorted code AINT ... DIM are
+    # in numba what it means in `amilpy.library.runtime`. In sorted code AINT ... DIM are
     # switches (their templates, an argument bound once: ABS(X - 0.3)); inside the
     # PROCEDURE they read W, assigned in its IF, so they are their plain forms there
     text = """X = INTGRL(0.5, -X)

@@ -245,7 +245,7 @@ def test_a_draw_only_printed_costs_no_restart() -> None:
     # 100 draws, each due at an output instant: a restart at each cost 1926
     # evaluations where the decay alone takes 455; the run goes on through them and
     # prints the stream's own draws (normal_draw(seed, site 0, 0, k) on interval k)
-    from amilpy.runtime import normal_draw
+    from amilpy.library.runtime import normal_draw
 
     printed = amilpy.loads(DRAWN.format(rate="-K*X", reading="G = GAUSS(0.0, 1.0)\n"
                                         "Y = X + 0.01*G")).run(seed=3)[0]

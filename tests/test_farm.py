@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import amilpy
-from amilpy.farm import default_jobs
+from amilpy.batch.farm import default_jobs
 
 HERE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 HOIST = os.path.join(HERE, "models", "hoist_backlash.amil")
@@ -74,7 +74,7 @@ def test_sweep_and_grid_on_processes_equal_serial():
     one = model.sweep("W", values, measure="X", settle=1.0)
     two = model.sweep("W", values, measure="X", settle=1.0, jobs=2)
     assert one.points == two.points
-    from amilpy.sweep import sweep
+    from amilpy.batch.sweep import sweep
 
     grid = sweep(model, "W", values, measure="X", grid=("ZETA", [0.1, 0.3]), jobs=2)
     serial = sweep(model, "W", values, measure="X", grid=("ZETA", [0.1, 0.3]))
@@ -218,7 +218,7 @@ def test_a_scheduler_with_no_workers_is_said_not_waited_on(monkeypatch):
     """A scheduler with no worker takes the runs and never runs them: the command
     waited for ever. Now it waits CONNECT_SECONDS for a worker, then says so."""
     distributed = pytest.importorskip("distributed")
-    from amilpy import farm
+    from amilpy.batch import farm
     from amilpy.diagnostics import AmilError
 
     monkeypatch.setattr(farm, "CONNECT_SECONDS", 1.0)

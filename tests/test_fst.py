@@ -1,7 +1,7 @@
 """FST's form (contract section 13): TIMER STTIME, relational FINISH, the translator's
 driver, WEATHER read from CABO files, and IALG 3 / EUDRIV in step-point mode. The
 numbers are checked against the plain Euler recurrence written here, reading the
-weather files with their own few lines of parsing (not amilpy.weather)."""
+weather files with their own few lines of parsing (not amilpy.library.weather)."""
 
 from __future__ import annotations
 
@@ -236,7 +236,7 @@ def test_acsl_ialg_3_is_the_classic_euler_loop_with_its_events():
 def test_the_report_writes_weather_and_impl_as_the_listing_does():
     # "Equations as evaluated" speaks the listing's language: a weather name, not the
     # memory and table that hold it; an IMPL loop's outputs by the loop's line
-    from amilpy.unparse import expr_text
+    from amilpy.parse.unparse import expr_text
 
     model = amilpy.loads(CROP)
     tsum = next(s for s in model.ir.states if s.name == "TSUM")

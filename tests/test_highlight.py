@@ -24,7 +24,7 @@ from pygments.token import (  # noqa: E402 - only after the importorskip
     Token,
 )
 
-from amilpy.highlight import (  # noqa: E402
+from amilpy.output.highlight import (  # noqa: E402
     BUILTIN_FUNCTIONS,
     KEYWORDS,
     RESERVED_NAMES,
@@ -191,7 +191,7 @@ def test_highlight_listing_keeps_polish_letters():
 
 
 def test_highlight_listing_without_pygments(monkeypatch):
-    import amilpy.highlight as hl
+    import amilpy.output.highlight as hl
 
     monkeypatch.setattr(hl, "AmilLexer", None)
     text = "X = A & \n  *B\n"

@@ -17,7 +17,7 @@ import pytest
 
 import amilpy
 from amilpy import cli, interrupts
-from amilpy.farm import default_jobs
+from amilpy.batch.farm import default_jobs
 
 OSCILLATOR = """TITLE TWO RUNS OF AN OSCILLATOR
 PARAM K = (1.0, 4.0)

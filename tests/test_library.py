@@ -146,7 +146,7 @@ def test_every_entry_documents_itself():
 @pytest.mark.parametrize("func", ["AFGEN", "NLFGEN"])
 def test_a_table_lookup_of_nan_is_nan(func):
     # issue 15: an IndexError off the end of the table
-    from amilpy import runtime
+    from amilpy.library import runtime
 
     table = ((0.0, 1.0, 2.0), (0.0, 1.0, 4.0))
     assert np.isnan(getattr(runtime, func.lower())(table, float("nan")))
@@ -171,8 +171,8 @@ def test_a_level_is_exact_at_its_band_edges():
     # QNTZR's level k holds (k - 1/2, k + 1/2]; v - 1/2 rounds (-0.49999999999999994
     # - 0.5 is -1.0, which made the level -1), so the band is checked: scalar and
     # elementwise alike
-    from amilpy.runtime import vector_helpers
-    from amilpy.surfaces import level
+    from amilpy.library.runtime import vector_helpers
+    from amilpy.library.surfaces import level
 
     v = [-0.49999999999999994, -0.5, 0.5, 0.49999999999999994, 1.5, -1.5, 2.5000000000000004]
     want = [0.0, -1.0, 0.0, 0.0, 1.0, -2.0, 3.0]

@@ -8,9 +8,8 @@ from conftest import run1
 from scipy.integrate import odeint
 
 import amilpy
-from amilpy import advice
 from amilpy.result import Run, Status
-from amilpy.run import Options
+from amilpy.run import Options, advice
 
 ROBERTSON = """Y1 = INTGRL(1.0, -0.04*Y1 + 1.0E4*Y2*Y3)
 Y2 = INTGRL(0.0, 0.04*Y1 - 1.0E4*Y2*Y3 - 3.0E7*Y2*Y2)

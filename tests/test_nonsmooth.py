@@ -22,8 +22,9 @@ from scipy.integrate import quad
 from scipy.optimize import brentq
 
 import amilpy
-from amilpy import library, runtime
-from amilpy.surfaces import level, sign
+from amilpy import library
+from amilpy.library import runtime
+from amilpy.library.surfaces import level, sign
 
 EPS = sys.float_info.epsilon
 ROOT_DOCS = Path(ROOT) / "docs"

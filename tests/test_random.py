@@ -18,7 +18,7 @@ from scipy import stats
 
 import amilpy
 from amilpy.diagnostics import AmilError
-from amilpy.runtime import normal_draw
+from amilpy.library.runtime import normal_draw
 
 
 def listing(body: str, fintim: float = 10.0, outdel: float = 0.1, extra: str = "") -> str:

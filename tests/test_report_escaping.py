@@ -13,8 +13,8 @@ import re
 
 import pytest
 
-from amilpy import highlight
 from amilpy.cli import main
+from amilpy.output import highlight
 from amilpy.output.report import latex, markdown
 
 PAYLOAD = "\\end{Verbatim}\\immediate\\write18{touch pwned}\\input{/etc/passwd}"

@@ -129,7 +129,7 @@ def test_weather_days_far_from_the_file_are_found_at_once():
     """STTIME = 1E15 days walked the calendar one year at a time (3E12 turns: a
     hang). The day and year now come from whole 400-year cycles first; they are
     those of the year-by-year walk (done here for days up to 1E6)."""
-    from amilpy.weather import Weather, WeatherSpec, days_in
+    from amilpy.library.weather import Weather, WeatherSpec, days_in
 
     weather = Weather(WeatherSpec("NLD", 1, 1990), ".")
 

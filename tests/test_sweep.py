@@ -10,8 +10,8 @@ from conftest import ROOT
 from references import duffing, hoist
 
 import amilpy
+from amilpy.batch.sweep import parse_range
 from amilpy.cli import main
-from amilpy.sweep import parse_range
 
 MODEL = f"{ROOT}/models/hoist_backlash.amil"
 H = hoist.Hoist()
@@ -82,7 +82,7 @@ def test_carried_state_continues_time_and_phase():
 
 
 def _sweep(values, amplitudes, directions=None, carry_state=False, unsteady=None):
-    from amilpy.sweep import Sweep, SweepPoint
+    from amilpy.batch.sweep import Sweep, SweepPoint
 
     result = Sweep("W", "Y", 0.0, carry_state=carry_state)
     directions = directions or ["up"] * len(values)

@@ -3,9 +3,10 @@
 import pytest
 
 import amilpy
-from amilpy import ir, syntax
+from amilpy import ir
 from amilpy.diagnostics import Span
-from amilpy.syntax import NODES, Visitor
+from amilpy.parse import syntax
+from amilpy.parse.syntax import NODES, Visitor
 
 SP = Span(1, 1)
 
@@ -36,7 +37,7 @@ def test_a_complete_visitor_missing_a_node_fails_when_defined():
 
 def test_the_complete_visitors_of_amilpy_are_checked_complete():
     # every module with a complete visitor imports cleanly (else the import fails)
-    from amilpy import codegen, surfaces, unparse  # noqa: F401
+    from amilpy.parse import unparse  # noqa: F401
 
     complete = [v for v in _all_subclasses(Visitor)
                 if v.complete and v.__module__.startswith("amilpy")]
@@ -165,7 +166,7 @@ def test_text_reads_back_as_the_same_expression(text):
     """unparse(parse(e)) parses to the same tree: the text is the listing's notation,
     with no parenthesis missing (and its precedence rules are Fortran's)."""
     from amilpy.parse import parse
-    from amilpy.unparse import expr_text
+    from amilpy.parse.unparse import expr_text
 
     first = parse(f"Y = {text}\n").statements[0].expr
     again = parse(f"Y = {expr_text(None, first)}\n").statements[0].expr

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from amilpy.diagnostics import AmilError
-from amilpy.weather import Weather, WeatherSpec, file_name, read_cabo
+from amilpy.library.weather import Weather, WeatherSpec, file_name, read_cabo
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 WEATHER = os.path.join(HERE, "listings", "weather")

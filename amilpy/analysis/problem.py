@@ -37,10 +37,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .. import ir
-from .. import syntax as ast
 from ..check.order import reads
 from ..diagnostics import AmilError, with_hint
 from ..library import lookup
+from ..parse import syntax as ast
 from ..run import Flow, State
 
 # tolerances of the analyses when the caller gives none (the listing's RELERR is

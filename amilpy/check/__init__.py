@@ -14,10 +14,10 @@ Surface classification (const / time / state) is `surfaces.classify`.
 from __future__ import annotations
 
 from .. import ir
-from .. import syntax as ast
 from ..diagnostics import AmilError, Reporter
-from ..surfaces import classify
-from ..syntax import deep_enough, no_collection
+from ..library.surfaces import classify
+from ..parse import syntax as ast
+from ..parse.syntax import deep_enough, no_collection
 from . import order
 from .code import CodeLowering, assigned_names
 from .groups import RunGroups, reject_late_equations, sections, split_groups

@@ -12,13 +12,13 @@ elsewhere is tested when its code runs.
 from __future__ import annotations
 
 from .. import ir
-from .. import syntax as ast
 from ..diagnostics import Reporter, Span, did_you_mean
 from ..language import DEFAULT_CINT, TIME
 from ..library import Kind, lookup
-from ..surfaces import classify
-from ..syntax import deep_enough
-from ..unparse import expr_text
+from ..library.surfaces import classify
+from ..parse import syntax as ast
+from ..parse.syntax import deep_enough
+from ..parse.unparse import expr_text
 from . import order
 from .code import CodeLowering, assigned_names
 from .groups import DATA_STATEMENTS, RunGroups

@@ -22,10 +22,10 @@ from collections.abc import Callable
 from dataclasses import replace
 
 from .. import ir
-from .. import syntax as ast
 from ..diagnostics import Reporter, Span
 from ..library import Kind, lookup
-from ..syntax import deep_enough
+from ..parse import syntax as ast
+from ..parse.syntax import deep_enough
 from .lower import Lowering
 from .names import PURE, Names
 

@@ -11,7 +11,6 @@ import math
 from dataclasses import dataclass, field, replace
 
 from .. import ir
-from .. import syntax as ast
 from ..diagnostics import Reporter, Span, did_you_mean
 from ..language import (
     DRIVERS,
@@ -24,9 +23,10 @@ from ..language import (
     TRANSLATION_KEYS,
     WEATHER_KEYS,
 )
+from ..library.weather import WeatherSpec
+from ..parse import syntax as ast
+from ..parse.syntax import Visitor
 from ..routes import method_names, route_for
-from ..syntax import Visitor
-from ..weather import WeatherSpec
 
 # what may stand in a run group after the first END
 DATA_STATEMENTS = (ast.Data, ast.Table, ast.Timer, ast.Method, ast.Tolerance, ast.Finish,

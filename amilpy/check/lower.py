@@ -12,7 +12,6 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from .. import ir
-from .. import syntax as ast
 from ..diagnostics import Diagnostic, Reporter, Span
 from ..language import TIME
 from ..library import (
@@ -24,10 +23,11 @@ from ..library import (
     Kind,
     lookup,
 )
-from ..surfaces import constant_value
-from ..syntax import Visitor
-from ..templates import ARGUMENTS, instantiate, template_names
-from ..unparse import expr_text
+from ..library.surfaces import constant_value
+from ..library.templates import ARGUMENTS, instantiate, template_names
+from ..parse import syntax as ast
+from ..parse.syntax import Visitor
+from ..parse.unparse import expr_text
 
 # the longest surface text or argument text a description holds
 TEXT_LIMIT = 60

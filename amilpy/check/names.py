@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import math
 
-from .. import syntax as ast
 from ..diagnostics import Reporter, Span, did_you_mean, nearest
 from ..language import (
     KNOWN_BEFORE_RUN,
@@ -17,8 +16,9 @@ from ..language import (
     split_lines,
 )
 from ..library import Kind, callable_names, lookup
-from ..surfaces import constant_value
-from ..weather import NAMES as WEATHER_NAMES
+from ..library.surfaces import constant_value
+from ..library.weather import NAMES as WEATHER_NAMES
+from ..parse import syntax as ast
 from .groups import Data, check_assignable
 
 # the largest store a function's literal argument may ask for (DELAY's N points)

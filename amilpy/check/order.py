@@ -4,9 +4,9 @@ every algebraic loop reported with all its variables and lines."""
 from __future__ import annotations
 
 from .. import ir
-from .. import syntax as ast
 from ..diagnostics import Reporter
-from ..syntax import Visitor
+from ..parse import syntax as ast
+from ..parse.syntax import Visitor
 
 
 class _Reads(Visitor):

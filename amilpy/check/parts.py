@@ -17,9 +17,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
-from .. import syntax as ast
 from ..diagnostics import Reporter, Span
 from ..language import ACSL_TIME, TIME
+from ..parse import syntax as ast
 
 # declarations and data: global wherever they stand
 DECLARATIONS = (ast.Data, ast.Timer, ast.Method, ast.Tolerance, ast.Report, ast.Label,

@@ -7,9 +7,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 from .. import ir
-from .. import syntax as ast
 from ..diagnostics import Span
 from ..language import split_lines
+from ..parse import syntax as ast
 from .code import CodeLowering, assigned_names
 from .names import Names
 

@@ -158,7 +158,7 @@ def _farm_options(p: argparse.ArgumentParser) -> None:
 
 
 def _jobs(args) -> int:
-    from ..farm import default_jobs
+    from ..batch.farm import default_jobs
 
     return args.jobs or default_jobs()
 
@@ -426,7 +426,7 @@ def cmd_run(args, path: str, signals: Signals) -> int:
 
 
 def cmd_sweep(args, path: str, signals: Signals) -> int:
-    from ..sweep import parse_range, sweep
+    from ..batch.sweep import parse_range, sweep
 
     if len(args.range) > 2:
         raise UsageError("give one range, or two for a grid (NAME=START:STOP:STEP each)")

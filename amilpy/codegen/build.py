@@ -14,13 +14,13 @@ import math
 from collections.abc import Callable
 from itertools import count
 
-from .. import ir, templates
-from .. import syntax as syn
+from .. import ir
 from ..diagnostics import AmilError, Diagnostic, Span
-from ..library import WEATHER_HOLD, lookup, vector_functions
-from ..surfaces import constant_value, is_affine
-from ..syntax import deep_enough, no_collection
-from ..templates import instantiate
+from ..library import WEATHER_HOLD, lookup, templates, vector_functions
+from ..library.surfaces import constant_value, is_affine
+from ..library.templates import instantiate
+from ..parse import syntax as syn
+from ..parse.syntax import deep_enough, no_collection
 from .compiled import Compiled
 from .consts import evaluate_constant, initial_slots
 from .emit import Emitter, Setting, needs, needs_memories, printed_only_surfaces

@@ -10,10 +10,11 @@ from __future__ import annotations
 import ast as py
 import math
 
-from .. import ir, templates
+from .. import ir
 from ..diagnostics import AmilError, Diagnostic, Span
-from ..runtime import Extending
-from ..syntax import deep_enough
+from ..library import templates
+from ..library.runtime import Extending
+from ..parse.syntax import deep_enough
 from .emit import Emitter
 from .pytree import assert_closed, namespace
 
@@ -32,7 +33,7 @@ _CODE_LIMIT = 4096
 def evaluate_constant(model: ir.Model, expr, constants: dict[str, float], tables,
                       span: Span) -> float:
     """Evaluate an expression of constants (INITIAL, initial conditions)."""
-    from .. import syntax as syn
+    from ..parse import syntax as syn
     from .pytree import parameter
 
     if type(expr) is syn.Num:  # (most initial conditions: no code to make)
@@ -139,7 +140,7 @@ def parameter_names(model: ir.Model) -> frozenset[str]:
     or --set changes those, and the same code serves every run (`Compiler.bind`);
     CONST values, TIMER values and what INITIAL computes from them alone are the
     true constants, folded into the code."""
-    from .. import syntax as syn
+    from ..parse import syntax as syn
 
     names = {n for n in model.data_names if model.data_kinds.get(n) != "CONST"}
     for eq in model.initial:  # in sorted order: what an equation reads comes first

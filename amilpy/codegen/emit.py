@@ -19,12 +19,12 @@ from dataclasses import dataclass
 from itertools import count
 
 from .. import ir
-from .. import syntax as syn
 from ..diagnostics import Span
 from ..library import Func, Kind, lookup, runtime_name
-from ..runtime import Extending, safe_pow
-from ..syntax import Visitor
-from ..templates import ARGUMENTS, argument_uses, tree
+from ..library.runtime import Extending, safe_pow
+from ..library.templates import ARGUMENTS, argument_uses, tree
+from ..parse import syntax as syn
+from ..parse.syntax import Visitor
 from .pytree import const_value, local, number, parameter, user_function
 
 _PYOPS = {"+": py.Add, "-": py.Sub, "*": py.Mult, "/": py.Div}

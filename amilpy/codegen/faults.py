@@ -18,9 +18,9 @@ from dataclasses import dataclass
 
 from .. import ir
 from ..diagnostics import Span
-from ..runtime import HelperFault
-from ..syntax import deep_enough
-from ..unparse import expr_text
+from ..library.runtime import HelperFault
+from ..parse.syntax import deep_enough
+from ..parse.unparse import expr_text
 
 # the key under which generated code's globals hold its statement table (a name
 # generated code never reads: it reads only the compiler's names)

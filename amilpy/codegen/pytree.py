@@ -11,8 +11,8 @@ from collections.abc import Callable
 from functools import lru_cache
 
 from ..library import generation, math_functions
-from ..runtime import HELPERS, safe_pow
-from ..syntax import deep_enough
+from ..library.runtime import HELPERS, safe_pow
+from ..parse.syntax import deep_enough
 
 # the arguments of every generated function; with the v_/h_ locals of model
 # names, the mN/nN/zN/wN locals and the _NAME callables, all generated code reads

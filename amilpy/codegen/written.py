@@ -148,7 +148,7 @@ def compile_code(model: ir.Model, name_: str, codes, constants: dict[str, float]
     ACSL form's INITIAL (`name_(t, y, m, z, ev)` -> values of the names it assigns,
     then of `starts`' names), or a FUNCTION (`name_(*params)` -> its result). Names
     the code assigns or reads that are not constants start at `starts` or 0."""
-    from ..syntax import walk
+    from ..parse.syntax import walk
     from .faults import STATEMENTS, Statement
     from .pytree import fold, function, namespace, place
 
@@ -192,7 +192,7 @@ def compile_code(model: ir.Model, name_: str, codes, constants: dict[str, float]
 
 
 def syntax_name():
-    from ..syntax import Name
+    from ..parse.syntax import Name
 
     return Name
 

@@ -145,7 +145,7 @@ def _kernel_module() -> ModuleType:
     try:
         from . import kernel
     except Exception:  # noqa: BLE001 - whatever a damaged pickle raises
-        from .. import surfaces  # (the leaving rule, compiled with the kernel)
+        from ..library import surfaces  # (the leaving rule, compiled with the kernel)
 
         for part in ("kernel.py", "dop853.py"):
             _forget_cache(Path(__file__).with_name(part))

@@ -28,7 +28,7 @@ import math
 import numpy as np
 from numba import types
 
-from ..surfaces import DOWN, REPELS, UP, leaving
+from ..library.surfaces import DOWN, REPELS, UP, leaving
 from .dop853 import (  # noqa: F401 - first_step, MODEL: the entry points callers take
     _B,
     _F8,

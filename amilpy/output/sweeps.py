@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from collections.abc import Iterator, Sequence
 
-from ..sweep import SIDE, Sweep
+from ..batch.sweep import SIDE, Sweep
 from . import words as W
 from .plot import literal_text, save_figure
 

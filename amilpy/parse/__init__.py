@@ -12,15 +12,15 @@ from __future__ import annotations
 from functools import lru_cache
 from importlib import resources
 
-from .. import syntax as ast
 from ..diagnostics import AmilError, Diagnostic, Span
 from ..language import ACSL_HEADS, split_lines
-from ..syntax import MAX_DEPTH, no_collection
+from . import syntax as ast
 from .blocks import Nester
 from .build import Builder
 from .errors import syntax_diagnostic
 from .lexical import blank_comment_lines, code_end, continues, prepare
 from .macros import expand, in_macros
+from .syntax import MAX_DEPTH, no_collection
 
 __all__ = ["MAX_DEPTH", "MAX_ERRORS", "blank_comment_lines", "parse"]
 

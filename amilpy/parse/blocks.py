@@ -13,8 +13,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .. import syntax as ast
 from ..diagnostics import Diagnostic, Span
+from . import syntax as ast
 
 # what opens a block, as a reader calls it
 _NAMES = {"IF": "IF", "FOR": "FOR loop", "DO": "DO loop", "PROCEDURAL": "PROCEDURAL",

@@ -7,7 +7,6 @@ without recursion; one nested deeper than `syntax.MAX_DEPTH` is a located error
 
 from __future__ import annotations
 
-from .. import syntax as ast
 from ..diagnostics import AmilError, Diagnostic, Span
 from ..language import (
     DATA_KEYWORDS,
@@ -18,8 +17,9 @@ from ..language import (
     fortran_float,
     split_lines,
 )
-from ..syntax import MAX_DEPTH
+from . import syntax as ast
 from .blocks import Close, ElseHead, Head
+from .syntax import MAX_DEPTH
 
 # -------------------------------------------------------------- tree -> syntax
 

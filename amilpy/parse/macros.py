@@ -19,8 +19,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from .. import syntax as ast
 from ..diagnostics import Diagnostic
+from . import syntax as ast
 
 MAX_EXPANSIONS = 10_000  # statements a listing's MACRO calls may expand to
 

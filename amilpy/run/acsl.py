@@ -30,9 +30,9 @@ from ..codegen.written import SCHEDULE, compile_code
 from ..diagnostics import AmilError, Diagnostic
 from ..language import MAX_INTERVALS
 from ..outcome import Failure
+from ..parse.syntax import no_collection
 from ..result import Event, EventKind
 from ..routes import IALG_METHODS, route_for
-from ..syntax import no_collection
 from . import steppoint
 from .loop import Cursor, Stop
 from .plan import (

@@ -22,7 +22,7 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from ..surfaces import sign
+from ..library.surfaces import sign
 from .watch import SurfaceWatch
 
 COARSE = 1e-7  # the first pass stops within this share of the step (before a window)

@@ -19,9 +19,9 @@ from .. import ir
 from ..codegen import Compiled
 from ..diagnostics import AmilError, Diagnostic
 from ..language import START_KEY
+from ..library.surfaces import linear_gradient, sign
 from ..result import EventKind
 from ..routes import DEFAULT, Route, StepPointError, route_for, step_point_mode
-from ..surfaces import linear_gradient, sign
 
 # RELERR and ABSERR when a listing sets none (RELERR/ABSERR, ACSL's MERROR/XERROR):
 # tight enough that every digit of the printout (7 significant) is right. Measured

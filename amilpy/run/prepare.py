@@ -27,8 +27,8 @@ from ..codegen import (
 )
 from ..diagnostics import AmilError, Diagnostic, Span
 from ..language import SEED_NAME
-from ..surfaces import level, sign
-from ..syntax import no_collection
+from ..library.surfaces import level, sign
+from ..parse.syntax import no_collection
 from . import steppoint
 from .plan import (
     Options,
@@ -116,10 +116,10 @@ def constant_modes(model: ir.Model, constants: dict[str, float], tables,
 def with_weather(model: ir.Model, spec: ir.RunSpec, timer: dict[str, float], opts: Options,
                  cache: Cache) -> ir.RunSpec:
     """The run's spec with a day table per weather name the model reads, over the
-    run's days, from the CABO files (FST's WEATHER; `weather.py` finds and reads them,
+    run's days, from the CABO files (FST's WEATHER; `library/weather.py` finds and reads them,
     and says where it looked when a file is not there)."""
     from ..library import WEATHER_TABLE
-    from ..weather import Weather
+    from ..library.weather import Weather
 
     t0 = start_time(spec, opts)
     t1 = t0 + timer["FINTIM"] + timer["DELT"]  # a step-point run may pass FINTIM

@@ -17,9 +17,9 @@ import numpy as np
 from .. import interrupts, ir
 from ..codegen import Compiled, evaluate_constant
 from ..diagnostics import AmilError
+from ..library.runtime import table_warnings
 from ..outcome import Failure, message
 from ..result import Event, EventKind, Run, Status
-from ..runtime import table_warnings
 from .faults import Fault, fault_text
 from .loop import Cursor, Integrator, Stop
 from .peaks import Context, locate_range

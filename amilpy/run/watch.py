@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..codegen import Compiled
-from ..surfaces import DOWN, REPELS, SLIDES, STILL, UP, leaving, sign
+from ..library.surfaces import DOWN, REPELS, SLIDES, STILL, UP, leaving, sign
 from .plan import SLIDE, Purpose, RunPlan, SurfaceKind
 from .slide import MAX_SLIDING, combine, corner_modes, slide_weights
 

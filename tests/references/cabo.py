@@ -1,4 +1,4 @@
-"""CABO weather files read in a few lines, apart from amilpy.weather: the tests'
+"""CABO weather files read in a few lines, apart from amilpy.library.weather: the tests'
 recurrences take the day's values from here."""
 
 from __future__ import annotations

@@ -9,8 +9,8 @@ import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
+from ...parse.unparse import expr_text
 from ...result import Run
-from ...unparse import expr_text
 from .. import tables as T
 from .. import words as W
 from ..printout import method_text, printer_plots

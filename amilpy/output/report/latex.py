@@ -167,7 +167,7 @@ _MARK = "\\ensuremath{\\hookrightarrow}"
 def code(b: Code, out: TextIO) -> None:
     """A listing (numbered, highlighted where Pygments is installed) or equations,
     `CODE_CHARS` wide: a longer line goes on in the next row, marked."""
-    from ...highlight import latex_pieces
+    from ..highlight import latex_pieces
 
     if b.kind == "plot":
         verbatim(b.lines, out)
@@ -186,7 +186,7 @@ def code(b: Code, out: TextIO) -> None:
 
 
 def body(doc: Document, out_dir: str, out: TextIO) -> None:
-    from ...highlight import style_defs
+    from ..highlight import style_defs
 
     out.write(f"% amilpy report: {tex(doc.title)}\n"
               f"% needs \\usepackage{{{','.join(PACKAGES)}}}\n")

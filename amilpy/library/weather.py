@@ -24,7 +24,7 @@ import math
 import os
 from dataclasses import dataclass, field
 
-from .diagnostics import AmilError, Diagnostic, Span
+from ..diagnostics import AmilError, Diagnostic, Span
 
 # the daily columns of a CABO row after station, year and day, as the listing names them
 DAILY = ("RDD", "TMMN", "TMMX", "VP", "WN", "RAIN")

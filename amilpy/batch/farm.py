@@ -26,10 +26,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import interrupts, ir
-from .diagnostics import AmilError
-from .outcome import was_interrupted
-from .result import Run
+from .. import interrupts, ir
+from ..diagnostics import AmilError
+from ..outcome import was_interrupted
+from ..result import Run
 
 # per worker process: token -> (model, its Cache)
 _MODELS: dict[str, tuple[ir.Model, object]] = {}
@@ -82,7 +82,7 @@ def farm(model: ir.Model, tasks: list[Task], jobs: int = 1, scheduler: str | Non
         return _on_dask(model, tasks, scheduler, done)
     if jobs <= 1 or len(tasks) <= 1:
         if cache is None:
-            from .run import Cache
+            from ..run import Cache
 
             cache = Cache()
         out = []
@@ -119,7 +119,7 @@ def _install(token: str, blob: bytes, ignore_interrupt: bool = False) -> None:
         if hasattr(signal, "pthread_sigmask"):
             signal.pthread_sigmask(signal.SIG_UNBLOCK, _starting_signals())
     if token not in _MODELS:
-        from .run import Cache
+        from ..run import Cache
 
         _MODELS[token] = (pickle.loads(blob), Cache())  # noqa: S301 - our own pickle
 
@@ -141,7 +141,7 @@ def execute(token: str, task: Task) -> Outcome:
 
 
 def _execute(model: ir.Model, cache, task: Task) -> Outcome:
-    from .run import simulate
+    from ..run import simulate
 
     try:
         run = simulate(model, task.spec, task.options, cache)
@@ -316,7 +316,7 @@ def run_tasks(model: ir.Model, specs: list[ir.RunSpec], options, jobs: int,
 
 def failed_run(spec: ir.RunSpec, method: str, message: str) -> Run:
     """A run that could not start (a fault in its data): no rows, its message."""
-    from .result import Status
+    from ..result import Status
 
     empty = np.empty(0)
     return Run(label=spec.label, params=dict(spec.data), constants={}, times=empty,

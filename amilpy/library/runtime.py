@@ -142,7 +142,7 @@ def weather_day(table: DayTable, x: float) -> float:
 
 def impl_fail(name: str, t: float, residual: float) -> None:
     """IMPL's loop did not converge (contract section 13): a fault naming Y."""
-    from .ir import IMPL_ITERATIONS
+    from ..ir import IMPL_ITERATIONS
 
     raise ArithmeticError(f"IMPL for {name} did not converge in {IMPL_ITERATIONS} iterations "
                           f"at TIME = {t:.9g}: |FOFY - {name}| = {abs(residual):.3g}")
@@ -503,7 +503,7 @@ def _any(*v) -> bool:
 def loop_count(start: float, stop: float, step: float) -> int:
     """How many times FOR/DO i = start, stop, step runs (Fortran's trip count), at
     most language.MAX_LOOP."""
-    from .language import MAX_LOOP
+    from ..language import MAX_LOOP
 
     if step == 0.0:
         raise ValueError("a FOR/DO loop with step 0")

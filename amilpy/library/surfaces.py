@@ -16,9 +16,9 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from . import ir
-from . import syntax as syn
-from .syntax import Visitor, deep_enough
+from .. import ir
+from ..parse import syntax as syn
+from ..parse.syntax import Visitor, deep_enough
 
 
 def sign(x: float) -> float:

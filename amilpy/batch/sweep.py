@@ -13,10 +13,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .diagnostics import AmilError, UsageError, with_hint
-from .language import fortran_float
-from .progress import report
-from .result import Run
+from ..diagnostics import AmilError, UsageError, with_hint
+from ..language import fortran_float
+from ..progress import report
+from ..result import Run
 
 
 @dataclass(frozen=True)
@@ -235,9 +235,9 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
     `progress` (`amilpy.progress`) is given a Report after each point (task "sweep")
     and during each run (task "run"; runs in this process only). Points that do not carry the
     state are independent: `jobs` worker processes or a Dask `scheduler` run them
-    (see `amilpy.farm`), in any order, the result in the points' order. `grid`:
+    (see `amilpy.batch.farm`), in any order, the result in the points' order. `grid`:
     (name, values) of a second data value: every pair of values is a point."""
-    from .run import Options
+    from ..run import Options
 
     name = name.upper()
     for n in [name] + ([grid[0].upper()] if grid else []):
@@ -309,8 +309,8 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
 def _carried(model, result: Sweep, sequence, options, params, keep_runs: bool,
              progress) -> None:
     """One point after the other, each from the previous one's final state."""
+    from ..run import simulate
     from .farm import extent, unsteadiness
-    from .run import simulate
 
     start = None
     for i, (value, direction, _) in enumerate(sequence):

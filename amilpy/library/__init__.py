@@ -50,8 +50,8 @@ from enum import Enum
 from functools import cache
 from typing import Any
 
+from ..ir import SurfaceKind
 from . import runtime as rt
-from .ir import SurfaceKind
 from .templates import check_template
 
 

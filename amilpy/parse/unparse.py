@@ -8,9 +8,9 @@ equations with this; surfaces carry their text for events and messages.
 
 from __future__ import annotations
 
-from . import ir
+from .. import ir
+from ..library import WEATHER_HOLD
 from . import syntax as syn
-from .library import WEATHER_HOLD
 from .syntax import Visitor, deep_enough
 
 _PREC = {"EQV": 1, "NEQV": 1, "OR": 2, "AND": 3, "<": 5, "<=": 5, ">": 5, ">=": 5, "==": 5,

@@ -21,7 +21,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-from .diagnostics import Span
+from ..diagnostics import Span
 
 # every node class, by name: what a visit_X method may name
 NODES: dict[str, type[Node]] = {}

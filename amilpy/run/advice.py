@@ -16,10 +16,10 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from . import ir
-from .result import Run
-from .routes import route_for
-from .run import Cache, Options, simulate
+from .. import ir
+from ..result import Run
+from ..routes import route_for
+from . import Cache, Options, simulate
 
 EXPENSIVE = 5_000  # right-hand-side evaluations before a probe is worth it
 SLOW = 1.0  # seconds of wall-clock time a run must have taken before a probe

@@ -15,8 +15,8 @@ import ast as py
 import copy
 from functools import cache
 
-from . import syntax
-from .diagnostics import Span
+from ..diagnostics import Span
+from ..parse import syntax
 
 ARGUMENTS = "ABCDEFGH"
 # placeholders whose meaning does not depend on the function

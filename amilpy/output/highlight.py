@@ -3,7 +3,7 @@
 Pygments is optional. It is imported only here, so the rest of amilpy never
 needs it; `highlight_listing` falls back to unhighlighted text without it.
 The lexer is registered for `pygmentize`, Sphinx and Jupyter through the
-`pygments.lexers` entry point (`amil = "amilpy.highlight:AmilLexer"`).
+`pygments.lexers` entry point (`amil = "amilpy.output.highlight:AmilLexer"`).
 
 The token rules follow grammar/amil.lark and amilpy/parse/; the function and
 reserved names are read from amilpy.library and amilpy.language at import, so the
@@ -18,7 +18,7 @@ import html
 import re
 from typing import Any
 
-# Absolute imports: `pygmentize -x -l amilpy/highlight.py:AmilLexer` runs this
+# Absolute imports: `pygmentize -x -l amilpy/output/highlight.py:AmilLexer` runs this
 # file outside its package, where relative imports fail.
 from amilpy.language import RESERVED, STATEMENT_KEYWORDS
 from amilpy.library import callable_names
