@@ -28,7 +28,7 @@ if TYPE_CHECKING:
 
 class Model:
     """A checked listing, ready to run any number of times. It keeps what its runs
-    share (compiled functions, INITIAL values, output grids) in `cache`."""
+    share (generated functions, INITIAL values, output grids) in `cache`."""
 
     def __init__(self, model: ir.Model) -> None:
         self.ir = model
@@ -67,9 +67,9 @@ class Model:
         if self.ir.acsl is not None:
             from .run.acsl import prepare_acsl
 
-            return prepare_acsl(self.ir, spec, cache=self.cache).compiled.source
+            return prepare_acsl(self.ir, spec, cache=self.cache).code.source
         opts = Options(weather_dirs=_folders(weather_dir))
-        return prepare(self.ir, spec, opts, cache=self.cache).compiled.source
+        return prepare(self.ir, spec, opts, cache=self.cache).code.source
 
     def flow(self, method: str | None = None, rtol: float | None = None,
              atol: float | None = None, run: int = 0, **params: float) -> Flow:

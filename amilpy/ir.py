@@ -416,7 +416,7 @@ class Model:
     # TERMT/FINISH surfaces whose condition holds at zero too (T >= TSTOP): where a
     # step point lands exactly on it (step-point mode), the run stops there
     closed: set[int] = field(default_factory=set)
-    # compiled functions per set of constants: repeated runs do not recompile
+    # generated functions per set of constants: repeated runs do not recompile
     compiled: dict = field(default_factory=dict, repr=False, compare=False)
     # INITIAL values per set of data, output grids per timer: likewise
     memo: dict = field(default_factory=dict, repr=False, compare=False)

@@ -48,7 +48,7 @@ ROUTES: tuple[Route, ...] = (
     Route("DOP853", ("DOP853",), False, True, "scipy", "DOP853",
           "variable-step Dormand-Prince 8(5,3)", stability_limit=6.1),
     # the same pair compiled with the model by numba (the [fast] extra; without it, or
-    # for a model with no compiled form, it runs as DOP853): amilpy.compiled
+    # for a model with no compiled form, it runs as DOP853): amilpy.code
     Route("COMPILED", ("COMPILED", "DOP853C"), False, True, "compiled", "DOP853",
           "DOP853 compiled with the model by numba (pip install 'amilpy[fast]')",
           stability_limit=6.1),

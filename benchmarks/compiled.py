@@ -53,7 +53,7 @@ import amilpy
 from amilpy.run import prepare
 from amilpy.compiled import kernel_for
 m = amilpy.load(sys.argv[1])
-c = prepare(m.ir, m.ir.runs[0]).compiled
+c = prepare(m.ir, m.ir.runs[0]).code
 t3 = time.perf_counter()
 k = kernel_for(c)
 t4 = time.perf_counter()

@@ -160,7 +160,7 @@ def _model(case, rtol, atol):
 
     model = amilpy.loads(case.text, case.name)
     p = prepare(model.ir, model.ir.runs[0], Options(rtol=rtol, atol=atol), model.cache)
-    c, plan = p.compiled, p.plan
+    c, plan = p.code, p.plan
     m = [1.0] * len(plan.watched)
     z = list(c.z0)
     return c, plan, m, z

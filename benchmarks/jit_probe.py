@@ -48,7 +48,7 @@ def main(path: str | None = None) -> None:
     path = path or os.path.join(ROOT, "models", "ex4_torque_meter.amil")
     model = amilpy.load(path)
     prepared = prepare(model.ir, model.ir.runs[0])
-    compiled = prepared.compiled
+    compiled = prepared.code
     source = compiled.source.split("def surf")[0]
     # the same function returning an array, for numba (compiler text, not model text)
     head, ret = source.rsplit("return [", 1)

@@ -4,7 +4,7 @@
 
 For each case:
 
-* ``rhs raw``: amilpy's generated ``rhs(t, ylist, modes, z)`` (``run.prepare(...).compiled.rhs``)
+* ``rhs raw``: amilpy's generated ``rhs(t, ylist, modes, z)`` (``run.prepare(...).code.rhs``)
   against the hand-written ``f(t, ylist)``, both on Python floats;
 * ``rhs as solver sees it``: the function a stepper calls with a NumPy array: amilpy's
   ``run.Flow.field(state)`` (``y.tolist()`` + try/except, as the run loop builds it) against
@@ -75,7 +75,7 @@ def measure(case, number: int = 20000, n_steps: int = 300) -> dict:
 
     model = amilpy.loads(case.text, case.name)
     flow = Flow(model.ir, model.ir.runs[0])
-    c = flow.compiled
+    c = flow.code
     t, named = _sample_state(case)
     ylist = [named[n] for n in c.state_names]
     yarr = np.array(ylist)

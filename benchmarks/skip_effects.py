@@ -108,7 +108,7 @@ def effect_a(repeats: int) -> tuple[list[str], dict]:
         res[method] = (t_all, t_few)
     src = m.python_source()
     rhs, out = _fn_source(src, "rhs"), _fn_source(src, "out")
-    few = prepare(m.ir, m.ir.runs[0], Options(outputs=["X"])).compiled
+    few = prepare(m.ir, m.ir.runs[0], Options(outputs=["X"])).code
     out_few = _fn_source(few.source, "out")
     lines = [f"### (a) unneeded equations: oscillator + {N_ALG} algebraic outputs "
              "(A0 .. A{N-1}, each SIN/EXP of the previous)", "",
@@ -134,7 +134,7 @@ def effect_b() -> tuple[list[str], list]:
         m.run()
         for method in ("AUTO", "RKS", "RADAU"):
             calls = [0]
-            for c in [prepare(m.ir, spec, cache=m.cache).compiled for spec in m.ir.runs]:
+            for c in [prepare(m.ir, spec, cache=m.cache).code for spec in m.ir.runs]:
                 if not getattr(c.out, "_counted", False):
                     orig = c.out
 
@@ -175,7 +175,7 @@ def effect_c(repeats: int) -> tuple[list[str], list]:
                         repeats)
             err = float(np.max(np.abs(r["X"] - _switch_exact(r.t))))
             kinds = sorted({e.kind for e in r.events})
-            rows.append((label, method, len(m.ir.surfaces), len(prepared.compiled.watched),
+            rows.append((label, method, len(m.ir.surfaces), len(prepared.code.watched),
                          sum(w.breakpoint_only for w in prepared.plan.watched), len(r.events),
                          ",".join(kinds),
                          r.stats["nsteps"], r.stats["nfev"], t * 1e3, err))
@@ -199,7 +199,7 @@ def effect_d() -> tuple[list[str], dict]:
     from amilpy.run import Cache, prepare
 
     m = amilpy.load(os.path.join(ROOT, "models", "ex4_clutch.amil"))
-    compiled = prepare(m.ir, m.ir.runs[0]).compiled
+    compiled = prepare(m.ir, m.ir.runs[0]).code
     rhs_src = _fn_source(compiled.source, "rhs")
     params = {k: v for k, v in compiled.namespace.items() if k.startswith("p_")}
     # the same function with every parameter's value folded in, as builds before did

@@ -472,7 +472,7 @@ def markdown(rows, summary, firsts, refs=(), probes=(), load: str = "") -> str:
             f"{_g(s['best_amilpy_s'] * 1e3)} | {_g(s['min_err_hand'], '{:.1e}')} | "
             f"{_g(s['min_err_auto'], '{:.1e}')} |")
     if any(math.isfinite(x.get("ceiling", math.nan)) for x in summary):
-        lines += ["", "Compiled ceiling (hand-written RHS and integrator compiled by numba, "
+        lines += ["", "ModelCode ceiling (hand-written RHS and integrator compiled by numba, "
                   "see ceiling.py): time to reach the level and AUTO / ceiling; the faster "
                   "of its two drivers: rows from the dense output (numba) or steps ending "
                   "on the output points (numba_land)", "",

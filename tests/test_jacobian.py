@@ -25,7 +25,7 @@ SHIPPED = ["ex4_elastic", "ex4_clutch", "ex4_torque_meter", "hoist_backlash",
 def _compiled(text_or_path):
     model = amilpy.load(text_or_path) if text_or_path.endswith(".amil") else \
         amilpy.loads(text_or_path)
-    return prepare(model.ir, model.ir.runs[0]).compiled
+    return prepare(model.ir, model.ir.runs[0]).code
 
 
 @pytest.mark.parametrize("name", SHIPPED)

@@ -113,7 +113,7 @@ TERMT(X > 2.0 .AND. ABS(Y) > 3.0)
 TIMER FINTIM = 2.0, OUTDEL = 0.1
 END
 """, name="v.amil")
-    c = prepare(model.ir, model.ir.runs[0]).compiled
+    c = prepare(model.ir, model.ir.runs[0]).code
     t = np.linspace(0.0, 2.0, 41)
     cols = [-1.3 + 1.0 * t, 0.4 - 1.3 * t + 0.5 * t * t]
     m = c.modes_literal(0.7, [col[14] for col in cols], [0.0] * len(c.watched), [])

@@ -72,7 +72,7 @@ def test_generated_functions_have_no_builtins():
     from amilpy.run import prepare
 
     m = amilpy.loads("X = INTGRL(1.0, -X)\nTIMER FINTIM = 1.0\nEND\n")
-    compiled = prepare(m.ir, m.ir.runs[0]).compiled
+    compiled = prepare(m.ir, m.ir.runs[0]).code
     assert compiled.rhs.__globals__["__builtins__"] == {}
 
 

@@ -60,7 +60,7 @@ class Tracker:
         self.names = names
         states = flow.state_names
         self.state_idx = {n: states.index(n) for n in names if n in states}
-        outs = flow.compiled.out_names
+        outs = flow.code.out_names
         self.out_idx = {n: outs.index(n) for n in names if n not in self.state_idx}
         self.integral = np.zeros(len(names))
         self.steps: list[tuple] = []  # (nodes, values, interpolant, modes, memory)
@@ -69,7 +69,7 @@ class Tracker:
         """Rows: the variables; columns: the instants t (y: states x instants)."""
         out = np.empty((len(self.names), len(t)))
         if self.out_idx:
-            c, watch = self.flow.compiled, self.flow.watch
+            c, watch = self.flow.code, self.flow.watch
             if SLIDE in m:
                 table = np.array([watch.outputs(float(ti), y[:, i], m, z)
                                   for i, ti in enumerate(t)]).T

@@ -99,7 +99,7 @@ def constant(text: str, flow: Flow, what: str, extra: dict[str, float] | None = 
     expr = getattr(statement, "expr", None)
     if expr is None:
         raise AmilError(f"{what} {text!r} is not an expression")
-    known = {**flow.compiled.constants, **(extra or {})}
+    known = {**flow.code.constants, **(extra or {})}
     for node in ast.walk(expr):
         if isinstance(node, ast.Name) and node.name not in known:
             raise AmilError(with_hint(f"{what} {text!r}: {node.name} is not a constant of "

@@ -5,7 +5,7 @@ does not carry its state, and the points of a parameter grid do not depend on ea
 other. `farm` hands them to worker processes on this machine (`jobs`) or to a Dask
 distributed cluster (`scheduler`, the optional extra `amilpy[cluster]`). Each worker
 gets the checked model once (pickled with the pool's initializer; scattered to
-every Dask worker once) and keeps its compiled functions between tasks, so a worker
+every Dask worker once) and keeps its generated functions between tasks, so a worker
 compiles a model once per set of constants, as a serial run would.
 
 Results come back in the order of the tasks, whatever order they finish in. A task

@@ -15,20 +15,20 @@ Functions made for one run (all take plain lists of floats):
                                the step was taken with, mn: the modes from now on)
 
 Modules: `emit` (IR expressions -> Python expressions), `build` (the functions,
-`Compiler` and `Compiled`), `consts` (values known before the run), `faults`
+`Compiler` and `ModelCode`), `consts` (values known before the run), `faults`
 (where a fault happened and what it was), `pytree` (helpers on Python trees).
 """
 
 from __future__ import annotations
 
 from .build import Compiler
-from .compiled import Compiled, fault_line
 from .consts import evaluate_constant, initial_values, parameter_names
 from .emit import Setting
 from .faults import FaultReport
+from .modelcode import ModelCode, fault_line
 from .pytree import namespace
 
 NAMESPACE = namespace()  # as the library stands at import (benchmarks read it)
 
-__all__ = ["Compiled", "Compiler", "FaultReport", "NAMESPACE", "Setting", "evaluate_constant",
+__all__ = ["ModelCode", "Compiler", "FaultReport", "NAMESPACE", "Setting", "evaluate_constant",
            "fault_line", "initial_values", "namespace", "parameter_names"]

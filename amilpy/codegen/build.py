@@ -2,7 +2,7 @@
 
 Every statement of the generated code (an algebraic equation, a state's
 derivative, a surface, a memory update) gets its own line in the code object;
-`Compiled.statements` maps the line back to the IR statement, its target and its
+`ModelCode.statements` maps the line back to the IR statement, its target and its
 span, so a fault is located from the code's own line table (see `faults`).
 """
 
@@ -21,10 +21,10 @@ from ..library.surfaces import constant_value, is_affine
 from ..library.templates import instantiate
 from ..parse import syntax as syn
 from ..parse.syntax import deep_enough, no_collection
-from .compiled import Compiled
 from .consts import evaluate_constant, initial_slots
 from .emit import Emitter, Setting, needs, needs_memories, printed_only_surfaces
 from .faults import STATEMENTS, Statement
+from .modelcode import ModelCode
 from .pytree import (
     fold,
     function,
@@ -93,7 +93,7 @@ def by_rows(fn: Callable) -> Callable:
 
 
 class Compiler:
-    """Builds the `Compiled` functions of one run from the IR and its constants."""
+    """Builds the `ModelCode` functions of one run from the IR and its constants."""
 
     def __init__(self, model: ir.Model, constants: dict[str, float], tables,
                  const_modes: dict[int, float], outputs: list[str] | None = None,
@@ -450,7 +450,7 @@ class Compiler:
 
     @deep_enough()
     @no_collection()
-    def build(self) -> Compiled:
+    def build(self) -> ModelCode:
         try:
             return self._build()
         except RecursionError:
@@ -462,7 +462,7 @@ class Compiler:
                 "split it into several assignments")], self.model.path,
                 self.model.source) from None
 
-    def _build(self) -> Compiled:
+    def _build(self) -> ModelCode:
         model = self.model
         self.check_arguments()
         out_names = self.outputs if self.outputs is not None else model.variables
@@ -493,7 +493,7 @@ class Compiler:
             self._source = py.unparse(self.module)
         return self._source
 
-    def bind(self, constants: dict[str, float]) -> Compiled:
+    def bind(self, constants: dict[str, float]) -> ModelCode:
         """The built code for one run's constants: executed with its parameters' values
         (cheap: it defines the functions), and the values that depend on them."""
         model = self.model
@@ -516,7 +516,7 @@ class Compiler:
         seen = frozenset().union(*(
             memory_read(fn, sum(m.nslots for m in model.memories), list(self.kept))
             for fn in self.module.body[:2]))  # rhs and surf
-        return Compiled(
+        return ModelCode(
             state_names=[s.name for s in model.states],
             y0=[binder.constant(s.ic, s.span) for s in model.states],
             z0=[v for mem, func in zip(model.memories, self.entries, strict=True)

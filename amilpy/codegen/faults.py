@@ -214,7 +214,7 @@ _SCALAR = {"surf_vec": "surf", "out_vec": "out"}
 @deep_enough()
 def explain(compiled, exc: BaseException, t: float, y, m, z) -> FaultReport | None:
     """The statement that raised `exc` and the operation that failed (see
-    `Compiled.explain_fault`)."""
+    `ModelCode.explain_fault`)."""
     found = statement_of(exc)
     if found is None or found[2] is not compiled.statements:
         return None

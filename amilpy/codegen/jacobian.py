@@ -1,7 +1,7 @@
 """The Jacobian of the frozen-branch vector field, by differentiating the generated
 `rhs` (issue 14.3).
 
-The compiled `rhs` is straight-line code on floats: the states unpacked, one
+The generated `rhs` is straight-line code on floats: the states unpacked, one
 assignment per algebraic equation, the derivatives returned. Forward
 differentiation of that tree gives, for every assignment v and every state j that
 v depends on (the dependency graph: the sparsity), a local `d<j>_v` holding
@@ -237,7 +237,7 @@ class _Deriv:
 
 @dataclass
 class ModelJacobian:
-    """d rhs / d y of one run's compiled functions, with its sparsity.
+    """d rhs / d y of one run's generated functions, with its sparsity.
 
     `rows`, `cols`: the structurally nonzero entries (the dependency graph);
     `constant`: the values of those that are constants (NaN where the generated
@@ -296,7 +296,7 @@ class ModelJacobian:
 
 def build(module: py.Module, n: int, tables: dict | None = None,
           values: dict | None = None) -> ModelJacobian:
-    """The Jacobian of the `rhs` function in a compiled module (`Compiled.module`);
+    """The Jacobian of the `rhs` function in a generated module (`ModelCode.module`);
     `values`: the parameters' globals (p_NAME) it reads."""
     return bind(code(module, n), tables, values)
 
@@ -372,7 +372,7 @@ def code(module: py.Module, n: int) -> tuple:
 
 
 def for_compiled(c) -> ModelJacobian:
-    """The Jacobian of a run's compiled `rhs` (`codegen.Compiled`), built once."""
+    """The Jacobian of a run's generated `rhs` (`codegen.ModelCode`), built once."""
     if "jacobian" not in c.derived:
         if "jacobian" not in c.shared:  # one code for every binding of the module
             c.shared["jacobian"] = code(c.module, len(c.state_names))

@@ -1,11 +1,11 @@
 """The right-hand side of a large model as NumPy operations on groups of alike
 statements (issue 14.3: a chain of 1000 masses).
 
-The compiled `rhs` is one Python statement per equation: about 0.05 us each a
+The generated `rhs` is one Python statement per equation: about 0.05 us each a
 call, cheaper than NumPy for small models and 10-20 times dearer for a model of
 thousands of statements whose equations repeat (the N-mass chain: N - 1 coupling
 forces of one shape, N accelerations of one shape). Here the statements of the
-compiled `rhs` (and its returned derivatives) are grouped by their shape (the
+generated `rhs` (and its returned derivatives) are grouped by their shape (the
 expression with every name and float constant taken out) and by their level in
 the dependency order (a statement comes after everything it reads), and each
 group is evaluated at once on arrays gathered from one value vector: one NumPy
@@ -105,7 +105,7 @@ class _Vector(py.NodeTransformer):
 
 
 def build(module: py.Module, n: int) -> Callable | None:
-    """The rolled right-hand side `rhs(t, y, m, z) -> array` of a compiled module, or
+    """The rolled right-hand side `rhs(t, y, m, z) -> array` of a generated module, or
     None when the model is too small or its statements do not repeat."""
     rhs = next(f for f in module.body if isinstance(f, py.FunctionDef) and f.name == "rhs")
     statements, values = _statements(rhs, n)
@@ -190,7 +190,7 @@ def _statements(rhs: py.FunctionDef, n: int):
 
 
 def for_compiled(c) -> Callable | None:
-    """The rolled right-hand side of a run's compiled functions (`codegen.Compiled`),
+    """The rolled right-hand side of a run's generated functions (`codegen.ModelCode`),
     guarded (see the module docstring), built once; None for a model it does not pay
     for."""
     if "rolled" not in c.derived:

@@ -25,7 +25,7 @@ from types import ModuleType
 
 import numpy as np
 
-from ..codegen import Compiled
+from ..codegen import ModelCode
 
 ENV_CACHE = "AMILPY_CACHE"  # where the compiled models are kept (default ~/.cache/amilpy)
 
@@ -73,7 +73,7 @@ class Kernel:
     loop: ModuleType  # amilpy.compiled.kernel
     parameters: tuple[str, ...]
 
-    def parameter_values(self, c: Compiled) -> np.ndarray:
+    def parameter_values(self, c: ModelCode) -> np.ndarray:
         """The run's parameter values, in the order the compiled code reads them."""
         return np.array([c.namespace[n] for n in self.parameters], dtype=float)
 
@@ -84,7 +84,7 @@ _LOADED: dict[str, Kernel] = {}  # by module key, for this process
 _BY_SOURCE: dict[str, Kernel | str] = {}
 
 
-def kernel_for(c: Compiled) -> Kernel | str:
+def kernel_for(c: ModelCode) -> Kernel | str:
     """The compiled module for `c`'s code (built, or read from the disk cache, once
     per process), or why there is none."""
     kernel = _BY_SOURCE.get(c.source)
@@ -93,7 +93,7 @@ def kernel_for(c: Compiled) -> Kernel | str:
     return kernel
 
 
-def _build(c: Compiled) -> Kernel | str:
+def _build(c: ModelCode) -> Kernel | str:
     if not available():
         return "numba is not installed (pip install 'amilpy[fast]')"
     loop = _kernel_module()

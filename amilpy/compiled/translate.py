@@ -1,6 +1,6 @@
 """A run's generated right-hand side and surfaces, rewritten for numba.
 
-The scalar functions `codegen` builds (`Compiled.module`, a tree the compiler made,
+The scalar functions `codegen` builds (`ModelCode.module`, a tree the compiler made,
 never listing text) become `model_rhs(t, y, m, z, p, out)` and
 `model_surf(t, y, m, z, p, out)`: the states, branches and memory read by index,
 each parameter read from `p` (so a new PARAM value is an argument, not a new
@@ -16,7 +16,7 @@ import copy
 import hashlib
 from dataclasses import dataclass
 
-from ..codegen import Compiled
+from ..codegen import ModelCode
 
 # The run-time helpers (`codegen.pytree.namespace`, as _NAME) the compiled route has.
 # Faults are NaN or an infinity there (numba's NumPy error model), which the kernel's
@@ -183,7 +183,7 @@ def _function(fn: py.FunctionDef, name: str, parameters: dict[str, int]
     return fn, rewrite.globals
 
 
-def translate(c: Compiled) -> Translation:
+def translate(c: ModelCode) -> Translation:
     """The numba module for `c`'s code (raises Unsupported)."""
     if c.module is None:
         raise Unsupported("no scalar functions were generated")

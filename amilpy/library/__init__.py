@@ -105,7 +105,7 @@ class MemorySpec:
     wakes: int | None = None
     # the slot that holds the next instant at which the memory samples the trajectory
     # (DELAY's store): the loop evaluates the `update` templates there, inside each
-    # accepted step, at the state the dense output gives (`Compiled.sample`)
+    # accepted step, at the state the dense output gives (`ModelCode.sample`)
     samples: int | None = None
     # a template over the arguments: how far back the value reads (DELAY's delay);
     # where it is known before the run and the derivatives read the value, no step is

@@ -350,7 +350,7 @@ def impulse_at(t: float, start: float, period: float) -> float:
 # CSMP's DELAY(N, P, X), max(DMIN, TDL/NMX) for ACSL's DELAY(X, IC, TDL, NMX, DMIN)),
 # kept as (t, X) pairs in a ring of K entries, read at t - delay by linear
 # interpolation. The run loop takes every sampling instant inside an accepted step
-# from its dense output (`Compiled.sample`: X at (g, y(g))); a step's end is recorded
+# from its dense output (`ModelCode.sample`: X at (g, y(g))); a step's end is recorded
 # by the memory update after the step, which also fills any instant the loop did not
 # sample (step-point mode) on the straight line from the last point. Slots from `o`:
 #   o: how many samples were taken (0: the store has not started)

@@ -1,6 +1,6 @@
 """Running a checked model: the run as a flow map.
 
-    prepare.py   constants, compiled functions and the plan of one run; the Cache
+    prepare.py   constants, generated functions and the plan of one run; the Cache
     plan.py      RunPlan: route, TIMER values, Tolerances, grid, watched surfaces,
                  breakpoints (plain data, decided once)
     watch.py     SurfaceWatch: branches, crossings located on the dense output,

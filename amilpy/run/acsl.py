@@ -96,7 +96,7 @@ def code_fault(exc: BaseException) -> str:
 
 def prepare_acsl(model: ir.Model, spec: ir.RunSpec, opts: Options | None = None,
                  cache: Cache | None = None) -> AcslPrepared:
-    """Constants, INITIAL, compiled functions and plan of one run of the ACSL form.
+    """Constants, INITIAL, generated functions and plan of one run of the ACSL form.
     A fault in INITIAL or in a value needed before the run is an AmilError there."""
     opts = opts or Options()
     cache = cache or Cache()
@@ -157,13 +157,13 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
     ckey = ("acsl", tuple(sorted(constants.items())), tuple(kept.items()),
             tuple(sorted(priors.items())), repr(sorted(spec.tables.items())),
             tuple(opts.outputs) if opts.outputs is not None else None, opts.events, setting)
-    compiled = cache.get("compiled", ckey, lambda: Compiler(
+    code = cache.get("bound", ckey, lambda: Compiler(
         model, constants, spec.tables, const_modes, opts.outputs, opts.events,
         setting=setting, kept=kept, priors=priors).build())
     t0 = acsl.t0
     # a TERMT on time alone bounds the run: find its instant from a plan reaching far
     far = dict(timer, FINTIM=MAX_INTERVALS * cint)
-    first = make_plan(model, spec, opts, compiled, far, make_grid(t0, t0 + cint, cint, cint),
+    first = make_plan(model, spec, opts, code, far, make_grid(t0, t0 + cint, cint, cint),
                       t0=t0)
     roots = [first.roots[k] for k, w in enumerate(first.watched)
              if w.purpose is Purpose.TERMT and k in first.roots]
@@ -182,10 +182,10 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
                         model.path)
     timer["FINTIM"] = fintim
     grid = steppoint.grid(t0, timer) if step_point else make_grid(t0, t0 + fintim, cint, cint)
-    plan = make_plan(model, spec, opts, compiled, timer, grid, step_point, t0=t0)
+    plan = make_plan(model, spec, opts, code, timer, grid, step_point, t0=t0)
     if unbounded:  # (a hundredth of a run of 100 output intervals: the length is unknown)
         plan = replace(plan, max_step=min(plan.max_step, cint))
-    return AcslPrepared({**constants, **values}, compiled, plan, schedules, stop, unbounded)
+    return AcslPrepared({**constants, **values}, code, plan, schedules, stop, unbounded)
 
 
 def _method(model: ir.Model, spec: ir.RunSpec, opts: Options, constants) -> str | None:

@@ -19,7 +19,7 @@ from functools import partial
 import numpy as np
 
 from .. import interrupts
-from ..codegen import Compiled
+from ..codegen import ModelCode
 from ..compiled.layout import LOOP, PLAIN, QUIET
 from ..outcome import Failure
 from ..steppers import Stepper
@@ -205,7 +205,7 @@ class FastPaths:
         return table
 
 
-def kernel_arguments(kernel, c: Compiled, plan: RunPlan, m, z, plain: bool,
+def kernel_arguments(kernel, c: ModelCode, plan: RunPlan, m, z, plain: bool,
                      follow: bool = True) -> dict:
     """The compiled stepper's arguments for a segment in branches m. `plain`: the
     kernel may locate a crossing and switch itself (nothing else happens there:

@@ -90,7 +90,7 @@ class Flow:
         self.model = model
         self.opts = options or Options()
         prepared = prepare(model, spec, self.opts, cache)
-        self.c, self.plan = prepared.compiled, prepared.plan
+        self.c, self.plan = prepared.code, prepared.plan
         self.watch = SurfaceWatch(self.c, self.plan)
         # monodromy by the variational equations where they apply (else differences)
         self.variational = True
@@ -101,8 +101,8 @@ class Flow:
         self.stiff = False  # a step of an explicit route was limited by stability
 
     @property
-    def compiled(self):
-        """The run's compiled functions (`codegen.Compiled`)."""
+    def code(self):
+        """The run's generated functions (`codegen.ModelCode`)."""
         return self.c
 
     @property

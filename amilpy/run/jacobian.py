@@ -47,7 +47,7 @@ def _column(f, y: list[float], j: int, h: float) -> list[float]:
 
 
 def model_jacobian(c, t: float, y, m, z) -> np.ndarray | None:
-    """d rhs/d y of a run's compiled model (`codegen.Compiled`) at (t, y) in the
+    """d rhs/d y of a run's generated model (`codegen.ModelCode`) at (t, y) in the
     branches m, from its equations; None where it cannot be had there."""
     from ..codegen.jacobian import for_compiled
 

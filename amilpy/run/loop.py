@@ -21,7 +21,7 @@ from bisect import bisect_right
 import numpy as np
 
 from .. import interrupts, ir
-from ..codegen import Compiled
+from ..codegen import ModelCode
 from ..diagnostics import AmilError
 from ..outcome import Failure
 from ..progress import report
@@ -48,7 +48,7 @@ class RunLoop:
     (`Integrator` locates the switching; `steppoint.StepPoint` reads it at the
     step points)."""
 
-    def __init__(self, model: ir.Model, plan: RunPlan, c: Compiled, watch: SurfaceWatch,
+    def __init__(self, model: ir.Model, plan: RunPlan, c: ModelCode, watch: SurfaceWatch,
                  opts: Options, started: float | None = None) -> None:
         self.model, self.plan, self.c, self.watch, self.opts = model, plan, c, watch, opts
         self.started = _clock.perf_counter() if started is None else started
@@ -67,7 +67,7 @@ class RunLoop:
 class Integrator(RunLoop, SegmentStart, StepWatch, Restarts, FastPaths):
     """Integrates one run's model under its plan, switching instants located."""
 
-    def __init__(self, model: ir.Model, plan: RunPlan, c: Compiled, watch: SurfaceWatch,
+    def __init__(self, model: ir.Model, plan: RunPlan, c: ModelCode, watch: SurfaceWatch,
                  opts: Options, started: float | None = None) -> None:
         super().__init__(model, plan, c, watch, opts, started)
         self.faults: list[Fault] = []  # arithmetic faults the integration has not passed
@@ -78,7 +78,7 @@ class Integrator(RunLoop, SegmentStart, StepWatch, Restarts, FastPaths):
         self._iterations = 0
         self.breakpoints, self.roots = plan.breakpoints, plan.roots
         self.check_times = plan.grid.times  # where AUTO looks at the surfaces
-        self._kernel = None  # METHOD COMPILED: the model's compiled module, on first use
+        self._kernel = None  # METHOD COMPILED: the model's generated module, on first use
         self._stop_at_event = False
         self._paused: Paused | None = None
         self._grazing: dict[int, float] = {}  # (`_grazing_bands`)

@@ -32,7 +32,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .. import ir
-from ..codegen import Compiled
+from ..codegen import ModelCode
 from ..steppers import solver_tolerance
 from .fastpaths import kernel_arguments
 from .loop import Cursor, Integrator, Stop
@@ -51,7 +51,7 @@ class Context:
 
     model: ir.Model
     plan: RunPlan
-    c: Compiled
+    c: ModelCode
     watch: SurfaceWatch
     opts: Options
     started: float  # the run's start, for its wall-clock limit

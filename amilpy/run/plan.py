@@ -1,6 +1,6 @@
 """The run plan: everything a run decides before its first step, as plain data.
 
-`make_plan` reads the run spec, the options and the compiled functions once and
+`make_plan` reads the run spec, the options and the generated functions once and
 gives a `RunPlan`: the route, the TIMER values, per-state tolerances
 (`Tolerances`), the output grid, the watched surfaces with their bookkeeping,
 and the breakpoints (roots of surfaces affine in TIME, IMPULS instants). The
@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import ir
-from ..codegen import Compiled
+from ..codegen import ModelCode
 from ..diagnostics import AmilError, Diagnostic
 from ..language import START_KEY
 from ..library.surfaces import linear_gradient, sign
@@ -350,10 +350,10 @@ def resolve_step_point(spec: ir.RunSpec, opts: Options) -> bool:
                                     "or run without --step-point")]) from None
 
 
-def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: Compiled,
+def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: ModelCode,
               timer: dict[str, float], grid: Grid, step_point: bool = False,
               t0: float | None = None) -> RunPlan:
-    """The plan of one run, from its compiled functions (breakpoints need them).
+    """The plan of one run, from its generated functions (breakpoints need them).
     In step-point mode the run ends at the grid's last step point."""
     route, method = resolve_route(spec, opts)
     if t0 is None:
@@ -404,7 +404,7 @@ def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: Compiled,
     )
 
 
-def time_breakpoints(c: Compiled, watched: list[Watched], t0: float, t1: float
+def time_breakpoints(c: ModelCode, watched: list[Watched], t0: float, t1: float
                      ) -> tuple[dict[int, float], list[float]]:
     """The breakpoints in (t0, t1): roots of the surfaces affine in TIME (by watched
     position) and the instants of IMPULS trains, sorted."""
@@ -435,7 +435,7 @@ def train_instants(trains: list[tuple[float, float]], t0: float, t1: float) -> l
     return points
 
 
-def _affine_root(c: Compiled, k: int, t0: float, t1: float) -> float | None:
+def _affine_root(c: ModelCode, k: int, t0: float, t1: float) -> float | None:
     """The first float at which an affine time surface reaches zero in [t0, t1]."""
     y, z, m = list(c.y0), list(c.z0), [0.0] * len(c.watched)
 

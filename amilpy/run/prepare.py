@@ -1,9 +1,9 @@
 """From a checked model and a run spec to what a run needs: the run's constants
-(data, TIMER and INITIAL values), its compiled functions and its plan.
+(data, TIMER and INITIAL values), its generated functions and its plan.
 
-`prepare` is the documented way in for anything that wants a run's compiled
+`prepare` is the documented way in for anything that wants a run's generated
 functions without running it (`--show-python`, benchmarks, tests). A `Cache`
-keeps compiled functions, INITIAL values and grids between the runs of one model;
+keeps generated functions, INITIAL values and grids between the runs of one model;
 `api.Model` owns one, so the IR holds no caches.
 """
 
@@ -17,8 +17,8 @@ from typing import TypeVar
 
 from .. import ir
 from ..codegen import (
-    Compiled,
     Compiler,
+    ModelCode,
     Setting,
     evaluate_constant,
     fault_line,
@@ -47,12 +47,12 @@ T = TypeVar("T")
 
 class Cache:
     """Values a model's runs share, by the data that determines them: INITIAL
-    values per set of data, compiled functions per set of constants (bound to the
+    values per set of data, generated functions per set of constants (bound to the
     code built for its true constants: runs that differ in PARAM values compile
     once, see `codegen.parameter_names`), output grids per timer. Each table is
     cleared when it grows past its limit (a long sweep)."""
 
-    LIMITS = {"initial": 256, "compiled": 64, "code": 64, "grid": 64, "parameters": 4,
+    LIMITS = {"initial": 256, "bound": 64, "code": 64, "grid": 64, "parameters": 4,
               "weather": 16}
 
     def __init__(self) -> None:
@@ -72,13 +72,13 @@ class Prepared:
     """One run, ready to integrate."""
 
     constants: dict[str, float]  # data, TIMER and INITIAL values
-    compiled: Compiled
+    code: ModelCode
     plan: RunPlan
 
 
 def prepare(model: ir.Model, spec: ir.RunSpec, opts: Options | None = None,
             cache: Cache | None = None) -> Prepared:
-    """Constants, compiled functions and plan of one run. A fault while evaluating
+    """Constants, generated functions and plan of one run. A fault while evaluating
     the constant parts (INITIAL, fixed branches, breakpoint instants) is an
     AmilError at the listing's line."""
     opts = opts or Options()
@@ -171,7 +171,7 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
     params = cache.get("parameters", id(model), lambda: parameter_names(model))
     skey = (tuple(sorted((k, v) for k, v in constants.items() if k not in params)),
             tuple(sorted(const_modes.items())), tables, outputs, opts.events, setting)
-    compiled = cache.get("compiled", ckey, lambda: cache.get("code", skey, lambda: Compiler(
+    code = cache.get("bound", ckey, lambda: cache.get("code", skey, lambda: Compiler(
         model, constants, spec.tables, const_modes, opts.outputs, opts.events, setting,
         parameters=params).build()).rebound(constants))
     t0 = start_time(spec, opts)
@@ -183,7 +183,7 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
         raise AmilError([Diagnostic(
             f"the run would print {len(grid.times)} rows (limit {opts.max_rows})",
             None, "raise OUTDEL/PRDEL")], model.path, model.source)
-    return Prepared(constants, compiled, make_plan(model, spec, opts, compiled, timer, grid,
+    return Prepared(constants, code, make_plan(model, spec, opts, code, timer, grid,
                                                    step_point))
 
 

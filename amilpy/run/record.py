@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..codegen import Compiled
+from ..codegen import ModelCode
 from ..language import RESERVED
 from ..result import Event, Run, Status
 from .plan import RunPlan
@@ -326,7 +326,7 @@ def vertices(t: np.ndarray, v: np.ndarray, mid: np.ndarray) -> tuple[np.ndarray,
 class Recorder:
     """The rows of one run, and the `Run` made of them."""
 
-    def __init__(self, plan: RunPlan, c: Compiled, watch: SurfaceWatch,
+    def __init__(self, plan: RunPlan, c: ModelCode, watch: SurfaceWatch,
                  range_names: list[str], range_from: float | None = None) -> None:
         self.plan = plan
         self.c = c

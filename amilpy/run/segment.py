@@ -49,7 +49,7 @@ class SegmentStart:
                 if calls[0] % 256 == 0 and _clock.perf_counter() > deadline:
                     raise Stop(Failure.TIME_LIMIT, t, limit=self.opts.max_time)
             try:
-                # no surface slides: the compiled derivatives themselves (the hot path)
+                # no surface slides: the generated derivatives themselves (the hot path)
                 if sliding:
                     return field(t, y, m, z)
                 if rolled:
@@ -74,7 +74,7 @@ class SegmentStart:
     @staticmethod
     def _logged(f: Callable, log: Evaluations, rhs: Callable | None, m, z) -> Callable:
         """f, keeping every evaluation in `log` (a chunk's own odeint call uses it);
-        given `rhs`, the compiled derivatives straight (f for a fault only)."""
+        given `rhs`, the generated derivatives straight (f for a fault only)."""
         log_t, log_y, logged = log.t.append, log.y.append, log.t
         if rhs is None:
             def slow(t, y):

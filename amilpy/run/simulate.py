@@ -1,6 +1,6 @@
 """One run of a checked model, from its start to its `Run`.
 
-`simulate` prepares the run (constants, compiled functions, plan), starts it
+`simulate` prepares the run (constants, generated functions, plan), starts it
 (`start`: the branches in force at t0, MODINT resets, memory, the first row),
 integrates it to FINISH, TERMT or a failure, locates the RANGE extrema
 (`locate_range`), evaluates TERMINAL in written order, and assembles the `Run`.
@@ -15,7 +15,7 @@ import time as _clock
 import numpy as np
 
 from .. import interrupts, ir
-from ..codegen import Compiled, evaluate_constant
+from ..codegen import ModelCode, evaluate_constant
 from ..diagnostics import AmilError
 from ..library.runtime import table_warnings
 from ..outcome import Failure, message
@@ -42,7 +42,7 @@ def simulate(model: ir.Model, spec: ir.RunSpec, options: Options | None = None,
              cache: Cache | None = None) -> Run:
     """Integrate one run of a checked model. Faults in the data raise AmilError;
     a failing integration returns a Run with status FAILED and the rows so far.
-    `cache` (an `api.Model`'s) keeps compiled functions between runs."""
+    `cache` (an `api.Model`'s) keeps generated functions between runs."""
     opts = options or Options()
     started = _clock.perf_counter()
     if model.acsl is not None:
@@ -53,7 +53,7 @@ def simulate(model: ir.Model, spec: ir.RunSpec, options: Options | None = None,
     return _Run(model, spec, opts, prepare(model, spec, opts, cache), started).run()
 
 
-def start_cursor(c: Compiled, plan: RunPlan, watch: SurfaceWatch, opts: Options,
+def start_cursor(c: ModelCode, plan: RunPlan, watch: SurfaceWatch, opts: Options,
                  y: np.ndarray, z: list[float], m: list[float] | None,
                  t0: float | None = None) -> Cursor:
     """The state a run (or a flow) starts from at t0 (default the run's): the
@@ -74,7 +74,7 @@ class _Run:
     def __init__(self, model: ir.Model, spec: ir.RunSpec, opts: Options, prepared: Prepared,
                  started: float) -> None:
         self.model, self.spec, self.opts = model, spec, opts
-        self.constants, self.c, self.plan = prepared.constants, prepared.compiled, prepared.plan
+        self.constants, self.c, self.plan = prepared.constants, prepared.code, prepared.plan
         self.watch = SurfaceWatch(self.c, self.plan)
         ranged = [n for r in spec.reports if r.kind == "RANGE" for n in r.names]
         self.rec = Recorder(self.plan, self.c, self.watch, ranged + list(opts.extrema),

@@ -30,7 +30,7 @@ import time as _clock
 import numpy as np
 
 from .. import interrupts, ir
-from ..codegen import Compiled
+from ..codegen import ModelCode
 from ..diagnostics import AmilError, Diagnostic
 from ..outcome import Failure
 from ..progress import report
@@ -92,7 +92,7 @@ def grid(t0: float, timer: dict[str, float]) -> Grid:
 class StepPoint(RunLoop):
     """Runs a step-point plan: switches read at the step points, nothing located."""
 
-    def __init__(self, model: ir.Model, plan: RunPlan, c: Compiled, watch: SurfaceWatch,
+    def __init__(self, model: ir.Model, plan: RunPlan, c: ModelCode, watch: SurfaceWatch,
                  opts: Options, started: float | None = None) -> None:
         super().__init__(model, plan, c, watch, opts, started)
         self.extrema: dict[str, list[float]] = {}  # RANGE over every step point

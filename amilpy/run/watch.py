@@ -1,7 +1,7 @@
 """The surface watch: which branch each watched surface is in, where it changes,
 and the motion while surfaces slide.
 
-A `SurfaceWatch` works from explicit inputs only: the compiled functions and the
+A `SurfaceWatch` works from explicit inputs only: the generated functions and the
 plan's table of watched surfaces (kinds, purposes, gradients, the look-ahead
 step). It never steps; the loop hands it states, modes and dense outputs.
 
@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..codegen import Compiled
+from ..codegen import ModelCode
 from ..library.surfaces import DOWN, REPELS, SLIDES, STILL, UP, leaving, sign
 from .plan import SLIDE, Purpose, RunPlan, SurfaceKind
 from .slide import MAX_SLIDING, combine, corner_modes, slide_weights
@@ -29,7 +29,7 @@ _XTOL = 4 * np.finfo(float).eps
 
 
 class SurfaceWatch:
-    def __init__(self, c: Compiled, plan: RunPlan) -> None:
+    def __init__(self, c: ModelCode, plan: RunPlan) -> None:
         self.c = c
         self.watched = plan.watched
         self.resets = plan.resets

@@ -1,4 +1,4 @@
-"""What a build gives: the compiled functions of one run and the means to locate a
+"""What a build gives: the generated functions of one run and the means to locate a
 fault in them (`Compiler` in build.py makes these)."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from .faults import FaultReport, Statement, explain, statement_of, tolerant
 
 
 @dataclass
-class Compiled:
+class ModelCode:
     """The callables and constants of one run of one model."""
 
     state_names: list[str]
@@ -85,7 +85,7 @@ class Compiled:
         runs never need it, and a large model's takes long to write)."""
         return self.binder.source_text()
 
-    def rebound(self, constants: dict[str, float]) -> Compiled:
+    def rebound(self, constants: dict[str, float]) -> ModelCode:
         """These functions for a run whose constants differ from these only in the
         parameters' values (`Compiler.parameters`): the same code, executed again
         with the new values; no compilation."""
