@@ -16,7 +16,9 @@ def __getattr__(name: str):
     # result.py needs numpy; `amilpy check` should not pay for importing it
     if name in ("Event", "Run", "Status"):
         from . import result
+        from .output.views import install
 
+        install()  # (a Run made outside Model.run draws and shows itself too)
         return getattr(result, name)
     if name == "interact":  # (ipywidgets, an optional extra, only when asked for)
         from .output.sliders import interact

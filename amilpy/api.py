@@ -136,8 +136,10 @@ class Model:
         evaluated comes back FAILED with its message (it does not stop the others).
         `progress` (`amilpy.progress`): given a Report of each run's TIME now and
         then (runs here only), and one as each run finishes (task "runs")."""
+        from .output.views import install
         from .run import Options
 
+        install()  # (how the runs show themselves: Run.plot, a notebook's table)
         _check_method(method)
         for label, tol in (("rtol", rtol), ("atol", atol)):
             if tol is not None and not tol > 0:

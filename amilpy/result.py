@@ -7,6 +7,7 @@ notebook view and `str(event)` hand over to the output package.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import Enum
 
@@ -58,15 +59,29 @@ class Event:
     text: str = ""
 
     def describe_branch(self, mode: float) -> str:
-        """A branch in the listing's terms ("W1 > 0"); see amilpy.output.words."""
-        from .output.words import branch_text
+        """A branch in the listing's own terms: "W1 > 0", "W1 held at 0", "level 3"."""
+        if self.kind == EventKind.LEVEL:
+            return f"level {mode:g}"
+        x = self.text or "argument"
+        if mode in (-1.0, 0.0, 1.0):
+            return f"{x} {'<=>'[int(mode) + 1]} 0"
+        return f"{x} held at 0"  # sliding: neither sign, the surface is kept at zero
 
-        return branch_text(self, mode)
+    def change(self) -> str:
+        """What changed, for a reader: "W1 > 0 -> W1 < 0", "reached", "ran"."""
+        if self.kind == EventKind.SLIDE:
+            return f"{self.text or 'its argument'} stays at 0: both sides push it back"
+        if self.kind in (EventKind.FINISH, EventKind.TERMT):  # the condition that stops it
+            return "reached"
+        if self.kind == EventKind.SCHEDULE:  # a crossing that runs a DISCRETE section
+            return f"{self.text or 'its expression'} crossed zero"
+        if self.kind == EventKind.DISCRETE:
+            return "ran"
+        return f"{self.describe_branch(self.old)} -> {self.describe_branch(self.new)}"
 
     def __str__(self) -> str:
-        from .output.words import event_line
-
-        return event_line(self)
+        """The instant, the switch as written and what changed."""
+        return f"TIME = {self.time:.9g}: {self.switch}: {self.change()}"
 
 
 @dataclass
@@ -182,11 +197,21 @@ class Run:
         returns the matplotlib axes. For several runs on one axes, use
         `amilpy.output.plot.draw_runs(runs, *names)`, which labels each run by the
         values that tell it from the others."""
-        from .output.plot import plot_run
+        return _view("plot")(self, names, ax, label)
 
-        return plot_run(self, names, ax, label)
+    def _repr_html_(self) -> str | None:
+        view = VIEWS.get("html")
+        return view(self) if view is not None else None  # (None: the plain repr)
 
-    def _repr_html_(self) -> str:
-        from .output.notebook import run_html
 
-        return run_html(self)
+# How a Run shows itself -- a figure, a table in a notebook -- is the output stage's
+# business: `amilpy.output.views` puts its functions here (the API does, before its
+# first run), so this module imports nothing of the stages after it.
+VIEWS: dict[str, Callable] = {}
+
+
+def _view(name: str) -> Callable:
+    if name not in VIEWS:
+        raise RuntimeError(f"Run.{name} is drawn by amilpy.output: call "
+                           "amilpy.output.views.install() first (amilpy.Model.run does)")
+    return VIEWS[name]

@@ -141,8 +141,8 @@ def test_two_listings_overlaid_in_one_figure(tmp_path, capsys):
 
 def test_overlay_draws_a_variable_only_where_a_listing_has_it(tmp_path):
     from amilpy import loads
+    from amilpy.output.options import PlotOptions
     from amilpy.output.plot import plot_overlay
-    from amilpy.output.writers import PlotOptions
 
     a = loads(OSCILLATOR).run()
     b = loads(OSCILLATOR.replace("OUTPUT PHASE\n", "").replace("PHASE = ATAN2(-V, X)\n",

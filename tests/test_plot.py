@@ -14,9 +14,9 @@ from conftest import ROOT
 
 import amilpy
 from amilpy.cli import main
+from amilpy.output.options import PlotOptions
 from amilpy.output.plot import FigureSpec, draw, figure_specs, plot_figures, zoom_window
 from amilpy.output.words import name_notes
-from amilpy.output.writers import PlotOptions
 
 OSCILLATOR = """TITLE DAMPED OSCILLATOR
 PARAM D = {d}

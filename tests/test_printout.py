@@ -14,7 +14,6 @@ from conftest import run1
 import amilpy.output.tables as T
 from amilpy.output import sheets
 from amilpy.output.printout import format_run, write_runs
-from amilpy.output.words import event_line
 from amilpy.result import Event, EventKind, Run, Status
 
 SLIDE = 0.5  # the mode of a sliding surface (neither sign)
@@ -39,14 +38,14 @@ def _event(kind, old, new, text="W1"):
 
 
 def test_events_in_the_listings_terms():
-    assert event_line(_event(EventKind.SWITCH, 1.0, -1.0)) == \
+    assert str(_event(EventKind.SWITCH, 1.0, -1.0)) == \
         "TIME = 0.0354576566: FSW for MFR (line 57): W1 > 0 -> W1 < 0"
-    assert event_line(_event(EventKind.SLIDE, 1.0, SLIDE)) == \
+    assert str(_event(EventKind.SLIDE, 1.0, SLIDE)) == \
         "TIME = 0.0354576566: FSW for MFR (line 57): W1 stays at 0: both sides push it back"
-    assert event_line(_event(EventKind.SWITCH, SLIDE, 1.0)) == \
+    assert str(_event(EventKind.SWITCH, SLIDE, 1.0)) == \
         "TIME = 0.0354576566: FSW for MFR (line 57): W1 held at 0 -> W1 > 0"
-    assert event_line(_event(EventKind.LEVEL, 2.0, 3.0, "X/0.5")).endswith("level 2 -> level 3")
-    assert event_line(_event(EventKind.FINISH, 1.0, -1.0, "V + 12")).endswith(": reached")
+    assert str(_event(EventKind.LEVEL, 2.0, 3.0, "X/0.5")).endswith("level 2 -> level 3")
+    assert str(_event(EventKind.FINISH, 1.0, -1.0, "V + 12")).endswith(": reached")
     # str(event), for the Python user, says the same
     assert str(_event(EventKind.SWITCH, -1.0, 1.0)).endswith("W1 < 0 -> W1 > 0")
 

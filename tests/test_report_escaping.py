@@ -15,7 +15,7 @@ import pytest
 
 from amilpy.cli import main
 from amilpy.output import highlight
-from amilpy.output.report import latex, markdown
+from amilpy.output.report import markdown
 
 PAYLOAD = "\\end{Verbatim}\\immediate\\write18{touch pwned}\\input{/etc/passwd}"
 HOSTILE = f"""TITLE TORQUE $\\sqrt{{x$ {PAYLOAD} <script>alert(1)</script> \x1b]0;owned\x07
@@ -82,7 +82,7 @@ def test_verbatim_escapes_what_fancyvrb_would_read():
     import io
 
     out = io.StringIO()
-    latex.verbatim(["\\end{Verbatim}", "{\\bf x}", "plain % text # & $ ^ _ ~"], out)
+    highlight.verbatim(["\\end{Verbatim}", "{\\bf x}", "plain % text # & $ ^ _ ~"], out)
     lines = out.getvalue().splitlines()
     assert lines[0].startswith("\\begin{Verbatim}[commandchars=\\\\\\{\\}")
     assert lines[1] == "\\char92{}end\\char123{}Verbatim\\char125{}"

@@ -18,7 +18,6 @@ Two kinds of code:
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import replace
 
 from .. import ir
@@ -310,37 +309,6 @@ def _switch_in_sorted_code(node: ast.Node) -> bool:
         func = lookup(node.func)
         return func is not None and func.kind in (Kind.SWITCH, Kind.TIME)
     return False
-
-
-def condition_surface(e: ast.Node, leaf: Callable[[ast.Node], ast.Node] = lambda x: x
-                      ) -> ast.Node:
-    """A condition as a continuous surface that is positive where the condition
-    holds (TERMT, FINISH relations): `A > B` is A - B, `A .AND. B` the smaller of
-    the two surfaces, `A .OR. B` the larger, `.NOT. A` its negative, a number
-    itself. Where no such surface exists (==, .EQV.), the truth minus 1/2.
-
-    `leaf` lowers the listing's own expressions (A, B); the smaller, larger and
-    absolute values this puts around them are the surface's own arithmetic, left
-    as plain calls (a surface is located, never integrated: its kinks are harmless)."""
-    span = e.span
-    if isinstance(e, ast.BinOp):
-        if e.op in (">", ">="):
-            return ast.BinOp("-", leaf(e.left), leaf(e.right), span)
-        if e.op in ("<", "<="):
-            return ast.BinOp("-", leaf(e.right), leaf(e.left), span)
-        if e.op == "/=":
-            return ast.Call("ABS", (ast.BinOp("-", leaf(e.left), leaf(e.right), span),), span)
-        if e.op in ("AND", "OR"):
-            return ast.Call("AMIN1" if e.op == "AND" else "AMAX1",
-                            (condition_surface(e.left, leaf),
-                             condition_surface(e.right, leaf)), span)
-    if isinstance(e, ast.Not):
-        return ast.Neg(condition_surface(e.operand, leaf), span)
-    if isinstance(e, ast.Num) and ast.is_logical(e):
-        return ast.Num(1.0 if e.value > 0 else -1.0, span, e.text)
-    if ast.is_logical(e):
-        return ast.BinOp("-", leaf(e), ast.Num(0.5, span, "0.5"), span)
-    return leaf(e)
 
 
 def _as_condition(expr: ast.Node) -> ast.Node:

@@ -315,8 +315,6 @@ class Lowering:
         """TERMT(c [, 'message']): the run ends where c turns true (`cond`: c as the
         surface reads it, when that differs from what the listing wrote). `finish`:
         FST's FINISH c, the same thing."""
-        from .code import condition_surface
-
         cond = st.expr if cond is None else cond
         text = self.written(st.expr.span) or expr_text(None, st.expr, TEXT_LIMIT)
         where = f"{'FINISH ' + text if finish else f'TERMT({text})'} at line {st.span.line}"
@@ -423,3 +421,34 @@ class _Lowerer(Visitor):
 def _reads_names(expr: ast.Node) -> bool:
     """Whether an expression reads any name (else it is a number once folded)."""
     return any(isinstance(n, ast.Name) for n in ast.walk(expr))
+
+
+def condition_surface(e: ast.Node, leaf: Callable[[ast.Node], ast.Node] = lambda x: x
+                      ) -> ast.Node:
+    """A condition as a continuous surface that is positive where the condition
+    holds (TERMT, FINISH relations): `A > B` is A - B, `A .AND. B` the smaller of
+    the two surfaces, `A .OR. B` the larger, `.NOT. A` its negative, a number
+    itself. Where no such surface exists (==, .EQV.), the truth minus 1/2.
+
+    `leaf` lowers the listing's own expressions (A, B); the smaller, larger and
+    absolute values this puts around them are the surface's own arithmetic, left
+    as plain calls (a surface is located, never integrated: its kinks are harmless)."""
+    span = e.span
+    if isinstance(e, ast.BinOp):
+        if e.op in (">", ">="):
+            return ast.BinOp("-", leaf(e.left), leaf(e.right), span)
+        if e.op in ("<", "<="):
+            return ast.BinOp("-", leaf(e.right), leaf(e.left), span)
+        if e.op == "/=":
+            return ast.Call("ABS", (ast.BinOp("-", leaf(e.left), leaf(e.right), span),), span)
+        if e.op in ("AND", "OR"):
+            return ast.Call("AMIN1" if e.op == "AND" else "AMAX1",
+                            (condition_surface(e.left, leaf),
+                             condition_surface(e.right, leaf)), span)
+    if isinstance(e, ast.Not):
+        return ast.Neg(condition_surface(e.operand, leaf), span)
+    if isinstance(e, ast.Num) and ast.is_logical(e):
+        return ast.Num(1.0 if e.value > 0 else -1.0, span, e.text)
+    if ast.is_logical(e):
+        return ast.BinOp("-", leaf(e), ast.Num(0.5, span, "0.5"), span)
+    return leaf(e)

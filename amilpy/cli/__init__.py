@@ -17,17 +17,37 @@ written before the printout, so a closed or blocked stdout cannot lose them.
 from __future__ import annotations
 
 import argparse
-import math
-import os
 import sys
 import warnings
 
 from .. import __version__, interrupts
 from ..diagnostics import AmilError, UsageError
-from ..language import fortran_float
 from ..output.files import OutputError
-from ..output.writers import DIALECTS, WRITERS, Outputs, PlotOptions, dest, writers_for
-from ..routes import method_names, methods_help, route_for
+from ..output.options import Outputs, PlotOptions
+from ..output.writers import WRITERS, dest
+from ..routes import methods_help, route_for
+from .common import (
+    COUNT,
+    EXIT_FAILED,
+    EXIT_MODEL,
+    EXIT_OK,
+    EXIT_OUTPUT,
+    EXIT_USAGE,
+    FINITE,
+    NONNEGATIVE,
+    POSITIVE,
+    csv_dialect,
+    figure_options,
+    finish,
+    format_option,
+    method_name,
+    parse_sets,
+    run_numbers,
+    stem_and_dir,
+    variable_names,
+    write_outputs,
+    writer_options,
+)
 from .console import (
     STDOUT_FAILED,
     Progress,
@@ -38,79 +58,8 @@ from .console import (
     write_out,
 )
 
-EXIT_OK, EXIT_MODEL, EXIT_USAGE, EXIT_FAILED, EXIT_OUTPUT = 0, 1, 2, 3, 4
-# the modules whose warnings the command line does not show (see `_main`)
 LIBRARIES = r"(scipy|numpy|matplotlib|numba|lark)(\.|$)"
 
-
-
-# ------------------------------------------------------------- value checks
-
-
-def _number(text: str) -> float:
-    try:
-        return fortran_float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-
-
-def _checked(kind: str, test, cast=_number):
-    def parse(text: str):
-        value = cast(text)
-        if not (math.isfinite(value) and test(value)):
-            raise argparse.ArgumentTypeError(f"must be {kind}, got {text!r}")
-        return value
-
-    parse.__name__ = kind
-    return parse
-
-
-def _integer(text: str) -> int:
-    try:
-        return int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-
-
-POSITIVE = _checked("a positive number", lambda x: x > 0)
-NONNEGATIVE = _checked("a number >= 0", lambda x: x >= 0)
-FINITE = _checked("a finite number", lambda x: True)
-COUNT = _checked("a whole number >= 1", lambda x: x >= 1, _integer)
-
-
-def _method(text: str) -> str:
-    if route_for(text) is None:
-        raise argparse.ArgumentTypeError(
-            f"unknown method {text!r}; the methods are {', '.join(method_names())}")
-    return text.upper()
-
-
-def _figure_formats(text: str) -> tuple[str, ...]:
-    from ..output.plot import FIGURE_FORMATS
-
-    formats = tuple(dict.fromkeys(f.strip().lower() for f in text.split(",") if f.strip()))
-    bad = [f for f in formats if f not in FIGURE_FORMATS]
-    if bad or not formats:
-        raise argparse.ArgumentTypeError(f"takes figure formats like png,svg,pdf (of "
-                                         f"{', '.join(FIGURE_FORMATS)}), got {text!r}")
-    return formats
-
-
-def _names(text: str) -> tuple[str, ...]:
-    names = tuple(dict.fromkeys(n.strip().upper() for n in text.split(",") if n.strip()))
-    if not names:
-        raise argparse.ArgumentTypeError(f"takes variable names like W1,MC, got {text!r}")
-    return names
-
-
-def _runs(text: str) -> tuple[int, ...]:
-    try:
-        numbers = tuple(int(x) for x in text.split(","))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"takes run numbers like 1,3, got {text!r}") from None
-    if not numbers or min(numbers) < 1:
-        raise argparse.ArgumentTypeError(f"run numbers start at 1, got {text!r}")
-    return numbers
 
 
 # ------------------------------------------------------------------ parser
@@ -119,7 +68,7 @@ def _runs(text: str) -> tuple[int, ...]:
 def _model_options(p: argparse.ArgumentParser, run_limits: bool = True) -> None:
     p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
                    help="override a PARAM/CONST/INCON value for every run (repeatable)")
-    p.add_argument("--method", metavar="NAME", type=_method,
+    p.add_argument("--method", metavar="NAME", type=method_name,
                    help="integration method, instead of METHOD: " + methods_help())
     p.add_argument("--compiled", dest="method", action="store_const", const="COMPILED",
                    help="the same as --method COMPILED (needs pip install 'amilpy[fast]'; "
@@ -173,28 +122,7 @@ def _plot_options(p: argparse.ArgumentParser) -> None:
                         "event after start-up (NAME_zoom.png)")
     g.add_argument("--subplots", action="store_true",
                    help="one axis per variable (done anyway when scales differ over 100x)")
-    g.add_argument("--runs", type=_runs, metavar="1,3", help="plot only these runs")
-
-
-def _format_option(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--format", dest="figure_formats", type=_figure_formats, metavar="LIST",
-                   help="the figures' files, comma-separated of png, svg, pdf (vector: "
-                        "for a printed report); implies --plot (default png)")
-
-
-def _writer_options(p: argparse.ArgumentParser, command: str) -> None:
-    for w in writers_for(command):
-        if w.flag is None:
-            continue
-        if w.takes_path:
-            p.add_argument(w.flag, dest=dest(w.flag), metavar="PATH", help=w.help)
-        else:
-            p.add_argument(w.flag, dest=dest(w.flag), action="store_true", help=w.help)
-
-
-def _csv_dialect(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--csv-dialect", choices=list(DIALECTS), default="plain",
-                   help="; ".join(f"{k}: {d.help}" for k, d in DIALECTS.items()))
+    g.add_argument("--runs", type=run_numbers, metavar="1,3", help="plot only these runs")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -213,12 +141,12 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("files", nargs="+", metavar="FILE", help="the listing(s) (.amil)")
     run.add_argument("--out", metavar="DIR", help="where PREPARE's CSV and the PNGs go "
                                                   "(default: next to each listing)")
-    _writer_options(run, "run")
-    run.add_argument("--vars", type=_names, metavar="A,B",
+    writer_options(run, "run")
+    run.add_argument("--vars", type=variable_names, metavar="A,B",
                      help="the variables --csv and --xlsx write (default: every PRINT, "
                           "OUTPUT and PREPARE variable)")
-    _csv_dialect(run)
-    _format_option(run)
+    csv_dialect(run)
+    format_option(run)
     run.add_argument("--overlay", action="store_true",
                      help="with several listings: draw them in the same figures (the "
                           "first listing's OUTPUT statements, each listing a colour) as "
@@ -253,9 +181,9 @@ def _parser() -> argparse.ArgumentParser:
                                                      "first OUTPUT/PRINT variable)")
     sw.add_argument("--out", metavar="DIR", help="where the PNG goes (default: next to the "
                                                  "listing)")
-    _writer_options(sw, "sweep")
-    _csv_dialect(sw)
-    _format_option(sw)
+    writer_options(sw, "sweep")
+    csv_dialect(sw)
+    format_option(sw)
     _model_options(sw, run_limits=False)
     sw.add_argument("--quiet", action="store_true", help="no table, only files and errors")
     _farm_options(sw)
@@ -288,25 +216,6 @@ def _parser() -> argparse.ArgumentParser:
 # ---------------------------------------------------------------- commands
 
 
-def _parse_sets(items: list[str]) -> dict[str, float]:
-    out = {}
-    for item in items:
-        if "=" not in item:
-            raise UsageError(f"--set takes NAME=VALUE, got {item!r}")
-        name, value = item.split("=", 1)
-        try:
-            number = fortran_float(value)
-        except ValueError:
-            comma = "," in value and value.replace(",", ".", 1).replace(".", "", 1).isdigit()
-            raise UsageError(f"--set {name}: {value!r} is not a number" + (
-                f"; the decimal separator is a point: {value.replace(',', '.', 1)}"
-                if comma else "")) from None
-        if not math.isfinite(number):
-            raise UsageError(f"--set {name}: the value must be finite, got {value!r}")
-        out[name.strip().upper()] = number
-    return out
-
-
 def _plot_choice(args, model) -> PlotOptions:
     if args.t_from is not None and args.t_to is not None and args.t_from >= args.t_to:
         raise UsageError(f"--from {args.t_from:g} must come before --to {args.t_to:g}")
@@ -320,50 +229,6 @@ def _plot_choice(args, model) -> PlotOptions:
                        show, getattr(args, "figure_formats", None) or ("png",))
 
 
-def figure_options(args) -> PlotOptions:
-    """The figure options of a command without a time window (sweep, the analyses)."""
-    return PlotOptions(formats=getattr(args, "figure_formats", None) or ("png",))
-
-
-def _write_outputs(outputs: Outputs, args, signals: Signals,
-                   skip: tuple[str, ...] = ()) -> tuple[list[str], list[str]]:
-    """Every writer asked for (less those named in `skip`), each on its own: (paths
-    written, error messages)."""
-    written: list[str] = []
-    errors: list[str] = []
-    with signals.held():
-        for w in writers_for(outputs.command):
-            path = getattr(args, dest(w.flag), None) if w.flag else None
-            asked = (w.wanted(outputs) if w.wanted else bool(path))
-            if not asked or w.name in skip:
-                continue
-            try:
-                written.extend(w.write(outputs, path if isinstance(path, str) else None))
-            except OutputError as exc:
-                if str(exc) not in errors:
-                    errors.append(str(exc))
-    return written, errors
-
-
-def _stem_and_dir(path: str, out: str | None) -> tuple[str, str]:
-    return (os.path.splitext(os.path.basename(path))[0],
-            out or os.path.dirname(os.path.abspath(path)))
-
-
-def _finish(path: str, written: list[str], errors: list[str], quiet: bool,
-            signals: Signals) -> int:
-    """Say what was written and what was not; the exit code of the outputs."""
-    if written and not quiet:
-        write_out(lambda out: out.write("\nwritten: " + ", ".join(written) + "\n"))
-    for message in errors:
-        print(f"amilpy: {message}", file=sys.stderr)
-    if signals.held_back:
-        print(f"amilpy: {path}: {signals.name(signals.held_back)} held back until the "
-              "files were complete; stopped", file=sys.stderr)
-        return EXIT_FAILED
-    return EXIT_OUTPUT if errors else EXIT_OK
-
-
 def _load(args, path: str):
     """The listing read, checked and its first run compiled (into the model's cache,
     where the run finds it), within --max-time; and the --set values."""
@@ -371,7 +236,7 @@ def _load(args, path: str):
 
     with time_limit(getattr(args, "max_time", None)):
         model = load(path)
-        params = _parse_sets(args.set)  # (the API says which names it does not have)
+        params = parse_sets(args.set)  # (the API says which names it does not have)
         model.python_source(weather_dir=getattr(args, "weather_dir", None), **params)
     return model, params
 
@@ -393,12 +258,12 @@ def cmd_run(args, path: str, signals: Signals) -> int:
                          scheduler=args.scheduler, **params)
     finally:
         progress.done()
-    stem, out_dir = _stem_and_dir(path, args.out)
+    stem, out_dir = stem_and_dir(path, args.out)
     outputs = Outputs("run", stem, out_dir, runs, model=model, dialect=args.csv_dialect,
                       plot=plot, names=names)
     if args.overlay:  # (drawn with the other listings' once all have run)
         args.overlaid.append((stem, model, runs, plot))
-    written, errors = _write_outputs(outputs, args, signals,
+    written, errors = write_outputs(outputs, args, signals,
                                      skip=("png",) if args.overlay else ())
     if not args.quiet and not signals.held_back:
         from ..output.printout import write_runs
@@ -415,7 +280,7 @@ def cmd_run(args, path: str, signals: Signals) -> int:
             + (f" ({c.how})" if c.how else "") + "\n"
             + "".join(f"  {line}\n" for line in accuracy_lines(c, WORDS["en"]))
             for k, c in enumerate(checks))))
-    code = _finish(path, written, errors, args.quiet, signals)
+    code = finish(path, written, errors, args.quiet, signals)
     for r in runs:
         if r.advice and not args.quiet:
             print(f"amilpy: note: {r.advice}", file=sys.stderr)
@@ -453,15 +318,15 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
                        grid=grid, **params)
     finally:
         progress.done()
-    stem, out_dir = _stem_and_dir(path, args.out)
+    stem, out_dir = stem_and_dir(path, args.out)
     outputs = Outputs("sweep", stem, out_dir, sweep=result, model=model,
                       dialect=args.csv_dialect, plot=figure_options(args))
-    written, errors = _write_outputs(outputs, args, signals)
+    written, errors = write_outputs(outputs, args, signals)
     if not args.quiet and not signals.held_back:
         from ..output.sweeps import format_sweep
 
         write_out(lambda out: out.write(format_sweep(result)))
-    code = _finish(path, written, errors, args.quiet, signals)
+    code = finish(path, written, errors, args.quiet, signals)
     failed = [p for p in result.points if p.status == "failed"]
     for message in result.errors:
         print(f"amilpy: {path}: {message}", file=sys.stderr)
@@ -496,7 +361,7 @@ def cmd_report(args, path: str, signals: Signals) -> int:
                                checks)
     write_out(lambda out: out.write("".join(f"{fmt}: {', '.join(paths)}\n"
                                             for fmt, paths in written.items())))
-    code = _finish(path, [], list(dict.fromkeys(str(e) for e in errors)), True, signals)
+    code = finish(path, [], list(dict.fromkeys(str(e) for e in errors)), True, signals)
     failed = [r for r in runs if not r.ok]
     for r in failed:
         print(f"amilpy: {path}: run {r.label!r}: {r.message}; the report is marked partial",
@@ -527,7 +392,7 @@ def write_overlay(args, signals: Signals) -> int:
     for _, model, _, _ in reversed(listings):  # (the first listing's units win)
         notes.update(name_notes(model.ir))
     first = args.files[0]
-    _, out_dir = _stem_and_dir(first, args.out)
+    _, out_dir = stem_and_dir(first, args.out)
     written, errors = [], []
     with signals.held():
         try:
@@ -535,7 +400,7 @@ def write_overlay(args, signals: Signals) -> int:
                                    listings[0][3], notes)
         except OutputError as exc:
             errors.append(str(exc))
-    return _finish(first, written, errors, args.quiet, signals)
+    return finish(first, written, errors, args.quiet, signals)
 
 
 COMMANDS = {"run": cmd_run, "sweep": cmd_sweep, "report": cmd_report, "check": cmd_check}

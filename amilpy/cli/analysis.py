@@ -11,9 +11,9 @@ import argparse
 import math
 import sys
 
-from .. import cli as base
 from ..language import fortran_float
-from ..output.writers import Outputs
+from ..output.options import Outputs
+from . import common as base
 from .console import Progress, write_out
 
 
@@ -57,13 +57,13 @@ def _common(p: argparse.ArgumentParser, command: str, closure: bool = True) -> N
                             "the first OUTPUT/PRINT variable)")
         p.add_argument("--out", metavar="DIR", help="where the PNG goes (default: next to "
                                                     "the listing)")
-    base._writer_options(p, command)
-    base._csv_dialect(p)
+    base.writer_options(p, command)
+    base.csv_dialect(p)
     if closure:  # (modes draws nothing)
-        base._format_option(p)
+        base.format_option(p)
     p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
                    help="override a PARAM/CONST/INCON value (repeatable)")
-    p.add_argument("--method", metavar="NAME", type=base._method,
+    p.add_argument("--method", metavar="NAME", type=base.method_name,
                    help="integration method (default: the listing's METHOD, else DOP853, "
                         "or AUTO when that finds the model stiff)")
     p.add_argument("--rtol", type=base.POSITIVE, metavar="X",
@@ -94,7 +94,7 @@ def _prepare(args, path: str):
     from ..api import load
 
     model = load(path)
-    return model, base._parse_sets(args.set)  # (the API checks the names)
+    return model, base.parse_sets(args.set)  # (the API checks the names)
 
 
 def _computed(args, path: str, compute, not_found: str = "", prefix: str = ""):
@@ -121,13 +121,13 @@ def _computed(args, path: str, compute, not_found: str = "", prefix: str = ""):
 
 
 def _done(command: str, path: str, model, result, args, signals, text) -> int:
-    stem, out_dir = base._stem_and_dir(path, getattr(args, "out", None))
+    stem, out_dir = base.stem_and_dir(path, getattr(args, "out", None))
     outputs = Outputs(command, stem, out_dir, model=model, analysis=result,
                       dialect=args.csv_dialect, plot=base.figure_options(args))
-    written, errors = base._write_outputs(outputs, args, signals)
+    written, errors = base.write_outputs(outputs, args, signals)
     if not args.quiet and not signals.held_back:
         write_out(lambda out: out.write(text(result, model)))
-    return base._finish(path, written, errors, args.quiet, signals)
+    return base.finish(path, written, errors, args.quiet, signals)
 
 
 def cmd_modes(args, path: str, signals) -> int:

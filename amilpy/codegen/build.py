@@ -35,7 +35,7 @@ from .pytree import (
     place,
     vectorised,
 )
-from .written import Statements, start
+from .written import Statements, start, user_callable
 
 # models with more memory slots than this read them from z instead of unpacking
 MAX_UNPACKED_SLOTS = 32
@@ -139,7 +139,7 @@ class Compiler:
         names = self.mode_names_new if new_modes else self.mode_names
         return Emitter(self.model, self.constants, self.const_modes, context, names,
                        self.global_tables, self.tables, self.unpacked_z, self.names,
-                       self.setting, self.parameters)
+                       self.setting, self.parameters, define_function=user_callable)
 
     def line(self, kind: str, target: str, span: Span | None, expr=None) -> int:
         """The generated line of one IR statement (the same in every function)."""

@@ -17,10 +17,12 @@ from ..library.runtime import Extending
 from ..parse.syntax import deep_enough
 from .emit import Emitter
 from .pytree import assert_closed, namespace
+from .written import user_callable
 
 
 def _emitter(model: ir.Model, constants: dict[str, float], tables) -> Emitter:
-    return Emitter(model, constants, {}, "literal", {}, {}, tables)
+    return Emitter(model, constants, {}, "literal", {}, {}, tables,
+                   define_function=user_callable)
 
 
 # expression -> its code with the constants it reads as names (p_NAME): a run with
@@ -43,7 +45,8 @@ def evaluate_constant(model: ir.Model, expr, constants: dict[str, float], tables
     key = (id(expr), names, tuple(sorted(tables)))
     entry = _CODE.get(key)
     if entry is None or entry[0] is not expr:
-        em = Emitter(model, constants, {}, "literal", {}, {}, tables, parameters=names)
+        em = Emitter(model, constants, {}, "literal", {}, {}, tables, parameters=names,
+                     define_function=user_callable)
         try:
             tree = em.emit(expr)
         except KeyError as exc:  # a name that is not a constant

@@ -15,6 +15,7 @@ from __future__ import annotations
 import ast as py
 import math
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass
 from itertools import count
 
@@ -61,8 +62,13 @@ class Emitter(Visitor):
                  context: str, mode_names: dict[int, str], tables: dict[str, tuple],
                  source_tables: dict, unpacked_z: bool = True, names=None,
                  setting: Setting | None = None,
-                 parameters: frozenset[str] = frozenset()) -> None:
+                 parameters: frozenset[str] = frozenset(),
+                 define_function: Callable | None = None) -> None:
         self.model = model
+        # a FUNCTION the listing defines (ACSL form), compiled on first call:
+        # `define_function(model, name, constants, tables)` (written.user_callable,
+        # given by the builders: its body is emitted by an Emitter too)
+        self.define_function = define_function
         self.constants = constants
         # constants read as names (p_NAME), not folded: a run with other values
         # binds the same code to them (see `codegen.params`)
@@ -180,9 +186,7 @@ class Emitter(Visitor):
         acsl = self.model.acsl
         if func is None and acsl is not None and e.func in acsl.functions:
             # a FUNCTION the listing defines (ACSL form)
-            from .written import user_callable
-
-            self.tables[user_function(e.func)] = user_callable(
+            self.tables[user_function(e.func)] = self.define_function(
                 self.model, e.func, self.constants, self.source_tables)
             return py.Call(py.Name(user_function(e.func), py.Load()),
                            [self.emit(a) for a in e.args], [])

@@ -157,7 +157,7 @@ def compile_code(model: ir.Model, name_: str, codes, constants: dict[str, float]
             if isinstance(n, syntax_name())]
     own = set(assigned) | set(starts) | set(params)
     em = Emitter(model, {k: v for k, v in constants.items() if k not in own}, {}, "literal",
-                 {}, {}, tables)
+                 {}, {}, tables, define_function=user_callable)
     table: list = [None]
     lines: dict = {}
 

@@ -16,12 +16,13 @@ from __future__ import annotations
 
 import html
 import re
-from typing import Any
+from typing import Any, TextIO
 
 # Absolute imports: `pygmentize -x -l amilpy/output/highlight.py:AmilLexer` runs this
 # file outside its package, where relative imports fail.
 from amilpy.language import RESERVED, STATEMENT_KEYWORDS
 from amilpy.library import callable_names
+from amilpy.output.words import visible
 
 # Statement and section keywords (amilpy.language). TITLE and LABEL are handled
 # apart because their free text runs to the end of the line.
@@ -180,8 +181,6 @@ def highlight_listing(text: str, formatter: str = "terminal", **options: Any) ->
         if formatter == "latex":  # (escaped: a line "\\end{Verbatim}" stays text)
             import io
 
-            from amilpy.output.report.latex import verbatim
-
             out = io.StringIO()
             verbatim(text.splitlines(), out, ",numbers=left" if options.get("linenos") else "")
             return out.getvalue()
@@ -240,3 +239,18 @@ def style_defs(formatter: str = "html", **options: Any) -> str:
         # own styles keep their names
         return fmt.get_style_defs("." + fmt.cssclass)
     return fmt.get_style_defs()
+
+
+# In a Verbatim with commandchars, a listing's text can neither end the environment
+# (a line "\end{Verbatim}") nor run a command: its \, { and } are characters by number.
+VERBATIM = str.maketrans({"\\": "\\char92{}", "{": "\\char123{}", "}": "\\char125{}"})
+
+
+def verbatim(lines: list[str], out: TextIO, options: str = "") -> None:
+    """Lines as they are, in a fancyvrb Verbatim (`options` after its own), in a
+    font small enough for the longest (a printer plot)."""
+    longest = max((len(line) for line in lines), default=0)
+    size = "\\small" if longest <= 100 else "\\scriptsize" if longest <= 125 else "\\tiny"
+    out.write(f"\\begin{{Verbatim}}[commandchars=\\\\\\{{\\}},fontsize={size}{options}]\n")
+    out.write("".join(visible(line).translate(VERBATIM) + "\n" for line in lines))
+    out.write("\\end{Verbatim}\n")

@@ -25,8 +25,8 @@ import numpy as np
 from ..result import EventKind, Run
 from . import words as W
 from .files import atomic_write
+from .options import PlotOptions
 from .tables import report_names
-from .writers import PlotOptions
 
 SCALE_RATIO = 100.0  # variables further apart than this get an axis each
 STYLES = ("-", "--", ":", "-.", (0, (5, 1, 1, 1, 1, 1)), (0, (1, 3)), (0, (8, 2)))

@@ -16,7 +16,6 @@ import numpy as np
 
 from ..result import Run, Status
 from . import tables as T
-from . import words as W
 
 SYMBOLS = "*+ox#@%&"
 PLOT_WIDTH = 51
@@ -121,7 +120,7 @@ def write_run(out: TextIO, run: Run, index: int | None = None, total: int = 1,
         for k, e in enumerate(shown):
             if len(events) > EVENTS_SHOWN and k == half:
                 out.write(f"   ... {len(events) - EVENTS_SHOWN} more ...\n")
-            out.write(f"   {W.event_line(e)}\n")
+            out.write(f"   {e}\n")
     if run.terminal:
         out.write("\nTERMINAL\n")
         for name, value in run.terminal.items():

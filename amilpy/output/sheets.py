@@ -19,7 +19,7 @@ from ..result import Run
 from . import tables as T
 from . import words as W
 from .files import OutputError, atomic_open
-from .writers import DIALECTS
+from .options import DIALECTS
 
 
 def _number(decimal: str):

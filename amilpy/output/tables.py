@@ -16,7 +16,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..result import Run
-from . import words as W
 
 WIDTH = 14  # the lab printout's column width
 COLUMNS_PER_BLOCK = 7  # value columns side by side in the printout
@@ -181,7 +180,7 @@ def events_table(run: Run, words: dict[str, str], limit: int = 60) -> Table | No
     table = Table("events", [
         Column("TIME", [e.time for e in shown], "t"),
         Column(words["switch"], [e.switch for e in shown], "s", left=True),
-        Column(words["change"], [W.event_change(e) for e in shown], "s", left=True)],
+        Column(words["change"], [e.change() for e in shown], "s", left=True)],
         caption=f"{words['events']} ({len(events)})")
     if len(events) > limit:
         table.notes.append(f"… {len(events) - limit} {words['more']} …")

@@ -11,38 +11,7 @@ from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # standard library only at import: the command line reads LANGUAGES
-    from ..result import Event, Run
-
-# ---------------------------------------------------------------- events
-
-
-def branch_text(event: Event, mode: float) -> str:
-    """A branch in the listing's own terms: "W1 > 0", "W1 held at 0", "level 3"."""
-    if event.kind == "level":  # EventKind.LEVEL (a str enum)
-        return f"level {mode:g}"
-    x = event.text or "argument"
-    if mode in (-1.0, 0.0, 1.0):
-        return f"{x} {'<=>'[int(mode) + 1]} 0"
-    return f"{x} held at 0"  # sliding: neither sign, the surface is kept at zero
-
-
-def event_line(event: Event) -> str:
-    """One event for a reader: the instant, the switch as written and what changed."""
-    head = f"TIME = {event.time:.9g}: {event.switch}"
-    return f"{head}: {event_change(event)}"
-
-
-def event_change(event: Event) -> str:
-    if event.kind == "slide":  # EventKind.SLIDE
-        return f"{event.text or 'its argument'} stays at 0: both sides push it back"
-    if event.kind in ("finish", "termt"):  # the condition that stops the run
-        return "reached"
-    if event.kind == "schedule":  # EventKind.SCHEDULE: a crossing that runs a DISCRETE
-        return f"{event.text or 'its expression'} crossed zero"
-    if event.kind == "discrete":  # EventKind.DISCRETE
-        return "ran"
-    return f"{branch_text(event, event.old)} -> {branch_text(event, event.new)}"
-
+    from ..result import Run
 
 # ------------------------------------------------------------- languages
 

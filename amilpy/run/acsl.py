@@ -25,8 +25,7 @@ import numpy as np
 
 from .. import ir
 from ..codegen import Compiler, Setting, evaluate_constant
-from ..codegen.faults import statement_of
-from ..codegen.written import SCHEDULE, compile_code
+from ..codegen.written import compile_code
 from ..diagnostics import AmilError, Diagnostic
 from ..language import MAX_INTERVALS
 from ..outcome import Failure
@@ -34,6 +33,8 @@ from ..parse.syntax import no_collection
 from ..result import Event, EventKind
 from ..routes import IALG_METHODS, route_for
 from . import steppoint
+from .code import Calls, code_fault
+from .driver import _Run
 from .loop import Cursor, Stop
 from .plan import (
     Grid,
@@ -45,7 +46,6 @@ from .plan import (
     resolve_step_point,
 )
 from .prepare import Cache, Prepared, before_run, constant_modes, random_seed
-from .simulate import _Run
 
 MIN_INTERVAL = 1e-100  # the least CINT a run takes
 
@@ -60,35 +60,10 @@ class AcslPrepared(Prepared):
     unbounded: bool = False  # no TERMT on time and no FINTIM: the run is capped
 
 
-class _Calls:
-    """What written-order code reports through `ev`: SCHEDULE and TERMT."""
-
-    def __init__(self) -> None:
-        self.schedules: list[tuple[float, str]] = []
-        self.termts: list[int] = []
-
-    def __call__(self, kind: int, what, value: float) -> None:
-        if kind == SCHEDULE:
-            self.schedules.append((float(value), what))
-        else:
-            self.termts.append(int(what))
-
-
 def termination(t: ir.Termination) -> str:
     where = f"TERMT at line {t.span.line}" if not t.text else \
         f"TERMT({t.text}) at line {t.span.line}"
     return f"{t.message} ({where})" if t.message else where
-
-
-def code_fault(exc: BaseException) -> str:
-    """A fault in written-order code: the statement and what went wrong."""
-    found = statement_of(exc)
-    what = str(exc) or type(exc).__name__
-    if isinstance(exc, ZeroDivisionError):
-        what = "division by zero"
-    if found is None or found[0] is None or found[0].span is None:
-        return what
-    return f"{found[0].target} (line {found[0].span.line}): {what}"
 
 
 # ----------------------------------------------------------------- preparation
@@ -117,7 +92,7 @@ def _initial(model: ir.Model, spec: ir.RunSpec, cache: Cache):
     key = (tuple(sorted(base.items())), repr(sorted(tables.items())))
     init = cache.get("initial", ("acsl",) + key, lambda: compile_code(
         model, "initial", acsl.initial, base, tables, starts))
-    calls = _Calls()
+    calls = Calls()
     values = dict(zip(init.amil_names, init(acsl.t0, [], [], [], calls), strict=True))
     stop = termination(acsl.termts[calls.termts[0]]) if calls.termts else None
     return base, values, calls.schedules, stop
@@ -273,8 +248,8 @@ class AcslRun(_Run):
         return nxt, acts
 
     # -------------------------------------------------------------------- code
-    def run_code(self, cur: Cursor, fn, what: str) -> _Calls:
-        calls = _Calls()
+    def run_code(self, cur: Cursor, fn, what: str) -> Calls:
+        calls = Calls()
         try:
             y, z, _ = fn(cur.t, cur.y.tolist(), cur.m, cur.z, calls)
         except (ArithmeticError, ValueError) as exc:
@@ -425,18 +400,4 @@ class AcslRun(_Run):
         return self.stopped
 
 
-def run_terminal(c, codes, cur: Cursor) -> dict[str, float]:
-    """TERMINAL sections in file order: the values they assign."""
-    out: dict[str, float] = {}
-    y, z = cur.y.tolist(), list(cur.z)
-    for k, code in enumerate(codes):
-        _, fn = c.code[f"terminal_{k}"]
-        try:
-            y, z, values = fn(cur.t, y, cur.m, z, _Calls())
-        except (ArithmeticError, ValueError) as exc:
-            raise AmilError(f"TERMINAL: {code_fault(exc)}") from None
-        out.update(zip(code.assigned, values, strict=True))
-    return out
-
-
-__all__ = ["AcslPrepared", "AcslRun", "Grid", "prepare_acsl", "run_terminal"]
+__all__ = ["AcslPrepared", "AcslRun", "Grid", "prepare_acsl"]

@@ -49,12 +49,12 @@ from ..diagnostics import AmilError
 from ..outcome import message
 from ..result import Event
 from .dense import Observers
+from .driver import start_cursor
 from .grazing import Grazing, Missed
 from .jacobian import jacobian_at
 from .loop import Cursor, Integrator, Stop
 from .plan import Options
 from .prepare import Cache, prepare
-from .simulate import start_cursor
 from .slide import MAX_SLIDING
 from .steppoint import StepPoint
 from .variational import Tangent

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from ..files import OutputError, atomic_open, ensure_directory
-from ..writers import PlotOptions
+from ..options import PlotOptions
 
 if TYPE_CHECKING:
     from ...result import Run

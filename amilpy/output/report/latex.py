@@ -21,6 +21,7 @@ from typing import TextIO
 
 from .. import tables as T
 from ..files import OutputError
+from ..highlight import VERBATIM, verbatim
 from ..words import visible
 from .document import CODE_CHARS, CONTINUED, Code, Document, Figure, Heading, TableBlock, Text
 
@@ -130,11 +131,6 @@ def table(t: T.Table, out: TextIO) -> None:
         out.write(f"{tex(note)}\n\n")
 
 
-# In a Verbatim with commandchars, a listing's text can neither end the environment
-# (a line "\end{Verbatim}") nor run a command: its \, { and } are characters by number.
-_VERBATIM = str.maketrans({"\\": "\\char92{}", "{": "\\char123{}", "}": "\\char125{}"})
-
-
 # What TeX reads as markup in a file name given to \input or \includegraphics
 # (where it cannot be escaped): a listing's name with one of them would run commands.
 _NOT_IN_NAMES = set("\\{}%#$&^~")
@@ -148,16 +144,6 @@ def check_file_name(stem: str, path: str) -> None:
                           f"{' '.join(visible(ch) for ch in bad)}, which LaTeX would read "
                           "as commands in the file names the report gives it: copy the "
                           "listing to a name without them")
-
-
-def verbatim(lines: list[str], out: TextIO, options: str = "") -> None:
-    """Lines as they are, in a fancyvrb Verbatim (`options` after its own), in a
-    font small enough for the longest (a printer plot)."""
-    longest = max((len(line) for line in lines), default=0)
-    size = "\\small" if longest <= 100 else "\\scriptsize" if longest <= 125 else "\\tiny"
-    out.write(f"\\begin{{Verbatim}}[commandchars=\\\\\\{{\\}},fontsize={size}{options}]\n")
-    out.write("".join(visible(line).translate(_VERBATIM) + "\n" for line in lines))
-    out.write("\\end{Verbatim}\n")
 
 
 # the continuation mark of a code row, in the Verbatim's commandchars
@@ -177,7 +163,7 @@ def code(b: Code, out: TextIO) -> None:
     texts = (latex_pieces(lines, [(r.line, r.start, len(r.text)) for r in rows])
              if b.kind == "listing" else None)
     if texts is None:
-        texts = [visible(r.text).translate(_VERBATIM) for r in rows]
+        texts = [visible(r.text).translate(VERBATIM) for r in rows]
     out.write("\\begin{Verbatim}[commandchars=\\\\\\{\\},fontsize=\\small]\n")
     for r, text in zip(rows, texts, strict=True):
         gutter = r.gutter.replace(CONTINUED, _MARK)

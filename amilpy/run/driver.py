@@ -1,0 +1,253 @@
+"""One run of a checked model driven from its start to its `Run`.
+
+`simulate` prepares the run (constants, generated functions, plan), starts it
+(`start`: the branches in force at t0, MODINT resets, memory, the first row),
+integrates it to FINISH, TERMT or a failure, locates the RANGE extrema
+(`locate_range`), evaluates TERMINAL in written order, and assembles the `Run`.
+A failing integration is a `Run` with status FAILED and every row computed; a
+fault in the data is an AmilError.
+"""
+
+from __future__ import annotations
+
+import time as _clock
+
+import numpy as np
+
+from .. import interrupts, ir
+from ..codegen import ModelCode, evaluate_constant
+from ..diagnostics import AmilError
+from ..library.runtime import table_warnings
+from ..outcome import Failure, message
+from ..result import Event, EventKind, Run, Status
+from .code import run_terminal
+from .faults import Fault, fault_text
+from .loop import Cursor, Integrator, Stop
+from .peaks import Context, locate_range
+from .plan import SLIDE, Options, RunPlan
+from .prepare import Prepared
+from .record import Recorder
+from .slide import MAX_SLIDING
+from .steppoint import StepPoint
+from .watch import SurfaceWatch, TooManySlides
+from .zeno import accumulation, cut
+
+
+def backstop(max_time: float | None) -> float | None:
+    """When a run's wall-clock limit interrupts code that never looks at the clock:
+    a little after the run loop's own look would have ended it."""
+    return None if not max_time else max_time + max(1.0, 0.1 * max_time)
+
+
+def start_cursor(c: ModelCode, plan: RunPlan, watch: SurfaceWatch, opts: Options,
+                 y: np.ndarray, z: list[float], m: list[float] | None,
+                 t0: float | None = None) -> Cursor:
+    """The state a run (or a flow) starts from at t0 (default the run's): the
+    branches in force (given, or chosen the way the dynamics go), MODINT resets
+    and memory applied."""
+    t0 = plan.t0 if t0 is None else t0
+    if m is None or len(m) != len(plan.watched):
+        m = watch.choose_modes(t0, y, z, [0.0] * len(plan.watched), set(), first=True)
+    y = watch.apply_resets(y, m, t0, z)
+    if c.z0:
+        memory = c.mem(t0, y.tolist(), m, m, z)
+        m = watch.after_memory(t0, y, list(m), z, memory)
+        z = memory
+    return Cursor(t0, y, list(m), list(z))
+
+
+class _Run:
+    def __init__(self, model: ir.Model, spec: ir.RunSpec, opts: Options, prepared: Prepared,
+                 started: float) -> None:
+        self.model, self.spec, self.opts = model, spec, opts
+        self.constants, self.c, self.plan = prepared.constants, prepared.code, prepared.plan
+        self.watch = SurfaceWatch(self.c, self.plan)
+        ranged = [n for r in spec.reports if r.kind == "RANGE" for n in r.names]
+        self.rec = Recorder(self.plan, self.c, self.watch, ranged + list(opts.extrema),
+                            self.plan.t0 + opts.settle if opts.settle > 0 else None)
+        # step-point mode runs the classic loop (steppoint.py) instead of the located one
+        self.integ = (StepPoint if self.plan.step_point else Integrator)(
+            model, self.plan, self.c, self.watch, opts, started)
+        self.started = started
+
+    def run(self) -> Run:
+        """The run, within its wall-clock limit even where no loop looks at the clock
+        (`backstop`): what was computed is kept."""
+        try:
+            with interrupts.time_limit(backstop(self.opts.max_time)):
+                return self._run()
+        except interrupts.TimeLimit:  # (before the integration: INITIAL, the start)
+            interrupts.silence_alarm()
+            t0 = self.plan.t0
+            cur = Cursor(t0, np.array(self.c.y0, dtype=float), [0.0] * len(self.plan.watched),
+                         list(self.c.z0))
+            self.integ.events.clear()
+            return self.finish(Status.FAILED, message(Failure.TIME_LIMIT, t=t0,
+                                                      limit=self.opts.max_time), cur, {})
+
+    def _run(self) -> Run:
+        c, plan, integ, start = self.c, self.plan, self.integ, self.opts.start
+        y = np.array(start["y"] if start else c.y0, dtype=float)
+        z = list(start["z"]) if start else list(c.z0)
+        m = [0.0] * len(plan.watched)
+        cur = Cursor(plan.t0, y, m, z)
+        table_warnings(c.tables)  # LINT's notes start afresh
+        if not plan.step_point:  # (in step-point mode t0 is the loop's first point)
+            try:
+                cur = self._start(y, z)
+            except (ArithmeticError, ValueError) as exc:
+                # a fault in the switching surfaces at the start (QNTZR with P = 0, say)
+                text = fault_text(self.model, c, Fault(exc, cur.t, y.tolist(), m, z))
+                integ.events.clear()
+                return self.finish(Status.FAILED, message(Failure.CANNOT_START, t=plan.t0,
+                                                          detail=text), cur, {})
+            except TooManySlides as exc:  # (seven masses stuck by dry friction at rest)
+                integ.events.clear()
+                return self.finish(Status.FAILED, message(Failure.SLIDES, t=plan.t0,
+                                                          count=exc.count, limit=MAX_SLIDING),
+                                   cur, {})
+        return self._integrate(cur)
+
+    def _start(self, y: np.ndarray, z: list[float]) -> Cursor:
+        """The branches in force at t0, and the first row."""
+        c, plan, integ, start = self.c, self.plan, self.integ, self.opts.start
+        cur = start_cursor(c, plan, self.watch, self.opts, y, z, start and start.get("m"))
+        for k, w in enumerate(plan.watched):
+            if cur.m[k] == SLIDE:  # sliding from the start is an event too
+                integ.events.append(Event(plan.t0, w.description, w.surface, 0.0, SLIDE,
+                                          EventKind.SLIDE, w.text))
+        self.first_row(cur)
+        return cur
+
+    def _integrate(self, cur: Cursor) -> Run:
+        c, plan, rec, integ = self.c, self.plan, self.rec, self.integ
+        try:
+            status, text = Status.FINISHED, ""
+            # (an overflow inside a solver's step is what the loop finds as a state or
+            # derivative that is not finite, and says so, with TIME and the variable:
+            # NumPy's warning about it, with a SciPy source line, is noise)
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                stopped = self.advance(cur)
+            if stopped is not None:
+                status, text = Status.STOPPED, message(Status.STOPPED, t=cur.t, what=stopped)
+        except Stop as stop:
+            status, text = Status.FAILED, message(stop.kind, t=stop.t, **stop.fields)
+            cur.t = stop.t
+            self._keep_last_good(cur)
+        except (interrupts.TimeLimit, KeyboardInterrupt) as ended:
+            # Ctrl-C, or the wall-clock limit where the loop never came back to look at
+            # its deadline (a PROCEDURAL loop, one long step: `run`). The rows of the
+            # step under way may reach past where it began: the run was computed to
+            # the last of them.
+            if isinstance(ended, KeyboardInterrupt):
+                interrupts.handled()
+                failure = Failure.INTERRUPTED
+            else:
+                interrupts.silence_alarm()
+                failure = Failure.TIME_LIMIT
+            cur.t = max(cur.t, rec.last_t if rec.last_t is not None else cur.t)
+            return self.finish(Status.FAILED, message(failure, t=cur.t,
+                                                      limit=self.opts.max_time), cur, {})
+        except TooManySlides as exc:
+            status, text = Status.FAILED, message(Failure.SLIDES, t=cur.t, count=exc.count,
+                                                  limit=MAX_SLIDING)
+        except (ArithmeticError, ValueError) as exc:
+            # arithmetic in generated code (surfaces, outputs), or SciPy refusing the
+            # non-finite values an earlier fault gave: the run ends here, with what it
+            # computed so far, and the fault that really happened
+            status = Status.FAILED
+            stop = Stop(Failure.FAULT, cur.t, detail=fault_text(
+                self.model, c, Fault(exc, cur.t, cur.y.tolist(), cur.m, cur.z)))
+            if c.fault_line(exc) is None:
+                stop = integ.fault_or(stop)
+            text = message(stop.kind, t=stop.t, **stop.fields)
+            self._keep_last_good(cur)
+        if status == Status.FINISHED and rec.out_i < len(plan.grid.times):
+            rec.row(plan.fintim, cur.y, cur.m, cur.z, len(plan.grid.times) - 1)
+        integ.warnings.extend(table_warnings(c.tables))
+        if rec.output_fault is not None:
+            integ.warnings.append(f"{rec.output_fault}; it is NaN in the rows where it "
+                                  "cannot be computed, and so is what is computed from it")
+        if plan.step_point:
+            run = self.finish(status, text, cur, integ.range_values())
+        else:
+            ctx = Context(self.model, plan, c, self.watch, self.opts, self.started)
+            run = self.finish(status, text, cur, locate_range(ctx, rec.extrema, rec.restarts))
+        return self._zeno(run)
+
+    @staticmethod
+    def _zeno(run: Run) -> Run:
+        """A run that went past an accumulation of events ends there (`zeno`)."""
+        if run.status == Status.FAILED:
+            return run
+        found = accumulation(run.events, run.t_end)
+        if found is not None:
+            cut(run, found.t)
+            run.status = Status.FAILED
+            run.message = message(Failure.ZENO, t=found.t, what=found.what,
+                                  ratio=found.ratio)
+        return run
+
+    def first_row(self, cur: Cursor) -> None:
+        """The row at t0 (the ACSL form runs the events due at t0 first)."""
+        self.rec.grid_row(cur.t, cur.y, cur.m, cur.z,
+                          shown=self.rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
+
+    def advance(self, cur: Cursor) -> str | None:
+        """Integrate to the end; what stopped the run early (FINISH, TERMT), if any."""
+        self.integ.integrate(cur, self.plan.fintim, self.rec)
+        reason = self.integ.stop_reason
+        return self.plan.watched[reason].description if reason is not None else None
+
+    def terminal(self, run: Run, cur: Cursor) -> dict[str, float]:
+        """TERMINAL's values, in written order."""
+        codes = self.model.terminal_code or (self.model.acsl.terminal if self.model.acsl
+                                             else [])
+        if codes:
+            return run_terminal(self.c, codes, cur)
+        return evaluate_terminal(self.model, self.spec, self.constants, run.final, cur.t)
+
+    def _keep_last_good(self, cur: Cursor) -> None:
+        """The last accepted state is the final row (everything computed)."""
+        last = self.integ.last_good
+        if last is not None and (self.rec.last_t is None or last[0] > self.rec.last_t) \
+                and np.all(np.isfinite(last[1])):
+            self.rec.row(last[0], np.asarray(last[1], float), last[2], cur.z)
+            cur.t, cur.y = last[0], np.asarray(last[1], float)
+
+    def finish(self, status: Status, text: str, cur: Cursor, extrema: dict) -> Run:
+        integ = self.integ
+        terminal: dict[str, float] = {}
+        notes = [f"line {d.span.line}: {d.message}" if d.span else d.message
+                 for d in self.model.warnings]
+        run = self.rec.run(
+            self.spec, self.constants, integ.events, status, text, notes + integ.warnings,
+            dict(nsteps=integ.nsteps, nfev=integ.nfev, nevents=len(integ.events),
+                 seconds=_clock.perf_counter() - self.started,
+                 stiff_from=getattr(integ, "stiff_from", None)),
+            cur.t, cur.y, cur.z, cur.m, terminal, extrema)
+        if status != Status.FAILED and (self.model.terminal or self.model.terminal_code
+                                        or (self.model.acsl and self.model.acsl.terminal)):
+            try:
+                terminal.update(self.terminal(run, cur))
+            except AmilError as err:
+                d = err.diagnostics[0]
+                where = f" (line {d.span.line})" if d.span else ""
+                run.status = Status.FAILED
+                run.message = message(Failure.TERMINAL, t=cur.t, detail=d.message + where)
+            run.terminal = dict(terminal)
+            run.final.update(terminal)
+        return run
+
+
+def evaluate_terminal(model: ir.Model, spec: ir.RunSpec, constants: dict[str, float],
+                      final: dict[str, float], t_end: float) -> dict[str, float]:
+    """TERMINAL, once, in written order: each statement sees the run's constants,
+    the final values of the states and DYNAMIC variables, TIME at the end, and the
+    TERMINAL values before it."""
+    values = {**constants, **final, "TIME": t_end}
+    out: dict[str, float] = {}
+    for eq in model.terminal:
+        out[eq.target] = values[eq.target] = evaluate_constant(model, eq.expr, values,
+                                                               spec.tables, eq.span)
+    return out
