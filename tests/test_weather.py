@@ -108,3 +108,14 @@ def test_a_malformed_line_is_named(tmp_path):
     (tmp_path / "NLD1.990").write_text(CABO.replace("0.65", "O.65"))
     with pytest.raises(AmilError, match=r"NLD1\.990:4: not a CABO weather line"):
         read_cabo(str(tmp_path / "NLD1.990"))
+
+
+@pytest.mark.parametrize("old, new", [("2800", "nan"), ("2800", "inf"),
+                                      ("    1    2800", "  inf    2800"), ("-0.18", "NaN")])
+def test_a_value_that_is_not_a_number_is_named_not_a_traceback(tmp_path, old, new):
+    # Python's float() reads "nan" and "inf": a NaN day ran on as "no weather" and an
+    # infinite day number was an OverflowError; -99 is how a CABO file marks a gap
+    (tmp_path / "NLD1.990").write_text(CABO.replace(old, new, 1))
+    with pytest.raises(AmilError, match=r"NLD1\.990:[34]: '(nan|inf|NaN)' is not a value a "
+                                        r"CABO weather file holds: write -99"):
+        read_cabo(str(tmp_path / "NLD1.990"))

@@ -116,6 +116,11 @@ def read_cabo(path: str) -> WeatherYear:
         except ValueError:
             raise AmilError(f"{path}:{number}: not a CABO weather line: {line.strip()[:60]!r}"
                             ) from None
+        bad = next((f for f, v in zip(fields, values, strict=True) if not math.isfinite(v)),
+                   None)
+        if bad is not None:  # (Python reads "nan" and "inf" as numbers; a CABO file has none)
+            raise AmilError(f"{path}:{number}: {bad[:20]!r} is not a value a CABO weather "
+                            "file holds: write -99 for a missing one")
         if year is None:
             if len(values) < 3:
                 raise AmilError(f"{path}:{number}: the station line needs LONG LAT ELEV "
