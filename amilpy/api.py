@@ -278,7 +278,9 @@ class Model:
         """One run per value of data value `name` (see `amilpy.batch.sweep.sweep`; `jobs`,
         `scheduler` as for `run`, for a sweep that does not carry its state)."""
         from .batch.sweep import sweep
+        from .output.views import install
 
+        install()  # (the runs it keeps plot and show themselves)
         _check_method(method)
         return sweep(self, name, [float(v) for v in values], both_ways=both_ways,
                      carry_state=carry_state, settle=settle, measure=measure, method=method,

@@ -165,3 +165,31 @@ def test_sweep_and_analysis_figures_take_the_format_too(tmp_path, command, extra
     assert (tmp_path / f"{stem}.pdf").read_bytes()[:5] == b"%PDF-"
     assert "<svg" in (tmp_path / f"{stem}.svg").read_text()
     assert not (tmp_path / f"{stem}.png").exists()
+
+
+def test_overlay_of_an_x_plot_with_a_listing_that_lacks_x(tmp_path):
+    # the first listing plots E against X; the second has no X: drawn without it,
+    # never a KeyError (a review found the traceback)
+    first = _write(tmp_path, "first")
+    other = _write(tmp_path, "other", "TITLE OTHER\nE = INTGRL(0.5, 0.0)\nPHASE = E\n"
+                                      "TIMER FINTIM = 6.0, OUTDEL = 0.5\nOUTPUT E\nEND\n")
+    assert main(["run", str(first), str(other), "--overlay", "--format", "svg",
+                 "--quiet"]) == 0
+    energy = (tmp_path / "first_vs_other_1.svg").read_text()
+    assert len(re.findall("stroke-width: 1.2", energy)) == 1  # first's E against X only
+
+
+def test_a_listing_name_with_dots_keeps_them_in_its_figures(tmp_path):
+    model = _write(tmp_path, "lab.svg")
+    assert main(["run", str(model), "--quiet", "--plot"]) == 0
+    assert sorted(p.name for p in tmp_path.glob("*.png")) == ["lab.svg_1.png", "lab.svg_2.png"]
+    assert main(["sweep", str(model), "W=0.5:1.5:0.5", "--fintim", "2", "--plot", "--quiet",
+                 "--out", str(tmp_path)]) == 0
+    assert (tmp_path / "lab.svg_sweep.png").exists() and not (tmp_path / "lab.png").exists()
+
+
+def test_vars_may_name_time(tmp_path):
+    model = _write(tmp_path, "osc")
+    out = tmp_path / "t.csv"
+    assert main(["run", str(model), "--quiet", "--csv", str(out), "--vars", "TIME,X"]) == 0
+    assert _rows(out)[0] == ["TIME", "X"]

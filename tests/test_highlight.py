@@ -1,4 +1,4 @@
-"""Editor support: the Pygments lexer (amilpy/highlight.py) and the TextMate grammar
+"""Editor support: the Pygments lexer (amilpy/output/highlight.py) and the TextMate grammar
 (editors/vscode/) read listings the way amilpy's reader does."""
 
 from __future__ import annotations

@@ -96,3 +96,12 @@ def test_a_run_still_plots_and_shows_itself():
     assert "<table>" in run._repr_html_()
     ax = run.plot("X")
     assert ax.get_lines()[0].get_label() == "X"
+
+
+def test_the_runs_a_sweep_keeps_plot_themselves():
+    import amilpy
+
+    model = amilpy.loads("PARAM K = 1.0\nX = INTGRL(1.0, -K*X)\n"
+                         "TIMER FINTIM = 1.0, PRDEL = 0.5\nPRINT X\nEND\n")
+    kept = model.sweep("K", [1.0, 2.0], keep_runs=True).runs
+    assert kept[0].plot("X").get_lines()

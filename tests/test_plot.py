@@ -90,8 +90,8 @@ def test_runs_option_keeps_labels_and_colours(tmp_path):
     model = amilpy.loads(text)
     runs = model.run()
     drawn = plot_figures(runs, str(tmp_path), "osc", PlotOptions(runs=(1, 3)))
-    assert [os.path.basename(p) for p, _ in drawn] == ["osc_1.png", "osc_2.png"]
-    assert drawn[0][1].endswith("; D = 0.2; D = 1")  # the caption names the runs shown
+    assert [os.path.basename(f.paths[0]) for f in drawn] == ["osc_1.png", "osc_2.png"]
+    assert drawn[0].caption.endswith("; D = 0.2; D = 1")  # the caption names the runs shown
     fig = draw([runs[0], runs[2]], figure_specs(runs[0])[0], ["D = 0.2", "D = 1"],
                numbers=[1, 3])
     colours = {line.get_color() for line in fig.axes[0].get_lines()

@@ -209,3 +209,47 @@ def test_figures_are_vector_graphics(motor, tmp_path):
         # and the figures are there: their axis labels are text on the page
         words = {w[3] for w in _words(pdf)} if shutil.which("pdftotext") else {"[s]"}
         assert "[s]" in words
+
+
+def _word_boxes(pdf):
+    """(page, y_min, y_max, word) of every word."""
+    html = subprocess.run(["pdftotext", "-bbox", str(pdf), "-"], capture_output=True,
+                          text=True, check=True).stdout
+    out, page = [], 0
+    for line in html.splitlines():
+        if "<page " in line:
+            page += 1
+        m = re.search(r'<word xMin="[\d.]+" yMin="([\d.]+)" xMax="[\d.]+" yMax="([\d.]+)">'
+                      r"(.*?)</word>", line)
+        if m:
+            out.append((page, float(m.group(1)), float(m.group(2)), m.group(3)))
+    return out
+
+
+def test_a_figure_taller_than_a_page_is_drawn_smaller_not_cut(tmp_path):
+    """Seven stacked axes (--subplots) are taller than the text's width allows: the
+    figure is narrowed to fit its page with its caption (a review found it run off
+    the page's foot, the caption lost)."""
+    _need("pdftotext")
+    names = [f"Y{k}" for k in range(1, 8)]
+    listing = ("TITLE SEVEN AXES\nX = INTGRL(1.0, -X)\n"
+               + "".join(f"{n} = {10 ** k}.0*X\n" for k, n in enumerate(names))
+               + "TIMER FINTIM = 1.0, PRDEL = 0.5, OUTDEL = 0.01\n"
+               + f"OUTPUT {', '.join(names)}\nEND\n")
+    path = tmp_path / "seven.amil"
+    path.write_text(listing)
+    from amilpy.output.options import PlotOptions
+
+    make_report(str(path), str(tmp_path / "r"), ("pdf",), lang="en",
+                plot_options=PlotOptions(subplots=True))
+    words = _word_boxes(tmp_path / "r" / "seven_report.pdf")
+    caption = [w for w in words if w[3] == "Figure"]
+    assert caption, "the caption is on a page"
+    page = caption[0][0]
+    # everything on the figure's page but its footer stays above the bottom margin
+    foot = 841.89 - 0.95 * 72  # (the text block's foot; the footer sits below it)
+    body = [w for w in words if w[0] == page and w[1] < 841.89 - 50]
+    assert body and max(w[2] for w in body) <= foot + 1
+    # and the page before does not end with the heading alone
+    before = [w for w in words if w[0] == page - 1 and w[1] < 841.89 - 50]
+    assert not before or before[-1][3] != "Plots"

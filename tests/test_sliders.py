@@ -95,8 +95,9 @@ def test_named_sliders_and_bad_names():
     assert _final(sliders)[1] == pytest.approx(2.0 * math.exp(-4.0), rel=1e-7)
     with pytest.raises(amilpy.UsageError, match="KK is not a variable or data value"):
         amilpy.interact(amilpy.loads(DECAY), names=["KK"])
-    with pytest.raises(amilpy.UsageError, match="X is a variable, not a data value"):
-        amilpy.interact(amilpy.loads(DECAY), names=["X"])
+    for names in (["X"], ["K", "X"]):  # (never dropped quietly beside a good name)
+        with pytest.raises(amilpy.UsageError, match="X is a variable, not a data value"):
+            amilpy.interact(amilpy.loads(DECAY), names=names)
     with pytest.raises(amilpy.UsageError, match="no slider for W"):
         sliders.update(W=1.0)
 

@@ -58,6 +58,7 @@ from .console import (
     write_out,
 )
 
+# the modules whose warnings the command line does not show (see `_main`)
 LIBRARIES = r"(scipy|numpy|matplotlib|numba|lark)(\.|$)"
 
 
@@ -244,7 +245,9 @@ def _load(args, path: str):
 def cmd_run(args, path: str, signals: Signals) -> int:
     model, params = _load(args, path)
     plot = _plot_choice(args, model)
-    names = model.known_names(args.vars, data=True) if args.vars else None
+    # (TIME is every CSV's first column anyway)
+    names = model.known_names([n for n in args.vars if n != "TIME"], data=True) \
+        if args.vars else None
     if args.show_python:
         write_out(lambda out: out.write(model.python_source(weather_dir=args.weather_dir,
                                                             **params) + "\n"))

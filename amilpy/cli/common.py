@@ -19,7 +19,6 @@ from ..routes import method_names, route_for
 from .console import Signals, write_out
 
 EXIT_OK, EXIT_MODEL, EXIT_USAGE, EXIT_FAILED, EXIT_OUTPUT = 0, 1, 2, 3, 4
-# the modules whose warnings the command line does not show (see `_main`)
 
 
 # ------------------------------------------------------------- value checks

@@ -272,5 +272,6 @@ def plot_response(resp, path: str, model=None, reference=None,
     return save_figure(fig, path, formats)
 
 
-def figure_path(out_dir: str, stem: str, what: str) -> str:
-    return os.path.join(out_dir, f"{stem}_{what}.png")
+def figure_stem(out_dir: str, stem: str, what: str) -> str:
+    """Where an analysis's figure goes, without its extension (one per --format)."""
+    return os.path.join(out_dir, f"{stem}_{what}")

@@ -249,8 +249,11 @@ VERBATIM = str.maketrans({"\\": "\\char92{}", "{": "\\char123{}", "}": "\\char12
 def verbatim(lines: list[str], out: TextIO, options: str = "") -> None:
     """Lines as they are, in a fancyvrb Verbatim (`options` after its own), in a
     font small enough for the longest (a printer plot)."""
+    from amilpy.output.report.document import CODE_CHARS  # (what \\small fits)
+
     longest = max((len(line) for line in lines), default=0)
-    size = "\\small" if longest <= 100 else "\\scriptsize" if longest <= 125 else "\\tiny"
+    size = "\\small" if longest <= CODE_CHARS else "\\scriptsize" if longest <= 125 \
+        else "\\tiny"
     out.write(f"\\begin{{Verbatim}}[commandchars=\\\\\\{{\\}},fontsize={size}{options}]\n")
     out.write("".join(visible(line).translate(VERBATIM) + "\n" for line in lines))
     out.write("\\end{Verbatim}\n")

@@ -164,6 +164,8 @@ def draw(runs: Sequence[Run], spec: FigureSpec, labels: Sequence[str] | None = N
     names = [n for n in spec.names if any(n in r for r in runs)]
     data: dict[tuple[int, str], tuple[np.ndarray, np.ndarray]] = {}
     for k, run in enumerate(runs):
+        if spec.x is not None and spec.x not in run:
+            continue  # (another listing's run, overlaid, without the X variable)
         xs = run.t if spec.x is None else run[spec.x]
         part = _window_index(run.t, spec.window)
         for n in names:
@@ -278,17 +280,6 @@ def caption(spec: FigureSpec, runs: Sequence[Run], labels: Sequence[str],
     return text
 
 
-def plot_figures(runs: list[Run], out_dir: str, stem: str,
-                 options: PlotOptions | None = None,
-                 notes: dict[str, tuple[str, str]] | None = None,
-                 words: dict[str, str] | None = None) -> list[tuple[str, str]]:
-    """Draw and save one figure per OUTPUT statement (and a zoomed one per statement
-    with `zoom_events`); return (path, caption) of each, the path in the first of
-    `options.formats`."""
-    return [(f.paths[0], f.caption) for f in
-            _saved_figures(runs, out_dir, stem, options, notes, words)]
-
-
 @dataclass(frozen=True)
 class SavedFigure:
     """A figure as written: its files (one per format), its caption, and how to
@@ -300,13 +291,17 @@ class SavedFigure:
     size: tuple[float, float]  # inches, as saved
 
 
-def report_figures(runs: list[Run], out_dir: str, stem: str,
-                   options: PlotOptions | None = None,
-                   notes: dict[str, tuple[str, str]] | None = None,
-                   words: dict[str, str] | None = None) -> list[SavedFigure]:
-    """`plot_figures` for a report: each figure with its files, caption and a way to
-    draw it again as vector graphics."""
-    return _saved_figures(runs, out_dir, stem, options, notes, words, keep=True)
+def plot_figures(runs: list[Run], out_dir: str, stem: str,
+                 options: PlotOptions | None = None,
+                 notes: dict[str, tuple[str, str]] | None = None,
+                 words: dict[str, str] | None = None) -> list[SavedFigure]:
+    """Draw and save one figure per OUTPUT statement (and a zoomed one per statement
+    with `zoom_events`), each in every one of `options.formats`: its files, caption
+    and a way to draw it again (a report's page draws it as vector graphics)."""
+    options = options or PlotOptions()
+    chosen, labels, numbers = selected(runs, options.runs)
+    return _save_specs(chosen, labels, numbers, figure_specs(runs[0]), out_dir, stem,
+                       options, notes, words)
 
 
 def window_suffix(window: tuple[float, float]) -> str:
@@ -338,22 +333,10 @@ def plot_overlay(listings: Sequence[tuple[str, Sequence[Run]]], out_dir: str,
             for path in f.paths]
 
 
-def _saved_figures(runs: list[Run], out_dir: str, stem: str,
-                   options: PlotOptions | None = None,
-                   notes: dict[str, tuple[str, str]] | None = None,
-                   words: dict[str, str] | None = None, keep: bool = False
-                   ) -> list[SavedFigure]:
-    options = options or PlotOptions()
-    chosen, labels, numbers = selected(runs, options.runs)
-    return _save_specs(chosen, labels, numbers, figure_specs(runs[0]), out_dir, stem,
-                       options, notes, words, keep)
-
-
 def _save_specs(chosen: list[Run], labels: list[str], numbers: list[int],
                 specs: list[FigureSpec], out_dir: str, stem: str, options: PlotOptions,
                 notes: dict[str, tuple[str, str]] | None = None,
-                words: dict[str, str] | None = None, keep: bool = False
-                ) -> list[SavedFigure]:
+                words: dict[str, str] | None = None) -> list[SavedFigure]:
     window = None
     if options.start is not None or options.stop is not None:
         t0 = min(float(r.times[0]) for r in chosen)
@@ -374,7 +357,7 @@ def _save_specs(chosen: list[Run], labels: list[str], numbers: list[int],
             paths = save_figure(fig, os.path.join(out_dir, name), options.formats)
             redraw = functools.partial(draw, chosen, figure_spec, labels, notes,
                                        options.subplots, False, numbers,
-                                       height=options.height) if keep else None
+                                       height=options.height)
             out.append(SavedFigure(paths, caption(figure_spec, chosen, labels, words), redraw,
                                    tuple(fig.get_size_inches())))
     if options.show:
@@ -386,21 +369,24 @@ def _save_specs(chosen: list[Run], labels: list[str], numbers: list[int],
 
 def plot_runs(runs: list[Run], out_dir: str, stem: str, options: PlotOptions | None = None,
               notes: dict[str, tuple[str, str]] | None = None) -> list[str]:
-    """Every file `plot_figures` writes (each figure in each of `options.formats`)."""
-    return [path for f in _saved_figures(runs, out_dir, stem, options, notes)
+    """Every file `plot_figures` writes."""
+    return [path for f in plot_figures(runs, out_dir, stem, options, notes)
             for path in f.paths]
 
 
 def save_figure(fig, path: str, formats: Sequence[str] = ()) -> list[str]:
-    """Save `fig` as `path`, or once per format of `formats` (path's stem with the
-    format's extension); the paths written, in that order. Vector formats keep
-    text as text (SVG: searchable; PDF: fonts embedded)."""
-    stem, ext = os.path.splitext(path)
-    ext = ext.lstrip(".").lower()
-    if ext not in FIGURE_FORMATS:  # (a stem with a dot in it: "hoist_from_0.5")
-        stem, ext = path, "png"
+    """Save `fig` as `path` (its extension says the format), or, given `formats`, as
+    the stem `path` with each format's extension; the paths written, in that order.
+    Vector formats keep text as text (SVG: searchable; PDF: fonts embedded)."""
+    if formats:  # (`path` is a stem: a listing's name may have dots, "lab.svg.amil")
+        stem = path
+    else:
+        stem, ext = os.path.splitext(path)
+        formats = (ext.lstrip(".").lower(),)
+        if formats[0] not in FIGURE_FORMATS:  # (a dot that is no extension: "x_0.5")
+            stem, formats = path, ("png",)
     out = []
-    for fmt in formats or (ext,):
+    for fmt in formats:
         if fmt not in FIGURE_FORMATS:
             raise ValueError(f"figure format {fmt!r}; the formats are "
                              f"{', '.join(FIGURE_FORMATS)}")

@@ -68,7 +68,6 @@ def slider_specs(model, names: Sequence[str] | None = None) -> list[SliderSpec]:
                              "data values: amilpy.interact(model, names=['K', ...])")
     else:
         names = model.known_names(names, data=True)
-        names = [n for n in names if n in data] or names
         missing = [n for n in names if n not in data]
         if missing:
             raise UsageError(f"{missing[0]} is a variable, not a data value: a slider "

@@ -106,5 +106,6 @@ def plot_sweep(result: Sweep, path: str, title: str | None = None,
     return save_figure(fig, path, formats)
 
 
-def sweep_png_path(out_dir: str, stem: str) -> str:
-    return os.path.join(out_dir, f"{stem}_sweep.png")
+def sweep_figure_stem(out_dir: str, stem: str) -> str:
+    """Where the sweep's figure goes, without its extension (one per --format)."""
+    return os.path.join(out_dir, f"{stem}_sweep")

@@ -71,12 +71,12 @@ def _sweep_csv(o: Outputs, path: str | None) -> list[str]:
 
 
 def _sweep_png(o: Outputs, _path: str | None) -> list[str]:
-    from .sweeps import plot_sweep, sweep_png_path, units
+    from .sweeps import plot_sweep, sweep_figure_stem, units
 
     titles = o.model.ir.runs[0].titles if o.model is not None else []
     title = titles[0] if titles else None
     axis_units = units(o.model, o.sweep) if o.model is not None else ("", "")
-    return plot_sweep(o.sweep, sweep_png_path(o.out_dir, o.stem), title, axis_units,
+    return plot_sweep(o.sweep, sweep_figure_stem(o.out_dir, o.stem), title, axis_units,
                       o.plot.formats)
 
 
@@ -96,7 +96,7 @@ def _analysis_png(o: Outputs, _path: str | None) -> list[str]:
     from . import analysis
 
     draw = {"periodic": analysis.plot_orbit, "response": analysis.plot_response}[o.command]
-    return draw(o.analysis, analysis.figure_path(o.out_dir, o.stem, o.command), o.model,
+    return draw(o.analysis, analysis.figure_stem(o.out_dir, o.stem, o.command), o.model,
                 formats=o.plot.formats)
 
 

@@ -14,7 +14,10 @@
     steppoint.py StepPoint: the classic fixed-step loop (step-point mode), its grid
                  and TIMER rules
     record.py    rows on the output grid, RANGE brackets, the Run
-    simulate.py  simulate(): one run from start to Run, RANGE located, TERMINAL
+    simulate.py  simulate(): one run prepared and handed to its driver
+    driver.py    the run from its start to its Run: RANGE located, TERMINAL
+    code.py      written-order code at run time: what it reports, its faults, TERMINAL
+    advice.py    the stiffness note after an expensive explicit run
     flow.py      Flow.advance(): the loop as a function, with its sensitivity
     variational.py  its monodromy by the variational equations and saltations
     grazing.py   a surface dipping across zero inside a step, found

@@ -89,7 +89,7 @@ def write_report(model, runs: Sequence[Run], path: str, out_dir: str | None = No
     from dataclasses import replace
 
     from .. import words as W
-    from ..plot import report_figures
+    from ..plot import plot_figures
     from .document import Figure, build
 
     stem = os.path.splitext(os.path.basename(path))[0]
@@ -116,8 +116,8 @@ def write_report(model, runs: Sequence[Run], path: str, out_dir: str | None = No
     # a little less tall than on screen, so that two share a page with some text)
     options = replace(plot_options or PlotOptions(), formats=("png", "pdf"),
                       height=REPORT_FIGURE_HEIGHT)
-    saved = attempt(lambda: report_figures(list(runs), out_dir, stem, options,
-                                           W.name_notes(model.ir), words))
+    saved = attempt(lambda: plot_figures(list(runs), out_dir, stem, options,
+                                         W.name_notes(model.ir), words))
     figures = [Figure(f.paths[0], f.caption, f.paths[1], f.redraw, f.size) for f in saved]
     doc = build(model, runs, figures, path, lang, checks)
     for fmt in formats:

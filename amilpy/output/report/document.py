@@ -157,11 +157,10 @@ def data_rows(model, run: Run, words: dict[str, str]) -> list[tuple[str, float, 
     return rows
 
 
-def build(model, runs: Sequence[Run], figures: Sequence[Figure | tuple[str, str]], path: str,
+def build(model, runs: Sequence[Run], figures: Sequence[Figure], path: str,
           lang: str, checks: Sequence | None = None) -> Document:
-    """The report of `model` (an api.Model) and its runs; `figures` are Figure
-    blocks or (PNG path, caption) pairs; `checks` each run's accuracy check, if
-    made."""
+    """The report of `model` (an api.Model) and its runs with its `figures`;
+    `checks` each run's accuracy check, if made."""
     words = W.WORDS[lang]
     ir = model.ir
     titles = runs[0].titles if runs and runs[0].titles else [os.path.basename(path)]
@@ -196,6 +195,5 @@ def build(model, runs: Sequence[Run], figures: Sequence[Figure | tuple[str, str]
         if not run.ok:
             doc.add(Text(f"{words['partial']}: {run.message}", strong=True))
     if figures:
-        doc.add(Heading(words["plots"], 2),
-                *(f if isinstance(f, Figure) else Figure(*f) for f in figures))
+        doc.add(Heading(words["plots"], 2), *figures)
     return doc

@@ -8,7 +8,8 @@ Nothing leaves the text block: prose is wrapped by its measured width; a
 listing or equation line longer than `CODE_CHARS` goes on in the next row,
 marked; tables are split by columns to fit (TIME starts each part) and, across
 pages, repeat their header; a printer plot wider than a line is set smaller.
-A heading is never the last thing on a page, and a figure is never cut.
+A heading is never the last thing on a page, and a figure is never cut (one taller
+than a page holds is drawn narrower).
 """
 
 from __future__ import annotations
@@ -208,14 +209,19 @@ def _figure(b: Figure, number: int, doc: Document, measure: _Measure) -> Box:
     """The figure the text's width, drawn again on the page (vector) where it can
     be, else its PNG; the caption right below."""
     width_in, height_in = b.size
-    image = WIDTH * height_in / width_in
     caption = measure.wrap(f"{doc.words['figure']} {number}: {b.caption}",
                            SIZES["caption"], width=WIDTH * 0.9)
     line = SIZES["caption"] * LEADING
+    # the text's width, unless that is taller than a page holds with its caption and a
+    # heading above (a figure of many stacked axes): then narrower, centred
+    tallest = HEIGHT - len(caption) * line - 10.0 - 3 * SIZES["heading"]
+    image = min(WIDTH * height_in / width_in, tallest)
+    width = image * width_in / height_in
+    left = MARGIN + (WIDTH - width) / 2
 
     def draw(fig, top: float) -> None:
-        x0, y_top = _frac(MARGIN, top)
-        x1, y_bottom = _frac(MARGIN + WIDTH, top + image)
+        x0, y_top = _frac(left, top)
+        x1, y_bottom = _frac(left + width, top + image)
         if b.redraw is not None:
             grid = fig.add_gridspec(3, 3, width_ratios=[x0, x1 - x0, 1 - x1],
                                     height_ratios=[1 - y_top, y_top - y_bottom, y_bottom],
