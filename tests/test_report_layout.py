@@ -83,19 +83,24 @@ def _pages(pdf):
     return int(re.search(r"Pages:\s+(\d+)", out.stdout).group(1))
 
 
-def _words(pdf):
-    """(page, x_min, x_max, word) of every word pdftotext finds."""
+def _boxes(pdf):
+    """(page, x_min, y_min, x_max, y_max, word) of every word pdftotext finds."""
     html = subprocess.run(["pdftotext", "-bbox", str(pdf), "-"], capture_output=True,
                           text=True, check=True).stdout
     out, page = [], 0
     for line in html.splitlines():
         if "<page " in line:
             page += 1
-        m = re.search(r'<word xMin="([\d.]+)" yMin="[\d.]+" xMax="([\d.]+)" yMax="[\d.]+">'
-                      r"(.*?)</word>", line)
+        m = re.search(r'<word xMin="([\d.]+)" yMin="([\d.]+)" xMax="([\d.]+)" '
+                      r'yMax="([\d.]+)">(.*?)</word>', line)
         if m:
-            out.append((page, float(m.group(1)), float(m.group(2)), m.group(3)))
+            out.append((page, *(float(g) for g in m.groups()[:4]), m.group(5)))
     return out
+
+
+def _words(pdf):
+    """(page, x_min, x_max, word) of every word."""
+    return [(p, x0, x1, w) for p, x0, _, x1, _, w in _boxes(pdf)]
 
 
 def _report(tmp_path, name, text, formats=("pdf", "tex")):
@@ -213,17 +218,7 @@ def test_figures_are_vector_graphics(motor, tmp_path):
 
 def _word_boxes(pdf):
     """(page, y_min, y_max, word) of every word."""
-    html = subprocess.run(["pdftotext", "-bbox", str(pdf), "-"], capture_output=True,
-                          text=True, check=True).stdout
-    out, page = [], 0
-    for line in html.splitlines():
-        if "<page " in line:
-            page += 1
-        m = re.search(r'<word xMin="[\d.]+" yMin="([\d.]+)" xMax="[\d.]+" yMax="([\d.]+)">'
-                      r"(.*?)</word>", line)
-        if m:
-            out.append((page, float(m.group(1)), float(m.group(2)), m.group(3)))
-    return out
+    return [(p, y0, y1, w) for p, _, y0, _, y1, w in _boxes(pdf)]
 
 
 def test_a_figure_taller_than_a_page_is_drawn_smaller_not_cut(tmp_path):
