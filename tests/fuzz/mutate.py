@@ -9,6 +9,7 @@ from __future__ import annotations
 import glob
 import os
 import random
+import re
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -256,6 +257,34 @@ def cli_cases(count: int, seed: int = 0):
             argv += [option, f"K={value}" if option == "--set" else value]
         argv += ["--quiet"]
         yield f"cli-s{seed}-{k}", CLI_LISTING, "amilpy " + " ".join(argv), argv
+
+
+# What each command is run with on a mutated listing: small budgets, so that a case
+# answers within the harness's time unless something is wrong; NAME is a PARAM of
+# the listing where it has one (else a name it lacks: a usage error, also a case).
+COMMAND_ARGS = {
+    "check": [],
+    "report": ["--format", "md,tex,pdf", "--no-accuracy-check", "--max-time", "3"],
+    "sweep": ["{name}=0.5:1.5:0.5", "--fintim", "0.5", "--jobs", "1"],
+    "modes": ["--at", "0"],
+    "periodic": ["--period", "1.0", "--settle", "0.5"],
+    "response": ["{name}=1.0:1.05", "--period", "1.0", "--settle", "0.5"],
+}
+
+
+def command_cases(count: int, seed: int = 0):
+    """Yield (case_id, bytes, description, argv): mutations of the corpus (as
+    `generate`) through every command but `run` in turn (which `generate` drives),
+    with the options of `COMMAND_ARGS`."""
+    commands = sorted(COMMAND_ARGS)
+    for k, (case_id, data, desc) in enumerate(generate(count, seed)):
+        command = commands[k % len(commands)]
+        found = re.search(rb"^\s*PARAM\s+([A-Za-z]\w*)", data, re.M | re.I)
+        name = found.group(1).decode("ascii", "replace") if found else "NOPARAM"
+        argv = [command, "{path}",
+                *(a.replace("{name}", name) for a in COMMAND_ARGS[command]), "--quiet"] \
+            if command != "check" else [command, "{path}"]
+        yield f"{command}-{case_id}", data, f"amilpy {command}: {desc}", argv
 
 
 def big_file(path: str, megabytes: int = 50) -> None:

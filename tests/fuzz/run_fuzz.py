@@ -33,12 +33,17 @@ def main(argv=None) -> int:
     ap.add_argument("--big", action="store_true", help="also run a 50 MB listing")
     ap.add_argument("--cli", type=int, default=0, metavar="N",
                     help="also N command lines with hostile numeric values")
+    ap.add_argument("--commands", type=int, default=0, metavar="N",
+                    help="also N mutated listings through check, report, sweep, modes, "
+                         "periodic and response in turn")
     ap.add_argument("--out", default="fuzz-findings")
     a = ap.parse_args(argv)
 
     cases = list(mutate.generate(a.count, a.seed))
     if a.cli:
         cases += list(mutate.cli_cases(a.cli, a.seed))
+    if a.commands:
+        cases += list(mutate.command_cases(a.commands, a.seed))
     if a.extremes:
         cases += [(k, v, f"extreme {k}") for k, v in mutate.extreme_cases().items()]
     if a.big:
