@@ -105,3 +105,15 @@ def test_the_runs_a_sweep_keeps_plot_themselves():
                          "TIMER FINTIM = 1.0, PRDEL = 0.5\nPRINT X\nEND\n")
     kept = model.sweep("K", [1.0, 2.0], keep_runs=True).runs
     assert kept[0].plot("X").get_lines()
+
+
+def test_every_package_is_in_the_wheel():
+    # pyproject lists the packages; one left out is missing from a normal (not
+    # editable) install, which the test suite's editable install would never show
+    import re
+
+    text = open(os.path.join(ROOT, "pyproject.toml"), encoding="utf-8").read()
+    listed = set(re.findall(r'"(amilpy[\w.]*)"', text.split("packages = [", 1)[1]
+                            .split("]", 1)[0]))
+    found = {m for m, (_, package) in _modules().items() if package}
+    assert found <= listed, sorted(found - listed)
