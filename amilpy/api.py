@@ -78,12 +78,16 @@ class Model:
         from .run import Flow, Options
 
         _check_method(method)
+        self._flow_map()
+        spec = self._specs(params)[run]
+        return Flow(self.ir, spec, Options(method=method, rtol=rtol, atol=atol), self.cache)
+
+    def _flow_map(self) -> None:
+        """Refuse what needs the model's flow map (`flow`, the analyses) in ACSL form."""
         if self.ir.acsl is not None:
             raise AmilError("a flow map is not available for a program in ACSL form: its "
                             "DISCRETE sections and DYNAMIC statements run between the "
                             "integrator's steps", self.ir.path)
-        spec = self._specs(params)[run]
-        return Flow(self.ir, spec, Options(method=method, rtol=rtol, atol=atol), self.cache)
 
     def _specs(self, params: dict[str, float]) -> list[ir.RunSpec]:
         known = set(self.ir.data_names)
@@ -308,6 +312,8 @@ class Model:
         from .analysis import Closure
         from .analysis.periodic import periodic
 
+        self._flow_map()
+
         _check_method(method)
         return periodic(self, Closure.of(period, angle), self._measures(measure),
                         settle_time=settle, method=method, rtol=rtol, atol=atol,
@@ -322,6 +328,8 @@ class Model:
         points, folds located."""
         from .analysis import Closure
         from .analysis.response import response
+
+        self._flow_map()
 
         _check_method(method)
         self._specs({**params, name: start})  # an unknown name is an error here

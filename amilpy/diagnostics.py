@@ -129,6 +129,9 @@ class Reporter:
     path: str | None
     source: str | None
     diagnostics: list[Diagnostic] = field(default_factory=list)
+    # every error reported, a repeat included: what a check compares to see whether it
+    # found a fault (the list says a repeated one once: a MACRO line called twice)
+    errors: int = 0
 
     def error(
         self,
@@ -137,6 +140,7 @@ class Reporter:
         hint: str | None = None,
         related: tuple[tuple[Span, str], ...] = (),
     ) -> None:
+        self.errors += 1
         d = Diagnostic(message, span, hint, "error", related)
         if d not in self.diagnostics:  # (two checks meeting one fault say it once)
             self.diagnostics.append(d)

@@ -382,3 +382,55 @@ def test_a_tiny_cint_is_refused_saying_so(cint):
         amilpy.loads(f"PROGRAM P\n  CINTERVAL CINT = {cint}\n  DERIVATIVE\n"
                      "    X = INTEG(1.0, 1.0)\n    TERMT(T .GE. 1.0)\n  END\nEND\n",
                      "t.csl").run(advice=False)
+
+
+# ---- found by the fuzzing over every command (stop 36) ----------------------------
+
+def test_a_bad_call_in_a_macro_called_twice_is_an_error_not_a_traceback(tmp_path):
+    # the second expansion's error repeats the first's (same MACRO line): said once,
+    # but its statement must not be lowered (an IndexError in the template)
+    from amilpy.cli import main
+
+    path = tmp_path / "m.amil"
+    path.write_text("MACRO Y = F2(T, X)\n   Y1 = REALPL(0., T)\n   Y = REALPL(0., T, Y1)\n"
+                    "ENDMAC\nX = INTGRL(0.0, 1.0)\nA = F2(0.1, X)\nB = F2(0.2, X)\n"
+                    "TIMER FINTIM = 1.0\nPRINT A, B\nEND\n")
+    assert main(["check", str(path)]) == 1
+
+
+def test_the_free_states_of_a_listing_with_an_impl_loop():
+    # periodic/response's look at which states are free ignored IMPL units' inputs
+    # (an IndexError on the shipped diode filter); V and the filters' states are read
+    import os
+
+    from conftest import ROOT
+
+    import amilpy
+    from amilpy.analysis.problem import free_states
+
+    model = amilpy.load(os.path.join(ROOT, "models", "examples", "csmp_diode_filter.amil"))
+    assert free_states(model.ir) == set()
+
+
+def test_analyses_of_an_acsl_program_are_refused_plainly(tmp_path, capsys):
+    import os
+
+    from conftest import ROOT
+
+    from amilpy.cli import main
+
+    path = os.path.join(ROOT, "tests", "golden", "acsl_dosing.csl")
+    for argv in (["periodic", path, "--period", "1"],
+                 ["response", path, "KE=0.1:0.2", "--period", "1"]):
+        assert main(argv) == 1
+        assert "a flow map is not available for a program in ACSL form" in \
+            capsys.readouterr().err
+
+
+def test_an_analysis_of_a_listing_without_variables(tmp_path, capsys):
+    from amilpy.cli import main
+
+    path = tmp_path / "empty.amil"
+    path.write_text("PARAM K = 1.0\nTIMER FINTIM = 1.0\nEND\n")
+    assert main(["periodic", str(path), "--period", "1"]) == 2
+    assert "no variable to measure" in capsys.readouterr().err

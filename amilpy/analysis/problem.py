@@ -125,14 +125,14 @@ def free_states(model: ir.Model) -> set[str]:
                                                               ir.Purpose.MEMORY)]
     roots += [a for m in model.memories for a in m.args]
     seen: set[str] = set()
-    pending = [n for r in roots for n in reads(r, model.switches, model.memories)]
+    pending = [n for r in roots for n in reads(r, model.switches, model.memories, model.units)]
     while pending:
         name = pending.pop()
         if name in seen:
             continue
         seen.add(name)
         if name in by_target:
-            pending.extend(reads(by_target[name], model.switches, model.memories))
+            pending.extend(reads(by_target[name], model.switches, model.memories, model.units))
     return {s.name for s in model.states if s.name not in seen}
 
 
@@ -163,12 +163,12 @@ def parameter_model(model: ir.Model, spec: ir.RunSpec, name: str
         grew = False
         for eq in model.dynamic:
             if eq.target not in reading and \
-                    set(reads(eq.expr, model.switches, model.memories)) & reading:
+                    set(reads(eq.expr, model.switches, model.memories, model.units)) & reading:
                 reading.add(eq.target)
                 grew = True
 
     def touches(expr) -> bool:
-        return bool(set(reads(expr, model.switches, model.memories)) & reading)
+        return bool(set(reads(expr, model.switches, model.memories, model.units)) & reading)
 
     fixed = (ir.Depends.CONST, ir.Depends.TIME, ir.Depends.IMPULSE)
     if any(touches(eq.expr) for eq in model.initial) or \

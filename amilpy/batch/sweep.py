@@ -221,6 +221,9 @@ def default_measure(model) -> str:
     OUTPUT/PRINT variable of the first run, else the first variable (an ir.Model)."""
     named = [n for r in model.runs[0].reports if r.kind in ("OUTPUT", "PRINT")
              for n in r.names]
+    if not named and not model.variables:
+        raise UsageError("the listing has no variable to measure: give it an equation or "
+                         "a state (and an OUTPUT or PRINT of it)")
     return named[0] if named else model.variables[0]
 
 

@@ -160,9 +160,9 @@ class CodeLowering:
             outputs = list(dict.fromkeys([*st.outputs, *outputs]))
             reads = list(dict.fromkeys([*st.inputs, *reads]))
             reads = [n for n in reads if n not in outputs]
-        before = len(self.rep.diagnostics)
+        before = self.rep.errors
         lowered = _Unit(self, section, st.span).block(body, {}, set(), ())
-        if len(self.rep.diagnostics) > before:
+        if self.rep.errors > before:
             return None
         return ir.Unit(index, "PROCEDURAL" if isinstance(st, ast.Procedural) else "IF",
                        tuple(outputs), tuple(reads), tuple(lowered), st.span)
@@ -194,7 +194,8 @@ class _Unit:
 
     def expr(self, expr: ast.Node, target: str | None, env, opaque, condition=False):
         names = self.code.names
-        names.check_calls(expr, UNIT_CALLS, "an IF or PROCEDURAL block")
+        if not names.check_calls(expr, UNIT_CALLS, "an IF or PROCEDURAL block"):
+            return ast.Num(0.0, expr.span)  # (reported: lowering it would fail on it)
         value = substitute(expr, env)
         literal = bool(opaque & set(read_names(value)))
         switch = next((n for n in ast.walk(value) if _switch_in_sorted_code(n)), None) \

@@ -71,11 +71,11 @@ class Names:
     def check_calls(self, expr: ast.Node, allow: tuple[Kind, ...] | None, section: str) -> bool:
         """Report unknown functions, wrong argument counts and misplaced functions;
         False if any."""
-        before = len(self.rep.diagnostics)
+        before = self.rep.errors
         for node in ast.walk(expr):
             if isinstance(node, ast.Call):
                 self.check_call(node, allow, section)
-        return len(self.rep.diagnostics) == before
+        return self.rep.errors == before
 
     def check_call(self, node: ast.Call, allow, section: str) -> None:
         entry = lookup(node.func)
