@@ -385,6 +385,8 @@ def save_figure(fig, path: str, formats: Sequence[str] = ()) -> list[str]:
         formats = (ext.lstrip(".").lower(),)
         if formats[0] not in FIGURE_FORMATS:  # (a dot that is no extension: "x_0.5")
             stem, formats = path, ("png",)
+    import matplotlib
+
     out = []
     for fmt in formats:
         if fmt not in FIGURE_FORMATS:
@@ -393,7 +395,7 @@ def save_figure(fig, path: str, formats: Sequence[str] = ()) -> list[str]:
         buf = io.BytesIO()
         # (SVG with its text as text, not paths: a report can search and restyle it;
         # no date in it, so the same figure is the same file)
-        with _rc({"svg.fonttype": "none", "svg.hashsalt": "amilpy"}):
+        with matplotlib.rc_context({"svg.fonttype": "none", "svg.hashsalt": "amilpy"}):
             fig.savefig(buf, format=fmt, dpi=110,
                         metadata={"Date": None} if fmt == "svg" else
                         {"CreationDate": None} if fmt == "pdf" else None)
@@ -401,12 +403,6 @@ def save_figure(fig, path: str, formats: Sequence[str] = ()) -> list[str]:
         atomic_write(target, buf.getvalue())
         out.append(target)
     return out
-
-
-def _rc(settings: dict):
-    import matplotlib
-
-    return matplotlib.rc_context(settings)
 
 
 def can_show() -> bool:

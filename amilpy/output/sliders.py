@@ -22,6 +22,7 @@ import re
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from html import escape
 
 from ..diagnostics import AmilError, UsageError
 from ..result import Run
@@ -189,7 +190,7 @@ class Sliders:
         except AmilError as exc:  # (a value the listing refuses: say so, keep the figures)
             if first:  # (the call's own arguments: its caller hears of it)
                 raise
-            self.status.value = f"<span style='color:red'>{_html(exc.text())}</span>"
+            self.status.value = f"<span style='color:red'>{escape(exc.text())}</span>"
             return self.runs
         self.runs_done += 1
         self.runs = runs
@@ -197,7 +198,7 @@ class Sliders:
         failed = [r for r in runs if not r.ok]
         note = "; ".join(f"{r.label}: {r.message}" for r in failed)
         self.status.value = (f"{len(runs)} run(s) in {took:.2g} s" if not failed else
-                             f"<span style='color:red'>{_html(note)}</span> (drawn up to "
+                             f"<span style='color:red'>{escape(note)}</span> (drawn up to "
                              "where it stopped)")
         self._draw()
         return runs
@@ -231,12 +232,6 @@ def _labels(prefix: str, runs: Sequence[Run]) -> list[str]:
     if len(runs) == 1:
         return [prefix]
     return [f"{prefix}; {label}" for label in W.run_labels(runs)]
-
-
-def _html(text: str) -> str:
-    from html import escape
-
-    return escape(text)
 
 
 def interact(model, names: Sequence[str] | None = None, method: str | None = None,

@@ -66,10 +66,10 @@ class Code:
         digits = len(str(len(self.lines))) if self.kind == "listing" else 0
         gutter = digits + 2 if self.kind == "listing" else 2
         width = max(chars - gutter, 20)
+        mark = " " * (gutter - 2) + CONTINUED + " "
         out = []
         for i, line in enumerate(self.lines):
             first = f"{i + 1:>{digits}}  " if self.kind == "listing" else ""
-            mark = " " * (gutter - 2) + CONTINUED + " "
             if self.kind == "plot":
                 out.append(Row(first, line, i, 0))
                 continue

@@ -79,17 +79,16 @@ class _Measure:
         from matplotlib.font_manager import FontProperties
 
         self.renderer = RendererAgg(10, 10, PT)
-        self.props = {}
-        self.FontProperties = FontProperties
+        self.props = {(size, bold): FontProperties(family=SANS, size=size,
+                                                   weight="bold" if bold else "normal")
+                      for size in set(SIZES.values()) for bold in (False, True)}
         self.cache: dict[tuple[str, float, bool], float] = {}
 
     def width(self, text: str, size: float, bold: bool = False) -> float:
         key = (text, size, bold)
         if key not in self.cache:
-            prop = self.FontProperties(family=SANS, size=size,
-                                       weight="bold" if bold else "normal")
             self.cache[key] = self.renderer.get_text_width_height_descent(
-                text, prop, ismath=False)[0]
+                text, self.props[size, bold], ismath=False)[0]
         return self.cache[key]
 
     def wrap(self, text: str, size: float, bold: bool = False, width: float = WIDTH
