@@ -10,10 +10,11 @@
 from __future__ import annotations
 
 import os
+from contextlib import contextmanager
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
-from . import ir
+from . import interrupts, ir
 from .check import check
 from .diagnostics import AmilError, Diagnostic, UsageError, did_you_mean, with_hint
 from .outcome import was_interrupted
@@ -278,9 +279,12 @@ class Model:
               fintim: float | None = None, keep_runs: bool = False, progress=None,
               step_point: bool | None = None, seed: float | None = None,
               weather_dir: str | list[str] | None = None,
-              jobs: int = 1, scheduler: str | None = None, **params: float):
+              jobs: int = 1, scheduler: str | None = None, max_time: float | None = None,
+              max_steps: int | None = None, max_events: int | None = None,
+              **params: float):
         """One run per value of data value `name` (see `amilpy.batch.sweep.sweep`; `jobs`,
-        `scheduler` as for `run`, for a sweep that does not carry its state)."""
+        `scheduler` as for `run`, for a sweep that does not carry its state; the
+        limits are each point's run's)."""
         from .batch.sweep import sweep
         from .output.views import install
 
@@ -291,52 +295,64 @@ class Model:
                      rtol=rtol, atol=atol, fintim=fintim, keep_runs=keep_runs,
                      progress=progress, step_point=step_point, seed=_seed(seed),
                      weather_dirs=_folders(weather_dir), jobs=jobs, scheduler=scheduler,
+                     max_time=max_time, max_steps=max_steps, max_events=max_events,
                      **params)
 
     def modes(self, at: float = 0.0, method: str | None = None, rtol: float | None = None,
-              atol: float | None = None, progress=None, **params: float):
+              atol: float | None = None, progress=None, max_time: float | None = None,
+              **params: float):
         """The linear modes about the state at TIME `at` (`amilpy.analysis.linear`):
-        eigenvalues, natural frequencies, damping ratios, shapes, the Jacobian."""
+        eigenvalues, natural frequencies, damping ratios, shapes, the Jacobian.
+        `max_time`: wall-clock seconds for the whole analysis (FlowFailed past it)."""
         from .analysis.linear import modes
+        from .run.flow import FlowFailed
 
         _check_method(method)
-        return modes(self, at, method=method, rtol=rtol, atol=atol, progress=progress,
-                     **params)
+        with _analysis_time(max_time, FlowFailed):
+            return modes(self, at, method=method, rtol=rtol, atol=atol, progress=progress,
+                         **params)
 
     def periodic(self, period=None, angle=None, measure=(), settle: float | None = None,
                  method: str | None = None, rtol: float | None = None,
-                 atol: float | None = None, progress=None, **params: float):
+                 atol: float | None = None, progress=None, max_time: float | None = None,
+                 **params: float):
         """The periodic steady state by shooting (`amilpy.analysis.periodic`): after
         `period` (a number or an expression of constants, "2*PI/W"), or when state
-        NAME has advanced by VALUE (`angle="PHI=2*PI"`); raises NotConverged."""
+        NAME has advanced by VALUE (`angle="PHI=2*PI"`); raises NotConverged (also
+        when `max_time`, wall-clock seconds for the whole analysis, runs out)."""
         from .analysis import Closure
-        from .analysis.periodic import periodic
+        from .analysis.periodic import NotConverged, periodic
 
         self._flow_map()
 
         _check_method(method)
-        return periodic(self, Closure.of(period, angle), self._measures(measure),
-                        settle_time=settle, method=method, rtol=rtol, atol=atol,
-                        progress=progress, **params)
+        with _analysis_time(max_time, lambda text: NotConverged(text, [])):
+            return periodic(self, Closure.of(period, angle), self._measures(measure),
+                            settle_time=settle, method=method, rtol=rtol, atol=atol,
+                            progress=progress, **params)
 
     def response(self, name: str, start: float, stop: float, period=None, angle=None,
                  measure=(), settle: float | None = None, method: str | None = None,
                  rtol: float | None = None, atol: float | None = None, progress=None,
-                 **params: float):
+                 max_time: float | None = None, **params: float):
         """The response curve in data value `name` over [start, stop] by continuation
         of the periodic orbit (`amilpy.analysis.response`): stable and unstable
-        points, folds located."""
+        points, folds located. `max_time`: wall-clock seconds for the whole curve;
+        the points found by then are kept (`Response.timed_out`); NotConverged if
+        it runs out before the first point."""
         from .analysis import Closure
+        from .analysis.periodic import NotConverged
         from .analysis.response import response
 
         self._flow_map()
 
         _check_method(method)
         self._specs({**params, name: start})  # an unknown name is an error here
-        return response(self, name.upper(), float(start), float(stop),
-                        Closure.of(period, angle), self._measures(measure),
-                        settle_time=settle, method=method, rtol=rtol, atol=atol,
-                        progress=progress, **params)
+        with _analysis_time(max_time, lambda text: NotConverged(text, [])):
+            return response(self, name.upper(), float(start), float(stop),
+                            Closure.of(period, angle), self._measures(measure),
+                            settle_time=settle, method=method, rtol=rtol, atol=atol,
+                            progress=progress, **params)
 
     def _measures(self, names) -> list[str]:
         from .batch.sweep import default_measure
@@ -431,6 +447,21 @@ def load(path: str | os.PathLike) -> Model:
         raise
     model.ir.warnings.append(note)
     return model
+
+
+@contextmanager
+def _analysis_time(max_time: float | None, error):
+    """An analysis within `max_time` seconds of wall clock (None: unbounded): past
+    it, `error(text)` is raised, unless the analysis kept what it found itself (a
+    response curve's points)."""
+    if max_time is not None and not max_time > 0:
+        raise UsageError(f"max_time must be positive, got {max_time!r}")
+    try:
+        with interrupts.time_limit(max_time):
+            yield
+    except interrupts.TimeLimit:
+        interrupts.silence_alarm()
+        raise error(f"the time limit of {max_time:g} s ran out") from None
 
 
 def _check_method(method: str | None) -> None:

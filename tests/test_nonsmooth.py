@@ -24,7 +24,7 @@ from scipy.optimize import brentq
 import amilpy
 from amilpy import library
 from amilpy.library import runtime
-from amilpy.library.surfaces import level, sign
+from amilpy.library.surfaces import amod_at, level, sign
 
 EPS = sys.float_info.epsilon
 ROOT_DOCS = Path(ROOT) / "docs"
@@ -40,7 +40,7 @@ def ulps(t: float, n: int = 8) -> float:
 # ------------------------------------------------------------ the library entries
 def _template(text: str, args: tuple[float, ...], modes=()) -> float:
     """A library template evaluated on floats: A, B, ... the arguments, M0, ... modes."""
-    names = {"ABS": abs, "SGN": sign, **dict(zip("ABCDEFGH", args, strict=False))}
+    names = {"ABS": abs, "SGN": sign, "AMODAT": amod_at, **dict(zip("ABCDEFGH", args, strict=False))}
     names.update({f"M{k}": m for k, m in enumerate(modes)})
     return float(eval(text, {"__builtins__": {}}, names))  # noqa: S307 - library text
 
@@ -586,3 +586,18 @@ def test_arithmetic_only_printed_is_not_an_event():
     abs_times = [e.time for e in read.events if e.switch.startswith("ABS")]
     assert abs_times == pytest.approx([0.25, 0.75, 1.25], abs=1e-9)
     assert read["A"] == pytest.approx(printed["A"], abs=1e-8)
+
+
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "DOP853", "COMPILED"])
+def test_amod_of_a_large_dividend_is_the_exact_remainder(method):
+    """AMOD(1E20, 7) printed 0: the switched form A - B*AINT(A/B) held at its branch
+    rounds A - k*B to nothing when A is large. In the branch A/B is in it is fmod's
+    exact remainder now (1E20 = 14285714285714285714*7 + 2: both exact in binary)
+    on every route, the compiled one too (its numba form of the same function;
+    without numba it runs as DOP853, which is then what is checked)."""
+    run = run1("X = INTGRL(0.0, 1.0)\nY = AMOD(1.0E20, 7.0)\nZ = AMOD(X + 1.0E20, 7.0)\n"
+               "W = AMOD(-1.0E20 - X, -7.0)\nTIMER FINTIM = 1.0, OUTDEL = 0.5\n"
+               "PRINT Y, Z, W\nEND\n", method=method)
+    assert run.ok
+    assert list(run["Y"]) == list(run["Z"]) == [2.0] * 3
+    assert list(run["W"]) == [-2.0] * 3 and math.fmod(1e20, 7.0) == 2.0

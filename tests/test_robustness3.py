@@ -241,6 +241,38 @@ def test_an_interrupted_response_keeps_the_curve_so_far():
     assert np.all(np.diff([p.value for p in resp.points]) > 0)
 
 
+def test_a_response_past_its_time_limit_keeps_the_curve_so_far():
+    """`response` had no time limit: a slow curve could only be killed, and its
+    points were lost (the fuzzing's "hangs"). `max_time` ends it like Ctrl-C: the
+    points so far are the result, marked as stopped by the limit. (The limit's
+    signal stands in here as the progress line after the third point raising what
+    the alarm raises: when it rings is the clock's business.)"""
+    model = amilpy.loads(SWEEP.replace("FINTIM = 5.0", "FINTIM = 30.0"))
+
+    def progress(report):
+        if report.done >= 3:
+            raise interrupts.TimeLimit
+
+    resp = model.response("W", 0.5, 1.5, period="2*PI/W", progress=progress, max_time=3600)
+    assert resp.timed_out and not resp.interrupted and not resp.complete
+    assert len(resp.points) == 3
+
+
+@pytest.mark.parametrize("command", [
+    ["modes", "--at", "30"], ["periodic", "--period", "2*PI/W"],
+    ["response", "W=0.5:1.5", "--period", "2*PI/W"]])
+def test_an_analysis_stops_at_its_time_limit_with_exit_3(tmp_path, capsys, command):
+    """modes, periodic and response take --max-time for the whole analysis. A limit
+    far shorter than the settling run (30 s of a forced oscillator: thousands of
+    steps, never done within 1 ms) ends it with exit 3 and says so."""
+    path = tmp_path / "forced.amil"
+    path.write_text(SWEEP.replace("FINTIM = 5.0", "FINTIM = 30.0"))
+    code = main([command[0], str(path), *command[1:], "--max-time", "0.001", "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 3, err
+    assert "time limit of 0.001 s ran out" in err and "Traceback" not in err
+
+
 # ------------------------------------------------------------ wall-clock limit
 
 def test_a_time_limit_keeps_the_rows_of_auto():
@@ -434,3 +466,18 @@ def test_an_analysis_of_a_listing_without_variables(tmp_path, capsys):
     path.write_text("PARAM K = 1.0\nTIMER FINTIM = 1.0\nEND\n")
     assert main(["periodic", str(path), "--period", "1"]) == 2
     assert "no variable to measure" in capsys.readouterr().err
+
+
+def test_a_sweep_bounds_each_point_by_the_run_limits(tmp_path, capsys):
+    """`sweep` took no --max-time/--max-steps/--max-events: a point that would not end
+    could only be killed. Each point's run now has them; a point over its limit is a
+    failed point with its rows so far (here 50 steps cannot reach TIME 5)."""
+    path = tmp_path / "forced.amil"
+    path.write_text(SWEEP)
+    code = main(["sweep", str(path), "W=0.5:1.5:0.5", "--max-steps", "50", "--jobs", "1",
+                 "--csv", str(tmp_path / "s.csv")])
+    out, err = capsys.readouterr()
+    assert code == 3 and "3 point(s) failed" in err
+    assert out.count("FAILED") == 3
+    result = amilpy.loads(SWEEP).sweep("W", [0.5], measure="X", max_steps=50)
+    assert result.points[0].status == "failed"

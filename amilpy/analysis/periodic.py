@@ -46,7 +46,7 @@ class NotConverged(AmilError):
     def __init__(self, message: str, history: list[float]) -> None:
         self.history = list(history)
         text = ", ".join(f"{r:.3g}" for r in history)
-        super().__init__(f"{message}; residual history: {text}")
+        super().__init__(f"{message}; residual history: {text}" if history else message)
 
 
 @dataclass

@@ -106,6 +106,7 @@ class Response:
     notes: list[str] = field(default_factory=list)  # flags, what could not be followed
     complete: bool = True  # the curve reached an end of the range
     interrupted: bool = False  # Ctrl-C (SIGTERM, SIGHUP) ended it: the points so far kept
+    timed_out: bool = False  # its time limit (`max_time`) ended it: the points so far kept
     names: list[str] = field(default_factory=list)  # the states, in Point.start order
 
     @property
@@ -291,6 +292,9 @@ class Continuation:
         except KeyboardInterrupt:  # the points found are kept, as a run's rows are
             interrupts.handled()
             out.complete, out.interrupted = False, True
+        except interrupts.TimeLimit:  # (the same, at the caller's time limit)
+            interrupts.silence_alarm()
+            out.complete, out.timed_out = False, True
         return out
 
     def follow(self, out: Response, node: _Node, tangent: np.ndarray, trail: list[_Node],

@@ -233,13 +233,16 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
           fintim: float | None = None, keep_runs: bool = False, progress=None,
           step_point: bool | None = None, seed: float | None = None,
           weather_dirs: tuple[str, ...] = (), jobs: int = 1, scheduler: str | None = None,
-          grid: tuple[str, list[float]] | None = None, **params: float) -> Sweep:
+          grid: tuple[str, list[float]] | None = None, max_time: float | None = None,
+          max_steps: int | None = None, max_events: int | None = None,
+          **params: float) -> Sweep:
     """Run `model` once per value of data value `name` and measure `measure`.
     `progress` (`amilpy.progress`) is given a Report after each point (task "sweep")
     and during each run (task "run"; runs in this process only). Points that do not carry the
     state are independent: `jobs` worker processes or a Dask `scheduler` run them
     (see `amilpy.batch.farm`), in any order, the result in the points' order. `grid`:
-    (name, values) of a second data value: every pair of values is a point."""
+    (name, values) of a second data value: every pair of values is a point.
+    `max_time`, `max_steps`, `max_events`: each point's run's limits, as `run`'s."""
     from ..run import Options
 
     name = name.upper()
@@ -263,10 +266,14 @@ def sweep(model, name: str, values: list[float], *, both_ways: bool = False,
         sequence += [(v, "down", None) for v in reversed(values[:-1])]
     result = Sweep(name, measure, settle, carry_state=carry_state, second=second)
 
+    limits = {k: v for k, v in (("max_time", max_time), ("max_steps", max_steps),
+                                 ("max_events", max_events)) if v}
+
     def options(start=None) -> Options:
         return Options(method=method, rtol=rtol, atol=atol, start=start, fintim=fintim,
                        progress=progress, extrema=(measure,), settle=settle,
-                       step_point=step_point, seed=seed, weather_dirs=weather_dirs)
+                       step_point=step_point, seed=seed, weather_dirs=weather_dirs,
+                       **limits)
 
     if carry_state:
         _carried(model, result, sequence, options, params, keep_runs, progress)

@@ -66,7 +66,7 @@ LIBRARIES = r"(scipy|numpy|matplotlib|numba|lark)(\.|$)"
 # ------------------------------------------------------------------ parser
 
 
-def _model_options(p: argparse.ArgumentParser, run_limits: bool = True) -> None:
+def _model_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
                    help="override a PARAM/CONST/INCON value for every run (repeatable)")
     p.add_argument("--method", metavar="NAME", type=method_name,
@@ -88,14 +88,13 @@ def _model_options(p: argparse.ArgumentParser, run_limits: bool = True) -> None:
                    help="a folder of CABO weather files for an FST listing's WEATHER, "
                         "looked in after WTRDIR, the listing's folder and its weather/ "
                         "and ../weather/ (repeatable)")
-    if run_limits:
-        p.add_argument("--max-time", type=POSITIVE, metavar="S",
-                       help="wall-clock limit per run, seconds (reading, checking and "
-                       "compiling the listing are bounded by it too)")
-        p.add_argument("--max-steps", type=COUNT, metavar="N",
-                       help="step limit per run (default 5000000)")
-        p.add_argument("--max-events", type=COUNT, metavar="N",
-                       help="event limit per run (default 200000)")
+    p.add_argument("--max-time", type=POSITIVE, metavar="S",
+                   help="wall-clock limit per run, seconds (reading, checking and "
+                   "compiling the listing are bounded by it too)")
+    p.add_argument("--max-steps", type=COUNT, metavar="N",
+                   help="step limit per run (default 5000000)")
+    p.add_argument("--max-events", type=COUNT, metavar="N",
+                   help="event limit per run (default 200000)")
 
 
 def _farm_options(p: argparse.ArgumentParser) -> None:
@@ -185,7 +184,7 @@ def _parser() -> argparse.ArgumentParser:
     writer_options(sw, "sweep")
     csv_dialect(sw)
     format_option(sw)
-    _model_options(sw, run_limits=False)
+    _model_options(sw)
     sw.add_argument("--quiet", action="store_true", help="no table, only files and errors")
     _farm_options(sw)
 
@@ -318,7 +317,8 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
                        step_point=args.step_point, seed=args.seed,
                        weather_dirs=tuple(args.weather_dir),
                        jobs=1 if args.carry_state else _jobs(args), scheduler=args.scheduler,
-                       grid=grid, **params)
+                       grid=grid, max_time=args.max_time, max_steps=args.max_steps,
+                       max_events=args.max_events, **params)
     finally:
         progress.done()
     stem, out_dir = stem_and_dir(path, args.out)

@@ -70,6 +70,9 @@ def _common(p: argparse.ArgumentParser, command: str, closure: bool = True) -> N
                    help="relative tolerance (default 1e-9 for periodic and response)")
     p.add_argument("--atol", type=base.POSITIVE, metavar="X",
                    help="absolute tolerance (default 1e-12 for periodic and response)")
+    p.add_argument("--max-time", type=base.POSITIVE, metavar="S",
+                   help="wall-clock limit of the whole analysis, seconds (a response curve "
+                        "keeps the points found by then)")
     p.add_argument("--quiet", action="store_true", help="no printout, only files and errors")
 
 
@@ -136,7 +139,7 @@ def cmd_modes(args, path: str, signals) -> int:
     model, params = _prepare(args, path)
     result, code = _computed(args, path, lambda progress: model.modes(
         at=args.at, method=args.method, rtol=args.rtol, atol=args.atol, progress=progress,
-        **params), prefix=f"modes: to TIME = {args.at:g}  ")
+        max_time=args.max_time, **params), prefix=f"modes: to TIME = {args.at:g}  ")
     if code is not None:
         return code
     return _done("modes", path, model, result, args, signals, modes_text)
@@ -148,8 +151,8 @@ def cmd_periodic(args, path: str, signals) -> int:
     model, params = _prepare(args, path)
     orbit, code = _computed(args, path, lambda progress: model.periodic(
         period=args.period, angle=args.angle, measure=args.measure, settle=args.settle,
-        method=args.method, rtol=args.rtol, atol=args.atol, progress=progress, **params),
-        not_found="no periodic orbit found")
+        method=args.method, rtol=args.rtol, atol=args.atol, progress=progress,
+        max_time=args.max_time, **params), not_found="no periodic orbit found")
     if code is not None:
         return code
     return _done("periodic", path, model, orbit, args, signals, orbit_text)
@@ -163,13 +166,15 @@ def cmd_response(args, path: str, signals) -> int:
     resp, code = _computed(args, path, lambda progress: model.response(
         name, start, stop, period=args.period, angle=args.angle, measure=args.measure,
         settle=args.settle, method=args.method, rtol=args.rtol, atol=args.atol,
-        progress=progress, **params),
+        progress=progress, max_time=args.max_time, **params),
         not_found=f"no periodic orbit at {name} = {start:g}")
     if code is not None:
         return code
     code = _done("response", path, model, resp, args, signals, response_text)
-    if resp.interrupted:
-        print(f"amilpy: {path}: interrupted after {name} = {resp.points[-1].value:.7g}; "
+    if resp.interrupted or resp.timed_out:
+        why = "interrupted" if resp.interrupted else \
+            f"stopped at --max-time {args.max_time:g} s"
+        print(f"amilpy: {path}: {why} after {name} = {resp.points[-1].value:.7g}; "
               "what was found is printed and written", file=sys.stderr)
         code = max(code, base.EXIT_FAILED)
     elif not resp.complete:

@@ -413,8 +413,9 @@ _nonsmooth("AINT(X)", rt.fortran_aint, "trunc", "(-M0 * SGN(A))", ("0.5 - ABS(A)
 _nonsmooth("NINT(X)", rt.fortran_nint, _vector_nint, "(-M0 * SGN(A))", ("-ABS(A)",),
            "ANINT", doc="the nearest whole number, halves away from 0",
            kind=SurfaceKind.LEVEL)
-# AMOD: A - B*AINT(A/B), AINT of A/B as above (B*SGN(A/B) is SGN(A)*|B|)
-_nonsmooth("AMOD(A, B)", rt.fortran_amod, "fmod", "(A + M0 * SGN(A) * ABS(B))",
+# AMOD: A - B*AINT(A/B), AINT of A/B as above (B*SGN(A/B) is SGN(A)*|B|), computed
+# as fmod while A/B is in the branch (`surfaces.amod_at`)
+_nonsmooth("AMOD(A, B)", rt.fortran_amod, "fmod", "AMODAT(A, B, M0)",
            ("0.5 - ABS(A / B)",), "MOD", doc="remainder with the sign of A",
            kind=SurfaceKind.LEVEL)
 

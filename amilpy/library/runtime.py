@@ -16,7 +16,7 @@ import math
 from collections.abc import Callable
 from statistics import NormalDist
 
-from .surfaces import level, sign
+from .surfaces import amod_at, level, sign
 
 Table = tuple[tuple[float, ...], tuple[float, ...]]
 
@@ -517,7 +517,7 @@ HELPERS: dict[str, Callable] = {
     "AFGEN": afgen, "NLFGEN": nlfgen, "DERIV": deriv, "IMPULS": impulse_at, "POW": safe_pow,
     "DELAY": delay, "DELAY_STORE": delay_store, "DELAY_INIT": delay_init,
     "LINT": lint, "PULSE_ON": pulse_on, "IMPULS_STEP": impulse_step, "DRAW": draw,
-    "SGN": sign, "LEVEL": level, "WHERE": _where, "ALL": _all, "ANY": _any,
+    "SGN": sign, "LEVEL": level, "AMODAT": amod_at, "WHERE": _where, "ALL": _all, "ANY": _any,
     "NITER": loop_count, "RANGE": range,  # FOR/DO loops of procedural code
     "WDAY": weather_day, "IMPL_FAIL": impl_fail,
 }
@@ -552,6 +552,6 @@ def vector_helpers() -> dict[str, Callable]:
         "LINT": lambda table, x: each(lambda v: lint(table, v))(x),
         "WDAY": lambda table, x: each(lambda v: weather_day(table, v))(x),
         "PULSE_ON": each(pulse_on), "IMPULS_STEP": each(impulse_step),
-        "LEVEL": _vector_level(np), "SGN": np.sign,
+        "LEVEL": _vector_level(np), "SGN": np.sign, "AMODAT": each(amod_at),
         "WHERE": np.where, "ALL": many(np.logical_and), "ANY": many(np.logical_or),
     }

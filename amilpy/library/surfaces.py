@@ -26,6 +26,17 @@ def sign(x: float) -> float:
     return 1.0 if x > 0 else (-1.0 if x < 0 else 0.0)
 
 
+def amod_at(a: float, b: float, m: float) -> float:
+    """AMOD(A, B) in the branch in force, A - B*AINT(A/B) with AINT(|A/B|) held at
+    -m (the mode of its level surface): fmod's exact remainder while A/B is in that
+    branch (A - k*B rounds to nothing when A is large: AMOD(1E20, 7) is 2, not 0),
+    the branch continued past its edge until the crossing is located."""
+    if b != 0.0 and abs(a / b) // 1.0 == -m:
+        # (math.fmod, which numba has not: % of positive floats is exact too)
+        return math.copysign(abs(a) % abs(b), a)
+    return a + m * (1.0 if a > 0 else (-1.0 if a < 0 else 0.0)) * abs(b)
+
+
 # How the motion leaves a switching surface it stands on, from the surface's rate
 # of change under its + branch (dp) and under its - branch (dm): the one rule, read
 # by the run loop (run/watch.py) and compiled into the numba kernel

@@ -265,10 +265,10 @@ def cli_cases(count: int, seed: int = 0):
 COMMAND_ARGS = {
     "check": [],
     "report": ["--format", "md,tex,pdf", "--no-accuracy-check", "--max-time", "3"],
-    "sweep": ["{name}=0.5:1.5:0.5", "--fintim", "0.5", "--jobs", "1"],
-    "modes": ["--at", "0"],
-    "periodic": ["--period", "1.0", "--settle", "0.5"],
-    "response": ["{name}=1.0:1.05", "--period", "1.0", "--settle", "0.5"],
+    "sweep": ["{name}=0.5:1.5:0.5", "--fintim", "0.5", "--jobs", "1", "--max-time", "3"],
+    "modes": ["--at", "0", "--max-time", "10"],
+    "periodic": ["--period", "1.0", "--settle", "0.5", "--max-time", "10"],
+    "response": ["{name}=1.0:1.05", "--period", "1.0", "--settle", "0.5", "--max-time", "10"],
 }
 
 
