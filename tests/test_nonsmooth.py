@@ -40,7 +40,8 @@ def ulps(t: float, n: int = 8) -> float:
 # ------------------------------------------------------------ the library entries
 def _template(text: str, args: tuple[float, ...], modes=()) -> float:
     """A library template evaluated on floats: A, B, ... the arguments, M0, ... modes."""
-    names = {"ABS": abs, "SGN": sign, "AMODAT": amod_at, **dict(zip("ABCDEFGH", args, strict=False))}
+    names = {"ABS": abs, "SGN": sign, "AMODAT": amod_at,
+             **dict(zip("ABCDEFGH", args, strict=False))}
     names.update({f"M{k}": m for k, m in enumerate(modes)})
     return float(eval(text, {"__builtins__": {}}, names))  # noqa: S307 - library text
 
