@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import math
 import time as _clock
-from bisect import bisect_left, bisect_right
 from collections.abc import Callable
 
 import numpy as np
@@ -125,8 +124,10 @@ class SegmentStart:
         if chunked:
             # the AUTO route steps from output instant to output instant
             times = self.check_times
-            lo = bisect_right(times, cur.t, rec.out_i if rec else 0)
-            checks = times[lo:bisect_left(times, seg_end, lo)]
+            # (searchsorted: bisect on an array compares NumPy scalars one by one)
+            lo = rec.out_i if rec else 0
+            lo += int(times[lo:].searchsorted(cur.t, "right"))
+            checks = times[lo:lo + int(times[lo:].searchsorted(seg_end, "left"))]
             if self.c.memory_trains:
                 # (the instants it pauses at, known now: inserted later, each would cost
                 # an integration of its own)
