@@ -14,6 +14,8 @@ from contextlib import contextmanager
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from . import interrupts, ir
 from .check import check
 from .diagnostics import AmilError, Diagnostic, UsageError, did_you_mean, with_hint
@@ -122,10 +124,14 @@ class Model:
             fintim: float | None = None, progress=None, advice: bool = True,
             step_point: bool | None = None, seed: float | None = None,
             weather_dir: str | list[str] | None = None,
-            jobs: int = 1, scheduler: str | None = None,
+            jobs: int = 1, scheduler: str | None = None, data=None,
             **params: float) -> list[Run]:
         """Run every run of the listing (value lists, END groups); data values
         given as keywords override the listing's for all of them.
+
+        `data`: a CSV of observations (a path, or `amilpy.observed.read`'s result):
+        each run gets rows at their instants and `Run.observed`, its comparison
+        with them (see `amilpy.observed`).
 
         `step_point=True` runs a fixed-step method in step-point mode (the classic
         translators' loop: switches read at the step points, nothing located), False
@@ -149,17 +155,24 @@ class Model:
         for label, tol in (("rtol", rtol), ("atol", atol)):
             if tol is not None and not tol > 0:
                 raise UsageError(f"{label} must be positive, got {tol}")
+        specs = self._specs(params)
+        obs = self._observations(data, len(specs))
         if outputs is not None:
             outputs = self.known_names(outputs)
+            if obs is not None:  # (the observed variables are recorded too)
+                outputs += [n for n in dict.fromkeys(s.name for s in obs.series)
+                            if n not in outputs]
         opts = Options(method=method, rtol=rtol, atol=atol, events=events, outputs=outputs,
                        max_time=max_time, progress=progress, fintim=fintim,
                        step_point=step_point, seed=_seed(seed),
-                       weather_dirs=_folders(weather_dir))
+                       weather_dirs=_folders(weather_dir),
+                       extra_times=tuple(np.unique(np.concatenate(
+                           [obs.times(k) for k in range(1, len(specs) + 1)])).tolist())
+                       if obs is not None else ())
         if max_steps:
             opts.max_steps = max_steps
         if max_events:
             opts.max_events = max_events
-        specs = self._specs(params)
         self._check_memory(specs, outputs, fintim)
         runs = []
         advised = False
@@ -171,12 +184,34 @@ class Model:
 
                 run.advice = stiffness_advice(self.ir, spec, run, opts, self.cache)
                 advised = run.advice is not None  # say it once
+            if obs is not None:
+                from .observed import compare
+
+                run.observed = compare(run, obs, k + 1, self._why_no_row())
             runs.append(run)
             if was_interrupted(run.message):
                 break  # Ctrl-C: keep what was computed, start nothing new
             if not farmed:
                 report(progress, "runs", k + 1, len(specs), index=k)
         return runs
+
+    def _observations(self, data, runs: int):
+        """`data` read and checked (None: none)."""
+        if data is None:
+            return None
+        from .observed import Observations, read
+
+        if isinstance(data, Observations):
+            return data
+        return read(os.fspath(data), self.ir.variables, runs)
+
+    def _why_no_row(self) -> str:
+        """What to change when a run cannot have a row at an observed instant."""
+        if self.ir.acsl is not None:
+            return (f"an ACSL program has rows at its communication instants only: make "
+                    f"{self.ir.acsl.cint_name} divide the observations' instants")
+        return ("step-point mode has rows at its steps only: make DELT divide the "
+                "observations' instants, or run without step-point mode")
 
     def _check_memory(self, specs: list[ir.RunSpec], outputs: list[str] | None,
                       fintim: float | None) -> None:

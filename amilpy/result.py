@@ -7,6 +7,7 @@ notebook view and `str(event)` hand over to the output package.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import Enum
@@ -96,6 +97,34 @@ class Table:
 
 
 @dataclass
+class Compared:
+    """One variable's observations (`--data`) against a run's values at their
+    instants; residual = observed - simulated."""
+
+    name: str
+    t: np.ndarray
+    observed: np.ndarray
+    simulated: np.ndarray
+    sd: np.ndarray | None  # the file's SD_<NAME>, if given
+    source: str  # the data file
+    unreached: int = 0  # observations past a failed run's end, left out
+
+    @property
+    def residual(self) -> np.ndarray:
+        return self.observed - self.simulated
+
+    @property
+    def rms(self) -> float:
+        r = self.residual
+        return float(np.sqrt(np.mean(r * r))) if r.size else math.nan
+
+    @property
+    def largest(self) -> float:
+        """The largest |residual|."""
+        return float(np.max(np.abs(self.residual))) if self.residual.size else math.nan
+
+
+@dataclass
 class Run:
     label: str
     params: dict[str, float]
@@ -125,6 +154,7 @@ class Run:
     # name -> (min, time of min, max, time of max) located on the integrator's dense
     # output (the RANGE variables; see run.record.Extrema)
     extrema: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
+    observed: list[Compared] = field(default_factory=list)  # --data, per variable
 
     @property
     def t(self) -> np.ndarray:

@@ -66,6 +66,13 @@ LIBRARIES = r"(scipy|numpy|matplotlib|numba|lark)(\.|$)"
 # ------------------------------------------------------------------ parser
 
 
+def _data_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--data", metavar="FILE",
+                   help="a CSV of observations (TIME and variables' columns, optional "
+                        "SD_<NAME> and RUN): drawn over the lines, tabled against the "
+                        "run with residuals (see docs/fitting.md)")
+
+
 def _model_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
                    help="override a PARAM/CONST/INCON value for every run (repeatable)")
@@ -154,6 +161,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--ascii", action="store_true",
                      help="line-printer plots in the printout (as PRTPLT does)")
     _model_options(run)
+    _data_option(run)
     run.add_argument("--show-python", action="store_true",
                      help="print the generated Python of the first run")
     run.add_argument("--quiet", action="store_true", help="no printout, only files and errors")
@@ -203,6 +211,7 @@ def _parser() -> argparse.ArgumentParser:
                      help="leave out the accuracy check (each run again with RELERR/100, "
                           "or DELT/4, which the report has by default)")
     _model_options(rep)
+    _data_option(rep)
     _plot_options(rep)
 
     chk = sub.add_parser("check", help="parse and check listings, do not run them")
@@ -257,7 +266,7 @@ def cmd_run(args, path: str, signals: Signals) -> int:
                          max_events=args.max_events, fintim=args.fintim,
                          advice=not args.no_advice, step_point=args.step_point,
                          seed=args.seed, weather_dir=args.weather_dir, jobs=_jobs(args),
-                         scheduler=args.scheduler, **params)
+                         scheduler=args.scheduler, data=args.data, **params)
     finally:
         progress.done()
     stem, out_dir = stem_and_dir(path, args.out)
@@ -354,7 +363,7 @@ def cmd_report(args, path: str, signals: Signals) -> int:
     runs = model.run(method=args.method, rtol=args.rtol, atol=args.atol, fintim=args.fintim,
                      max_time=args.max_time, max_steps=args.max_steps,
                      max_events=args.max_events, step_point=args.step_point, seed=args.seed,
-                     weather_dir=args.weather_dir, **params)
+                     weather_dir=args.weather_dir, data=args.data, **params)
     checks = None if args.no_accuracy_check else model.check_accuracy(
         runs, fintim=args.fintim, step_point=args.step_point, seed=args.seed,
         weather_dir=args.weather_dir, **params)

@@ -189,6 +189,9 @@ def draw(runs: Sequence[Run], spec: FigureSpec, labels: Sequence[str] | None = N
                 colour = f"C{(numbers[k] - 1) % 10}" if several else f"C{names.index(n) % 10}"
                 ax.plot(x, y, color=colour, linestyle=style[n], linewidth=1.2,
                         label=n if not several else f"{n}, {labels[k]}")
+                if spec.x is None:
+                    _mark_observed(ax, runs[k], n, spec.window, factor, colour,
+                                   n if not several else f"{n}, {labels[k]}")
         unit = W.unit_of(group, spec.label, notes)
         ax.set_ylabel(W.shorten(", ".join(group), 40) + (f" [{unit}]" if unit else "")
                       + _in_units(factor))
@@ -206,7 +209,7 @@ def draw(runs: Sequence[Run], spec: FigureSpec, labels: Sequence[str] | None = N
         elif several:
             ax.legend([Line2D([], [], color=f"C{(numbers[k] - 1) % 10}", linestyle=style[group[0]])
                        for k in range(len(runs))], labels, fontsize=8)
-        elif len(group) > 1:
+        elif len(group) > 1 or any(c.name in group for r in runs for c in r.observed):
             ax.legend(fontsize=8)
     axes[-1].set_xlabel(_x_label(spec, notes) + _in_units(x_factor))
     title = spec.label or (runs[0].titles[0] if runs and runs[0].titles else ", ".join(names))
@@ -225,6 +228,23 @@ def draw(runs: Sequence[Run], spec: FigureSpec, labels: Sequence[str] | None = N
         fig.subplots_adjust(left=0.8 / w, right=1 - 0.15 / w, bottom=0.5 / h,
                             top=1 - 0.3 / h, hspace=0.35 / (h / len(groups)))
     return fig
+
+
+def _mark_observed(ax, run: Run, name: str, window, factor: float, colour: str,
+                   label: str) -> None:
+    """The observations of `name` (`--data`) as markers over its line, with their
+    standard deviations as bars when the file gives them."""
+    for c in run.observed:
+        if c.name != name:
+            continue
+        keep = np.ones(len(c.t), bool) if window is None else \
+            (c.t >= window[0]) & (c.t <= window[1])
+        if not keep.any():
+            continue
+        ax.errorbar(c.t[keep], c.observed[keep] / factor,
+                    yerr=None if c.sd is None else c.sd[keep] / factor, fmt="o",
+                    markersize=4, color=colour, markerfacecolor="white", elinewidth=0.8,
+                    capsize=2, label=f"{label} ({W.shorten(os.path.basename(c.source), 24)})")
 
 
 def figure_size(axes: int, height: float = 4.8) -> tuple[float, float]:

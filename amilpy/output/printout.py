@@ -108,10 +108,16 @@ def write_run(out: TextIO, run: Run, index: int | None = None, total: int = 1,
     write_table(out, T.printout_table(run))
     for plot in printer_plots(run, ascii_plots):
         out.write(plot)
-    ranged = T.range_table(run)
-    if ranged is not None:
-        for head, rows in T.text_blocks(ranged):
-            out.write("\n" + head + "\n" + "".join(line + "\n" for line in rows))
+    for table in (T.range_table(run), T.observed_table(run), T.residual_table(run)):
+        if table is not None:
+            if table.key != "range":
+                out.write(f"\n{'DATA' if table.key == 'observed' else 'DATA SUMMARY'}"
+                          + (f" ({run.observed[0].source})" if table.key == "observed"
+                             else "") + "\n")
+            for head, rows in T.text_blocks(table):
+                out.write("\n" * (table.key == "range") + head + "\n"
+                          + "".join(line + "\n" for line in rows))
+            out.write("".join(f"   {n}\n" for n in table.notes))
     if show_events and run.events:
         out.write(f"\nSWITCHING EVENTS ({len(run.events)})\n")
         events = run.events

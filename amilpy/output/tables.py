@@ -170,6 +170,38 @@ def range_table(run: Run, head: Sequence[str] = LAB_RANGE_HEAD) -> Table | None:
     return Table("range", cols)
 
 
+LAB_DATA_HEAD = ("TIME", "VARIABLE", "OBSERVED", "SIMULATED", "RESIDUAL")
+LAB_FIT_HEAD = ("VARIABLE", "N", "RMS RESIDUAL", "MAX |RESIDUAL|")
+
+
+def observed_table(run: Run, head: Sequence[str] = LAB_DATA_HEAD) -> Table | None:
+    """Every observation (`--data`) against the run, variable by variable in time
+    order; residual = observed - simulated."""
+    if not run.observed:
+        return None
+    cs = run.observed
+    cols = [Column(head[0], np.concatenate([c.t for c in cs]), "t"),
+            Column(head[1], [c.name for c in cs for _ in c.t], "s", left=True)]
+    for h, key in zip(head[2:], ("observed", "simulated", "residual"), strict=True):
+        cols.append(Column(h, np.concatenate([getattr(c, key) for c in cs])))
+    return Table("observed", cols)
+
+
+def residual_table(run: Run, head: Sequence[str] = LAB_FIT_HEAD) -> Table | None:
+    """Per observed variable: how many observations, the RMS and the largest
+    |residual| (with a note of any past a failed run's end)."""
+    if not run.observed:
+        return None
+    cs = run.observed
+    table = Table("residuals", [
+        Column(head[0], [c.name for c in cs], "s", left=True),
+        Column(head[1], [str(len(c.t)) for c in cs], "s"),
+        Column(head[2], [c.rms for c in cs]), Column(head[3], [c.largest for c in cs])])
+    table.notes += [f"{c.name}: {c.unreached} observation(s) past the run's end left out"
+                    for c in cs if c.unreached]
+    return table
+
+
 def events_table(run: Run, words: dict[str, str], limit: int = 60) -> Table | None:
     """TIME, switch and change of each event; the first and last `limit`/2 when
     there are more, with a note of how many are left out."""
@@ -211,15 +243,15 @@ def data_table(rows: list[tuple[str, float, str, str, str]], words: dict[str, st
 
 
 def widths(table: Table) -> list[int]:
-    """Column widths for the fixed-width form: WIDTH for numbers, and for text at
-    least WIDTH, else the longest cell (or header) + 2."""
+    """Column widths for the fixed-width form: WIDTH for numbers (more for a longer
+    header), and for text at least WIDTH, else the longest cell (or header) + 2."""
     out = []
     for c in table.columns:
         if c.fmt == "s":
             longest = max((len(str(v)) for v in c.values), default=0)
             out.append(max(WIDTH, longest + 4, len(c.name) + 4))
         else:
-            out.append(WIDTH)
+            out.append(max(WIDTH, len(c.name) + 2))
     return out
 
 

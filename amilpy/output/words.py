@@ -38,6 +38,9 @@ WORDS: dict[str, dict[str, str]] = {
         "acc events differ": "events: {n} here, {m} with {how}: an event depends on the "
                              "tolerance",
         "acc not made": "accuracy check not made: {why}",
+        "observed": "observed", "simulated": "simulated", "residual": "residual",
+        "variable": "variable", "count": "n", "rms": "RMS residual",
+        "largest": "max |residual|", "data vs run": "Observations against the run",
     },
     "pl": {
         "listing": "Listing programu", "data": "Dane i wartości początkowe",
@@ -62,6 +65,9 @@ WORDS: dict[str, dict[str, str]] = {
         "acc events differ": "przełączenia: {n} tutaj, {m} przy {how}: przełączenie zależy "
                              "od tolerancji",
         "acc not made": "sprawdzenia dokładności nie wykonano: {why}",
+        "observed": "pomiar", "simulated": "symulacja", "residual": "różnica",
+        "variable": "zmienna", "count": "n", "rms": "różnica RMS",
+        "largest": "maks. |różnica|", "data vs run": "Pomiary a symulacja",
     },
 }
 

@@ -76,6 +76,9 @@ class Options:
     seed: float | None = None  # the random streams' seed, instead of the listing's
     # folders where FST's weather files are looked for after the listing's own (§13)
     weather_dirs: tuple[str, ...] = ()
+    # instants that must be rows, beside the OUTDEL and PRDEL grids (observations:
+    # `amilpy.observed`); in neither grid's table
+    extra_times: tuple[float, ...] = ()
 
 
 # (the IR's: what a surface is for and how it selects a branch, one definition)
@@ -315,15 +318,31 @@ def _grid(t0: float, fintim: float, step: float) -> np.ndarray:
     return g
 
 
-def make_grid(t0: float, fintim: float, outdel: float, prdel: float) -> Grid:
+def make_grid(t0: float, fintim: float, outdel: float, prdel: float,
+              extra: tuple[float, ...] = ()) -> Grid:
+    """The output instants; `extra`: more instants in (t0, fintim) to have rows at
+    (in neither grid), each within 1e-12 of a grid instant taken as that one."""
     if outdel == prdel:  # (one grid: the ACSL form's CINT, most listings)
         times = _grid(t0, fintim, outdel)
         every = np.ones(len(times), bool)
-        return Grid(times, every, every)
-    go = _grid(t0, fintim, outdel)
-    gp = _grid(t0, fintim, prdel)
-    times = np.union1d(go, gp)
-    return Grid(times, np.isin(times, go), np.isin(times, gp))
+        grid = Grid(times, every, every)
+    else:
+        go = _grid(t0, fintim, outdel)
+        gp = _grid(t0, fintim, prdel)
+        times = np.union1d(go, gp)
+        grid = Grid(times, np.isin(times, go), np.isin(times, gp))
+    if not extra:
+        return grid
+    more = np.asarray(extra, dtype=float)
+    more = more[(more > t0) & (more < fintim)]
+    g = grid.times
+    j = np.clip(np.searchsorted(g, more), 1, len(g) - 1)
+    gap = np.minimum(np.abs(g[j] - more), np.abs(g[j - 1] - more))
+    more = more[gap > 1e-12 * np.maximum(1.0, np.abs(more))]
+    if not more.size:
+        return grid
+    times = np.union1d(g, more)
+    return Grid(times, np.isin(times, g[grid.outdel]), np.isin(times, g[grid.prdel]))
 
 
 def resolve_route(spec: ir.RunSpec, opts: Options) -> tuple[Route, str]:

@@ -176,9 +176,10 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
         parameters=params).build()).rebound(constants))
     t0 = start_time(spec, opts)
     fintim = t0 + timer["FINTIM"]
-    gkey = (t0, fintim, timer["OUTDEL"], timer["PRDEL"], step_point and timer["DELT"])
+    gkey = (t0, fintim, timer["OUTDEL"], timer["PRDEL"], step_point and timer["DELT"],
+            opts.extra_times)
     grid = cache.get("grid", gkey, lambda: steppoint.grid(t0, timer) if step_point else
-                     make_grid(t0, fintim, timer["OUTDEL"], timer["PRDEL"]))
+                     make_grid(t0, fintim, timer["OUTDEL"], timer["PRDEL"], opts.extra_times))
     if len(grid.times) > opts.max_rows:
         raise AmilError([Diagnostic(
             f"the run would print {len(grid.times)} rows (limit {opts.max_rows})",

@@ -186,6 +186,15 @@ def build(model, runs: Sequence[Run], figures: Sequence[Figure], path: str,
                       T.terminal_table(run, words)):
             if table is not None:
                 doc.add(TableBlock(table))
+        if run.observed:
+            doc.add(Text(f"{words['data vs run']} ({os.path.basename(run.observed[0].source)})",
+                         strong=True))
+            for table in (T.observed_table(run, (words["time"], words["variable"],
+                                                 words["observed"], words["simulated"],
+                                                 words["residual"])),
+                          T.residual_table(run, (words["variable"], words["count"],
+                                                 words["rms"], words["largest"]))):
+                doc.add(TableBlock(table))
         doc.add(*(Text(w) for w in run.warnings))
         if checks is not None and k <= len(checks):
             check = checks[k - 1]
