@@ -389,6 +389,19 @@ class Model:
                             settle_time=settle, method=method, rtol=rtol, atol=atol,
                             progress=progress, **params)
 
+    def fit(self, data, free, *, log=(), weights: str = "sd", method: str | None = None,
+            rtol: float | None = None, atol: float | None = None, progress=None,
+            max_evaluations: int = 200, **params: float):
+        """Fit data values to measurements (`amilpy.analysis.fit`): `data` a CSV of
+        observations (see `run`), `free` the values fitted ("B", "B=0:1E-3", or a
+        dict name -> (lo, hi)), `log` those fitted on a log scale, `weights` "sd",
+        "relative" or "none". Returns an `analysis.fit.Fit`."""
+        from .analysis.fit import fit
+
+        _check_method(method)
+        return fit(self, data, free, log=log, weights=weights, method=method, rtol=rtol,
+                   atol=atol, progress=progress, max_evaluations=max_evaluations, **params)
+
     def _measures(self, names) -> list[str]:
         from .batch.sweep import default_measure
 

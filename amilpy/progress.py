@@ -20,6 +20,7 @@ TASKS = {
     "sweep": "points run, of all of them",
     "periodic": "Newton steps taken (no total)",
     "response": "orbits found on the curve (no total)",
+    "fit": "evaluations of the runs (no total)",
 }
 
 
@@ -28,7 +29,7 @@ class Report:
     """`task` (one of TASKS) has come to `done` of `total` (None: not known
     beforehand). `facts`: what the task adds, by name (a run: events, steps; a
     sweep: name, value; Newton: residual; a response: name, value, residual; runs:
-    index, the run that finished)."""
+    index, the run that finished; a fit: value, the values tried)."""
 
     task: str
     done: float

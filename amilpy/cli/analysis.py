@@ -91,6 +91,60 @@ def add_parsers(sub) -> None:
     _common(r, "response")
     r.add_argument("span", metavar="NAME=START:STOP", type=_span,
                    help="the data value followed and its range")
+    add_fit_parser(sub)
+
+
+def add_fit_parser(sub) -> None:
+    f = sub.add_parser("fit", help="fit data values to measurements: weighted least "
+                                   "squares, estimates with standard errors and 95 % "
+                                   "intervals")
+    f.add_argument("file", metavar="FILE", help="the listing (.amil)")
+    f.add_argument("--data", metavar="OBS.csv", required=True,
+                   help="the observations: TIME and variables' columns, optional "
+                        "SD_<NAME> and RUN (as run --data)")
+    f.add_argument("--free", metavar="NAME[=LO:HI]", action="append", required=True,
+                   help="a PARAM/CONST/INCON value to fit, with bounds (repeatable)")
+    f.add_argument("--log", metavar="NAME", action="append", default=[],
+                   help="fit this one on a log scale (a positive rate, a time constant)")
+    f.add_argument("--weights", choices=("sd", "relative", "none"), default=None,
+                   help="residuals divided by the SD_<NAME> columns (default when the "
+                        "file has them), by |observed|, or as they are (default otherwise)")
+    f.add_argument("--max-evaluations", type=base.COUNT, default=200, metavar="N",
+                   help="evaluations of the runs the optimiser may make (default 200)")
+    f.add_argument("--out", metavar="DIR", help="where the PNGs go (default: next to the "
+                                                "listing)")
+    base.writer_options(f, "fit")
+    base.csv_dialect(f)
+    base.format_option(f)
+    f.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
+                   help="override a PARAM/CONST/INCON value (repeatable)")
+    f.add_argument("--method", metavar="NAME", type=base.method_name,
+                   help="integration method (default: the listing's METHOD)")
+    f.add_argument("--rtol", type=base.POSITIVE, metavar="X", help="relative tolerance")
+    f.add_argument("--atol", type=base.POSITIVE, metavar="X", help="absolute tolerance")
+    f.add_argument("--quiet", action="store_true", help="no printout, only files and errors")
+
+
+def cmd_fit(args, path: str, signals) -> int:
+    from ..observed import read
+    from ..output.fitting import fit_text
+
+    model, params = _prepare(args, path)
+    obs = read(args.data, model.ir.variables, len(model.ir.runs))
+    weights = args.weights or ("sd" if all(s.sd is not None for s in obs.series)
+                               else "none")
+    progress = Progress(not args.quiet)
+    try:
+        result = model.fit(obs, args.free, log=args.log, weights=weights,
+                           method=args.method, rtol=args.rtol, atol=args.atol,
+                           progress=progress, max_evaluations=args.max_evaluations, **params)
+    finally:
+        progress.done()
+    code = _done("fit", path, model, result, args, signals, fit_text)
+    if not result.success:
+        print(f"amilpy: {path}: the fit did not converge: {result.message}", file=sys.stderr)
+        code = max(code, base.EXIT_FAILED)
+    return code
 
 
 def _prepare(args, path: str):
@@ -185,4 +239,5 @@ def cmd_response(args, path: str, signals) -> int:
     return code
 
 
-COMMANDS = {"modes": cmd_modes, "periodic": cmd_periodic, "response": cmd_response}
+COMMANDS = {"modes": cmd_modes, "periodic": cmd_periodic, "response": cmd_response,
+            "fit": cmd_fit}

@@ -175,6 +175,8 @@ class Progress:
         elif task == "response":
             self.line(f"response: {facts.get('name', '')} = {facts.get('value', math.nan):.7g}"
                       f"  point {done:g}  residual {facts.get('residual', math.nan):.1e}")
+        elif task == "fit":
+            self.line(f"fit: evaluation {done:g}  {facts.get('value', '')}")
 
     def line(self, text: str) -> None:
         if self.enabled:

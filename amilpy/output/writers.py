@@ -100,6 +100,31 @@ def _analysis_png(o: Outputs, _path: str | None) -> list[str]:
                 formats=o.plot.formats)
 
 
+def _fit_csv(o: Outputs, path: str | None) -> list[str]:
+    from . import sheets
+    from .fitting import fit_csv
+
+    header, rows = fit_csv(o.analysis)
+    sheets.write_csv_rows(path, header, rows, o.dialect)
+    return [path]
+
+
+def _fit_png(o: Outputs, _path: str | None) -> list[str]:
+    from .plot import plot_runs
+    from .words import name_notes
+
+    return plot_runs(o.analysis.fitted, o.out_dir, o.stem + "_fit", o.plot,
+                     name_notes(o.model.ir))
+
+
+def _fit_listing(o: Outputs, path: str | None) -> list[str]:
+    from ..analysis.fit import written_listing
+    from .files import atomic_write
+
+    atomic_write(path, written_listing(o.model, o.analysis.values).encode("utf-8"))
+    return [path]
+
+
 WRITERS: tuple[Writer, ...] = (
     Writer("prepare", "run", None, False,
            "PREPARE in the listing: its variables as NAME.csv in --out", _prepare,
@@ -136,6 +161,15 @@ WRITERS: tuple[Writer, ...] = (
            "draw half peak-to-peak against the value (stable solid, unstable dashed, "
            "folds marked) as NAME_response.png next to the model or in --out",
            _analysis_png),
+    Writer("fit-csv", "fit", "--csv", True,
+           "write the estimates as CSV: NAME, START, ESTIMATE, SE, LOWER95, UPPER95",
+           _fit_csv),
+    Writer("fit-png", "fit", "--plot", False,
+           "draw the fitted runs with the observations as NAME_fit_K.png next to the "
+           "model or in --out", _fit_png),
+    Writer("fit-listing", "fit", "--write", True,
+           "write the listing with the fitted values in place (comments kept)",
+           _fit_listing),
 )
 
 

@@ -250,7 +250,14 @@ def run_cases(cases, timeout: float = DEFAULT_TIMEOUT, mem_mb: int = DEFAULT_MEM
                         raise RuntimeError("fuzz worker failed to start: "
                                            + proc.stderr.read()[-2000:])
                     break
-                msg = json.loads(line)
+                try:
+                    msg = json.loads(line)
+                except ValueError:  # a case wrote to the worker's stdout descriptor
+                    msg = {"stray": line}
+                if "stray" in msg or not isinstance(msg, dict):
+                    print(f"stray output on stdout during {current}: {line[:200]!r}",
+                          file=sys.stderr)
+                    continue
                 if "begin" in msg:
                     current, began = msg["begin"], time.perf_counter()
                     continue

@@ -1,0 +1,255 @@
+"""Fitting data values to measurements (`amilpy fit`, `Model.fit`): weighted least
+squares over the observations of a `--data` file (`amilpy.observed`), each
+evaluation every run of the listing with the free values set, by SciPy's
+trust-region reflective `least_squares` within the bounds.
+
+The residuals are observed - simulated at the observed instants (the runs' own
+values there, not interpolated), weighted by `weights`: "sd" divides by the
+file's SD_<NAME> columns, "relative" by |observed|, "none" leaves them. The
+Jacobian is central differences of whole runs, each free value moved by
+cbrt(RELERR)-sized steps relative to it (the runs are accurate to about RELERR,
+so a difference over h is good to RELERR/h^2 + h^2: best near the cube root).
+
+At the optimum: the covariance is (J^T J)^-1, times the residual variance
+s^2 = 2 cost / (n - p) unless the weights are the data's own SDs (then the
+residuals are in units of their SD already); standard errors its diagonal's
+root, 95 % intervals from Student's t with n - p degrees of freedom, and the
+correlation matrix. A value fitted on a log scale (`log`) has its interval
+exp(log p +- t se). What the data cannot determine is said: a Jacobian of
+deficient rank or condition over 1e8, an interval wider than the bounds."""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..diagnostics import AmilError, UsageError, with_hint
+from ..observed import Observations
+from ..progress import report
+
+WEIGHTS = ("sd", "relative", "none")
+CONDITION_LIMIT = 1e8
+# least_squares' ftol/xtol/gtol: its default 1e-8 leaves noise-free estimates 1e-5
+# off where the data determine them weakly; the runs are good to ~1e-9
+TOLERANCE = 1e-10
+
+
+@dataclass
+class Fit:
+    """The estimates of a fit and what goes with them."""
+
+    names: list[str]
+    start: list[float]
+    estimates: list[float]
+    se: list[float]  # standard errors (of the value, by the delta method on a log scale)
+    lower: list[float]  # 95 % confidence interval
+    upper: list[float]
+    correlation: np.ndarray
+    n: int  # observations
+    cost: float  # half the sum of squared weighted residuals
+    runs: int  # model evaluations (each: every run of the listing)
+    message: str  # why the optimiser stopped
+    success: bool
+    weights: str
+    notes: list[str] = field(default_factory=list)  # identifiability, in words
+    fitted: list = field(default_factory=list)  # the runs at the estimates (Run)
+    log: list[str] = field(default_factory=list)
+
+    @property
+    def values(self) -> dict[str, float]:
+        return dict(zip(self.names, self.estimates, strict=True))
+
+
+def parse_free(items) -> dict[str, tuple[float, float]]:
+    """NAME or NAME=LO:HI (strings), or a dict name -> (lo, hi) / None, as bounds."""
+    from ..language import fortran_float
+
+    if isinstance(items, dict):
+        return {k.upper(): (-math.inf, math.inf) if v is None else (float(v[0]), float(v[1]))
+                for k, v in items.items()}
+    out = {}
+    for item in [items] if isinstance(items, str) else items:
+        name, _, span = item.partition("=")
+        lo, hi = -math.inf, math.inf
+        if span:
+            try:
+                lo, hi = (fortran_float(x) if x.strip() else default
+                          for x, default in zip(span.split(":"), (-math.inf, math.inf),
+                                                strict=True))
+            except ValueError:
+                raise UsageError(f"write NAME=LO:HI (either may be left empty), got "
+                                 f"{item!r}") from None
+        if not lo < hi:
+            raise UsageError(f"{name}: the lower bound must be below the upper, got {item!r}")
+        out[name.strip().upper()] = (lo, hi)
+    return out
+
+
+def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = None,
+        rtol: float | None = None, atol: float | None = None, progress=None,
+        max_evaluations: int = 200, **params: float) -> Fit:
+    """Fit the `free` data values of `model` (an api.Model) to `data`; see the module."""
+    from scipy.optimize import least_squares
+    from scipy.stats import t as student
+
+    bounds = parse_free(free)
+    if not bounds:
+        raise UsageError("name at least one value to fit (--free NAME)")
+    specs = model._specs(params)
+    for name in bounds:
+        if name not in specs[0].data:
+            raise UsageError(with_hint(f"{name} is not a PARAM/CONST/INCON value of this "
+                                       "model", name, specs[0].data))
+        if any(name in s.changed and s.changed[name] != specs[0].data[name]
+               for s in specs[1:]) and name not in params:
+            raise UsageError(f"{name} differs from run to run (a value list): it cannot be "
+                             "one fitted value; fit it with one run at a time (--set)")
+    logged = {n.upper() for n in log}
+    for name in logged - set(bounds):
+        raise UsageError(f"--log {name}: {name} is not one of the values fitted (--free)")
+    if weights not in WEIGHTS:
+        raise UsageError(f"weights are one of {', '.join(WEIGHTS)}, got {weights!r}")
+    obs = data if isinstance(data, Observations) else model._observations(data, len(specs))
+    names = list(bounds)
+    start = [float(params.get(n, specs[0].data[n])) for n in names]
+    for n, p0 in zip(names, start, strict=True):
+        lo, hi = bounds[n]
+        if n in logged and not (p0 > 0 and lo >= 0):
+            raise UsageError(f"--log {n} needs a positive value and bounds (it is {p0:g})")
+        if not lo <= p0 <= hi:
+            raise UsageError(f"{n} = {p0:g} is outside its bounds {lo:g}:{hi:g}")
+    if weights == "sd" and any(s.sd is None for s in obs.series):
+        raise UsageError("--weights sd needs an SD_<NAME> column for every variable "
+                         "observed; give them, or --weights relative or none")
+
+    def to_x(p):
+        return np.array([math.log(v) if n in logged else v for n, v in zip(names, p,
+                                                                            strict=True)])
+
+    def to_p(x):
+        return [math.exp(v) if n in logged else float(v) for n, v in zip(names, x,
+                                                                         strict=True)]
+
+    lo = to_x([max(bounds[n][0], 1e-300) if n in logged else bounds[n][0] for n in names])
+    lo = np.where(np.isfinite(lo), lo, -np.inf)
+    hi = np.array([math.log(bounds[n][1]) if n in logged and math.isfinite(bounds[n][1])
+                   else bounds[n][1] for n in names])
+    count = [0]
+    options = dict(method=method, rtol=rtol, atol=atol, advice=False, data=obs)
+
+    def runs_at(x):
+        values = dict(zip(names, to_p(x), strict=True))
+        runs = model.run(**options, **{**params, **values})
+        count[0] += 1
+        failed = [r for r in runs if not r.ok]
+        if failed:
+            raise AmilError(f"the run at {_values(values)} failed: {failed[0].message}",
+                            model.ir.path)
+        report(progress, "fit", count[0], None, value=_values(values))
+        return runs
+
+    def residuals(x):
+        return _weighted(runs_at(x), weights)
+
+    r0 = residuals(to_x(start))
+    n, p = len(r0), len(names)
+    if n < p:
+        raise UsageError(f"{n} observation(s) cannot determine {p} values")
+    step = max(np.cbrt(model_rtol(model, rtol)), 1e-6)
+    result = least_squares(residuals, to_x(start), bounds=(lo, hi), method="trf",
+                           jac="3-point", diff_step=step, x_scale="jac",
+                           max_nfev=max_evaluations, ftol=TOLERANCE, xtol=TOLERANCE,
+                           gtol=TOLERANCE)
+    x = result.x
+    fitted = runs_at(x)
+    r = _weighted(fitted, weights)
+    jac = result.jac
+    dof = n - p
+    s2 = float(r @ r) / dof if weights != "sd" and dof > 0 else 1.0
+    notes = []
+    sv = np.linalg.svd(jac, compute_uv=False)
+    if sv.size and (sv[-1] == 0 or sv[0] / sv[-1] > CONDITION_LIMIT):
+        weakest = int(np.argmax(np.abs(np.linalg.svd(jac)[2][-1])))
+        notes.append(f"the data cannot determine {names[weakest]}: the fit's Jacobian is "
+                     f"singular or nearly so (condition {sv[0] / max(sv[-1], 1e-300):.2g}); "
+                     "fix it, or observe what it moves")
+    cov_x = np.linalg.pinv(jac.T @ jac) * s2
+    se_x = np.sqrt(np.maximum(np.diag(cov_x), 0.0))
+    quantile = float(student.ppf(0.975, dof)) if dof > 0 else math.inf
+    est = to_p(x)
+    se, lower, upper = [], [], []
+    for k, name in enumerate(names):
+        xk, sk = float(x[k]), float(se_x[k])
+        if name in logged:
+            se.append(est[k] * sk)
+            lower.append(math.exp(xk - quantile * sk))
+            upper.append(math.exp(xk + quantile * sk))
+        else:
+            se.append(sk)
+            lower.append(xk - quantile * sk)
+            upper.append(xk + quantile * sk)
+        b = bounds[name]
+        if (lower[-1] < b[0] or upper[-1] > b[1]) and all(map(math.isfinite, b)):
+            notes.append(f"{name}: the 95 % interval {lower[-1]:.4g} .. {upper[-1]:.4g} is "
+                         f"wider than its bounds {b[0]:g}:{b[1]:g}: the data hardly "
+                         "determine it")
+    d = np.sqrt(np.diag(cov_x))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov_x / np.outer(d, d)
+    return Fit(names, start, est, se, lower, upper, corr, n, 0.5 * float(r @ r), count[0],
+               result.message, bool(result.success), weights, notes, fitted,
+               sorted(logged))
+
+
+def model_rtol(model, rtol: float | None) -> float:
+    """The RELERR the runs will have (the caller's, the listing's, else the default)."""
+    from ..run.plan import TOLERANCES
+
+    if rtol is not None:
+        return rtol
+    given = model.ir.runs[0].relerr
+    return given if given is not None else \
+        TOLERANCES["acsl" if model.ir.acsl is not None else "csmp"][0]
+
+
+def _values(values: dict[str, float]) -> str:
+    return ", ".join(f"{k} = {v:.10g}" for k, v in values.items())
+
+
+def _weighted(runs, weights: str) -> np.ndarray:
+    parts = []
+    for run in runs:
+        for c in run.observed:
+            r = c.residual
+            if weights == "sd":
+                r = r / c.sd
+            elif weights == "relative":
+                r = r / np.maximum(np.abs(c.observed), 1e-300)
+            parts.append(r)
+    return np.concatenate(parts) if parts else np.empty(0)
+
+
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[EeDd][-+]?\d+)?"
+
+
+def written_listing(model, values: dict[str, float]) -> str:
+    """The listing's text with each fitted value written where the value was given
+    (the rest of the line, its comment included, as it was)."""
+    lines = model.ir.source.splitlines(keepends=True)
+    for name, value in values.items():
+        span = model.ir.spans.get(name)
+        if span is None:
+            raise UsageError(f"{name}: where it is given is not known; write it by hand")
+        line = lines[span.line - 1]
+        head, tail = line[:span.column - 1], line[span.column - 1:]
+        found = re.match(rf"({re.escape(name)}\s*=\s*)({_NUMBER})(?!\s*,\s*{_NUMBER})",
+                         tail, re.I)
+        if found is None:
+            raise UsageError(f"{name} at line {span.line} is not given as one number: "
+                             "write its fitted value by hand")
+        lines[span.line - 1] = head + found.group(1) + f"{value:.10G}" + \
+            tail[found.end():]
+    return "".join(lines)
