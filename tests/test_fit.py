@@ -6,6 +6,7 @@ that hold the truth at their stated rate."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -141,3 +142,18 @@ def test_a_fit_that_cannot_be_asked_is_a_usage_error(tmp_path, free, kw, words):
     data = _csv(tmp_path, "TIME,X", [(0.5, 1.0), (1.0, 0.6)])
     with pytest.raises(UsageError, match=words.replace("(", r"\(")):
         amilpy.loads(DECAY).fit(data, free, **kw)
+
+
+def test_the_docs_dosing_example_prints_what_the_docs_say():
+    """docs/fitting.md shows the KA/KE fit of the shipped dosing program; its
+    estimates and standard errors are what the command gives (7 digits)."""
+    doc = (Path(ROOT) / "docs" / "fitting.md").read_text()
+    shown = {line.split()[0]: [float(x) for x in line.split()[1:]]
+             for line in doc.splitlines() if line.startswith(("KA  ", "KE  "))}
+    model = amilpy.load(f"{ROOT}/models/examples/oral_dosing.csl")
+    fit = model.fit(f"{ROOT}/models/examples/data/oral_dosing_cp.csv",
+                    ["KA=0.01:10", "KE=0.01:10"], log=["KA", "KE"], weights="relative")
+    for k, name in enumerate(fit.names):
+        start, estimate, se, lower, upper = shown[name]
+        assert [estimate, se, lower, upper] == pytest.approx(
+            [fit.estimates[k], fit.se[k], fit.lower[k], fit.upper[k]], rel=1e-6)
