@@ -125,13 +125,21 @@ class Model:
             step_point: bool | None = None, seed: float | None = None,
             weather_dir: str | list[str] | None = None,
             jobs: int = 1, scheduler: str | None = None, data=None,
-            **params: float) -> list[Run]:
+            stream_csv=None, csv_names: list[str] | None = None,
+            csv_dialect: str = "plain", **params: float) -> list[Run]:
         """Run every run of the listing (value lists, END groups); data values
         given as keywords override the listing's for all of them.
 
         `data`: a CSV of observations (a path, or `amilpy.observed.read`'s result):
         each run gets rows at their instants and `Run.observed`, its comparison
         with them (see `amilpy.observed`).
+
+        `stream_csv`: a path (or an `output.stream.CsvStream`, which the caller
+        then closes): write the runs' CSV (`csv_names` its columns, default every
+        PRINT/OUTPUT/PREPARE variable; `csv_dialect`) as the runs go, keeping in
+        memory only the PRDEL rows, observed instants and a sample of the OUTDEL
+        rows for the figures (see `amilpy.output.stream`): for runs whose rows would
+        not fit in memory. The runs are then made here, one after the other.
 
         `step_point=True` runs a fixed-step method in step-point mode (the classic
         translators' loop: switches read at the step points, nothing located), False
@@ -173,16 +181,47 @@ class Model:
             opts.max_steps = max_steps
         if max_events:
             opts.max_events = max_events
-        self._check_memory(specs, outputs, fintim)
+        if stream_csv is None:
+            self._check_memory(specs, outputs, fintim)
+            return self._runs(specs, opts, obs, advice, jobs, scheduler, progress)
+        from .output.sheets import partial_notes
+        from .output.stream import CsvStream
+
+        if csv_names is not None:
+            csv_names = self.known_names([n for n in csv_names if n.upper() != "TIME"],
+                                         data=True)
+        own = not isinstance(stream_csv, CsvStream)  # (else the caller closes it)
+        sink = CsvStream(stream_csv, csv_names, csv_dialect, [s.data for s in specs]) \
+            if own else stream_csv
+        opts.row_sink = sink
+        try:
+            runs = self._runs(specs, opts, obs, advice, 1, None, progress, sink)
+            if own:
+                sink.close(partial_notes(runs))
+        except BaseException:
+            sink.discard()
+            raise
+        if sink.rows > sink.kept:
+            for run in runs:
+                run.warnings.append(f"the OUTDEL rows ({sink.rows} in all) went to "
+                                    f"{sink.path} as the runs went; {sink.kept} of them, "
+                                    "evenly spaced, are kept for the figures")
+        return runs
+
+    def _runs(self, specs, opts, obs, advice: bool, jobs: int, scheduler, progress,
+              sink=None) -> list[Run]:
         runs = []
         advised = False
         farmed = self._farm(specs, opts, jobs, scheduler, progress)
         for k, spec in enumerate(specs):
+            if sink is not None:
+                sink.next_run(k + 1)
             run = farmed[k] if farmed else self._one(spec, opts, len(specs) > 1)
             if advice and not advised:
                 from .run.advice import stiffness_advice
 
-                run.advice = stiffness_advice(self.ir, spec, run, opts, self.cache)
+                run.advice = stiffness_advice(self.ir, spec, run, replace(opts, row_sink=None),
+                                              self.cache)
                 advised = run.advice is not None  # say it once
             if obs is not None:
                 from .observed import compare
@@ -213,22 +252,36 @@ class Model:
         return ("step-point mode has rows at its steps only: make DELT divide the "
                 "observations' instants, or run without step-point mode")
 
+    def stored_values(self, fintim: float | None = None, outputs: list[str] | None = None,
+                      **params: float) -> float:
+        """How many values the runs would keep (rows x columns; 0 for the ACSL form,
+        whose rows are known only as it runs)."""
+        if self.ir.acsl is not None:
+            return 0.0
+        return self._stored(self._specs(params), outputs, fintim)
+
+    def _stored(self, specs, outputs, fintim) -> float:
+        from .run.plan import stored_values
+
+        columns = len(outputs) if outputs is not None else len(self.ir.variables)
+        try:
+            return sum(stored_values(spec, columns, fintim) for spec in specs)
+        except AmilError as exc:
+            if exc.path is None:
+                exc.path, exc.source = self.ir.path, self.ir.source
+            raise
+
     def _check_memory(self, specs: list[ir.RunSpec], outputs: list[str] | None,
                       fintim: float | None) -> None:
         """Refuse, before the first run, runs whose rows together would not fit. (In
         ACSL form the rows follow CINT and TERMT, known only after INITIAL: a run is
         capped at language.MAX_INTERVALS rows instead.)"""
-        from .run.plan import DEFAULTS, stored_values
+        from .run.plan import DEFAULTS
 
         if self.ir.acsl is not None:
             return
+        total = self._stored(specs, outputs, fintim)
         columns = len(outputs) if outputs is not None else len(self.ir.variables)
-        try:
-            total = sum(stored_values(spec, columns, fintim) for spec in specs)
-        except AmilError as exc:
-            if exc.path is None:
-                exc.path, exc.source = self.ir.path, self.ir.source
-            raise
         limit = DEFAULTS["max_values"]
         if total > limit:
             raise AmilError(

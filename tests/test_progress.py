@@ -62,8 +62,8 @@ def test_newton_and_the_response_curve_report_their_steps():
 
 def test_an_unknown_task_is_refused():
     with pytest.raises(ValueError, match="unknown progress task"):
-        Report("fit", 1.0)
-    assert set(TASKS) == {"run", "runs", "sweep", "periodic", "response"}
+        Report("fitting", 1.0)
+    assert set(TASKS) == {"run", "runs", "sweep", "periodic", "response", "fit"}
 
 
 def test_the_progress_line_reads_every_task(monkeypatch):
@@ -77,8 +77,10 @@ def test_the_progress_line_reads_every_task(monkeypatch):
     line(Report("runs", 1, 2, {"index": 0}))
     line(Report("periodic", 3, None, {"residual": 1e-9}))
     line(Report("response", 7, None, {"name": "W", "value": 1.05, "residual": 1e-10}))
+    line(Report("fit", 4, None, {"value": "K = 0.8"}))
     text = err.getvalue()
     for shown in ("W = 0.8 done (1/3)", "W point 2/3  TIME 20 / 40  ( 50.0%)  events 2",
                   "run 1 finished (1 of 2)", "periodic: Newton step 3, residual 1.00e-09",
-                  "response: W = 1.05  point 7  residual 1.0e-10"):
+                  "response: W = 1.05  point 7  residual 1.0e-10",
+                  "fit: evaluation 4  K = 0.8"):
         assert shown in text

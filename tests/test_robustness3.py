@@ -481,3 +481,41 @@ def test_a_sweep_bounds_each_point_by_the_run_limits(tmp_path, capsys):
     assert out.count("FAILED") == 3
     result = amilpy.loads(SWEEP).sweep("W", [0.5], measure="X", max_steps=50)
     assert result.points[0].status == "failed"
+
+
+# a mutation of the shipped diode filter (fuzzing): the diode drop is VT*ALOG(I/IS),
+# -inf while I = 0, so the period map's variation is NaN
+NAN_JACOBIAN = """TITLE A DIODE FILTER WITH A DROP OF LOG(0)
+MACRO Y = FILT2(TAU, X)
+   Y1 = REALPL(0., TAU, X)
+   Y  = REALPL(0., TAU, Y1)
+ENDMAC
+PARAM C = 1.E-3, R = 100., VT = 0.02585, IS = 1.E-12, V0 = 5.
+V   = INTGRL(V0, -I/C)
+I   = IMPL(0., 1.E-10, FI)
+VD  = VT*ALOG(""" + "DEADSP(-0.5, 0.5, " * 8 + "1." + ")" * 8 + """ + I/IS)
+FI  = AMAX1(0., (V - VD)/R)
+IF2 = FILT2(0.01, I)
+VF2 = FILT2(0.05, V)
+TIMER FINTIM = 0.5, PRDEL = 0.05, OUTDEL = 0.002
+PRINT V, I, VD, IF2, VF2
+END
+"""
+
+
+def test_a_non_finite_jacobian_ends_an_analysis_with_a_message(tmp_path, capfd):
+    """A NaN in the period map's Jacobian reached LAPACK, which printed its complaint
+    on stdout (into the user's printout) and then gave a LinAlgError traceback. Now
+    a non-finite Jacobian is said, exit 3, and nothing reaches stdout; `modes` of a
+    non-finite Jacobian likewise."""
+    from amilpy.analysis.linear import mode_list
+    from amilpy.run import FlowFailed
+
+    path = tmp_path / "filter.amil"
+    path.write_text(NAN_JACOBIAN)
+    code = main(["periodic", str(path), "--period", "1.0", "--settle", "0.5", "--quiet"])
+    out, err = capfd.readouterr()
+    assert code == 3 and out == "", out
+    assert "Jacobian is not finite" in err and "Traceback" not in err
+    with pytest.raises(FlowFailed, match="not finite"):
+        mode_list(np.array([[0.0, 1.0], [np.nan, 0.0]]))

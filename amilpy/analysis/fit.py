@@ -152,7 +152,12 @@ def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = 
         return runs
 
     def residuals(x):
-        return _weighted(runs_at(x), weights)
+        r = _weighted(runs_at(x), weights)
+        if not np.all(np.isfinite(r)):
+            raise AmilError(f"the residuals at {_values(dict(zip(names, to_p(x), strict=True)))}"
+                            " are not finite (a variable observed is NaN or infinite "
+                            "there)", model.ir.path)
+        return r
 
     r0 = residuals(to_x(start))
     n, p = len(r0), len(names)

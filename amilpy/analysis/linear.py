@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..diagnostics import AmilError
-from ..run import Flow, State
+from ..run import Flow, FlowFailed, State
 from ..run.jacobian import MODEL
 
 ZERO = 1e-8  # an eigenvalue below this fraction of the largest is a zero mode
@@ -95,6 +95,10 @@ def mode_list(jac: np.ndarray) -> list[Mode]:
     then by natural frequency."""
     if not jac.size:
         return []
+    if not np.all(np.isfinite(jac)):
+        # (LAPACK would print its complaint on stdout and give up)
+        raise FlowFailed("the Jacobian is not finite there (a derivative that overflows "
+                         "or is NaN): no modes")
     values, vectors = np.linalg.eig(jac)
     top = float(np.max(np.abs(values)))
     out = []

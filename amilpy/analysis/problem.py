@@ -41,7 +41,7 @@ from ..check.order import reads
 from ..diagnostics import AmilError, with_hint
 from ..library import lookup
 from ..parse import syntax as ast
-from ..run import Flow, State
+from ..run import Flow, FlowFailed, State
 
 # tolerances of the analyses when the caller gives none (the listing's RELERR is
 # for a transient to be drawn; a Newton iteration needs its residuals to 1E-8)
@@ -385,6 +385,12 @@ class Problem:
             r = np.append(r, end.y[a] - start.y[a] - self.advance)
         ev = Evaluation(x, r, start, end, events)
         if jacobian:
+            if not np.all(np.isfinite(m)):
+                # (LAPACK would print its complaint on stdout and give up)
+                bad = int(np.argmax(~np.isfinite(m).all(axis=1)))
+                raise FlowFailed(f"the period map's Jacobian is not finite (the variation "
+                                 f"of {self.names[bad]} at TIME = {end.t:.9g}): the "
+                                 "motion cannot be linearised there")
             if with_p:
                 ev.glam = np.append(m[c, -1], m[self.angle, -1])
                 m = m[:, :-1]

@@ -256,9 +256,10 @@ class Continuation:
                 glam = self.g_lam(node.x, node.lam, r)
             # least squares: with a symmetry and its balance (the hoist's rigid-body
             # speed and momentum) the system has one more row than rank
-            d = np.linalg.lstsq(np.vstack([np.hstack([node.gx, glam[:, None]]),
-                                           row[None, :]]),
-                                -np.append(r, plane(node)), rcond=None)[0]
+            a = np.vstack([np.hstack([node.gx, glam[:, None]]), row[None, :]])
+            if not np.all(np.isfinite(a)):  # (LAPACK would print on stdout and give up)
+                raise NotConverged("the curve's Jacobian is not finite here", history)
+            d = np.linalg.lstsq(a, -np.append(r, plane(node)), rcond=None)[0]
             for halving in range(4):
                 dx, dlam = self.expand(d * 0.5 ** halving)
                 trial = self.node(node.x + dx, node.lam + dlam, kind=kind)

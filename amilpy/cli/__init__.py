@@ -17,6 +17,7 @@ written before the printout, so a closed or blocked stdout cannot lose them.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import warnings
 
@@ -260,18 +261,24 @@ def cmd_run(args, path: str, signals: Signals) -> int:
         write_out(lambda out: out.write(model.python_source(weather_dir=args.weather_dir,
                                                             **params) + "\n"))
     progress = Progress(not args.quiet)
+    stream = _csv_stream(args, model, names, params)
     try:
         runs = model.run(method=args.method, rtol=args.rtol, atol=args.atol,
                          progress=progress, max_time=args.max_time, max_steps=args.max_steps,
                          max_events=args.max_events, fintim=args.fintim,
                          advice=not args.no_advice, step_point=args.step_point,
                          seed=args.seed, weather_dir=args.weather_dir, jobs=_jobs(args),
-                         scheduler=args.scheduler, data=args.data, **params)
+                         scheduler=args.scheduler, data=args.data, stream_csv=stream,
+                         csv_names=names, csv_dialect=args.csv_dialect, **params)
+    except BaseException:
+        if stream is not None:
+            stream.discard()
+        raise
     finally:
         progress.done()
     stem, out_dir = stem_and_dir(path, args.out)
     outputs = Outputs("run", stem, out_dir, runs, model=model, dialect=args.csv_dialect,
-                      plot=plot, names=names)
+                      plot=plot, names=names, streamed=stream)
     if args.overlay:  # (drawn with the other listings' once all have run)
         args.overlaid.append((stem, model, runs, plot))
     written, errors = write_outputs(outputs, args, signals,
@@ -299,6 +306,33 @@ def cmd_run(args, path: str, signals: Signals) -> int:
     for r in failed:
         print(f"amilpy: {path}: run {r.label!r}: {r.message}", file=sys.stderr)
     return max(code, EXIT_FAILED if failed else EXIT_OK)
+
+
+# --csv streams the rows to the file as the runs go (output/stream.py) when they
+# would keep more values than this in memory (40 MB): one long run, say
+STREAM_VALUES = 5_000_000
+
+
+def _csv_stream(args, model, names, params):
+    """The CsvStream for --csv when the runs are long, else None (a short run's CSV
+    is written from its rows after it, with --xlsx, or where the path is no
+    regular file in a folder that exists: the writer says what is wrong there)."""
+    from ..output.files import is_stream
+
+    path = args.csv
+    if not path or args.xlsx or is_stream(path) or model.ir.acsl is not None or \
+            not os.path.isdir(os.path.dirname(os.path.abspath(path))) or \
+            (os.path.lexists(path) and not os.path.isfile(path)):
+        return None
+    if model.stored_values(args.fintim, **params) <= STREAM_VALUES:
+        return None
+    from ..output.stream import CsvStream
+
+    try:
+        return CsvStream(path, names, args.csv_dialect,
+                         [s.data for s in model._specs(params)])
+    except OSError:
+        return None
 
 
 def cmd_sweep(args, path: str, signals: Signals) -> int:

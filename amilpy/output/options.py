@@ -58,4 +58,6 @@ class Outputs:
     model: object = None  # the api.Model (units, labels)
     dialect: str = "plain"  # --csv-dialect
     plot: PlotOptions = field(default_factory=PlotOptions)
+    # the --csv the runs wrote as they went (output.stream.CsvStream), to be closed
+    streamed: object | None = None
     names: list[str] | None = None  # --vars: the columns of --csv/--xlsx (None: the default)

@@ -65,14 +65,20 @@ def export_names(run: Run) -> list[str]:
     order;
     with neither, the printout's. Not TIME (the first column anyway), nor a
     TERMINAL value, which is no column of the grid."""
+    return export_names_from(run.reports, lambda n: n in run.values or n not in run.terminal) \
+        or T.printed_names(run)
+
+
+def export_names_from(reports, column) -> list[str]:
+    """`export_names` from a run's reports before it has run: `column(name)` says
+    whether a name is a column of the grid (not a TERMINAL value)."""
     seen: dict[str, None] = {}
-    for r in run.reports:
+    for r in reports:
         if r.kind in ("PRINT", "OUTPUT", "PREPARE"):
             seen.update(dict.fromkeys(r.names))
             if getattr(r, "x", None):
                 seen[r.x] = None
-    names = [n for n in seen if n != "TIME" and (n in run.values or n not in run.terminal)]
-    return names or T.printed_names(run)
+    return [n for n in seen if n != "TIME" and column(n)]
 
 
 def run_rows(runs: Sequence[Run], names: Sequence[str]) -> tuple[list[str], Iterator[list]]:

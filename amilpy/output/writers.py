@@ -42,7 +42,10 @@ def _prepare(o: Outputs, _path: str | None) -> list[str]:
 def _csv(o: Outputs, path: str | None) -> list[str]:
     from . import sheets
 
-    sheets.write_csv(path, o.runs, o.names, dialect=o.dialect)
+    if o.streamed is not None:  # (streamed as the runs went: its notes and header)
+        o.streamed.close(sheets.partial_notes(o.runs))
+    else:
+        sheets.write_csv(path, o.runs, o.names, dialect=o.dialect)
     return [path]
 
 

@@ -64,7 +64,11 @@ class _Run:
         self.watch = SurfaceWatch(self.c, self.plan)
         ranged = [n for r in spec.reports if r.kind == "RANGE" for n in r.names]
         self.rec = Recorder(self.plan, self.c, self.watch, ranged + list(opts.extrema),
-                            self.plan.t0 + opts.settle if opts.settle > 0 else None)
+                            self.plan.t0 + opts.settle if opts.settle > 0 else None,
+                            opts.row_sink)
+        if opts.row_sink is not None:
+            opts.row_sink.begin(self.c.out_names, self.constants, spec.reports,
+                                len(self.plan.grid.times))
         # step-point mode runs the classic loop (steppoint.py) instead of the located one
         self.integ = (StepPoint if self.plan.step_point else Integrator)(
             model, self.plan, self.c, self.watch, opts, started)

@@ -79,6 +79,9 @@ class Options:
     # instants that must be rows, beside the OUTDEL and PRDEL grids (observations:
     # `amilpy.observed`); in neither grid's table
     extra_times: tuple[float, ...] = ()
+    # where the rows go as the run makes them (output/stream.py's CsvStream: a long
+    # run's CSV), keeping in memory only what it says; None: every row kept
+    row_sink: object | None = None
 
 
 # (the IR's: what a surface is for and how it selects a branch, one definition)

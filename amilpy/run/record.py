@@ -32,8 +32,11 @@ class Rows:
     # back to the system when it is freed, not a heap that stays as large as it was)
     SINGLE = 4096  # single rows kept as lists at most
 
-    def __init__(self, width: int) -> None:
+    def __init__(self, width: int, on_part=None) -> None:
         self.width = width
+        # `on_part(t, g, values, final) -> rows kept`: each part as it is merged (a
+        # CSV streamed as the run goes: output/stream.py), the run's last one final
+        self.on_part = on_part
         self.t_parts: list[np.ndarray] = []
         self.g_parts: list[np.ndarray] = []
         self.columns: list[list[np.ndarray]] = [[] for _ in range(width)]
@@ -66,11 +69,16 @@ class Rows:
         if self.in_blocks >= self.BATCH:
             self._merge()
 
-    def _merge(self) -> None:
+    def _merge(self, final: bool = False) -> None:
         if not self.blocks:
+            if final and self.on_part is not None:
+                self.on_part(np.empty(0), np.empty(0, int), np.empty((0, self.width)), True)
             return
         t, g, v = (np.concatenate(p) for p in zip(*self.blocks, strict=True))
         self.blocks, self.in_blocks = [], 0
+        if self.on_part is not None:
+            keep = self.on_part(t, g, v, final)
+            t, g, v = t[keep], g[keep], v[keep]
         self.t_parts.append(t)
         self.g_parts.append(g)
         for column, values in zip(self.columns, v.T, strict=True):
@@ -85,7 +93,7 @@ class Rows:
         """TIME, the grid indices and each column, as arrays; the rows are given
         away (the parts of a column are freed as soon as it is put together)."""
         self._flush()
-        self._merge()
+        self._merge(final=True)
         t = np.concatenate(self.t_parts) if self.t_parts else np.empty(0)
         g = np.concatenate(self.g_parts) if self.g_parts else np.empty(0, int)
         self.t_parts, self.g_parts = [], []
@@ -327,12 +335,16 @@ class Recorder:
     """The rows of one run, and the `Run` made of them."""
 
     def __init__(self, plan: RunPlan, c: ModelCode, watch: SurfaceWatch,
-                 range_names: list[str], range_from: float | None = None) -> None:
+                 range_names: list[str], range_from: float | None = None,
+                 sink=None) -> None:
         self.plan = plan
         self.c = c
         self.watch = watch
         self.times = plan.grid.times
-        self.rows = Rows(len(c.out_names))
+        # `sink`: where the rows are streamed as the run goes (output/stream.py's
+        # CsvStream, begun by the caller), keeping in memory what it says
+        self.sink = sink
+        self.rows = Rows(len(c.out_names), self._stream if sink is not None else None)
         self.out_i = 0  # the next grid instant to record
         # an instant whose row the caller takes itself, after its events (ACSL form)
         self.hold: float | None = None
@@ -471,6 +483,13 @@ class Recorder:
         """Several such points, in order, in the branches m."""
         if self.extrema.names and len(S):
             self._samples(S, m, z, S, SY, every=True)
+
+    def _stream(self, t: np.ndarray, g: np.ndarray, v: np.ndarray, final: bool) -> np.ndarray:
+        grid = self.plan.grid  # (the ACSL form's CINT may change it during the run)
+        on = g >= 0
+        outdel, prdel = np.zeros(len(g), bool), np.zeros(len(g), bool)
+        outdel[on], prdel[on] = grid.outdel[g[on]], grid.prdel[g[on]]
+        return self.sink.part(t, g, list(v.T), outdel, prdel, final)
 
     def run(self, spec, constants: dict[str, float], events: list[Event], status: Status,
             message: str, warnings: list[str], stats: dict, t: float, y: np.ndarray, z, m,

@@ -1,0 +1,110 @@
+"""A CSV streamed as the runs go (`Model.run(stream_csv=)`, `amilpy run --csv` of a long
+run): the file is the one written after the runs, byte for byte, and a run keeps
+only its PRDEL rows and a sample for the figures, so a run whose rows would not fit
+in memory still writes them all."""
+
+from __future__ import annotations
+
+import filecmp
+import os
+import subprocess
+import sys
+import textwrap
+
+import pytest
+from conftest import ROOT
+
+import amilpy
+from amilpy.cli import main
+from amilpy.output import sheets, stream
+from amilpy.output.printout import format_runs
+from amilpy.run import record
+
+TWO_RUNS = open(os.path.join(ROOT, "models", "ex4_elastic.amil")).read().replace(
+    "PARAM  C = 2.0,", "PARAM  C = (2.0, 3.0),")
+
+
+@pytest.fixture
+def small_parts(monkeypatch):
+    """Parts of 777 rows and 300 kept: a short run streams in many parts (a long one's
+    parts are 32,768 rows), each part's last row held back for the next."""
+    monkeypatch.setattr(record.Rows, "BATCH", 777)
+    monkeypatch.setattr(stream, "KEEP", 300)
+
+
+@pytest.mark.parametrize("dialect", ["plain", "excel-pl"])
+@pytest.mark.parametrize("limit", [None, 300])
+def test_the_streamed_csv_is_the_csv_written_after_the_runs(tmp_path, small_parts, dialect,
+                                                           limit):
+    """Two runs (a RUN and a C column first), both dialects, whole runs and runs
+    stopped by --max-steps (PARTIAL notes on top, the stop instant's row last): the
+    same bytes. The printout is the same but for the note saying where the rows
+    went, and the run's final values and RANGE are the same."""
+    model = amilpy.loads(TWO_RUNS, "e.amil")
+    whole = model.run(advice=False, max_steps=limit)
+    sheets.write_csv(str(tmp_path / "after.csv"), whole, dialect=dialect)
+    streamed = model.run(advice=False, max_steps=limit, stream_csv=str(tmp_path / "s.csv"),
+                         csv_dialect=dialect)
+    assert filecmp.cmp(tmp_path / "after.csv", tmp_path / "s.csv", shallow=False)
+    assert [f for f in os.listdir(tmp_path) if f.startswith(".")] == []  # no temporary
+    for a, b in zip(whole, streamed, strict=True):
+        assert a.final == b.final and a.extrema == b.extrema and a.status == b.status
+        assert len(b.t) < len(a.t) or limit is not None
+    note = streamed[0].warnings[-1]
+    assert note.startswith("the OUTDEL rows (")
+    assert format_runs(whole) == format_runs(streamed).replace(f"\nNOTE: {note}\n", "")
+
+
+def test_the_command_streams_a_long_run_and_writes_the_same_file(tmp_path, monkeypatch,
+                                                                 small_parts):
+    """`amilpy run --csv` streams when the runs would keep more than STREAM_VALUES (here
+    lowered to 1): the file is what the whole run writes, with --vars too."""
+    listing = tmp_path / "e.amil"
+    listing.write_text(TWO_RUNS)
+    args = ["run", str(listing), "--quiet", "--vars", "W2,C,MC"]
+    assert main([*args, "--csv", str(tmp_path / "after.csv")]) == 0
+    monkeypatch.setattr("amilpy.cli.STREAM_VALUES", 1)
+    assert main([*args, "--csv", str(tmp_path / "s.csv")]) == 0
+    assert filecmp.cmp(tmp_path / "after.csv", tmp_path / "s.csv", shallow=False)
+    assert sorted(os.listdir(tmp_path)) == ["after.csv", "e.amil", "s.csv"]
+
+
+RAMP = "\n".join(["TITLE A LONG RAMP", "X = INTGRL(0.0, 1.0)",
+                  *(f"Y{k} = {k}.0*X" for k in range(1, 21)),
+                  "TIMER FINTIM = 500.0, OUTDEL = 1.0E-3, PRDEL = 100.0",
+                  "PRINT X, " + ", ".join(f"Y{k}" for k in range(1, 21)), "END", ""])
+
+PROBE = textwrap.dedent("""
+    import resource, sys
+    import amilpy.cli as cli
+    cli.main(["run", "ramp.amil", "--fintim", "100", "--csv", "warm.csv", "--quiet"])
+    if sys.argv[1] == "whole":
+        cli.STREAM_VALUES = 1e18
+    vm = next(int(x.split()[1]) for x in open("/proc/self/status") if x.startswith("VmSize"))
+    limit = vm * 1024 + 120 * 2**20
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    sys.exit(cli.main(["run", "ramp.amil", "--csv", "out.csv", "--quiet"]))
+""")
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc and RLIMIT_AS")
+def test_a_run_whose_rows_do_not_fit_streams_them_within_a_memory_limit(tmp_path):
+    """500,001 rows of 21 variables (84 MB of values) under an address-space limit of
+    120 MB above what the process holds after a warm-up run: kept whole, the rows do
+    not fit ("out of memory", exit 3, no file); streamed, the run writes every row."""
+    (tmp_path / "ramp.amil").write_text(RAMP)
+    (tmp_path / "probe.py").write_text(PROBE)
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg")
+
+    def probe(how: str) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "probe.py", how], cwd=tmp_path, env=env,
+                              capture_output=True, text=True, timeout=600)
+
+    whole = probe("whole")
+    assert whole.returncode == 3 and "out of memory" in whole.stderr, whole.stderr
+    assert not (tmp_path / "out.csv").exists()
+    streamed = probe("stream")
+    assert streamed.returncode == 0, streamed.stderr
+    with open(tmp_path / "out.csv") as fh:
+        lines = sum(1 for _ in fh)
+    assert lines == 1 + 500_001
