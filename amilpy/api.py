@@ -197,7 +197,7 @@ class Model:
         try:
             runs = self._runs(specs, opts, obs, advice, 1, None, progress, sink)
             if own:
-                sink.close(partial_notes(runs))
+                sink.close(partial_notes(runs), [r.params for r in runs])
         except BaseException:
             sink.discard()
             raise

@@ -42,7 +42,9 @@ class Series:
     t: np.ndarray
     values: np.ndarray
     sd: np.ndarray | None
-    lines: tuple[int, ...]  # the file's line of each observation (for messages)
+    lines: tuple[int, ...]  # the file's line of each observation (for messages) ...
+    columns: tuple[int, ...] = ()  # ... the column of its TIME cell ...
+    value_columns: tuple[int, ...] = ()  # ... and of its value
 
 
 @dataclass(frozen=True)
@@ -106,7 +108,9 @@ def read(path: str, variables, runs: int) -> Observations:
     for k, ((text, col), name) in enumerate(zip(header, names, strict=True)):
         if k == time_col:
             continue
-        if name == "RUN":
+        if not name:  # (a spreadsheet's trailing separator: a column nothing is in)
+            kinds[k] = ("none", "")
+        elif name == "RUN":
             kinds[k] = ("run", "")
         elif name.startswith(SD_PREFIX) and name[len(SD_PREFIX):] in known:
             kinds[k] = ("sd", name[len(SD_PREFIX):])
@@ -137,6 +141,11 @@ def read(path: str, variables, runs: int) -> Observations:
         t = value(time_col)
         if t is None:
             raise bare.error("no TIME on this line", number, 1)
+        t_col = cells[time_col][1]
+        for k, (kind, _) in kinds.items():
+            if kind == "none" and k < len(cells) and cells[k][0]:
+                raise bare.error("a value in a column with no name", number, cells[k][1],
+                                 "name the column in the header line")
         run: int | None = None
         for k, (kind, _) in kinds.items():
             if kind == "run":
@@ -158,13 +167,14 @@ def read(path: str, variables, runs: int) -> Observations:
                                  "given", number, cells[sd_col][1] if sd_col < len(cells)
                                  else 1)
             rows.setdefault((run, name), []).append(
-                (t, x, sd if sd is not None else math.nan, number))
+                (t, x, sd if sd is not None else math.nan, number, t_col, cells[k][1]))
     series = []
     for (run, name), points in rows.items():
         points.sort(key=lambda p: p[0])
         a = np.array([p[:3] for p in points], dtype=float)
         sd = a[:, 2] if np.all(np.isfinite(a[:, 2])) else None
-        series.append(Series(name, run, a[:, 0], a[:, 1], sd, tuple(p[3] for p in points)))
+        series.append(Series(name, run, a[:, 0], a[:, 1], sd, tuple(p[3] for p in points),
+                             tuple(p[4] for p in points), tuple(p[5] for p in points)))
     if not series:
         raise bare.error("the data file has no observations", head_line, 1,
                          "put a line per instant under the header")
@@ -210,7 +220,7 @@ def compare(run: Run, obs: Observations, number: int, why_no_row: str) -> list[C
         if outside.any():
             k = int(np.argmax(outside))
             raise obs.error(f"TIME {s.t[k]:g} is outside run {number}, which goes from "
-                            f"TIME {t0:g} to {t1:g}", s.lines[k], 1,
+                            f"TIME {t0:g} to {t1:g}", s.lines[k], s.columns[k],
                             "leave out the observations the run does not reach, or "
                             "change FINTIM")
         if s.name not in run.values:
@@ -226,8 +236,8 @@ def compare(run: Run, obs: Observations, number: int, why_no_row: str) -> list[C
         missing = ~hit & reached
         if missing.any():
             k = int(np.argmax(missing))
-            raise obs.error(f"run {number} has no row at TIME {s.t[k]:g}", s.lines[k], 1,
-                            why_no_row)
+            raise obs.error(f"run {number} has no row at TIME {s.t[k]:g}", s.lines[k],
+                            s.columns[k], why_no_row)
         keep = hit & reached
         sim = run.values[s.name][pick[keep]]
         out.append(Compared(s.name, s.t[keep], s.values[keep], np.asarray(sim, float),

@@ -2,7 +2,7 @@
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/longrun.py [--models hoist_backlash machine_unit]
         [--fintims 10 100 1000] [--methods AUTO COMPILED] [--rtol R] [--tree PATH]
-        [--out DIR]
+        [--stream] [--out DIR]
 
 Each point runs in a fresh process (its peak resident memory is its own): the listing
 is loaded and run once over its own FINTIM first (imports, code generation, numba's
@@ -12,7 +12,9 @@ the process, the baseline before the long run (Python, NumPy, SciPy, and numba's
 LLVM for COMPILED), and the run's own share (peak - baseline) per row held.
 
 `--tree PATH` runs another checkout's amilpy (a worktree of an older commit) on its
-own models, for a before/after table.
+own models, for a before/after table. `--stream` writes the long run's CSV as it
+goes (`Model.run(stream_csv=)`, what `amilpy run --csv` does for a long run): the
+rows are then the CSV's, and the table goes to longrun_stream.md.
 
 A run that keeps its cost per simulated second and its memory per row whatever its
 length is what this checks: before issue 29, AUTO's memory grew with the square of
@@ -39,27 +41,36 @@ import json, os, resource, sys, time
 import amilpy
 path, method, fintim = sys.argv[1], sys.argv[2], float(sys.argv[3])
 rtol = float(sys.argv[4]) if sys.argv[4] != "-" else None
+stream = sys.argv[5] if len(sys.argv) > 5 else None
 m = amilpy.load(path)
 kw = dict(method=method, advice=False, rtol=rtol, atol=None if rtol is None else rtol * 1e-3)
 m.run(**kw)  # the fixed costs: imports, code generation, the kernel
 base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 start = time.process_time()
-run, = m.run(fintim=fintim, **kw)
+run, = m.run(fintim=fintim, stream_csv=stream, **kw)
 cpu = time.process_time() - start
 peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-print(json.dumps({"cpu": cpu, "base": base, "peak": peak, "rows": len(run.t),
+rows = len(run.t)
+if stream:
+    with open(stream) as fh:
+        rows = sum(1 for _ in fh) - 1
+    os.unlink(stream)
+print(json.dumps({"cpu": cpu, "base": base, "peak": peak, "rows": rows,
                   "columns": len(run.values), "events": len(run.events),
                   "status": str(run.status), "method": run.method}))
 """
 
 
 def point(model: str, method: str, fintim: float, rtol: float | None,
-          tree: str = ROOT) -> dict:
+          tree: str = ROOT, stream: bool = False) -> dict:
+    import tempfile
+
     path = os.path.join(tree, "models", f"{model}.amil")
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1", PYTHONPATH=tree)
+    csv = [os.path.join(tempfile.mkdtemp(), "rows.csv")] if stream else []
     out = subprocess.run([sys.executable, "-c", _PROBE, path, method, repr(fintim),
-                          repr(rtol) if rtol else "-"], capture_output=True, text=True,
-                         cwd=tree, env=env)
+                          repr(rtol) if rtol else "-", *csv], capture_output=True,
+                         text=True, cwd=tree, env=env)
     if out.returncode:
         return {"model": model, "method": method, "fintim": fintim,
                 "error": out.stderr.strip().splitlines()[-1] if out.stderr else "failed"}
@@ -92,12 +103,12 @@ def table(rows: list[dict]) -> str:
 
 def main(models=("hoist_backlash", "machine_unit"), fintims=(10.0, 100.0, 1000.0),
          methods=("AUTO", "COMPILED"), rtol: float | None = None,
-         out_dir: str | None = None, tree: str = ROOT) -> list[dict]:
+         out_dir: str | None = None, tree: str = ROOT, stream: bool = False) -> list[dict]:
     rows = []
     for model in models:
         for method in methods:
             for fintim in fintims:
-                r = point(model, method, fintim, rtol, tree)
+                r = point(model, method, fintim, rtol, tree, stream)
                 rows.append(r)
                 print(table([r]).splitlines()[-1], flush=True)
     text = table(rows)
@@ -105,7 +116,8 @@ def main(models=("hoist_backlash", "machine_unit"), fintims=(10.0, 100.0, 1000.0
     print(text)
     if out_dir:
         os.makedirs(out_dir, exist_ok=True)
-        with open(os.path.join(out_dir, "longrun.md"), "w", encoding="utf-8") as f:
+        name = "longrun_stream.md" if stream else "longrun.md"
+        with open(os.path.join(out_dir, name), "w", encoding="utf-8") as f:
             f.write(text + "\n")
     return rows
 
@@ -118,6 +130,8 @@ if __name__ == "__main__":
     ap.add_argument("--rtol", type=float, default=None,
                     help="RELERR (ABSERR = RELERR x 1e-3); default: the listing's own")
     ap.add_argument("--tree", default=ROOT, help="the checkout whose amilpy runs")
+    ap.add_argument("--stream", action="store_true",
+                    help="stream the long run's CSV as it goes (Model.run(stream_csv=))")
     ap.add_argument("--out", default=None)
     a = ap.parse_args()
-    main(a.models, a.fintims, a.methods, a.rtol, a.out, os.path.abspath(a.tree))
+    main(a.models, a.fintims, a.methods, a.rtol, a.out, os.path.abspath(a.tree), a.stream)

@@ -365,3 +365,30 @@ def test_a_damaged_numba_cache_is_compiled_again(tmp_path):
     for f in files:
         f.write_bytes(os.urandom(40))
     assert run() == first
+
+
+@needs_numba
+def test_the_compiled_truncations_do_not_wrap_for_large_values():
+    """numba compiles AINT and QNTZR's level as written; with integers there, AINT(1E20)
+    wrapped to -9.2E18 (past 2**63). In floats they are Python's exactly, at the
+    band edges, at zeros of either sign, and far past 2**63; NaN and infinities are
+    faults as in Python."""
+    import math
+
+    import numba
+
+    from amilpy.library.runtime import fortran_aint
+    from amilpy.library.surfaces import level
+
+    aint, lev = numba.njit(fortran_aint), numba.njit(level)
+    for x in (0.0, -0.0, 0.5, -0.5, 0.49999999999999994, 1.5, -1.5, 2.5, -2.5,
+              2.0**50 + 0.5, 1e20, -1e20, 3.7e300, -3.7, 5e-324):
+        k = math.ceil(x - 0.5)
+        k = k - 1 if x <= k - 0.5 else k + 1 if x > k + 0.5 else k
+        assert aint(x) == fortran_aint(x) == float(math.trunc(x)), x
+        assert lev(x) == level(x) == float(k), x
+    for bad in (math.nan, math.inf):
+        with pytest.raises((ValueError, OverflowError)):
+            fortran_aint(bad)
+        with pytest.raises((ValueError, OverflowError)):
+            level(bad)

@@ -127,3 +127,18 @@ def test_the_report_has_the_observations_section(tmp_path, capsys):
     md = (tmp_path / "decay_report.md").read_text()
     assert "**Observations against the run (obs.csv)**" in md
     assert "| 0.5 | X | 6.000000E-01 |" in md
+
+
+def test_a_trailing_separator_is_no_column_and_errors_point_at_the_time_cell(tmp_path):
+    """A spreadsheet writes `TIME;X;` (a last, empty column): accepted, as long as
+    nothing is in it. An instant outside the run is pointed at in its own cell,
+    wherever the TIME column is."""
+    model = amilpy.loads(DECAY.replace("PARAM K = (1.0, 2.0)", "PARAM K = 1.0"))
+    runs = model.run(data=_write(tmp_path, "TIME;X;\n0,5;0,6;\n"))
+    assert list(runs[0].observed[0].t) == [0.5]
+    with pytest.raises(AmilError, match="a value in a column with no name") as err:
+        model.run(data=_write(tmp_path, "TIME;X;\n0,5;0,6;7\n", "filled.csv"))
+    assert (err.value.line, err.value.column) == (2, 9)
+    with pytest.raises(AmilError, match="TIME 7.5 is outside run 1") as err:
+        model.run(data=_write(tmp_path, "X,TIME\n0.5,7.5\n", "late.csv"))
+    assert (err.value.line, err.value.column) == (2, 5)

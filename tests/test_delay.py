@@ -260,3 +260,24 @@ def test_the_store_has_the_slots_its_entry_gives(call):
     assert mem.nslots == len(c.z0) == 2 * 7 + 13
     z = c.mem(0.0, [0.0], [1.0] * len(c.watched), [1.0] * len(c.watched), c.z0)
     assert len(z) == len(c.z0) and c.next_sample(z) > 0.0
+
+
+def test_a_short_delay_over_a_long_run_keeps_its_history_right():
+    """A delay of 0.01 over 2,000 of its lengths (FINTIM 20): the history the delay
+    reads is the integrator's own, step by step, however long the run; D = sin(t -
+    0.01) and its integral 1 - cos(t - 0.01) to 1e-9 (RELERR 1e-10's global error)."""
+    run = amilpy.loads("X = SIN(TIME)\nD = DELAY(100, 0.01, X)\nZ = INTGRL(0.0, D)\n"
+                       "TIMER FINTIM = 20.0, OUTDEL = 0.1\nPRINT D, Z\nEND\n").run(
+                           advice=False)[0]
+    t = run.t
+    assert run.ok
+    assert np.max(np.abs(run["D"] - np.where(t >= 0.01, np.sin(t - 0.01), 0.0))) < 1e-9
+    assert np.max(np.abs(run["Z"] - np.where(t >= 0.01, 1 - np.cos(t - 0.01), 0.0))) < 1e-9
+
+
+def test_a_zero_csmp_delay_is_the_value_itself():
+    """DELAY(N, 0.0, X) in the CSMP form: no delay, D = X at every row (it hung
+    once; the ACSL form's zero TDL is its own test)."""
+    run = amilpy.loads("X = INTGRL(1.0, -X)\nD = DELAY(10, 0.0, X)\n"
+                       "TIMER FINTIM = 1.0, OUTDEL = 0.1\nPRINT D, X\nEND\n").run(advice=False)[0]
+    assert run.ok and list(run["D"]) == list(run["X"])

@@ -14,7 +14,7 @@ from conftest import ROOT
 
 import amilpy
 from amilpy.cli import main
-from amilpy.diagnostics import UsageError
+from amilpy.diagnostics import AmilError, UsageError
 
 # x' = -K x, x(0) = X0: x = X0 exp(-K t)
 DECAY = """TITLE DECAY
@@ -158,3 +158,46 @@ def test_the_docs_dosing_example_prints_what_the_docs_say():
         start, estimate, se, lower, upper = shown[name]
         assert [estimate, se, lower, upper] == pytest.approx(
             [fit.estimates[k], fit.se[k], fit.lower[k], fit.upper[k]], rel=1e-6)
+
+
+def test_known_sds_give_normal_intervals_and_none_left_gives_no_errors(tmp_path):
+    """With the data's own SDs the residual variance is known: the interval is the
+    estimate +- 1.96 SE (the normal quantile, not Student's t, which made it 2.2
+    times too wide with two degrees of freedom). With the variance estimated and as
+    many values as observations nothing is left to estimate it: no SE, said."""
+    t = np.array([0.5])
+    sd = _csv(tmp_path, "TIME,X,SD_X", [(0.5, 1.7 * math.exp(-0.4), 0.05)], "sd.csv")
+    fit = amilpy.loads(DECAY.replace("INCON X0 = 2.0", "INCON X0 = 1.7")).fit(
+        sd, ["K=0.1:5"], weights="sd")
+    assert fit.estimates[0] == pytest.approx(0.8, rel=1e-6)
+    assert fit.upper[0] - fit.estimates[0] == pytest.approx(1.959964 * fit.se[0], rel=1e-6)
+    none = _csv(tmp_path, "TIME,X", zip(t, 1.7 * np.exp(-0.8 * t), strict=True))
+    fit = amilpy.loads(DECAY.replace("INCON X0 = 2.0", "INCON X0 = 1.7")).fit(
+        none, ["K=0.1:5"], weights="none")
+    assert math.isnan(fit.se[0]) and math.isnan(fit.lower[0])
+    assert any("no degrees of freedom" in n for n in fit.notes)
+
+
+def test_a_value_stopped_at_its_bound_is_said(tmp_path):
+    t = np.linspace(0.1, 2.0, 8)
+    data = _csv(tmp_path, "TIME,X", zip(t, 2.0 * np.exp(-0.8 * t), strict=True))
+    fit = amilpy.loads(DECAY).fit(data, ["K=1.0:3"], weights="none")
+    assert fit.estimates[0] == pytest.approx(1.0)
+    assert any("K stopped at its lower bound 1" in n for n in fit.notes), fit.notes
+
+
+def test_a_fit_refuses_what_it_cannot_compare(tmp_path):
+    """A run that a FINISH stops before some observations (the residuals would change
+    length from one evaluation to the next: a SciPy traceback) and relative weights
+    of an observation of 0 (a residual of 1e297): each an error saying what to do,
+    the second at the observation's line and column."""
+    fall = ("PARAM G = 15.0\nV = INTGRL(0.0, -G)\nX = INTGRL(10.0, V)\nFINISH X = 0.0\n"
+            "TIMER FINTIM = 2.0, OUTDEL = 0.01\nOUTPUT X\nEND\n")
+    t = np.arange(0.1, 1.45, 0.1)
+    data = _csv(tmp_path, "TIME,X", zip(t, 10.0 - 0.5 * 9.81 * t * t, strict=True))
+    with pytest.raises(AmilError, match="stops at TIME = 1.1547.*before 3 observation"):
+        amilpy.loads(fall).fit(data, ["G=1:20"], weights="none")
+    zero = _csv(tmp_path, "TIME,X", [(0.5, 1.0), (1.0, 0.0)], "zero.csv")
+    with pytest.raises(AmilError, match="divides by") as err:
+        amilpy.loads(DECAY).fit(zero, ["K"], weights="relative")
+    assert (err.value.line, err.value.column) == (3, 5)

@@ -136,3 +136,33 @@ def test_a_second_ctrl_c_waits_for_the_files_and_a_third_ends_the_command():
     assert signals.held_back == signal.SIGINT
     with pytest.raises(KeyboardInterrupt):
         signals._handler(signal.SIGINT, None)
+
+
+def test_an_auto_chunk_takes_a_quarter_second_at_most(monkeypatch):
+    """A Ctrl-C inside one of AUTO's odeint calls loses that call's rows (odeint gives
+    back nothing of a call an exception ends), and without --max-time a call could
+    take 4,096 output instants however slow they were. Every AUTO stepper is now
+    given CHUNK_SECONDS, and sizes its next chunk from the time its chunks took: at
+    1 ms an instant a chunk is at most 250 instants (the clock is the stepper's own
+    bookkeeping here, set by hand: no test waits on a clock)."""
+    import numpy as np
+
+    from amilpy import steppers
+    from amilpy.run import segment
+    from amilpy.steppers.odeint import OdeintStepper
+
+    given = []
+    real = steppers.make_stepper
+
+    def spy(*args, **kw):
+        given.append(kw.get("chunk_seconds"))
+        return real(*args, **kw)
+
+    monkeypatch.setattr(segment, "make_stepper", spy)
+    assert amilpy.loads(OSCILLATOR).run(method="AUTO", advice=False)[0].ok
+    assert given and all(s == segment.CHUNK_SECONDS == 0.25 for s in given)
+    stepper = OdeintStepper(lambda t, y: -y, 0.0, np.ones(1), 100.0, np.arange(1.0, 100.0),
+                            rtol=1e-6, atol=1e-9, max_step=np.inf, first_step=None,
+                            chunk=4096, chunk_seconds=0.25)
+    stepper._instants, stepper._seconds, stepper._steps = 1000, 1.0, 1000
+    assert stepper._chunk_size(10**9) == 250

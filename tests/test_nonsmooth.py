@@ -602,3 +602,18 @@ def test_amod_of_a_large_dividend_is_the_exact_remainder(method):
     assert run.ok
     assert list(run["Y"]) == list(run["Z"]) == [2.0] * 3
     assert list(run["W"]) == [-2.0] * 3 and math.fmod(1e20, 7.0) == 2.0
+
+
+def test_amod_on_a_multiple_is_the_start_of_its_branch():
+    """AMOD(Y, 0.1) where Y is a multiple of 0.1: Y/0.1 rounds onto the whole number
+    (5.0 at Y = 0.5) the exact quotient is just below, and the switch has crossed to
+    that branch, which starts at 0 -- fmod's exact 0.0999... belongs to the branch
+    before. So the row shows 0, as A - B*AINT(A/B) does (and a large dividend keeps
+    its exact remainder: the test above)."""
+    run = run1("Y = INTGRL(0.0, 1.0)\nX = AMOD(Y, 0.1)\nTIMER FINTIM = 1.0, OUTDEL = 0.05\n"
+               "PRINT X\nEND\n")
+    x = dict(zip(np.round(run.t, 9).tolist(), run["X"].tolist(), strict=True))
+    for t in (0.1, 0.2, 0.5, 0.9, 1.0):
+        assert abs(x[t]) < 1e-15, (t, x[t])
+    for t in (0.05, 0.45, 0.95):
+        assert x[t] == pytest.approx(0.05, abs=1e-15)

@@ -16,6 +16,7 @@ from conftest import run1
 import amilpy
 from amilpy import interrupts
 from amilpy.cli import main
+from amilpy.diagnostics import AmilError
 
 
 def _run(tmp_path, text: str, *args: str, name: str = "m.amil") -> int:
@@ -519,3 +520,15 @@ def test_a_non_finite_jacobian_ends_an_analysis_with_a_message(tmp_path, capfd):
     assert "Jacobian is not finite" in err and "Traceback" not in err
     with pytest.raises(FlowFailed, match="not finite"):
         mode_list(np.array([[0.0, 1.0], [np.nan, 0.0]]))
+
+
+def test_an_acsl_run_of_many_variables_keeps_no_more_values_than_any_run():
+    """The ACSL form's rows are known only as it runs, so the CSMP form's check of
+    rows x variables before the run never applied: a program of 400 variables and a
+    million communication intervals would take 3.2 GB. Its run is capped at the same
+    2e8 values (500,000 intervals here) and refused before it starts, saying so."""
+    lines = [f"    Y{k} = {k}.0*X" for k in range(1, 400)]
+    text = ("PROGRAM MANY\n  CINTERVAL CINT = 1.0E-3\n  DERIVATIVE\n    X = INTEG(1.0, 0.0)\n"
+            + "\n".join(lines) + "\n  END\n  TIMER FINTIM = 1000.0\nEND\n")
+    with pytest.raises(AmilError, match=r"more than the 500,000 a run of 4\d\d variables"):
+        amilpy.loads(text, "many.csl").run(advice=False)

@@ -108,3 +108,45 @@ def test_a_run_whose_rows_do_not_fit_streams_them_within_a_memory_limit(tmp_path
     with open(tmp_path / "out.csv") as fh:
         lines = sum(1 for _ in fh)
     assert lines == 1 + 500_001
+
+
+def test_observations_on_output_instants_keep_their_rows_when_streamed(tmp_path,
+                                                                       small_parts):
+    """An observation on an OUTDEL instant shares that row; the stream's sample kept
+    only the instants added for observations, so the comparison said the run had no
+    row there. The observed instants' rows are kept now."""
+    model = amilpy.loads("X = INTGRL(1.0, -X)\nTIMER FINTIM = 1.0, OUTDEL = 0.001, "
+                         "PRDEL = 0.1\nPRINT X\nEND\n")
+    data = tmp_path / "obs.csv"
+    data.write_text("TIME,X\n0.123,0.9\n0.5,0.6\n0.5005,0.6\n")
+    whole = model.run(data=str(data))[0]
+    streamed = model.run(data=str(data), stream_csv=str(tmp_path / "s.csv"))[0]
+    assert list(streamed.observed[0].t) == [0.123, 0.5, 0.5005]
+    assert list(streamed.observed[0].simulated) == list(whole.observed[0].simulated)
+
+
+def test_what_reads_every_row_after_the_runs_is_not_streamed(tmp_path, monkeypatch):
+    """PREPARE's file, --xlsx and --check-accuracy read the rows after the runs: with
+    them the command keeps every row (the PREPARE file had 20 lines of 1,002)."""
+    monkeypatch.setattr("amilpy.cli.STREAM_VALUES", 1)
+    listing = tmp_path / "p.amil"
+    listing.write_text("X = INTGRL(1.0, -X)\nTIMER FINTIM = 1.0, OUTDEL = 0.001\n"
+                       "PREPARE X\nEND\n")
+    assert main(["run", str(listing), "--csv", str(tmp_path / "c.csv"), "--quiet"]) == 0
+    with open(tmp_path / "p.csv") as fh:
+        assert sum(1 for _ in fh) == 1002
+
+
+def test_an_interrupted_sequence_has_the_header_of_the_runs_made(tmp_path):
+    """The streamed body has the RUN and changed-value columns of the runs planned;
+    after a Ctrl-C in the first of two, the file has those of the one run made (none),
+    as the CSV written after the runs has."""
+    sink = stream.CsvStream(str(tmp_path / "s.csv"), ["X"], "plain", [{"K": 1.0}, {"K": 2.0}])
+    sink.next_run(1)
+    sink.begin(["X"], {"K": 1.0}, [], 3)
+    import numpy as np
+
+    sink.part(np.array([0.0, 0.5]), np.array([0, 1]), [np.array([1.0, 0.6])],
+              np.array([True, True]), np.array([True, True]), final=True)
+    sink.close([], [{"K": 1.0}])
+    assert (tmp_path / "s.csv").read_text() == "TIME,X\n0.0,1.0\n0.5,0.6\n"

@@ -116,6 +116,23 @@ def test_a_value_that_is_not_a_number_is_named_not_a_traceback(tmp_path, old, ne
     # Python's float() reads "nan" and "inf": a NaN day ran on as "no weather" and an
     # infinite day number was an OverflowError; -99 is how a CABO file marks a gap
     (tmp_path / "NLD1.990").write_text(CABO.replace(old, new, 1))
-    with pytest.raises(AmilError, match=r"NLD1\.990:[34]: '(nan|inf|NaN)' is not a value a "
-                                        r"CABO weather file holds: write -99"):
+    with pytest.raises(AmilError, match=r"NLD1\.990:[34]: field \d+ is not a finite number, "
+                                        r"which a CABO weather file holds: write -99"):
         read_cabo(str(tmp_path / "NLD1.990"))
+
+
+def test_a_weather_file_that_is_no_weather_is_not_quoted(tmp_path):
+    """A weather file linked to /proc/self/environ printed the start of the process's
+    environment in its error (the bad line was quoted). Errors now name the line and
+    the field, never the text."""
+    secret = "AMILPY_SECRET_TOKEN=hunter2"
+    (tmp_path / "NLD1.990").write_text(CABO.replace("2800", secret, 1))
+    with pytest.raises(AmilError, match=r"NLD1\.990:\d+: not a CABO weather line: field \d+ "
+                                        r"is not a number") as err:
+        read_cabo(str(tmp_path / "NLD1.990"))
+    assert "hunter2" not in str(err.value) and "SECRET" not in str(err.value)
+    if os.path.exists("/proc/self/environ"):
+        os.symlink("/proc/self/environ", tmp_path / "NLD2.990")
+        with pytest.raises(AmilError) as err:
+            read_cabo(str(tmp_path / "NLD2.990"))
+        assert "PATH=" not in str(err.value) and "HOME=" not in str(err.value)

@@ -13,10 +13,12 @@ so a difference over h is good to RELERR/h^2 + h^2: best near the cube root).
 At the optimum: the covariance is (J^T J)^-1, times the residual variance
 s^2 = 2 cost / (n - p) unless the weights are the data's own SDs (then the
 residuals are in units of their SD already); standard errors its diagonal's
-root, 95 % intervals from Student's t with n - p degrees of freedom, and the
-correlation matrix. A value fitted on a log scale (`log`) has its interval
-exp(log p +- t se). What the data cannot determine is said: a Jacobian of
-deficient rank or condition over 1e8, an interval wider than the bounds."""
+root, 95 % intervals from the normal quantile when the SDs are known, else from
+Student's t with n - p degrees of freedom (none left, n = p: no standard
+errors), and the correlation matrix. A value that stops at a bound is said. A
+value fitted on a log scale (`log`) has its interval exp(log p +- t se). What
+the data cannot determine is said: a Jacobian of deficient rank or condition
+over 1e8, an interval wider than the bounds."""
 
 from __future__ import annotations
 
@@ -93,6 +95,7 @@ def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = 
         max_evaluations: int = 200, **params: float) -> Fit:
     """Fit the `free` data values of `model` (an api.Model) to `data`; see the module."""
     from scipy.optimize import least_squares
+    from scipy.stats import norm as normal
     from scipy.stats import t as student
 
     bounds = parse_free(free)
@@ -124,6 +127,14 @@ def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = 
     if weights == "sd" and any(s.sd is None for s in obs.series):
         raise UsageError("--weights sd needs an SD_<NAME> column for every variable "
                          "observed; give them, or --weights relative or none")
+    if weights == "relative":
+        for s in obs.series:
+            zero = np.flatnonzero(s.values == 0.0)
+            if zero.size:
+                raise obs.error(f"--weights relative divides by |{s.name}|, which is 0 "
+                                "here", s.lines[int(zero[0])],
+                                s.value_columns[int(zero[0])],
+                                "leave the observation out, or use --weights sd or none")
 
     def to_x(p):
         return np.array([math.log(v) if n in logged else v for n, v in zip(names, p,
@@ -147,6 +158,16 @@ def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = 
         failed = [r for r in runs if not r.ok]
         if failed:
             raise AmilError(f"the run at {_values(values)} failed: {failed[0].message}",
+                            model.ir.path)
+        short = [(k, c) for k, r in enumerate(runs, start=1) for c in r.observed
+                 if c.unreached]
+        if short:
+            k, c = short[0]
+            raise AmilError(f"run {k} at {_values(values)} stops at TIME = "
+                            f"{runs[k - 1].t_end:.9g} ({runs[k - 1].message or 'FINISH'}), "
+                            f"before {c.unreached} observation(s) of {c.name}: a fit "
+                            "compares every observation at every evaluation; leave those "
+                            "out, or bound the values so that the run reaches them",
                             model.ir.path)
         report(progress, "fit", count[0], None, value=_values(values))
         return runs
@@ -173,8 +194,15 @@ def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = 
     r = _weighted(fitted, weights)
     jac = result.jac
     dof = n - p
-    s2 = float(r @ r) / dof if weights != "sd" and dof > 0 else 1.0
     notes = []
+    if weights == "sd":
+        s2 = 1.0  # (the residuals are in units of their known SDs)
+    elif dof > 0:
+        s2 = float(r @ r) / dof
+    else:
+        s2 = math.nan
+        notes.append(f"{n} observation(s) for {p} value(s): no degrees of freedom are "
+                     "left to estimate the residuals' variance, so no standard errors")
     sv = np.linalg.svd(jac, compute_uv=False)
     if sv.size and (sv[-1] == 0 or sv[0] / sv[-1] > CONDITION_LIMIT):
         weakest = int(np.argmax(np.abs(np.linalg.svd(jac)[2][-1])))
@@ -183,7 +211,9 @@ def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = 
                      "fix it, or observe what it moves")
     cov_x = np.linalg.pinv(jac.T @ jac) * s2
     se_x = np.sqrt(np.maximum(np.diag(cov_x), 0.0))
-    quantile = float(student.ppf(0.975, dof)) if dof > 0 else math.inf
+    # (the SDs known: the normal quantile; estimated: Student's t with n - p)
+    quantile = float(normal.ppf(0.975)) if weights == "sd" else \
+        float(student.ppf(0.975, dof)) if dof > 0 else math.nan
     est = to_p(x)
     se, lower, upper = [], [], []
     for k, name in enumerate(names):
@@ -197,7 +227,15 @@ def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = 
             lower.append(xk - quantile * sk)
             upper.append(xk + quantile * sk)
         b = bounds[name]
-        if (lower[-1] < b[0] or upper[-1] > b[1]) and all(map(math.isfinite, b)):
+        near = 1e-9 * max(1.0, abs(float(x[k])))
+        at_low, at_high = x[k] <= lo[k] + near, x[k] >= hi[k] - near
+        if result.active_mask[k] != 0 or at_low or at_high:
+            side, edge = ("lower", b[0]) if result.active_mask[k] < 0 or at_low else \
+                ("upper", b[1])
+            notes.append(f"{name} stopped at its {side} bound {edge:g}: the data would take "
+                         "it further; its interval is not a confidence interval there "
+                         "(widen the bound, or check the model)")
+        elif (lower[-1] < b[0] or upper[-1] > b[1]) and all(map(math.isfinite, b)):
             notes.append(f"{name}: the 95 % interval {lower[-1]:.4g} .. {upper[-1]:.4g} is "
                          f"wider than its bounds {b[0]:g}:{b[1]:g}: the data hardly "
                          "determine it")

@@ -320,7 +320,11 @@ def _csv_stream(args, model, names, params):
     from ..output.files import is_stream
 
     path = args.csv
-    if not path or args.xlsx or is_stream(path) or model.ir.acsl is not None or \
+    # (what reads every row after the runs cannot take a streamed run: --xlsx, the
+    # accuracy check's comparison, PREPARE's file)
+    if not path or args.xlsx or args.check_accuracy or is_stream(path) or \
+            model.ir.acsl is not None or \
+            any(r.kind == "PREPARE" for spec in model.ir.runs for r in spec.reports) or \
             not os.path.isdir(os.path.dirname(os.path.abspath(path))) or \
             (os.path.lexists(path) and not os.path.isfile(path)):
         return None

@@ -27,7 +27,13 @@ def fortran_sign(a: float, b: float) -> float:
 
 
 def fortran_aint(x: float) -> float:
-    return float(math.trunc(x))
+    """Fortran AINT, truncation toward 0, in floats (numba compiles this as written:
+    an integer there would wrap past 2**63, AINT(1E20) = -9.2E18)."""
+    if x != x:
+        raise ValueError("AINT of NaN")
+    if x - x != 0.0:
+        raise OverflowError("AINT of an infinity")
+    return (x // 1.0 if x >= 0.0 else -((-x) // 1.0)) + 0.0
 
 
 def fortran_nint(x: float) -> float:

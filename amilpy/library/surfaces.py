@@ -28,13 +28,18 @@ def sign(x: float) -> float:
 
 def amod_at(a: float, b: float, m: float) -> float:
     """AMOD(A, B) in the branch in force, A - B*AINT(A/B) with AINT(|A/B|) held at
-    -m (the mode of its level surface): fmod's exact remainder while A/B is in that
-    branch (A - k*B rounds to nothing when A is large: AMOD(1E20, 7) is 2, not 0),
-    the branch continued past its edge until the crossing is located."""
-    if b != 0.0 and abs(a / b) // 1.0 == -m:
-        # (math.fmod, which numba has not: % of positive floats is exact too)
-        return math.copysign(abs(a) % abs(b), a)
-    return a + m * (1.0 if a > 0 else (-1.0 if a < 0 else 0.0)) * abs(b)
+    -m (the mode of its level surface): fmod's exact remainder where it is that
+    branch's value (A - k*B rounds to nothing when A is large: AMOD(1E20, 7) is 2,
+    not 0), the branch continued past its edge until the crossing is located."""
+    branch = a + m * (1.0 if a > 0 else (-1.0 if a < 0 else 0.0)) * abs(b)
+    if b != 0.0:
+        # (math.fmod, which numba has not: % of positive floats is exact too) -- where
+        # it is the branch's value: A/B may round onto a whole number the exact
+        # quotient is just below (AMOD(0.5, 0.1): the branch says 0, fmod 0.1)
+        exact = math.copysign(abs(a) % abs(b), a)
+        if abs(exact - branch) <= 0.5 * abs(b):
+            return exact
+    return branch
 
 
 # How the motion leaves a switching surface it stands on, from the surface's rate
@@ -74,12 +79,18 @@ def leaving(dp: float, dm: float, exact: bool) -> float:
 def level(v: float) -> float:
     """QNTZR's level k, with (k - 1/2) < v <= (k + 1/2) (round half down), exactly:
     v - 1/2 rounds (-0.49999999999999994 - 0.5 is -1.0), so the band is checked."""
-    k = math.ceil(v - 0.5)
+    # (in floats: numba compiles this as written, and an integer would wrap past
+    # 2**63; ceil(a) = -floor(-a), + 0.0 for no -0.0)
+    if v != v:
+        raise ValueError("the level of NaN")
+    if v - v != 0.0:
+        raise OverflowError("the level of an infinity")
+    k = -((0.5 - v) // 1.0) + 0.0
     if v <= k - 0.5:
-        k -= 1
+        k -= 1.0
     elif v > k + 0.5:
-        k += 1
-    return float(k)
+        k += 1.0
+    return k
 
 
 def truth(x: float) -> bool:

@@ -114,13 +114,18 @@ def read_cabo(path: str) -> WeatherYear:
         try:
             values = [float(f) for f in fields]
         except ValueError:
-            raise AmilError(f"{path}:{number}: not a CABO weather line: {line.strip()[:60]!r}"
-                            ) from None
+            # (the field's place, never its text: a "weather file" may be a link to
+            # something that is no business of an error message, /proc/self/environ)
+            k = next(k for k, f in enumerate(fields, start=1) if not _is_float(f))
+            raise AmilError(f"{path}:{number}: not a CABO weather line: field {k} is not "
+                            "a number (a line holds the station, the year, the day and "
+                            "the day's values)") from None
         bad = next((f for f, v in zip(fields, values, strict=True) if not math.isfinite(v)),
                    None)
         if bad is not None:  # (Python reads "nan" and "inf" as numbers; a CABO file has none)
-            raise AmilError(f"{path}:{number}: {bad[:20]!r} is not a value a CABO weather "
-                            "file holds: write -99 for a missing one")
+            k = fields.index(bad) + 1
+            raise AmilError(f"{path}:{number}: field {k} is not a finite number, which a "
+                            "CABO weather file holds: write -99 for a missing value")
         if year is None:
             if len(values) < 3:
                 raise AmilError(f"{path}:{number}: the station line needs LONG LAT ELEV "
@@ -229,3 +234,11 @@ class Weather:
         import numpy as np
 
         return np.array([self.value(name, float(t)) for t in np.asarray(ts, float)])
+
+
+def _is_float(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True

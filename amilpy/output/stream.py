@@ -62,9 +62,11 @@ class CsvStream:
                              for n in self.changed)] if len(self._params) > 1 else []
 
     def begin(self, out_names: Sequence[str], constants: dict[str, float], reports,
-              grid_rows: int) -> None:
-        """The run's columns (its generated outputs' names), constants, reports and
-        how many rows its grid has."""
+              grid_rows: int, observed: Sequence[float] = ()) -> None:
+        """The run's columns (its generated outputs' names), constants, reports, how
+        many rows its grid has, and the instants observations are compared at (their
+        rows are kept)."""
+        self._observed = np.unique(np.asarray(observed, dtype=float))
         index = {n: i for i, n in enumerate(out_names)}
         if self.names is None:
             self.names = export_names_from(reports, lambda n: n in index or n in constants) \
@@ -95,6 +97,12 @@ class CsvStream:
         if rows.size:
             self._write(t[rows].tolist(), [c[rows].tolist() for c in columns])
         keep = ~outdel | prdel | (g % self._stride == 0)
+        if n and self._observed.size:  # (an observation on an OUTDEL instant: its row)
+            o = self._observed
+            j = np.clip(np.searchsorted(o, t), 1, max(o.size - 1, 1)) if o.size > 1 else \
+                np.zeros(n, int)
+            near = np.minimum(np.abs(o[j] - t), np.abs(o[np.maximum(j - 1, 0)] - t))
+            keep |= near <= 1e-12 * np.maximum(1.0, np.abs(t))
         if n:
             keep[-1] = True
         self.kept += int(np.count_nonzero(keep & written))
@@ -115,19 +123,31 @@ class CsvStream:
         self.rows += len(t)
 
     # ------------------------------------------------------------ the file
-    def close(self, notes: Sequence[str]) -> None:
-        """The file: `notes` (# lines), the header, the body; whole or absent."""
+    def close(self, notes: Sequence[str], made: Sequence[dict[str, float]]) -> None:
+        """The file: `notes` (# lines), the header, the body; whole or absent. `made`:
+        the data values of the runs made (fewer than planned after a Ctrl-C: the
+        RUN and changed-value columns are then those of the runs made, as the CSV
+        written after them has)."""
         self._body.close()
-        header = (["RUN", *self.changed] if len(self._params) > 1 else []) + \
-            ["TIME", *(self.names or [])]
+        lead = ["RUN", *self.changed] if len(self._params) > 1 else []
+        changed = [n for n in dict.fromkeys(k for p in made for k in p)
+                   if len(made) > 1 and any(p.get(n) != made[0].get(n) for p in made)]
+        wanted = ["RUN", *changed] if len(made) > 1 else []
+        keep = [k for k, name in enumerate(lead) if name in wanted]
+        sep = DIALECTS[self.dialect].delimiter
         try:
             with atomic_open(self.path, text=True, encoding=self._encoding, newline="") as fh:
                 for line in notes:
                     fh.write(f"# {line}{self._newline}")
-                csv.writer(fh, delimiter=DIALECTS[self.dialect].delimiter,
-                           lineterminator=self._newline).writerow(header)
+                csv.writer(fh, delimiter=sep, lineterminator=self._newline).writerow(
+                    wanted + ["TIME", *(self.names or [])])
                 with open(self._tmp, encoding=self._encoding, newline="") as body:
-                    shutil.copyfileobj(body, fh, 1 << 20)
+                    if keep == list(range(len(lead))):
+                        shutil.copyfileobj(body, fh, 1 << 20)
+                    else:  # (numbers only: no field is quoted)
+                        for row in body:
+                            cells = row.split(sep)
+                            fh.write(sep.join([cells[k] for k in keep] + cells[len(lead):]))
         finally:
             self.discard()
 

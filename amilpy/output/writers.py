@@ -43,7 +43,7 @@ def _csv(o: Outputs, path: str | None) -> list[str]:
     from . import sheets
 
     if o.streamed is not None:  # (streamed as the runs went: its notes and header)
-        o.streamed.close(sheets.partial_notes(o.runs))
+        o.streamed.close(sheets.partial_notes(o.runs), [r.params for r in o.runs])
     else:
         sheets.write_csv(path, o.runs, o.names, dialect=o.dialect)
     return [path]

@@ -37,6 +37,7 @@ from .code import Calls, code_fault
 from .driver import _Run
 from .loop import Cursor, Stop
 from .plan import (
+    DEFAULTS,
     Grid,
     Options,
     Purpose,
@@ -136,6 +137,9 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
         model, constants, spec.tables, const_modes, opts.outputs, opts.events,
         setting=setting, kept=kept, priors=priors).build())
     t0 = acsl.t0
+    # the rows a run keeps: MAX_INTERVALS, fewer when many variables would make them
+    # more values than any run keeps (a CSMP run is refused before it starts likewise)
+    kept_intervals = min(MAX_INTERVALS, DEFAULTS["max_values"] // max(len(code.out_names), 1))
     # a TERMT on time alone bounds the run: find its instant from a plan reaching far
     far = dict(timer, FINTIM=MAX_INTERVALS * cint)
     first = make_plan(model, spec, opts, code, far, make_grid(t0, t0 + cint, cint, cint),
@@ -149,12 +153,13 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
     elif given is not None:
         fintim = given
     else:
-        fintim, unbounded = MAX_INTERVALS * cint, True
-    if not fintim / cint <= MAX_INTERVALS + 1:  # (+ the row past a TERMT instant)
+        fintim, unbounded = kept_intervals * cint, True
+    if not fintim / cint <= kept_intervals + 1:  # (+ the row past a TERMT instant)
         raise AmilError(f"{acsl.cint_name} = {cint:g} gives {fintim / cint:.3g} output "
                         f"intervals to TIME = {t0 + fintim:g}, more than the "
-                        f"{MAX_INTERVALS:,} a run keeps: make {acsl.cint_name} longer",
-                        model.path)
+                        f"{kept_intervals:,} a run of {len(code.out_names)} variables keeps "
+                        f"({DEFAULTS['max_values']:.0e} values at most): make "
+                        f"{acsl.cint_name} longer", model.path)
     timer["FINTIM"] = fintim
     grid = steppoint.grid(t0, timer) if step_point else make_grid(t0, t0 + fintim, cint, cint)
     plan = make_plan(model, spec, opts, code, timer, grid, step_point, t0=t0)

@@ -68,7 +68,7 @@ class _Run:
                             opts.row_sink)
         if opts.row_sink is not None:
             opts.row_sink.begin(self.c.out_names, self.constants, spec.reports,
-                                len(self.plan.grid.times))
+                                len(self.plan.grid.times), opts.extra_times)
         # step-point mode runs the classic loop (steppoint.py) instead of the located one
         self.integ = (StepPoint if self.plan.step_point else Integrator)(
             model, self.plan, self.c, self.watch, opts, started)

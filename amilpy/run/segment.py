@@ -24,6 +24,9 @@ from .slide import MAX_SLIDING
 from .watch import TooManySlides, crossings
 
 CHUNK_SHARE = 0.02  # of --max-time, the most one odeint chunk may take
+# ... and with no time limit: a Ctrl-C inside a chunk loses the chunk (odeint gives
+# back nothing of a call an exception ends), so none takes long
+CHUNK_SECONDS = 0.25
 
 
 class SegmentStart:
@@ -133,13 +136,14 @@ class SegmentStart:
                 # an integration of its own)
                 checks = np.union1d(checks, train_instants(self.c.memory_trains, cur.t,
                                                            seg_end))
-        # with nothing to watch nothing is thrown away after a chunk: long chunks (a
-        # FINISH would throw away the rest of the run), unless it may pause and start
-        # afresh (the caller's code, a memory the integrator sees); never the whole
-        # segment in one call, whose output and counts would take 200 bytes a row of
-        # a long run; nor under a time limit, until the chunks' time is known
+        # with nothing to watch nothing is thrown away after a chunk: longer first
+        # chunks (growing four times a chunk, up to 4096 instants and CHUNK_SECONDS),
+        # unless it may pause and start afresh (the caller's code, a memory the
+        # integrator sees); never the whole segment in one call, whose output and
+        # counts would take 200 bytes a row of a long run; nor under a time limit,
+        # until the chunks' time is known
         pausing = t_end is not None and seg_end > t_end
-        chunk = 16 if plan.watch_idx or pausing or self.opts.max_time else 4096
+        chunk = 16 if plan.watch_idx or pausing or self.opts.max_time else 256
         stepper = make_stepper(
             plan.route.name, f, cur.t, cur.y, seg_end, rtol=plan.tol.rtol, atol=plan.tol.atol,
             delt=plan.timer["DELT"], max_step=plan.max_step, first_step=self._last_step,
@@ -148,7 +152,8 @@ class SegmentStart:
             kernel=self._kernel_arguments(cur, dense, rec), log=log,
             watch=(self._wrong_at(cur), cur.m, cur.z) if plan.watch_idx else None,
             # (a chunk the time limit ends inside is lost: none may take long)
-            chunk_seconds=CHUNK_SHARE * self.opts.max_time if self.opts.max_time else None)
+            chunk_seconds=min(CHUNK_SHARE * self.opts.max_time, CHUNK_SECONDS)
+            if self.opts.max_time else CHUNK_SECONDS)
         return stepper, f
 
     def _wrong_at(self, cur: Cursor) -> Callable[..., tuple[int, int]]:
