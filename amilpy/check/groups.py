@@ -271,7 +271,12 @@ class RunGroups(Visitor):
     def visit_Data(self, st: ast.Data) -> None:
         for item in st.items:
             check_assignable(item.name, item.span, "a data value", self.rep)
-            if self.group.index == 0 and item.name in self.spans and self.kinds.get(item.name):
+            again = item.name in self.spans and self.kinds.get(item.name)
+            if again and not item.is_list and item.name not in self.group.lists and \
+                    self.data.get(item.name) == item.values[0] and \
+                    self.kinds[item.name] == st.keyword:
+                continue  # (the same value again: Magnolia listings repeat a CONSTANT)
+            if self.group.index == 0 and again:
                 self.rep.error(
                     f"{item.name} is given a value twice",
                     item.span,

@@ -7,6 +7,9 @@ without recursion; one nested deeper than `syntax.MAX_DEPTH` is a located error
 
 from __future__ import annotations
 
+import math
+from dataclasses import replace
+
 from ..diagnostics import AmilError, Diagnostic, Span
 from ..language import (
     DATA_KEYWORDS,
@@ -251,7 +254,7 @@ class Builder:
         if node.data == "negative":
             return -fortran_float(str(node.children[0]))
         if node.data == "truth":
-            return 1.0 if str(node.children[0]).upper() == ".TRUE." else 0.0
+            return 1.0 if str(node.children[0]).upper().strip(".") == "TRUE" else 0.0
         if node.data == "string":
             self.errors.append(Diagnostic(
                 f"the string {node.children[0]} cannot be a value", self.span(node),
@@ -263,7 +266,16 @@ class Builder:
     def st_data(self, node) -> ast.Data:
         keyword = DATA_KEYWORDS[str(node.children[0]).upper()]
         items = []
-        for item in node.children[1:]:
+        children = node.children[1:]
+        whole = False  # an INTEGER constant: Fortran truncates what it is given
+        if children and getattr(children[0], "type", None) == "TYPE_KW":
+            kind = "".join(str(children[0]).upper().split())
+            if kind not in ("INTEGER", "REAL", "DOUBLEPRECISION", "LOGICAL"):
+                self.errors.append(Diagnostic(
+                    f"{kind} is no type of a constant", self.span(children[0]),
+                    "write CONSTANT INTEGER, REAL, DOUBLE PRECISION or LOGICAL, or none"))
+            whole, children = kind == "INTEGER", children[1:]
+        for item in children:
             name = str(item.children[0]).upper()
             if item.data == "data_list":
                 values: list[float] = []
@@ -279,6 +291,9 @@ class Builder:
                 items.append(ast.DataItem(name, tuple(values), self.span(item), True))
             else:
                 items.append(ast.DataItem(name, (self.value(item.children[1]),), self.span(item)))
+            if whole:
+                items[-1] = replace(items[-1], values=tuple(
+                    float(math.trunc(v)) if math.isfinite(v) else v for v in items[-1].values))
         return ast.Data(keyword, tuple(items), self.span(node))
 
     def st_table(self, node) -> ast.Table:

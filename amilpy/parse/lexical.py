@@ -10,7 +10,10 @@ diagnostic still points into the listing as written:
   the line still ends the statement. Everywhere else `;` separates statements;
 - `!=` inside parentheses is not-equal (it becomes `/=`); elsewhere `!` starts a
   comment, so banner comments such as `!======` stay comments;
-- text after a `STOP` statement is not read (FST files keep Fortran there).
+- text after a `STOP` statement is not read (FST files keep Fortran there);
+- Magnolia's `IF T < TCHNG THEN` (and `ELSE IF`, and an IF alone on its line) has
+  its condition put in parentheses: the blank after IF becomes `(`, the blank before
+  THEN (or a comment), or the line's end, `)`.
 
 Strings (`'text'`, `''` a quote) and `!` comments are skipped as units: a `!` or
 `;` inside a string and a `'` inside a comment are plain characters.
@@ -58,6 +61,29 @@ def blank_comment_lines(text: str) -> str:
         out.append(line)
         continued = continues(line)
     return "\n".join(out)
+
+
+_BARE_IF = re.compile(r"^([ \t]*(?:ELSE[ \t]*IF|IF))([ \t])(?![ \t]*\()(.*?)"
+                      r"(?:([ \t])(THEN)[ \t]*)?$", re.IGNORECASE)
+_ASSIGNS = re.compile(r"(?<![<>=/!])=(?!=)")  # an `=` that is no comparison's
+
+
+def _bare_if(line: str) -> str:
+    """IF cond [THEN] with the condition in parentheses, columns kept (see the
+    module); any other line as it is."""
+    end = code_end(line)
+    code = line[:end].rstrip(" \t")
+    m = _BARE_IF.match(code)
+    if m is None or not m.group(3).strip() or _ASSIGNS.search(m.group(3)) or \
+            "'" in m.group(3):
+        return line
+    head, cond = m.group(1) + "(" + m.group(3), ")"
+    if m.group(5):  # (the blank before THEN)
+        return head + cond + m.group(5) + line[len(code):]
+    rest = line[len(code):]
+    if rest[:1] in (" ", "\t"):  # (the blank before a comment)
+        return head + cond + rest[1:]
+    return head + cond + rest
 
 
 def _after_stop(lines: list[str]) -> list[str]:
@@ -139,6 +165,10 @@ def prepare(text: str) -> str:
     lines = _after_stop(blank_comment_lines(text).split("\n"))
     scanner = _Scanner()
     out = []
+    continued = False
     for line in lines:
-        out.append(scanner.line(line, continues(line)))
+        if not continued:
+            line = _bare_if(line)
+        continued = continues(line)
+        out.append(scanner.line(line, continued))
     return "\n".join(out)

@@ -1,0 +1,74 @@
+"""Magnolia's everyday syntax in ACSL programs, seen in published listings: pow(),
+typed constants, TRUE/FALSE without dots, IF without parentheses, a CONSTANT
+repeated with its value. Each runs to a closed form."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import amilpy
+from amilpy.diagnostics import AmilError
+
+
+def _program(constants: str, derivative: str) -> str:
+    return ("PROGRAM probe\n" + constants + "  CINTERVAL CINT = 0.5\n  DERIVATIVE\n"
+            + derivative + "    TERMT(T >= 2.0)\n  END\nEND\n")
+
+
+def test_pow_is_the_power():
+    """Y = pow(X, 2) with X = exp(-K t): exp(-2 K t) at every row (RELERR 1e-11 for the
+    ACSL form: 1e-9 is safe)."""
+    run = amilpy.loads(_program("  CONSTANT K = 0.5\n",
+                                "    X = INTEG(-K*X, 1.0)\n    Y = pow(X, 2.0)\n"),
+                       "p.csl").run(advice=False)[0]
+    assert np.max(np.abs(run["Y"] - np.exp(-run.t))) < 1e-9
+
+
+@pytest.mark.parametrize("line, value", [
+    ("constant integer N = 3", 3.0), ("CONSTANT INTEGER N = 2.7", 2.0),
+    ("CONSTANT REAL N = 1.5", 1.5), ("CONSTANT DOUBLE PRECISION N = 1.5", 1.5),
+    ("CONSTANT DOUBLEPRECISION N = 1.5", 1.5), ("CONSTANT LOGICAL N = .TRUE.", 1.0),
+    ("CONSTANT N = false", 0.0), ("CONSTANT N = TRUE", 1.0), ("constant n = False", 0.0),
+])
+def test_typed_constants_and_bare_truth_values(line, value):
+    """Magnolia's typed constants (an INTEGER one truncated as Fortran assigns it)
+    and TRUE/FALSE without dots: X' = N from 0, so X(2) = 2 N."""
+    run = amilpy.loads(_program(f"  {line}\n", "    X = INTEG(N, 0.0)\n"), "p.csl").run(
+        advice=False)[0]
+    assert run["X"][-1] == pytest.approx(2.0 * value, abs=1e-12)
+
+
+def test_a_constant_of_no_type_is_refused_where_it_stands():
+    with pytest.raises(AmilError, match="DIMENSION is no type of a constant"):
+        amilpy.loads(_program("  CONSTANT DIMENSION N = 3\n", "    X = INTEG(N, 0.0)\n"),
+                     "p.csl")
+
+
+@pytest.mark.parametrize("block", [
+    "    IF T < 1.0 THEN\n      R = 1.0\n    ELSE\n      R = 2.0\n    END IF\n",
+    "    if t < tchng\n      R = 1.0\n    else\n      R = 2.0\n    end\n",
+    "    IF (T < 1.0) THEN\n      R = 1.0\n    ELSE IF T >= 1.0 THEN  ! bare\n      R = 2.0\n"
+    "    END IF\n",
+])
+def test_if_without_parentheses(block):
+    """Magnolia writes `IF t < tchng` (with or without THEN, closed by END): the
+    condition is put in parentheses before the grammar reads it, columns kept. R = 1
+    before TIME 1, 2 after: X(2) = 3, and the switch is located at TIME 1."""
+    run = amilpy.loads(_program("  CONSTANT TCHNG = 1.0\n", block + "    X = INTEG(R, 0.0)\n"),
+                       "p.csl").run(advice=False)[0]
+    assert run["X"][-1] == pytest.approx(3.0, abs=1e-9)
+    assert any(abs(e.time - 1.0) < 1e-12 for e in run.events)
+
+
+def test_a_constant_given_twice_with_its_value_is_one_constant():
+    """Published listings repeat a CONSTANT (in another section, after an INCLUDE):
+    with the same value it is the same constant; with another it is an error still."""
+    same = _program("  CONSTANT K = 0.5\n  CONSTANT K = 0.5\n", "    X = INTEG(-K*X, 1.0)\n")
+    run = amilpy.loads(same, "p.csl").run(advice=False)[0]
+    assert run["X"][-1] == pytest.approx(math.exp(-1.0), rel=1e-9)
+    with pytest.raises(AmilError, match="K is given a value twice"):
+        amilpy.loads(same.replace("  CONSTANT K = 0.5\n  CONSTANT K = 0.5",
+                                  "  CONSTANT K = 0.5\n  CONSTANT K = 0.7"), "p.csl")
