@@ -72,3 +72,19 @@ def test_a_constant_given_twice_with_its_value_is_one_constant():
     with pytest.raises(AmilError, match="K is given a value twice"):
         amilpy.loads(same.replace("  CONSTANT K = 0.5\n  CONSTANT K = 0.5",
                                   "  CONSTANT K = 0.5\n  CONSTANT K = 0.7"), "p.csl")
+
+
+def test_a_constant_given_a_new_value_in_initial():
+    """Magnolia lets INITIAL give a CONSTANT a new value: the assignment wins from there
+    on (KB read before it is 0.5, KA after it 0.25, and the derivatives and TERMINAL
+    see 0.25: X = exp(-0.25 t)); elsewhere (DERIVATIVE) it is still refused."""
+    text = ("PROGRAM probe\n  CONSTANT K = 0.5\n  CINTERVAL CINT = 0.5\n  INITIAL\n"
+            "    KB = K\n    K = 0.25\n    KA = K\n  END\n  DERIVATIVE\n"
+            "    X = INTEG(-K*X, 1.0)\n    TERMT(T >= 2.0)\n  END\n  TERMINAL\n    KT = K\n"
+            "  END\n  PRINT X, KB, KA\nEND\n")
+    run = amilpy.loads(text, "p.csl").run(advice=False)[0]
+    assert (run["KB"][-1], run["KA"][-1], run.terminal["KT"]) == (0.5, 0.25, 0.25)
+    assert np.max(np.abs(run["X"] - np.exp(-0.25 * run.t))) < 1e-9
+    with pytest.raises(AmilError, match="K is both a data value and computed"):
+        amilpy.loads(text.replace("    TERMT(T >= 2.0)\n", "    TERMT(T >= 2.0)\n    K = 0.3\n"),
+                     "p.csl")

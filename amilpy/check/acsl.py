@@ -230,7 +230,10 @@ class _Check:
         for code in (*initial, own, *(d.code for d in discretes.values()), *terminal):
             for st in code.body:
                 for node in ast.walk(st):
-                    if isinstance(node, ir.Let) and node.target in clash:
+                    # (in INITIAL a CONSTANT may be given a new value, as Magnolia
+                    # allows: the assignment wins from there on)
+                    if isinstance(node, ir.Let) and node.target in clash and \
+                            not any(code is c for c in initial):
                         self.rep.error(f"{node.target} is a CONSTANT and cannot be assigned",
                                        node.span, "give it its value in CONSTANT only, or "
                                        "rename the computed one")

@@ -147,7 +147,8 @@ def compile_code(model: ir.Model, name_: str, codes, constants: dict[str, float]
     """Written-order code compiled on its own, before the run's functions exist: the
     ACSL form's INITIAL (`name_(t, y, m, z, ev)` -> values of the names it assigns,
     then of `starts`' names), or a FUNCTION (`name_(*params)` -> its result). Names
-    the code assigns or reads that are not constants start at `starts` or 0."""
+    the code assigns or reads that are not constants start at `starts` or 0; a
+    constant it assigns starts at its value."""
     from ..parse.syntax import walk
     from .faults import STATEMENTS, Statement
     from .pytree import fold, function, namespace, place
@@ -155,6 +156,9 @@ def compile_code(model: ir.Model, name_: str, codes, constants: dict[str, float]
     assigned = list(dict.fromkeys(n for c in codes for n in c.assigned))
     read = [n.name for c in codes for st in c.body for n in walk(st)
             if isinstance(n, syntax_name())]
+    # a constant the code assigns (Magnolia's CONSTANT given a new value in INITIAL)
+    # is its constant until then
+    starts = {**{n: constants[n] for n in assigned if n in constants}, **starts}
     own = set(assigned) | set(starts) | set(params)
     em = Emitter(model, {k: v for k, v in constants.items() if k not in own}, {}, "literal",
                  {}, {}, tables, define_function=user_callable)
