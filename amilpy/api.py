@@ -444,16 +444,18 @@ class Model:
 
     def fit(self, data, free, *, log=(), weights: str = "sd", method: str | None = None,
             rtol: float | None = None, atol: float | None = None, progress=None,
-            max_evaluations: int = 200, **params: float):
+            max_evaluations: int = 200, gradients: str = "differences", **params: float):
         """Fit data values to measurements (`amilpy.analysis.fit`): `data` a CSV of
         observations (see `run`), `free` the values fitted ("B", "B=0:1E-3", or a
         dict name -> (lo, hi)), `log` those fitted on a log scale, `weights` "sd",
-        "relative" or "none". Returns an `analysis.fit.Fit`."""
+        "relative" or "none", `gradients` "differences" (of whole runs) or
+        "sensitivities" (the variational equations). Returns an `analysis.fit.Fit`."""
         from .analysis.fit import fit
 
         _check_method(method)
         return fit(self, data, free, log=log, weights=weights, method=method, rtol=rtol,
-                   atol=atol, progress=progress, max_evaluations=max_evaluations, **params)
+                   atol=atol, progress=progress, max_evaluations=max_evaluations,
+                   gradients=gradients, **params)
 
     def _measures(self, names) -> list[str]:
         from .batch.sweep import default_measure

@@ -201,3 +201,92 @@ def test_a_fit_refuses_what_it_cannot_compare(tmp_path):
     with pytest.raises(AmilError, match="divides by") as err:
         amilpy.loads(DECAY).fit(zero, ["K"], weights="relative")
     assert (err.value.line, err.value.column) == (3, 5)
+
+
+# a ball dropped from 1 m onto a spring-dashpot floor: the floor's force -K X - C V
+# acts while X < 0 and jumps at X = 0 (the dashpot's part, the ball moving): each
+# contact begins and ends at a located switch, whose instant C and K move
+BALL = """TITLE A BALL ON A SPRING-DASHPOT FLOOR
+PARAM C = 2.0, K = 400.0
+CONST G = 9.81
+F = FSW(X, -K*X - C*V, 0.0, 0.0)
+V = INTGRL(0.0, -G + F)
+X = INTGRL(1.0, V)
+TIMER FINTIM = 1.5, OUTDEL = 0.01
+PRINT X, V, F
+END
+"""
+
+
+def _ball_scipy(c: float, k: float, t: np.ndarray) -> np.ndarray:
+    """The ball written again with SciPy: one solve_ivp per phase, the contact's
+    start and end found by its events (rtol 1e-12): X at the instants t."""
+    from scipy.integrate import solve_ivp
+
+    def free(_, y):
+        return [y[1], -9.81]
+
+    def contact(_, y):
+        return [y[1], -9.81 - k * y[0] - c * y[1]]
+
+    def down(_, y):  # (into the floor, and out of it: events by direction)
+        return y[0]
+
+    def up(_, y):
+        return y[0]
+
+    down.terminal = up.terminal = True
+    down.direction, up.direction = -1.0, 1.0
+    out, y, t0, phase = np.full(len(t), np.nan), [1.0, 0.0], 0.0, free
+    while t0 < t[-1]:
+        sol = solve_ivp(phase, (t0, t[-1]), y, rtol=1e-12, atol=1e-14,
+                        events=down if phase is free else up, dense_output=True,
+                        method="DOP853")
+        inside = (t >= t0) & (t <= sol.t[-1])
+        out[inside] = sol.sol(t[inside])[0]
+        if sol.status != 1:
+            break
+        t0, y = sol.t[-1], [0.0, sol.y[1, -1]]
+        phase = contact if phase is free else free
+    return out
+
+
+def test_sensitivities_through_switches_agree_with_differences(tmp_path):
+    """d X/d C and d X/d K and those of the force F (an output, no state) at instants
+    before, inside and after the contacts, from the variational equations with the
+    tangent's jump at each located switch: equal to central differences of whole
+    runs at RELERR 1e-12 (steps of 1e-4 of each value) to 1e-6 of each column's
+    largest (the differences' own error: (1e-4)^2 and 1e-12/1e-4)."""
+    from amilpy.analysis.sensitivity import observed_jacobian
+    from amilpy.observed import read
+
+    t = np.array([0.3, 0.5, 0.55, 0.6, 0.8, 1.0, 1.2, 1.4])
+    path = _csv(tmp_path, "TIME,X,F", [(x, 0.0, 0.0) for x in t])
+    model = amilpy.loads(BALL)
+    obs = read(path, model.ir.variables, 1)
+    exact, why = observed_jacobian(model, obs, ["C", "K"], {"C": 2.0, "K": 400.0}, {}, {})
+    assert why == "" and exact.shape == (16, 2)
+
+    def simulated(**kw):
+        run = model.run(advice=False, data=obs, rtol=1e-12, atol=1e-15, **kw)[0]
+        return np.concatenate([c.simulated for c in run.observed])
+
+    cols = [(simulated(**{n: v * (1 + 1e-4)}) - simulated(**{n: v * (1 - 1e-4)}))
+            / (2e-4 * v) for n, v in (("C", 2.0), ("K", 400.0))]
+    diff = np.column_stack(cols)
+    assert np.max(np.abs(exact - diff) / np.max(np.abs(diff), axis=0)) < 1e-6
+
+
+def test_a_fit_with_sensitivities_recovers_the_ball_written_again_with_scipy(tmp_path):
+    """C = 3 and K = 300 from X at 12 instants made by the SciPy version of the ball:
+    recovered to 1e-6 with the variational equations' Jacobian, and said so."""
+    t = np.linspace(0.1, 1.45, 12)
+    data = _csv(tmp_path, "TIME,X", zip(t, _ball_scipy(3.0, 300.0, t), strict=True))
+    fit = amilpy.loads(BALL).fit(data, ["C=0.1:20", "K=50:2000"], weights="none",
+                                 gradients="sensitivities")
+    assert fit.estimates == pytest.approx([3.0, 300.0], rel=1e-6)
+    assert fit.gradients.startswith("variational equations") and fit.jacobians >= 1
+    slides = amilpy.loads(FRICTION).fit(
+        _csv(tmp_path, "TIME,X", [(0.5, 0.8), (1.4, 1.0)], "f.csv"), ["MU=0.05:1"],
+        weights="none", gradients="sensitivities")
+    assert "finite differences of whole runs (run 1: a surface slides)" == slides.gradients

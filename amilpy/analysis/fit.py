@@ -8,7 +8,10 @@ values there, not interpolated), weighted by `weights`: "sd" divides by the
 file's SD_<NAME> columns, "relative" by |observed|, "none" leaves them. The
 Jacobian is central differences of whole runs, each free value moved by
 cbrt(RELERR)-sized steps relative to it (the runs are accurate to about RELERR,
-so a difference over h is good to RELERR/h^2 + h^2: best near the cube root).
+so a difference over h is good to RELERR/h^2 + h^2: best near the cube root); or,
+with `gradients="sensitivities"`, the variational equations of the flow with the
+jumps at the switches (`analysis.sensitivity`: exact to the integration's accuracy,
+through switching instants), central differences where they do not apply.
 
 At the optimum: the covariance is (J^T J)^-1, times the residual variance
 s^2 = 2 cost / (n - p) unless the weights are the data's own SDs (then the
@@ -31,8 +34,12 @@ import numpy as np
 from ..diagnostics import AmilError, UsageError, with_hint
 from ..observed import Observations
 from ..progress import report
+from .sensitivity import observed_jacobian
 
 WEIGHTS = ("sd", "relative", "none")
+# the Jacobian: central differences of whole runs (the default: on the shipped
+# models the cheaper, benchmarks/fitting.py), or the variational equations
+GRADIENTS = ("differences", "sensitivities")
 CONDITION_LIMIT = 1e8
 # least_squares' ftol/xtol/gtol: its default 1e-8 leaves noise-free estimates 1e-5
 # off where the data determine them weakly; the runs are good to ~1e-9
@@ -59,6 +66,8 @@ class Fit:
     notes: list[str] = field(default_factory=list)  # identifiability, in words
     fitted: list = field(default_factory=list)  # the runs at the estimates (Run)
     log: list[str] = field(default_factory=list)
+    jacobians: int = 0  # Jacobians from the variational equations
+    gradients: str = ""  # how the Jacobian was had (and why not the sensitivities)
 
     @property
     def values(self) -> dict[str, float]:
@@ -92,7 +101,8 @@ def parse_free(items) -> dict[str, tuple[float, float]]:
 
 def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = None,
         rtol: float | None = None, atol: float | None = None, progress=None,
-        max_evaluations: int = 200, **params: float) -> Fit:
+        max_evaluations: int = 200, gradients: str = "differences",
+        **params: float) -> Fit:
     """Fit the `free` data values of `model` (an api.Model) to `data`; see the module."""
     from scipy.optimize import least_squares
     from scipy.stats import norm as normal
@@ -180,15 +190,48 @@ def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = 
                             "there)", model.ir.path)
         return r
 
-    r0 = residuals(to_x(start))
+    first = runs_at(to_x(start))
+    r0 = _weighted(first, weights)
+    if not np.all(np.isfinite(r0)):
+        residuals(to_x(start))  # (says so)
     n, p = len(r0), len(names)
     if n < p:
         raise UsageError(f"{n} observation(s) cannot determine {p} values")
     step = max(np.cbrt(model_rtol(model, rtol)), 1e-6)
+    # the residuals' weights, for the Jacobian of the sensitivities
+    scale = np.concatenate([_weight(c, weights) for r in first for c in r.observed]) \
+        if n else np.empty(0)
+    sens = {"count": 0, "how": ""}
+    flow_options = dict(method=method, rtol=rtol, atol=atol)
+
+    known: dict[tuple, tuple] = {}  # (the Jacobian at the start, had to decide)
+
+    def jacobian(x):
+        values = dict(zip(names, to_p(x), strict=True))
+        dsim, why = known.pop(tuple(x), None) or \
+            observed_jacobian(model, obs, names, values, params, flow_options)
+        if dsim is None or dsim.shape != (n, p) or not np.all(np.isfinite(dsim)):
+            sens["how"] = "finite differences of whole runs" + (f" ({why})" if why else "")
+            return _differences(residuals, x, step, lo, hi)
+        sens["count"] += 1
+        chain = np.array([v if name in logged else 1.0 for name, v in
+                          zip(names, to_p(x), strict=True)])
+        return -dsim * scale[:, None] * chain[None, :]
+
+    if gradients not in GRADIENTS:
+        raise UsageError(f"gradients are one of {', '.join(GRADIENTS)}, got {gradients!r}")
+    probe, why = observed_jacobian(model, obs, names, dict(zip(names, start, strict=True)),
+                                   params, flow_options) \
+        if gradients == "sensitivities" else (None, "")
+    if probe is None:
+        sens["how"] = "finite differences of whole runs" + (f" ({why})" if why else "")
+    else:
+        sens["how"] = "variational equations (sensitivities through the switches)"
+        known[tuple(to_x(start))] = (probe, why)
     result = least_squares(residuals, to_x(start), bounds=(lo, hi), method="trf",
-                           jac="3-point", diff_step=step, x_scale="jac",
-                           max_nfev=max_evaluations, ftol=TOLERANCE, xtol=TOLERANCE,
-                           gtol=TOLERANCE)
+                           jac=jacobian if probe is not None else "3-point",
+                           diff_step=step, x_scale="jac", max_nfev=max_evaluations,
+                           ftol=TOLERANCE, xtol=TOLERANCE, gtol=TOLERANCE)
     x = result.x
     fitted = runs_at(x)
     r = _weighted(fitted, weights)
@@ -244,7 +287,7 @@ def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = 
         corr = cov_x / np.outer(d, d)
     return Fit(names, start, est, se, lower, upper, corr, n, 0.5 * float(r @ r), count[0],
                result.message, bool(result.success), weights, notes, fitted,
-               sorted(logged))
+               sorted(logged), sens["count"], sens["how"])
 
 
 def model_rtol(model, rtol: float | None) -> float:
@@ -262,17 +305,29 @@ def _values(values: dict[str, float]) -> str:
     return ", ".join(f"{k} = {v:.10g}" for k, v in values.items())
 
 
+def _weight(c, weights: str) -> np.ndarray:
+    """What each residual of a comparison is multiplied by."""
+    if weights == "sd":
+        return 1.0 / c.sd
+    if weights == "relative":
+        return 1.0 / np.maximum(np.abs(c.observed), 1e-300)
+    return np.ones(len(c.t))
+
+
 def _weighted(runs, weights: str) -> np.ndarray:
-    parts = []
-    for run in runs:
-        for c in run.observed:
-            r = c.residual
-            if weights == "sd":
-                r = r / c.sd
-            elif weights == "relative":
-                r = r / np.maximum(np.abs(c.observed), 1e-300)
-            parts.append(r)
+    parts = [c.residual * _weight(c, weights) for run in runs for c in run.observed]
     return np.concatenate(parts) if parts else np.empty(0)
+
+
+def _differences(residuals, x: np.ndarray, step: float, lo, hi) -> np.ndarray:
+    """Central differences of the residuals (one-sided at a bound)."""
+    cols = []
+    for j in range(len(x)):
+        h = step * max(abs(x[j]), 1.0)
+        up, down = x.copy(), x.copy()
+        up[j], down[j] = min(x[j] + h, hi[j]), max(x[j] - h, lo[j])
+        cols.append((residuals(up) - residuals(down)) / (up[j] - down[j]))
+    return np.column_stack(cols)
 
 
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[EeDd][-+]?\d+)?"

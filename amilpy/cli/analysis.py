@@ -109,6 +109,11 @@ def add_fit_parser(sub) -> None:
     f.add_argument("--weights", choices=("sd", "relative", "none"), default=None,
                    help="residuals divided by the SD_<NAME> columns (default when the "
                         "file has them), by |observed|, or as they are (default otherwise)")
+    f.add_argument("--gradients", choices=("differences", "sensitivities"),
+                   default="differences",
+                   help="the Jacobian: central differences of whole runs (default), or the "
+                        "variational equations with their jumps at the switches (exact; "
+                        "differences where they do not apply, saying why)")
     f.add_argument("--max-evaluations", type=base.COUNT, default=200, metavar="N",
                    help="evaluations of the runs the optimiser may make (default 200)")
     f.add_argument("--out", metavar="DIR", help="where the PNGs go (default: next to the "
@@ -137,7 +142,8 @@ def cmd_fit(args, path: str, signals) -> int:
     try:
         result = model.fit(obs, args.free, log=args.log, weights=weights,
                            method=args.method, rtol=args.rtol, atol=args.atol,
-                           progress=progress, max_evaluations=args.max_evaluations, **params)
+                           progress=progress, max_evaluations=args.max_evaluations,
+                           gradients=args.gradients, **params)
     finally:
         progress.done()
     code = _done("fit", path, model, result, args, signals, fit_text)

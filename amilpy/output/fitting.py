@@ -33,7 +33,9 @@ def fit_text(fit, model=None) -> str:
             lines.append(f"run {k}")
         for header, rows in T.text_blocks(table):
             lines += [header, *rows]
-    lines += ["", f"weighted sum of squares {2 * fit.cost:.6g}; stopped: {fit.message}"]
+    lines += ["", f"weighted sum of squares {2 * fit.cost:.6g}; stopped: {fit.message}",
+              f"Jacobian: {fit.gradients}" + (f", {fit.jacobians} of them" if fit.jacobians
+                                               else "")]
     lines += [f"NOTE: {n}" for n in fit.notes]
     return "\n".join(lines) + "\n"
 

@@ -156,6 +156,17 @@ class Tangent:
 
     def _saltation(self, k: int, t: float, y: np.ndarray, before, after, z_before, z_after
                    ) -> np.ndarray | None:
+        jump = self._jump(k, t, y, before, after, z_before, z_after)
+        if jump is None:
+            return None
+        g, diff, rate = jump
+        if rate is None:
+            return np.eye(len(y))  # a switch on TIME alone: the instant does not move
+        return np.eye(len(y)) + np.outer(diff, g) / rate
+
+    def _jump(self, k: int, t: float, y: np.ndarray, before, after, z_before, z_after):
+        """(n = ds/dy, f+ - f-, n . f- + ds/dt) of switch k at (t, y); rate None for a
+        switch on TIME alone; None (and `failed` said) where the flow is tangent."""
         c = self.c
         g = self.watch.watched[k].gradient
         yl = y.tolist()
@@ -169,19 +180,71 @@ class Tangent:
                 g[j] = (c.surf(t, up.tolist(), before, z_before)[k] -
                         c.surf(t, down.tolist(), before, z_before)[k]) / (up[j] - down[j])
         g = np.asarray(g, dtype=float)
+        f_minus = np.asarray(c.rhs(t, yl, before, z_before), dtype=float)
+        f_plus = np.asarray(c.rhs(t, yl, after, z_after), dtype=float)
         if not np.any(g):
-            return np.eye(len(y))  # a switch on TIME alone: the instant does not move
+            return g, f_plus - f_minus, None
         ht = STEP * max(abs(t), 1.0)
         st = (c.surf(t + ht, yl, before, z_before)[k] -
               c.surf(t - ht, yl, before, z_before)[k]) / (2 * ht)
-        f_minus = np.asarray(c.rhs(t, yl, before, z_before), dtype=float)
-        f_plus = np.asarray(c.rhs(t, yl, after, z_after), dtype=float)
         rate = float(g @ f_minus) + st
         if abs(rate) <= 1e-9 * (float(np.abs(g) @ np.abs(f_minus)) + abs(st)) or rate == 0:
             self.failed = "the flow is tangent to a switching surface"
             return None
-        return np.eye(len(y)) + np.outer(f_plus - f_minus, g) / rate
+        return g, f_plus - f_minus, rate
 
 
 def scale_of(y: np.ndarray, floor: np.ndarray) -> np.ndarray:
     return np.maximum(np.abs(y), floor)
+
+
+class ParameterTangent(Tangent):
+    """Tangent of the flow with respect to data values: d y(t)/d p for the q values
+    p, carried as the flow's tangent on the states augmented by p (p' = 0), whose
+    matrix is [[A, F_p], [0, 0]] with F_p = d f/d p, and whose jump at a switch takes
+    the surface's own dependence on p in (n = [ds/dy, ds/dp]). `variants[j]` are the
+    run's generated functions with p_j moved by +h_j and -h_j (`ModelCode`, bound to
+    other constants: no compilation), for F_p and ds/dp by central differences at
+    the same TIME, states, branches and memory; `start` = d y(t0)/d p."""
+
+    def __init__(self, c, watch, floor: np.ndarray, start: np.ndarray,
+                 variants: list[tuple[object, object, float]]) -> None:
+        n, q = start.shape
+        super().__init__(c, watch, floor, n + q, range(n, n + q))
+        self._phi = np.vstack([start, np.eye(q)])
+        self.n, self.variants = n, variants
+
+    def _by_p(self, fn: str, t: float, yl: list, m, z) -> np.ndarray:
+        """d fn(t, y, m, z) / d p, a column per value (fn: "rhs" or "surf")."""
+        cols = []
+        for plus, minus, h in self.variants:
+            hi = np.asarray(getattr(plus, fn)(t, yl, m, z), dtype=float)
+            lo = np.asarray(getattr(minus, fn)(t, yl, m, z), dtype=float)
+            cols.append((hi - lo) / (2.0 * h))
+        return np.array(cols).T
+
+    def jacobian(self, t: float, y: np.ndarray, m, z) -> np.ndarray:
+        n, q = self.n, len(self.variants)
+        out = np.zeros((n + q, n + q))
+        out[:n, :n] = super().jacobian(t, y, m, z)
+        out[:n, n:] = self._by_p("rhs", t, np.asarray(y, dtype=float).tolist(), m, z)
+        return out
+
+    def _saltation(self, k: int, t: float, y: np.ndarray, before, after, z_before, z_after
+                   ) -> np.ndarray | None:
+        n, q = self.n, len(self.variants)
+        jump = self._jump(k, t, y, before, after, z_before, z_after)
+        if jump is None:
+            return None
+        g, diff, rate = jump
+        sp = self._by_p("surf", t, y.tolist(), before, z_before)[k]
+        out = np.eye(n + q)
+        if rate is None:
+            if np.any(sp):  # (a switch on TIME whose instant a data value moves)
+                self.failed = "a switch on TIME whose instant depends on a data value"
+                return None
+            return out
+        # the augmented states' jump: I + (f+ - f-, 0) (ds/dy, ds/dp)^T / rate
+        out[:n, :n] += np.outer(diff, g) / rate
+        out[:n, n:] = np.outer(diff, sp) / rate
+        return out
