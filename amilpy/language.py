@@ -132,6 +132,15 @@ REFUSED: dict[str, tuple[str, str]] = {
     "CHARACTER": ("CHARACTER variables", "remove it: strings are only TERMT messages, "
                   "WEATHER/TRANSLATION values and comments"),
     "EVENT": ("FST 3's EVENT blocks", "write a DISCRETE section run by SCHEDULE (ACSL form)"),
+    "ZEROCONDITION": ("an FST 3 EVENT block's ZEROCONDITION", "write a DISCRETE section run by "
+                      "SCHEDULE name .XN. condition (ACSL form)"),
+    "FIRSTTIME": ("an FST 3 EVENT block's FIRSTTIME", "write a DISCRETE section run by "
+                  "SCHEDULE (ACSL form)"),
+    "NEWVALUE": ("an FST 3 EVENT block's NEWVALUE", "assign the state in the DISCRETE section "
+                 "(ACSL form)"),
+    "ENDEVENT": ("the end of an FST 3 EVENT block", "write a DISCRETE section ... END (ACSL "
+                 "form)"),
+    "SET": ("FST's SET", "give the value in INCON or PARAM, or compute it as NAME = expression"),
     "CALL": ("CALL of a Fortran subroutine", "rewrite it as statements or a PROCEDURE"),
     "SUBROUTINE": ("a Fortran subroutine", "rewrite it as statements or a PROCEDURE; text "
                    "after STOP is not read"),

@@ -245,3 +245,22 @@ def test_the_report_writes_weather_and_impl_as_the_listing_does():
                         "TIMER FINTIM = 1.\nPRINT X\nEND\n").ir
     y = next(e for e in impl.dynamic if e.target == "Y")
     assert expr_text(impl, y.expr) == "(the IMPL loop at line 2)"
+
+
+def test_fst_event_blocks_and_set_are_refused_by_name():
+    """FST 3's EVENT ... ZEROCONDITION ... NEWVALUE ... ENDEVENT and SET are not run
+    yet: each line is refused by its construct's name, at its line, with what to
+    write (they gave "this statement needs '='", and the EVENT line nothing)."""
+
+    text = ("TITLE T\nPARAM K = 1.0\nSET EMERG = 0.\nX = INTGRL(1.0, -K*X)\nEVENT\n"
+            "ZEROCONDITION X - 0.5\nNEWVALUE X = 1.0\nENDEVENT\n"
+            "TIMER FINTIM = 1.0, OUTDEL = 0.1\nPRINT X\nEND\n")
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text, "e.fst")
+    said = [(d.span.line, d.message) for d in err.value.diagnostics]
+    assert said == [(3, "FST's SET (line 3): not supported"),
+                    (5, "FST 3's EVENT blocks (line 5): not supported"),
+                    (6, "an FST 3 EVENT block's ZEROCONDITION (line 6): not supported"),
+                    (7, "an FST 3 EVENT block's NEWVALUE (line 7): not supported"),
+                    (8, "the end of an FST 3 EVENT block (line 8): not supported")]
+    assert "needs '='" not in err.value.render()
