@@ -68,6 +68,8 @@ class Fit:
     log: list[str] = field(default_factory=list)
     jacobians: int = 0  # Jacobians from the variational equations
     gradients: str = ""  # how the Jacobian was had (and why not the sensitivities)
+    quantile: float = math.nan  # of the 95 % intervals ...
+    quantile_of: str = ""  # ... and whose: the normal's (SDs known) or Student's t
 
     @property
     def values(self) -> dict[str, float]:
@@ -287,7 +289,9 @@ def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = 
         corr = cov_x / np.outer(d, d)
     return Fit(names, start, est, se, lower, upper, corr, n, 0.5 * float(r @ r), count[0],
                result.message, bool(result.success), weights, notes, fitted,
-               sorted(logged), sens["count"], sens["how"])
+               sorted(logged), sens["count"], sens["how"], quantile,
+               "the normal quantile (the SDs known)" if weights == "sd" else
+               f"Student's t, {dof} degrees of freedom")
 
 
 def model_rtol(model, rtol: float | None) -> float:

@@ -16,9 +16,11 @@ def fit_text(fit, model=None) -> str:
                                                     fit.lower, fit.upper), strict=True)])
     for header, rows in T.text_blocks(table):
         lines += [header, *rows]
+    lines.append(f"(95 % intervals: estimate +- {fit.quantile:.4g} SE, {fit.quantile_of})")
     if fit.log:
-        lines.append(f"(on a log scale: {', '.join(fit.log)}; the interval is "
-                     "exp(log estimate +- t SE), the SE by the delta method)")
+        lines.append(f"(on a log scale: {', '.join(fit.log)}: the interval is exp(log "
+                     "estimate +- q x the SE of the log); the SE shown is the value's, by "
+                     "the delta method)")
     if len(fit.names) > 1:
         lines += ["", "CORRELATION", " " * 12 + "".join(n[:10].rjust(11) for n in fit.names)]
         for name, row in zip(fit.names, fit.correlation, strict=True):
