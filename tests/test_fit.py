@@ -290,3 +290,36 @@ def test_a_fit_with_sensitivities_recovers_the_ball_written_again_with_scipy(tmp
         _csv(tmp_path, "TIME,X", [(0.5, 0.8), (1.4, 1.0)], "f.csv"), ["MU=0.05:1"],
         weights="none", gradients="sensitivities")
     assert "finite differences of whole runs (run 1: a surface slides)" == slides.gradients
+
+
+@pytest.mark.parametrize("text, names, values, why", [
+    # a TIME switch due exactly at an observed instant (the next stretch started on
+    # its surface and kept the old branch: dX/dK at 1.5 was -0.525 for -0.173)
+    ("PARAM K = 0.7\nY = K*STEP(1.0)\nX = INTGRL(1.0, -K*X + Y)\n", ["K"], {"K": 0.7}, ""),
+    # a value of 0 (its column was 0: moved by 0)
+    ("PARAM K = 0.7, B = 0.0\nINCON X0 = 1.0\nX = INTGRL(X0, -K*X + B)\nY = K*X + 3.0*B\n",
+     ["B", "X0"], {"B": 0.0, "X0": 1.0}, ""),
+    # a memory function's initial value (its sensitivity was 0: not followed)
+    ("PARAM K = 0.7, YIC = 1.0\nY = HSTRSS(YIC, -10.0, 10.0, X)\nX = INTGRL(0.0, -K*X + Y)\n",
+     ["YIC"], {"YIC": 1.0}, "a memory function's initial value depends on YIC"),
+])
+def test_sensitivities_agree_with_differences_or_say_why_not(tmp_path, text, names, values,
+                                                             why):
+    from amilpy.analysis.sensitivity import observed_jacobian
+    from amilpy.observed import read
+
+    model = amilpy.loads(text + "TIMER FINTIM = 2.0, OUTDEL = 0.1\nPRINT X, Y\nEND\n")
+    obs = read(_csv(tmp_path, "TIME,X,Y", [(t, 0.0, 0.0) for t in (0.5, 1.0, 1.5)]),
+               model.ir.variables, 1)
+    exact, said = observed_jacobian(model, obs, names, values, {}, {})
+    if why:
+        assert exact is None and why in said
+        return
+
+    def simulated(**kw):
+        run = model.run(advice=False, data=obs, rtol=1e-12, atol=1e-15, **{**values, **kw})[0]
+        return np.concatenate([c.simulated for c in run.observed])
+
+    diff = np.column_stack([(simulated(**{n: values[n] + 1e-5}) -
+                             simulated(**{n: values[n] - 1e-5})) / 2e-5 for n in names])
+    assert said == "" and np.max(np.abs(exact - diff)) < 1e-6

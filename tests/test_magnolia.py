@@ -88,3 +88,38 @@ def test_a_constant_given_a_new_value_in_initial():
     with pytest.raises(AmilError, match="K is both a data value and computed"):
         amilpy.loads(text.replace("    TERMT(T >= 2.0)\n", "    TERMT(T >= 2.0)\n    K = 0.3\n"),
                      "p.csl")
+
+
+def test_a_bare_if_with_a_not_equal_keeps_its_condition():
+    """`IF C != 2.0 THEN` without parentheses: the `!` is not-equal's, not a comment's
+    (it became `IF (C)` and a comment, and ran the wrong branch: X(2) = 2)."""
+    block = "    IF C != 2.0 THEN\n      R = 1.0\n    ELSE\n      R = 0.0\n    END IF\n"
+    run = amilpy.loads(_program("  CONSTANT C = 2.0\n", block + "    X = INTEG(R, 0.0)\n"),
+                       "p.csl").run(advice=False)[0]
+    assert run["X"][-1] == 0.0
+
+
+def test_the_new_keywords_leave_names_that_look_like_them_alone():
+    """SET (FST, refused by name) as the first output of a two-output call, a
+    variable named FALSE in a RELERR setting, and a PARAM given twice (refused in
+    the CSMP form, where only a repeated CONST is the same constant)."""
+    run = amilpy.loads("X = INTGRL(0.0, 1.0)\nSET, Z = OUTSW(X - 0.5, 1.0)\n"
+                       "FALSE = INTGRL(1.0, -FALSE)\nRELERR FALSE = 1.0E-8\n"
+                       "TIMER FINTIM = 1.0, OUTDEL = 0.5\nPRINT SET, Z, FALSE\nEND\n").run(
+                           advice=False)[0]
+    assert run.ok and run["FALSE"][-1] == pytest.approx(math.exp(-1.0), rel=1e-6)
+    with pytest.raises(AmilError, match="K is given a value twice"):
+        amilpy.loads("PARAM K = 1.0\nPARAM K = 1.0\nX = INTGRL(0.0, K)\nEND\n")
+
+
+def test_cinterval_cannot_read_a_constant_initial_changes():
+    """CINTERVAL CINT = TS is computed before INITIAL runs: with TS given a new value
+    in INITIAL it used the old one (rows every 0.5 for 0.1). Said now, with what to
+    write (and that, CINT = TS in INITIAL, gives rows every 0.1)."""
+    text = ("PROGRAM p\n  CONSTANT TS = 0.5\n  CINTERVAL CINT = TS\n  INITIAL\n    TS = 0.1\n"
+            "  END\n  DERIVATIVE\n    X = INTEG(1.0, 0.0)\n    TERMT(T >= 1.0)\n  END\nEND\n")
+    with pytest.raises(AmilError, match="CINTERVAL uses TS, which INITIAL gives a new value"):
+        amilpy.loads(text, "p.csl")
+    run = amilpy.loads(text.replace("CINTERVAL CINT = TS", "CINTERVAL CINT = 0.5").replace(
+        "    TS = 0.1\n", "    TS = 0.1\n    CINT = TS\n"), "p.csl").run(advice=False)[0]
+    assert np.allclose(run.t, np.linspace(0.0, 1.0, 11))

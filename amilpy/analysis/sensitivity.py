@@ -9,10 +9,11 @@ d out/d p at its instant.
 
 F_p, ds/dp, d out/dp and the start's dependence d y(t0)/dp are central differences
 of the generated functions at one TIME and state (the run's code bound to p +- h,
-no integration); h = cbrt(eps) |p|. Where the variational equations do not follow
+no integration); h = cbrt(eps) |p|, at least 1e-8. Where the variational equations do not follow
 the flow (a surface that slides, a state reset, a memory value the derivatives read
-changing, a flow tangent to a surface, the ACSL form's written-order code) the
-caller differences whole runs instead, and is told why."""
+changing, a flow tangent to a surface, a memory function's initial value that
+depends on p, the ACSL form's written-order code) the caller differences whole runs
+instead, and is told why."""
 
 from __future__ import annotations
 
@@ -57,7 +58,9 @@ def _run_jacobian(model, obs: Observations, k: int, names, values, params, optio
     n = len(start.y)
     variants, dy0 = [], np.zeros((n, len(names)))
     for j, name in enumerate(names):
-        h = STEP * max(abs(data[name]), 1e-300)
+        # (a value of 0, or a tiny one, is moved by at least 1e-8: exact for what it
+        # enters linearly, which is what a value near 0 mostly does)
+        h = max(STEP * abs(data[name]), 1e-8)
         plus = model.flow(options.get("method"), options.get("rtol"), options.get("atol"),
                           run=k, **{**data, name: data[name] + h})
         minus = model.flow(options.get("method"), options.get("rtol"), options.get("atol"),
@@ -66,8 +69,10 @@ def _run_jacobian(model, obs: Observations, k: int, names, values, params, optio
                 minus.code.watched != c.watched or plus.code.out_names != c.out_names:
             return None, f"{name} changes which switches the run watches"
         variants.append((plus.code, minus.code, h))
-        dy0[:, j] = (np.asarray(plus.initial_state().y) -
-                     np.asarray(minus.initial_state().y)) / (2.0 * h)
+        up, down = plus.initial_state(), minus.initial_state()
+        if up.memory != down.memory:  # (HSTRSS's, BCKLSH's initial value: not followed)
+            return None, f"a memory function's initial value depends on {name}"
+        dy0[:, j] = (np.asarray(up.y) - np.asarray(down.y)) / (2.0 * h)
     floor = np.broadcast_to(np.asarray(flow.plan.tol.atol / flow.plan.tol.rtol, dtype=float),
                             (n,))
     tangent = ParameterTangent(c, flow.watch, floor, dy0, variants)
@@ -83,6 +88,10 @@ def _run_jacobian(model, obs: Observations, k: int, names, values, params, optio
             if state.t < tk * (1 - 1e-12) - 1e-300:
                 return None, f"the run stops at TIME = {state.t:.9g}"
             t = tk
+            # the branches at tk chosen afresh, as at a start: a switch on TIME due
+            # exactly at tk is taken (the next advance would start on its surface and
+            # keep the old branch); the tangent's jump follows from the change
+            state = flow.state(state.y, None, state.memory, tk)
         at[tk] = (state, tangent.phi[:n].copy())
     states = {name: i for i, name in enumerate(c.state_names)}
     out_index = {name: i for i, name in enumerate(c.out_names)}

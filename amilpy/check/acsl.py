@@ -258,6 +258,17 @@ class _Check:
                     if isinstance(node, ast.Name) and node.name not in here \
                             and id(node) not in table_args:
                         names.undefined(node, known | terminal_names)
+        # a CONSTANT INITIAL gives a new value is its new value from there on; what is
+        # computed before INITIAL runs (CINTERVAL) cannot see it: said, not ignored
+        reassigned = clash & {n.target for code in initial for st in code.body
+                              for n in ast.walk(st) if isinstance(n, ir.Let)}
+        for d in self.parts.declarations:
+            if isinstance(d, ast.Cinterval):
+                for node in ast.walk(d.expr):
+                    if isinstance(node, ast.Name) and node.name in reassigned:
+                        self.rep.error(f"CINTERVAL uses {node.name}, which INITIAL gives a "
+                                       "new value", node.span, f"assign {d.name} in INITIAL, "
+                                       f"after {node.name}")
         before = set(self.data.names) | initial_names | presets | {"PI", TIME}
         for expr, what in self.low.before_run:
             for node in ast.walk(expr):

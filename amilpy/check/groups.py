@@ -272,9 +272,9 @@ class RunGroups(Visitor):
         for item in st.items:
             check_assignable(item.name, item.span, "a data value", self.rep)
             again = item.name in self.spans and self.kinds.get(item.name)
-            if again and not item.is_list and item.name not in self.group.lists and \
-                    self.data.get(item.name) == item.values[0] and \
-                    self.kinds[item.name] == st.keyword:
+            if again and st.keyword == "CONST" == self.kinds[item.name] and \
+                    not item.is_list and item.name not in self.group.lists and \
+                    self.data.get(item.name) == item.values[0]:
                 continue  # (the same value again: Magnolia listings repeat a CONSTANT)
             if self.group.index == 0 and again:
                 self.rep.error(

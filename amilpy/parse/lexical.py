@@ -65,13 +65,24 @@ def blank_comment_lines(text: str) -> str:
 
 _BARE_IF = re.compile(r"^([ \t]*(?:ELSE[ \t]*IF|IF))([ \t])(?![ \t]*\()(.*?)"
                       r"(?:([ \t])(THEN)[ \t]*)?$", re.IGNORECASE)
-_ASSIGNS = re.compile(r"(?<![<>=/!])=(?!=)")  # an `=` that is no comparison's
+_ASSIGNS = re.compile(r"(?<![<>=/!~])=(?!=)")  # an `=` that is no comparison's
+
+
+def _bare_code_end(line: str) -> int:
+    """`code_end`, but a `!=` is not-equal (a bare condition has no parentheses
+    around it for the scanner to know)."""
+    end = code_end(line)
+    while end < len(line) and line[end + 1:end + 2] == "=":
+        end = end + 2 + code_end(line[end + 2:])
+    return min(end, len(line))
 
 
 def _bare_if(line: str) -> str:
     """IF cond [THEN] with the condition in parentheses, columns kept (see the
-    module); any other line as it is."""
-    end = code_end(line)
+    module); any other line as it is (a line that continues too)."""
+    if continues(line):
+        return line
+    end = _bare_code_end(line)
     code = line[:end].rstrip(" \t")
     m = _BARE_IF.match(code)
     if m is None or not m.group(3).strip() or _ASSIGNS.search(m.group(3)) or \
