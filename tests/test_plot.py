@@ -213,3 +213,21 @@ def test_long_title_plot_fits_in_little_memory(tmp_path):
     code, peak, err = _vm_peak_mb(["run", str(long), "--plot", "--quiet"], baseline + 150)
     assert code == 0, err[-2000:]
     assert (tmp_path / "long.png").exists()
+
+
+def test_the_time_axis_says_the_form_s_unit(tmp_path):
+    """TIME [s] in the CSMP form (the lab's mechanics); an ACSL program (a
+    pharmacokinetic one counts hours) says none; an FST listing days. The shipped
+    oral-dosing figure said seconds for its hours."""
+    import amilpy
+    from amilpy.output.plot import _x_label, figure_specs
+    from amilpy.output.words import name_notes
+
+    csmp = amilpy.loads("X = INTGRL(0.0, 1.0)\nTIMER FINTIM = 1.0\nOUTPUT X\nEND\n")
+    acsl = amilpy.load(os.path.join(ROOT, "models", "examples", "oral_dosing.csl"))
+    fst = amilpy.load(os.path.join(ROOT, "models", "examples", "fst_wheat.fst"))
+    labels = []
+    for model in (csmp, acsl, fst):
+        spec = figure_specs(model.run(advice=False)[0])[0]
+        labels.append(_x_label(spec, name_notes(model.ir)))
+    assert labels == ["TIME [s]", "TIME", "TIME [d]"]

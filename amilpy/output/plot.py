@@ -254,7 +254,8 @@ def figure_size(axes: int, height: float = 4.8) -> tuple[float, float]:
 
 def _x_label(spec: FigureSpec, notes: dict[str, tuple[str, str]]) -> str:
     if spec.x is None:
-        return "TIME [s]"
+        unit = notes.get("TIME", ("s", ""))[0]
+        return "TIME" + (f" [{unit}]" if unit else "")
     unit = notes.get(spec.x, ("", ""))[0]
     return spec.x + (f" [{unit}]" if unit else "")
 

@@ -245,8 +245,14 @@ def shorten(text: str, limit: int) -> str:
 
 def name_notes(model) -> dict[str, tuple[str, str]]:
     """name -> (unit, description) of every value and variable whose defining line
-    has a trailing `!` comment (`model` is an ir.Model)."""
-    return comments_by_name(model.source, {n: s.line for n, s in model.spans.items()})
+    has a trailing `!` comment (`model` is an ir.Model); TIME's unit too: seconds in
+    the CSMP form (the lab's mechanics), days in an FST listing (FSE's), none said
+    in the ACSL form (a pharmacokinetic program counts hours)."""
+    notes = comments_by_name(model.source, {n: s.line for n, s in model.spans.items()})
+    if "TIME" not in notes:
+        fst = (model.path or "").lower().endswith(".fst")
+        notes["TIME"] = ("" if model.acsl is not None else "d" if fst else "s", "")
+    return notes
 
 
 def unit_of(names: Sequence[str], label: str | None,

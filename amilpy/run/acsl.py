@@ -395,8 +395,9 @@ class AcslRun(_Run):
                 if self.prepared.unbounded:
                     termt = any(w.purpose is Purpose.TERMT for w in plan.watched)
                     raise Stop(Failure.FAULT, cur.t, detail=(
-                        f"no TERMT ended the run within {MAX_INTERVALS} output intervals "
-                        "(the most a run keeps); " + (
+                        f"no TERMT ended the run within "
+                        f"{len(self.prepared.plan.grid.times) - 1:,} output intervals "
+                        "(the most a run of its variables keeps); " + (
                             "make CINT longer, or its TERMT come sooner" if termt else
                             "add TERMT(T >= TSTOP) or TIMER FINTIM")))
                 return None
