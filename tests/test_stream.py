@@ -87,6 +87,7 @@ PROBE = textwrap.dedent("""
 """)
 
 
+@pytest.mark.slow  # (15 s: writing 10 million cells; CI runs it in its slow step)
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc and RLIMIT_AS")
 def test_a_run_whose_rows_do_not_fit_streams_them_within_a_memory_limit(tmp_path):
     """500,001 rows of 21 variables (84 MB of values) under an address-space limit of
