@@ -14,8 +14,6 @@ from contextlib import contextmanager
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 from . import interrupts, ir
 from .check import check
 from .diagnostics import AmilError, Diagnostic, UsageError, did_you_mean, with_hint
@@ -174,9 +172,7 @@ class Model:
                        max_time=max_time, progress=progress, fintim=fintim,
                        step_point=step_point, seed=_seed(seed),
                        weather_dirs=_folders(weather_dir),
-                       extra_times=tuple(np.unique(np.concatenate(
-                           [obs.times(k) for k in range(1, len(specs) + 1)])).tolist())
-                       if obs is not None else ())
+                       extra_times=tuple(obs.times().tolist()) if obs is not None else ())
         if max_steps:
             opts.max_steps = max_steps
         if max_events:
@@ -258,12 +254,15 @@ class Model:
         whose rows are known only as it runs)."""
         if self.ir.acsl is not None:
             return 0.0
-        return self._stored(self._specs(params), outputs, fintim)
+        return self._stored(self._specs(params), self._columns(outputs), fintim)
 
-    def _stored(self, specs, outputs, fintim) -> float:
+    def _columns(self, outputs: list[str] | None) -> int:
+        """The columns a run keeps: the outputs asked for, else every variable."""
+        return len(outputs) if outputs is not None else len(self.ir.variables)
+
+    def _stored(self, specs, columns: int, fintim) -> float:
         from .run.plan import stored_values
 
-        columns = len(outputs) if outputs is not None else len(self.ir.variables)
         try:
             return sum(stored_values(spec, columns, fintim) for spec in specs)
         except AmilError as exc:
@@ -280,8 +279,8 @@ class Model:
 
         if self.ir.acsl is not None:
             return
-        total = self._stored(specs, outputs, fintim)
-        columns = len(outputs) if outputs is not None else len(self.ir.variables)
+        columns = self._columns(outputs)
+        total = self._stored(specs, columns, fintim)
         limit = DEFAULTS["max_values"]
         if total > limit:
             raise AmilError(

@@ -80,6 +80,14 @@ def fortran_float(text: str) -> float:
     return float(text.replace("D", "E").replace("d", "e"))
 
 
+def plain_float(text: str) -> float | None:
+    """The number `float` reads in the text (nan and inf too), or None."""
+    try:
+        return float(text)
+    except ValueError:
+        return None
+
+
 def split_lines(text: str) -> list[str]:
     """The lines of a listing, numbered as diagnostics and the parser number them."""
     return LINE_BREAK.split(text)

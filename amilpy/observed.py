@@ -27,7 +27,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .diagnostics import AmilError, Diagnostic, Span, did_you_mean
+from .language import plain_float
 from .result import Compared, Run, Status
+from .run.plan import SAME_INSTANT, nearest_instants
 
 TIME_COLUMNS = ("TIME", "T")
 SD_PREFIX = "SD_"
@@ -58,9 +60,10 @@ class Observations:
         """The series that belong to run `number` (1-based)."""
         return [s for s in self.series if s.run is None or s.run == number]
 
-    def times(self, number: int) -> np.ndarray:
-        """Every observed instant of run `number`, sorted, each once."""
-        parts = [s.t for s in self.for_run(number)]
+    def times(self, number: int | None = None) -> np.ndarray:
+        """Every observed instant of run `number` (None: of every run), sorted, each
+        once."""
+        parts = [s.t for s in (self.series if number is None else self.for_run(number))]
         return np.unique(np.concatenate(parts)) if parts else np.empty(0)
 
     def error(self, message: str, line: int, column: int = 1, hint: str | None = None,
@@ -198,11 +201,8 @@ def _cell(obs: Observations, cells: list[tuple[str, int]], k: int, line: int,
 
 
 def _number(text: str) -> float | None:
-    try:
-        x = float(text)
-    except ValueError:
-        return None
-    return x if math.isfinite(x) else None
+    x = plain_float(text)
+    return x if x is not None and math.isfinite(x) else None
 
 
 def compare(run: Run, obs: Observations, number: int, why_no_row: str) -> list[Compared]:
@@ -214,9 +214,9 @@ def compare(run: Run, obs: Observations, number: int, why_no_row: str) -> list[C
     t0, t1 = float(times[0]), run.t_end
     finished = run.status == Status.FINISHED
     for s in obs.for_run(number):
-        outside = s.t < t0 - 1e-12 * max(1.0, abs(t0))
+        outside = s.t < t0 - SAME_INSTANT * max(1.0, abs(t0))
         if finished:
-            outside |= s.t > t1 + 1e-12 * max(1.0, abs(t1))
+            outside |= s.t > t1 + SAME_INSTANT * max(1.0, abs(t1))
         if outside.any():
             k = int(np.argmax(outside))
             raise obs.error(f"TIME {s.t[k]:g} is outside run {number}, which goes from "
@@ -225,14 +225,9 @@ def compare(run: Run, obs: Observations, number: int, why_no_row: str) -> list[C
                             "change FINTIM")
         if s.name not in run.values:
             continue  # (a variable the run does not record: none, checked before)
-        j = np.clip(np.searchsorted(times, s.t), 0, max(len(times) - 1, 0))
-        near = np.where(j > 0, j - 1, j)
-        pick = np.where(np.abs(times[near] - s.t) < np.abs(times[j] - s.t), near, j) \
-            if len(times) else j
-        hit = np.abs(times[pick] - s.t) <= 1e-12 * np.maximum(1.0, np.abs(s.t)) \
-            if len(times) else np.zeros(len(s.t), bool)
+        pick, hit = nearest_instants(times, s.t)
         reached = np.ones(len(s.t), bool) if finished else \
-            s.t <= t1 + 1e-12 * max(1.0, abs(t1))
+            s.t <= t1 + SAME_INSTANT * max(1.0, abs(t1))
         missing = ~hit & reached
         if missing.any():
             k = int(np.argmax(missing))

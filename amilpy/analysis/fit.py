@@ -127,6 +127,8 @@ def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = 
         raise UsageError(f"--log {name}: {name} is not one of the values fitted (--free)")
     if weights not in WEIGHTS:
         raise UsageError(f"weights are one of {', '.join(WEIGHTS)}, got {weights!r}")
+    if gradients not in GRADIENTS:
+        raise UsageError(f"gradients are one of {', '.join(GRADIENTS)}, got {gradients!r}")
     obs = data if isinstance(data, Observations) else model._observations(data, len(specs))
     names = list(bounds)
     start = [float(params.get(n, specs[0].data[n])) for n in names]
@@ -184,19 +186,19 @@ def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = 
         report(progress, "fit", count[0], None, value=_values(values))
         return runs
 
-    def residuals(x):
-        r = _weighted(runs_at(x), weights)
+    def weighted(runs, x) -> np.ndarray:
+        r = _weighted(runs, weights)
         if not np.all(np.isfinite(r)):
             raise AmilError(f"the residuals at {_values(dict(zip(names, to_p(x), strict=True)))}"
                             " are not finite (a variable observed is NaN or infinite "
                             "there)", model.ir.path)
         return r
 
+    def residuals(x):
+        return weighted(runs_at(x), x)
+
     first = runs_at(to_x(start))
-    r0 = _weighted(first, weights)
-    if not np.all(np.isfinite(r0)):
-        residuals(to_x(start))  # (says so)
-    n, p = len(r0), len(names)
+    n, p = len(weighted(first, to_x(start))), len(names)
     if n < p:
         raise UsageError(f"{n} observation(s) cannot determine {p} values")
     step = max(np.cbrt(model_rtol(model, rtol)), 1e-6)
@@ -213,20 +215,18 @@ def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = 
         dsim, why = known.pop(tuple(x), None) or \
             observed_jacobian(model, obs, names, values, params, flow_options)
         if dsim is None or dsim.shape != (n, p) or not np.all(np.isfinite(dsim)):
-            sens["how"] = "finite differences of whole runs" + (f" ({why})" if why else "")
+            sens["how"] = _by_differences(why)
             return _differences(residuals, x, step, lo, hi)
         sens["count"] += 1
         chain = np.array([v if name in logged else 1.0 for name, v in
                           zip(names, to_p(x), strict=True)])
         return -dsim * scale[:, None] * chain[None, :]
 
-    if gradients not in GRADIENTS:
-        raise UsageError(f"gradients are one of {', '.join(GRADIENTS)}, got {gradients!r}")
     probe, why = observed_jacobian(model, obs, names, dict(zip(names, start, strict=True)),
                                    params, flow_options) \
         if gradients == "sensitivities" else (None, "")
     if probe is None:
-        sens["how"] = "finite differences of whole runs" + (f" ({why})" if why else "")
+        sens["how"] = _by_differences(why)
     else:
         sens["how"] = "variational equations (sensitivities through the switches)"
         known[tuple(to_x(start))] = (probe, why)
@@ -248,9 +248,9 @@ def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = 
         s2 = math.nan
         notes.append(f"{n} observation(s) for {p} value(s): no degrees of freedom are "
                      "left to estimate the residuals' variance, so no standard errors")
-    sv = np.linalg.svd(jac, compute_uv=False)
+    _, sv, vt = np.linalg.svd(jac)
     if sv.size and (sv[-1] == 0 or sv[0] / sv[-1] > CONDITION_LIMIT):
-        weakest = int(np.argmax(np.abs(np.linalg.svd(jac)[2][-1])))
+        weakest = int(np.argmax(np.abs(vt[-1])))
         notes.append(f"the data cannot determine {names[weakest]}: the fit's Jacobian is "
                      f"singular or nearly so (condition {sv[0] / max(sv[-1], 1e-300):.2g}); "
                      "fix it, or observe what it moves")
@@ -307,6 +307,10 @@ def model_rtol(model, rtol: float | None) -> float:
 
 def _values(values: dict[str, float]) -> str:
     return ", ".join(f"{k} = {v:.10g}" for k, v in values.items())
+
+
+def _by_differences(why: str) -> str:
+    return "finite differences of whole runs" + (f" ({why})" if why else "")
 
 
 def _weight(c, weights: str) -> np.ndarray:

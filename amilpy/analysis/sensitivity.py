@@ -51,8 +51,12 @@ def observed_jacobian(model, obs: Observations, names: list[str], values: dict[s
 
 def _run_jacobian(model, obs: Observations, k: int, names, values, params, options):
     data = {**params, **values}
-    flow = model.flow(options.get("method"), options.get("rtol"), options.get("atol"),
-                      run=k, **data)
+
+    def flow_at(**changed):
+        return model.flow(options.get("method"), options.get("rtol"), options.get("atol"),
+                          run=k, **{**data, **changed})
+
+    flow = flow_at()
     c = flow.code
     start = flow.initial_state()
     n = len(start.y)
@@ -61,12 +65,9 @@ def _run_jacobian(model, obs: Observations, k: int, names, values, params, optio
         # (a value of 0, or a tiny one, is moved by at least 1e-8: exact for what it
         # enters linearly, which is what a value near 0 mostly does)
         h = max(STEP * abs(data[name]), 1e-8)
-        plus = model.flow(options.get("method"), options.get("rtol"), options.get("atol"),
-                          run=k, **{**data, name: data[name] + h})
-        minus = model.flow(options.get("method"), options.get("rtol"), options.get("atol"),
-                           run=k, **{**data, name: data[name] - h})
-        if plus.code.watched != c.watched or len(plus.code.state_names) != n or \
-                minus.code.watched != c.watched or plus.code.out_names != c.out_names:
+        plus, minus = flow_at(**{name: data[name] + h}), flow_at(**{name: data[name] - h})
+        if any((v.code.watched, v.code.state_names, v.code.out_names) !=
+               (c.watched, c.state_names, c.out_names) for v in (plus, minus)):
             return None, f"{name} changes which switches the run watches"
         variants.append((plus.code, minus.code, h))
         up, down = plus.initial_state(), minus.initial_state()
@@ -77,7 +78,7 @@ def _run_jacobian(model, obs: Observations, k: int, names, values, params, optio
                             (n,))
     tangent = ParameterTangent(c, flow.watch, floor, dy0, variants)
     series = [s for s in obs.for_run(k + 1) if s.name in c.out_names]
-    times = np.unique(np.concatenate([s.t for s in series])) if series else np.empty(0)
+    times = obs.times(k + 1)
     at: dict[float, tuple] = {}
     state, t = start, start.t
     for tk in times.tolist():

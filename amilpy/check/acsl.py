@@ -260,8 +260,7 @@ class _Check:
                         names.undefined(node, known | terminal_names)
         # a CONSTANT INITIAL gives a new value is its new value from there on; what is
         # computed before INITIAL runs (CINTERVAL) cannot see it: said, not ignored
-        reassigned = clash & {n.target for code in initial for st in code.body
-                              for n in ast.walk(st) if isinstance(n, ir.Let)}
+        reassigned = clash & {n for code in initial for n in code.assigned}
         for d in self.parts.declarations:
             if isinstance(d, ast.Cinterval):
                 for node in ast.walk(d.expr):

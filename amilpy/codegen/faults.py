@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 from .. import ir
 from ..diagnostics import Span
+from ..language import plain_float
 from ..library.runtime import HelperFault
 from ..parse.syntax import deep_enough
 from ..parse.unparse import expr_text
@@ -248,14 +249,6 @@ def _text(model: ir.Model, source: object) -> str:
     return source if isinstance(source, str) else expr_text(model, source)
 
 
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
 def _value(v: float) -> str:
     """An operand as short as %g when that is exact, else every digit it takes:
     ASIN's argument 1.0000000000000002 must not read as 1, which is in range."""
@@ -273,12 +266,12 @@ def _describe(model: ir.Model, site: _Site, fault: _Fault) -> str:
     if isinstance(site.node, py.BinOp):
         (a, b), (left, right) = fault.values, texts
         if isinstance(site.node.op, py.Div):
-            return f"{what}: {left}/{right}" if _is_number(right) else \
+            return f"{what}: {left}/{right}" if plain_float(right) is not None else \
                 f"{what}: {right} = {_value(b)}"
         if isinstance(fault.exc, ZeroDivisionError):
             return f"0 raised to a negative power: {left} = {_value(a)}, {right} = {_value(b)}"
         return f"{what}: {left}**{right} with {left} = {_value(a)}"
     named = [(n, v) for n, v in zip(texts, fault.values, strict=False)
-             if not _is_number(n) and isinstance(v, float)]
+             if plain_float(n) is None and isinstance(v, float)]
     values = ", ".join(f"{n} = {_value(v)}" for n, v in named)
     return f"{what}: {_text(model, site.source)}" + (f" with {values}" if values else "")

@@ -25,6 +25,7 @@ import os
 from dataclasses import dataclass, field
 
 from ..diagnostics import AmilError, Diagnostic, Span
+from ..language import plain_float
 
 # the daily columns of a CABO row after station, year and day, as the listing names them
 DAILY = ("RDD", "TMMN", "TMMX", "VP", "WN", "RAIN")
@@ -116,7 +117,7 @@ def read_cabo(path: str) -> WeatherYear:
         except ValueError:
             # (the field's place, never its text: a "weather file" may be a link to
             # something that is no business of an error message, /proc/self/environ)
-            k = next(k for k, f in enumerate(fields, start=1) if not _is_float(f))
+            k = next(k for k, f in enumerate(fields, start=1) if plain_float(f) is None)
             raise AmilError(f"{path}:{number}: not a CABO weather line: field {k} is not "
                             "a number (a line holds the station, the year, the day and "
                             "the day's values)") from None
@@ -234,11 +235,3 @@ class Weather:
         import numpy as np
 
         return np.array([self.value(name, float(t)) for t in np.asarray(ts, float)])
-
-
-def _is_float(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True

@@ -93,11 +93,13 @@ def heading(run: Run, index: int | None = None, total: int = 1) -> str:
     return f"{head}{label}   ({method_text(run)})"
 
 
-def write_table(out: TextIO, table: T.Table) -> None:
+def write_table(out: TextIO, table: T.Table, gap: str = "\n") -> None:
+    """The table's blocks, each after `gap`, then its notes."""
     for head, rows in T.text_blocks(table):
-        out.write("\n" + head + "\n")
+        out.write(gap + head + "\n")
         for line in rows:
             out.write(line + "\n")
+    out.write("".join(f"   {n}\n" for n in table.notes))
 
 
 def write_run(out: TextIO, run: Run, index: int | None = None, total: int = 1,
@@ -108,16 +110,14 @@ def write_run(out: TextIO, run: Run, index: int | None = None, total: int = 1,
     write_table(out, T.printout_table(run))
     for plot in printer_plots(run, ascii_plots):
         out.write(plot)
-    for table in (T.range_table(run), T.observed_table(run), T.residual_table(run)):
-        if table is not None:
-            if table.key != "range":
-                out.write(f"\n{'DATA' if table.key == 'observed' else 'DATA SUMMARY'}"
-                          + (f" ({run.observed[0].source})" if table.key == "observed"
-                             else "") + "\n")
-            for head, rows in T.text_blocks(table):
-                out.write("\n" * (table.key == "range") + head + "\n"
-                          + "".join(line + "\n" for line in rows))
-            out.write("".join(f"   {n}\n" for n in table.notes))
+    ranged = T.range_table(run)
+    if ranged is not None:
+        write_table(out, ranged)
+    if run.observed:
+        out.write(f"\nDATA ({run.observed[0].source})\n")
+        write_table(out, T.observed_table(run), gap="")
+        out.write("\nDATA SUMMARY\n")
+        write_table(out, T.residual_table(run), gap="")
     if show_events and run.events:
         out.write(f"\nSWITCHING EVENTS ({len(run.events)})\n")
         events = run.events

@@ -23,6 +23,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..run.plan import nearest_instants
 from .files import atomic_open
 from .options import DIALECTS
 from .sheets import export_names_from
@@ -98,11 +99,7 @@ class CsvStream:
             self._write(t[rows].tolist(), [c[rows].tolist() for c in columns])
         keep = ~outdel | prdel | (g % self._stride == 0)
         if n and self._observed.size:  # (an observation on an OUTDEL instant: its row)
-            o = self._observed
-            j = np.clip(np.searchsorted(o, t), 1, max(o.size - 1, 1)) if o.size > 1 else \
-                np.zeros(n, int)
-            near = np.minimum(np.abs(o[j] - t), np.abs(o[np.maximum(j - 1, 0)] - t))
-            keep |= near <= 1e-12 * np.maximum(1.0, np.abs(t))
+            keep |= nearest_instants(self._observed, t)[1]
         if n:
             keep[-1] = True
         self.kept += int(np.count_nonzero(keep & written))

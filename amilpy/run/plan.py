@@ -321,10 +321,27 @@ def _grid(t0: float, fintim: float, step: float) -> np.ndarray:
     return g
 
 
+# an instant within this of another (relative, at least absolute) is that instant:
+# the grid's own arithmetic, t0 + k*step, rounds within it
+SAME_INSTANT = 1e-12
+
+
+def nearest_instants(times: np.ndarray, t) -> tuple[np.ndarray, np.ndarray]:
+    """For each of the instants t, the index of the nearest of the sorted `times`,
+    and whether it is that instant (within SAME_INSTANT)."""
+    t = np.asarray(t, dtype=float)
+    if not len(times):
+        return np.zeros(len(t), int), np.zeros(len(t), bool)
+    j = np.searchsorted(times, t).clip(0, len(times) - 1)
+    before = np.maximum(j - 1, 0)
+    pick = np.where(np.abs(times[before] - t) < np.abs(times[j] - t), before, j)
+    return pick, np.abs(times[pick] - t) <= SAME_INSTANT * np.maximum(1.0, np.abs(t))
+
+
 def make_grid(t0: float, fintim: float, outdel: float, prdel: float,
               extra: tuple[float, ...] = ()) -> Grid:
     """The output instants; `extra`: more instants in (t0, fintim) to have rows at
-    (in neither grid), each within 1e-12 of a grid instant taken as that one."""
+    (in neither grid), each within SAME_INSTANT of a grid instant taken as that one."""
     if outdel == prdel:  # (one grid: the ACSL form's CINT, most listings)
         times = _grid(t0, fintim, outdel)
         every = np.ones(len(times), bool)
@@ -339,9 +356,7 @@ def make_grid(t0: float, fintim: float, outdel: float, prdel: float,
     more = np.asarray(extra, dtype=float)
     more = more[(more > t0) & (more < fintim)]
     g = grid.times
-    j = np.clip(np.searchsorted(g, more), 1, len(g) - 1)
-    gap = np.minimum(np.abs(g[j] - more), np.abs(g[j - 1] - more))
-    more = more[gap > 1e-12 * np.maximum(1.0, np.abs(more))]
+    more = more[~nearest_instants(g, more)[1]]
     if not more.size:
         return grid
     times = np.union1d(g, more)
