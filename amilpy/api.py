@@ -399,6 +399,27 @@ class Model:
             return modes(self, at, method=method, rtol=rtol, atol=atol, progress=progress,
                          **params)
 
+    def steady(self, at: float | None = None, guess: dict[str, float] | None = None, *,
+               inputs=(), outputs=(), method: str | None = None, rtol: float | None = None,
+               atol: float | None = None, progress=None, max_time: float | None = None,
+               **params: float):
+        """The equilibrium (every derivative zero, in the switch branches that hold
+        there) near the initial state or `guess` (state -> value), the field frozen
+        at TIME `at` (default the start): `amilpy.analysis.steady.Equilibrium`, with
+        its eigenvalues and, given `inputs` (data values) and `outputs` (variables),
+        the linear model A, B, C, D about it. Raises `analysis.steady.NoEquilibrium`
+        (a FlowFailed) when none is found, or past `max_time` seconds."""
+        from .analysis.steady import NoEquilibrium, equilibrium
+
+        self._flow_map()
+        _check_method(method)
+        for label, tol in (("rtol", rtol), ("atol", atol)):
+            if tol is not None and not tol > 0:
+                raise UsageError(f"{label} must be positive, got {tol}")
+        with _analysis_time(max_time, NoEquilibrium):
+            return equilibrium(self, at, guess, method=method, rtol=rtol, atol=atol,
+                               inputs=inputs, outputs=outputs, progress=progress, **params)
+
     def periodic(self, period=None, angle=None, measure=(), settle: float | None = None,
                  method: str | None = None, rtol: float | None = None,
                  atol: float | None = None, progress=None, max_time: float | None = None,

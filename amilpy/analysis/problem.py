@@ -119,11 +119,18 @@ def constant(text: str, flow: Flow, what: str, extra: dict[str, float] | None = 
 def free_states(model: ir.Model) -> set[str]:
     """States that no derivative, switching surface or memory reads, directly or
     through DYNAMIC variables: running integrals, left out of the periodicity."""
-    by_target = {eq.target: eq.expr for eq in model.dynamic}
     roots: list[ast.Node] = [s.deriv for s in model.states]
     roots += [s.expr for s in model.surfaces if s.purpose in (ir.Purpose.SWITCH,
                                                               ir.Purpose.MEMORY)]
     roots += [a for m in model.memories for a in m.args]
+    seen = read_closure(model, roots)
+    return {s.name for s in model.states if s.name not in seen}
+
+
+def read_closure(model: ir.Model, roots: list[ast.Node]) -> set[str]:
+    """The names `roots` read, directly or through DYNAMIC variables (and the
+    switches' and memory functions' arguments)."""
+    by_target = {eq.target: eq.expr for eq in model.dynamic}
     seen: set[str] = set()
     pending = [n for r in roots for n in reads(r, model.switches, model.memories, model.units)]
     while pending:
@@ -133,7 +140,7 @@ def free_states(model: ir.Model) -> set[str]:
         seen.add(name)
         if name in by_target:
             pending.extend(reads(by_target[name], model.switches, model.memories, model.units))
-    return {s.name for s in model.states if s.name not in seen}
+    return seen
 
 
 SYMMETRY = 1e-8  # a singular value below this fraction of the largest: a symmetry

@@ -92,6 +92,48 @@ def add_parsers(sub) -> None:
     r.add_argument("span", metavar="NAME=START:STOP", type=_span,
                    help="the data value followed and its range")
     add_fit_parser(sub)
+    add_steady_parser(sub)
+
+
+def add_steady_parser(sub) -> None:
+    s = sub.add_parser("steady", help="the equilibrium (every derivative zero) in the "
+                                      "switch branches that hold there: states, "
+                                      "eigenvalues, stability; the linear model A, B, C, "
+                                      "D and its Bode diagram")
+    _common(s, "steady", closure=False)
+    base.format_option(s)
+    s.add_argument("--at", type=base.FINITE, default=None, metavar="TIME",
+                   help="freeze the field at this TIME (what TIME drives: a STEP, a "
+                        "forcing; default the run's start)")
+    s.add_argument("--guess", metavar="NAME=VALUE", action="append", default=[],
+                   help="start the search with state NAME at VALUE (repeatable; default "
+                        "the listing's initial values)")
+    s.add_argument("--input", metavar="NAME", action="append", default=[],
+                   help="a data value (PARAM/CONST/INCON) taken as an input u of the "
+                        "linear model (repeatable)")
+    s.add_argument("--output", metavar="NAME", action="append", default=[],
+                   help="a variable taken as an output y of the linear model "
+                        "(repeatable)")
+    s.add_argument("--out", metavar="DIR", help="where the Bode PNGs go (default: next "
+                                                "to the listing)")
+
+
+def cmd_steady(args, path: str, signals) -> int:
+    from ..output.steady import steady_text
+
+    if (args.matrices or args.bode) and not (args.input and args.output):
+        print(f"amilpy: {path}: --matrices and --bode need the linear model: give "
+              "--input NAME (a data value) and --output NAME (a variable)", file=sys.stderr)
+        return base.EXIT_USAGE
+    model, params = _prepare(args, path)
+    guess = base.parse_sets(args.guess, "--guess")
+    result, code = _computed(args, path, lambda progress: model.steady(
+        at=args.at, guess=guess, inputs=args.input, outputs=args.output,
+        method=args.method, rtol=args.rtol, atol=args.atol, progress=progress,
+        max_time=args.max_time, **params), prefix="steady: ")
+    if code is not None:
+        return code
+    return _done("steady", path, model, result, args, signals, steady_text)
 
 
 def add_fit_parser(sub) -> None:
@@ -246,4 +288,4 @@ def cmd_response(args, path: str, signals) -> int:
 
 
 COMMANDS = {"modes": cmd_modes, "periodic": cmd_periodic, "response": cmd_response,
-            "fit": cmd_fit}
+            "fit": cmd_fit, "steady": cmd_steady}

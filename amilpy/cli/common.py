@@ -111,21 +111,21 @@ def csv_dialect(p: argparse.ArgumentParser) -> None:
                    help="; ".join(f"{k}: {d.help}" for k, d in DIALECTS.items()))
 
 
-def parse_sets(items: list[str]) -> dict[str, float]:
+def parse_sets(items: list[str], option: str = "--set") -> dict[str, float]:
     out = {}
     for item in items:
         if "=" not in item:
-            raise UsageError(f"--set takes NAME=VALUE, got {item!r}")
+            raise UsageError(f"{option} takes NAME=VALUE, got {item!r}")
         name, value = item.split("=", 1)
         try:
             number = fortran_float(value)
         except ValueError:
             comma = "," in value and value.replace(",", ".", 1).replace(".", "", 1).isdigit()
-            raise UsageError(f"--set {name}: {value!r} is not a number" + (
+            raise UsageError(f"{option} {name}: {value!r} is not a number" + (
                 f"; the decimal separator is a point: {value.replace(',', '.', 1)}"
                 if comma else "")) from None
         if not math.isfinite(number):
-            raise UsageError(f"--set {name}: the value must be finite, got {value!r}")
+            raise UsageError(f"{option} {name}: the value must be finite, got {value!r}")
         out[name.strip().upper()] = number
     return out
 

@@ -55,21 +55,27 @@ def modes_text(result, model=None) -> str:
                                          f"{result.error:.1E} of its largest entry"),
              "  " + ", ".join(f"{n} = {v:.6g}" for n, v in zip(result.names, result.state.y,
                                                                strict=True)), "",
-             f"{'MODE':>5}{'RE [1/S]':>14}{'IM [RAD/S]':>14}{'WN [RAD/S]':>14}"
-             f"{'F [HZ]':>14}{'ZETA':>14}"]
-    for k, m in enumerate(result.modes, 1):
-        lam = m.eigenvalue
-        if m.zero:
-            lines.append(f"{k:5d}{_num(lam.real)}{_num(lam.imag)}  {ZERO_MODE}")
-        else:
-            lines.append(f"{k:5d}{_num(lam.real)}{_num(lam.imag)}{_num(m.wn)}{_num(m.fhz)}"
-                         f"{_num(m.zeta)}")
+             *eigen_table(result.modes)]
     lines += ["", "MODE SHAPES (largest component 1; a complex one as |c|<phase in degrees)",
               f"{'MODE':>5}" + "".join(f" {n:>13}" for n in result.names)]
     for k, m in enumerate(result.modes, 1):
         top = float(np.max(np.abs(m.shape))) if len(m.shape) else 0.0
         lines.append(f"{k:5d}" + "".join(f" {_component(c, top):>13}" for c in m.shape))
     return "\n".join(lines) + "\n"
+
+
+def eigen_table(modes) -> list[str]:
+    """The eigenvalue table's lines: RE, IM, WN, F, ZETA per mode."""
+    lines = [f"{'MODE':>5}{'RE [1/S]':>14}{'IM [RAD/S]':>14}{'WN [RAD/S]':>14}"
+             f"{'F [HZ]':>14}{'ZETA':>14}"]
+    for k, m in enumerate(modes, 1):
+        lam = m.eigenvalue
+        if m.zero:
+            lines.append(f"{k:5d}{_num(lam.real)}{_num(lam.imag)}  {ZERO_MODE}")
+        else:
+            lines.append(f"{k:5d}{_num(lam.real)}{_num(lam.imag)}{_num(m.wn)}{_num(m.fhz)}"
+                         f"{_num(m.zeta)}")
+    return lines
 
 
 def modes_csv(result) -> tuple[list[str], Iterator[list]]:

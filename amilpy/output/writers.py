@@ -128,6 +128,51 @@ def _fit_listing(o: Outputs, path: str | None) -> list[str]:
     return [path]
 
 
+def _steady_csv(o: Outputs, path: str | None) -> list[str]:
+    from . import sheets
+    from .steady import steady_csv
+
+    header, body = steady_csv(o.analysis)
+    sheets.write_csv_rows(path, header, body, o.dialect)
+    return [path]
+
+
+def _steady_matrices(o: Outputs, path: str | None) -> list[str]:
+    from . import sheets
+    from .steady import matrices_csv
+
+    _need_linear(o, "--matrices")
+    header, body = matrices_csv(o.analysis)
+    sheets.write_csv_rows(path, header, body, o.dialect)
+    return [path]
+
+
+def _steady_npz(o: Outputs, path: str | None) -> list[str]:
+    from .files import atomic_write
+    from .steady import npz_bytes
+
+    atomic_write(path, npz_bytes(o.analysis))
+    return [path]
+
+
+def _steady_bode(o: Outputs, _path: str | None) -> list[str]:
+    from .analysis import figure_stem
+    from .steady import plot_bode
+
+    _need_linear(o, "--bode")
+    return plot_bode(o.analysis, figure_stem(o.out_dir, o.stem, "bode"), o.model,
+                     o.plot.formats)
+
+
+def _need_linear(o: Outputs, flag: str) -> None:
+    from .files import OutputError
+
+    lin = o.analysis.linear
+    if lin is None or not lin.inputs or not lin.outputs:
+        raise OutputError(f"{flag} needs the linear model: give --input NAME and "
+                          "--output NAME")
+
+
 WRITERS: tuple[Writer, ...] = (
     Writer("prepare", "run", None, False,
            "PREPARE in the listing: its variables as NAME.csv in --out", _prepare,
@@ -173,6 +218,18 @@ WRITERS: tuple[Writer, ...] = (
     Writer("fit-listing", "fit", "--write", True,
            "write the listing with the fitted values in place (comments kept)",
            _fit_listing),
+    Writer("steady-csv", "steady", "--csv", True,
+           "write the equilibrium as CSV: NAME, VALUE, RATE, ROLE (solved, held, free)",
+           _steady_csv),
+    Writer("steady-matrices", "steady", "--matrices", True,
+           "write A, B, C, D of the linear model (--input, --output) as CSV in long form: "
+           "MATRIX, ROW, COLUMN, VALUE", _steady_matrices),
+    Writer("steady-npz", "steady", "--npz", True,
+           "write the equilibrium, its eigenvalues and A, B, C, D with their names as a "
+           "NumPy .npz (numpy.load)", _steady_npz),
+    Writer("steady-bode", "steady", "--bode", False,
+           "draw the Bode diagram of every output to every input as NAME_bode_INPUT.png "
+           "next to the model or in --out", _steady_bode),
 )
 
 

@@ -95,12 +95,13 @@ def differences(f, y, floor) -> np.ndarray:
 
 
 def refined(f, y: np.ndarray, floor) -> tuple[np.ndarray, np.ndarray]:
-    """(J, estimated error of each column): each column at the largest step whose
-    estimate agrees with the next smaller one to AGREE of the column's size (its
-    truncation error is then below that), else where two estimates agree best."""
+    """(J, estimated error of each column) of f: R^n -> R^m at y: each column at
+    the largest step whose estimate agrees with the next smaller one to AGREE of
+    the column's size (its truncation error is then below that), else where two
+    estimates agree best."""
     y = [float(v) for v in y]
     h = STEP * np.maximum(np.abs(y), floor)
-    out = np.empty((len(y), len(y)))
+    out = np.empty((len(f(y)) if y else 0, len(y)))  # (f may give other values than y's)
     error = np.zeros(len(y))
     for j in range(len(y)):
         tries = [np.array(_column(f, y, j, k * h[j])) for k in REFINE]
