@@ -385,6 +385,62 @@ class Model:
                      max_time=max_time, max_steps=max_steps, max_events=max_events,
                      **params)
 
+    def montecarlo(self, dists: dict, runs: int | None = None, seed: int = 1, *,
+                   quantiles=(5.0, 50.0, 95.0), correlation: dict | None = None,
+                   outputs: list[str] | None = None, method: str | None = None,
+                   rtol: float | None = None, atol: float | None = None,
+                   fintim: float | None = None, jobs: int = 1, scheduler: str | None = None,
+                   progress=None, max_time: float | None = None,
+                   max_steps: int | None = None, max_events: int | None = None,
+                   weather_dir: str | list[str] | None = None, **params: float):
+        """A Monte Carlo (`amilpy.batch.montecarlo`): `runs` runs of the listing's
+        first run with each data value in `dists` drawn from its distribution (a
+        `batch.distributions.Dist` or its text, "lognormal(0, 0.2)"; `runs` may be
+        left out when every one is a table), `seed` the draws' seed;
+        `correlation` {(A, B): r} between drawn names (a Gaussian copula). Returns
+        a `MonteCarlo`: quantile bands of `outputs` (default every PRINT/OUTPUT
+        variable), quantiles of final and TERMINAL values, failed runs with their
+        values. The same for a seed whatever `jobs`/`scheduler`. `max_time`:
+        wall-clock seconds for the whole study (the runs done by then are kept;
+        each run is bounded by it too)."""
+        from .batch.distributions import Dist, parse_dist, table_rows
+        from .batch.montecarlo import montecarlo
+        from .output.views import install
+        from .run import Options
+
+        install()
+        _check_method(method)
+        parsed = {}
+        for key, dist in dists.items():  # (a table's path: relative to the working folder)
+            name = key.strip().upper()
+            parsed[name] = dist if isinstance(dist, Dist) else parse_dist(name, str(dist))
+        if runs is None:
+            runs = table_rows(parsed)
+            if runs is None:
+                raise UsageError("give the number of runs (--runs N)")
+        try:
+            seed = int(seed)
+        except (TypeError, ValueError):
+            raise UsageError(f"the seed must be a whole number, got {seed!r}") from None
+        if seed < 0:
+            raise UsageError(f"the seed must be 0 or more, got {seed}")
+        pairs = {}
+        for key, r in (correlation or {}).items():
+            a, b = (key.split(",") if isinstance(key, str) else key)
+            pairs[(a.strip().upper(), b.strip().upper())] = float(r)
+        variables = self.known_names(outputs) if outputs else None
+        opts = Options(method=method, rtol=rtol, atol=atol, fintim=fintim,
+                       max_time=max_time, weather_dirs=_folders(weather_dir))
+        if max_steps:
+            opts.max_steps = max_steps
+        if max_events:
+            opts.max_events = max_events
+        self._specs(params)  # (unknown names are errors here)
+        return montecarlo(self, parsed, int(runs), seed, quantiles=tuple(quantiles),
+                          correlation=pairs, names=variables, options=opts, jobs=jobs,
+                          scheduler=scheduler, progress=progress, max_time=max_time,
+                          params={k.upper(): float(v) for k, v in params.items()})
+
     def modes(self, at: float = 0.0, method: str | None = None, rtol: float | None = None,
               atol: float | None = None, progress=None, max_time: float | None = None,
               **params: float):

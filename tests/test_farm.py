@@ -226,3 +226,19 @@ def test_a_scheduler_with_no_workers_is_said_not_waited_on(monkeypatch):
                                   dashboard_address=None) as cluster:
         with pytest.raises(AmilError, match="has no workers"):
             amilpy.loads(LISTS).run(advice=False, scheduler=cluster.scheduler_address)
+
+
+def test_a_montecarlo_on_a_dask_cluster_is_the_serial_one_bit_for_bit():
+    """The draws are made before any run, from the seed alone: a Dask cluster gives
+    the serial Monte Carlo's bands, final values and statuses exactly."""
+    distributed = pytest.importorskip("distributed")
+    listing = ("PARAM K = 1.0\nX = INTGRL(1.0, -K*X)\nTIMER FINTIM = 1.0, OUTDEL = 0.1\n"
+               "PRINT X\nEND\n")
+    dists = {"K": "lognormal(0, 0.5)"}
+    serial = amilpy.loads(listing).montecarlo(dists, runs=40, seed=9)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        farmed = amilpy.loads(listing).montecarlo(dists, runs=40, seed=9,
+                                                  scheduler=cluster.scheduler_address)
+    assert np.array_equal(serial.bands, farmed.bands)
+    assert np.array_equal(serial.final, farmed.final) and serial.status == farmed.status

@@ -47,6 +47,9 @@ class Task:
     measure: str | None = None
     settle: float = 0.0
     keep_run: bool = True
+    # what comes back instead of the run: reduce(run) as the outcome's point (a
+    # module-level function or a partial of one: it goes to the workers pickled)
+    reduce: Callable[[Run], object] | None = None
 
 
 @dataclass
@@ -140,6 +143,24 @@ def execute(token: str, task: Task) -> Outcome:
     return _execute(model, cache, task)
 
 
+def execute_group(token: str, tasks: list[Task]) -> list[Outcome]:
+    """Several tasks in a worker, one after the other: for runs of a millisecond,
+    which a task each would spend as much in handing over as in running."""
+    model, cache = _MODELS[token]
+    return [_execute(model, cache, task) for task in tasks]
+
+
+# tasks per hand-over to a worker: enough that each worker gets GROUPS of them
+# (the pool balances the load), at most MAX_GROUP
+GROUPS, MAX_GROUP = 8, 64
+
+
+def groups(count: int, jobs: int) -> list[range]:
+    """The tasks' indices cut into hand-overs (see GROUPS)."""
+    size = max(1, min(MAX_GROUP, count // (jobs * GROUPS)))
+    return [range(k, min(count, k + size)) for k in range(0, count, size)]
+
+
 def _execute(model: ir.Model, cache, task: Task) -> Outcome:
     from ..run import simulate
 
@@ -152,6 +173,8 @@ def _execute(model: ir.Model, cache, task: Task) -> Outcome:
     except Exception as exc:  # noqa: BLE001 - reported with its parameters, others kept
         return Outcome(error=f"{type(exc).__name__}: {exc}")
     stopped = was_interrupted(run.message)
+    if task.reduce is not None:
+        return Outcome(point=task.reduce(run), interrupted=stopped)
     if task.measure is None:
         return Outcome(run=run, interrupted=stopped)
     t0 = float(run.times[0]) if len(run.times) else float("nan")
@@ -210,19 +233,22 @@ def _on_processes(model: ir.Model, tasks: list[Task], jobs: int,
         try:
             pool = ProcessPoolExecutor(max_workers=min(jobs, len(tasks)), mp_context=context,
                                        initializer=_install, initargs=(token, blob, True))
-            futures = {pool.submit(execute, token, task): i for i, task in enumerate(tasks)}
+            futures = {pool.submit(execute_group, token, [tasks[i] for i in group]): group
+                       for group in groups(len(tasks), jobs)}
         finally:
             if blocking:  # (one held back is raised here, and handled below)
                 signal.pthread_sigmask(signal.SIG_UNBLOCK, _starting_signals())
         interrupts.check()  # (one swallowed while the pool started)
         for future in as_completed(futures):
-            i = futures[future]
+            group = futures[future]
             try:
-                out[i] = future.result()
+                got = future.result()
             except Exception as exc:  # noqa: BLE001 - a worker that died
-                out[i] = Outcome(error=f"the worker failed: {exc}")
-            if done is not None:
-                done(i, out[i])
+                got = [Outcome(error=f"the worker failed: {exc}") for _ in group]
+            for i, outcome in zip(group, got, strict=True):
+                out[i] = outcome
+                if done is not None:
+                    done(i, outcome)
             interrupts.check()
     except KeyboardInterrupt:
         # Ctrl-C: the finished runs are kept; the workers are ended, their runs lost

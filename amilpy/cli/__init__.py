@@ -23,6 +23,7 @@ import warnings
 
 from .. import __version__, interrupts
 from ..diagnostics import AmilError, UsageError
+from ..language import fortran_float
 from ..output.files import OutputError
 from ..output.options import Outputs, PlotOptions
 from ..output.writers import WRITERS, dest
@@ -74,7 +75,8 @@ def _data_option(p: argparse.ArgumentParser) -> None:
                         "run with residuals (see docs/fitting.md)")
 
 
-def _model_options(p: argparse.ArgumentParser) -> None:
+def _model_options(p: argparse.ArgumentParser, seed: str | None = None) -> None:
+    """The options of a run; `seed`: what --seed seeds, where not the random streams."""
     p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
                    help="override a PARAM/CONST/INCON value for every run (repeatable)")
     p.add_argument("--method", metavar="NAME", type=method_name,
@@ -90,8 +92,8 @@ def _model_options(p: argparse.ArgumentParser) -> None:
                         "translators did: switches read at the step points, nothing "
                         "located (METHOD EULER/RECT always is)")
     p.add_argument("--seed", type=FINITE, metavar="N",
-                   help="seed of the random streams (GAUSS, UNIF, OU...), instead of "
-                        "the listing's RNSEED (default 1)")
+                   help=seed or "seed of the random streams (GAUSS, UNIF, OU...), instead "
+                                "of the listing's RNSEED (default 1)")
     p.add_argument("--weather-dir", metavar="DIR", action="append", default=[],
                    help="a folder of CABO weather files for an FST listing's WEATHER, "
                         "looked in after WTRDIR, the listing's folder and its weather/ "
@@ -196,6 +198,37 @@ def _parser() -> argparse.ArgumentParser:
     _model_options(sw)
     sw.add_argument("--quiet", action="store_true", help="no table, only files and errors")
     _farm_options(sw)
+
+    mc = sub.add_parser("montecarlo", help="runs with data values drawn from "
+                                           "distributions: quantile bands, final and "
+                                           "TERMINAL values, failed runs")
+    mc.add_argument("file", metavar="FILE", help="the listing (.amil)")
+    mc.add_argument("--dist", metavar="NAME=DIST", action="append", required=True,
+                    type=_dist_option,
+                    help="a data value and its distribution (repeatable): "
+                         "normal(m,s), lognormal(m,s) (of the log), uniform(a,b), "
+                         "triangular(a,c,b), truncnormal(m,s,a,b), table(FILE) (a CSV's "
+                         "rows, its column NAME)")
+    mc.add_argument("--runs", type=COUNT, metavar="N",
+                    help="how many runs (default: the rows of the tables, when every "
+                         "--dist is one)")
+    mc.add_argument("--quantiles", default="5,50,95", metavar="LIST",
+                    help="the percents of the bands and tables (default 5,50,95)")
+    mc.add_argument("--correlate", metavar="A,B=R", action="append", default=[],
+                    help="correlation R of two drawn names' normal scores (a Gaussian "
+                         "copula; repeatable)")
+    mc.add_argument("--vars", type=variable_names, metavar="A,B",
+                    help="the variables (default: every PRINT and OUTPUT variable)")
+    mc.add_argument("--out", metavar="DIR", help="where the PNGs go (default: next to the "
+                                                 "listing)")
+    writer_options(mc, "montecarlo")
+    csv_dialect(mc)
+    format_option(mc)
+    _model_options(mc, seed="seed of the draws (a whole number, default 1): the same seed, "
+                            "the same runs, whatever --jobs or --scheduler (the listing's "
+                            "random streams keep its RNSEED)")
+    mc.add_argument("--quiet", action="store_true", help="no printout, only files and errors")
+    _farm_options(mc)
 
     rep = sub.add_parser("report", help="a lab-report document: listing, data, equations, "
                                         "printouts, events, plots")
@@ -389,6 +422,72 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
     return max(code, EXIT_FAILED if failed or result.errors else EXIT_OK)
 
 
+def _dist_option(text: str) -> tuple[str, str]:
+    name, sep, dist = text.partition("=")
+    if not sep or not name.strip().isidentifier():
+        raise argparse.ArgumentTypeError(f"takes NAME=DIST, e.g. K=lognormal(0,0.2), got "
+                                         f"{text!r}")
+    return name.strip().upper(), dist.strip()
+
+
+def _correlations(items: list[str]) -> dict[tuple[str, str], float]:
+    out = {}
+    for item in items:
+        pair, sep, value = item.partition("=")
+        names = [n.strip().upper() for n in pair.split(",")]
+        try:
+            r = fortran_float(value)
+        except ValueError:
+            r = None
+        if not sep or len(names) != 2 or r is None:
+            raise UsageError(f"--correlate takes A,B=R, e.g. KA,KE=0.5, got {item!r}")
+        out[(names[0], names[1])] = r
+    return out
+
+
+def cmd_montecarlo(args, path: str, signals: Signals) -> int:
+    from ..batch.montecarlo import parse_quantiles
+    from ..output.montecarlo import montecarlo_text
+
+    quantiles = parse_quantiles(args.quantiles)
+    correlation = _correlations(args.correlate)
+    model, params = _load(args, path)
+    seed = 1 if args.seed is None else args.seed
+    if seed < 0 or seed != int(seed):
+        raise UsageError(f"--seed must be a whole number, 0 or more, got {args.seed:g}")
+    dists = dict(args.dist)
+    progress = Progress(not args.quiet)
+    progress.prefix = "montecarlo  "
+    try:
+        result = model.montecarlo(dists, args.runs, int(seed), quantiles=quantiles,
+                                  correlation=correlation, outputs=args.vars,
+                                  method=args.method, rtol=args.rtol, atol=args.atol,
+                                  fintim=args.fintim, jobs=_jobs(args),
+                                  scheduler=args.scheduler, progress=progress,
+                                  max_time=args.max_time, max_steps=args.max_steps,
+                                  max_events=args.max_events,
+                                  weather_dir=args.weather_dir or None, **params)
+    finally:
+        progress.done()
+    stem, out_dir = stem_and_dir(path, args.out)
+    outputs = Outputs("montecarlo", stem, out_dir, analysis=result, model=model,
+                      dialect=args.csv_dialect, plot=figure_options(args))
+    written, errors = write_outputs(outputs, args, signals)
+    if not args.quiet and not signals.held_back:
+        write_out(lambda out: out.write(montecarlo_text(result, model)))
+    code = finish(path, written, errors, args.quiet, signals)
+    if result.failed:
+        print(f"amilpy: {path}: {len(result.failed)} of {result.runs} runs failed (listed, "
+              "left out of the quantiles)", file=sys.stderr)
+    if result.interrupted or result.timed_out:
+        why = "interrupted" if result.interrupted else \
+            f"stopped at --max-time {args.max_time:g} s"
+        print(f"amilpy: {path}: {why} after {result.done} of {result.runs} runs; what was "
+              "done is printed and written", file=sys.stderr)
+    return max(code, EXIT_FAILED if result.failed or result.interrupted or result.timed_out
+               else EXIT_OK)
+
+
 def cmd_report(args, path: str, signals: Signals) -> int:
     from ..output.report import FORMATS, write_report
 
@@ -453,7 +552,8 @@ def write_overlay(args, signals: Signals) -> int:
     return finish(first, written, errors, args.quiet, signals)
 
 
-COMMANDS = {"run": cmd_run, "sweep": cmd_sweep, "report": cmd_report, "check": cmd_check}
+COMMANDS = {"run": cmd_run, "sweep": cmd_sweep, "montecarlo": cmd_montecarlo,
+            "report": cmd_report, "check": cmd_check}
 
 
 def _one(command, args, path: str, signals: Signals) -> int:

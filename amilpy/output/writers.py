@@ -164,6 +164,38 @@ def _steady_bode(o: Outputs, _path: str | None) -> list[str]:
                      o.plot.formats)
 
 
+def _montecarlo_csv(o: Outputs, path: str | None) -> list[str]:
+    from . import sheets
+    from .montecarlo import bands_csv
+
+    header, body = bands_csv(o.analysis)
+    sheets.write_csv_rows(path, header, body, o.dialect, _partial(o.analysis))
+    return [path]
+
+
+def _montecarlo_samples(o: Outputs, path: str | None) -> list[str]:
+    from . import sheets
+    from .montecarlo import samples_csv
+
+    header, body = samples_csv(o.analysis)
+    sheets.write_csv_rows(path, header, body, o.dialect, _partial(o.analysis))
+    return [path]
+
+
+def _partial(mc) -> list[str]:
+    if mc.done < mc.runs:
+        return [f"partial: {mc.done} of the {mc.runs} runs were done"]
+    return []
+
+
+def _montecarlo_png(o: Outputs, _path: str | None) -> list[str]:
+    from .analysis import figure_stem
+    from .montecarlo import plot_bands
+
+    return plot_bands(o.analysis, figure_stem(o.out_dir, o.stem, "montecarlo"), o.model,
+                      o.plot.formats)
+
+
 def _need_linear(o: Outputs, flag: str) -> None:
     from .files import OutputError
 
@@ -230,6 +262,15 @@ WRITERS: tuple[Writer, ...] = (
     Writer("steady-bode", "steady", "--bode", False,
            "draw the Bode diagram of every output to every input as NAME_bode_INPUT.png "
            "next to the model or in --out", _steady_bode),
+    Writer("montecarlo-csv", "montecarlo", "--csv", True,
+           "write the bands as CSV on the output grid: TIME, NAME_MEAN and NAME_P<q> of "
+           "each variable, RUNS", _montecarlo_csv),
+    Writer("montecarlo-samples", "montecarlo", "--samples", True,
+           "write every run as CSV: RUN, STATUS, the drawn values, FINAL_<NAME>, the "
+           "TERMINAL values, a failed run's MESSAGE", _montecarlo_samples),
+    Writer("montecarlo-png", "montecarlo", "--plot", False,
+           "draw the bands (median line, quantiles shaded) of each OUTPUT statement as "
+           "NAME_montecarlo_K.png next to the model or in --out", _montecarlo_png),
 )
 
 

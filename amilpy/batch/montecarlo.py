@@ -1,0 +1,286 @@
+"""Monte Carlo: the listing run once per set of data values drawn from their
+distributions (`distributions.py`), and what the runs say together: quantile
+bands of every reported variable on the output grid, quantiles of the final
+and TERMINAL values, and the runs that failed, counted and listed with their
+values (never dropped in silence).
+
+The draws are made here, before any run, from the seed alone; the runs go to
+`farm` (worker processes or a Dask cluster) in chunks, each coming back as a
+`Member` (its rows of the reported variables, not the whole run), so the
+result is the same bit for bit whatever `jobs` or `scheduler`. A run that
+failed is left out of the bands and the quantiles (its partial history is no
+draw of the complete one) and listed; a run a FINISH condition stopped early
+counts in the bands up to where it stopped (`MonteCarlo.counts` says how many
+runs each instant's quantiles are of).
+
+Quantiles are NumPy's default (linear interpolation between order statistics,
+Hyndman & Fan type 7)."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+from functools import partial
+
+import numpy as np
+
+from ..diagnostics import AmilError, UsageError
+from ..progress import report
+from ..result import Run, Status
+from .distributions import Dist, sample
+
+QUANTILES = (5.0, 50.0, 95.0)  # percent
+CHUNK = 64  # runs handed to the farm at a time, per worker, at least
+CHUNKS = 10  # and at most this many hand-overs in all
+
+
+@dataclass(frozen=True)
+class Member:
+    """What one run gives back: its grid rows of the reported variables."""
+
+    times: np.ndarray
+    prdel: np.ndarray  # which of `times` are PRDEL instants
+    values: np.ndarray  # (len(times), variables)
+    final: tuple[float, ...]  # the variables' values at the run's end
+    terminal: dict[str, float]
+    status: str
+    message: str
+
+
+def member_of(names: tuple[str, ...], run: Run) -> Member:
+    """The reduction a worker applies to its run (`farm.Task.reduce`)."""
+    grid = run.outdel_mask | run.prdel_mask
+    times = run.times[grid]
+    values = np.empty((len(times), len(names)))
+    for j, name in enumerate(names):
+        values[:, j] = run.values[name][grid] if name in run.values else \
+            run.constants.get(name, math.nan)
+    final = tuple(float(run.final.get(n, values[-1, j] if len(times) else math.nan))
+                  for j, n in enumerate(names))
+    return Member(times, run.prdel_mask[grid], values, final, dict(run.terminal),
+                  str(run.status), run.message)
+
+
+@dataclass
+class MonteCarlo:
+    """The runs of a Monte Carlo and their quantiles (see the module)."""
+
+    dists: dict[str, Dist]
+    samples: dict[str, np.ndarray]  # name -> its drawn value per run
+    seed: int
+    variables: list[str]
+    quantiles: tuple[float, ...]  # percent
+    times: np.ndarray  # the output grid (OUTDEL and PRDEL instants)
+    prdel: np.ndarray  # which of `times` are PRDEL instants
+    bands: np.ndarray  # (quantiles, times, variables), NaN where no run has a value
+    mean: np.ndarray  # (times, variables)
+    counts: np.ndarray  # runs with a value at each instant
+    final: np.ndarray  # (runs, variables): each run's final values (NaN: failed)
+    terminal_names: list[str]
+    terminal: np.ndarray  # (runs, TERMINAL values)
+    status: list[str]  # per run: finished, stopped, failed, or "" (not run)
+    messages: list[str]
+    correlation: dict[tuple[str, str], float] = field(default_factory=dict)
+    interrupted: bool = False
+    timed_out: bool = False
+    params: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def runs(self) -> int:
+        return len(self.status)
+
+    @property
+    def done(self) -> int:
+        return sum(1 for s in self.status if s)
+
+    @property
+    def failed(self) -> list[int]:
+        """The runs (0-based) that failed."""
+        return [k for k, s in enumerate(self.status) if s == str(Status.FAILED)]
+
+    @property
+    def kept(self) -> np.ndarray:
+        """Which runs count in the quantiles: those that ran and did not fail."""
+        return np.array([s not in ("", str(Status.FAILED)) for s in self.status], bool)
+
+    def values_of(self, k: int) -> dict[str, float]:
+        return {n: float(v[k]) for n, v in self.samples.items()}
+
+    def final_quantiles(self) -> np.ndarray:
+        """(quantiles, variables) of the final values over the runs kept."""
+        return _quantiles(self.final[self.kept], self.quantiles)
+
+    def terminal_quantiles(self) -> np.ndarray:
+        return _quantiles(self.terminal[self.kept], self.quantiles)
+
+    def band(self, name: str) -> np.ndarray:
+        """(quantiles, times) of one variable."""
+        return self.bands[:, :, self.variables.index(name.upper())]
+
+
+def _quantiles(values: np.ndarray, q) -> np.ndarray:
+    if not len(values):
+        return np.full((len(q), values.shape[1]), math.nan)
+    with np.errstate(all="ignore"):
+        import warnings
+
+        with warnings.catch_warnings():  # (a column of NaN: all-NaN slice, NaN it is)
+            warnings.simplefilter("ignore", RuntimeWarning)
+            return np.nanquantile(values, np.asarray(q) / 100.0, axis=0)
+
+
+def parse_quantiles(text: str) -> tuple[float, ...]:
+    """"5,50,95" -> (5.0, 50.0, 95.0): percents in [0, 100], sorted, distinct."""
+    try:
+        q = sorted({float(p) for p in text.split(",") if p.strip()})
+    except ValueError:
+        raise UsageError(f"--quantiles takes percents, e.g. 5,50,95, got {text!r}") from None
+    if not q or not all(0.0 <= v <= 100.0 for v in q):
+        raise UsageError(f"--quantiles takes percents between 0 and 100, got {text!r}")
+    return tuple(q)
+
+
+def montecarlo(model, dists: dict[str, Dist], runs: int, seed: int, *,
+               quantiles=QUANTILES, correlation=None, names: list[str] | None = None,
+               options=None, jobs: int = 1, scheduler: str | None = None,
+               progress=None, max_time: float | None = None,
+               params: dict[str, float] | None = None) -> MonteCarlo:
+    """The Monte Carlo of `model` (an api.Model): `runs` runs of its first run's data
+    (with `params`) and each name's value drawn from `dists`; `options` a
+    run.Options (method, tolerances, limits) for every run; `max_time` wall-clock
+    seconds for the whole study (the runs done by then are kept)."""
+    from .farm import Task, default_jobs, farm
+
+    params = dict(params or {})
+    if runs < 1:
+        raise UsageError(f"--runs must be at least 1, got {runs}")
+    known = set(model.ir.data_names)
+    for name in dists:
+        if name not in known:
+            from ..diagnostics import with_hint
+
+            raise UsageError(with_hint(f"--dist {name}: not a PARAM/CONST/INCON value of "
+                                       "this model", name, sorted(known)))
+        if name in params:
+            raise UsageError(f"{name} has both --set and --dist: give one")
+    correlation = dict(correlation or {})
+    samples = sample(dists, runs, seed, correlation)
+    variables = names or _reported(model)
+    values_limit(model, variables, runs, options)
+    opts = replace(options, outputs=[v for v in variables if v in model.ir.variables],
+                   progress=None)
+    base = model._specs(params)[0]
+    reduce = partial(member_of, tuple(variables))
+    members: list[Member | None] = [None] * runs
+    errors: dict[int, str] = {}
+    interrupted = timed_out = False
+    start = time.monotonic()
+    # (each chunk starts its workers afresh: a tenth of the runs at least, so that
+    # starting them costs little, and the time limit and Ctrl-C are looked at often)
+    chunk = max(CHUNK * max(1, jobs if not scheduler else default_jobs()),
+                math.ceil(runs / CHUNKS))
+    for first in range(0, runs, chunk):
+        if max_time is not None and time.monotonic() - start >= max_time:
+            timed_out = True
+            break
+        ks = range(first, min(runs, first + chunk))
+        tasks = [Task(_spec(base, {n: float(v[k]) for n, v in samples.items()}), opts,
+                      f"run {k + 1}", reduce=reduce) for k in ks]
+
+        def done(i: int, _outcome, offset=first) -> None:
+            report(progress, "runs", offset + i + 1, runs)
+
+        outcomes = farm(model.ir, tasks, jobs, scheduler, done, model.cache)
+        for k, o in zip(ks, outcomes, strict=True):
+            if o.point is not None:
+                members[k] = o.point
+            elif o.interrupted:
+                interrupted = True
+            else:
+                errors[k] = o.error or "not run"
+            if o.interrupted:
+                interrupted = True
+        if interrupted:
+            break
+    return _gather(dists, samples, seed, variables, tuple(quantiles), members, errors,
+                   correlation, interrupted, timed_out, params)
+
+
+def _spec(base, values: dict[str, float]):
+    data = {**base.data, **values}
+    changed = {**base.changed, **values}
+    return replace(base, data=data, changed=changed,
+                   label=", ".join(f"{n} = {v:.6g}" for n, v in values.items()))
+
+
+def _reported(model) -> list[str]:
+    """Every PRINT and OUTPUT variable of the first run, once each, in order."""
+    names: list[str] = []
+    for r in model.ir.runs[0].reports:
+        if r.kind in ("PRINT", "OUTPUT"):
+            names += [n for n in r.names if n not in names and n != "TIME"]
+    if not names:
+        raise UsageError("the listing has no PRINT or OUTPUT variable: name the variables "
+                         "with --vars")
+    return names
+
+
+def values_limit(model, variables: list[str], runs: int, options) -> None:
+    """Refuse before the first run a study whose kept values would not fit."""
+    from ..run.plan import DEFAULTS
+
+    per_run = model.stored_values(options.fintim, variables) if model.ir.acsl is None \
+        else 0.0
+    total = per_run * runs
+    limit = DEFAULTS["max_values"]
+    if total > limit:
+        raise AmilError(f"the {runs} runs would keep {total:.3g} values ({len(variables)} "
+                        f"variables on every output row; limit {limit:.0e}): fewer --runs, "
+                        "fewer --vars, or a coarser OUTDEL/PRDEL")
+
+
+def _gather(dists, samples, seed, variables, quantiles, members, errors, correlation,
+            interrupted, timed_out, params) -> MonteCarlo:
+    runs = len(members)
+    reference = max((m for m in members if m is not None), key=lambda m: len(m.times),
+                    default=None)
+    times = reference.times if reference is not None else np.empty(0)
+    prdel = reference.prdel if reference is not None else np.empty(0, bool)
+    cube = np.full((runs, len(times), len(variables)), np.nan)
+    final = np.full((runs, len(variables)), np.nan)
+    terminal_names = list(dict.fromkeys(n for m in members if m is not None
+                                        for n in m.terminal))
+    terminal = np.full((runs, len(terminal_names)), np.nan)
+    status, messages = [""] * runs, [""] * runs
+    from ..run.plan import nearest_instants
+
+    for k, m in enumerate(members):
+        if m is None:
+            if k in errors:
+                status[k], messages[k] = str(Status.FAILED), errors[k]
+            continue
+        status[k], messages[k] = m.status, m.message
+        if m.status == str(Status.FAILED):
+            continue
+        pick, same = nearest_instants(times, m.times)
+        cube[k, pick[same]] = m.values[same]
+        final[k] = m.final
+        for j, n in enumerate(terminal_names):
+            terminal[k, j] = m.terminal.get(n, math.nan)
+    kept = cube[[s not in ("", str(Status.FAILED)) for s in status]]
+    bands = _quantiles(kept.reshape(len(kept), -1), quantiles).reshape(
+        len(quantiles), len(times), len(variables)) if len(times) else \
+        np.empty((len(quantiles), 0, len(variables)))
+    with np.errstate(all="ignore"):
+        import warnings
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            mean = np.nanmean(kept, axis=0) if len(kept) else \
+                np.full((len(times), len(variables)), np.nan)
+    counts = np.sum(np.all(np.isfinite(kept), axis=2), axis=0) if len(kept) else \
+        np.zeros(len(times), int)
+    return MonteCarlo(dists, samples, seed, list(variables), quantiles, times, prdel, bands,
+                      mean, counts, final, terminal_names, terminal, status, messages,
+                      correlation, interrupted, timed_out, params)

@@ -1,0 +1,184 @@
+"""`amilpy montecarlo` / Model.montecarlo: draws from each distribution, quantile
+bands against closed forms, failed runs listed, the same runs whatever the
+number of workers."""
+
+from __future__ import annotations
+
+import csv
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+import amilpy
+from amilpy.batch.distributions import parse_dist, sample
+from amilpy.cli import main
+from amilpy.diagnostics import UsageError
+
+DECAY = """TITLE DECAY WITH AN UNCERTAIN RATE
+PARAM K = 1.0, X0 = 1.0
+X = INTGRL(X0, -K*X)
+TIMER FINTIM = 2.0, OUTDEL = 0.1, PRDEL = 0.5
+PRINT X
+OUTPUT X
+END
+"""
+
+
+@pytest.fixture
+def decay(tmp_path):
+    path = tmp_path / "decay.amil"
+    path.write_text(DECAY)
+    return path
+
+
+def test_lognormal_rate_gives_the_exact_quantiles_at_every_time(decay):
+    # X(t) = exp(-K t) with ln K ~ N(0, 0.3): P(X(t) <= x) = 1 - Phi(ln(-ln(x)/t)/0.3).
+    # The exact CDF at each sample quantile of 4,000 runs must be within 4 binomial
+    # standard deviations, sqrt(p(1-p)/n), of p (a sample quantile's own spread;
+    # the integration's error, 1e-7 of X at RELERR 1e-6, is 1e-4 of that band).
+    mc = amilpy.load(decay).montecarlo({"K": "lognormal(0, 0.3)"}, runs=4000, seed=11)
+    assert mc.done == 4000 and not mc.failed
+    n = 4000
+    for qi, q in enumerate(mc.quantiles):
+        p = q / 100
+        for i, t in enumerate(mc.times):
+            if t == 0:
+                assert mc.bands[qi, i, 0] == pytest.approx(1.0, abs=1e-15)
+                continue
+            x = mc.bands[qi, i, 0]
+            cdf = 1.0 - stats.norm.cdf(math.log(-math.log(x) / t) / 0.3)
+            assert abs(cdf - p) <= 4 * math.sqrt(p * (1 - p) / n), (q, t, cdf)
+    # and the final values' quantiles are the last row's
+    assert mc.final_quantiles()[:, 0] == pytest.approx(mc.bands[:, -1, 0], rel=1e-12)
+
+
+def test_every_distribution_draws_what_it_names():
+    # Kolmogorov-Smirnov of 4,000 draws against SciPy's distribution: p > 0.001
+    # (the draws are fixed by the seed, so this either always passes or never).
+    cases = {"A": ("normal(2, 0.5)", stats.norm(2, 0.5)),
+             "B": ("lognormal(0.1, 0.4)", stats.lognorm(0.4, scale=math.exp(0.1))),
+             "C": ("uniform(-1, 3)", stats.uniform(-1, 4)),
+             "D": ("triangular(0, 1, 4)", stats.triang(0.25, loc=0, scale=4)),
+             "E": ("truncnormal(1, 2, 0, 1.5)",
+                   stats.truncnorm(-0.5, 0.25, loc=1, scale=2))}
+    dists = {k: parse_dist(k, text) for k, (text, _) in cases.items()}
+    drawn = sample(dists, 4000, seed=5)
+    for name, (_, ref) in cases.items():
+        assert stats.kstest(drawn[name], ref.cdf).pvalue > 1e-3, name
+    assert drawn["E"].min() >= 0 and drawn["E"].max() <= 1.5
+    again = sample(dists, 4000, seed=5)
+    assert all(np.array_equal(drawn[k], again[k]) for k in cases)
+    assert not np.array_equal(drawn["A"], sample(dists, 4000, seed=6)["A"])
+
+
+def test_correlated_names_have_the_copula_rank_correlation():
+    # Gaussian copula with r = 0.6: the rank correlation is 6/pi asin(r/2) = 0.5824;
+    # 20,000 draws estimate it to about 0.006 (4 of that: 0.025).
+    dists = {"A": parse_dist("A", "uniform(0, 1)"), "B": parse_dist("B", "lognormal(0, 1)")}
+    drawn = sample(dists, 20000, seed=2, correlation={("A", "B"): 0.6})
+    rho = stats.spearmanr(drawn["A"], drawn["B"])[0]
+    assert rho == pytest.approx(6 / math.pi * math.asin(0.3), abs=0.025)
+    with pytest.raises(UsageError, match="not positive definite"):
+        three = {k: parse_dist(k, "normal(0, 1)") for k in "ABC"}
+        sample(three, 10, 1, {("A", "B"): 0.9, ("B", "C"): 0.9, ("A", "C"): -0.9})
+
+
+def test_a_table_gives_its_rows_in_order_and_keeps_them_together(decay, tmp_path):
+    table = tmp_path / "draws.csv"
+    table.write_text("K,X0\n0.5,2.0\n1.0,1.0\n2.0,0.5\n")
+    mc = amilpy.load(decay).montecarlo({"K": f"table({table})", "X0": f"table({table})"})
+    assert mc.runs == 3  # the table's rows
+    assert mc.samples["K"].tolist() == [0.5, 1.0, 2.0]
+    assert mc.samples["X0"].tolist() == [2.0, 1.0, 0.5]
+    # each run's final value is X0 exp(-2 K) (RELERR 1e-6)
+    assert mc.final[:, 0] == pytest.approx([2 * math.exp(-1), math.exp(-2), 0.5 * math.exp(-4)],
+                                           rel=1e-5)
+    with pytest.raises(UsageError, match="has 3 rows"):
+        amilpy.load(decay).montecarlo({"K": f"table({table})"}, runs=4)
+
+
+FAILING = """TITLE A RUN THAT CANNOT START FOR K < 1
+PARAM K = 2.0
+INITIAL
+   R = SQRT(K - 1.0)
+DYNAMIC
+X = INTGRL(R, -X)
+TIMER FINTIM = 1.0, OUTDEL = 0.1
+PRINT X
+END
+"""
+
+
+def test_failed_runs_are_counted_listed_and_left_out(tmp_path, capsys):
+    # K uniform on (0.5, 1.5): the runs with K < 1 cannot start (SQRT of a negative
+    # number: X starts at NaN). They are listed with their K, left out of the quantiles, and the
+    # command exits 3; the kept runs' final values are sqrt(K - 1) e^-1.
+    path = tmp_path / "fail.amil"
+    path.write_text(FAILING)
+    mc = amilpy.load(path).montecarlo({"K": "uniform(0.5, 1.5)"}, runs=200, seed=4)
+    bad = np.flatnonzero(mc.samples["K"] < 1.0).tolist()
+    assert mc.failed == bad and 60 < len(bad) < 140
+    assert all("initial value of X is not finite" in mc.messages[k] for k in bad)
+    kept = mc.samples["K"][mc.kept]
+    assert mc.final[mc.kept, 0] == pytest.approx(np.sqrt(kept - 1) * math.exp(-1), rel=1e-5)
+    assert np.all(np.isnan(mc.final[bad, 0]))
+    assert mc.final_quantiles()[1, 0] == pytest.approx(
+        np.median(np.sqrt(kept - 1) * math.exp(-1)), rel=1e-5)
+    samples = tmp_path / "runs.csv"
+    assert main(["montecarlo", str(path), "--dist", "K=uniform(0.5,1.5)", "--runs", "200",
+                 "--seed", "4", "--samples", str(samples), "--jobs", "1"]) == 3
+    out, err = capsys.readouterr()
+    assert f"FAILED RUNS ({len(bad)}" in out and f"run {bad[0] + 1}: K = " in out
+    assert f"{len(bad)} of 200 runs failed" in err
+    with open(samples, newline="") as fh:
+        rows = list(csv.reader(fh))
+    assert rows[0] == ["RUN", "STATUS", "K", "FINAL_X", "MESSAGE"]
+    assert [int(r[0]) - 1 for r in rows[1:] if r[1] == "failed"] == bad
+
+
+def test_the_same_runs_whatever_the_workers(decay):
+    model = amilpy.load(decay)
+    one = model.montecarlo({"K": "lognormal(0, 0.3)", "X0": "normal(1, 0.1)"}, runs=300,
+                           seed=8, jobs=1)
+    two = amilpy.load(decay).montecarlo({"K": "lognormal(0, 0.3)", "X0": "normal(1, 0.1)"},
+                                        runs=300, seed=8, jobs=2)
+    assert np.array_equal(one.bands, two.bands) and np.array_equal(one.final, two.final)
+    assert all(np.array_equal(one.samples[k], two.samples[k]) for k in one.samples)
+
+
+def test_montecarlo_writes_bands_samples_and_figures(decay, tmp_path, capsys):
+    bands, runs = tmp_path / "bands.csv", tmp_path / "runs.csv"
+    code = main(["montecarlo", str(decay), "--dist", "K=lognormal(0,0.3)", "--runs", "50",
+                 "--quantiles", "10,25,50,75,90", "--csv", str(bands), "--samples",
+                 str(runs), "--plot", "--out", str(tmp_path), "--jobs", "1"])
+    assert code == 0
+    out = capsys.readouterr().out
+    assert out.startswith("MONTE CARLO OF DECAY WITH AN UNCERTAIN RATE")
+    assert "X: QUANTILES OVER THE RUNS AT THE PRDEL INSTANTS" in out
+    with open(bands, newline="") as fh:
+        rows = list(csv.reader(fh))
+    assert rows[0] == ["TIME", "X_MEAN", "X_P10", "X_P25", "X_P50", "X_P75", "X_P90", "RUNS"]
+    assert len(rows) == 22 and rows[-1][-1] == "50"
+    p10, p90 = float(rows[-1][2]), float(rows[-1][6])
+    assert p10 < float(rows[-1][4]) < p90
+    assert (tmp_path / "decay_montecarlo_1.png").read_bytes()[:4] == b"\x89PNG"
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--dist", "K=gauss(1,2)", "--runs", "5"], "'gauss' is no distribution"),
+    (["--dist", "K=normal(1)", "--runs", "5"], "normal takes 2 numbers"),
+    (["--dist", "K=normal(1,-2)", "--runs", "5"], "needs mean m, standard deviation s > 0"),
+    (["--dist", "K=uniform(2,1)", "--runs", "5"], "needs a < b"),
+    (["--dist", "Q=uniform(0,1)", "--runs", "5"], "Q: not a PARAM/CONST/INCON"),
+    (["--dist", "K=uniform(0,1)"], "give the number of runs"),
+    (["--dist", "K=uniform(0,1)", "--runs", "5", "--set", "K=2"], "both --set and --dist"),
+    (["--dist", "K=uniform(0,1)", "--runs", "5", "--correlate", "K,X0=0.5"],
+     "X0 has no --dist"),
+    (["--dist", "K=uniform(0,1)", "--runs", "5", "--quantiles", "5,150"], "between 0 and 100"),
+    (["--dist", "K=uniform(0,1)", "--runs", "5", "--seed", "1.5"], "whole number"),
+])
+def test_montecarlo_usage_errors(decay, capsys, argv, message):
+    assert main(["montecarlo", str(decay), *argv]) == 2
+    assert message in capsys.readouterr().err
