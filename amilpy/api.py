@@ -441,6 +441,47 @@ class Model:
                           scheduler=scheduler, progress=progress, max_time=max_time,
                           params={k.upper(): float(v) for k, v in params.items()})
 
+    def sensitivity(self, names=None, *, method: str = "local", dists: dict | None = None,
+                    measures=(), runs: int | None = None, seed: int = 1,
+                    outputs: list[str] | None = None, method_ode: str | None = None,
+                    rtol: float | None = None, atol: float | None = None,
+                    fintim: float | None = None, jobs: int = 1,
+                    scheduler: str | None = None, progress=None,
+                    max_time: float | None = None, **params: float):
+        """Sensitivities. `method="local"`: (P/Y) dY/dP over the first run of `outputs`
+        (default every PRINT/OUTPUT variable) to the data values `names` (default the
+        PARAM values), from the variational equations (`analysis.sensitivity.Local`).
+        `method="morris"` or `"sobol"`: global indices of `measures` ("X", "X@T",
+        "max(X)", "min(X)", a TERMINAL name) over `dists` (name -> distribution, as
+        `montecarlo`), `runs` trajectories (Morris) or rows (Sobol), `seed`
+        (`batch.indices.Indices`). `method_ode`: the integration method."""
+        from .run import Options
+
+        _check_method(method_ode)
+        if method == "local":
+            from .analysis.sensitivity import local
+
+            if dists:
+                raise UsageError("a local sensitivity takes no distributions: give "
+                                 "method='morris' or 'sobol' for global indices")
+            return local(self, list(names) if names else None, outputs,
+                         {"method": method_ode, "rtol": rtol, "atol": atol}, params)
+        from .batch.distributions import parse_dist
+        from .batch.indices import indices
+
+        parsed = {k.strip().upper(): parse_dist(k.strip().upper(), str(v))
+                  if isinstance(v, str) else v for k, v in (dists or {}).items()}
+        opts = Options(method=method_ode, rtol=rtol, atol=atol, fintim=fintim,
+                       max_time=max_time)
+        self._specs(params)
+        if runs is None:
+            raise UsageError("give the number of runs (--runs N: Sobol's rows, Morris's "
+                             "trajectories)")
+        return indices(self, method, parsed, list(measures), int(runs), int(seed),
+                       options=opts, jobs=jobs, scheduler=scheduler, progress=progress,
+                       max_time=max_time,
+                       params={k.upper(): float(v) for k, v in params.items()})
+
     def modes(self, at: float = 0.0, method: str | None = None, rtol: float | None = None,
               atol: float | None = None, progress=None, max_time: float | None = None,
               **params: float):

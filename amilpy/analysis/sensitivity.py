@@ -17,6 +17,8 @@ instead, and is told why."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..observed import Observations
@@ -50,8 +52,35 @@ def observed_jacobian(model, obs: Observations, names: list[str], values: dict[s
 
 
 def _run_jacobian(model, obs: Observations, k: int, names, values, params, options):
-    data = {**params, **values}
+    track = trajectory(model, k, names, {**params, **values}, options, obs.times(k + 1))
+    if isinstance(track, str):
+        return None, track
+    series = [s for s in obs.for_run(k + 1) if s.name in track.code.out_names]
+    rows = [track.row(s.name, tk) for s in series for tk in s.t.tolist()]
+    return (np.array(rows).reshape(len(rows), len(names))), ""
 
+
+class Trajectory:
+    """d y(t)/d p along one run at given instants (`trajectory`), and of any output."""
+
+    def __init__(self, code, variants, floor, at: dict[float, tuple]) -> None:
+        self.code, self.variants, self.floor, self.at = code, variants, floor, at
+        self.states = {name: i for i, name in enumerate(code.state_names)}
+        self.outputs = {name: i for i, name in enumerate(code.out_names)}
+
+    def row(self, name: str, t: float) -> np.ndarray:
+        """d name(t) / d p, a value per data value."""
+        state, sens = self.at[t]
+        if name in self.states:
+            return sens[self.states[name]]
+        return _output_row(self.code, self.variants, self.outputs[name], t, state, sens,
+                           self.floor)
+
+
+def trajectory(model, k: int, names: list[str], data: dict[str, float], options: dict,
+               times) -> Trajectory | str:
+    """Run `k`'s tangent with respect to the data values `names` at `times` (sorted;
+    `data` the values), or why the variational equations cannot follow it."""
     def flow_at(**changed):
         return model.flow(options.get("method"), options.get("rtol"), options.get("atol"),
                           run=k, **{**data, **changed})
@@ -68,43 +97,31 @@ def _run_jacobian(model, obs: Observations, k: int, names, values, params, optio
         plus, minus = flow_at(**{name: data[name] + h}), flow_at(**{name: data[name] - h})
         if any((v.code.watched, v.code.state_names, v.code.out_names) !=
                (c.watched, c.state_names, c.out_names) for v in (plus, minus)):
-            return None, f"{name} changes which switches the run watches"
+            return f"{name} changes which switches the run watches"
         variants.append((plus.code, minus.code, h))
         up, down = plus.initial_state(), minus.initial_state()
         if up.memory != down.memory:  # (HSTRSS's, BCKLSH's initial value: not followed)
-            return None, f"a memory function's initial value depends on {name}"
+            return f"a memory function's initial value depends on {name}"
         dy0[:, j] = (np.asarray(up.y) - np.asarray(down.y)) / (2.0 * h)
     floor = np.broadcast_to(np.asarray(flow.plan.tol.atol / flow.plan.tol.rtol, dtype=float),
                             (n,))
     tangent = ParameterTangent(c, flow.watch, floor, dy0, variants)
-    series = [s for s in obs.for_run(k + 1) if s.name in c.out_names]
-    times = obs.times(k + 1)
     at: dict[float, tuple] = {}
     state, t = start, start.t
-    for tk in times.tolist():
+    for tk in np.asarray(times, dtype=float).tolist():
         if tk > t:
             state, _ = flow.advance(state, t, tk, observer=tangent)
             if tangent.failed is not None:
-                return None, tangent.failed
+                return tangent.failed
             if state.t < tk * (1 - 1e-12) - 1e-300:
-                return None, f"the run stops at TIME = {state.t:.9g}"
+                return f"the run stops at TIME = {state.t:.9g}"
             t = tk
             # the branches at tk chosen afresh, as at a start: a switch on TIME due
             # exactly at tk is taken (the next advance would start on its surface and
             # keep the old branch); the tangent's jump follows from the change
             state = flow.state(state.y, None, state.memory, tk)
         at[tk] = (state, tangent.phi[:n].copy())
-    states = {name: i for i, name in enumerate(c.state_names)}
-    out_index = {name: i for i, name in enumerate(c.out_names)}
-    rows = []
-    for s in series:
-        for tk in s.t.tolist():
-            st, sens = at[tk]
-            if s.name in states:
-                rows.append(sens[states[s.name]])
-                continue
-            rows.append(_output_row(c, variants, out_index[s.name], tk, st, sens, floor))
-    return (np.array(rows).reshape(len(rows), len(names))), ""
+    return Trajectory(c, variants, floor, at)
 
 
 def _output_row(c, variants, i: int, t: float, state, sens: np.ndarray, floor: np.ndarray
@@ -123,3 +140,102 @@ def _output_row(c, variants, i: int, t: float, state, sens: np.ndarray, floor: n
                        / (2.0 * h) for plus, minus, h in variants])
     return grad @ sens + direct
 
+
+
+@dataclass
+class Local:
+    """Local sensitivities of the first run's variables to data values over time."""
+
+    names: list[str]  # the data values
+    values: dict[str, float]  # their values in the run
+    variables: list[str]
+    times: np.ndarray  # the output grid (OUTDEL and PRDEL instants)
+    prdel: np.ndarray  # which of `times` are PRDEL instants
+    y: np.ndarray  # (times, variables)
+    raw: np.ndarray  # (times, variables, names): d y / d p
+    how: str  # "sensitivity equations", or "differences of whole runs (why)"
+
+    @property
+    def normalised(self) -> np.ndarray:
+        """p / y * d y / d p: the percent change of y per percent of p (NaN where
+        y = 0)."""
+        p = np.array([self.values[n] for n in self.names])
+        with np.errstate(all="ignore"):
+            out = self.raw * p[None, None, :] / self.y[:, :, None]
+        out[~np.isfinite(out)] = np.nan
+        return out
+
+    def largest(self) -> np.ndarray:
+        """(variables, names): the largest |normalised| coefficient over the run."""
+        norm = np.abs(self.normalised)
+        out = np.full(norm.shape[1:], np.nan)
+        for i in range(norm.shape[1]):
+            for j in range(norm.shape[2]):
+                col = norm[:, i, j]
+                if np.any(np.isfinite(col)):
+                    out[i, j] = float(np.nanmax(col))
+        return out
+
+
+def local(model, names: list[str] | None = None, variables: list[str] | None = None,
+          options: dict | None = None, params: dict[str, float] | None = None) -> Local:
+    """d y/d p of `variables` (default every PRINT/OUTPUT variable) to the data values
+    `names` (default the PARAM values) on the first run's output grid: the
+    variational equations (`trajectory`), else central differences of whole runs
+    (h = cbrt(RELERR) |p|), and why."""
+    from ..batch.montecarlo import member_of, reported
+    from ..diagnostics import UsageError
+
+    options = dict(options or {})
+    params = {k.upper(): float(v) for k, v in (params or {}).items()}
+    data = {**model.ir.runs[0].data, **params}
+    if not names:
+        kinds = model.ir.data_kinds
+        names = [n for n in model.ir.data_names if kinds.get(n) == "PARAM"] or \
+            list(model.ir.data_names)
+    names = [n.upper() for n in names]
+    for n in names:
+        if n not in data:
+            from ..diagnostics import with_hint
+
+            raise UsageError(with_hint(f"--local {n}: not a PARAM/CONST/INCON value of this "
+                                       "model", n, list(data)))
+    if not names:
+        raise UsageError("the model has no data value to differentiate by")
+    variables = model.known_names(variables) if variables else reported(model)
+    run = model.run(options.get("method"), options.get("rtol"), options.get("atol"),
+                    outputs=variables, advice=False, **params)[0]
+    if not run.ok:
+        raise FlowFailed(f"the run failed: {run.message}")
+    base = member_of(tuple(variables), run)
+    track = trajectory(model, 0, names, data, options, base.times) \
+        if model.ir.acsl is None else "an ACSL program has no flow map"
+    if isinstance(track, Trajectory):
+        raw = np.array([[track.row(v, t) for v in variables] for t in base.times.tolist()])
+        how = "sensitivity equations"
+    else:
+        raw = _differences(model, names, data, variables, options, params, base)
+        how = f"differences of whole runs ({track})"
+    return Local(names, {n: data[n] for n in names}, variables, base.times, base.prdel,
+                 base.values, raw.reshape(len(base.times), len(variables), len(names)), how)
+
+
+def _differences(model, names, data, variables, options, params, base) -> np.ndarray:
+    from ..batch.montecarlo import member_of
+    from ..run.plan import nearest_instants
+
+    rtol = options.get("rtol") or 1e-6
+    out = np.full((len(base.times), len(variables), len(names)), np.nan)
+    for j, name in enumerate(names):
+        h = max(np.cbrt(rtol) * abs(data[name]), 1e-8)
+        rows = []
+        for value in (data[name] + h, data[name] - h):
+            run = model.run(options.get("method"), options.get("rtol"), options.get("atol"),
+                            outputs=variables, advice=False, **{**params, name: value})[0]
+            if not run.ok:
+                raise FlowFailed(f"the run with {name} = {value:.9g} failed: {run.message}")
+            m = member_of(tuple(variables), run)
+            pick, same = nearest_instants(m.times, base.times)
+            rows.append(np.where(same[:, None], m.values[pick], np.nan))
+        out[:, :, j] = (rows[0] - rows[1]) / (2 * h)
+    return out

@@ -46,6 +46,7 @@ class Member:
     terminal: dict[str, float]
     status: str
     message: str
+    extrema: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
 
 
 def member_of(names: tuple[str, ...], run: Run) -> Member:
@@ -59,7 +60,7 @@ def member_of(names: tuple[str, ...], run: Run) -> Member:
     final = tuple(float(run.final.get(n, values[-1, j] if len(times) else math.nan))
                   for j, n in enumerate(names))
     return Member(times, run.prdel_mask[grid], values, final, dict(run.terminal),
-                  str(run.status), run.message)
+                  str(run.status), run.message, dict(run.extrema))
 
 
 @dataclass
@@ -150,11 +151,22 @@ def montecarlo(model, dists: dict[str, Dist], runs: int, seed: int, *,
     (with `params`) and each name's value drawn from `dists`; `options` a
     run.Options (method, tolerances, limits) for every run; `max_time` wall-clock
     seconds for the whole study (the runs done by then are kept)."""
-    from .farm import Task, default_jobs, farm
-
     params = dict(params or {})
     if runs < 1:
         raise UsageError(f"--runs must be at least 1, got {runs}")
+    check_names(model, dists, params)
+    correlation = dict(correlation or {})
+    samples = sample(dists, runs, seed, correlation)
+    variables = names or reported(model)
+    values_limit(model, variables, runs, options)
+    batch = run_sets(model, samples, variables, options, jobs=jobs, scheduler=scheduler,
+                     progress=progress, max_time=max_time, params=params)
+    return _gather(dists, samples, seed, variables, tuple(quantiles), batch, correlation,
+                   params)
+
+
+def check_names(model, dists, params: dict[str, float]) -> None:
+    """Each drawn name a data value of the model, and not also --set."""
     known = set(model.ir.data_names)
     for name in dists:
         if name not in known:
@@ -164,17 +176,34 @@ def montecarlo(model, dists: dict[str, Dist], runs: int, seed: int, *,
                                        "this model", name, sorted(known)))
         if name in params:
             raise UsageError(f"{name} has both --set and --dist: give one")
-    correlation = dict(correlation or {})
-    samples = sample(dists, runs, seed, correlation)
-    variables = names or _reported(model)
-    values_limit(model, variables, runs, options)
+
+
+@dataclass
+class Batch:
+    """What `run_sets` gives: a Member per set (None: failed before it ran, the
+    error in `errors`, or not run)."""
+
+    members: list[Member | None]
+    errors: dict[int, str]
+    interrupted: bool = False
+    timed_out: bool = False
+
+
+def run_sets(model, sets: dict[str, np.ndarray], variables: list[str], options, *,
+             jobs: int = 1, scheduler: str | None = None, progress=None,
+             max_time: float | None = None, params: dict[str, float] | None = None
+             ) -> Batch:
+    """Run the model's first run (with `params`) once per set of values (`sets`: name
+    -> a value per run), on `jobs` workers or `scheduler`, in chunks; each run comes
+    back as a Member of `variables` (and the extrema `options.extrema` asks for)."""
+    from .farm import Task, default_jobs, farm
+
+    runs = len(next(iter(sets.values()))) if sets else 0
     opts = replace(options, outputs=[v for v in variables if v in model.ir.variables],
                    progress=None)
-    base = model._specs(params)[0]
+    base = model._specs(dict(params or {}))[0]
     reduce = partial(member_of, tuple(variables))
-    members: list[Member | None] = [None] * runs
-    errors: dict[int, str] = {}
-    interrupted = timed_out = False
+    batch = Batch([None] * runs, {})
     start = time.monotonic()
     # (each chunk starts its workers afresh: a tenth of the runs at least, so that
     # starting them costs little, and the time limit and Ctrl-C are looked at often)
@@ -182,10 +211,10 @@ def montecarlo(model, dists: dict[str, Dist], runs: int, seed: int, *,
                 math.ceil(runs / CHUNKS))
     for first in range(0, runs, chunk):
         if max_time is not None and time.monotonic() - start >= max_time:
-            timed_out = True
+            batch.timed_out = True
             break
         ks = range(first, min(runs, first + chunk))
-        tasks = [Task(_spec(base, {n: float(v[k]) for n, v in samples.items()}), opts,
+        tasks = [Task(_spec(base, {n: float(v[k]) for n, v in sets.items()}), opts,
                       f"run {k + 1}", reduce=reduce) for k in ks]
 
         def done(i: int, _outcome, offset=first) -> None:
@@ -194,17 +223,13 @@ def montecarlo(model, dists: dict[str, Dist], runs: int, seed: int, *,
         outcomes = farm(model.ir, tasks, jobs, scheduler, done, model.cache)
         for k, o in zip(ks, outcomes, strict=True):
             if o.point is not None:
-                members[k] = o.point
-            elif o.interrupted:
-                interrupted = True
-            else:
-                errors[k] = o.error or "not run"
-            if o.interrupted:
-                interrupted = True
-        if interrupted:
+                batch.members[k] = o.point
+            elif not o.interrupted:
+                batch.errors[k] = o.error or "not run"
+            batch.interrupted = batch.interrupted or o.interrupted
+        if batch.interrupted:
             break
-    return _gather(dists, samples, seed, variables, tuple(quantiles), members, errors,
-                   correlation, interrupted, timed_out, params)
+    return batch
 
 
 def _spec(base, values: dict[str, float]):
@@ -214,7 +239,7 @@ def _spec(base, values: dict[str, float]):
                    label=", ".join(f"{n} = {v:.6g}" for n, v in values.items()))
 
 
-def _reported(model) -> list[str]:
+def reported(model) -> list[str]:
     """Every PRINT and OUTPUT variable of the first run, once each, in order."""
     names: list[str] = []
     for r in model.ir.runs[0].reports:
@@ -240,8 +265,9 @@ def values_limit(model, variables: list[str], runs: int, options) -> None:
                         "fewer --vars, or a coarser OUTDEL/PRDEL")
 
 
-def _gather(dists, samples, seed, variables, quantiles, members, errors, correlation,
-            interrupted, timed_out, params) -> MonteCarlo:
+def _gather(dists, samples, seed, variables, quantiles, batch: Batch, correlation,
+            params) -> MonteCarlo:
+    members, errors = batch.members, batch.errors
     runs = len(members)
     reference = max((m for m in members if m is not None), key=lambda m: len(m.times),
                     default=None)
@@ -283,4 +309,4 @@ def _gather(dists, samples, seed, variables, quantiles, members, errors, correla
         np.zeros(len(times), int)
     return MonteCarlo(dists, samples, seed, list(variables), quantiles, times, prdel, bands,
                       mean, counts, final, terminal_names, terminal, status, messages,
-                      correlation, interrupted, timed_out, params)
+                      correlation, batch.interrupted, batch.timed_out, params)

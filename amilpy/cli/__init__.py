@@ -75,11 +75,13 @@ def _data_option(p: argparse.ArgumentParser) -> None:
                         "run with residuals (see docs/fitting.md)")
 
 
-def _model_options(p: argparse.ArgumentParser, seed: str | None = None) -> None:
-    """The options of a run; `seed`: what --seed seeds, where not the random streams."""
+def _model_options(p: argparse.ArgumentParser, seed: str | None = None,
+                   method: str = "--method") -> None:
+    """The options of a run; `seed`: what --seed seeds, where not the random streams;
+    `method`: the integration method's flag, where --method names something else."""
     p.add_argument("--set", metavar="NAME=VALUE", action="append", default=[],
                    help="override a PARAM/CONST/INCON value for every run (repeatable)")
-    p.add_argument("--method", metavar="NAME", type=method_name,
+    p.add_argument(method, dest="method", metavar="NAME", type=method_name,
                    help="integration method, instead of METHOD: " + methods_help())
     p.add_argument("--compiled", dest="method", action="store_const", const="COMPILED",
                    help="the same as --method COMPILED (needs pip install 'amilpy[fast]'; "
@@ -229,6 +231,37 @@ def _parser() -> argparse.ArgumentParser:
                             "random streams keep its RNSEED)")
     mc.add_argument("--quiet", action="store_true", help="no printout, only files and errors")
     _farm_options(mc)
+
+    se = sub.add_parser("sensitivity", help="which data value matters: local coefficients "
+                                            "over time, or global Morris/Sobol indices")
+    se.add_argument("file", metavar="FILE", help="the listing (.amil)")
+    se.add_argument("--local", metavar="NAME", nargs="*",
+                    help="local sensitivities (P/Y) dY/dP over the run to these data "
+                         "values (default: the PARAM values), from the sensitivity "
+                         "equations")
+    se.add_argument("--method", dest="global_method", choices=("morris", "sobol"),
+                    help="global indices over --dist distributions instead")
+    se.add_argument("--dist", metavar="NAME=DIST", action="append", default=[],
+                    type=_dist_option, help="a data value's distribution (as montecarlo)")
+    se.add_argument("--runs", type=COUNT, metavar="N",
+                    help="Sobol: rows N (N(k+2) runs, N a power of two); Morris: "
+                         "trajectories r (r(k+1) runs)")
+    se.add_argument("--measure", metavar="SPEC", action="append", default=[],
+                    help="a global output: VAR (final value), VAR@T, max(VAR), min(VAR) "
+                         "or a TERMINAL name (repeatable; default the first PRINT/OUTPUT "
+                         "variable's final value)")
+    se.add_argument("--vars", type=variable_names, metavar="A,B",
+                    help="the variables of a local sensitivity (default: every PRINT and "
+                         "OUTPUT variable)")
+    se.add_argument("--out", metavar="DIR", help="where the PNGs go (default: next to the "
+                                                 "listing)")
+    writer_options(se, "sensitivity")
+    csv_dialect(se)
+    format_option(se)
+    _model_options(se, seed="seed of the global method's draws (a whole number, default 1)",
+                   method="--integrator")
+    se.add_argument("--quiet", action="store_true", help="no printout, only files and errors")
+    _farm_options(se)
 
     rep = sub.add_parser("report", help="a lab-report document: listing, data, equations, "
                                         "printouts, events, plots")
@@ -488,6 +521,49 @@ def cmd_montecarlo(args, path: str, signals: Signals) -> int:
                else EXIT_OK)
 
 
+def cmd_sensitivity(args, path: str, signals: Signals) -> int:
+    from ..output.sensitivity import indices_text, local_text
+
+    if args.global_method and args.local is not None:
+        raise UsageError("give --local or --method morris|sobol, not both")
+    if not args.global_method and (args.dist or args.measure):
+        raise UsageError("--dist and --measure are for global indices: add --method "
+                         "morris or --method sobol")
+    seed = 1 if args.seed is None else args.seed
+    if seed < 0 or seed != int(seed):
+        raise UsageError(f"--seed must be a whole number, 0 or more, got {args.seed:g}")
+    model, params = _load(args, path)
+    progress = Progress(not args.quiet)
+    progress.prefix = "sensitivity  "
+    try:
+        if args.global_method:
+            result = model.sensitivity(
+                method=args.global_method, dists=dict(args.dist), measures=args.measure,
+                runs=args.runs, seed=int(seed), method_ode=args.method, rtol=args.rtol,
+                atol=args.atol, fintim=args.fintim, jobs=_jobs(args),
+                scheduler=args.scheduler, progress=progress, max_time=args.max_time,
+                **params)
+        else:
+            result = model.sensitivity(args.local or None, outputs=args.vars,
+                                       method_ode=args.method, rtol=args.rtol,
+                                       atol=args.atol, **params)
+    finally:
+        progress.done()
+    stem, out_dir = stem_and_dir(path, args.out)
+    outputs = Outputs("sensitivity", stem, out_dir, analysis=result, model=model,
+                      dialect=args.csv_dialect, plot=figure_options(args))
+    written, errors = write_outputs(outputs, args, signals)
+    text = indices_text if args.global_method else local_text
+    if not args.quiet and not signals.held_back:
+        write_out(lambda out: out.write(text(result, model)))
+    code = finish(path, written, errors, args.quiet, signals)
+    failed = getattr(result, "failed", [])
+    if failed:
+        print(f"amilpy: {path}: {len(failed)} of {result.runs} runs failed (listed)",
+              file=sys.stderr)
+    return max(code, EXIT_FAILED if failed else EXIT_OK)
+
+
 def cmd_report(args, path: str, signals: Signals) -> int:
     from ..output.report import FORMATS, write_report
 
@@ -553,7 +629,7 @@ def write_overlay(args, signals: Signals) -> int:
 
 
 COMMANDS = {"run": cmd_run, "sweep": cmd_sweep, "montecarlo": cmd_montecarlo,
-            "report": cmd_report, "check": cmd_check}
+            "sensitivity": cmd_sensitivity, "report": cmd_report, "check": cmd_check}
 
 
 def _one(command, args, path: str, signals: Signals) -> int:

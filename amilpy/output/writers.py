@@ -196,6 +196,25 @@ def _montecarlo_png(o: Outputs, _path: str | None) -> list[str]:
                       o.plot.formats)
 
 
+def _sensitivity_csv(o: Outputs, path: str | None) -> list[str]:
+    from . import sheets
+    from .sensitivity import indices_csv, local_csv
+
+    rows = local_csv if hasattr(o.analysis, "normalised") else indices_csv
+    header, body = rows(o.analysis)
+    sheets.write_csv_rows(path, header, body, o.dialect)
+    return [path]
+
+
+def _sensitivity_png(o: Outputs, _path: str | None) -> list[str]:
+    from .analysis import figure_stem
+    from .sensitivity import plot_indices, plot_local
+
+    draw = plot_local if hasattr(o.analysis, "normalised") else plot_indices
+    return draw(o.analysis, figure_stem(o.out_dir, o.stem, "sensitivity"), o.model,
+                o.plot.formats)
+
+
 def _need_linear(o: Outputs, flag: str) -> None:
     from .files import OutputError
 
@@ -271,6 +290,12 @@ WRITERS: tuple[Writer, ...] = (
     Writer("montecarlo-png", "montecarlo", "--plot", False,
            "draw the bands (median line, quantiles shaded) of each OUTPUT statement as "
            "NAME_montecarlo_K.png next to the model or in --out", _montecarlo_png),
+    Writer("sensitivity-csv", "sensitivity", "--csv", True,
+           "write the sensitivities as CSV: local, TIME and per variable its value, "
+           "S_<VAR>_<P> and D_<VAR>_<P>; global, a row per output and value", _sensitivity_csv),
+    Writer("sensitivity-png", "sensitivity", "--plot", False,
+           "draw them: local, S against TIME per variable (NAME_sensitivity_VAR.png); "
+           "global, bars of the indices (NAME_sensitivity.png)", _sensitivity_png),
 )
 
 

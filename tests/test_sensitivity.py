@@ -1,0 +1,183 @@
+"""`amilpy sensitivity` / Model.sensitivity: local coefficients over time from the
+sensitivity equations, and global Sobol and Morris indices, against closed forms."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import amilpy
+from amilpy.cli import main
+from amilpy.diagnostics import UsageError
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "models" / "examples"
+
+DECAY = """TITLE DECAY
+PARAM K = 0.7, X0 = 2.0
+X = INTGRL(X0, -K*X)
+TIMER FINTIM = 2.0, OUTDEL = 0.1, PRDEL = 0.5
+PRINT X
+END
+"""
+
+SUM = """TITLE SUM OF TWO RATES
+PARAM K1 = 0.5, K2 = 1.0
+X = INTGRL(0.0, K1 + K2)
+TIMER FINTIM = 2.0, OUTDEL = 0.1
+PRINT X
+TERMINAL
+   XEND = X
+END
+"""
+
+
+@pytest.fixture
+def decay(tmp_path):
+    path = tmp_path / "decay.amil"
+    path.write_text(DECAY)
+    return path
+
+
+@pytest.fixture
+def rates(tmp_path):
+    path = tmp_path / "sum.amil"
+    path.write_text(SUM)
+    return path
+
+
+def test_local_coefficients_of_a_decay_are_minus_k_t_and_one(decay):
+    # X = X0 exp(-K t): (K/X) dX/dK = -K t, (X0/X) dX/dX0 = 1. The sensitivity
+    # equations are integrated with the run's steps (RELERR 1e-6): 1e-6.
+    loc = amilpy.load(decay).sensitivity()
+    assert loc.names == ["K", "X0"] and loc.how == "sensitivity equations"
+    s = loc.normalised
+    assert s[:, 0, 0] == pytest.approx(-0.7 * loc.times, abs=1e-6)
+    assert s[:, 0, 1] == pytest.approx(np.ones(len(loc.times)), abs=1e-6)
+    assert loc.raw[:, 0, 0] == pytest.approx(-loc.times * 2.0 * np.exp(-0.7 * loc.times),
+                                             abs=1e-6)
+
+
+SWITCHED = """TITLE A RATE THAT STARTS AT TS
+PARAM A = 3.0, TS = 0.4
+X = INTGRL(0.0, INSW(TIME - TS, 0.0, A))
+TIMER FINTIM = 1.0, OUTDEL = 0.1
+PRINT X
+END
+"""
+
+
+def test_local_sensitivity_through_a_switching_instant(tmp_path):
+    # X = A (t - TS) after TS: dX/dA = t - TS, dX/dTS = -A, differentiated through
+    # the moving switch (its surface depends on TS): exact on this piecewise-linear
+    # flow, 1e-9.
+    path = tmp_path / "switched.amil"
+    path.write_text(SWITCHED)
+    # (At t = TS itself X is not differentiable in TS: the row there is left out.)
+    loc = amilpy.load(path).sensitivity(["A", "TS"])
+    after = loc.times > 0.4 + 1e-9
+    before = loc.times < 0.4 - 1e-9
+    assert loc.raw[after, 0, 0] == pytest.approx(loc.times[after] - 0.4, abs=1e-9)
+    assert loc.raw[after, 0, 1] == pytest.approx(np.full(int(np.sum(after)), -3.0), abs=1e-9)
+    assert loc.raw[before, 0, :] == pytest.approx(np.zeros((int(np.sum(before)), 2)),
+                                                  abs=1e-12)
+
+
+def test_an_acsl_program_is_differenced_and_says_so():
+    # CP = AB/VD: (VD/CP) dCP/dVD = -1 exactly; central differences of whole runs
+    # with h = cbrt(RELERR) |VD| are off by about h^2 = 1e-4.
+    loc = amilpy.load(EXAMPLES / "oral_dosing.csl").sensitivity(["VD"], outputs=["CP"])
+    assert loc.how.startswith("differences of whole runs")
+    s = loc.normalised[1:, 0, 0]  # (CP = 0 at the start)
+    assert s == pytest.approx(np.full(len(s), -1.0), abs=2e-4)
+
+
+def test_sobol_indices_of_a_sum_are_its_variance_shares(rates):
+    # X(T) = T (K1 + K2), K1 ~ U(0, 1), K2 ~ U(0, 2): V(K1) = 1/12, V(K2) = 4/12, so
+    # S1 = ST1 = 0.2, S2 = ST2 = 0.8 (additive: first order = total). N = 512 rows;
+    # the estimators of an additive model are within 0.01 here, and the bootstrap
+    # intervals hold the exact values.
+    ind = amilpy.load(rates).sensitivity(method="sobol", dists={
+        "K1": "uniform(0, 1)", "K2": "uniform(0, 2)"}, measures=["X", "XEND", "X@1"],
+        runs=512, seed=3)
+    assert ind.runs == 512 * 4 and not ind.failed
+    for m in range(3):
+        assert ind.first[m] == pytest.approx([0.2, 0.8], abs=0.01)
+        assert ind.total[m] == pytest.approx([0.2, 0.8], abs=0.01)
+        for j, exact in enumerate([0.2, 0.8]):
+            assert ind.first_ci[m, j, 0] <= exact <= ind.first_ci[m, j, 1]
+            assert ind.total_ci[m, j, 0] <= exact <= ind.total_ci[m, j, 1]
+    assert ind.variance[0] == pytest.approx(4.0 * 5 / 12, rel=0.05)  # T^2 (1/12 + 4/12)
+
+
+def test_morris_effects_of_a_linear_output_are_its_slopes(rates):
+    # X(2) = 2 (K1 + K2): an effect is dX/du = 2 (b - a): 2 for K1, 4 for K2, with
+    # no spread (sigma 0 to rounding); max(X) is the same (X grows).
+    ind = amilpy.load(rates).sensitivity(method="morris", dists={
+        "K1": "uniform(0, 1)", "K2": "uniform(0, 2)"}, measures=["X", "max(X)"],
+        runs=12, seed=1)
+    assert ind.runs == 12 * 3
+    assert ind.mu_star == pytest.approx(np.array([[2.0, 4.0], [2.0, 4.0]]), rel=1e-9)
+    assert ind.mu == pytest.approx(ind.mu_star, rel=1e-9)
+    assert np.all(ind.sigma < 1e-9)
+
+
+def test_global_indices_are_the_same_whatever_the_workers(rates):
+    kw = dict(method="sobol", dists={"K1": "normal(1, 0.2)", "K2": "lognormal(0, 0.3)"},
+              measures=["X"], runs=64, seed=5)
+    one = amilpy.load(rates).sensitivity(jobs=1, **kw)
+    two = amilpy.load(rates).sensitivity(jobs=2, **kw)
+    assert np.array_equal(one.values, two.values)
+    assert np.array_equal(one.first, two.first) and np.array_equal(one.total, two.total)
+
+
+def test_sensitivity_commands_write_csv_and_figures(decay, rates, tmp_path, capsys):
+    local_csv = tmp_path / "local.csv"
+    assert main(["sensitivity", str(decay), "--local", "K", "--csv", str(local_csv),
+                 "--plot", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("LOCAL SENSITIVITIES OF DECAY") and "S AT THE PRDEL" in out
+    with open(local_csv, newline="") as fh:
+        rows = list(csv.reader(fh))
+    assert rows[0] == ["TIME", "X", "S_X_K", "D_X_K"]
+    assert float(rows[-1][2]) == pytest.approx(-0.7 * 2.0, abs=1e-6)
+    assert (tmp_path / "decay_sensitivity_X.png").exists()
+    global_csv = tmp_path / "global.csv"
+    assert main(["sensitivity", str(rates), "--method", "morris", "--dist",
+                 "K1=uniform(0,1)", "--dist", "K2=uniform(0,2)", "--runs", "4",
+                 "--csv", str(global_csv), "--plot", "--out", str(tmp_path),
+                 "--jobs", "1"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("MORRIS ELEMENTARY EFFECTS OF SUM OF TWO RATES")
+    with open(global_csv, newline="") as fh:
+        rows = list(csv.reader(fh))
+    assert rows[0] == ["MEASURE", "NAME", "MU_STAR", "MU", "SIGMA"]
+    assert [r[1] for r in rows[1:]] == ["K1", "K2"]
+    assert (tmp_path / "sum_sensitivity.png").exists()
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--local", "K", "--method", "sobol", "--dist", "K=uniform(0,1)", "--runs", "8"],
+     "not both"),
+    (["--dist", "K=uniform(0,1)"], "add --method"),
+    (["--method", "sobol", "--runs", "8"], "--dist NAME=DIST"),
+    (["--method", "sobol", "--dist", "K=uniform(0,1)"], "give the number of runs"),
+    (["--method", "sobol", "--dist", "K=uniform(0,1)", "--runs", "8", "--measure", "X@0.55"],
+     "not an output instant"),
+    (["--method", "morris", "--dist", "K=uniform(0,1)", "--runs", "8", "--measure", "Q"],
+     "Q is not a variable"),
+    (["--local", "NOPE"], "--local NOPE: not a PARAM"),
+])
+def test_sensitivity_usage_errors(decay, capsys, argv, message):
+    assert main(["sensitivity", str(decay), "--jobs", "1", *argv]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_a_table_is_no_distribution_for_global_indices(rates, tmp_path):
+    table = tmp_path / "t.csv"
+    table.write_text("K1\n1\n2\n")
+    with pytest.raises(UsageError, match="not table"):
+        amilpy.load(rates).sensitivity(method="sobol", dists={"K1": f"table({table})"},
+                                       runs=4)
