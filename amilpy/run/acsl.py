@@ -133,9 +133,19 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
     ckey = ("acsl", tuple(sorted(constants.items())), tuple(kept.items()),
             tuple(sorted(priors.items())), repr(sorted(spec.tables.items())),
             tuple(opts.outputs) if opts.outputs is not None else None, opts.events, setting)
-    code = cache.get("bound", ckey, lambda: Compiler(
+    # a run whose data values (and what INITIAL works out) alone differ binds the code
+    # built for another, as in CSMP form (a Monte Carlo, a sweep: no compile per run);
+    # the written-order code reads them by name, so nothing of them is folded in
+    params = frozenset(model.data_names) | frozenset(
+        n for code in acsl.initial for n in code.assigned)
+    skey = ("acsl", tuple(sorted((k, v) for k, v in constants.items() if k not in params)),
+            tuple(sorted(const_modes.items())), tuple(kept.items()),
+            tuple(sorted(priors.items())), repr(sorted(spec.tables.items())),
+            tuple(opts.outputs) if opts.outputs is not None else None, opts.events, setting)
+    code = cache.get("bound", ckey, lambda: cache.get("code", skey, lambda: Compiler(
         model, constants, spec.tables, const_modes, opts.outputs, opts.events,
-        setting=setting, kept=kept, priors=priors).build())
+        setting=setting, kept=kept, priors=priors, parameters=params).build()
+    ).rebound(constants))
     t0 = acsl.t0
     # the rows a run keeps: MAX_INTERVALS, fewer when many variables would make them
     # more values than any run keeps (a CSMP run is refused before it starts likewise)
