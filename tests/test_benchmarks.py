@@ -300,3 +300,27 @@ def test_response_vs_sweep_reads_every_jump_of_each_direction():
     errors, jumps = rvs.sweep_errors(Swept(), {})
     assert len(errors) == 0
     assert jumps == [("up", 72.0, 72.05), ("up", 72.85, 72.9), ("down", 67.85, 67.8)]
+
+
+def test_ensembles_routes_agree_with_the_closed_form():
+    """The ensemble benchmark's hand-written routes and its closed form (a Bateman
+    curve per dose) agree to their tolerances on 5 members, and amilpy's Monte Carlo
+    of the same draws ends where the closed form does (1e-9)."""
+    import ensembles
+    import numpy as np
+
+    import amilpy
+
+    ke, vd = ensembles.draws(5)
+    t = np.arange(0.0, ensembles.TSTOP + 1e-9, ensembles.CINT)
+    ref = ensembles.exact(ke, vd, t)
+    for route in (ensembles.odeint_each, ensembles.odeint_stacked):
+        out = route(ke, vd, t, 1e-10, 1e-13)
+        assert np.max(np.abs(out - ref)[:, 1:] / ref[:, 1:]) < 1e-8
+    model = amilpy.load(os.path.join(os.path.dirname(BENCH), "models", "examples",
+                                     "oral_dosing.csl"))
+    mc = model.montecarlo({"KE": "lognormal(-1.754, 0.25)", "VD": "lognormal(3.738, 0.2)"},
+                          runs=5, seed=1, outputs=["CP"])
+    assert mc.samples["KE"] == pytest.approx(ke, rel=0) and mc.samples["VD"] == pytest.approx(
+        vd, rel=0)
+    assert mc.final[:, 0] == pytest.approx(ref[:, -1], rel=1e-9)
