@@ -23,6 +23,7 @@ import numpy as np
 
 from ..observed import Observations
 from ..run.flow import FlowFailed
+from ..run.plan import SAME_INSTANT
 from ..run.variational import ParameterTangent
 
 STEP = 6e-6  # ~ cbrt(machine epsilon): central differences of the generated functions
@@ -60,21 +61,54 @@ def _run_jacobian(model, obs: Observations, k: int, names, values, params, optio
     return (np.array(rows).reshape(len(rows), len(names))), ""
 
 
+class _Sampler:
+    """An observer of the flow's steps that cuts each at the instants asked for and
+    keeps the state and the tangent there (`Trajectory.at`)."""
+
+    def __init__(self, tangent: ParameterTangent, times: np.ndarray, n: int) -> None:
+        self.tangent, self.times, self.n = tangent, times, n
+        self.at: dict[float, tuple] = {}
+
+    def __call__(self, ta: float, tb: float, interp, m, z) -> None:
+        from ..run import State
+
+        lo = int(np.searchsorted(self.times, ta, side="right"))
+        hi = int(np.searchsorted(self.times, tb, side="right"))
+        t = ta
+        for tk in self.times[lo:hi].tolist():
+            if tk in self.at:
+                continue
+            self.tangent(t, tk, interp, m, z)
+            if self.tangent.failed is not None:
+                return
+            y = np.asarray(interp(tk), dtype=float)
+            self.at[tk] = (State(y, tuple(m), tuple(z), tk), self.tangent.phi[:self.n].copy())
+            t = tk
+        if tb > t:
+            self.tangent(t, tb, interp, m, z)
+
+
 class Trajectory:
     """d y(t)/d p along one run at given instants (`trajectory`), and of any output."""
 
-    def __init__(self, code, variants, floor, at: dict[float, tuple]) -> None:
-        self.code, self.variants, self.floor, self.at = code, variants, floor, at
-        self.states = {name: i for i, name in enumerate(code.state_names)}
-        self.outputs = {name: i for i, name in enumerate(code.out_names)}
+    def __init__(self, flow, variants, floor, at: dict[float, tuple]) -> None:
+        self.flow, self.code = flow, flow.code
+        self.variants, self.floor, self.at = variants, floor, at
+        self.states = {name: i for i, name in enumerate(self.code.state_names)}
+        self.outputs = {name: i for i, name in enumerate(self.code.out_names)}
+        self._rows: dict[float, object] = {}
 
     def row(self, name: str, t: float) -> np.ndarray:
         """d name(t) / d p, a value per data value."""
         state, sens = self.at[t]
         if name in self.states:
             return sens[self.states[name]]
-        return _output_row(self.code, self.variants, self.outputs[name], t, state, sens,
-                           self.floor)
+        if t not in self._rows:
+            # the branches at t chosen afresh, as the run's row there has them: a switch
+            # on TIME due exactly at t is taken (the step that ends at t has the old one)
+            self._rows[t] = self.flow.state(state.y, None, state.memory, t)
+        return _output_row(self.code, self.variants, self.outputs[name], t, self._rows[t],
+                           sens, self.floor)
 
 
 def trajectory(model, k: int, names: list[str], data: dict[str, float], options: dict,
@@ -106,22 +140,20 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
     floor = np.broadcast_to(np.asarray(flow.plan.tol.atol / flow.plan.tol.rtol, dtype=float),
                             (n,))
     tangent = ParameterTangent(c, flow.watch, floor, dy0, variants)
-    at: dict[float, tuple] = {}
-    state, t = start, start.t
-    for tk in np.asarray(times, dtype=float).tolist():
-        if tk > t:
-            state, _ = flow.advance(state, t, tk, observer=tangent)
-            if tangent.failed is not None:
-                return tangent.failed
-            if state.t < tk * (1 - 1e-12) - 1e-300:
-                return f"the run stops at TIME = {state.t:.9g}"
-            t = tk
-            # the branches at tk chosen afresh, as at a start: a switch on TIME due
-            # exactly at tk is taken (the next advance would start on its surface and
-            # keep the old branch); the tangent's jump follows from the change
-            state = flow.state(state.y, None, state.memory, tk)
-        at[tk] = (state, tangent.phi[:n].copy())
-    return Trajectory(c, variants, floor, at)
+    times = np.asarray(times, dtype=float)
+    sampler = _Sampler(tangent, times, n)
+    at: dict[float, tuple] = sampler.at
+    if len(times) and times[0] <= start.t + SAME_INSTANT * max(1.0, abs(start.t)):
+        at[float(times[0])] = (start, tangent.phi[:n].copy())
+    if len(times) and times[-1] > start.t:
+        # one integration over the whole span, as the run's: the tangent is read inside
+        # the steps at the instants asked for (no restart at each of them)
+        end, _ = flow.advance(start, start.t, float(times[-1]), observer=sampler)
+        if tangent.failed is not None:
+            return tangent.failed
+        if end.t < times[-1] * (1 - 1e-12) - 1e-300:
+            return f"the run stops at TIME = {end.t:.9g}"
+    return Trajectory(flow, variants, floor, at)
 
 
 def _output_row(c, variants, i: int, t: float, state, sens: np.ndarray, floor: np.ndarray
@@ -166,14 +198,17 @@ class Local:
         return out
 
     def largest(self) -> np.ndarray:
-        """(variables, names): the largest |normalised| coefficient over the run."""
-        norm = np.abs(self.normalised)
-        out = np.full(norm.shape[1:], np.nan)
-        for i in range(norm.shape[1]):
-            for j in range(norm.shape[2]):
-                col = norm[:, i, j]
-                if np.any(np.isfinite(col)):
-                    out[i, j] = float(np.nanmax(col))
+        """(variables, names): the largest |P dY/dP| over the run relative to the
+        largest |Y| (a coefficient over Y's scale: near a zero of Y the pointwise
+        one grows without bound)."""
+        p = np.array([self.values[n] for n in self.names])
+        with np.errstate(all="ignore"):
+            top = np.nanmax(np.abs(self.y), axis=0) if len(self.y) else \
+                np.full(len(self.variables), np.nan)
+            effect = np.nanmax(np.abs(self.raw * p[None, None, :]), axis=0) \
+                if len(self.raw) else np.full((len(self.variables), len(p)), np.nan)
+            out = effect / top[:, None]
+        out[~np.isfinite(out)] = np.nan
         return out
 
 

@@ -31,7 +31,8 @@ def local_text(loc, model=None) -> str:
              "S = (P / Y) dY/dP: the percent change of Y per percent change of P, at "
              + ", ".join(f"{n} = {v:.6g}" for n, v in loc.values.items()),
              f"from the {loc.how}", "",
-             "LARGEST |S| OVER THE RUN" ,
+             "LARGEST |P dY/dP| OVER THE RUN, OVER THE LARGEST |Y| (the ranking: S itself "
+             "grows without bound near a zero of Y)",
              f"{'':<12}" + "".join(f"{n:>14}" for n in loc.names)]
     big = loc.largest()
     for i, v in enumerate(loc.variables):

@@ -349,8 +349,13 @@ def make_grid(t0: float, fintim: float, outdel: float, prdel: float,
     else:
         go = _grid(t0, fintim, outdel)
         gp = _grid(t0, fintim, prdel)
-        times = np.union1d(go, gp)
-        grid = Grid(times, np.isin(times, go), np.isin(times, gp))
+        # a PRDEL instant that rounds within SAME_INSTANT of an OUTDEL one (3*0.05 and
+        # 150*0.001) is that instant: one row, not two 3E-17 apart
+        pick, same = nearest_instants(go, gp)
+        own = gp[~same]
+        times = np.union1d(go, own)
+        grid = Grid(times, np.isin(times, go), np.isin(times, go[pick[same]]) |
+                    np.isin(times, own))
     if not extra:
         return grid
     more = np.asarray(extra, dtype=float)
