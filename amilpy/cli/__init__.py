@@ -463,6 +463,14 @@ def _dist_option(text: str) -> tuple[str, str]:
     return name.strip().upper(), dist.strip()
 
 
+def _draw_seed(args) -> int:
+    """--seed of the draws (montecarlo, sensitivity): a whole number, 0 or more."""
+    seed = 1 if args.seed is None else args.seed
+    if seed < 0 or seed != int(seed):
+        raise UsageError(f"--seed must be a whole number, 0 or more, got {args.seed:g}")
+    return int(seed)
+
+
 def _correlations(items: list[str]) -> dict[tuple[str, str], float]:
     out = {}
     for item in items:
@@ -485,14 +493,12 @@ def cmd_montecarlo(args, path: str, signals: Signals) -> int:
     quantiles = parse_quantiles(args.quantiles)
     correlation = _correlations(args.correlate)
     model, params = _load(args, path)
-    seed = 1 if args.seed is None else args.seed
-    if seed < 0 or seed != int(seed):
-        raise UsageError(f"--seed must be a whole number, 0 or more, got {args.seed:g}")
+    seed = _draw_seed(args)
     dists = dict(args.dist)
     progress = Progress(not args.quiet)
     progress.prefix = "montecarlo  "
     try:
-        result = model.montecarlo(dists, args.runs, int(seed), quantiles=quantiles,
+        result = model.montecarlo(dists, args.runs, seed, quantiles=quantiles,
                                   correlation=correlation, outputs=args.vars,
                                   method=args.method, rtol=args.rtol, atol=args.atol,
                                   fintim=args.fintim, jobs=_jobs(args),
@@ -529,9 +535,7 @@ def cmd_sensitivity(args, path: str, signals: Signals) -> int:
     if not args.global_method and (args.dist or args.measure):
         raise UsageError("--dist and --measure are for global indices: add --method "
                          "morris or --method sobol")
-    seed = 1 if args.seed is None else args.seed
-    if seed < 0 or seed != int(seed):
-        raise UsageError(f"--seed must be a whole number, 0 or more, got {args.seed:g}")
+    seed = _draw_seed(args)
     model, params = _load(args, path)
     progress = Progress(not args.quiet)
     progress.prefix = "sensitivity  "
@@ -539,7 +543,7 @@ def cmd_sensitivity(args, path: str, signals: Signals) -> int:
         if args.global_method:
             result = model.sensitivity(
                 method=args.global_method, dists=dict(args.dist), measures=args.measure,
-                runs=args.runs, seed=int(seed), method_ode=args.method, rtol=args.rtol,
+                runs=args.runs, seed=seed, method_ode=args.method, rtol=args.rtol,
                 atol=args.atol, fintim=args.fintim, jobs=_jobs(args),
                 scheduler=args.scheduler, progress=progress, max_time=args.max_time,
                 **params)

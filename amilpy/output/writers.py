@@ -103,15 +103,6 @@ def _analysis_png(o: Outputs, _path: str | None) -> list[str]:
                 formats=o.plot.formats)
 
 
-def _fit_csv(o: Outputs, path: str | None) -> list[str]:
-    from . import sheets
-    from .fitting import fit_csv
-
-    header, rows = fit_csv(o.analysis)
-    sheets.write_csv_rows(path, header, rows, o.dialect)
-    return [path]
-
-
 def _fit_png(o: Outputs, _path: str | None) -> list[str]:
     from .plot import plot_runs
     from .words import name_notes
@@ -128,23 +119,22 @@ def _fit_listing(o: Outputs, path: str | None) -> list[str]:
     return [path]
 
 
-def _steady_csv(o: Outputs, path: str | None) -> list[str]:
-    from . import sheets
-    from .steady import steady_csv
+def _csv_of(module: str, rows: str, comments=None, needs: str | None = None):
+    """A writer of one CSV table: `rows(o.analysis)` of amilpy.output.<module> gives
+    (header, rows); `comments(o.analysis)` the lines above them; `needs`: the flag
+    that needs the linear model (`_need_linear`)."""
+    def write(o: Outputs, path: str | None) -> list[str]:
+        from importlib import import_module
 
-    header, body = steady_csv(o.analysis)
-    sheets.write_csv_rows(path, header, body, o.dialect)
-    return [path]
+        from . import sheets
 
-
-def _steady_matrices(o: Outputs, path: str | None) -> list[str]:
-    from . import sheets
-    from .steady import matrices_csv
-
-    _need_linear(o, "--matrices")
-    header, body = matrices_csv(o.analysis)
-    sheets.write_csv_rows(path, header, body, o.dialect)
-    return [path]
+        if needs:
+            _need_linear(o, needs)
+        header, body = getattr(import_module(f"amilpy.output.{module}"), rows)(o.analysis)
+        sheets.write_csv_rows(path, header, body, o.dialect,
+                              comments(o.analysis) if comments else ())
+        return [path]
+    return write
 
 
 def _steady_npz(o: Outputs, path: str | None) -> list[str]:
@@ -164,24 +154,6 @@ def _steady_bode(o: Outputs, _path: str | None) -> list[str]:
                      o.plot.formats)
 
 
-def _montecarlo_csv(o: Outputs, path: str | None) -> list[str]:
-    from . import sheets
-    from .montecarlo import bands_csv
-
-    header, body = bands_csv(o.analysis)
-    sheets.write_csv_rows(path, header, body, o.dialect, _partial(o.analysis))
-    return [path]
-
-
-def _montecarlo_samples(o: Outputs, path: str | None) -> list[str]:
-    from . import sheets
-    from .montecarlo import samples_csv
-
-    header, body = samples_csv(o.analysis)
-    sheets.write_csv_rows(path, header, body, o.dialect, _partial(o.analysis))
-    return [path]
-
-
 def _partial(mc) -> list[str]:
     if mc.done < mc.runs:
         return [f"partial: {mc.done} of the {mc.runs} runs were done"]
@@ -196,14 +168,10 @@ def _montecarlo_png(o: Outputs, _path: str | None) -> list[str]:
                       o.plot.formats)
 
 
-def _sensitivity_csv(o: Outputs, path: str | None) -> list[str]:
-    from . import sheets
+def _sensitivity_rows(result):
     from .sensitivity import indices_csv, local_csv
 
-    rows = local_csv if hasattr(o.analysis, "normalised") else indices_csv
-    header, body = rows(o.analysis)
-    sheets.write_csv_rows(path, header, body, o.dialect)
-    return [path]
+    return (local_csv if hasattr(result, "normalised") else indices_csv)(result)
 
 
 def _sensitivity_png(o: Outputs, _path: str | None) -> list[str]:
@@ -262,7 +230,7 @@ WRITERS: tuple[Writer, ...] = (
            _analysis_png),
     Writer("fit-csv", "fit", "--csv", True,
            "write the estimates as CSV: NAME, START, ESTIMATE, SE, LOWER95, UPPER95",
-           _fit_csv),
+           _csv_of("fitting", "fit_csv")),
     Writer("fit-png", "fit", "--plot", False,
            "draw the fitted runs with the observations as NAME_fit_K.png next to the "
            "model or in --out", _fit_png),
@@ -271,10 +239,10 @@ WRITERS: tuple[Writer, ...] = (
            _fit_listing),
     Writer("steady-csv", "steady", "--csv", True,
            "write the equilibrium as CSV: NAME, VALUE, RATE, ROLE (solved, held, free)",
-           _steady_csv),
+           _csv_of("steady", "steady_csv")),
     Writer("steady-matrices", "steady", "--matrices", True,
            "write A, B, C, D of the linear model (--input, --output) as CSV in long form: "
-           "MATRIX, ROW, COLUMN, VALUE", _steady_matrices),
+           "MATRIX, ROW, COLUMN, VALUE", _csv_of("steady", "matrices_csv", needs="--matrices")),
     Writer("steady-npz", "steady", "--npz", True,
            "write the equilibrium, its eigenvalues and A, B, C, D with their names as a "
            "NumPy .npz (numpy.load)", _steady_npz),
@@ -283,16 +251,18 @@ WRITERS: tuple[Writer, ...] = (
            "next to the model or in --out", _steady_bode),
     Writer("montecarlo-csv", "montecarlo", "--csv", True,
            "write the bands as CSV on the output grid: TIME, NAME_MEAN and NAME_P<q> of "
-           "each variable, RUNS", _montecarlo_csv),
+           "each variable, RUNS", _csv_of("montecarlo", "bands_csv", _partial)),
     Writer("montecarlo-samples", "montecarlo", "--samples", True,
            "write every run as CSV: RUN, STATUS, the drawn values, FINAL_<NAME>, the "
-           "TERMINAL values, a failed run's MESSAGE", _montecarlo_samples),
+           "TERMINAL values, a failed run's MESSAGE",
+           _csv_of("montecarlo", "samples_csv", _partial)),
     Writer("montecarlo-png", "montecarlo", "--plot", False,
            "draw the bands (median line, quantiles shaded) of each OUTPUT statement as "
            "NAME_montecarlo_K.png next to the model or in --out", _montecarlo_png),
     Writer("sensitivity-csv", "sensitivity", "--csv", True,
            "write the sensitivities as CSV: local, TIME and per variable its value, "
-           "S_<VAR>_<P> and D_<VAR>_<P>; global, a row per output and value", _sensitivity_csv),
+           "S_<VAR>_<P> and D_<VAR>_<P>; global, a row per output and value",
+           _csv_of("writers", "_sensitivity_rows")),
     Writer("sensitivity-png", "sensitivity", "--plot", False,
            "draw them: local, S against TIME per variable (NAME_sensitivity_VAR.png); "
            "global, bars of the indices (NAME_sensitivity.png)", _sensitivity_png),
