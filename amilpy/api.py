@@ -392,7 +392,8 @@ class Model:
                    fintim: float | None = None, jobs: int = 1, scheduler: str | None = None,
                    progress=None, max_time: float | None = None,
                    max_steps: int | None = None, max_events: int | None = None,
-                   weather_dir: str | list[str] | None = None, **params: float):
+                   weather_dir: str | list[str] | None = None, stacked: bool = True,
+                   **params: float):
         """A Monte Carlo (`amilpy.batch.montecarlo`): `runs` runs of the listing's
         first run with each data value in `dists` drawn from its distribution (a
         `batch.distributions.Dist` or its text, "lognormal(0, 0.2)"; `runs` may be
@@ -402,7 +403,9 @@ class Model:
         variable), quantiles of final and TERMINAL values, failed runs with their
         values. The same for a seed whatever `jobs`/`scheduler`. `max_time`:
         wall-clock seconds for the whole study (the runs done by then are kept;
-        each run is bounded by it too)."""
+        each run is bounded by it too). `stacked`: where the runs share their
+        switching instants (none switches on its own), integrate them all at once
+        (`batch.stacked`); False runs them one by one."""
         from .batch.distributions import Dist, parse_dist, table_rows
         from .batch.montecarlo import montecarlo
         from .output.views import install
@@ -439,7 +442,8 @@ class Model:
         return montecarlo(self, parsed, int(runs), seed, quantiles=tuple(quantiles),
                           correlation=pairs, names=variables, options=opts, jobs=jobs,
                           scheduler=scheduler, progress=progress, max_time=max_time,
-                          params={k.upper(): float(v) for k, v in params.items()})
+                          params={k.upper(): float(v) for k, v in params.items()},
+                          stacked=stacked)
 
     def sensitivity(self, names=None, *, method: str = "local", dists: dict | None = None,
                     measures=(), runs: int | None = None, seed: int = 1,

@@ -146,11 +146,12 @@ def montecarlo(model, dists: dict[str, Dist], runs: int, seed: int, *,
                quantiles=QUANTILES, correlation=None, names: list[str] | None = None,
                options=None, jobs: int = 1, scheduler: str | None = None,
                progress=None, max_time: float | None = None,
-               params: dict[str, float] | None = None) -> MonteCarlo:
+               params: dict[str, float] | None = None, stacked: bool = True) -> MonteCarlo:
     """The Monte Carlo of `model` (an api.Model): `runs` runs of its first run's data
     (with `params`) and each name's value drawn from `dists`; `options` a
     run.Options (method, tolerances, limits) for every run; `max_time` wall-clock
-    seconds for the whole study (the runs done by then are kept)."""
+    seconds for the whole study (the runs done by then are kept); `stacked`: all
+    runs integrated at once where they can be (`stacked.py`)."""
     params = dict(params or {})
     if runs < 1:
         raise UsageError(f"--runs must be at least 1, got {runs}")
@@ -160,7 +161,7 @@ def montecarlo(model, dists: dict[str, Dist], runs: int, seed: int, *,
     variables = names or reported(model)
     values_limit(model, variables, runs, options)
     batch = run_sets(model, samples, variables, options, jobs=jobs, scheduler=scheduler,
-                     progress=progress, max_time=max_time, params=params)
+                     progress=progress, max_time=max_time, params=params, stacked=stacked)
     return _gather(dists, samples, seed, variables, tuple(quantiles), batch, correlation,
                    params)
 
@@ -191,14 +192,23 @@ class Batch:
 
 def run_sets(model, sets: dict[str, np.ndarray], variables: list[str], options, *,
              jobs: int = 1, scheduler: str | None = None, progress=None,
-             max_time: float | None = None, params: dict[str, float] | None = None
-             ) -> Batch:
+             max_time: float | None = None, params: dict[str, float] | None = None,
+             stacked: bool = True) -> Batch:
     """Run the model's first run (with `params`) once per set of values (`sets`: name
-    -> a value per run), on `jobs` workers or `scheduler`, in chunks; each run comes
-    back as a Member of `variables` (and the extrema `options.extrema` asks for)."""
+    -> a value per run): all at once where they can be (`stacked.py`; not with
+    `stacked=False`), else on `jobs` workers or `scheduler`, in chunks; each run
+    comes back as a Member of `variables` (and the extrema `options.extrema` asks
+    for)."""
     from .farm import Task, default_jobs, farm
 
     runs = len(next(iter(sets.values()))) if sets else 0
+    if stacked:
+        from .stacked import run_stacked
+
+        together = run_stacked(model, sets, variables, options, dict(params or {}))
+        if together is not None:
+            report(progress, "runs", runs, runs)
+            return together
     opts = replace(options, outputs=[v for v in variables if v in model.ir.variables],
                    progress=None)
     base = model._specs(dict(params or {}))[0]

@@ -221,6 +221,9 @@ def _parser() -> argparse.ArgumentParser:
                          "copula; repeatable)")
     mc.add_argument("--vars", type=variable_names, metavar="A,B",
                     help="the variables (default: every PRINT and OUTPUT variable)")
+    mc.add_argument("--one-by-one", action="store_true",
+                    help="run the members one by one even where none switches on its own "
+                         "and they could be integrated at once (to compare the two)")
     mc.add_argument("--out", metavar="DIR", help="where the PNGs go (default: next to the "
                                                  "listing)")
     writer_options(mc, "montecarlo")
@@ -505,7 +508,8 @@ def cmd_montecarlo(args, path: str, signals: Signals) -> int:
                                   scheduler=args.scheduler, progress=progress,
                                   max_time=args.max_time, max_steps=args.max_steps,
                                   max_events=args.max_events,
-                                  weather_dir=args.weather_dir or None, **params)
+                                  weather_dir=args.weather_dir or None,
+                                  stacked=not args.one_by_one, **params)
     finally:
         progress.done()
     stem, out_dir = stem_and_dir(path, args.out)

@@ -493,6 +493,24 @@ class Compiler:
             self._source = py.unparse(self.module)
         return self._source
 
+    def over_members(self, values: dict[str, object]) -> tuple[Callable, Callable]:
+        """(rhs, out) over NumPy columns whose parameters are arrays as well, an element
+        per member of an ensemble integrated at once (`batch.stacked`): the generated
+        right-hand side made elementwise (compiled once per build) and the outputs'
+        own elementwise copy, run with `values` (every parameter's array)."""
+        if "rhs_vec" not in self.shared:
+            rhs = next(f for f in self.module.body if getattr(f, "name", "") == "rhs")
+            module = py.Module(body=[vectorised(rhs, "rhs_vec")], type_ignores=[])
+            self.shared["rhs_vec"] = compile(py.fix_missing_locations(module),
+                                             self.model.path or self.model.name, "exec")
+        vector: dict[str, object] = {"__builtins__": {}, STATEMENTS: self.statements}
+        vector.update({f"_{k}": v for k, v in vector_functions().items()})
+        vector.update(self.global_tables)
+        vector.update({parameter(n): v for n, v in values.items()})
+        exec(self.code, vector)  # noqa: S102 - compiler-built tree, closed namespace
+        exec(self.shared["rhs_vec"], vector)  # noqa: S102 - the same, elementwise
+        return vector["rhs_vec"], vector["out_vec"]
+
     def bind(self, constants: dict[str, float]) -> ModelCode:
         """The built code for one run's constants: executed with its parameters' values
         (cheap: it defines the functions), and the values that depend on them."""
