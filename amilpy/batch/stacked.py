@@ -41,6 +41,8 @@ def why_not(model, code, plan, opts) -> str | None:
         return "a fixed-step route"
     if code.watched:
         return "the members switch at their own instants"
+    if ir.units:
+        return "statements (IF blocks, loops) run one row at a time"
     if code.z0 or ir.memories or ir.weather or code.sample is not None or \
             code.memory_trains or code.seen_times:
         return "memory functions, delays, random draws or weather"
@@ -113,16 +115,20 @@ def run_stacked(model, sets: dict[str, np.ndarray], variables: list[str], option
         return np.repeat(np.broadcast_to(np.asarray(x, dtype=float), (n,)), runs)
 
     times = plan.grid.times
-    with np.errstate(all="ignore"):
-        sol, info = odeint(f, y0.reshape(-1), times, rtol=per_state(plan.tol.rtol),
-                           atol=per_state(plan.tol.atol), mxstep=MXSTEP,
-                           hmax=plan.max_step if math.isfinite(plan.max_step) else 0.0,
-                           full_output=True)
+    try:
+        with np.errstate(all="ignore"):
+            sol, info = odeint(f, y0.reshape(-1), times, rtol=per_state(plan.tol.rtol),
+                               atol=per_state(plan.tol.atol), mxstep=MXSTEP,
+                               hmax=plan.max_step if math.isfinite(plan.max_step) else 0.0,
+                               full_output=True)
+            ys = sol.reshape(len(times), n, runs)  # (times, states, members)
+            outs = out(times[:, None], [ys[:, i, :] for i in range(n)], [], [])
+    except (ArithmeticError, ValueError, TypeError):
+        # (a function with no elementwise form, a fault: the members one by one, where
+        # a fault is located and said)
+        return None
     if info.get("message") != "Integration successful." or not np.all(np.isfinite(sol)):
         return None
-    ys = sol.reshape(len(times), n, runs)  # (times, states, members)
-    with np.errstate(all="ignore"):
-        outs = out(times[:, None], [ys[:, i, :] for i in range(n)], [], [])
     index = {name: i for i, name in enumerate(code.out_names)}
     members = []
     for k in range(runs):
