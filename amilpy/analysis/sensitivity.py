@@ -218,7 +218,8 @@ def local(model, names: list[str] | None = None, variables: list[str] | None = N
     `names` (default the PARAM values) on the first run's output grid: the
     variational equations (`trajectory`), else central differences of whole runs
     (h = cbrt(RELERR) |p|), and why."""
-    from ..batch.montecarlo import member_of, reported
+    from ..batch.members import member_of
+    from ..batch.montecarlo import reported
     from ..diagnostics import UsageError
 
     options = dict(options or {})
@@ -256,7 +257,7 @@ def local(model, names: list[str] | None = None, variables: list[str] | None = N
 
 
 def _differences(model, names, data, variables, options, params, base) -> np.ndarray:
-    from ..batch.montecarlo import member_of
+    from ..batch.members import member_of
     from ..run.plan import nearest_instants
 
     rtol = options.get("rtol") or 1e-6

@@ -35,7 +35,8 @@ import numpy as np
 
 from ..diagnostics import UsageError
 from .distributions import Dist
-from .montecarlo import Batch, check_names, run_sets
+from .members import Batch
+from .montecarlo import check_names, run_sets
 
 METHODS = ("morris", "sobol")
 LEVELS = 4  # Morris's grid

@@ -27,40 +27,13 @@ import numpy as np
 
 from ..diagnostics import AmilError, UsageError
 from ..progress import report
-from ..result import Run, Status
+from ..result import Status
 from .distributions import Dist, sample
+from .members import Batch, member_of, member_spec
 
 QUANTILES = (5.0, 50.0, 95.0)  # percent
 CHUNK = 64  # runs handed to the farm at a time, per worker, at least
 CHUNKS = 10  # and at most this many hand-overs in all
-
-
-@dataclass(frozen=True)
-class Member:
-    """What one run gives back: its grid rows of the reported variables."""
-
-    times: np.ndarray
-    prdel: np.ndarray  # which of `times` are PRDEL instants
-    values: np.ndarray  # (len(times), variables)
-    final: tuple[float, ...]  # the variables' values at the run's end
-    terminal: dict[str, float]
-    status: str
-    message: str
-    extrema: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
-
-
-def member_of(names: tuple[str, ...], run: Run) -> Member:
-    """The reduction a worker applies to its run (`farm.Task.reduce`)."""
-    grid = run.outdel_mask | run.prdel_mask
-    times = run.times[grid]
-    values = np.empty((len(times), len(names)))
-    for j, name in enumerate(names):
-        values[:, j] = run.values[name][grid] if name in run.values else \
-            run.constants.get(name, math.nan)
-    final = tuple(float(run.final.get(n, values[-1, j] if len(times) else math.nan))
-                  for j, n in enumerate(names))
-    return Member(times, run.prdel_mask[grid], values, final, dict(run.terminal),
-                  str(run.status), run.message, dict(run.extrema))
 
 
 @dataclass
@@ -179,17 +152,6 @@ def check_names(model, dists, params: dict[str, float]) -> None:
             raise UsageError(f"{name} has both --set and --dist: give one")
 
 
-@dataclass
-class Batch:
-    """What `run_sets` gives: a Member per set (None: failed before it ran, the
-    error in `errors`, or not run)."""
-
-    members: list[Member | None]
-    errors: dict[int, str]
-    interrupted: bool = False
-    timed_out: bool = False
-
-
 def run_sets(model, sets: dict[str, np.ndarray], variables: list[str], options, *,
              jobs: int = 1, scheduler: str | None = None, progress=None,
              max_time: float | None = None, params: dict[str, float] | None = None,
@@ -224,7 +186,7 @@ def run_sets(model, sets: dict[str, np.ndarray], variables: list[str], options, 
             batch.timed_out = True
             break
         ks = range(first, min(runs, first + chunk))
-        tasks = [Task(_spec(base, {n: float(v[k]) for n, v in sets.items()}), opts,
+        tasks = [Task(member_spec(base, {n: float(v[k]) for n, v in sets.items()}), opts,
                       f"run {k + 1}", reduce=reduce) for k in ks]
 
         def done(i: int, _outcome, offset=first) -> None:
@@ -240,13 +202,6 @@ def run_sets(model, sets: dict[str, np.ndarray], variables: list[str], options, 
         if batch.interrupted:
             break
     return batch
-
-
-def _spec(base, values: dict[str, float]):
-    data = {**base.data, **values}
-    changed = {**base.changed, **values}
-    return replace(base, data=data, changed=changed,
-                   label=", ".join(f"{n} = {v:.6g}" for n, v in values.items()))
 
 
 def reported(model) -> list[str]:

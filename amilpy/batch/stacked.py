@@ -27,7 +27,7 @@ import numpy as np
 
 from ..diagnostics import AmilError
 from ..result import Status
-from .montecarlo import Batch, Member, _spec
+from .members import Batch, Member, member_spec
 
 MXSTEP = 500_000  # odeint's steps per output interval (its default 500 is too few here)
 
@@ -76,7 +76,7 @@ def run_stacked(model, sets: dict[str, np.ndarray], variables: list[str], option
     opts = replace(options, outputs=[v for v in variables if v in model.ir.variables],
                    progress=None)
     base = model._specs(dict(params))[0]
-    first = _spec(base, {n: float(v[0]) for n, v in sets.items()})
+    first = member_spec(base, {n: float(v[0]) for n, v in sets.items()})
     try:
         prepared = prepare(model.ir, first, opts, model.cache)
     except AmilError:
