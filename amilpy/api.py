@@ -393,7 +393,7 @@ class Model:
                    progress=None, max_time: float | None = None,
                    max_steps: int | None = None, max_events: int | None = None,
                    weather_dir: str | list[str] | None = None, stacked: bool = True,
-                   **params: float):
+                   step_point: bool | None = None, **params: float):
         """A Monte Carlo (`amilpy.batch.montecarlo`): `runs` runs of the listing's
         first run with each data value in `dists` drawn from its distribution (a
         `batch.distributions.Dist` or its text, "lognormal(0, 0.2)"; `runs` may be
@@ -406,40 +406,24 @@ class Model:
         each run is bounded by it too). `stacked`: where the runs share their
         switching instants (none switches on its own), integrate them all at once
         (`batch.stacked`); False runs them one by one."""
-        from .batch.distributions import Dist, parse_dist, table_rows
-        from .batch.montecarlo import montecarlo
+        from .batch.distributions import table_rows
+        from .batch.montecarlo import montecarlo, parse_quantiles
         from .output.views import install
-        from .run import Options
 
         install()
         _check_method(method)
-        parsed = {}
-        for key, dist in dists.items():  # (a table's path: relative to the working folder)
-            name = key.strip().upper()
-            parsed[name] = dist if isinstance(dist, Dist) else parse_dist(name, str(dist))
+        parsed = _draws(dists)
         if runs is None:
             runs = table_rows(parsed)
             if runs is None:
                 raise UsageError("give the number of runs (--runs N)")
-        try:
-            seed = int(seed)
-        except (TypeError, ValueError):
-            raise UsageError(f"the seed must be a whole number, got {seed!r}") from None
-        if seed < 0:
-            raise UsageError(f"the seed must be 0 or more, got {seed}")
-        pairs = {}
-        for key, r in (correlation or {}).items():
-            a, b = (key.split(",") if isinstance(key, str) else key)
-            pairs[(a.strip().upper(), b.strip().upper())] = float(r)
+        runs, seed = _whole(runs, "runs", 1), _whole(seed, "seed", 0)
+        pairs = _pairs(correlation)
         variables = self.known_names(outputs) if outputs else None
-        opts = Options(method=method, rtol=rtol, atol=atol, fintim=fintim,
-                       max_time=max_time, weather_dirs=_folders(weather_dir))
-        if max_steps:
-            opts.max_steps = max_steps
-        if max_events:
-            opts.max_events = max_events
+        opts = _batch_options(method, rtol, atol, fintim, max_time, weather_dir, max_steps,
+                              max_events, step_point)
         self._specs(params)  # (unknown names are errors here)
-        return montecarlo(self, parsed, int(runs), seed, quantiles=tuple(quantiles),
+        return montecarlo(self, parsed, runs, seed, quantiles=parse_quantiles(quantiles),
                           correlation=pairs, names=variables, options=opts, jobs=jobs,
                           scheduler=scheduler, progress=progress, max_time=max_time,
                           params={k.upper(): float(v) for k, v in params.items()},
@@ -451,39 +435,40 @@ class Model:
                     rtol: float | None = None, atol: float | None = None,
                     fintim: float | None = None, jobs: int = 1,
                     scheduler: str | None = None, progress=None,
-                    max_time: float | None = None, **params: float):
+                    max_time: float | None = None, max_steps: int | None = None,
+                    max_events: int | None = None, step_point: bool | None = None,
+                    weather_dir: str | list[str] | None = None, **params: float):
         """Sensitivities. `method="local"`: (P/Y) dY/dP over the first run of `outputs`
         (default every PRINT/OUTPUT variable) to the data values `names` (default the
         PARAM values), from the variational equations (`analysis.sensitivity.Local`).
         `method="morris"` or `"sobol"`: global indices of `measures` ("X", "X@T",
         "max(X)", "min(X)", a TERMINAL name) over `dists` (name -> distribution, as
         `montecarlo`), `runs` trajectories (Morris) or rows (Sobol), `seed`
-        (`batch.indices.Indices`). `method_ode`: the integration method."""
-        from .run import Options
+        (`batch.indices.Indices`). `method_ode`: the integration method. `max_time`:
+        wall-clock seconds for the whole analysis."""
+        from .run.flow import FlowFailed
 
         _check_method(method_ode)
+        opts = _batch_options(method_ode, rtol, atol, fintim, max_time, weather_dir,
+                              max_steps, max_events, step_point)
         if method == "local":
             from .analysis.sensitivity import local
 
             if dists:
                 raise UsageError("a local sensitivity takes no distributions: give "
                                  "method='morris' or 'sobol' for global indices")
-            return local(self, list(names) if names else None, outputs,
-                         {"method": method_ode, "rtol": rtol, "atol": atol}, params)
-        from .batch.distributions import parse_dist
+            with _analysis_time(max_time, FlowFailed):
+                return local(self, _names(names) or None, _names(outputs) or None,
+                             opts, params)
         from .batch.indices import indices
 
-        parsed = {k.strip().upper(): parse_dist(k.strip().upper(), str(v))
-                  if isinstance(v, str) else v for k, v in (dists or {}).items()}
-        opts = Options(method=method_ode, rtol=rtol, atol=atol, fintim=fintim,
-                       max_time=max_time)
         self._specs(params)
         if runs is None:
             raise UsageError("give the number of runs (--runs N: Sobol's rows, Morris's "
                              "trajectories)")
-        return indices(self, method, parsed, list(measures), int(runs), int(seed),
-                       options=opts, jobs=jobs, scheduler=scheduler, progress=progress,
-                       max_time=max_time,
+        return indices(self, method, _draws(dists or {}), _names(measures),
+                       _whole(runs, "runs", 1), _whole(seed, "seed", 0), options=opts,
+                       jobs=jobs, scheduler=scheduler, progress=progress, max_time=max_time,
                        params={k.upper(): float(v) for k, v in params.items()})
 
     def modes(self, at: float = 0.0, method: str | None = None, rtol: float | None = None,
@@ -601,6 +586,74 @@ class Model:
     def __repr__(self) -> str:
         return f"<amilpy.Model {self.name!r}: {len(self.ir.states)} states, " \
                f"{len(self.ir.runs)} runs>"
+
+
+def _names(value) -> list[str]:
+    """One name or several (a bare string is one name, not its letters)."""
+    if value is None:
+        return []
+    return [value] if isinstance(value, str) else list(value)
+
+
+def _whole(value, what: str, least: int) -> int:
+    """A count or a seed: a whole number, at least `least`."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        number = float("nan")
+    if not (number == number and number == int(number) and number >= least):
+        raise UsageError(f"{what} must be a whole number, {least} or more, got {value!r}")
+    return int(number)
+
+
+def _draws(dists) -> dict:
+    """name -> Dist from name -> Dist or its text; a name given twice is an error."""
+    from .batch.distributions import Dist, parse_dist
+
+    items = dists.items() if hasattr(dists, "items") else dists
+    out: dict = {}
+    for key, dist in items:  # (a table's path: relative to the working folder)
+        name = str(key).strip().upper()
+        if name in out:
+            raise UsageError(f"{name} has two distributions: give one")
+        out[name] = dist if isinstance(dist, Dist) else parse_dist(name, str(dist))
+    return out
+
+
+def _pairs(correlation) -> dict[tuple[str, str], float]:
+    """{(A, B): r} from {(A, B): r} or {"A,B": r}; a pair given twice is an error."""
+    out: dict[tuple[str, str], float] = {}
+    items = correlation.items() if hasattr(correlation, "items") else (correlation or ())
+    for key, r in items:
+        parts = key.split(",") if isinstance(key, str) else list(key)
+        if len(parts) != 2:
+            raise UsageError(f"a correlation is between two names (A, B): got {key!r}")
+        a, b = (str(p).strip().upper() for p in parts)
+        if (a, b) in out or (b, a) in out:
+            raise UsageError(f"the correlation of {a} and {b} is given twice")
+        try:
+            out[(a, b)] = float(r)
+        except (TypeError, ValueError):
+            raise UsageError(f"the correlation of {a} and {b} must be a number, got "
+                             f"{r!r}") from None
+    return out
+
+
+def _batch_options(method, rtol, atol, fintim, max_time, weather_dir, max_steps, max_events,
+                   step_point):
+    """The run options every run of an ensemble shares."""
+    from .run import Options
+
+    for label, tol in (("rtol", rtol), ("atol", atol)):
+        if tol is not None and not tol > 0:
+            raise UsageError(f"{label} must be positive, got {tol}")
+    opts = Options(method=method, rtol=rtol, atol=atol, fintim=fintim, max_time=max_time,
+                   weather_dirs=_folders(weather_dir), step_point=step_point)
+    if max_steps:
+        opts.max_steps = max_steps
+    if max_events:
+        opts.max_events = max_events
+    return opts
 
 
 def _folders(value) -> tuple[str, ...]:

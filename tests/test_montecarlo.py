@@ -239,3 +239,46 @@ def test_members_that_switch_on_their_own_run_one_by_one(decay, tmp_path):
                                                    Options())
     mc = model.montecarlo({"TS": "uniform(0.2, 0.8)"}, runs=20, seed=1)
     assert mc.final[:, 0] == pytest.approx(1.0 - mc.samples["TS"], abs=1e-9)
+
+
+def test_when_every_run_fails_the_runs_are_listed(tmp_path, capsys):
+    path = tmp_path / "fail.amil"
+    path.write_text(FAILING)
+    assert main(["montecarlo", str(path), "--dist", "K=uniform(0.1,0.5)", "--runs", "3",
+                 "--jobs", "1"]) == 3
+    out = capsys.readouterr().out
+    assert "3 run, 0 kept, 3 failed" in out and "FAILED RUNS (3" in out
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--dist", "K=normal(1,0.1)", "--dist", "K=normal(2,0.1)", "--runs", "3"],
+     "K has two distributions"),
+    (["--dist", "K=normal(1,0.1)", "--dist", "X0=normal(1,0.1)", "--runs", "3",
+      "--correlate", "K,X0=0.5", "--correlate", "X0,K=-0.5"], "given twice"),
+])
+def test_a_value_or_pair_given_twice_is_refused(decay, capsys, argv, message):
+    assert main(["montecarlo", str(decay), *argv]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_the_api_checks_what_the_command_line_checks(decay):
+    model = amilpy.load(decay)
+    with pytest.raises(UsageError, match="between 0 and 100"):
+        model.montecarlo({"K": "uniform(0, 1)"}, runs=3, quantiles=(150,))
+    with pytest.raises(UsageError, match="whole number"):
+        model.montecarlo({"K": "uniform(0, 1)"}, runs=2.7)
+    with pytest.raises(UsageError, match="two names"):
+        model.montecarlo({"K": "uniform(0, 1)"}, runs=3, correlation={"K": 0.5})
+
+
+def test_step_point_mode_is_the_runs_own(tmp_path):
+    # --step-point reaches every member: the Monte Carlo of one fixed value is the run.
+    path = tmp_path / "rect.amil"
+    path.write_text("PARAM K = 1.0\nX = INTGRL(1.0, -K*X)\nMETHOD RKS\n"
+                    "TIMER FINTIM = 1.0, OUTDEL = 0.1, DELT = 0.1\nPRINT X\nEND\n")
+    model = amilpy.load(path)
+    run, = model.run(method="EULER", step_point=True)
+    mc = model.montecarlo({"K": "uniform(0.999999999, 1.000000001)"}, runs=2, seed=1,
+                          method="EULER", step_point=True)
+    assert mc.final[:, 0] == pytest.approx([run["X"][-1]] * 2, rel=1e-8)
+    assert run["X"][-1] == pytest.approx(0.9 ** 10, rel=1e-12)

@@ -181,3 +181,55 @@ def test_a_table_is_no_distribution_for_global_indices(rates, tmp_path):
     with pytest.raises(UsageError, match="not table"):
         amilpy.load(rates).sensitivity(method="sobol", dists={"K1": f"table({table})"},
                                        runs=4)
+
+
+def test_a_fixed_step_route_is_differenced_and_says_so(decay):
+    # EULER has no dense output for the sensitivity equations: central differences
+    # of whole runs, said; (K/X) dX/dK of Euler's own solution is still about -K t.
+    loc = amilpy.load(decay).sensitivity(["K"], method_ode="EULER")
+    assert loc.how.startswith("differences of whole runs (a fixed-step route")
+    assert loc.normalised[-1, 0, 0] == pytest.approx(-0.7 * 2.0, rel=2e-2)
+
+
+def test_a_small_value_is_differentiated_by_a_fraction_of_itself(tmp_path):
+    # X' = -(1E-10/A) X with A = 1E-10: (A/X) dX/dA = +t exactly.
+    path = tmp_path / "small.amil"
+    path.write_text("PARAM A = 1.0E-10\nX = INTGRL(1.0, -1.0E-10/A*X)\n"
+                    "TIMER FINTIM = 1.0, OUTDEL = 0.1\nPRINT X\nEND\n")
+    loc = amilpy.load(path).sensitivity("A")  # (a bare name is one name)
+    assert loc.normalised[:, 0, 0] == pytest.approx(loc.times, abs=1e-6)
+
+
+FINISHING = """TITLE DECAY THAT STOPS
+PARAM K = 0.7
+X = INTGRL(1.0, -K*X)
+FINISH X = 0.2
+TIMER FINTIM = 3.0, OUTDEL = 0.1
+PRINT X
+END
+"""
+
+
+def test_a_value_at_an_instant_some_runs_never_reach(tmp_path):
+    # FINISH stops the fast-decaying runs before TIME = 2.5: their X@2.5 has no value;
+    # their rows are left out and said, not an error. An instant off the output grid
+    # is refused before any run.
+    path = tmp_path / "finish.amil"
+    path.write_text(FINISHING)
+    ind = amilpy.load(path).sensitivity(method="sobol", dists={"K": "uniform(0.2, 1.2)"},
+                                        measures=["X@2.5"], runs=16, seed=1)
+    assert ind.notes and "rows left out" in ind.notes[-1]
+    with pytest.raises(UsageError, match="not an output instant"):
+        amilpy.load(path).sensitivity(method="sobol", dists={"K": "uniform(0.2, 1.2)"},
+                                      measures=["X@2.55"], runs=16)
+
+
+def test_sobol_points_come_row_by_row():
+    # A_r, B_r, AB_1,r ... AB_k,r together, so that a study stopped early has whole rows.
+    from amilpy.batch.indices import _saltelli
+
+    u = _saltelli(3, 8, seed=1).reshape(8, 5, 3)
+    for i in range(3):
+        others = [j for j in range(3) if j != i]
+        assert np.array_equal(u[:, 2 + i, others], u[:, 0, others])
+        assert np.array_equal(u[:, 2 + i, i], u[:, 1, i])

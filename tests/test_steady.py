@@ -17,6 +17,7 @@ from amilpy.analysis.steady import FREE, HELD, SOLVED, NoEquilibrium
 from amilpy.cli import main
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
+EXAMPLES = MODELS / "examples"
 
 # three masses in a row, springs K1 (wall-m1), K2 (m1-m2), K3 (m2-m3), dashpots C,
 # a constant load F on the last mass; W integrates the power F*V3 (nothing reads it)
@@ -208,9 +209,47 @@ def test_steady_writes_csv_matrices_npz_and_bode(chain, tmp_path, capsys):
 def test_steady_usage_errors(chain, capsys):
     assert main(["steady", str(chain), "--bode"]) == 2
     assert "--input" in capsys.readouterr().err
-    assert main(["steady", str(chain), "--guess", "Q=1"]) == 1
+    assert main(["steady", str(chain), "--guess", "Q=1"]) == 2
     assert "not a state" in capsys.readouterr().err
     assert main(["steady", str(chain), "--guess", "X1=abc"]) == 2
     assert "--guess X1" in capsys.readouterr().err
-    assert main(["steady", str(chain), "--input", "NOPE", "--output", "X3"]) == 1
+    assert main(["steady", str(chain), "--input", "NOPE", "--output", "X3"]) == 2
     assert "not a PARAM" in capsys.readouterr().err
+
+
+def test_a_listing_with_nothing_to_solve_for_says_so(tmp_path, capsys):
+    # X' = C: X is free (nothing reads it); there is no state to bring to rest, and
+    # the printout says so instead of calling it stable; X cannot be an output of a
+    # linear model whose states it is not among.
+    path = tmp_path / "clock.amil"
+    path.write_text("PARAM C = 1.0\nX = INTGRL(0.0, C)\nTIMER FINTIM = 1.0\nPRINT X\nEND\n")
+    eq = amilpy.load(path).steady()
+    assert eq.stability == "none" and eq.roles["X"] == FREE
+    assert main(["steady", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "NO STATE TO SOLVE FOR" in out and "X keeps changing" in out
+    assert main(["steady", str(path), "--input", "C", "--output", "X"]) == 2
+    assert "no state of the linear model" in capsys.readouterr().err
+
+
+def test_a_start_the_field_cannot_be_had_at_is_a_clear_failure(tmp_path, capsys):
+    # A NaN initial value, and a field that faults wherever the search looks: exit 3
+    # with what to give, never a traceback.
+    nan = tmp_path / "nan.amil"
+    nan.write_text("PARAM K = 0.5\nINITIAL\n   R = SQRT(K - 1.0)\nDYNAMIC\n"
+                   "X = INTGRL(R, -X)\nTIMER FINTIM = 1.0\nPRINT X\nEND\n")
+    assert main(["steady", str(nan)]) == 3
+    assert "the start is not finite (X = nan)" in capsys.readouterr().err
+    assert main(["steady", str(EXAMPLES / "csmp_diode_filter.amil")]) == 3
+    assert "the field cannot be had" in capsys.readouterr().err
+
+
+def test_a_small_input_is_moved_by_a_fraction_of_itself(tmp_path):
+    # X' = 1E-10/A - X with A = 1E-10: X = 1E-10/A = 1 at rest, B = d(X')/dA =
+    # -1E-10/A^2 = -1E10 (a step of 1e-8 would be a hundred times A itself).
+    path = tmp_path / "small.amil"
+    path.write_text("PARAM A = 1.0E-10\nX = INTGRL(0.0, 1.0E-10/A - X)\nTIMER FINTIM = 1.0\n"
+                    "PRINT X\nEND\n")
+    eq = amilpy.load(path).steady(inputs="A", outputs="X")
+    assert eq["X"] == pytest.approx(1.0, rel=1e-12)
+    assert eq.linear.b[0, 0] == pytest.approx(-1e10, rel=1e-8)

@@ -120,14 +120,14 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
                           run=k, **{**data, **changed})
 
     flow = flow_at()
+    if flow.plan.step_point or not flow.plan.route.uses_tolerances:
+        return "a fixed-step route has no dense output for the sensitivity equations"
     c = flow.code
     start = flow.initial_state()
     n = len(start.y)
     variants, dy0 = [], np.zeros((n, len(names)))
     for j, name in enumerate(names):
-        # (a value of 0, or a tiny one, is moved by at least 1e-8: exact for what it
-        # enters linearly, which is what a value near 0 mostly does)
-        h = max(STEP * abs(data[name]), 1e-8)
+        h = step_for(data[name], STEP)
         plus, minus = flow_at(**{name: data[name] + h}), flow_at(**{name: data[name] - h})
         if any((v.code.watched, v.code.state_names, v.code.out_names) !=
                (c.watched, c.state_names, c.out_names) for v in (plus, minus)):
@@ -153,6 +153,9 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
             return tangent.failed
         if end.t < times[-1] * (1 - 1e-12) - 1e-300:
             return f"the run stops at TIME = {end.t:.9g}"
+    missing = [t for t in times.tolist() if t not in at]
+    if missing:
+        return f"the flow's steps did not reach TIME = {missing[0]:.9g}"
     return Trajectory(flow, variants, floor, at)
 
 
@@ -213,16 +216,19 @@ class Local:
 
 
 def local(model, names: list[str] | None = None, variables: list[str] | None = None,
-          options: dict | None = None, params: dict[str, float] | None = None) -> Local:
+          options=None, params: dict[str, float] | None = None) -> Local:
     """d y/d p of `variables` (default every PRINT/OUTPUT variable) to the data values
     `names` (default the PARAM values) on the first run's output grid: the
     variational equations (`trajectory`), else central differences of whole runs
-    (h = cbrt(RELERR) |p|), and why."""
+    (h = cbrt(RELERR) |p|), and why. `options`: a run.Options for the run."""
+    from dataclasses import replace
+
     from ..batch.members import member_of
     from ..batch.montecarlo import reported
     from ..diagnostics import UsageError
+    from ..run import Options
 
-    options = dict(options or {})
+    options = replace(options or Options(), outputs=None, progress=None)
     params = {k.upper(): float(v) for k, v in (params or {}).items()}
     data = {**model.ir.runs[0].data, **params}
     if not names:
@@ -239,37 +245,58 @@ def local(model, names: list[str] | None = None, variables: list[str] | None = N
     if not names:
         raise UsageError("the model has no data value to differentiate by")
     variables = model.known_names(variables) if variables else reported(model)
-    run = model.run(options.get("method"), options.get("rtol"), options.get("atol"),
-                    outputs=variables, advice=False, **params)[0]
-    if not run.ok:
-        raise FlowFailed(f"the run failed: {run.message}")
+    run = _one_run(model, options, variables, params)
     base = member_of(tuple(variables), run)
-    track = trajectory(model, 0, names, data, options, base.times) \
+    flow_options = {"method": options.method, "rtol": options.rtol, "atol": options.atol}
+    track = trajectory(model, 0, names, data, flow_options, base.times) \
         if model.ir.acsl is None else "an ACSL program has no flow map"
     if isinstance(track, Trajectory):
         raw = np.array([[track.row(v, t) for v in variables] for t in base.times.tolist()])
         how = "sensitivity equations"
     else:
-        raw = _differences(model, names, data, variables, options, params, base)
+        raw = _differences(model, names, data, variables, options, params, base, run.rtol)
         how = f"differences of whole runs ({track})"
     return Local(names, {n: data[n] for n in names}, variables, base.times, base.prdel,
                  base.values, raw.reshape(len(base.times), len(variables), len(names)), how)
 
 
-def _differences(model, names, data, variables, options, params, base) -> np.ndarray:
+def _one_run(model, options, variables, params):
+    """The first run with `options` (its Options: limits, weather, step-point mode),
+    or FlowFailed saying why it failed."""
+    from dataclasses import replace
+
+    from ..run import simulate
+
+    spec = model._specs(params)[0]
+    run = simulate(model.ir, spec, replace(options, outputs=list(variables)), model.cache)
+    if not run.ok:
+        raise FlowFailed(f"the run failed: {run.message}")
+    return run
+
+
+def step_for(value: float, relative: float) -> float:
+    """A central difference's step for a data value: relative to it (a value of 1E-12
+    is moved by a fraction of itself, never by more than itself); 1e-8 for 0."""
+    return relative * abs(value) if value else 1e-8
+
+
+def _differences(model, names, data, variables, options, params, base, rtol: float
+                 ) -> np.ndarray:
+    """Central differences of whole runs, h = cbrt(RELERR) |p| (RELERR the run's own:
+    the truncation error h^2 and the runs' noise RELERR/h balance there)."""
     from ..batch.members import member_of
     from ..run.plan import nearest_instants
 
-    rtol = options.get("rtol") or 1e-6
+    rel = float(np.cbrt(rtol if np.isfinite(rtol) and rtol > 0 else 1e-6))
     out = np.full((len(base.times), len(variables), len(names)), np.nan)
     for j, name in enumerate(names):
-        h = max(np.cbrt(rtol) * abs(data[name]), 1e-8)
+        h = step_for(data[name], rel)
         rows = []
         for value in (data[name] + h, data[name] - h):
-            run = model.run(options.get("method"), options.get("rtol"), options.get("atol"),
-                            outputs=variables, advice=False, **{**params, name: value})[0]
-            if not run.ok:
-                raise FlowFailed(f"the run with {name} = {value:.9g} failed: {run.message}")
+            try:
+                run = _one_run(model, options, variables, {**params, name: value})
+            except FlowFailed as exc:
+                raise FlowFailed(f"the run with {name} = {value:.9g}: {exc}") from None
             m = member_of(tuple(variables), run)
             pick, same = nearest_instants(m.times, base.times)
             rows.append(np.where(same[:, None], m.values[pick], np.nan))

@@ -43,11 +43,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..diagnostics import AmilError, with_hint
+from ..diagnostics import AmilError, UsageError, with_hint
 from ..run import Flow, FlowFailed, State
 from ..run.jacobian import refined
 from .linear import ZERO, Mode, jacobian, mode_list
 from .problem import ATOL, RTOL, SYMMETRY, free_states, read_closure
+from .sensitivity import step_for
 
 TOL = 1e-10  # a residual below this fraction of its equation's rate scale is zero
 MAX_NEWTON = 30
@@ -126,8 +127,11 @@ class Equilibrium:
     @property
     def stability(self) -> str:
         """"stable" (every mode decays, zero modes apart: `zero_modes`), "unstable"
-        (one grows) or "marginal" (none grows, a nonzero one neither grows nor
-        decays: an undamped oscillation)."""
+        (one grows), "marginal" (none grows, a nonzero one neither grows nor
+        decays: an undamped oscillation), or "none" (no state is solved for: every
+        one is held or free)."""
+        if not self.solved:
+            return "none"
         top = max((abs(m.eigenvalue) for m in self.modes), default=0.0)
         live = [m for m in self.modes if not m.zero]
         if any(m.eigenvalue.real > ZERO * top for m in live):
@@ -166,14 +170,27 @@ class _Problem:
     def __init__(self, flow: Flow, start: State, t: float, unknown: np.ndarray) -> None:
         self.flow, self.t, self.unknown = flow, t, unknown
         self.memory = start.memory
+        self.trouble = ""  # why the field could not be had at the last point tried
         tol = flow.plan.tol
         self.floor = np.broadcast_to(np.asarray(tol.atol / tol.rtol, dtype=float),
                                      (len(start.y),)).copy()
 
-    def at(self, y: np.ndarray) -> tuple[State, np.ndarray]:
-        """The state at y with its branches as at a start, and the field there."""
-        state = self.flow.state(y, None, self.memory, self.t)
-        f = np.asarray(self.flow.field(state, self.t)(self.t, np.array(state.y)), dtype=float)
+    def at(self, y: np.ndarray) -> tuple[State | None, np.ndarray]:
+        """The state at y with its branches as at a start, and the field there; (None,
+        infinities) where the field cannot be had (a fault, an implicit loop that does
+        not converge): the caller shortens its step."""
+        try:
+            state = self.flow.state(y, None, self.memory, self.t)
+            f = np.asarray(self.flow.field(state, self.t)(self.t, np.array(state.y)),
+                           dtype=float)
+        except (AmilError, ArithmeticError, ValueError) as exc:
+            self.trouble = str(exc.diagnostics[0].message if isinstance(exc, AmilError)
+                               and exc.diagnostics else exc)
+            return None, np.full(len(y), np.inf)
+        if not np.all(np.isfinite(f)):
+            bad = self.flow.state_names[int(np.argmin(np.isfinite(f)))]
+            self.trouble = f"d{bad}/dt is not finite"
+            return None, np.full(len(y), np.inf)
         return state, f
 
     def jac(self, state: State) -> tuple[np.ndarray, float]:
@@ -211,9 +228,13 @@ def equilibrium(model, at: float | None = None, guess: dict[str, float] | None =
     for key, value in (guess or {}).items():
         name = key.upper()
         if name not in names:
-            raise AmilError(with_hint(f"--guess {name}: not a state of this model (the "
-                                      "INTGRL variables are)", name, names))
+            raise UsageError(with_hint(f"--guess {name}: not a state of this model (the "
+                                       "INTGRL variables are)", name, names))
         y[names.index(name)] = float(value)
+    bad = [n for n, v in zip(names, y, strict=True) if not math.isfinite(v)]
+    if bad:
+        raise NoEquilibrium(f"the start is not finite ({bad[0]} = {y[names.index(bad[0])]}):"
+                            f" give --guess {bad[0]}=VALUE, or values that make it finite")
     role = roles(model.ir)
     unknown = np.array([k for k, n in enumerate(names) if role[n] == SOLVED], dtype=int)
     problem = _Problem(flow, start, t, unknown)
@@ -236,11 +257,16 @@ def _solve(problem: _Problem, y0: np.ndarray):
         return (*found[:4], "Newton")
     best = found[4]
     state, iterations = _pseudo_transient(problem, y0)
-    found = _newton(problem, np.array(state.y, dtype=float))
+    found = _newton(problem, np.array(state.y, dtype=float)) if state is not None else \
+        (None, None, None, 0, best)
     if found[0] is not None:
         return (found[0], found[1], found[2], iterations + found[3],
                 "pseudo-transient continuation, then Newton")
     best = min((best, found[4]), key=lambda b: b[0])
+    if best[1] is None:
+        raise NoEquilibrium(f"no equilibrium found: the field cannot be had at the guess "
+                            f"or near it ({problem.trouble}); give --guess NAME=VALUE "
+                            "where the listing's equations hold")
     raise NoEquilibrium(
         f"no equilibrium found from the guess: the best point has a residual of "
         f"{best[0]:.3g} of its rate scale{_where(problem, best[1])} "
@@ -259,6 +285,8 @@ def _keep_guess(problem: _Problem, state: State, f: np.ndarray, jac: np.ndarray,
     if not len(x):
         return state, f, jac
     s = problem.scales(state.y)[x]
+    if not np.all(np.isfinite(jac)):
+        return state, f, jac
     _, sv, vt = np.linalg.svd(jac[np.ix_(x, x)] * s)
     null = vt[np.append(sv, np.zeros(len(x) - len(sv))) <= SYMMETRY * (sv[0] if len(sv)
                                                                       else 0.0)]
@@ -268,6 +296,8 @@ def _keep_guess(problem: _Problem, state: State, f: np.ndarray, jac: np.ndarray,
     moved = (y[x] - guess[x]) / s
     y[x] -= (null.T @ (null @ moved)) * s
     back, fb = problem.at(y)
+    if back is None:
+        return state, f, jac
     jb, _ = problem.jac(back)
     if tuple(back.modes) == tuple(state.modes) and problem.measure(fb, jb, back.y) <= TOL:
         return back, fb, jb
@@ -290,13 +320,21 @@ def _where(problem: _Problem, state: State | None) -> str:
 
 def _newton(problem: _Problem, y: np.ndarray):
     """(state, f, J, iterations, best) on convergence, else (None, ..., best):
-    best = (measure, state, f)."""
+    best = (measure, state, f). A step to where the field cannot be had is halved."""
     x = problem.unknown
     best = (math.inf, None, None)
     seen: set[tuple] = set()
     polish, last, kept = 0, math.inf, None
+    back = None  # (the last iterate, its step): for halving
     for k in range(MAX_NEWTON):
         state, f = problem.at(y)
+        if state is None:
+            if back is None or not np.any(back[1]):
+                break
+            y = back[0].copy()
+            back = (back[0], back[1] / 2)
+            y[x] += back[1]
+            continue
         jac, _ = problem.jac(state)
         r = problem.measure(f, jac, state.y)
         if r < best[0]:
@@ -306,8 +344,6 @@ def _newton(problem: _Problem, y: np.ndarray):
         if r <= TOL:  # (converged: a step or two more while the residual falls)
             polish += 1
         last, kept = r, (state, f, jac)
-        if not np.all(np.isfinite(f)):
-            break
         s = problem.scales(state.y)[x]
         step = np.linalg.lstsq(jac[np.ix_(x, x)] * s, -f[x], rcond=1e-12)[0] * s
         key = (tuple(state.modes), tuple(np.round(step / s, 12)))
@@ -315,17 +351,20 @@ def _newton(problem: _Problem, y: np.ndarray):
             break
         seen.add(key)
         y = np.array(state.y, dtype=float)
+        back = (y.copy(), step)
         y[x] += step
     if last <= TOL:  # (converged, and the polishing steps went round)
         return (*kept, k, best)
     return None, None, None, MAX_NEWTON, best
 
 
-def _pseudo_transient(problem: _Problem, y: np.ndarray) -> tuple[State, int]:
+def _pseudo_transient(problem: _Problem, y: np.ndarray) -> tuple[State | None, int]:
     """Implicit Euler steps with growing tau towards a stable equilibrium (see the
     module); the state reached (Newton then finishes)."""
     x = problem.unknown
     state, f = problem.at(y)
+    if state is None:
+        return None, 0
     jac, _ = problem.jac(state)
     s = problem.scales(state.y)[x]
     size = float(np.max(np.abs(jac[np.ix_(x, x)]) @ s / s)) if len(x) else 1.0
@@ -343,6 +382,9 @@ def _pseudo_transient(problem: _Problem, y: np.ndarray) -> tuple[State, int]:
         y = np.array(state.y, dtype=float)
         y[x] += step
         new_state, new_f = problem.at(y)
+        if new_state is None:
+            tau /= 10
+            continue
         new_norm = float(np.linalg.norm(new_f[x] / problem.scales(new_state.y)[x]))
         if not math.isfinite(new_norm):
             tau /= 10
@@ -361,13 +403,20 @@ def _linear(model, flow: Flow, state: State, t: float, names: list[str], x: np.n
     data = {**model.ir.runs[0].data, **{k.upper(): float(v) for k, v in params.items()}}
     for name in inputs:
         if name not in data:
-            raise AmilError(with_hint(f"--input {name}: not a PARAM/CONST/INCON value of "
-                                      "this model", name, list(data)))
+            raise UsageError(with_hint(f"--input {name}: not a PARAM/CONST/INCON value of "
+                                       "this model (an input is a data value)", name,
+                                       list(data)))
+    x_names = {names[k] for k in x}
+    for name in outputs:
+        if name in names and name not in x_names:
+            raise UsageError(f"--output {name}: a state held or free at the equilibrium "
+                             "(its rate reads no state, or nothing reads it) is no state "
+                             "of the linear model")
     y = np.array(state.y, dtype=float)
     m, z = list(state.modes), list(state.memory)
     variants = []
     for name in inputs:
-        h = max(STEP * abs(data[name]), 1e-8)
+        h = step_for(data[name], STEP)
         plus, minus = (model.flow(method=flow.opts.method, rtol=flow.opts.rtol,
                                   atol=flow.opts.atol,
                                   **{**params, name: data[name] + d}).code for d in (h, -h))

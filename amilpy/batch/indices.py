@@ -98,10 +98,9 @@ def value_of(measure: Measure, member, variables: list[str]) -> float:
     from ..run.plan import nearest_instants
 
     pick, same = nearest_instants(member.times, [measure.time])
-    if not same[0]:
-        raise UsageError(f"--measure {measure.text}: TIME = {measure.time:g} is not an "
-                         "output instant of the run; choose one on the OUTDEL or PRDEL grid")
-    return float(member.values[pick[0], j])
+    # (not there: the run stopped before T, a FINISH condition; T itself was checked
+    # against the output grid before the runs)
+    return float(member.values[pick[0], j]) if same[0] else math.nan
 
 
 @dataclass
@@ -153,6 +152,7 @@ def indices(model, method: str, dists: dict[str, Dist], measures: list[str], run
         raise UsageError(f"--runs must be at least 2, got {runs}")
     parsed = [parse_measure(m, model) for m in measures] if measures else \
         [parse_measure(_default_measure(model), model)]
+    _check_instants(model, parsed, options, params)
     names = list(dists)
     notes = []
     if method == "sobol":
@@ -189,6 +189,22 @@ def indices(model, method: str, dists: dict[str, Dist], measures: list[str], run
     return out
 
 
+def _check_instants(model, measures: list[Measure], options, params) -> None:
+    """Each VAR@T's T an output instant of the run (CSMP form; an ACSL program's grid
+    is known only as it runs: a T off it gives no value, NaN)."""
+    timed = [m for m in measures if m.kind == "at"]
+    if not timed or model.ir.acsl is not None:
+        return
+    from ..run import prepare
+    from ..run.plan import nearest_instants
+
+    grid = prepare(model.ir, model._specs(params)[0], options, model.cache).plan.grid.times
+    for m in timed:
+        if not nearest_instants(grid, [m.time])[1][0]:
+            raise UsageError(f"--measure {m.text}: TIME = {m.time:g} is not an output "
+                             "instant of the run; choose one on the OUTDEL or PRDEL grid")
+
+
 def _default_measure(model) -> str:
     from .montecarlo import reported
 
@@ -196,7 +212,8 @@ def _default_measure(model) -> str:
 
 
 def _saltelli(k: int, n: int, seed: int) -> np.ndarray:
-    """The unit points, in blocks of N: A, B, AB_1, ..., AB_k."""
+    """The unit points, row by row: A_r, B_r, AB_1,r, ..., AB_k,r for r = 1 ... N (a
+    study stopped early then has whole rows)."""
     from scipy.stats import qmc
 
     u = qmc.Sobol(2 * k, scramble=True, seed=np.random.default_rng(seed)).random(n)
@@ -206,18 +223,18 @@ def _saltelli(k: int, n: int, seed: int) -> np.ndarray:
         ab = a.copy()
         ab[:, i] = b[:, i]
         blocks.append(ab)
-    return np.vstack(blocks)
+    return np.stack(blocks, axis=1).reshape(n * (k + 2), k)
 
 
 def _sobol(out: Indices, n: int, k: int, seed: int) -> None:
-    f = out.values
-    fa, fb = f[:n], f[n:2 * n]
-    fab = np.stack([f[(2 + i) * n:(3 + i) * n] for i in range(k)])  # (k, n, measures)
+    f = out.values.reshape(n, k + 2, -1)  # (rows, blocks, measures): see _saltelli
+    fa, fb = f[:, 0], f[:, 1]
+    fab = np.stack([f[:, 2 + i] for i in range(k)])  # (k, n, measures)
     ok = np.all(np.isfinite(fa), axis=1) & np.all(np.isfinite(fb), axis=1) & \
         np.all(np.isfinite(fab), axis=(0, 2))
     if not np.all(ok):
         out.notes.append(f"{int(np.sum(~ok))} of the {n} rows left out: one of their runs "
-                         "failed or was not run")
+                         "failed, was not run, or has no value of the output")
     rows = np.flatnonzero(ok)
 
     def estimate(idx):

@@ -34,6 +34,7 @@ from .members import Batch, member_of, member_spec
 QUANTILES = (5.0, 50.0, 95.0)  # percent
 CHUNK = 64  # runs handed to the farm at a time, per worker, at least
 CHUNKS = 10  # and at most this many hand-overs in all
+TIMED = 4  # runs per worker between looks at the clock, under a time limit
 
 
 @dataclass
@@ -104,14 +105,17 @@ def _quantiles(values: np.ndarray, q) -> np.ndarray:
             return np.nanquantile(values, np.asarray(q) / 100.0, axis=0)
 
 
-def parse_quantiles(text: str) -> tuple[float, ...]:
-    """"5,50,95" -> (5.0, 50.0, 95.0): percents in [0, 100], sorted, distinct."""
+def parse_quantiles(value) -> tuple[float, ...]:
+    """"5,50,95" or (5, 50, 95) -> (5.0, 50.0, 95.0): percents in [0, 100], sorted,
+    distinct to ten digits (their names, P5 ..., must differ)."""
+    items = value.split(",") if isinstance(value, str) else list(value)
     try:
-        q = sorted({float(p) for p in text.split(",") if p.strip()})
-    except ValueError:
-        raise UsageError(f"--quantiles takes percents, e.g. 5,50,95, got {text!r}") from None
+        q = sorted({float(f"{float(p):.10g}") for p in items
+                    if not isinstance(p, str) or p.strip()})
+    except (TypeError, ValueError):
+        raise UsageError(f"--quantiles takes percents, e.g. 5,50,95, got {value!r}") from None
     if not q or not all(0.0 <= v <= 100.0 for v in q):
-        raise UsageError(f"--quantiles takes percents between 0 and 100, got {text!r}")
+        raise UsageError(f"--quantiles takes percents between 0 and 100, got {value!r}")
     return tuple(q)
 
 
@@ -179,14 +183,17 @@ def run_sets(model, sets: dict[str, np.ndarray], variables: list[str], options, 
     start = time.monotonic()
     # (each chunk starts its workers afresh: a tenth of the runs at least, so that
     # starting them costs little, and the time limit and Ctrl-C are looked at often)
-    chunk = max(CHUNK * max(1, jobs if not scheduler else default_jobs()),
-                math.ceil(runs / CHUNKS))
+    workers = max(1, jobs if not scheduler else default_jobs())
+    chunk = max(CHUNK * workers, math.ceil(runs / CHUNKS)) if max_time is None else \
+        TIMED * workers  # (with a time limit: looked at after every few runs)
     for first in range(0, runs, chunk):
         if max_time is not None and time.monotonic() - start >= max_time:
             batch.timed_out = True
             break
         ks = range(first, min(runs, first + chunk))
-        tasks = [Task(member_spec(base, {n: float(v[k]) for n, v in sets.items()}), opts,
+        left = opts if max_time is None else \
+            replace(opts, max_time=max(max_time - (time.monotonic() - start), 1e-3))
+        tasks = [Task(member_spec(base, {n: float(v[k]) for n, v in sets.items()}), left,
                       f"run {k + 1}", reduce=reduce) for k in ks]
 
         def done(i: int, _outcome, offset=first) -> None:
@@ -201,6 +208,9 @@ def run_sets(model, sets: dict[str, np.ndarray], variables: list[str], options, 
             batch.interrupted = batch.interrupted or o.interrupted
         if batch.interrupted:
             break
+    if max_time is not None and not batch.timed_out and \
+            any(m is None and k not in batch.errors for k, m in enumerate(batch.members)):
+        batch.timed_out = True  # (the loop ended at the limit with runs left)
     return batch
 
 
@@ -261,8 +271,8 @@ def _gather(dists, samples, seed, variables, quantiles, batch: Batch, correlatio
             terminal[k, j] = m.terminal.get(n, math.nan)
     kept = cube[[s not in ("", str(Status.FAILED)) for s in status]]
     bands = _quantiles(kept.reshape(len(kept), -1), quantiles).reshape(
-        len(quantiles), len(times), len(variables)) if len(times) else \
-        np.empty((len(quantiles), 0, len(variables)))
+        len(quantiles), len(times), len(variables)) if len(times) and len(kept) else \
+        np.full((len(quantiles), len(times), len(variables)), np.nan)
     with np.errstate(all="ignore"):
         import warnings
 

@@ -212,8 +212,8 @@ def _parser() -> argparse.ArgumentParser:
                          "triangular(a,c,b), truncnormal(m,s,a,b), table(FILE) (a CSV's "
                          "rows, its column NAME)")
     mc.add_argument("--runs", type=COUNT, metavar="N",
-                    help="how many runs (default: the rows of the tables, when every "
-                         "--dist is one)")
+                    help="how many runs (default, when a --dist is a table: its rows, the "
+                         "fewest of the tables')")
     mc.add_argument("--quantiles", default="5,50,95", metavar="LIST",
                     help="the percents of the bands and tables (default 5,50,95)")
     mc.add_argument("--correlate", metavar="A,B=R", action="append", default=[],
@@ -497,7 +497,7 @@ def cmd_montecarlo(args, path: str, signals: Signals) -> int:
     correlation = _correlations(args.correlate)
     model, params = _load(args, path)
     seed = _draw_seed(args)
-    dists = dict(args.dist)
+    dists = args.dist
     progress = Progress(not args.quiet)
     progress.prefix = "montecarlo  "
     try:
@@ -509,7 +509,8 @@ def cmd_montecarlo(args, path: str, signals: Signals) -> int:
                                   max_time=args.max_time, max_steps=args.max_steps,
                                   max_events=args.max_events,
                                   weather_dir=args.weather_dir or None,
-                                  stacked=not args.one_by_one, **params)
+                                  stacked=not args.one_by_one, step_point=args.step_point,
+                                  **params)
     finally:
         progress.done()
     stem, out_dir = stem_and_dir(path, args.out)
@@ -544,17 +545,18 @@ def cmd_sensitivity(args, path: str, signals: Signals) -> int:
     progress = Progress(not args.quiet)
     progress.prefix = "sensitivity  "
     try:
+        common = dict(method_ode=args.method, rtol=args.rtol, atol=args.atol,
+                      fintim=args.fintim, max_time=args.max_time, max_steps=args.max_steps,
+                      max_events=args.max_events, step_point=args.step_point,
+                      weather_dir=args.weather_dir or None)
         if args.global_method:
             result = model.sensitivity(
-                method=args.global_method, dists=dict(args.dist), measures=args.measure,
-                runs=args.runs, seed=seed, method_ode=args.method, rtol=args.rtol,
-                atol=args.atol, fintim=args.fintim, jobs=_jobs(args),
-                scheduler=args.scheduler, progress=progress, max_time=args.max_time,
-                **params)
+                method=args.global_method, dists=args.dist, measures=args.measure,
+                runs=args.runs, seed=seed, jobs=_jobs(args), scheduler=args.scheduler,
+                progress=progress, **common, **params)
         else:
-            result = model.sensitivity(args.local or None, outputs=args.vars,
-                                       method_ode=args.method, rtol=args.rtol,
-                                       atol=args.atol, **params)
+            result = model.sensitivity(args.local or None, outputs=args.vars, **common,
+                                       **params)
     finally:
         progress.done()
     stem, out_dir = stem_and_dir(path, args.out)
@@ -569,7 +571,12 @@ def cmd_sensitivity(args, path: str, signals: Signals) -> int:
     if failed:
         print(f"amilpy: {path}: {len(failed)} of {result.runs} runs failed (listed)",
               file=sys.stderr)
-    return max(code, EXIT_FAILED if failed else EXIT_OK)
+    short = getattr(result, "interrupted", False) or getattr(result, "timed_out", False)
+    if short:
+        why = "interrupted" if result.interrupted else \
+            f"stopped at --max-time {args.max_time:g} s"
+        print(f"amilpy: {path}: {why}: the indices are of the runs done", file=sys.stderr)
+    return max(code, EXIT_FAILED if failed or short else EXIT_OK)
 
 
 def cmd_report(args, path: str, signals: Signals) -> int:
@@ -640,8 +647,23 @@ COMMANDS = {"run": cmd_run, "sweep": cmd_sweep, "montecarlo": cmd_montecarlo,
             "sensitivity": cmd_sensitivity, "report": cmd_report, "check": cmd_check}
 
 
+def _distinct_files(args) -> None:
+    """Two outputs asked into one file would leave only the last: refused first."""
+    seen: dict[str, str] = {}
+    for w in WRITERS:
+        target = getattr(args, dest(w.flag), None) if w.flag and w.takes_path else None
+        if w.command != args.command or not isinstance(target, str):
+            continue
+        key = os.path.realpath(target)
+        if key in seen and seen[key] != w.flag:
+            raise UsageError(f"{seen[key]} and {w.flag} name the same file, {target}: give "
+                             "each its own")
+        seen[key] = w.flag
+
+
 def _one(command, args, path: str, signals: Signals) -> int:
     try:
+        _distinct_files(args)
         code = command(args, path, signals)
         if interrupts.pending():
             # (swallowed where no loop looked again: after the last run, say; what

@@ -17,7 +17,7 @@ FAILED_LISTED = 20  # failed runs listed in the printout (all of them in --sampl
 
 
 def _q(q: float) -> str:
-    return f"P{q:g}"
+    return f"P{q:.10g}"
 
 
 def _num(x: float, width: int = 14) -> str:

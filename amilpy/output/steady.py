@@ -29,6 +29,9 @@ def _branch(mode: float) -> str:
 
 
 def stability_text(eq) -> str:
+    if eq.stability == "none":
+        return "NO STATE TO SOLVE FOR: every state is held or free, so nothing here comes " \
+               "to rest by itself"
     zero = eq.zero_modes
     also = f", apart from {zero} zero mode{'s' * (zero != 1)} (a direction the field " \
         "does not change along: a drift, a free position)" if zero else ""
@@ -50,12 +53,19 @@ def steady_text(eq, model=None) -> str:
         role = eq.roles[name]
         note = f"  {ROLE_WORDS[role]}" if role in ROLE_WORDS else ""
         lines.append(f"{name:<12}{value:16.8E}{rate:16.8E}{note}")
+    moving = [n for n, r in zip(eq.names, eq.rates, strict=True)
+              if eq.roles[n] in ROLE_WORDS and r != 0]
+    if moving:
+        lines += ["", f"note: {', '.join(moving)} keep{'s' * (len(moving) == 1)} changing; "
+                      "this is the equilibrium with "
+                      + ("it" if len(moving) == 1 else "them") + " frozen"]
     if eq.surfaces:
         lines += ["", "SWITCHING SURFACES AT THE EQUILIBRIUM"]
         lines += [f"  {text}: {_branch(mode)}" for text, mode in eq.surfaces]
-    lines += ["", stability_text(eq), "",
-              f"EIGENVALUES OF THE SOLVED STATES' JACOBIAN (from {eq_how(eq)})",
-              *eigen_table(eq.modes)]
+    lines += ["", stability_text(eq)]
+    if eq.modes:
+        lines += ["", f"EIGENVALUES OF THE SOLVED STATES' JACOBIAN (from {eq_how(eq)})",
+                  *eigen_table(eq.modes)]
     if eq.linear is not None:
         lines += ["", "LINEAR MODEL ABOUT THE EQUILIBRIUM (deviations): x' = A x + B u, "
                       "y = C x + D u"]

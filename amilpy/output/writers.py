@@ -168,6 +168,12 @@ def _montecarlo_png(o: Outputs, _path: str | None) -> list[str]:
                       o.plot.formats)
 
 
+def _short(result) -> list[str]:
+    if getattr(result, "interrupted", False) or getattr(result, "timed_out", False):
+        return ["partial: the study stopped early; the indices are of the runs done"]
+    return []
+
+
 def _sensitivity_rows(result):
     from .sensitivity import indices_csv, local_csv
 
@@ -262,7 +268,7 @@ WRITERS: tuple[Writer, ...] = (
     Writer("sensitivity-csv", "sensitivity", "--csv", True,
            "write the sensitivities as CSV: local, TIME and per variable its value, "
            "S_<VAR>_<P> and D_<VAR>_<P>; global, a row per output and value",
-           _csv_of("writers", "_sensitivity_rows")),
+           _csv_of("writers", "_sensitivity_rows", _short)),
     Writer("sensitivity-png", "sensitivity", "--plot", False,
            "draw them: local, S against TIME per variable (NAME_sensitivity_VAR.png); "
            "global, bars of the indices (NAME_sensitivity.png)", _sensitivity_png),
