@@ -392,3 +392,22 @@ def test_the_compiled_truncations_do_not_wrap_for_large_values():
             fortran_aint(bad)
         with pytest.raises((ValueError, OverflowError)):
             level(bad)
+
+
+@needs_numba
+def test_an_ensemble_of_a_listing_that_names_no_method_runs_compiled():
+    # With numba installed, the hoist's members (each meets the gap's edges at its own
+    # instants, so they cannot be stacked) run on METHOD COMPILED, the kernel compiled
+    # once; said in the result, and the members end where plain AUTO runs end (both
+    # at RELERR 1e-8: 1e-6 of the twist's range).
+    model = amilpy.load(os.path.join(ROOT, "models", "hoist_backlash.amil"))
+    mc = model.montecarlo({"ZETA": "uniform(0.004, 0.006)"}, runs=3, seed=2, outputs=["Y"],
+                          fintim=0.5, rtol=1e-8)
+    assert "METHOD COMPILED" in mc.how
+    for k in range(3):
+        run, = model.run(method="AUTO", rtol=1e-8, fintim=0.5, outputs=["Y"], advice=False,
+                         ZETA=float(mc.samples["ZETA"][k]))
+        assert mc.final[k, 0] == pytest.approx(run["Y"][-1], abs=1e-6 * np.ptp(run["Y"]))
+    named = model.montecarlo({"ZETA": "uniform(0.004, 0.006)"}, runs=2, seed=2,
+                             outputs=["Y"], fintim=0.1, method="AUTO")
+    assert named.how == ""  # (a method named: the caller's)

@@ -180,8 +180,8 @@ def indices(model, method: str, dists: dict[str, Dist], measures: list[str], run
                                          if m is not None and m.status == "failed"})
     messages = {k: batch.errors.get(k) or batch.members[k].message for k in failed}
     out = Indices(method, names, dists, parsed, seed, len(units), n, values, samples, failed,
-                  messages, notes=notes, interrupted=batch.interrupted,
-                  timed_out=batch.timed_out)
+                  messages, notes=notes + ([batch.how] if batch.how else []),
+                  interrupted=batch.interrupted, timed_out=batch.timed_out)
     if method == "sobol":
         _sobol(out, n, len(names), seed)
     else:

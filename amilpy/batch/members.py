@@ -49,6 +49,7 @@ class Batch:
     errors: dict[int, str]
     interrupted: bool = False
     timed_out: bool = False
+    how: str = ""  # how the runs were made, when not as a plain run would be
 
 
 def member_spec(base, values: dict[str, float]):

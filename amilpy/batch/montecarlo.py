@@ -60,6 +60,7 @@ class MonteCarlo:
     interrupted: bool = False
     timed_out: bool = False
     params: dict[str, float] = field(default_factory=dict)
+    how: str = ""  # how the runs were made, when not as a plain run would be
 
     @property
     def runs(self) -> int:
@@ -143,6 +144,34 @@ def montecarlo(model, dists: dict[str, Dist], runs: int, seed: int, *,
                    params)
 
 
+def ensemble_route(model, options, params: dict[str, float]):
+    """The runs' options, and a note when they differ from a plain run's: where
+    neither the caller nor the listing names a METHOD and numba is installed (the
+    [fast] extra), the members run on METHOD COMPILED, whose kernel is compiled once
+    for all of them (a hoist member then costs a tenth of a default run:
+    `benchmarks/ensembles.py`); where the model has no compiled form, as a plain
+    run."""
+    from dataclasses import replace
+
+    from .. import compiled
+
+    spec = model._specs(params)[0]
+    if options.method is not None or spec.method is not None or options.step_point or \
+            model.ir.acsl is not None or not compiled.available():
+        return options, ""
+    from ..run import prepare
+
+    chosen = replace(options, method="COMPILED")
+    try:
+        kernel = compiled.kernel_for(prepare(model.ir, spec, chosen, model.cache).code)
+    except AmilError:
+        return options, ""
+    if isinstance(kernel, str):
+        return options, ""
+    return chosen, ("the runs on METHOD COMPILED (numba; the listing names no METHOD): "
+                    "its kernel compiled once for all of them")
+
+
 def check_names(model, dists, params: dict[str, float]) -> None:
     """Each drawn name a data value of the model, and not also --set."""
     known = set(model.ir.data_names)
@@ -174,12 +203,15 @@ def run_sets(model, sets: dict[str, np.ndarray], variables: list[str], options, 
         together = run_stacked(model, sets, variables, options, dict(params or {}))
         if together is not None:
             report(progress, "runs", runs, runs)
+            together.how = (f"the {runs} runs integrated at once (none switches on its "
+                            "own): one LSODA run over every member's states")
             return together
+    options, how = ensemble_route(model, options, dict(params or {}))
     opts = replace(options, outputs=[v for v in variables if v in model.ir.variables],
                    progress=None)
     base = model._specs(dict(params or {}))[0]
     reduce = partial(member_of, tuple(variables))
-    batch = Batch([None] * runs, {})
+    batch = Batch([None] * runs, {}, how=how)
     start = time.monotonic()
     # (each chunk starts its workers afresh: a tenth of the runs at least, so that
     # starting them costs little, and the time limit and Ctrl-C are looked at often)
@@ -284,4 +316,4 @@ def _gather(dists, samples, seed, variables, quantiles, batch: Batch, correlatio
         np.zeros(len(times), int)
     return MonteCarlo(dists, samples, seed, list(variables), quantiles, times, prdel, bands,
                       mean, counts, final, terminal_names, terminal, status, messages,
-                      correlation, batch.interrupted, batch.timed_out, params)
+                      correlation, batch.interrupted, batch.timed_out, params, batch.how)

@@ -31,6 +31,7 @@ def montecarlo_text(mc, model=None) -> str:
              f"{len(mc.failed)} failed" +
              ("; interrupted: the runs done are kept" if mc.interrupted else "") +
              ("; the time limit ran out: the runs done are kept" if mc.timed_out else ""),
+             *([mc.how] if mc.how else []),
              "", "DRAWN VALUES" + "".join(f"{h:>14}" for h in ("MEAN", "SD", "MIN", "MAX")),
              ]
     for name, values in mc.samples.items():
