@@ -411,3 +411,17 @@ def test_an_ensemble_of_a_listing_that_names_no_method_runs_compiled():
     named = model.montecarlo({"ZETA": "uniform(0.004, 0.006)"}, runs=2, seed=2,
                              outputs=["Y"], fintim=0.1, method="AUTO")
     assert named.how == ""  # (a method named: the caller's)
+
+
+@needs_numba
+def test_two_listings_with_the_same_code_and_other_parameters_each_get_theirs():
+    # X' = -X in both; the first binds K (read only by INITIAL), the second nothing.
+    # The kernel reads parameters by position: one built for the first, reused for the
+    # second, asked it for K (a KeyError).
+    first = amilpy.loads("PARAM K = 2.0\nINITIAL\n   R = SQRT(K)\nDYNAMIC\n"
+                         "X = INTGRL(R, -X)\nMETHOD COMPILED\nTIMER FINTIM = 1.0\nEND\n")
+    second = amilpy.loads("X = INTGRL(1.0, -X)\nMETHOD COMPILED\nTIMER FINTIM = 1.0\nEND\n")
+    a, = first.run(advice=False)
+    b, = second.run(advice=False)
+    assert a["X"][-1] == pytest.approx(math.sqrt(2.0) * math.exp(-1.0), rel=1e-6)
+    assert b["X"][-1] == pytest.approx(math.exp(-1.0), rel=1e-6)

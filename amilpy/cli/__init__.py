@@ -647,8 +647,8 @@ COMMANDS = {"run": cmd_run, "sweep": cmd_sweep, "montecarlo": cmd_montecarlo,
             "sensitivity": cmd_sensitivity, "report": cmd_report, "check": cmd_check}
 
 
-def _distinct_files(args) -> None:
-    """Two outputs asked into one file would leave only the last: refused first."""
+def _same_file(args) -> str:
+    """Two outputs asked into one file would leave only the last: what to say, or ""."""
     seen: dict[str, str] = {}
     for w in WRITERS:
         target = getattr(args, dest(w.flag), None) if w.flag and w.takes_path else None
@@ -656,14 +656,13 @@ def _distinct_files(args) -> None:
             continue
         key = os.path.realpath(target)
         if key in seen and seen[key] != w.flag:
-            raise UsageError(f"{seen[key]} and {w.flag} name the same file, {target}: give "
-                             "each its own")
+            return f"{seen[key]} and {w.flag} name the same file, {target}: give each its own"
         seen[key] = w.flag
+    return ""
 
 
 def _one(command, args, path: str, signals: Signals) -> int:
     try:
-        _distinct_files(args)
         code = command(args, path, signals)
         if interrupts.pending():
             # (swallowed where no loop looked again: after the last run, say; what
@@ -733,6 +732,10 @@ def _main(argv: list[str] | None) -> int:
     if len(paths) > 1 and several:
         print(f"amilpy {args.command}: {several[0]} names one file; with several listings "
               "run them one at a time", file=sys.stderr)
+        return EXIT_USAGE
+    same = _same_file(args)
+    if same:
+        print(f"amilpy {args.command}: {same}", file=sys.stderr)
         return EXIT_USAGE
     if getattr(args, "figure_formats", None) or getattr(args, "overlay", False):
         args.plot = True  # (asking for figure files or an overlay asks for figures)

@@ -81,15 +81,20 @@ class Kernel:
 _LOADED: dict[str, Kernel] = {}  # by module key, for this process
 # by the generated Python source: a run whose constants differ (FINTIM, say) builds
 # new scalar functions of the same text, and needs no new translation
-_BY_SOURCE: dict[str, Kernel | str] = {}
+_BY_SOURCE: dict[tuple, Kernel | str] = {}
 
 
 def kernel_for(c: ModelCode) -> Kernel | str:
     """The compiled module for `c`'s code (built, or read from the disk cache, once
     per process), or why there is none."""
-    kernel = _BY_SOURCE.get(c.source)
+    # (two listings can generate the same text and bind different parameters: one
+    # whose INITIAL reads a PARAM that no derivative reads, and one with none; the
+    # kernel reads its parameters by position, so they are part of the key)
+    key = (c.source, tuple(sorted(k for k, v in c.namespace.items()
+                                  if k.startswith("p_") and isinstance(v, float))))
+    kernel = _BY_SOURCE.get(key)
     if kernel is None:
-        kernel = _BY_SOURCE[c.source] = _build(c)
+        kernel = _BY_SOURCE[key] = _build(c)
     return kernel
 
 
