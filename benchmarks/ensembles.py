@@ -26,7 +26,8 @@ the error of C1(24 h) against the closed form.
 
 hoist_backlash.amil (ZETA uniform, 5 s, 111 contact edges a run): amilpy
 montecarlo against Model.run (no stacked hand-written route: each member meets
-the gap's edges at its own instants).
+the gap's edges at its own instants). With numba installed (the [fast] extra) the
+members of a listing that names no METHOD run on METHOD COMPILED, one by one.
 
 Printed: seconds per member (the minimum of --repeats, in one process), the
 factor against Model.run, and the error.
@@ -156,7 +157,10 @@ def stacked_case(amilpy, n: int, repeats: int) -> None:
         model.run(advice=False)
         dists = {"KE": "lognormal(-1.6, 0.3)", "K12": "uniform(0.3, 0.7)"}
         rows = []
-        for label, stacked in (("amilpy montecarlo", True), ("  one by one", False)):
+        from amilpy import compiled
+
+        alone = "  one by one" + (" (COMPILED)" if compiled.available() else "")
+        for label, stacked in (("amilpy montecarlo", True), (alone, False)):
             sec, mc = best(lambda s=stacked: model.montecarlo(
                 dists, runs=n, seed=1, outputs=["C1"], stacked=s), repeats)
             ref = two_exact(mc.samples["KE"], mc.samples["K12"])
