@@ -282,3 +282,13 @@ def test_step_point_mode_is_the_runs_own(tmp_path):
                           method="EULER", step_point=True)
     assert mc.final[:, 0] == pytest.approx([run["X"][-1]] * 2, rel=1e-8)
     assert run["X"][-1] == pytest.approx(0.9 ** 10, rel=1e-12)
+
+
+def test_an_output_into_the_listing_itself_is_refused(decay, capsys):
+    text = decay.read_text()
+    assert main(["montecarlo", str(decay), "--dist", "K=uniform(0.5,1.5)", "--runs", "2",
+                 "--csv", str(decay)]) == 2
+    assert "is the listing itself" in capsys.readouterr().err
+    assert decay.read_text() == text
+    assert main(["run", str(decay), "--csv", str(decay)]) == 2
+    assert decay.read_text() == text

@@ -648,13 +648,18 @@ COMMANDS = {"run": cmd_run, "sweep": cmd_sweep, "montecarlo": cmd_montecarlo,
 
 
 def _same_file(args) -> str:
-    """Two outputs asked into one file would leave only the last: what to say, or ""."""
+    """Two outputs asked into one file would leave only the last, and an output into
+    the listing would replace it: what to say, or ""."""
+    listings = {os.path.realpath(p) for p in (getattr(args, "files", None) or
+                                              [getattr(args, "file", None)]) if p}
     seen: dict[str, str] = {}
     for w in WRITERS:
         target = getattr(args, dest(w.flag), None) if w.flag and w.takes_path else None
         if w.command != args.command or not isinstance(target, str):
             continue
         key = os.path.realpath(target)
+        if key in listings:
+            return f"{w.flag} {target} is the listing itself: give another file"
         if key in seen and seen[key] != w.flag:
             return f"{seen[key]} and {w.flag} name the same file, {target}: give each its own"
         seen[key] = w.flag
