@@ -269,6 +269,10 @@ COMMAND_ARGS = {
     "modes": ["--at", "0", "--max-time", "10"],
     "periodic": ["--period", "1.0", "--settle", "0.5", "--max-time", "10"],
     "response": ["{name}=1.0:1.05", "--period", "1.0", "--settle", "0.5", "--max-time", "10"],
+    "montecarlo": ["--dist", "{name}=uniform(0.5,1.5)", "--runs", "6", "--fintim", "0.5",
+                   "--jobs", "1", "--max-time", "5"],
+    "sensitivity": ["--local", "{name}", "--fintim", "0.5", "--max-time", "5"],
+    "steady": ["--max-time", "10"],
 }
 
 

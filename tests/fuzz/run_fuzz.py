@@ -35,7 +35,7 @@ def main(argv=None) -> int:
                     help="also N command lines with hostile numeric values")
     ap.add_argument("--commands", type=int, default=0, metavar="N",
                     help="also N mutated listings through check, report, sweep, modes, "
-                         "periodic and response in turn")
+                         "periodic, response, montecarlo, sensitivity and steady in turn")
     ap.add_argument("--out", default="fuzz-findings")
     a = ap.parse_args(argv)
 
