@@ -209,6 +209,8 @@ def test_steady_writes_csv_matrices_npz_and_bode(chain, tmp_path, capsys):
 def test_steady_usage_errors(chain, capsys):
     assert main(["steady", str(chain), "--bode"]) == 2
     assert "--input" in capsys.readouterr().err
+    assert main(["steady", str(chain), "--linear", "--input", "F"]) == 2
+    assert "--output NAME" in capsys.readouterr().err
     assert main(["steady", str(chain), "--guess", "Q=1"]) == 2
     assert "not a state" in capsys.readouterr().err
     assert main(["steady", str(chain), "--guess", "X1=abc"]) == 2

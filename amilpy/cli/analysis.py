@@ -108,6 +108,9 @@ def add_steady_parser(sub) -> None:
     s.add_argument("--guess", metavar="NAME=VALUE", action="append", default=[],
                    help="start the search with state NAME at VALUE (repeatable; default "
                         "the listing's initial values)")
+    s.add_argument("--linear", action="store_true",
+                   help="print the linear model A, B, C, D about the equilibrium (with "
+                        "--input and --output; giving them is enough)")
     s.add_argument("--input", metavar="NAME", action="append", default=[],
                    help="a data value (PARAM/CONST/INCON) taken as an input u of the "
                         "linear model (repeatable)")
@@ -121,8 +124,8 @@ def add_steady_parser(sub) -> None:
 def cmd_steady(args, path: str, signals) -> int:
     from ..output.steady import steady_text
 
-    if (args.matrices or args.bode) and not (args.input and args.output):
-        print(f"amilpy: {path}: --matrices and --bode need the linear model: give "
+    if (args.linear or args.matrices or args.bode) and not (args.input and args.output):
+        print(f"amilpy: {path}: --linear, --matrices and --bode need the linear model: give "
               "--input NAME (a data value) and --output NAME (a variable)", file=sys.stderr)
         return base.EXIT_USAGE
     model, params = _prepare(args, path)
