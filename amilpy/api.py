@@ -154,13 +154,10 @@ class Model:
         `progress` (`amilpy.progress`): given a Report of each run's TIME now and
         then (runs here only), and one as each run finishes (task "runs")."""
         from .output.views import install
-        from .run import Options
 
         install()  # (how the runs show themselves: Run.plot, a notebook's table)
         _check_method(method)
-        for label, tol in (("rtol", rtol), ("atol", atol)):
-            if tol is not None and not tol > 0:
-                raise UsageError(f"{label} must be positive, got {tol}")
+        _check_tolerances(rtol, atol)
         specs = self._specs(params)
         obs = self._observations(data, len(specs))
         if outputs is not None:
@@ -168,15 +165,12 @@ class Model:
             if obs is not None:  # (the observed variables are recorded too)
                 outputs += [n for n in dict.fromkeys(s.name for s in obs.series)
                             if n not in outputs]
-        opts = Options(method=method, rtol=rtol, atol=atol, events=events, outputs=outputs,
-                       max_time=max_time, progress=progress, fintim=fintim,
-                       step_point=step_point, seed=_seed(seed),
-                       weather_dirs=_folders(weather_dir),
-                       extra_times=tuple(obs.times().tolist()) if obs is not None else ())
-        if max_steps:
-            opts.max_steps = max_steps
-        if max_events:
-            opts.max_events = max_events
+        opts = _run_options(method, rtol, atol, max_steps, max_events, events=events,
+                            outputs=outputs, max_time=max_time, progress=progress,
+                            fintim=fintim, step_point=step_point, seed=_seed(seed),
+                            weather_dirs=_folders(weather_dir),
+                            extra_times=tuple(obs.times().tolist()) if obs is not None
+                            else ())
         if stream_csv is None:
             self._check_memory(specs, outputs, fintim)
             return self._runs(specs, opts, obs, advice, jobs, scheduler, progress)
@@ -385,7 +379,7 @@ class Model:
                      max_time=max_time, max_steps=max_steps, max_events=max_events,
                      **params)
 
-    def montecarlo(self, dists: dict, runs: int | None = None, seed: int = 1, *,
+    def montecarlo(self, dists: dict, runs: int | None = None, seed: int | None = 1, *,
                    quantiles=(5.0, 50.0, 95.0), correlation: dict | None = None,
                    outputs: list[str] | None = None, method: str | None = None,
                    rtol: float | None = None, atol: float | None = None,
@@ -417,7 +411,7 @@ class Model:
             runs = table_rows(parsed)
             if runs is None:
                 raise UsageError("give the number of runs (--runs N)")
-        runs, seed = _whole(runs, "runs", 1), _whole(seed, "seed", 0)
+        runs, seed = _whole(runs, "runs", 1), _draw_seed(seed)
         pairs = _pairs(correlation)
         variables = self.known_names(outputs) if outputs else None
         opts = _batch_options(method, rtol, atol, fintim, max_time, weather_dir, max_steps,
@@ -430,7 +424,7 @@ class Model:
                           stacked=stacked)
 
     def sensitivity(self, names=None, *, method: str = "local", dists: dict | None = None,
-                    measures=(), runs: int | None = None, seed: int = 1,
+                    measures=(), runs: int | None = None, seed: int | None = 1,
                     outputs: list[str] | None = None, method_ode: str | None = None,
                     rtol: float | None = None, atol: float | None = None,
                     fintim: float | None = None, jobs: int = 1,
@@ -467,7 +461,7 @@ class Model:
             raise UsageError("give the number of runs (--runs N: Sobol's rows, Morris's "
                              "trajectories)")
         return indices(self, method, _draws(dists or {}), _names(measures),
-                       _whole(runs, "runs", 1), _whole(seed, "seed", 0), options=opts,
+                       _whole(runs, "runs", 1), _draw_seed(seed), options=opts,
                        jobs=jobs, scheduler=scheduler, progress=progress, max_time=max_time,
                        params={k.upper(): float(v) for k, v in params.items()})
 
@@ -499,9 +493,7 @@ class Model:
 
         self._flow_map()
         _check_method(method)
-        for label, tol in (("rtol", rtol), ("atol", atol)):
-            if tol is not None and not tol > 0:
-                raise UsageError(f"{label} must be positive, got {tol}")
+        _check_tolerances(rtol, atol)
         with _analysis_time(max_time, NoEquilibrium):
             return equilibrium(self, at, guess, method=method, rtol=rtol, atol=atol,
                                inputs=inputs, outputs=outputs, progress=progress, **params)
@@ -606,6 +598,11 @@ def _whole(value, what: str, least: int) -> int:
     return int(number)
 
 
+def _draw_seed(seed) -> int:
+    """The seed of an ensemble's draws: a whole number, 0 or more (None: 1)."""
+    return _whole(1 if seed is None else seed, "seed", 0)
+
+
 def _draws(dists) -> dict:
     """name -> Dist from name -> Dist or its text; a name given twice is an error."""
     from .batch.distributions import Dist, parse_dist
@@ -621,7 +618,8 @@ def _draws(dists) -> dict:
 
 
 def _pairs(correlation) -> dict[tuple[str, str], float]:
-    """{(A, B): r} from {(A, B): r} or {"A,B": r}; a pair given twice is an error."""
+    """{(A, B): r} from {(A, B): r}, {"A,B": r} or such pairs in a list; a pair given
+    twice is an error."""
     out: dict[tuple[str, str], float] = {}
     items = correlation.items() if hasattr(correlation, "items") else (correlation or ())
     for key, r in items:
@@ -642,13 +640,24 @@ def _pairs(correlation) -> dict[tuple[str, str], float]:
 def _batch_options(method, rtol, atol, fintim, max_time, weather_dir, max_steps, max_events,
                    step_point):
     """The run options every run of an ensemble shares."""
-    from .run import Options
+    _check_tolerances(rtol, atol)
+    return _run_options(method, rtol, atol, max_steps, max_events, fintim=fintim,
+                        max_time=max_time, weather_dirs=_folders(weather_dir),
+                        step_point=step_point)
 
+
+def _check_tolerances(rtol: float | None, atol: float | None) -> None:
     for label, tol in (("rtol", rtol), ("atol", atol)):
         if tol is not None and not tol > 0:
             raise UsageError(f"{label} must be positive, got {tol}")
-    opts = Options(method=method, rtol=rtol, atol=atol, fintim=fintim, max_time=max_time,
-                   weather_dirs=_folders(weather_dir), step_point=step_point)
+
+
+def _run_options(method, rtol, atol, max_steps: int | None, max_events: int | None,
+                 **fields):
+    """run.Options from the API's keywords (a limit left out: the default)."""
+    from .run import Options
+
+    opts = Options(method=method, rtol=rtol, atol=atol, **fields)
     if max_steps:
         opts.max_steps = max_steps
     if max_events:

@@ -49,6 +49,7 @@ from .common import (
     variable_names,
     write_outputs,
     writer_options,
+    written_and_printed,
 )
 from .console import (
     STDOUT_FAILED,
@@ -466,42 +467,40 @@ def _dist_option(text: str) -> tuple[str, str]:
     return name.strip().upper(), dist.strip()
 
 
-def _draw_seed(args) -> int:
-    """--seed of the draws (montecarlo, sensitivity): a whole number, 0 or more."""
-    seed = 1 if args.seed is None else args.seed
-    if seed < 0 or seed != int(seed):
-        raise UsageError(f"--seed must be a whole number, 0 or more, got {args.seed:g}")
-    return int(seed)
-
-
-def _correlations(items: list[str]) -> dict[tuple[str, str], float]:
-    out = {}
+def _correlations(items: list[str]) -> list[tuple[str, float]]:
+    """--correlate A,B=R as ("A,B", R) pairs (the API reads the names and refuses a
+    pair given twice)."""
+    out = []
     for item in items:
         pair, sep, value = item.partition("=")
-        names = [n.strip().upper() for n in pair.split(",")]
         try:
             r = fortran_float(value)
         except ValueError:
             r = None
-        if not sep or len(names) != 2 or r is None:
+        if not sep or pair.count(",") != 1 or r is None:
             raise UsageError(f"--correlate takes A,B=R, e.g. KA,KE=0.5, got {item!r}")
-        out[(names[0], names[1])] = r
+        out.append((pair, r))
     return out
 
 
+def _stopped_early(path: str, result, args, after: str) -> bool:
+    """Say that an ensemble stopped before its last run (Ctrl-C, --max-time)."""
+    if not (getattr(result, "interrupted", False) or getattr(result, "timed_out", False)):
+        return False
+    why = "interrupted" if result.interrupted else f"stopped at --max-time {args.max_time:g} s"
+    print(f"amilpy: {path}: {why}{after}", file=sys.stderr)
+    return True
+
+
 def cmd_montecarlo(args, path: str, signals: Signals) -> int:
-    from ..batch.montecarlo import parse_quantiles
     from ..output.montecarlo import montecarlo_text
 
-    quantiles = parse_quantiles(args.quantiles)
     correlation = _correlations(args.correlate)
     model, params = _load(args, path)
-    seed = _draw_seed(args)
-    dists = args.dist
     progress = Progress(not args.quiet)
     progress.prefix = "montecarlo  "
     try:
-        result = model.montecarlo(dists, args.runs, seed, quantiles=quantiles,
+        result = model.montecarlo(args.dist, args.runs, args.seed, quantiles=args.quantiles,
                                   correlation=correlation, outputs=args.vars,
                                   method=args.method, rtol=args.rtol, atol=args.atol,
                                   fintim=args.fintim, jobs=_jobs(args),
@@ -513,23 +512,13 @@ def cmd_montecarlo(args, path: str, signals: Signals) -> int:
                                   **params)
     finally:
         progress.done()
-    stem, out_dir = stem_and_dir(path, args.out)
-    outputs = Outputs("montecarlo", stem, out_dir, analysis=result, model=model,
-                      dialect=args.csv_dialect, plot=figure_options(args))
-    written, errors = write_outputs(outputs, args, signals)
-    if not args.quiet and not signals.held_back:
-        write_out(lambda out: out.write(montecarlo_text(result, model)))
-    code = finish(path, written, errors, args.quiet, signals)
+    code = written_and_printed("montecarlo", path, model, result, args, signals, montecarlo_text)
     if result.failed:
         print(f"amilpy: {path}: {len(result.failed)} of {result.runs} runs failed (listed, "
               "left out of the quantiles)", file=sys.stderr)
-    if result.interrupted or result.timed_out:
-        why = "interrupted" if result.interrupted else \
-            f"stopped at --max-time {args.max_time:g} s"
-        print(f"amilpy: {path}: {why} after {result.done} of {result.runs} runs; what was "
-              "done is printed and written", file=sys.stderr)
-    return max(code, EXIT_FAILED if result.failed or result.interrupted or result.timed_out
-               else EXIT_OK)
+    short = _stopped_early(path, result, args, f" after {result.done} of {result.runs} "
+                                               "runs; what was done is printed and written")
+    return max(code, EXIT_FAILED if result.failed or short else EXIT_OK)
 
 
 def cmd_sensitivity(args, path: str, signals: Signals) -> int:
@@ -540,7 +529,6 @@ def cmd_sensitivity(args, path: str, signals: Signals) -> int:
     if not args.global_method and (args.dist or args.measure):
         raise UsageError("--dist and --measure are for global indices: add --method "
                          "morris or --method sobol")
-    seed = _draw_seed(args)
     model, params = _load(args, path)
     progress = Progress(not args.quiet)
     progress.prefix = "sensitivity  "
@@ -552,30 +540,20 @@ def cmd_sensitivity(args, path: str, signals: Signals) -> int:
         if args.global_method:
             result = model.sensitivity(
                 method=args.global_method, dists=args.dist, measures=args.measure,
-                runs=args.runs, seed=seed, jobs=_jobs(args), scheduler=args.scheduler,
+                runs=args.runs, seed=args.seed, jobs=_jobs(args), scheduler=args.scheduler,
                 progress=progress, **common, **params)
         else:
             result = model.sensitivity(args.local or None, outputs=args.vars, **common,
                                        **params)
     finally:
         progress.done()
-    stem, out_dir = stem_and_dir(path, args.out)
-    outputs = Outputs("sensitivity", stem, out_dir, analysis=result, model=model,
-                      dialect=args.csv_dialect, plot=figure_options(args))
-    written, errors = write_outputs(outputs, args, signals)
-    text = indices_text if args.global_method else local_text
-    if not args.quiet and not signals.held_back:
-        write_out(lambda out: out.write(text(result, model)))
-    code = finish(path, written, errors, args.quiet, signals)
+    code = written_and_printed("sensitivity", path, model, result, args, signals,
+                 indices_text if args.global_method else local_text)
     failed = getattr(result, "failed", [])
     if failed:
         print(f"amilpy: {path}: {len(failed)} of {result.runs} runs failed (listed)",
               file=sys.stderr)
-    short = getattr(result, "interrupted", False) or getattr(result, "timed_out", False)
-    if short:
-        why = "interrupted" if result.interrupted else \
-            f"stopped at --max-time {args.max_time:g} s"
-        print(f"amilpy: {path}: {why}: the indices are of the runs done", file=sys.stderr)
+    short = _stopped_early(path, result, args, ": the indices are of the runs done")
     return max(code, EXIT_FAILED if failed or short else EXIT_OK)
 
 

@@ -12,9 +12,8 @@ import math
 import sys
 
 from ..language import fortran_float
-from ..output.options import Outputs
 from . import common as base
-from .console import Progress, write_out
+from .console import Progress
 
 
 def _span(text: str) -> tuple[str, float, float]:
@@ -136,7 +135,7 @@ def cmd_steady(args, path: str, signals) -> int:
         max_time=args.max_time, **params), prefix="steady: ")
     if code is not None:
         return code
-    return _done("steady", path, model, result, args, signals, steady_text)
+    return base.written_and_printed("steady", path, model, result, args, signals, steady_text)
 
 
 def add_fit_parser(sub) -> None:
@@ -191,7 +190,7 @@ def cmd_fit(args, path: str, signals) -> int:
                            gradients=args.gradients, **params)
     finally:
         progress.done()
-    code = _done("fit", path, model, result, args, signals, fit_text)
+    code = base.written_and_printed("fit", path, model, result, args, signals, fit_text)
     if not result.success:
         print(f"amilpy: {path}: the fit did not converge: {result.message}", file=sys.stderr)
         code = max(code, base.EXIT_FAILED)
@@ -228,16 +227,6 @@ def _computed(args, path: str, compute, not_found: str = "", prefix: str = ""):
         progress.done()
 
 
-def _done(command: str, path: str, model, result, args, signals, text) -> int:
-    stem, out_dir = base.stem_and_dir(path, getattr(args, "out", None))
-    outputs = Outputs(command, stem, out_dir, model=model, analysis=result,
-                      dialect=args.csv_dialect, plot=base.figure_options(args))
-    written, errors = base.write_outputs(outputs, args, signals)
-    if not args.quiet and not signals.held_back:
-        write_out(lambda out: out.write(text(result, model)))
-    return base.finish(path, written, errors, args.quiet, signals)
-
-
 def cmd_modes(args, path: str, signals) -> int:
     from ..output.analysis import modes_text
 
@@ -247,7 +236,7 @@ def cmd_modes(args, path: str, signals) -> int:
         max_time=args.max_time, **params), prefix=f"modes: to TIME = {args.at:g}  ")
     if code is not None:
         return code
-    return _done("modes", path, model, result, args, signals, modes_text)
+    return base.written_and_printed("modes", path, model, result, args, signals, modes_text)
 
 
 def cmd_periodic(args, path: str, signals) -> int:
@@ -260,7 +249,7 @@ def cmd_periodic(args, path: str, signals) -> int:
         max_time=args.max_time, **params), not_found="no periodic orbit found")
     if code is not None:
         return code
-    return _done("periodic", path, model, orbit, args, signals, orbit_text)
+    return base.written_and_printed("periodic", path, model, orbit, args, signals, orbit_text)
 
 
 def cmd_response(args, path: str, signals) -> int:
@@ -275,7 +264,7 @@ def cmd_response(args, path: str, signals) -> int:
         not_found=f"no periodic orbit at {name} = {start:g}")
     if code is not None:
         return code
-    code = _done("response", path, model, resp, args, signals, response_text)
+    code = base.written_and_printed("response", path, model, resp, args, signals, response_text)
     if resp.interrupted or resp.timed_out:
         why = "interrupted" if resp.interrupted else \
             f"stopped at --max-time {args.max_time:g} s"

@@ -155,6 +155,18 @@ def write_outputs(outputs: Outputs, args, signals: Signals,
     return written, errors
 
 
+def written_and_printed(command: str, path: str, model, result, args, signals, text) -> int:
+    """An analysis's or an ensemble's files (the writers of `command`), then its
+    printout `text(result, model)`; the exit code of the outputs."""
+    stem, out_dir = stem_and_dir(path, getattr(args, "out", None))
+    outputs = Outputs(command, stem, out_dir, model=model, analysis=result,
+                      dialect=args.csv_dialect, plot=figure_options(args))
+    written, errors = write_outputs(outputs, args, signals)
+    if not args.quiet and not signals.held_back:
+        write_out(lambda out: out.write(text(result, model)))
+    return finish(path, written, errors, args.quiet, signals)
+
+
 def stem_and_dir(path: str, out: str | None) -> tuple[str, str]:
     return (os.path.splitext(os.path.basename(path))[0],
             out or os.path.dirname(os.path.abspath(path)))
