@@ -104,16 +104,7 @@ class Model:
                 overrides[name] = float(value)
             except (TypeError, ValueError):
                 raise UsageError(f"{name} must be a number, got {value!r}") from None
-        specs = []
-        for spec in self.ir.runs:
-            if overrides:
-                data = dict(spec.data)
-                data.update(overrides)
-                changed = {**spec.changed, **overrides}
-                label = ", ".join(f"{n} = {v:g}" for n, v in changed.items())
-                spec = replace(spec, data=data, changed=changed, label=label or spec.label)
-            specs.append(spec)
-        return specs
+        return [spec.overridden(overrides) for spec in self.ir.runs]
 
     def run(self, method: str | None = None, rtol: float | None = None,
             atol: float | None = None, *, events: bool = True,

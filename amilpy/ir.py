@@ -9,7 +9,7 @@ family a complete visitor of IR expressions handles.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import Enum
 
 from .diagnostics import Span
@@ -383,6 +383,16 @@ class RunSpec:
     step_point: bool | None = None
     timer_spans: dict[str, Span] = field(default_factory=dict)  # where each TIMER key is
     weather: object | None = None  # FST's WEATHER statements (weather.WeatherSpec)
+
+    def overridden(self, values: dict[str, float]) -> RunSpec:
+        """This run with data values from outside (--set, a sweep, an ensemble's
+        draw): they count as changed, and the label names every changed value."""
+        if not values:
+            return self
+        changed = {**self.changed, **values}
+        label = ", ".join(f"{n} = {v:g}" for n, v in changed.items())
+        return replace(self, data={**self.data, **values}, changed=changed,
+                       label=label or self.label)
 
 
 @dataclass

@@ -34,9 +34,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..diagnostics import UsageError
+from ..result import Status
 from .distributions import Dist
 from .members import Batch
-from .montecarlo import check_names, run_sets
+from .montecarlo import check_names, reported, run_sets
 
 METHODS = ("morris", "sobol")
 LEVELS = 4  # Morris's grid
@@ -85,7 +86,7 @@ def _terminal_names(model) -> set[str]:
 
 def value_of(measure: Measure, member, variables: list[str]) -> float:
     """The measure of one run (NaN: the run has none)."""
-    if member is None or member.status == "failed":
+    if member is None or member.status == str(Status.FAILED):
         return math.nan
     if measure.kind == "terminal":
         return float(member.terminal.get(measure.name, math.nan))
@@ -150,8 +151,7 @@ def indices(model, method: str, dists: dict[str, Dist], measures: list[str], run
     check_names(model, dists, params)
     if runs < 2:
         raise UsageError(f"--runs must be at least 2, got {runs}")
-    parsed = [parse_measure(m, model) for m in measures] if measures else \
-        [parse_measure(_default_measure(model), model)]
+    parsed = [parse_measure(m, model) for m in measures or reported(model)[:1]]
     _check_instants(model, parsed, options, params)
     names = list(dists)
     notes = []
@@ -166,19 +166,18 @@ def indices(model, method: str, dists: dict[str, Dist], measures: list[str], run
         units, steps = _morris(len(names), n, seed)
     samples = {name: np.asarray(dists[name].quantile(units[:, j]), dtype=float)
                for j, name in enumerate(names)}
-    variables = list(dict.fromkeys(m.name for m in parsed if m.kind != "terminal"))
+    # (the runs keep the variables measured; only TERMINAL values: the first reported)
+    variables = list(dict.fromkeys(m.name for m in parsed if m.kind != "terminal")) or \
+        reported(model)[:1]
     from dataclasses import replace
 
     opts = replace(options, extrema=tuple(m.name for m in parsed if m.kind in ("max", "min")))
-    batch: Batch = run_sets(model, samples, variables or [model.known_names(
-        _default_measure(model))[0]], opts, jobs=jobs, scheduler=scheduler,
-        progress=progress, max_time=max_time, params=params)
-    variables = variables or [model.known_names(_default_measure(model))[0]]
+    batch: Batch = run_sets(model, samples, variables, opts, jobs=jobs, scheduler=scheduler,
+                            progress=progress, max_time=max_time, params=params)
     values = np.array([[value_of(m, member, variables) for m in parsed]
                        for member in batch.members]).reshape(len(units), len(parsed))
-    failed = sorted(set(batch.errors) | {k for k, m in enumerate(batch.members)
-                                         if m is not None and m.status == "failed"})
-    messages = {k: batch.errors.get(k) or batch.members[k].message for k in failed}
+    failed = [k for k in range(len(units)) if batch.status(k) == str(Status.FAILED)]
+    messages = {k: batch.message(k) for k in failed}
     out = Indices(method, names, dists, parsed, seed, len(units), n, values, samples, failed,
                   messages, notes=notes + ([batch.how] if batch.how else []),
                   interrupted=batch.interrupted, timed_out=batch.timed_out)
@@ -203,12 +202,6 @@ def _check_instants(model, measures: list[Measure], options, params) -> None:
         if not nearest_instants(grid, [m.time])[1][0]:
             raise UsageError(f"--measure {m.text}: TIME = {m.time:g} is not an output "
                              "instant of the run; choose one on the OUTDEL or PRDEL grid")
-
-
-def _default_measure(model) -> str:
-    from .montecarlo import reported
-
-    return reported(model)[0]
 
 
 def _saltelli(k: int, n: int, seed: int) -> np.ndarray:

@@ -5,11 +5,11 @@ at a time (`montecarlo.run_sets`) or every run at once (`stacked`)."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..result import Run
+from ..result import Run, Status
 
 
 @dataclass(frozen=True)
@@ -51,9 +51,13 @@ class Batch:
     timed_out: bool = False
     how: str = ""  # how the runs were made, when not as a plain run would be
 
+    def status(self, k: int) -> str:
+        """Run k's: finished, stopped, failed, or "" (not run)."""
+        member = self.members[k]
+        if member is not None:
+            return member.status
+        return str(Status.FAILED) if k in self.errors else ""
 
-def member_spec(base, values: dict[str, float]):
-    data = {**base.data, **values}
-    changed = {**base.changed, **values}
-    return replace(base, data=data, changed=changed,
-                   label=", ".join(f"{n} = {v:.6g}" for n, v in values.items()))
+    def message(self, k: int) -> str:
+        member = self.members[k]
+        return member.message if member is not None else self.errors.get(k, "")

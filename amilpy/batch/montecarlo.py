@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from functools import partial
 
@@ -29,7 +31,7 @@ from ..diagnostics import AmilError, UsageError
 from ..progress import report
 from ..result import Status
 from .distributions import Dist, sample
-from .members import Batch, member_of, member_spec
+from .members import Batch, member_of
 
 QUANTILES = (5.0, 50.0, 95.0)  # percent
 CHUNK = 64  # runs handed to the farm at a time, per worker, at least
@@ -78,7 +80,7 @@ class MonteCarlo:
     @property
     def kept(self) -> np.ndarray:
         """Which runs count in the quantiles: those that ran and did not fail."""
-        return np.array([s not in ("", str(Status.FAILED)) for s in self.status], bool)
+        return counted(self.status)
 
     def values_of(self, k: int) -> dict[str, float]:
         return {n: float(v[k]) for n, v in self.samples.items()}
@@ -95,15 +97,24 @@ class MonteCarlo:
         return self.bands[:, :, self.variables.index(name.upper())]
 
 
+def counted(status: list[str]) -> np.ndarray:
+    """Which runs count in the quantiles: those that ran and did not fail."""
+    return np.array([s not in ("", str(Status.FAILED)) for s in status], bool)
+
+
+@contextmanager
+def _nan_columns():
+    """A column of NaN (no run has a value there) gives NaN, without a warning."""
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        yield
+
+
 def _quantiles(values: np.ndarray, q) -> np.ndarray:
     if not len(values):
         return np.full((len(q), values.shape[1]), math.nan)
-    with np.errstate(all="ignore"):
-        import warnings
-
-        with warnings.catch_warnings():  # (a column of NaN: all-NaN slice, NaN it is)
-            warnings.simplefilter("ignore", RuntimeWarning)
-            return np.nanquantile(values, np.asarray(q) / 100.0, axis=0)
+    with _nan_columns():
+        return np.nanquantile(values, np.asarray(q) / 100.0, axis=0)
 
 
 def parse_quantiles(value) -> tuple[float, ...]:
@@ -131,8 +142,6 @@ def montecarlo(model, dists: dict[str, Dist], runs: int, seed: int, *,
     seconds for the whole study (the runs done by then are kept); `stacked`: all
     runs integrated at once where they can be (`stacked.py`)."""
     params = dict(params or {})
-    if runs < 1:
-        raise UsageError(f"--runs must be at least 1, got {runs}")
     check_names(model, dists, params)
     correlation = dict(correlation or {})
     samples = sample(dists, runs, seed, correlation)
@@ -144,7 +153,7 @@ def montecarlo(model, dists: dict[str, Dist], runs: int, seed: int, *,
                    params)
 
 
-def ensemble_route(model, options, params: dict[str, float]):
+def ensemble_route(model, spec, options):
     """The runs' options, and a note when they differ from a plain run's: where
     neither the caller nor the listing names a METHOD and numba is installed (the
     [fast] extra), the members run on METHOD COMPILED, whose kernel is compiled once
@@ -155,7 +164,6 @@ def ensemble_route(model, options, params: dict[str, float]):
 
     from .. import compiled
 
-    spec = model._specs(params)[0]
     if options.method is not None or spec.method is not None or options.step_point or \
             model.ir.acsl is not None or not compiled.available():
         return options, ""
@@ -197,19 +205,19 @@ def run_sets(model, sets: dict[str, np.ndarray], variables: list[str], options, 
     from .farm import Task, default_jobs, farm
 
     runs = len(next(iter(sets.values()))) if sets else 0
+    base = model._specs(dict(params or {}))[0]
+    opts = replace(options, outputs=[v for v in variables if v in model.ir.variables],
+                   progress=None)
     if stacked:
         from .stacked import run_stacked
 
-        together = run_stacked(model, sets, variables, options, dict(params or {}))
+        together = run_stacked(model, base, sets, runs, variables, opts)
         if together is not None:
             report(progress, "runs", runs, runs)
             together.how = (f"the {runs} runs integrated at once (none switches on its "
                             "own): one LSODA run over every member's states")
             return together
-    options, how = ensemble_route(model, options, dict(params or {}))
-    opts = replace(options, outputs=[v for v in variables if v in model.ir.variables],
-                   progress=None)
-    base = model._specs(dict(params or {}))[0]
+    opts, how = ensemble_route(model, base, opts)
     reduce = partial(member_of, tuple(variables))
     batch = Batch([None] * runs, {}, how=how)
     start = time.monotonic()
@@ -225,7 +233,7 @@ def run_sets(model, sets: dict[str, np.ndarray], variables: list[str], options, 
         ks = range(first, min(runs, first + chunk))
         left = opts if max_time is None else \
             replace(opts, max_time=max(max_time - (time.monotonic() - start), 1e-3))
-        tasks = [Task(member_spec(base, {n: float(v[k]) for n, v in sets.items()}), left,
+        tasks = [Task(base.overridden({n: float(v[k]) for n, v in sets.items()}), left,
                       f"run {k + 1}", reduce=reduce) for k in ks]
 
         def done(i: int, _outcome, offset=first) -> None:
@@ -274,7 +282,7 @@ def values_limit(model, variables: list[str], runs: int, options) -> None:
 
 def _gather(dists, samples, seed, variables, quantiles, batch: Batch, correlation,
             params) -> MonteCarlo:
-    members, errors = batch.members, batch.errors
+    members = batch.members
     runs = len(members)
     reference = max((m for m in members if m is not None), key=lambda m: len(m.times),
                     default=None)
@@ -289,29 +297,21 @@ def _gather(dists, samples, seed, variables, quantiles, batch: Batch, correlatio
     from ..run.plan import nearest_instants
 
     for k, m in enumerate(members):
-        if m is None:
-            if k in errors:
-                status[k], messages[k] = str(Status.FAILED), errors[k]
-            continue
-        status[k], messages[k] = m.status, m.message
-        if m.status == str(Status.FAILED):
+        status[k], messages[k] = batch.status(k), batch.message(k)
+        if m is None or m.status == str(Status.FAILED):
             continue
         pick, same = nearest_instants(times, m.times)
         cube[k, pick[same]] = m.values[same]
         final[k] = m.final
         for j, n in enumerate(terminal_names):
             terminal[k, j] = m.terminal.get(n, math.nan)
-    kept = cube[[s not in ("", str(Status.FAILED)) for s in status]]
+    kept = cube[counted(status)]
     bands = _quantiles(kept.reshape(len(kept), -1), quantiles).reshape(
         len(quantiles), len(times), len(variables)) if len(times) and len(kept) else \
         np.full((len(quantiles), len(times), len(variables)), np.nan)
-    with np.errstate(all="ignore"):
-        import warnings
-
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            mean = np.nanmean(kept, axis=0) if len(kept) else \
-                np.full((len(times), len(variables)), np.nan)
+    with _nan_columns():
+        mean = np.nanmean(kept, axis=0) if len(kept) else \
+            np.full((len(times), len(variables)), np.nan)
     counts = np.sum(np.all(np.isfinite(kept), axis=2), axis=0) if len(kept) else \
         np.zeros(len(times), int)
     return MonteCarlo(dists, samples, seed, list(variables), quantiles, times, prdel, bands,

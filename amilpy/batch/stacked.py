@@ -27,7 +27,7 @@ import numpy as np
 
 from ..diagnostics import AmilError
 from ..result import Status
-from .members import Batch, Member, member_spec
+from .members import Batch, Member
 
 MXSTEP = 500_000  # odeint's steps per output interval (its default 500 is too few here)
 
@@ -58,25 +58,20 @@ def why_not(model, code, plan, opts) -> str | None:
     return None
 
 
-def run_stacked(model, sets: dict[str, np.ndarray], variables: list[str], options,
-                params: dict[str, float]) -> Batch | None:
-    """The ensemble at once (see the module), or None when it cannot be (`why_not`)
-    or LSODA fails on the stacked system (the members then run one by one)."""
-    from dataclasses import replace
-
+def run_stacked(model, base, sets: dict[str, np.ndarray], runs: int, variables: list[str],
+                opts) -> Batch | None:
+    """The ensemble at once (see the module): `runs` runs of spec `base` with `sets`'
+    values, `opts` their options; None when it cannot be (`why_not`) or LSODA fails on
+    the stacked system (the members then run one by one)."""
     from scipy.integrate import odeint
 
     from ..codegen.consts import evaluate_constant, initial_values
     from ..run import prepare
     from ..run.plan import reserved_values
 
-    runs = len(next(iter(sets.values()))) if sets else 0
     if runs < 2 or model.ir.acsl is not None:
         return None
-    opts = replace(options, outputs=[v for v in variables if v in model.ir.variables],
-                   progress=None)
-    base = model._specs(dict(params))[0]
-    first = member_spec(base, {n: float(v[0]) for n, v in sets.items()})
+    first = base.overridden({n: float(v[0]) for n, v in sets.items()})
     try:
         prepared = prepare(model.ir, first, opts, model.cache)
     except AmilError:
