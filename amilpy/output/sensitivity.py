@@ -9,6 +9,7 @@ from collections.abc import Iterator, Sequence
 
 import numpy as np
 
+from ..analysis.sensitivity import Local
 from . import words as W
 from .analysis import _title
 from .plot import save_figure
@@ -186,3 +187,14 @@ def plot_indices(ind, stem: str, model=None, formats: Sequence[str] = ()) -> lis
     fig.suptitle(f"{W.shorten(_title(model), 90)}\n{word}", fontsize=10)
     fig.tight_layout()
     return save_figure(fig, stem, formats or ("png",))
+
+
+def sensitivity_csv(result) -> tuple[list[str], Iterator[list]]:
+    """`local_csv` or `indices_csv`, as the result is."""
+    return (local_csv if isinstance(result, Local) else indices_csv)(result)
+
+
+def plot_sensitivity(result, stem: str, model=None, formats: Sequence[str] = ()) -> list[str]:
+    """`plot_local` or `plot_indices`, as the result is."""
+    draw = plot_local if isinstance(result, Local) else plot_indices
+    return draw(result, stem, model, formats)

@@ -83,26 +83,6 @@ def _sweep_png(o: Outputs, _path: str | None) -> list[str]:
                       o.plot.formats)
 
 
-def _analysis_csv(o: Outputs, path: str | None) -> list[str]:
-    from . import analysis, sheets
-
-    rows = {"modes": analysis.modes_csv, "periodic": analysis.orbit_csv,
-            "response": analysis.response_csv}[o.command]
-    header, body = rows(o.analysis)
-    partial = o.command == "response" and not o.analysis.complete
-    sheets.write_csv_rows(path, header, body, o.dialect,
-                          ["partial: the curve ends short of the range"] if partial else ())
-    return [path]
-
-
-def _analysis_png(o: Outputs, _path: str | None) -> list[str]:
-    from . import analysis
-
-    draw = {"periodic": analysis.plot_orbit, "response": analysis.plot_response}[o.command]
-    return draw(o.analysis, analysis.figure_stem(o.out_dir, o.stem, o.command), o.model,
-                formats=o.plot.formats)
-
-
 def _fit_png(o: Outputs, _path: str | None) -> list[str]:
     from .plot import plot_runs
     from .words import name_notes
@@ -137,6 +117,26 @@ def _csv_of(module: str, rows: str, comments=None, needs: str | None = None):
     return write
 
 
+def _figure_of(module: str, draw: str, what: str, needs: str | None = None):
+    """A writer of an analysis's figures: `draw(o.analysis, stem, o.model, formats=...)`
+    of amilpy.output.<module>, the files named NAME_<what>...; `needs` as `_csv_of`."""
+    def write(o: Outputs, _path: str | None) -> list[str]:
+        from importlib import import_module
+
+        from .analysis import figure_stem
+
+        if needs:
+            _need_linear(o, needs)
+        fn = getattr(import_module(f"amilpy.output.{module}"), draw)
+        return fn(o.analysis, figure_stem(o.out_dir, o.stem, what), o.model,
+                  formats=o.plot.formats)
+    return write
+
+
+def _partial_curve(resp) -> list[str]:
+    return [] if resp.complete else ["partial: the curve ends short of the range"]
+
+
 def _steady_npz(o: Outputs, path: str | None) -> list[str]:
     from .files import atomic_write
     from .steady import npz_bytes
@@ -145,48 +145,16 @@ def _steady_npz(o: Outputs, path: str | None) -> list[str]:
     return [path]
 
 
-def _steady_bode(o: Outputs, _path: str | None) -> list[str]:
-    from .analysis import figure_stem
-    from .steady import plot_bode
-
-    _need_linear(o, "--bode")
-    return plot_bode(o.analysis, figure_stem(o.out_dir, o.stem, "bode"), o.model,
-                     o.plot.formats)
-
-
 def _partial(mc) -> list[str]:
     if mc.done < mc.runs:
         return [f"partial: {mc.done} of the {mc.runs} runs were done"]
     return []
 
 
-def _montecarlo_png(o: Outputs, _path: str | None) -> list[str]:
-    from .analysis import figure_stem
-    from .montecarlo import plot_bands
-
-    return plot_bands(o.analysis, figure_stem(o.out_dir, o.stem, "montecarlo"), o.model,
-                      o.plot.formats)
-
-
 def _short(result) -> list[str]:
     if getattr(result, "interrupted", False) or getattr(result, "timed_out", False):
         return ["partial: the study stopped early; the indices are of the runs done"]
     return []
-
-
-def _sensitivity_rows(result):
-    from .sensitivity import indices_csv, local_csv
-
-    return (local_csv if hasattr(result, "normalised") else indices_csv)(result)
-
-
-def _sensitivity_png(o: Outputs, _path: str | None) -> list[str]:
-    from .analysis import figure_stem
-    from .sensitivity import plot_indices, plot_local
-
-    draw = plot_local if hasattr(o.analysis, "normalised") else plot_indices
-    return draw(o.analysis, figure_stem(o.out_dir, o.stem, "sensitivity"), o.model,
-                o.plot.formats)
 
 
 def _need_linear(o: Outputs, flag: str) -> None:
@@ -220,20 +188,20 @@ WRITERS: tuple[Writer, ...] = (
            "NAME_sweep.png next to the model or in --out", _sweep_png),
     Writer("modes-csv", "modes", "--csv", True,
            "write the modes as CSV: RE, IM, WN, FHZ, ZETA, the shape per state (real "
-           "parts, then IM_<state>)", _analysis_csv),
+           "parts, then IM_<state>)", _csv_of("analysis", "modes_csv")),
     Writer("periodic-csv", "periodic", "--csv", True,
            "write the orbit as CSV: PERIOD, MIN_/MAX_/MEAN_/HALF_PP_ of each measured "
-           "variable, STABLE, MU_MAX", _analysis_csv),
+           "variable, STABLE, MU_MAX", _csv_of("analysis", "orbit_csv")),
     Writer("periodic-png", "periodic", "--plot", False,
            "draw the measured variables over one period as NAME_periodic.png next to "
-           "the model or in --out", _analysis_png),
+           "the model or in --out", _figure_of("analysis", "plot_orbit", "periodic")),
     Writer("response-csv", "response", "--csv", True,
            "write the curve as CSV, one row per orbit along it (folds in place, "
-           "KIND fold)", _analysis_csv),
+           "KIND fold)", _csv_of("analysis", "response_csv", _partial_curve)),
     Writer("response-png", "response", "--plot", False,
            "draw half peak-to-peak against the value (stable solid, unstable dashed, "
            "folds marked) as NAME_response.png next to the model or in --out",
-           _analysis_png),
+           _figure_of("analysis", "plot_response", "response")),
     Writer("fit-csv", "fit", "--csv", True,
            "write the estimates as CSV: NAME, START, ESTIMATE, SE, LOWER95, UPPER95",
            _csv_of("fitting", "fit_csv")),
@@ -254,7 +222,7 @@ WRITERS: tuple[Writer, ...] = (
            "NumPy .npz (numpy.load)", _steady_npz),
     Writer("steady-bode", "steady", "--bode", False,
            "draw the Bode diagram of every output to every input as NAME_bode_INPUT.png "
-           "next to the model or in --out", _steady_bode),
+           "next to the model or in --out", _figure_of("steady", "plot_bode", "bode", "--bode")),
     Writer("montecarlo-csv", "montecarlo", "--csv", True,
            "write the bands as CSV on the output grid: TIME, NAME_MEAN and NAME_P<q> of "
            "each variable, RUNS", _csv_of("montecarlo", "bands_csv", _partial)),
@@ -264,14 +232,16 @@ WRITERS: tuple[Writer, ...] = (
            _csv_of("montecarlo", "samples_csv", _partial)),
     Writer("montecarlo-png", "montecarlo", "--plot", False,
            "draw the bands (median line, quantiles shaded) of each OUTPUT statement as "
-           "NAME_montecarlo_K.png next to the model or in --out", _montecarlo_png),
+           "NAME_montecarlo_K.png next to the model or in --out",
+           _figure_of("montecarlo", "plot_bands", "montecarlo")),
     Writer("sensitivity-csv", "sensitivity", "--csv", True,
            "write the sensitivities as CSV: local, TIME and per variable its value, "
            "S_<VAR>_<P> and D_<VAR>_<P>; global, a row per output and value",
-           _csv_of("writers", "_sensitivity_rows", _short)),
+           _csv_of("sensitivity", "sensitivity_csv", _short)),
     Writer("sensitivity-png", "sensitivity", "--plot", False,
            "draw them: local, S against TIME per variable (NAME_sensitivity_VAR.png); "
-           "global, bars of the indices (NAME_sensitivity.png)", _sensitivity_png),
+           "global, bars of the indices (NAME_sensitivity.png)",
+           _figure_of("sensitivity", "plot_sensitivity", "sensitivity")),
 )
 
 
