@@ -23,10 +23,9 @@ import numpy as np
 
 from ..observed import Observations
 from ..run.flow import FlowFailed
+from ..run.jacobian import STEP  # (cbrt(machine epsilon): the one differencing step)
 from ..run.plan import SAME_INSTANT
 from ..run.variational import ParameterTangent
-
-STEP = 6e-6  # ~ cbrt(machine epsilon): central differences of the generated functions
 
 
 def observed_jacobian(model, obs: Observations, names: list[str], values: dict[str, float],
@@ -111,6 +110,19 @@ class Trajectory:
                            sens, self.floor)
 
 
+def moved_flows(flow_at, code, name: str, value: float):
+    """(flow with data value `name` at value + h, at value - h, h), h = `step_for`, for
+    central differences of the generated functions; None where moving it changes
+    which switches the run watches (`code`'s: the variants must be the same model).
+    `flow_at(**values)`: the flow with those data values."""
+    h = step_for(value, STEP)
+    plus, minus = flow_at(**{name: value + h}), flow_at(**{name: value - h})
+    if any((v.code.watched, v.code.state_names, v.code.out_names) !=
+           (code.watched, code.state_names, code.out_names) for v in (plus, minus)):
+        return None
+    return plus, minus, h
+
+
 def trajectory(model, k: int, names: list[str], data: dict[str, float], options: dict,
                times) -> Trajectory | str:
     """Run `k`'s tangent with respect to the data values `names` at `times` (sorted;
@@ -127,11 +139,10 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
     n = len(start.y)
     variants, dy0 = [], np.zeros((n, len(names)))
     for j, name in enumerate(names):
-        h = step_for(data[name], STEP)
-        plus, minus = flow_at(**{name: data[name] + h}), flow_at(**{name: data[name] - h})
-        if any((v.code.watched, v.code.state_names, v.code.out_names) !=
-               (c.watched, c.state_names, c.out_names) for v in (plus, minus)):
+        moved = moved_flows(flow_at, c, name, data[name])
+        if moved is None:
             return f"{name} changes which switches the run watches"
+        plus, minus, h = moved
         variants.append((plus.code, minus.code, h))
         up, down = plus.initial_state(), minus.initial_state()
         if up.memory != down.memory:  # (HSTRSS's, BCKLSH's initial value: not followed)

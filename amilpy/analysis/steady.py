@@ -48,13 +48,12 @@ from ..run import Flow, FlowFailed, State
 from ..run.jacobian import refined
 from .linear import ZERO, Mode, jacobian, mode_list
 from .problem import ATOL, RTOL, SYMMETRY, free_states, read_closure
-from .sensitivity import step_for
+from .sensitivity import moved_flows
 
 TOL = 1e-10  # a residual below this fraction of its equation's rate scale is zero
 MAX_NEWTON = 30
 POLISH = 2  # Newton steps taken past convergence while the residual still falls
 MAX_PSEUDO = 400  # pseudo-transient steps
-STEP = 6e-6  # ~ cbrt(machine epsilon): the inputs' and outputs' central differences
 
 HELD, FREE, SOLVED = "held", "free", "solved"
 
@@ -414,17 +413,18 @@ def _linear(model, flow: Flow, state: State, t: float, names: list[str], x: np.n
                              "of the linear model")
     y = np.array(state.y, dtype=float)
     m, z = list(state.modes), list(state.memory)
+    def flow_at(**values):
+        return model.flow(method=flow.opts.method, rtol=flow.opts.rtol, atol=flow.opts.atol,
+                          **{**params, **values})
+
     variants = []
     for name in inputs:
-        h = step_for(data[name], STEP)
-        plus, minus = (model.flow(method=flow.opts.method, rtol=flow.opts.rtol,
-                                  atol=flow.opts.atol,
-                                  **{**params, name: data[name] + d}).code for d in (h, -h))
-        if any((v.watched, v.state_names, v.out_names) != (c.watched, c.state_names,
-                                                          c.out_names) for v in (plus, minus)):
+        moved = moved_flows(flow_at, c, name, data[name])
+        if moved is None:
             raise AmilError(f"--input {name}: changing it changes which switches the run "
                             "watches; it cannot be an input of a linear model here")
-        variants.append((plus, minus, h))
+        plus, minus, h = moved
+        variants.append((plus.code, minus.code, h))
     yl = y.tolist()
     b = np.array([(np.asarray(p.rhs(t, yl, m, z)) - np.asarray(q.rhs(t, yl, m, z))) / (2 * h)
                   for p, q, h in variants]).T.reshape(len(y), len(inputs))
