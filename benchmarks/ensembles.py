@@ -117,18 +117,12 @@ def odeint_stacked(ke, vd, t, rtol, atol):
     return (np.concatenate(rows).T) / vd[:, None]
 
 
-TWO = """TITLE INFUSION INTO TWO COMPARTMENTS
-PARAM RATE = 10.0, K12 = 0.5, K21 = 0.3, KE = 0.2, V1 = 5.0
-INITIAL
-   KT = K12 + KE
-DYNAMIC
-A1 = INTGRL(0.0, RATE - KT*A1 + K21*A2)
-A2 = INTGRL(0.0, K12*A1 - K21*A2)
-C1 = A1/V1
-TIMER FINTIM = 24.0, OUTDEL = 0.5, PRDEL = 4.0
-PRINT C1, A2
-END
-"""
+def listing_two() -> str:
+    """The two-compartment listing of tests/test_montecarlo.py (one copy of it)."""
+    sys.path.insert(0, os.path.join(ROOT, "tests"))
+    from test_montecarlo import TWO_COMPARTMENTS
+
+    return TWO_COMPARTMENTS
 
 
 def two_exact(ke: np.ndarray, k12: np.ndarray) -> np.ndarray:
@@ -152,7 +146,7 @@ def stacked_case(amilpy, n: int, repeats: int) -> None:
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, "two.amil")
         with open(path, "w") as fh:
-            fh.write(TWO)
+            fh.write(listing_two())
         model = amilpy.load(path)
         model.run(advice=False)
         dists = {"KE": "lognormal(-1.6, 0.3)", "K12": "uniform(0.3, 0.7)"}

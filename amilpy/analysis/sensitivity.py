@@ -9,11 +9,11 @@ d out/d p at its instant.
 
 F_p, ds/dp, d out/dp and the start's dependence d y(t0)/dp are central differences
 of the generated functions at one TIME and state (the run's code bound to p +- h,
-no integration); h = cbrt(eps) |p|, at least 1e-8. Where the variational equations do not follow
-the flow (a surface that slides, a state reset, a memory value the derivatives read
-changing, a flow tangent to a surface, a memory function's initial value that
-depends on p, the ACSL form's written-order code) the caller differences whole runs
-instead, and is told why."""
+no integration); h = cbrt(eps) |p| (1e-8 for p = 0: `step_for`). Where the
+variational equations do not follow the flow (a surface that slides, a state reset,
+a memory value the derivatives read changing, a flow tangent to a surface, a memory
+function's initial value that depends on p, the ACSL form's written-order code) the
+caller differences whole runs instead, and is told why."""
 
 from __future__ import annotations
 

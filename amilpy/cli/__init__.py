@@ -138,6 +138,24 @@ def _plot_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--runs", type=run_numbers, metavar="1,3", help="plot only these runs")
 
 
+def _ensemble_parser(sub, command: str, summary: str, seed: str, method: str = "--method"
+                     ) -> argparse.ArgumentParser:
+    """A command over many runs of one listing (montecarlo, sensitivity): the listing,
+    its files, the run options (--seed seeding the draws; `method` the integration
+    method's flag) and the workers; the command adds its own."""
+    p = sub.add_parser(command, help=summary)
+    p.add_argument("file", metavar="FILE", help="the listing (.amil)")
+    p.add_argument("--out", metavar="DIR", help="where the PNGs go (default: next to the "
+                                                "listing)")
+    writer_options(p, command)
+    csv_dialect(p)
+    format_option(p)
+    _model_options(p, seed=seed, method=method)
+    p.add_argument("--quiet", action="store_true", help="no printout, only files and errors")
+    _farm_options(p)
+    return p
+
+
 def _parser() -> argparse.ArgumentParser:
     from ..output.report import FORMATS
     from ..output.words import LANGUAGES
@@ -202,10 +220,11 @@ def _parser() -> argparse.ArgumentParser:
     sw.add_argument("--quiet", action="store_true", help="no table, only files and errors")
     _farm_options(sw)
 
-    mc = sub.add_parser("montecarlo", help="runs with data values drawn from "
-                                           "distributions: quantile bands, final and "
-                                           "TERMINAL values, failed runs")
-    mc.add_argument("file", metavar="FILE", help="the listing (.amil)")
+    mc = _ensemble_parser(sub, "montecarlo", "runs with data values drawn from "
+                          "distributions: quantile bands, final and TERMINAL values, "
+                          "failed runs", "seed of the draws (a whole number, default 1): the "
+                          "same seed, the same runs, whatever --jobs or --scheduler (the "
+                          "listing's random streams keep its RNSEED)")
     mc.add_argument("--dist", metavar="NAME=DIST", action="append", required=True,
                     type=_dist_option,
                     help="a data value and its distribution (repeatable): "
@@ -225,20 +244,11 @@ def _parser() -> argparse.ArgumentParser:
     mc.add_argument("--one-by-one", action="store_true",
                     help="run the members one by one even where none switches on its own "
                          "and they could be integrated at once (to compare the two)")
-    mc.add_argument("--out", metavar="DIR", help="where the PNGs go (default: next to the "
-                                                 "listing)")
-    writer_options(mc, "montecarlo")
-    csv_dialect(mc)
-    format_option(mc)
-    _model_options(mc, seed="seed of the draws (a whole number, default 1): the same seed, "
-                            "the same runs, whatever --jobs or --scheduler (the listing's "
-                            "random streams keep its RNSEED)")
-    mc.add_argument("--quiet", action="store_true", help="no printout, only files and errors")
-    _farm_options(mc)
 
-    se = sub.add_parser("sensitivity", help="which data value matters: local coefficients "
-                                            "over time, or global Morris/Sobol indices")
-    se.add_argument("file", metavar="FILE", help="the listing (.amil)")
+    se = _ensemble_parser(sub, "sensitivity", "which data value matters: local "
+                          "coefficients over time, or global Morris/Sobol indices",
+                          "seed of the global method's draws (a whole number, default 1)",
+                          method="--integrator")
     se.add_argument("--local", metavar="NAME", nargs="*",
                     help="local sensitivities (P/Y) dY/dP over the run to these data "
                          "values (default: the PARAM values), from the sensitivity "
@@ -257,15 +267,6 @@ def _parser() -> argparse.ArgumentParser:
     se.add_argument("--vars", type=variable_names, metavar="A,B",
                     help="the variables of a local sensitivity (default: every PRINT and "
                          "OUTPUT variable)")
-    se.add_argument("--out", metavar="DIR", help="where the PNGs go (default: next to the "
-                                                 "listing)")
-    writer_options(se, "sensitivity")
-    csv_dialect(se)
-    format_option(se)
-    _model_options(se, seed="seed of the global method's draws (a whole number, default 1)",
-                   method="--integrator")
-    se.add_argument("--quiet", action="store_true", help="no printout, only files and errors")
-    _farm_options(se)
 
     rep = sub.add_parser("report", help="a lab-report document: listing, data, equations, "
                                         "printouts, events, plots")
