@@ -170,6 +170,7 @@ class _Problem:
         self.flow, self.t, self.unknown = flow, t, unknown
         self.memory = start.memory
         self.trouble = ""  # why the field could not be had at the last point tried
+        self._last: tuple | None = None  # (state, its Linearisation)
         tol = flow.plan.tol
         self.floor = np.broadcast_to(np.asarray(tol.atol / tol.rtol, dtype=float),
                                      (len(start.y),)).copy()
@@ -193,8 +194,15 @@ class _Problem:
         return state, f
 
     def jac(self, state: State) -> tuple[np.ndarray, float]:
-        lin = jacobian(self.flow, state, self.t)
+        lin = self.linearisation(state)
         return lin.jacobian, lin.error
+
+    def linearisation(self, state: State):
+        """`linear.jacobian` at `state`; the last one kept (the solution's is asked for
+        again once it is found)."""
+        if self._last is None or self._last[0] is not state:
+            self._last = (state, jacobian(self.flow, state, self.t))
+        return self._last[1]
 
     def scales(self, y: np.ndarray) -> np.ndarray:
         return np.maximum(np.abs(y), self.floor)
@@ -240,7 +248,7 @@ def equilibrium(model, at: float | None = None, guess: dict[str, float] | None =
     state, f, jac, its, how = _solve(problem, y)
     state, f, jac = _keep_guess(problem, state, f, jac, y)
     jx = jac[np.ix_(unknown, unknown)]
-    lin = jacobian(flow, state, t)
+    lin = problem.linearisation(state)
     linear = _linear(model, flow, state, t, names, unknown, lin.jacobian, inputs, outputs,
                      params) if inputs or outputs else None
     return Equilibrium(t, state, names, role, f, problem.measure(f, jac, state.y), its, how,
