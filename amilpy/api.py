@@ -69,7 +69,10 @@ class Model:
             from .run.acsl import prepare_acsl
 
             return prepare_acsl(self.ir, spec, cache=self.cache).code.source
-        opts = Options(weather_dirs=_folders(weather_dir))
+        from .run.plan import DEFAULTS
+
+        # (the code is the same however many rows a run then keeps or streams)
+        opts = Options(weather_dirs=_folders(weather_dir), max_rows=DEFAULTS["max_streamed_rows"])
         return prepare(self.ir, spec, opts, cache=self.cache).code.source
 
     def flow(self, method: str | None = None, rtol: float | None = None,
@@ -241,6 +244,14 @@ class Model:
             return 0.0
         return self._stored(self._specs(params), self._columns(outputs), fintim)
 
+    def most_rows(self, fintim: float | None = None, **params: float) -> float:
+        """The most output rows any run would have (0 for the ACSL form)."""
+        from .run.plan import output_rows
+
+        if self.ir.acsl is not None:
+            return 0.0
+        return max(self._per_run(self._specs(params), lambda s: output_rows(s, fintim)))
+
     def _columns(self, outputs: list[str] | None) -> int:
         """The columns a run keeps: the outputs asked for, else every variable."""
         return len(outputs) if outputs is not None else len(self.ir.variables)
@@ -248,8 +259,12 @@ class Model:
     def _stored(self, specs, columns: int, fintim) -> float:
         from .run.plan import stored_values
 
+        return sum(self._per_run(specs, lambda s: stored_values(s, columns, fintim)))
+
+    def _per_run(self, specs, count) -> list[float]:
+        """`count` of each run's spec; a fault in its TIMER located in the listing."""
         try:
-            return sum(stored_values(spec, columns, fintim) for spec in specs)
+            return [count(spec) for spec in specs]
         except AmilError as exc:
             if exc.path is None:
                 exc.path, exc.source = self.ir.path, self.ir.source

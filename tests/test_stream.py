@@ -151,3 +151,38 @@ def test_an_interrupted_sequence_has_the_header_of_the_runs_made(tmp_path):
               np.array([True, True]), np.array([True, True]), final=True)
     sink.close([], [{"K": 1.0}])
     assert (tmp_path / "s.csv").read_text() == "TIME,X\n0.0,1.0\n0.5,0.6\n"
+
+
+PAST = textwrap.dedent("""
+    import resource, sys
+    import amilpy.cli as cli
+    cli.main(["run", "past.amil", "--fintim", "0.01", "--csv", "warm.csv", "--quiet"])
+    vm = next(int(x.split()[1]) for x in open("/proc/self/status") if x.startswith("VmSize"))
+    limit = vm * 1024 + 80 * 2**20
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    sys.exit(cli.main(["run", "past.amil", "--csv", "out.csv", "--quiet"]))
+""")
+
+
+@pytest.mark.slow  # (10 s: 2.5 million rows written)
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc and RLIMIT_AS")
+def test_a_streamed_run_may_have_more_rows_than_a_run_may_keep(tmp_path):
+    """2,500,001 OUTDEL rows: more than the 2E6 a run keeps in memory (refused
+    without --csv), streamed within 80 MB of address space above the warm-up's: the
+    grid's 10 bytes an instant (25 MB) and no more that grows with the run."""
+    (tmp_path / "past.amil").write_text("TITLE PAST THE LIMIT\nX = INTGRL(0.0, 1.0)\n"
+                                        "TIMER FINTIM = 2.5, OUTDEL = 1.0E-6, PRDEL = 0.5\n"
+                                        "PRINT X\nEND\n")
+    (tmp_path / "probe.py").write_text(PAST)
+    out = subprocess.run([sys.executable, "probe.py"], cwd=tmp_path, capture_output=True,
+                         text=True, timeout=600,
+                         env=dict(os.environ, OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg"))
+    assert out.returncode == 0, out.stderr
+    with open(tmp_path / "out.csv") as fh:
+        header = next(fh)
+        n, last = 0, None
+        for n, last in enumerate(fh, start=1):  # noqa: B007
+            pass
+    assert header.strip() == "TIME,X" and n == 2_500_001
+    t, x = (float(v) for v in last.split(","))
+    assert t == 2.5 and x == pytest.approx(2.5, rel=1e-12)  # (X = TIME: exact)

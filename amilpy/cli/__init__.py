@@ -399,7 +399,11 @@ def _csv_stream(args, model, names, params):
             not os.path.isdir(os.path.dirname(os.path.abspath(path))) or \
             (os.path.lexists(path) and not os.path.isfile(path)):
         return None
-    if model.stored_values(args.fintim, **params) <= STREAM_VALUES:
+    from ..run.plan import DEFAULTS
+
+    # (many values, or more rows than a run may keep whatever their values)
+    if model.stored_values(args.fintim, **params) <= STREAM_VALUES and \
+            model.most_rows(args.fintim, **params) <= DEFAULTS["max_rows"]:
         return None
     from ..output.stream import CsvStream
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -43,6 +44,9 @@ DEFAULTS = {
     "max_steps": 5_000_000,
     "max_events": 200_000,
     "max_rows": 2_000_000,
+    # OUTDEL rows of a run that writes them to its CSV as it goes (output.stream): it
+    # holds 10 bytes an instant (the grid), 200 MB at this
+    "max_streamed_rows": 20_000_000,
     # values all the runs of one call keep (rows x variables, summed over the runs):
     # 2E8 float64 are 1.6 GB, what a laptop can spare for a printout
     "max_values": 200_000_000,
@@ -235,15 +239,23 @@ class RunPlan:
 def stored_values(spec: ir.RunSpec, columns: int, fintim: float | None = None) -> float:
     """The most values a run of `spec` keeps: its output rows (the OUTDEL and PRDEL
     grids, both ends included) times `columns`."""
-    t = timer_values(spec, fintim)
-    rows = t["FINTIM"] / t["OUTDEL"] + t["FINTIM"] / t["PRDEL"] + 2.0
-    return rows * columns
+    return output_rows(spec, fintim) * columns
+
+
+def output_rows(spec: ir.RunSpec, fintim: float | None = None) -> float:
+    """The most output rows a run of `spec` has (the OUTDEL and PRDEL grids, both
+    ends included)."""
+    t = timer_values(spec, fintim, streamed=True)  # (how many, the most any run takes)
+    return t["FINTIM"] / t["OUTDEL"] + t["FINTIM"] / t["PRDEL"] + 2.0
 
 
 def timer_values(spec: ir.RunSpec, fintim: float | None = None,
-                 max_rows: int = DEFAULTS["max_rows"]) -> dict[str, float]:
+                 max_rows: int = DEFAULTS["max_rows"],
+                 streamed: bool = False) -> dict[str, float]:
     """CSMP TIMER defaults: OUTDEL = FINTIM/100 and PRDEL = OUTDEL when neither is
-    given; one given, the other takes its value; DELT divides the output interval."""
+    given; one given, the other takes its value; DELT divides the output interval.
+    `streamed`: the OUTDEL rows go to a file as the run goes (a longer grid may be
+    had then: `row_limit`)."""
     t = dict(spec.timer)
     fintim_option = fintim
     if fintim is not None:
@@ -282,10 +294,17 @@ def timer_values(spec: ir.RunSpec, fintim: float | None = None,
                 f"ask for a run of at least {t[name]:g}, or write a smaller {name}" if asked
                 else f"write {name} = {t['FINTIM'] / 100.0:g} (a hundredth of the run) or "
                 "less, or a longer FINTIM")])
-    rows = fintim / interval
-    if not rows <= max_rows:
-        raise AmilError(f"FINTIM/{'OUTDEL' if t['OUTDEL'] <= t['PRDEL'] else 'PRDEL'} = "
-                        f"{rows:.3g} output rows (limit {max_rows}): raise OUTDEL/PRDEL")
+    for name in ("PRDEL", "OUTDEL"):  # (PRDEL's rows are kept whatever the run)
+        rows = fintim / min(t[name], fintim)
+        limit = row_limit(max_rows, streamed and name == "OUTDEL")
+        if not rows <= limit:
+            raise AmilError([Diagnostic(
+                f"FINTIM/{name} = {rows:.3g} output rows (limit {limit})", None,
+                f"raise {name}" + (
+                    ", or have the rows written to a CSV as the run goes (amilpy run "
+                    f"--csv FILE, Model.run(stream_csv=FILE): up to {row_limit(0, True):.0e}"
+                    " OUTDEL rows)" if name == "OUTDEL" and not streamed and
+                    rows <= row_limit(0, True) else ""))])
     if "DELT" in t:
         n = max(1, math.ceil(interval / t["DELT"] - 1e-9))
         t["DELT"] = interval / n
@@ -294,6 +313,11 @@ def timer_values(spec: ir.RunSpec, fintim: float | None = None,
     t.setdefault("DELMIN", 0.0)
     t.setdefault("DELMAX", math.inf)
     return t
+
+
+def row_limit(max_rows: int, streamed: bool) -> int:
+    """The most output rows a run may have: `max_rows`, more if they are streamed."""
+    return max(max_rows, DEFAULTS["max_streamed_rows"]) if streamed else max_rows
 
 
 def reserved_values(timer: dict[str, float]) -> dict[str, float]:
@@ -311,14 +335,51 @@ def start_time(spec: ir.RunSpec, opts: Options) -> float:
     return float(spec.timer.get(START_KEY, 0.0))
 
 
+@dataclass(frozen=True)
+class _Uniform:
+    """The instants t0 + k*step, k = 0, 1, ..., the last of them FINTIM (appended
+    when the last step does not reach it, else put in its place), by index: a grid
+    of 1E7 instants is never written out whole before the run's own array is."""
+
+    t0: float
+    fintim: float
+    step: float
+
+    @cached_property
+    def size(self) -> int:
+        n = int(math.floor((self.fintim - self.t0) / self.step * (1 + 1e-12) + 1e-9))
+        return n + 2 if self.fintim - (self.t0 + self.step * n) > 1e-9 * self.step \
+            else n + 1
+
+    def at(self, k: np.ndarray) -> np.ndarray:
+        v = self.t0 + self.step * np.asarray(k, dtype=float)
+        v[np.asarray(k) == self.size - 1] = self.fintim
+        return v
+
+    def _near(self, t: np.ndarray) -> np.ndarray:
+        """Four indices about each t: the nearest instant and the count of those
+        below t are among them (the floor is within one of the index)."""
+        k = np.floor((t - self.t0) / self.step).clip(0, self.size - 1).astype(np.int64)
+        return k[:, None] + np.arange(-1, 3)
+
+    def below(self, t: np.ndarray) -> np.ndarray:
+        """np.searchsorted(the instants, t): how many are below each t."""
+        near = self._near(t)
+        inside = (near >= 0) & (near < self.size)
+        under = inside & (self.at(near.clip(0, self.size - 1)) < t[:, None])
+        return np.maximum(near[:, 0], 0) + under.sum(axis=1)
+
+    def nearest(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """`nearest_instants` on this grid."""
+        near = self._near(t).clip(0, self.size - 1)
+        d = np.abs(self.at(near) - t[:, None])
+        pick = near[np.arange(len(t)), d.argmin(axis=1)]
+        return pick, np.abs(self.at(pick) - t) <= SAME_INSTANT * np.maximum(1.0, np.abs(t))
+
+
 def _grid(t0: float, fintim: float, step: float) -> np.ndarray:
-    n = int(math.floor((fintim - t0) / step * (1 + 1e-12) + 1e-9))
-    g = t0 + step * np.arange(n + 1)
-    if fintim - g[-1] > 1e-9 * step:
-        g = np.append(g, fintim)
-    else:
-        g[-1] = fintim
-    return g
+    g = _Uniform(t0, fintim, step)
+    return g.at(np.arange(g.size))
 
 
 # an instant within this of another (relative, at least absolute) is that instant:
@@ -341,31 +402,38 @@ def nearest_instants(times: np.ndarray, t) -> tuple[np.ndarray, np.ndarray]:
 def make_grid(t0: float, fintim: float, outdel: float, prdel: float,
               extra: tuple[float, ...] = ()) -> Grid:
     """The output instants; `extra`: more instants in (t0, fintim) to have rows at
-    (in neither grid), each within SAME_INSTANT of a grid instant taken as that one."""
-    if outdel == prdel:  # (one grid: the ACSL form's CINT, most listings)
-        times = _grid(t0, fintim, outdel)
-        every = np.ones(len(times), bool)
-        grid = Grid(times, every, every)
-    else:
-        go = _grid(t0, fintim, outdel)
-        gp = _grid(t0, fintim, prdel)
-        # a PRDEL instant that rounds within SAME_INSTANT of an OUTDEL one (3*0.05 and
-        # 150*0.001) is that instant: one row, not two 3E-17 apart
-        pick, same = nearest_instants(go, gp)
-        own = gp[~same]
-        times = np.union1d(go, own)
-        grid = Grid(times, np.isin(times, go), np.isin(times, go[pick[same]]) |
-                    np.isin(times, own))
-    if not extra:
-        return grid
+    (in neither grid), each within SAME_INSTANT of a grid instant taken as that one.
+
+    Written into the run's arrays part by part: a streamed run of 1E7 rows holds its
+    grid (10 bytes an instant) and no more (a union of the two grids took 95)."""
+    rows = _Uniform(t0, fintim, outdel)
+    # a PRDEL instant that rounds within SAME_INSTANT of an OUTDEL one (3*0.05 and
+    # 150*0.001) is that instant: one row, not two 3E-17 apart
+    gp = _grid(t0, fintim, prdel) if prdel != outdel else np.empty(0)
+    pick, same = rows.nearest(gp)
     more = np.asarray(extra, dtype=float)
-    more = more[(more > t0) & (more < fintim)]
-    g = grid.times
-    more = more[~nearest_instants(g, more)[1]]
-    if not more.size:
-        return grid
-    times = np.union1d(g, more)
-    return Grid(times, np.isin(times, g[grid.outdel]), np.isin(times, g[grid.prdel]))
+    more = np.unique(more[(more > t0) & (more < fintim)])
+    more = more[~rows.nearest(more)[1] & ~nearest_instants(gp[~same], more)[1]]
+    # the instants put between the OUTDEL ones: PRDEL's own and the extra ones
+    put = np.concatenate([gp[~same], more])
+    order = np.argsort(put, kind="stable")
+    put, put_prdel = put[order], (np.arange(len(put)) < int(np.count_nonzero(~same)))[order]
+    size = rows.size
+    times = np.empty(size + len(put))
+    outdel_mask = np.ones(len(times), bool)
+    prdel_mask = np.zeros(len(times), bool) if prdel != outdel else outdel_mask.copy()
+    # where each OUTDEL instant k lands: k plus the instants put before it
+    at = rows.below(put)  # put[j] goes before OUTDEL instant at[j]
+    new = at + np.arange(len(put))
+    times[new] = put
+    outdel_mask[new] = False
+    prdel_mask[new] = put_prdel
+    part = 1 << 16
+    for a in range(0, size, part):
+        k = np.arange(a, min(a + part, size))
+        times[k + np.searchsorted(at, k, side="right")] = rows.at(k)
+    prdel_mask[pick[same] + np.searchsorted(at, pick[same], side="right")] = True
+    return Grid(times, outdel_mask, prdel_mask)
 
 
 def resolve_route(spec: ir.RunSpec, opts: Options) -> tuple[Route, str]:

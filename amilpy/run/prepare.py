@@ -38,6 +38,7 @@ from .plan import (
     reserved_values,
     resolve_route,
     resolve_step_point,
+    row_limit,
     start_time,
     timer_values,
 )
@@ -143,7 +144,7 @@ def with_weather(model: ir.Model, spec: ir.RunSpec, timer: dict[str, float], opt
 @no_collection()
 def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> Prepared:
     try:
-        timer = timer_values(spec, opts.fintim, opts.max_rows)
+        timer = timer_values(spec, opts.fintim, opts.max_rows, opts.row_sink is not None)
     except AmilError as exc:
         if exc.path is None:
             exc.path, exc.source = model.path, model.source
@@ -180,9 +181,10 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
             opts.extra_times)
     grid = cache.get("grid", gkey, lambda: steppoint.grid(t0, timer) if step_point else
                      make_grid(t0, fintim, timer["OUTDEL"], timer["PRDEL"], opts.extra_times))
-    if len(grid.times) > opts.max_rows:
+    limit = row_limit(opts.max_rows, opts.row_sink is not None)
+    if len(grid.times) > limit:
         raise AmilError([Diagnostic(
-            f"the run would print {len(grid.times)} rows (limit {opts.max_rows})",
+            f"the run would print {len(grid.times)} rows (limit {limit})",
             None, "raise OUTDEL/PRDEL")], model.path, model.source)
     return Prepared(constants, code, make_plan(model, spec, opts, code, timer, grid,
                                                    step_point))

@@ -1,0 +1,112 @@
+"""The output grid: the OUTDEL and PRDEL instants, one row per instant, and how many
+rows a run may have.
+
+The reference is exact arithmetic: the instants k*OUTDEL and j*PRDEL as fractions,
+merged as a set. The grid's own instants are the floats t0 + k*step, which round
+within 1e-12 (SAME_INSTANT) of the exact ones; an instant of both grids is one row.
+"""
+
+from __future__ import annotations
+
+import tracemalloc
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+from amilpy import cli
+from amilpy.diagnostics import AmilError
+from amilpy.run.plan import make_grid, timer_values
+
+
+def exact_grid(t0: str, fintim: str, outdel: str, prdel: str, extra=()):
+    """(instant, on OUTDEL, on PRDEL) in order, from exact fractions: each grid's
+    instants t0 + k*step up to FINTIM, and FINTIM itself on both."""
+    a, b = Fraction(t0), Fraction(fintim)
+
+    def grid(step: str) -> set[Fraction]:
+        d = Fraction(step)
+        return {a + k * d for k in range(int((b - a) / d) + 1)} | {b}
+
+    o, p = grid(outdel), grid(prdel)
+    e = {Fraction(x) for x in extra if a < Fraction(x) < b}
+    return [(float(t), t in o, t in p) for t in sorted(o | p | e)]
+
+
+@pytest.mark.parametrize("t0, fintim, outdel, prdel, extra", [
+    ("0", "5", "0.001", "0.05", ()),           # the hoist's: PRDEL on every 50th row
+    ("0", "1", "0.03", "0.1", ()),             # PRDEL instants between OUTDEL ones
+    ("0", "1", "0.1", "0.03", ()),             # and the other way round
+    ("0.3", "10", "0.07", "0.07", ("0.5", "3.333", "9.99", "42")),  # one grid, extras
+    ("0", "0.5", "0.125", "0.1", ("0.25", "0.2", "0.3")),  # extras on grid instants
+    ("2", "7.5", "0.25", "1", ()),             # FINTIM - t0 not a multiple of PRDEL
+])
+def test_the_grid_is_the_union_of_the_two_grids_one_row_an_instant(t0, fintim, outdel,
+                                                                    prdel, extra):
+    grid = make_grid(float(t0), float(fintim), float(outdel), float(prdel),
+                     tuple(float(x) for x in extra))
+    want = exact_grid(t0, fintim, outdel, prdel, extra)
+    assert len(grid.times) == len(want)
+    # (t0 + k*step rounds within a few ulps of the exact instant)
+    np.testing.assert_allclose(grid.times, [w[0] for w in want], rtol=1e-13, atol=1e-13)
+    assert grid.outdel.tolist() == [w[1] for w in want]
+    assert grid.prdel.tolist() == [w[2] for w in want]
+    assert np.all(np.diff(grid.times) > 0)
+
+
+def test_the_grid_of_a_long_run_takes_its_own_ten_bytes_an_instant():
+    """A million OUTDEL instants and 18,000 PRDEL ones between them: the grid holds
+    8 bytes an instant and two 1-byte masks; making it took 95 bytes an instant at
+    its peak (the union and membership tests of two written-out grids), which is what
+    a streamed run of 1E7 rows would have needed (950 MB) before its first step."""
+    tracemalloc.start()
+    try:
+        grid = make_grid(0.0, 1000.0, 1e-3, 0.05 + 1e-4)  # (PRDEL's own instants)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    rows = len(grid.times)
+    # PRDEL = 0.0501: j*PRDEL is an OUTDEL instant where j is a multiple of 10
+    assert rows == 1_000_001 + sum(1 for j in range(1, int(1000 / 0.0501) + 1) if j % 10)
+    assert peak / rows < 13.0  # 10 held; a part of 65,536 being written out, 2 MB
+
+
+def spec_with(fintim: float, outdel: float, prdel: float):
+    import amilpy
+
+    m = amilpy.loads(f"X = INTGRL(0.0, 1.0)\nTIMER FINTIM = {fintim!r}, "
+                     f"OUTDEL = {outdel!r}, PRDEL = {prdel!r}\nPRINT X\nEND\n")
+    return m.ir.runs[0]
+
+
+def test_rows_past_the_limit_are_refused_with_the_way_to_have_them():
+    """2E6 rows a run keeps in memory; a run writing its OUTDEL rows to its CSV as it
+    goes holds only their instants and may have 2E7; PRDEL's rows are kept either
+    way (the printout), so their limit stays."""
+    spec = spec_with(10_000.0, 1e-3, 1.0)  # 1E7 OUTDEL rows
+    with pytest.raises(AmilError) as exc:
+        timer_values(spec)
+    text = exc.value.render()
+    assert "FINTIM/OUTDEL = 1e+07 output rows (limit 2000000)" in text
+    assert "--csv FILE" in text and "stream_csv" in text
+    assert timer_values(spec, streamed=True)["OUTDEL"] == 1e-3
+    with pytest.raises(AmilError, match="FINTIM/OUTDEL = 3e.07 output rows .limit 20000000"):
+        timer_values(spec_with(30_000.0, 1e-3, 1.0), streamed=True)
+    with pytest.raises(AmilError, match="FINTIM/PRDEL = 1e.07 output rows .limit 2000000"):
+        timer_values(spec_with(10_000.0, 1e-3, 1e-3), streamed=True)
+
+
+def test_the_command_streams_a_run_of_more_rows_than_memory_may_keep(tmp_path, capsys):
+    """`amilpy run --csv` with 3E7 rows: refused before the run, saying the limit
+    (nothing written); 1E7 rows without --csv: refused, saying --csv has them."""
+    path = tmp_path / "ramp.amil"
+    path.write_text("X = INTGRL(0.0, 1.0)\nTIMER FINTIM = 1.0, OUTDEL = 1.0E-4, PRDEL = 0.5\n"
+                    "PRINT X\nEND\n")
+    code = cli.main(["run", str(path), "--fintim", "3000", "--csv", str(tmp_path / "x.csv"),
+                     "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 1 and "3e+07 output rows (limit 20000000)" in err
+    assert not (tmp_path / "x.csv").exists() and list(tmp_path.iterdir()) == [path]
+    code = cli.main(["run", str(path), "--fintim", "1000", "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 1 and "1e+07 output rows (limit 2000000)" in err and "--csv FILE" in err
