@@ -147,6 +147,8 @@ class FastPaths:
             self._check_limits(cur.t, stepper)
             gi = rec.out_i if rec is not None else len(times)
             got = stepper.advance(m, z, times, gi)
+            if rec is not None:  # (the step ends and events come after the rows)
+                rec.extrema.held = True
             if rec is not None and len(got.T):
                 # (each row's branches too: RANGE re-integrates from rows)
                 table = rows_table(partial(self._compiled_outputs, got, z), rec, got.T,
@@ -170,6 +172,8 @@ class FastPaths:
                 if len(self.events) > self.opts.max_events:
                     raise Stop(Failure.EVENTS, t, limit=self.opts.max_events)
                 self._check_chatter()
+            if rec is not None:
+                rec.extrema.settle()
             m[:] = got.m.tolist()
             self._note_stiff(stepper)
             cur.t, cur.y = stepper.t, stepper.y

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from bisect import bisect_left, bisect_right
+from bisect import bisect_left
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -37,7 +37,7 @@ from ..steppers import solver_tolerance
 from .fastpaths import kernel_arguments
 from .loop import Cursor, Integrator, Stop
 from .plan import SLIDE, Options, RunPlan, SurfaceKind
-from .record import Bracket, Extrema, column, vertices
+from .record import Bracket, Extrema, RestartStates, column, vertices
 from .watch import SurfaceWatch, TooManySlides, crossings
 
 SAMPLES = 33  # instants per zoom level on the AUTO route
@@ -57,7 +57,7 @@ class Context:
     started: float  # the run's start, for its wall-clock limit
 
 
-def locate_range(ctx: Context, extrema: Extrema, restarts: list[Bracket]
+def locate_range(ctx: Context, extrema: Extrema, restarts: RestartStates
                  ) -> dict[str, tuple[float, float, float, float]]:
     """name -> (min, time, max, time) for every RANGE variable (see the module);
     `restarts`: the states where the run restarted, in time order."""
@@ -88,12 +88,11 @@ def locate_range(ctx: Context, extrema: Extrema, restarts: list[Bracket]
                 interval = c.middle if rising else replace(c.bracket, tb=c.middle.ta)
             if interval is not None:
                 todo.setdefault((interval.ta, interval.tb), (interval, set()))[1].add((col, top))
-    times = [r.ta for r in restarts]
     for b, wanted in todo.values():
         columns = [(extrema.names[k], extrema.columns[k], top) for k, top in sorted(wanted)]
         # between the restarts inside (a switch, a breakpoint: a kink may be the
         # extremum) nothing switches, so each piece may be sampled as it is
-        inside = restarts[bisect_right(times, b.ta):bisect_left(times, b.tb)]
+        inside = restarts.between(b.ta, b.tb)
         starts = [b] + inside
         ends = [r.ta for r in inside] + [b.tb]
         if not all(_sampled(ctx, replace(s, tb=e), columns, found)

@@ -10,6 +10,8 @@ RANGE variables' rows for the brackets where their minimum and maximum may lie;
 from __future__ import annotations
 
 import math
+from array import array
+from bisect import bisect_left, bisect_right
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -116,6 +118,54 @@ class Bracket:
     z: tuple[float, ...]
 
 
+FORGET_FROM = 4096  # restarts kept before those no RANGE bracket can want are forgotten
+
+
+class RestartStates:
+    """The states where a run restarted, in time order, kept compactly: a long run
+    restarts at every event (445,000 times in 10,000 s of the hoist), and as
+    `Bracket`s they took 600 bytes each, as arrays and shared tuples 80 (7 states)."""
+
+    def __init__(self) -> None:
+        self.times = array("d")
+        self._y = array("d")
+        self._m: list[tuple] = []
+        self._z: list[tuple] = []
+        self._shared: dict[tuple, tuple] = {}  # (a run goes through few branch sets)
+
+    def add(self, t: float, y: np.ndarray, m, z) -> None:
+        self.times.append(t)
+        self._y.frombytes(np.ascontiguousarray(y, dtype=float).tobytes())
+        m, z = tuple(m), tuple(z)
+        self._m.append(self._shared.setdefault(m, m))
+        self._z.append(self._shared.setdefault(z, z))
+
+    def __len__(self) -> int:
+        return len(self.times)
+
+    def keep(self, spans: list[tuple[float, float]], after: float) -> None:
+        """Forget the restarts outside the spans and before `after`."""
+        t = np.frombuffer(self.times, float)
+        wanted = t >= after
+        for ta, tb in spans:
+            wanted[bisect_left(self.times, ta):bisect_right(self.times, tb)] = True
+        n = len(self._y) // max(len(t), 1)
+        rows = np.flatnonzero(wanted)
+        y = np.frombuffer(self._y, float).reshape(len(t), n)[rows]
+        self.times = array("d", t[rows].tobytes())
+        self._y = array("d", y.tobytes())
+        self._m = [self._m[k] for k in rows]
+        self._z = [self._z[k] for k in rows]
+
+    def between(self, ta: float, tb: float) -> list[Bracket]:
+        """The restarts strictly inside (ta, tb), as brackets starting there."""
+        n = len(self._y) // max(len(self.times), 1)
+        return [Bracket(self.times[k], math.nan,
+                        np.frombuffer(self._y, float, n, 8 * n * k).copy(),
+                        self._m[k], self._z[k])
+                for k in range(bisect_right(self.times, ta), bisect_left(self.times, tb))]
+
+
 @dataclass(frozen=True)
 class Candidate:
     """Where a variable's maximum (or, negated, minimum) may lie."""
@@ -158,13 +208,17 @@ class Extrema:
         self._starts = np.zeros(1, int)  # where each part begins in a scan
         self._order: np.ndarray | None = None  # the scan's time order of its points
         self.started = False
+        # the points of one stretch still coming, some before those in (a compiled
+        # kernel call's rows, then its step ends and events among them): no scan, the
+        # rows already scanned must all come before the rest (`settle` ends it)
+        self.held = False
 
     def add(self, t: float, values: list[float], y: np.ndarray, m, z) -> None:
         """One row (y is kept, not copied: the loop never changes a state in place)."""
         if self.names:
             self.single.append((t, values, y, tuple(m), tuple(z)))
             self.buffered += 1
-            if self.buffered >= self.BATCH:
+            if self.buffered >= self.BATCH and not self.held:
                 self._scan_buffer()
 
     def add_many(self, T: np.ndarray, V: np.ndarray, Y: np.ndarray, m, z,
@@ -177,11 +231,12 @@ class Extrema:
             modes = m if isinstance(m, np.ndarray) else tuple(m)
             self.parts.append((T, V[:, self.columns], Y, modes, tuple(z)))
             self.buffered += len(T)
-            if not more and self.buffered >= self.BATCH:
+            if not more and self.buffered >= self.BATCH and not self.held:
                 self._scan_buffer()
 
     def settle(self) -> None:
-        """Scan the buffer if it is full (after rows added with `more`)."""
+        """Scan the buffer if it is full (after rows added with `more`, or held)."""
+        self.held = False
         if self.buffered >= self.BATCH:
             self._scan_buffer()
 
@@ -283,6 +338,15 @@ class Extrema:
         kept.sort(key=lambda k: -k.score)
         del kept[self.KEEP:]
 
+    def wanted(self) -> tuple[list[tuple[float, float]], float]:
+        """Where a restart may still be wanted: inside the brackets of the candidates
+        kept (`peaks.locate_range` integrates them again piece by piece), and after
+        the first row not yet scanned (brackets to come start there or later)."""
+        spans = [(c.bracket.ta, c.bracket.tb) for kept in self.candidates for c in kept]
+        firsts = [float(p[0].min()) for p in self.parts if len(p[0])]
+        firsts += [r[0] for r in self.single[:1]]
+        return spans, min(firsts, default=math.inf if self.started else -math.inf)
+
     def close(self) -> None:
         """Scan what is left; the last row is a candidate too when it is the larger
         of the last two."""
@@ -356,7 +420,8 @@ class Recorder:
         named = [n for n in dict.fromkeys(range_names) if n in index]
         self.extrema = Extrema(named, [index[n] for n in named])
         # the state after every restart, where a RANGE variable may have a kink
-        self.restarts: list[Bracket] = []
+        self.restarts = RestartStates()
+        self._forget_at = FORGET_FROM
         # rows before this TIME are not searched (a sweep's settling time); the
         # first row after it is then an end of the searched window, like a run's start
         self.range_from = range_from
@@ -411,7 +476,10 @@ class Recorder:
     def restarted(self, t: float, y: np.ndarray, m, z) -> None:
         """The run restarts at t in modes m (kept when there is RANGE to locate)."""
         if self.extrema.names:
-            self.restarts.append(Bracket(t, math.nan, np.array(y, float), tuple(m), tuple(z)))
+            self.restarts.add(t, y, m, z)
+            if len(self.restarts) >= self._forget_at:  # (a long run restarts 10^5 times)
+                self.restarts.keep(*self.extrema.wanted())
+                self._forget_at = max(FORGET_FROM, 2 * len(self.restarts))
 
     def grid_row(self, t: float, y: np.ndarray, m, z, shown=None) -> None:
         """The row of the next grid instant (none at the instant held for the caller)."""
