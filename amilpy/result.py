@@ -42,7 +42,10 @@ class EventKind(str, Enum):
         return self.value
 
 
-@dataclass(frozen=True)
+_BRANCHES: dict[float, float] = {}  # every branch value events have had
+
+
+@dataclass(frozen=True, slots=True)  # (a long run keeps 10^5 of them: 104 bytes each)
 class Event:
     """A switching instant: `old` -> `new` branch of one surface at `time`.
 
@@ -58,6 +61,12 @@ class Event:
     new: float
     kind: EventKind = EventKind.SWITCH
     text: str = ""
+
+    def __post_init__(self) -> None:
+        # (the branches are a few values: one float object each, not two an event)
+        if len(_BRANCHES) < 4096:
+            object.__setattr__(self, "old", _BRANCHES.setdefault(self.old, self.old))
+            object.__setattr__(self, "new", _BRANCHES.setdefault(self.new, self.new))
 
     def describe_branch(self, mode: float) -> str:
         """A branch in the listing's own terms: "W1 > 0", "W1 held at 0", "level 3"."""
