@@ -45,7 +45,7 @@ class EventKind(str, Enum):
 _BRANCHES: dict[float, float] = {}  # every branch value events have had
 
 
-@dataclass(frozen=True, slots=True)  # (a long run keeps 10^5 of them: 104 bytes each)
+@dataclass(frozen=True, slots=True)  # (a long run keeps 10^5 of them: 120 bytes each)
 class Event:
     """A switching instant: `old` -> `new` branch of one surface at `time`.
 
