@@ -42,7 +42,14 @@ class EventKind(str, Enum):
         return self.value
 
 
-_BRANCHES: dict[float, float] = {}  # every branch value events have had
+_BRANCHES: dict[tuple[float, float], float] = {}  # every branch value events have had
+
+
+def _shared(value):
+    """One float object for each branch value (-0.0 apart from 0.0; others as given)."""
+    if type(value) is not float or value != value or len(_BRANCHES) >= 4096:
+        return value
+    return _BRANCHES.setdefault((value, math.copysign(1.0, value)), value)
 
 
 @dataclass(frozen=True, slots=True)  # (a long run keeps 10^5 of them: 120 bytes each)
@@ -64,9 +71,8 @@ class Event:
 
     def __post_init__(self) -> None:
         # (the branches are a few values: one float object each, not two an event)
-        if len(_BRANCHES) < 4096:
-            object.__setattr__(self, "old", _BRANCHES.setdefault(self.old, self.old))
-            object.__setattr__(self, "new", _BRANCHES.setdefault(self.new, self.new))
+        object.__setattr__(self, "old", _shared(self.old))
+        object.__setattr__(self, "new", _shared(self.new))
 
     def describe_branch(self, mode: float) -> str:
         """A branch in the listing's own terms: "W1 > 0", "W1 held at 0", "level 3"."""

@@ -71,12 +71,16 @@ def test_the_grid_of_a_long_run_takes_its_own_ten_bytes_an_instant():
     assert peak / rows < 13.0  # 10 held; a part of 65,536 being written out, 2 MB
 
 
-def spec_with(fintim: float, outdel: float, prdel: float):
+def model_with(fintim: float, outdel: float, prdel: float | None = None):
     import amilpy
 
-    m = amilpy.loads(f"X = INTGRL(0.0, 1.0)\nTIMER FINTIM = {fintim!r}, "
-                     f"OUTDEL = {outdel!r}, PRDEL = {prdel!r}\nPRINT X\nEND\n")
-    return m.ir.runs[0]
+    timer = f"FINTIM = {fintim!r}, OUTDEL = {outdel!r}" + \
+        (f", PRDEL = {prdel!r}" if prdel is not None else "")
+    return amilpy.loads(f"X = INTGRL(0.0, 1.0)\nTIMER {timer}\nPRINT X\nEND\n")
+
+
+def spec_with(fintim: float, outdel: float, prdel: float | None = None):
+    return model_with(fintim, outdel, prdel).ir.runs[0]
 
 
 def test_rows_past_the_limit_are_refused_with_the_way_to_have_them():
@@ -96,6 +100,39 @@ def test_rows_past_the_limit_are_refused_with_the_way_to_have_them():
         timer_values(spec_with(10_000.0, 1e-3, 1e-3), streamed=True)
 
 
+def test_a_run_kept_whole_is_refused_at_the_rows_memory_may_keep_whatever_its_length():
+    """3E7 rows without --csv: the limit said is 2E6 (not the streamed one), from
+    Model.run as from timer_values."""
+    with pytest.raises(AmilError) as exc:
+        model_with(30.0, 1e-6, 0.5).run()
+    assert "(limit 2000000)" in exc.value.render()
+
+
+def test_a_listing_without_prdel_is_told_to_write_one_to_stream():
+    """PRDEL defaults to OUTDEL, and PRDEL's rows are kept for the printout: such a
+    run is refused in OUTDEL's name, told to write a coarser PRDEL and stream; streamed
+    as it is, told to write a PRDEL."""
+    spec = spec_with(3.0, 1e-6)
+    with pytest.raises(AmilError) as exc:
+        timer_values(spec)
+    text = exc.value.render()
+    assert "FINTIM/OUTDEL = 3e+06 output rows (limit 2000000)" in text
+    assert "write a coarser PRDEL" in text and "--csv FILE" in text
+    with pytest.raises(AmilError) as exc:
+        timer_values(spec, streamed=True)
+    text = exc.value.render()
+    assert "FINTIM/PRDEL = 3e+06 output rows (limit 2000000)" in text
+    assert "write a coarser PRDEL" in text and "--csv" not in text
+
+
+def test_one_grid_counts_its_rows_once():
+    """OUTDEL = PRDEL (or PRDEL not written): one grid, FINTIM/OUTDEL + 1 rows, so
+    a run of 1.2E6 rows is kept whole, not streamed."""
+    assert model_with(1.2, 1e-6).most_rows() == pytest.approx(1_200_001)
+    assert model_with(1.2, 1e-6, 1e-6).most_rows() == pytest.approx(1_200_001)
+    assert model_with(1.0, 1e-6, 0.5).most_rows() == pytest.approx(1_000_001 + 3)
+
+
 def test_the_command_streams_a_run_of_more_rows_than_memory_may_keep(tmp_path, capsys):
     """`amilpy run --csv` with 3E7 rows: refused before the run, saying the limit
     (nothing written); 1E7 rows without --csv: refused, saying --csv has them."""
@@ -110,3 +147,19 @@ def test_the_command_streams_a_run_of_more_rows_than_memory_may_keep(tmp_path, c
     code = cli.main(["run", str(path), "--fintim", "1000", "--quiet"])
     err = capsys.readouterr().err
     assert code == 1 and "1e+07 output rows (limit 2000000)" in err and "--csv FILE" in err
+
+
+def test_events_share_their_branch_values_and_keep_minus_zero():
+    """Events hold one float object per branch value (a long run keeps 10^5 of them);
+    -0.0 stays -0.0 after a 0.0 (a QNTZR level), other kinds of number as given."""
+    import math
+
+    from amilpy.result import Event, EventKind
+
+    a = Event(1.0, "FSW", 0, float("-1"), float("1"))
+    b = Event(2.0, "FSW", 0, float("1"), float("-1"))
+    assert a.new is b.old and a.old is b.new
+    zero = Event(3.0, "QNTZR", 1, 0.0, 1.0, EventKind.LEVEL)
+    minus = Event(4.0, "QNTZR", 1, -0.0, 1.0, EventKind.LEVEL)
+    assert math.copysign(1.0, zero.old) == 1.0 and math.copysign(1.0, minus.old) == -1.0
+    assert Event(5.0, "FSW", 0, 1, -1).old == 1 and type(Event(5.0, "FSW", 0, 1, -1).old) is int

@@ -245,17 +245,19 @@ def stored_values(spec: ir.RunSpec, columns: int, fintim: float | None = None) -
 def output_rows(spec: ir.RunSpec, fintim: float | None = None) -> float:
     """The most output rows a run of `spec` has (the OUTDEL and PRDEL grids, both
     ends included)."""
-    t = timer_values(spec, fintim, streamed=True)  # (how many, the most any run takes)
+    t = timer_values(spec, fintim, max_rows=None)
+    if t["OUTDEL"] == t["PRDEL"]:
+        return t["FINTIM"] / t["OUTDEL"] + 1.0
     return t["FINTIM"] / t["OUTDEL"] + t["FINTIM"] / t["PRDEL"] + 2.0
 
 
 def timer_values(spec: ir.RunSpec, fintim: float | None = None,
-                 max_rows: int = DEFAULTS["max_rows"],
+                 max_rows: int | None = DEFAULTS["max_rows"],
                  streamed: bool = False) -> dict[str, float]:
     """CSMP TIMER defaults: OUTDEL = FINTIM/100 and PRDEL = OUTDEL when neither is
     given; one given, the other takes its value; DELT divides the output interval.
     `streamed`: the OUTDEL rows go to a file as the run goes (a longer grid may be
-    had then: `row_limit`)."""
+    had then: `row_limit`); `max_rows` None: no limit (a count, not a run)."""
     t = dict(spec.timer)
     fintim_option = fintim
     if fintim is not None:
@@ -294,17 +296,8 @@ def timer_values(spec: ir.RunSpec, fintim: float | None = None,
                 f"ask for a run of at least {t[name]:g}, or write a smaller {name}" if asked
                 else f"write {name} = {t['FINTIM'] / 100.0:g} (a hundredth of the run) or "
                 "less, or a longer FINTIM")])
-    for name in ("PRDEL", "OUTDEL"):  # (PRDEL's rows are kept whatever the run)
-        rows = fintim / min(t[name], fintim)
-        limit = row_limit(max_rows, streamed and name == "OUTDEL")
-        if not rows <= limit:
-            raise AmilError([Diagnostic(
-                f"FINTIM/{name} = {rows:.3g} output rows (limit {limit})", None,
-                f"raise {name}" + (
-                    ", or have the rows written to a CSV as the run goes (amilpy run "
-                    f"--csv FILE, Model.run(stream_csv=FILE): up to {row_limit(0, True):.0e}"
-                    " OUTDEL rows)" if name == "OUTDEL" and not streamed and
-                    rows <= row_limit(0, True) else ""))])
+    if max_rows is not None:
+        _check_rows(spec, t, max_rows, streamed)
     if "DELT" in t:
         n = max(1, math.ceil(interval / t["DELT"] - 1e-9))
         t["DELT"] = interval / n
@@ -313,6 +306,34 @@ def timer_values(spec: ir.RunSpec, fintim: float | None = None,
     t.setdefault("DELMIN", 0.0)
     t.setdefault("DELMAX", math.inf)
     return t
+
+
+def _check_rows(spec: ir.RunSpec, t: dict[str, float], max_rows: int,
+                streamed: bool) -> None:
+    """Refuse more output rows than a run may have: `max_rows` kept in memory (the
+    finer grid's; streamed, PRDEL's, whose rows are kept for the printout), and
+    `row_limit` OUTDEL rows of a streamed run."""
+    fintim = t["FINTIM"]
+    stream_most = row_limit(max_rows, True)
+    kept = "PRDEL" if streamed or t["PRDEL"] < t["OUTDEL"] else "OUTDEL"
+    checks = [(kept, max_rows)] + ([("OUTDEL", stream_most)] if streamed else [])
+    for name, limit in checks:
+        rows = fintim / min(t[name], fintim)
+        if rows <= limit:
+            continue
+        no_prdel = "PRDEL" not in spec.timer
+        hint = f"raise {name}"
+        if name == "PRDEL" and no_prdel:
+            hint = "write a coarser PRDEL (the printed rows, kept in memory: without one " \
+                   "it is OUTDEL)"
+        elif name == "OUTDEL" and not streamed and rows <= stream_most and \
+                (no_prdel or fintim / t["PRDEL"] <= max_rows):
+            hint += (", or " + ("write a coarser PRDEL (the printed rows: without one it "
+                                "is OUTDEL) and " if no_prdel else "") +
+                     "have the OUTDEL rows written to a CSV as the run goes (amilpy run "
+                     f"--csv FILE, Model.run(stream_csv=FILE): up to {stream_most:.0e})")
+        raise AmilError([Diagnostic(f"FINTIM/{name} = {rows:.3g} output rows "
+                                    f"(limit {limit})", spec.timer_spans.get(name), hint)])
 
 
 def row_limit(max_rows: int, streamed: bool) -> int:
