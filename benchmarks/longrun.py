@@ -2,7 +2,7 @@
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/longrun.py [--models hoist_backlash machine_unit]
         [--fintims 10 100 1000] [--methods AUTO COMPILED] [--rtol R] [--tree PATH]
-        [--stream] [--out DIR]
+        [--stream] [--max-events N] [--max-steps N] [--out DIR]
 
 Each point runs in a fresh process (its peak resident memory is its own): the listing
 is loaded and run once over its own FINTIM first (imports, code generation, numba's
@@ -41,9 +41,11 @@ import json, os, resource, sys, time
 import amilpy
 path, method, fintim = sys.argv[1], sys.argv[2], float(sys.argv[3])
 rtol = float(sys.argv[4]) if sys.argv[4] != "-" else None
-stream = sys.argv[5] if len(sys.argv) > 5 else None
+max_events, max_steps = (int(x) for x in sys.argv[5].split(","))
+stream = sys.argv[6] if len(sys.argv) > 6 else None
 m = amilpy.load(path)
-kw = dict(method=method, advice=False, rtol=rtol, atol=None if rtol is None else rtol * 1e-3)
+kw = dict(method=method, advice=False, rtol=rtol, atol=None if rtol is None else rtol * 1e-3,
+          max_events=max_events, max_steps=max_steps)
 m.run(**kw)  # the fixed costs: imports, code generation, the kernel
 base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 start = time.process_time()
@@ -62,15 +64,16 @@ print(json.dumps({"cpu": cpu, "base": base, "peak": peak, "rows": rows,
 
 
 def point(model: str, method: str, fintim: float, rtol: float | None,
-          tree: str = ROOT, stream: bool = False) -> dict:
+          tree: str = ROOT, stream: bool = False, limits: tuple[int, int] = (200_000, 5_000_000)
+          ) -> dict:
     import tempfile
 
     path = os.path.join(tree, "models", f"{model}.amil")
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1", PYTHONPATH=tree)
     csv = [os.path.join(tempfile.mkdtemp(), "rows.csv")] if stream else []
     out = subprocess.run([sys.executable, "-c", _PROBE, path, method, repr(fintim),
-                          repr(rtol) if rtol else "-", *csv], capture_output=True,
-                         text=True, cwd=tree, env=env)
+                          repr(rtol) if rtol else "-", ",".join(map(str, limits)), *csv],
+                         capture_output=True, text=True, cwd=tree, env=env)
     if out.returncode:
         return {"model": model, "method": method, "fintim": fintim,
                 "error": out.stderr.strip().splitlines()[-1] if out.stderr else "failed"}
@@ -103,12 +106,13 @@ def table(rows: list[dict]) -> str:
 
 def main(models=("hoist_backlash", "machine_unit"), fintims=(10.0, 100.0, 1000.0),
          methods=("AUTO", "COMPILED"), rtol: float | None = None,
-         out_dir: str | None = None, tree: str = ROOT, stream: bool = False) -> list[dict]:
+         out_dir: str | None = None, tree: str = ROOT, stream: bool = False,
+         limits: tuple[int, int] = (200_000, 5_000_000)) -> list[dict]:
     rows = []
     for model in models:
         for method in methods:
             for fintim in fintims:
-                r = point(model, method, fintim, rtol, tree, stream)
+                r = point(model, method, fintim, rtol, tree, stream, limits)
                 rows.append(r)
                 print(table([r]).splitlines()[-1], flush=True)
     text = table(rows)
@@ -132,6 +136,12 @@ if __name__ == "__main__":
     ap.add_argument("--tree", default=ROOT, help="the checkout whose amilpy runs")
     ap.add_argument("--stream", action="store_true",
                     help="stream the long run's CSV as it goes (Model.run(stream_csv=))")
+    ap.add_argument("--max-events", type=int, default=200_000,
+                    help="the runs' event limit (the hoist switches 45 times a second: "
+                         "450,000 times in 10,000 s)")
+    ap.add_argument("--max-steps", type=int, default=5_000_000,
+                    help="the runs' step limit (the hoist takes 770 steps a second)")
     ap.add_argument("--out", default=None)
     a = ap.parse_args()
-    main(a.models, a.fintims, a.methods, a.rtol, a.out, os.path.abspath(a.tree), a.stream)
+    main(a.models, a.fintims, a.methods, a.rtol, a.out, os.path.abspath(a.tree), a.stream,
+         (a.max_events, a.max_steps))

@@ -147,6 +147,11 @@ def test_longrun_runs(tmp_path):
     r, = rows
     assert r["status"] == "finished" and r["rows"] == 20_001 and r["peak"] >= r["base"] > 0
     assert (tmp_path / "longrun.md").read_text().count("| machine_unit | AUTO (AUTO) |") == 1
+    # streamed, with the run's limits passed on (here a step limit it reaches)
+    r, = longrun.main(models=["machine_unit"], fintims=[20.0], methods=["AUTO"],
+                      out_dir=str(tmp_path), stream=True, limits=(10, 50))
+    assert r["status"] == "failed" and 0 < r["rows"] < 20_001
+    assert (tmp_path / "longrun_stream.md").exists()
 
 
 def test_frontend_runs_each_checkout_in_its_own_process(tmp_path):
