@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 from . import interrupts, ir
 from .check import check
-from .diagnostics import AmilError, Diagnostic, UsageError, did_you_mean, with_hint
+from .diagnostics import AmilError, Diagnostic, UsageError, did_you_mean, in_file, with_hint
 from .outcome import was_interrupted
 from .parse import parse
 from .progress import report
@@ -263,12 +263,8 @@ class Model:
 
     def _per_run(self, specs, count) -> list[float]:
         """`count` of each run's spec; a fault in its TIMER located in the listing."""
-        try:
+        with in_file(self.ir.path, self.ir.source):
             return [count(spec) for spec in specs]
-        except AmilError as exc:
-            if exc.path is None:
-                exc.path, exc.source = self.ir.path, self.ir.source
-            raise
 
     def _check_memory(self, specs: list[ir.RunSpec], outputs: list[str] | None,
                       fintim: float | None) -> None:

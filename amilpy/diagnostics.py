@@ -8,7 +8,8 @@ the source line, a caret under the offending text and a hint.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 from .language import split_lines
@@ -68,6 +69,17 @@ class AmilError(Exception):
         from html import escape
 
         return f"<pre style='color:#b00'>{escape(self.render())}</pre>"
+
+
+@contextmanager
+def in_file(path: str | None, source: str | None) -> Iterator[None]:
+    """A fault raised inside that names no file is a fault of this one."""
+    try:
+        yield
+    except AmilError as exc:
+        if exc.path is None:
+            exc.path, exc.source = path, source
+        raise
 
 
 class UsageError(AmilError):

@@ -73,7 +73,8 @@ def test_a_long_run_holds_its_rows_once(tmp_path, method):
     assert float(hi) == pytest.approx(1.0, abs=1e-4)
 
 
-@pytest.mark.parametrize("method", ["AUTO", "COMPILED", "RKS", "DOP853", "LSODA"])
+@pytest.mark.parametrize("method", ["AUTO", "COMPILED", pytest.param("RKS", marks=pytest.mark.slow),
+                                    "DOP853", pytest.param("LSODA", marks=pytest.mark.slow)])
 def test_range_is_the_same_however_the_rows_are_cut_and_restarts_forgotten(
         monkeypatch, method):
     """RANGE scans the rows for candidates a batch of 8,192 at a time, and keeps the

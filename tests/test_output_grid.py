@@ -163,3 +163,18 @@ def test_events_share_their_branch_values_and_keep_minus_zero():
     minus = Event(4.0, "QNTZR", 1, -0.0, 1.0, EventKind.LEVEL)
     assert math.copysign(1.0, zero.old) == 1.0 and math.copysign(1.0, minus.old) == -1.0
     assert Event(5.0, "FSW", 0, 1, -1).old == 1 and type(Event(5.0, "FSW", 0, 1, -1).old) is int
+
+
+def test_a_grid_finer_than_time_can_tell_apart_is_refused():
+    """Instants within 1E-12 of TIME of each other are one instant (the grid's own
+    rounding): OUTDEL 1E-3 from TIME = 1E9 (a late STTIME, a run continued) would give
+    rows that fall together, which the union of the grids merged silently, taking
+    some for others. Refused, with what to write."""
+    with pytest.raises(AmilError) as exc:
+        make_grid(1e9, 1e9 + 1.5, 1e-3, 1.5e-3)
+    text = exc.value.render()
+    assert "OUTDEL = 0.001 is below what TIME can tell apart at TIME = 1e+09" in text
+    assert "write OUTDEL = 1 or more, or start TIME nearer 0" in text
+    with pytest.raises(AmilError, match="PRDEL = 1e-07 is below"):
+        make_grid(1e5, 1e5 + 1.0, 0.5, 1e-7)
+    assert len(make_grid(1e6, 1e6 + 1.0, 1e-3, 0.5).times) == 1001  # (1E-9 of TIME apart)

@@ -427,6 +427,15 @@ def make_grid(t0: float, fintim: float, outdel: float, prdel: float,
 
     Written into the run's arrays part by part: a streamed run of 1E7 rows holds its
     grid (8 to 10 bytes an instant) and no more (a union of the two grids took 95)."""
+    scale = max(1.0, abs(t0), abs(fintim))
+    for name, step in (("OUTDEL", outdel), ("PRDEL", prdel)):
+        if step <= SAME_INSTANT * scale:
+            # (two instants that close are one: the grid's rows would fall together)
+            raise AmilError([Diagnostic(
+                f"{name} = {step:g} is below what TIME can tell apart at TIME = "
+                f"{scale:g} (instants {SAME_INSTANT:g} of it apart are one)", None,
+                f"write {name} = {SAME_INSTANT * scale * 1e3:g} or more, or start TIME "
+                "nearer 0")])
     rows = _Uniform(t0, fintim, outdel)
     # a PRDEL instant that rounds within SAME_INSTANT of an OUTDEL one (3*0.05 and
     # 150*0.001) is that instant: one row, not two 3E-17 apart

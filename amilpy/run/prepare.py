@@ -25,7 +25,7 @@ from ..codegen import (
     initial_values,
     parameter_names,
 )
-from ..diagnostics import AmilError, Diagnostic, Span
+from ..diagnostics import AmilError, Diagnostic, Span, in_file
 from ..language import SEED_NAME
 from ..library.surfaces import level, sign
 from ..parse.syntax import no_collection
@@ -130,12 +130,8 @@ def with_weather(model: ir.Model, spec: ir.RunSpec, timer: dict[str, float], opt
 
     def read() -> dict[str, object]:
         weather = Weather(spec.weather, folder, list(opts.weather_dirs), model.weather_lines)
-        try:
+        with in_file(model.path, model.source):
             days = weather.tables(model.weather, t0, t1)
-        except AmilError as exc:
-            if exc.path is None:
-                exc.path, exc.source = model.path, model.source
-            raise
         return {WEATHER_TABLE + name: table for name, table in days.items()}
 
     return replace(spec, tables={**spec.tables, **cache.get("weather", key, read)})
@@ -143,12 +139,8 @@ def with_weather(model: ir.Model, spec: ir.RunSpec, timer: dict[str, float], opt
 
 @no_collection()
 def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> Prepared:
-    try:
+    with in_file(model.path, model.source):
         timer = timer_values(spec, opts.fintim, opts.max_rows, opts.row_sink is not None)
-    except AmilError as exc:
-        if exc.path is None:
-            exc.path, exc.source = model.path, model.source
-        raise
     route, method = resolve_route(spec, opts)
     step_point = resolve_step_point(spec, opts)
     if step_point:
@@ -179,8 +171,10 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
     fintim = t0 + timer["FINTIM"]
     gkey = (t0, fintim, timer["OUTDEL"], timer["PRDEL"], step_point and timer["DELT"],
             opts.extra_times)
-    grid = cache.get("grid", gkey, lambda: steppoint.grid(t0, timer) if step_point else
-                     make_grid(t0, fintim, timer["OUTDEL"], timer["PRDEL"], opts.extra_times))
+    with in_file(model.path, model.source):
+        grid = cache.get("grid", gkey, lambda: steppoint.grid(t0, timer) if step_point else
+                         make_grid(t0, fintim, timer["OUTDEL"], timer["PRDEL"],
+                                   opts.extra_times))
     limit = row_limit(opts.max_rows, opts.row_sink is not None)
     if len(grid.times) > limit:
         raise AmilError([Diagnostic(
