@@ -441,28 +441,28 @@ def make_grid(t0: float, fintim: float, outdel: float, prdel: float,
     # 150*0.001) is that instant: one row, not two 3E-17 apart
     gp = _grid(t0, fintim, prdel) if prdel != outdel else np.empty(0)
     pick, same = rows.nearest(gp)
+    own = gp[~same]
     more = np.asarray(extra, dtype=float)
     more = np.unique(more[(more > t0) & (more < fintim)])
-    more = more[~rows.nearest(more)[1] & ~nearest_instants(gp[~same], more)[1]]
+    more = more[~rows.nearest(more)[1] & ~nearest_instants(own, more)[1]]
     # the instants put between the OUTDEL ones: PRDEL's own and the extra ones
-    put = np.concatenate([gp[~same], more])
+    put = np.concatenate([own, more])
     order = np.argsort(put, kind="stable")
-    put, put_prdel = put[order], (np.arange(len(put)) < int(np.count_nonzero(~same)))[order]
+    put, put_prdel = put[order], (np.arange(len(put)) < len(own))[order]
+    at = rows.below(put)  # put[j] goes before OUTDEL instant at[j]
     size = rows.size
     times = np.empty(size + len(put))
     if len(put):
+        new = at + np.arange(len(put))
+        times[new] = put
         outdel_mask = np.ones(len(times), bool)
-        prdel_mask = np.zeros(len(times), bool) if prdel != outdel else outdel_mask.copy()
+        outdel_mask[new] = False
+        prdel_mask = outdel_mask.copy() if prdel == outdel else np.zeros(len(times), bool)
+        prdel_mask[new] = put_prdel
     else:  # (every instant an OUTDEL one: a mask that takes no memory, read-only)
         outdel_mask = np.broadcast_to(np.True_, (size,))
-        prdel_mask = np.zeros(size, bool) if prdel != outdel else outdel_mask
+        prdel_mask = outdel_mask if prdel == outdel else np.zeros(size, bool)
     # where each OUTDEL instant k lands: k plus the instants put before it
-    at = rows.below(put)  # put[j] goes before OUTDEL instant at[j]
-    new = at + np.arange(len(put))
-    times[new] = put
-    if len(put):
-        outdel_mask[new] = False
-        prdel_mask[new] = put_prdel
     part = 1 << 16
     for a in range(0, size, part):
         k = np.arange(a, min(a + part, size))

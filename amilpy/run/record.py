@@ -128,13 +128,15 @@ class RestartStates:
 
     def __init__(self) -> None:
         self.times = array("d")
-        self._y = array("d")
+        self._y = array("d")  # the states one after the other, `_n` each
+        self._n = 0
         self._m: list[tuple] = []
         self._z: list[tuple] = []
         self._shared: dict[tuple, tuple] = {}  # (a run goes through few branch sets)
 
     def add(self, t: float, y: np.ndarray, m, z) -> None:
         self.times.append(t)
+        self._n = len(y)
         self._y.frombytes(np.ascontiguousarray(y, dtype=float).tobytes())
         m, z = tuple(m), tuple(z)
         self._m.append(self._shared.setdefault(m, m))
@@ -149,9 +151,8 @@ class RestartStates:
         wanted = t >= after
         for ta, tb in spans:
             wanted[bisect_left(self.times, ta):bisect_right(self.times, tb)] = True
-        n = len(self._y) // max(len(t), 1)
         rows = np.flatnonzero(wanted)
-        y = np.frombuffer(self._y, float).reshape(len(t), n)[rows]
+        y = np.frombuffer(self._y, float).reshape(len(t), self._n)[rows]
         self.times = array("d", t[rows].tobytes())
         self._y = array("d", y.tobytes())
         self._m = [self._m[k] for k in rows]
@@ -159,7 +160,7 @@ class RestartStates:
 
     def between(self, ta: float, tb: float) -> list[Bracket]:
         """The restarts strictly inside (ta, tb), as brackets starting there."""
-        n = len(self._y) // max(len(self.times), 1)
+        n = self._n
         return [Bracket(self.times[k], math.nan,
                         np.frombuffer(self._y, float, n, 8 * n * k).copy(),
                         self._m[k], self._z[k])
