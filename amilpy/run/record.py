@@ -25,23 +25,29 @@ from .watch import SurfaceWatch
 
 class Rows:
     """The recorded output rows, in order: single rows from the step-by-step path,
-    whole blocks from an odeint chunk. Kept column by column, in parts of BATCH rows
-    or more, so the `Run`'s columns are put together one at a time at the end, each
-    freeing its parts as it is made: a long run holds its rows about once, never as
-    blocks, a table and columns at the same time."""
+    whole blocks from an odeint chunk. Kept column by column, each column one array
+    grown in place (`ndarray.resize`: realloc, which moves a large block by remapping
+    its pages, not by copying them) and cut to its length at the end: a long run
+    holds its rows once. Many small parts kept for the whole run would sit among the
+    run's short-lived arrays on the C heap, whose freed holes the system never gets
+    back: 75 MB more than the rows for the 1,000 s hoist (1E6 rows) that way."""
 
-    BATCH = 32768  # (a column's part then takes 256 kB: memory of its own, which goes
-    # back to the system when it is freed, not a heap that stays as large as it was)
+    BATCH = 32768  # rows handed to `on_part` at a time (a streamed run)
     SINGLE = 4096  # single rows kept as lists at most
+    GROW = 1.5  # a column's capacity grows by this factor, at least to what it must hold
 
-    def __init__(self, width: int, on_part=None) -> None:
+    def __init__(self, width: int, on_part=None, expect: int = 0) -> None:
         self.width = width
         # `on_part(t, g, values, final) -> rows kept`: each part as it is merged (a
         # CSV streamed as the run goes: output/stream.py), the run's last one final
         self.on_part = on_part
-        self.t_parts: list[np.ndarray] = []
-        self.g_parts: list[np.ndarray] = []
-        self.columns: list[list[np.ndarray]] = [[] for _ in range(width)]
+        # the kept rows: TIME, grid index and each column, the first `n` of each
+        # (`expect`: the rows the run is planned to keep, its first capacity)
+        cap = max(int(expect), 16)
+        self.n = 0
+        self.kept_t = np.empty(cap)
+        self.kept_g = np.empty(cap, np.int32)  # (a grid has at most 2E7 instants)
+        self.kept = [np.empty(cap) for _ in range(width)]
         self.blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # not merged yet
         self.in_blocks = 0
         self.t: list[float] = []
@@ -64,6 +70,9 @@ class Rows:
             self.t, self.g, self.v = [], [], []
 
     def _block(self, t: np.ndarray, g: np.ndarray, values: np.ndarray) -> None:
+        if self.on_part is None:  # (kept as they come: nothing waits to be handed on)
+            self._keep(t, g, values)
+            return
         # (TIME may be a view of a stepper's chunk, which it would keep alive until the
         # merge: copied; the indices and the table are the block's own)
         self.blocks.append((np.array(t, float), g, values))
@@ -72,19 +81,31 @@ class Rows:
             self._merge()
 
     def _merge(self, final: bool = False) -> None:
+        if self.on_part is None:
+            return
         if not self.blocks:
-            if final and self.on_part is not None:
+            if final:
                 self.on_part(np.empty(0), np.empty(0, int), np.empty((0, self.width)), True)
             return
         t, g, v = (np.concatenate(p) for p in zip(*self.blocks, strict=True))
         self.blocks, self.in_blocks = [], 0
-        if self.on_part is not None:
-            keep = self.on_part(t, g, v, final)
-            t, g, v = t[keep], g[keep], v[keep]
-        self.t_parts.append(t)
-        self.g_parts.append(g)
-        for column, values in zip(self.columns, v.T, strict=True):
-            column.append(values.copy())
+        keep = self.on_part(t, g, v, final)
+        self._keep(t[keep], g[keep], v[keep])
+
+    def _keep(self, t: np.ndarray, g: np.ndarray, v: np.ndarray) -> None:
+        n, k = self.n, len(t)
+        if n + k > len(self.kept_t):
+            self._resize(max(n + k, int(len(self.kept_t) * self.GROW)))
+        self.kept_t[n:n + k] = t
+        self.kept_g[n:n + k] = g
+        for column, values in zip(self.kept, v.T, strict=True):
+            column[n:n + k] = values
+        self.n = n + k
+
+    def _resize(self, size: int) -> None:
+        # (the arrays are Rows' own and nothing holds a view of them: see take)
+        for a in (self.kept_t, self.kept_g, *self.kept):
+            a.resize(size, refcheck=False)
 
     def add_block(self, t: np.ndarray, g: np.ndarray, values: np.ndarray) -> None:
         self._flush()
@@ -92,19 +113,14 @@ class Rows:
         self.last_t = float(t[-1])
 
     def take(self) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
-        """TIME, the grid indices and each column, as arrays; the rows are given
-        away (the parts of a column are freed as soon as it is put together)."""
+        """TIME, the grid indices and each column, as arrays cut to their length;
+        the rows are given away."""
         self._flush()
         self._merge(final=True)
-        t = np.concatenate(self.t_parts) if self.t_parts else np.empty(0)
-        g = np.concatenate(self.g_parts) if self.g_parts else np.empty(0, int)
-        self.t_parts, self.g_parts = [], []
-        out = []
-        for k in range(self.width):
-            parts, self.columns[k] = self.columns[k], []
-            out.append(np.concatenate(parts) if parts else np.empty(0))
-            del parts
-        return t, g, out
+        self._resize(self.n)
+        out = (self.kept_t, self.kept_g, self.kept)
+        self.__init__(self.width, self.on_part)
+        return out
 
 
 @dataclass(frozen=True)
@@ -409,7 +425,10 @@ class Recorder:
         # `sink`: where the rows are streamed as the run goes (output/stream.py's
         # CsvStream, begun by the caller), keeping in memory what it says
         self.sink = sink
-        self.rows = Rows(len(c.out_names), self._stream if sink is not None else None)
+        # (a run kept whole is planned to keep a row an instant of its grid; a streamed
+        # one keeps its PRDEL rows, how many is found as it goes)
+        self.rows = Rows(len(c.out_names), self._stream if sink is not None else None,
+                         len(plan.grid.times) + 1 if sink is None else Rows.BATCH)
         self.out_i = 0  # the next grid instant to record
         # an instant whose row the caller takes itself, after its events (ACSL form)
         self.hold: float | None = None
@@ -567,14 +586,17 @@ class Recorder:
         grid = self.plan.grid
         times, g, columns = self.rows.take()
         values = dict(zip(names, columns, strict=True))
-        last = np.zeros(len(g), bool)
+        # (indexed with g as it is, g = -1 reading the last instant's and put right
+        # after: no copy of g, which the 1,000 s hoist's peak would have held twice)
+        outdel_mask, prdel_mask = np.zeros(len(g), bool), np.zeros(len(g), bool)
+        if len(g) and len(grid.times):
+            off = g < 0  # rows between grid instants: events, the stop
+            outdel_mask, prdel_mask = grid.outdel[g], grid.prdel[g]
+            outdel_mask[off] = prdel_mask[off] = False
+            del off
         if len(g):
-            last[-1] = True  # the stop instant (FINISH, TERMT, failure) is always shown
-        on_grid = g >= 0
-        outdel_mask = last.copy()
-        prdel_mask = last.copy()
-        outdel_mask[on_grid] |= grid.outdel[g[on_grid]]
-        prdel_mask[on_grid] |= grid.prdel[g[on_grid]]
+            # the stop instant (FINISH, TERMT, failure) is always shown
+            outdel_mask[-1] = prdel_mask[-1] = True
         final = {k: float(v) for k, v in constants.items() if k not in RESERVED}
         final.update({n: float(v[-1]) for n, v in values.items()} if len(times) else {})
         for i, n in enumerate(self.c.state_names):
