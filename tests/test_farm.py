@@ -159,7 +159,9 @@ def test_ctrl_c_at_any_instant_of_a_farmed_run_ends_it(tmp_path):
     path = tmp_path / "two.amil"
     path.write_text("PARAM K = (1.0, 1000.0, 2000.0)\nX = INTGRL(0.0, COS(K*TIME))\n"
                     "RELERR 1.0E-6\nTIMER FINTIM = 1.0E3, OUTDEL = 1.0\nPRINT X\nEND\n")
-    env = dict(os.environ, PYTHONPATH=HERE)
+    # (faulthandler: a command still running is made to write where each of its
+    # processes is, SIGABRT, before it is killed; the failure shows it)
+    env = dict(os.environ, PYTHONPATH=HERE, PYTHONFAULTHANDLER="1")
     codes = []
     for k in range(13):
         # (SIGINT as a shell leaves it to a command it starts in the foreground: a test
@@ -175,9 +177,14 @@ def test_ctrl_c_at_any_instant_of_a_farmed_run_ends_it(tmp_path):
         try:
             _, err = proc.communicate(timeout=60)
         except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.communicate()
-            pytest.fail(f"Ctrl-C {0.3 + 0.1 * k:.1f} s after the start: still running 60 s later")
+            os.killpg(proc.pid, signal.SIGABRT)
+            try:
+                _, err = proc.communicate(timeout=10)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                _, err = proc.communicate()
+            pytest.fail(f"Ctrl-C {0.3 + 0.1 * k:.1f} s after the start: still running 60 s "
+                        f"later; where its processes were:\n{err[-4000:]}")
         codes.append(proc.returncode)
         if "Traceback" in err:  # (Python's own interrupt while it imports amilpy's
             # modules, however long that takes on this machine; once main() runs, none)
