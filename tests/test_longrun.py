@@ -119,12 +119,13 @@ def test_range_is_the_same_however_the_rows_are_cut_and_restarts_forgotten(
     assert len(cut.events) == len(whole.events) == 222
 
 
-@pytest.mark.parametrize("streamed", [False, True])
-def test_rows_grow_in_place_and_keep_every_row_in_order(streamed):
-    """Rows keeps each column as one array grown in place from a capacity of 16:
-    single rows and blocks interleaved, 40,000 rows in all (several growths, and
-    with a stream several parts of BATCH rows, of which it keeps every third), come
-    back in order, exactly, each column cut to its length and its own memory."""
+@pytest.mark.parametrize("streamed, expect", [(False, 0), (False, 40_000), (True, 0)])
+def test_rows_grow_in_place_and_keep_every_row_in_order(streamed, expect):
+    """Rows keeps each column as one array grown in place, from a capacity of 16, or
+    of FIRST rows and then the planned 40,000: single rows and blocks interleaved,
+    40,000 rows or a few more in all (several growths, and with a stream several
+    parts of BATCH rows, of which it keeps every third), come back in order,
+    exactly, each column cut to its length and its own memory."""
     import numpy as np
 
     from amilpy.run.record import Rows
@@ -136,7 +137,7 @@ def test_rows_grow_in_place_and_keep_every_row_in_order(streamed):
         seen.append((len(t), final))
         return g % 3 == 0
 
-    rows = Rows(3, on_part if streamed else None)
+    rows = Rows(3, on_part if streamed else None, expect)
     t_all, g_all, v_all = [], [], []
     g = 0
     while g < 40_000:
@@ -160,3 +161,39 @@ def test_rows_grow_in_place_and_keep_every_row_in_order(streamed):
     if streamed:
         assert sum(n for n, _ in seen) == len(g_all) and seen[-1][1]
         assert not any(final for _, final in seen[:-1])
+
+
+EARLY = textwrap.dedent("""
+    import resource, sys
+    import amilpy
+    m = amilpy.load(sys.argv[1])
+    m.run(advice=False, fintim=1.0)
+    with open("/proc/self/status") as f:
+        vm = next(int(line.split()[1]) for line in f if line.startswith("VmSize:"))
+    limit = vm * 1024 + 60 * 2**20
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    r, = m.run(advice=False)
+    print(r.status, len(r.t))
+""")
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/status"), reason="needs Linux's /proc")
+def test_a_run_that_stops_early_asks_no_memory_for_the_rows_it_did_not_make(tmp_path):
+    """A falling body printing 42 columns over FINTIM 40,000 s at OUTDEL 0.1 plans
+    400,001 rows (135 MB) but stops at FINISH after 1.22 s (14 rows). Under an
+    address-space limit of 60 MB above a warm process it runs: room for the rows is
+    asked for as they come (8,192 at first). (Room for the whole grid asked for at
+    the start cost no resident memory but 135 MB of address space: a MemoryError
+    here, and under a strict overcommit.)"""
+    body = "\n".join(f"A{k} = Y + {k}.0" for k in range(40))
+    path = tmp_path / "fall.amil"
+    path.write_text("TITLE A FALL\nY = INTGRL(10.0, V)\nV = INTGRL(0.0, -9.81)\n" + body
+                    + "\nTIMER FINTIM = 40000.0, OUTDEL = 0.1, PRDEL = 0.5\nFINISH V = -12.0\n"
+                    "PRINT Y, V, " + ", ".join(f"A{k}" for k in range(40)) + "\nEND\n",
+                    encoding="utf-8")
+    out = subprocess.run([sys.executable, "-c", EARLY, str(path)], capture_output=True,
+                         text=True, env=dict(os.environ, OPENBLAS_NUM_THREADS="1"))
+    assert out.returncode == 0, out.stderr[-2000:]
+    status, rows = out.stdout.split()
+    # V = -9.81 t reaches -12 at t = 1.2232 s: rows at 0, 0.1, ..., 1.2 and the stop
+    assert status == "stopped" and int(rows) == 14

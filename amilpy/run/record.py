@@ -35,6 +35,7 @@ class Rows:
     BATCH = 32768  # rows handed to `on_part` at a time (a streamed run)
     SINGLE = 4096  # single rows kept as lists at most
     GROW = 1.5  # a column's capacity grows by this factor, at least to what it must hold
+    FIRST = 8192  # rows a column has room for at most before any is kept (64 kB)
 
     def __init__(self, width: int, on_part=None, expect: int = 0) -> None:
         self.width = width
@@ -42,8 +43,11 @@ class Rows:
         # CSV streamed as the run goes: output/stream.py), the run's last one final
         self.on_part = on_part
         # the kept rows: TIME, grid index and each column, the first `n` of each
-        # (`expect`: the rows the run is planned to keep, its first capacity)
-        cap = max(int(expect), 16)
+        # (`expect`: the rows the run is planned to keep; room for FIRST of them at
+        # most at first, then for all at the first growth: one copy of 64 kB a
+        # column, and a run that stops early has not asked for its whole grid)
+        self.expect = int(expect)
+        cap = max(min(self.expect, self.FIRST), 16)
         self.n = 0
         self.kept_t = np.empty(cap)
         self.kept_g = np.empty(cap, np.int32)  # (a grid has at most 2E7 instants)
@@ -95,7 +99,8 @@ class Rows:
     def _keep(self, t: np.ndarray, g: np.ndarray, v: np.ndarray) -> None:
         n, k = self.n, len(t)
         if n + k > len(self.kept_t):
-            self._resize(max(n + k, int(len(self.kept_t) * self.GROW)))
+            cap = len(self.kept_t)
+            self._resize(max(n + k, self.expect if cap < self.expect else int(cap * self.GROW)))
         self.kept_t[n:n + k] = t
         self.kept_g[n:n + k] = g
         for column, values in zip(self.kept, v.T, strict=True):
