@@ -194,6 +194,18 @@ class Grid:
     outdel: np.ndarray
     prdel: np.ndarray
 
+    def masks(self, g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The OUTDEL and PRDEL masks of rows at grid indices `g` (-1: a row
+        between the grid's instants, an event's or the stop's, in neither), new
+        arrays. (Indexed with g as it is, -1 reading the last instant's and put right
+        after: no copy of g, which a run of 1E6 rows would hold twice.)"""
+        if not len(g) or not len(self.times):
+            return np.zeros(len(g), bool), np.zeros(len(g), bool)
+        off = g < 0
+        outdel, prdel = self.outdel[g], self.prdel[g]
+        outdel[off] = prdel[off] = False
+        return outdel, prdel
+
 
 @dataclass(frozen=True)
 class Reset:

@@ -578,10 +578,8 @@ class Recorder:
             self._samples(S, m, z, S, SY, every=True)
 
     def _stream(self, t: np.ndarray, g: np.ndarray, v: np.ndarray, final: bool) -> np.ndarray:
-        grid = self.plan.grid  # (the ACSL form's CINT may change it during the run)
-        on = g >= 0
-        outdel, prdel = np.zeros(len(g), bool), np.zeros(len(g), bool)
-        outdel[on], prdel[on] = grid.outdel[g[on]], grid.prdel[g[on]]
+        # (the plan's grid as it is now: the ACSL form's CINT may change it in the run)
+        outdel, prdel = self.plan.grid.masks(g)
         return self.sink.part(t, g, list(v.T), outdel, prdel, final)
 
     def run(self, spec, constants: dict[str, float], events: list[Event], status: Status,
@@ -591,14 +589,7 @@ class Recorder:
         grid = self.plan.grid
         times, g, columns = self.rows.take()
         values = dict(zip(names, columns, strict=True))
-        # (indexed with g as it is, g = -1 reading the last instant's and put right
-        # after: no copy of g, which the 1,000 s hoist's peak would have held twice)
-        outdel_mask, prdel_mask = np.zeros(len(g), bool), np.zeros(len(g), bool)
-        if len(g) and len(grid.times):
-            off = g < 0  # rows between grid instants: events, the stop
-            outdel_mask, prdel_mask = grid.outdel[g], grid.prdel[g]
-            outdel_mask[off] = prdel_mask[off] = False
-            del off
+        outdel_mask, prdel_mask = grid.masks(g)
         if len(g):
             # the stop instant (FINISH, TERMT, failure) is always shown
             outdel_mask[-1] = prdel_mask[-1] = True
