@@ -383,12 +383,21 @@ class RunSpec:
     step_point: bool | None = None
     timer_spans: dict[str, Span] = field(default_factory=dict)  # where each TIMER key is
     weather: object | None = None  # FST's WEATHER statements (weather.WeatherSpec)
+    # constants that size an array or bound a loop written out over one (parse.arrays)
+    fixed: frozenset[str] = frozenset()
 
     def overridden(self, values: dict[str, float]) -> RunSpec:
         """This run with data values from outside (--set, a sweep, an ensemble's
         draw): they count as changed, and the label names every changed value."""
         if not values:
             return self
+        fixed = sorted(set(values) & self.fixed)
+        if fixed:
+            from .diagnostics import Diagnostic, UsageError
+
+            raise UsageError([Diagnostic(
+                f"{fixed[0]} sizes an array or bounds a loop over one: it is fixed when the "
+                "listing is read", None, f"change {fixed[0]} in the listing itself")])
         changed = {**self.changed, **values}
         label = ", ".join(f"{n} = {v:g}" for n, v in changed.items())
         return replace(self, data={**self.data, **values}, changed=changed,

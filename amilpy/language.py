@@ -103,6 +103,9 @@ ACSL_HEADS: tuple[str, ...] = ("PROGRAM", "MODEL")
 ACSL_TIME = "T"  # time in ACSL form (TIME too, unless the listing assigns it)
 DEFAULT_CINT = 0.1
 MAX_LOOP = 1_000_000  # iterations of one FOR/DO loop
+# elements of the arrays of one listing (each is a variable of its own), and the
+# statements loops over arrays may be written out into
+MAX_ELEMENTS = 200_000
 MAX_INTERVALS = 1_000_000  # output intervals of a run no TERMT or FINTIM bounds
 # ALGORITHM ... XERROR: integration control (section 11); the names are constants
 CONTROL_KEYWORDS: tuple[str, ...] = ("ALGORITHM", "NSTEPS", "MAXTERVAL", "MINTERVAL",

@@ -78,6 +78,8 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
     ("ACSL", "`DELAY(X, IC, TDL, NMX)`", "`DELAY` with the value IC before t0 + TDL (TDL may "
      "change in time)"),
     ("ACSL", "`ALGORITHM IALG = 3` (Euler)", "`METHOD RECT` in step-point mode"),
+    ("ACSL", "`DIMENSION X(3)`, `CONSTANT X = 1.0, 2*0.0`, `X[I]`, `FOR I = 1, 3 ... END`",
+     "the elements `X(1)`, `X(2)`, `X(3)`, variables of their own (Arrays, below)"),
     ("CSMP III", "`MACRO Y = LAG2(T, X) ... ENDMAC`, `A = LAG2(0.1, U)`", "the body "
      "expanded at each call (its own states and locals per call)"),
     ("CSMP III", "`PROCEDURE Y, Z = P(A, B) ... ENDPRO`", "`PROCEDURAL (Y, Z = A, B)`"),
@@ -155,6 +157,38 @@ sorted and integrated; DYNAMIC runs in written order at every CINT row; DISCRETE
 sections run when SCHEDULE or INTERVAL says, and may change states (the run
 restarts from the new values); TERMINAL runs once at the end. With no PRINT or
 OUTPUT, every state is printed.
+
+### Arrays
+
+```
+PROGRAM  three decays, one array
+  DIMENSION X(3), XD(3), K(3), X0(3)
+  CONSTANT K = 1.0, 2.0, 3.0, X0 = 3*1.0
+  CINTERVAL CINT = 0.1
+  DERIVATIVE
+    PROCEDURAL (XD = X)
+      DO I = 1, 3
+        XD(I) = -K(I)*X(I)
+      END DO
+    END
+    X = INTEG(XD, X0)
+    TERMT(T >= 1.0)
+  END
+END
+```
+
+`DIMENSION X(3), A[2, 2]` (or a type: `REAL V(5)`, `DIMENSION INTEGER N(2)`) declares
+arrays; `CONSTANT K = 1.0, 2.0, 3.0` gives their values in Fortran's order (the first
+subscript fastest; `3*1.0` repeats). Each element is a variable of its own, named
+`X(1)`, `A(2,1)` in the printout, the CSV and `--set`: sorting, the states, the
+Jacobian and every METHOD see scalars. A subscript known when the listing is read
+(numbers, constants, the variable of a loop over known bounds, which is written out
+pass by pass) names its element; one known only as the run goes (`DOSE[DAY]` in a
+DISCRETE section) reads through `ELEMENT(K, X1, ...)`, and a subscript outside the
+array stops the run with its value. `X = INTEG(XD, X0)` and any statement that
+assigns a whole array hold for each element; `PRINT X` lists the elements. The
+constants that size an array or bound a written-out loop are fixed when the listing
+is read: `--set` may not change them.
 
 ## The FST form
 

@@ -57,7 +57,8 @@ def _all_subclasses(cls):
 
 def test_families_hold_every_expression_node():
     # a node added to syntax or ir must join a family, or no complete visitor sees it
-    families = set(ir.EXPRESSIONS) | set(syntax.STATEMENTS) | set(ir.CODE)
+    families = set(ir.EXPRESSIONS) | set(syntax.STATEMENTS) | set(ir.CODE) \
+        | set(syntax.RESOLVED_BY_READER)
     # pieces of statements, not visited alone
     parts = {syntax.DataItem, syntax.Setting, syntax.Branch, syntax.Item}
     assert set(NODES.values()) == families | parts

@@ -13,6 +13,8 @@ Surface classification (const / time / state) is `surfaces.classify`.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from .. import ir
 from ..diagnostics import AmilError, Reporter
 from ..library.surfaces import classify
@@ -73,15 +75,23 @@ def check(program: ast.Program, name: str | None = None) -> ir.Model:
     if program.form == "ACSL":
         from .acsl import check_acsl
 
-        return check_acsl(program, name)
+        return _fixed(check_acsl(program, name), program.fixed)
     try:
-        return _check_csmp(program, name)
+        return _fixed(_check_csmp(program, name), program.fixed)
     except AmilError as exc:
         if program.macros:
             from ..parse.macros import in_macros
 
             exc.diagnostics = in_macros(exc.diagnostics, program.macros)
         raise
+
+
+def _fixed(model: ir.Model, fixed: frozenset[str]) -> ir.Model:
+    """The constants an array's size or a written-out loop's bounds read (parse.arrays)
+    may not change from run to run."""
+    if fixed:
+        model.runs = [replace(r, fixed=fixed) for r in model.runs]
+    return model
 
 
 def _check_csmp(program: ast.Program, name: str | None) -> ir.Model:

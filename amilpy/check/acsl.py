@@ -321,6 +321,8 @@ class _Check:
         for code in initial:
             for st in code.body:
                 reads = [n for n in ast.walk(st) if isinstance(n, ast.Name)]
+                # (a loop gives its variable a value before its body reads it)
+                given |= {n.var for n in ast.walk(st) if isinstance(n, ir.ForLoop)}
                 for node in reads:
                     if node.name not in given and node.name in first \
                             and first[node.name].line > node.span.line:

@@ -148,9 +148,9 @@ class Names:
             self.rep.error(f"{what} (line {node.span.line}): not supported", node.span, hint)
             return
         if node.func in self.defined or node.func in self.data_names:
-            self.rep.error(f"{node.func} is a variable, not a function: subscripts "
-                           f"(arrays) are not supported", node.span,
-                           "write one scalar per element (X1, X2, ...)")
+            self.rep.error(f"{node.func} is a variable, not a function or an array",
+                           node.span, f"to read {node.func} as an array, declare it: "
+                           f"DIMENSION {node.func}(n)")
             return
         self.rep.error(f"unknown function {node.func}", node.span,
                        did_you_mean(node.func, callable_names() | set(self.functions)) or

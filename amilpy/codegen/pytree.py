@@ -44,8 +44,14 @@ def local(name: str) -> str:
     if "#" in name:
         # hidden names hold '#', '.' and "'": spell every non-alphanumeric
         # character as _XX so that no two names meet
-        return "h_" + "".join(c if c.isalnum() else f"_{ord(c):02X}" for c in name)
+        return "h_" + _spelled(name)
+    if not name.replace("_", "").isalnum():  # an array's element, X(1,2)
+        return "a_" + _spelled(name)
     return "v_" + name
+
+
+def _spelled(name: str) -> str:
+    return "".join(c if c.isalnum() else f"_{ord(c):02X}" for c in name)
 
 
 def user_function(name: str) -> str:
@@ -55,7 +61,7 @@ def user_function(name: str) -> str:
 
 def parameter(name: str) -> str:
     """The global a run's parameter is read from in generated code."""
-    return "p_" + name
+    return "p_" + (name if name.replace("_", "").isalnum() else "a_" + _spelled(name))
 
 
 def number(v: float) -> py.expr:
@@ -298,7 +304,7 @@ _FORBIDDEN = (py.Attribute, py.Import, py.ImportFrom, py.Global, py.Lambda)
 
 
 def _compiler_name(name: str, allowed: frozenset, also: Callable[[str], bool] | None) -> bool:
-    return (name in allowed or name.startswith(("v_", "h_", "_T_", "_U_", "p_"))
+    return (name in allowed or name.startswith(("v_", "h_", "a_", "_T_", "_U_", "p_"))
             or (name[0] in "mnzw" and name[1:].isdigit())
             or (also is not None and also(name)))
 

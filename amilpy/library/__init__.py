@@ -376,6 +376,9 @@ _math("FLOAT(X)", float, lambda np: (lambda x: np.asarray(x, dtype=float)))
 _math("ATAN2(Y, X)", math.atan2, "arctan2")
 _math("POW(X, Y)", rt.safe_pow, "power", doc="X**Y (Magnolia's pow; NaN for a negative X "
       "to a fractional Y)")
+_math("ELEMENT(K, X1, ...)", rt.element, rt.vector_element,
+      doc="XK: an array's element at a subscript known only as the run goes (X[K], the "
+      "reader's); K outside 1..n is a fault")
 _math("NOTNUL(X)", rt.notnul, lambda np: (lambda x: np.where(np.asarray(x) == 0.0, 1.0, x)),
       doc="1 if X = 0, else X: Y/NOTNUL(X) never divides by 0")
 

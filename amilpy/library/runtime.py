@@ -97,6 +97,26 @@ def notnul(x: float) -> float:
     return 1.0 if x == 0.0 else x
 
 
+def element(k: float, *xs: float) -> float:
+    """ELEMENT(K, X1, ..., Xn): Xk, an array's element at a subscript known only as the
+    run goes (parse/arrays.py); a K that is no whole number in 1..n is a fault."""
+    i = int(k) if k == k and abs(k) < 2**31 else 0
+    if i != k or not 1 <= i <= len(xs):
+        raise ValueError(f"the subscript {k:g} is outside 1..{len(xs)}")
+    return xs[i - 1]
+
+
+def vector_element(np):
+    def element_v(k, *xs):
+        k = np.asarray(k, dtype=float)
+        i = np.where(np.isfinite(k), k, 0.0)
+        if np.any((i != k) | (i < 1) | (i > len(xs))):
+            bad = float(np.ravel(k)[np.ravel((i != k) | (i < 1) | (i > len(xs)))][0])
+            raise ValueError(f"the subscript {bad:g} is outside 1..{len(xs)}")
+        return np.choose(i.astype(int) - 1, np.broadcast_arrays(*xs))
+    return element_v
+
+
 def nan_on_domain(f: Callable[[float], float]) -> Callable[[float], float]:
     """f, with NaN instead of a ValueError/OverflowError (SINH, COSH)."""
     def g(x: float) -> float:

@@ -14,6 +14,7 @@ from importlib import resources
 
 from ..diagnostics import AmilError, Diagnostic, Span
 from ..language import ACSL_HEADS, split_lines
+from . import arrays
 from . import syntax as ast
 from .blocks import Nester
 from .build import Builder
@@ -78,16 +79,16 @@ def parse(text: str, path: str | None = None) -> ast.Program:
             continue
         break
     if errors:
-        if is_acsl(prepared):
-            errors = [_array_list(d) for d in errors]
         raise AmilError(errors, path, text)
     builder = Builder(text, path)
+    builder.acsl = is_acsl(prepared)
     items = builder.statements(tree)
     form, name, statements = Nester(builder.errors).nest(items)
     statements, macros = expand(statements, builder.errors)
+    statements, fixed = arrays.expand(statements, builder.errors)
     if builder.errors:
         raise AmilError(in_macros(sorted(builder.errors, key=_where), macros), path, text)
-    return ast.Program(tuple(statements), path, text, form, name, macros)
+    return ast.Program(tuple(statements), path, text, form, name, macros, fixed)
 
 
 def is_acsl(prepared: str) -> bool:
@@ -100,15 +101,6 @@ def is_acsl(prepared: str) -> bool:
             word = re.match(r"[A-Za-z]+", code)
             return word is not None and word.group().upper() in ACSL_HEADS
     return False
-
-
-def _array_list(d: Diagnostic) -> Diagnostic:
-    """In ACSL form `CONSTANT X = 1, 2, 3` is an array, not a decimal comma."""
-    if not d.message.startswith("a decimal comma in a data statement"):
-        return d
-    return Diagnostic("a list of values for one name (an array): not supported", d.span,
-                      "write one CONSTANT per value (X1 = ..., X2 = ...)", d.severity,
-                      d.related)
 
 
 def _where(d: Diagnostic) -> tuple[int, int]:

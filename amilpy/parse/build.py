@@ -13,6 +13,7 @@ from dataclasses import replace
 from ..diagnostics import AmilError, Diagnostic, Span
 from ..language import (
     DATA_KEYWORDS,
+    MAX_ELEMENTS,
     REFUSED,
     REPORT_KEYWORDS,
     SECTIONS,
@@ -54,6 +55,7 @@ class Builder:
         self.source = source
         self.path = path
         self.errors: list[Diagnostic] = []  # refusals and misplaced strings
+        self.acsl = False  # the ACSL form (where CONSTANT X = 1, 2 fills an array)
 
     def refuse(self, construct: str, span: Span, hint: str) -> None:
         """A construct amilpy does not run (contract section 14)."""
@@ -197,14 +199,11 @@ class Builder:
                  if not hasattr(c, "data")]
         items = [c for c in node.children if hasattr(c, "data")]
         kind = TYPE_KEYWORDS[words[-1]]
-        for item in items:
-            if item.data == "decl_array":
-                self.refuse(f"the array {str(item.children[0]).upper()}", self.span(item),
-                            "write one scalar per element (X1, X2, ...); a declaration "
-                            "without a size declares a scalar")
-        names = [c.children[0] for c in items if c.data == "decl_item"]
+        names = [c.children[0] for c in items]
+        sizes = tuple(tuple(self.expr(e) for e in c.children[1:]) for c in items)
         return ast.Declare(kind, tuple(str(n).upper() for n in names),
-                           tuple(self.span(n) for n in names), self.span(node))
+                           tuple(self.span(n) for n in names), self.span(node),
+                           sizes if any(sizes) else ())
 
     def st_refused(self, node) -> None:
         word = " ".join(str(node.children[0]).upper().split())
@@ -233,10 +232,10 @@ class Builder:
                     "remove it: GO TO and labelled loops are not supported; write IF (c) "
                     "THEN ... END IF or DO i = a, b ... END DO")
 
-    def st_assign_subscript(self, node) -> None:
-        name = str(node.children[0]).upper()
-        self.refuse(f"the subscripted assignment {name}(...) = ...", self.span(node),
-                    "arrays are not supported: write one scalar per element (X1, X2, ...)")
+    def st_assign_subscript(self, node) -> ast.Assign:
+        name, *subscripts, expr = node.children
+        return ast.Assign((str(name).upper(),), (self.span(name),), self.expr(expr),
+                          self.span(node), tuple(self.expr(e) for e in subscripts))
 
     def st_stop(self, node) -> ast.Stop:
         return ast.Stop(self.span(node))
@@ -276,8 +275,27 @@ class Builder:
                     "write CONSTANT INTEGER, REAL, DOUBLE PRECISION or LOGICAL, or none"))
             whole, children = kind == "INTEGER", children[1:]
         for item in children:
+            if item.data in ("more_value", "more_repeat"):
+                # ACSL's CONSTANT X = 1, 2, 3: the value belongs to the name before it
+                if not self.acsl:
+                    self.errors.append(Diagnostic(
+                        "a decimal comma in a data statement", self.span(item),
+                        "the decimal separator is a point: write 1.5, not 1,5"))
+                    continue
+                last = items[-1]
+                count = self.count(item.children[0]) if item.data == "more_repeat" else 1
+                value = self.value(item.children[-1])
+                if whole and math.isfinite(value):
+                    value = float(math.trunc(value))
+                items[-1] = replace(last, values=last.values + (value,) * count,
+                                    is_array=True)
+                continue
             name = str(item.children[0]).upper()
-            if item.data == "data_list":
+            if item.data == "data_repeat":
+                count = self.count(item.children[1])
+                items.append(ast.DataItem(name, (self.value(item.children[2]),) * count,
+                                          self.span(item), is_array=True))
+            elif item.data == "data_list":
                 values: list[float] = []
                 for entry in item.children[1:]:
                     count = int(str(entry.children[0])) if entry.data == "repeat" else 1
@@ -295,6 +313,16 @@ class Builder:
                 items[-1] = replace(items[-1], values=tuple(
                     float(math.trunc(v)) if math.isfinite(v) else v for v in items[-1].values))
         return ast.Data(keyword, tuple(items), self.span(node))
+
+    def count(self, token) -> int:
+        """n of an array's n*v (at most language.MAX_ELEMENTS)."""
+        n = int(str(token))
+        if n > MAX_ELEMENTS:
+            self.errors.append(Diagnostic(
+                f"{n}*... repeats a value more than {MAX_ELEMENTS:,} times", self.span(token),
+                f"an array has at most {MAX_ELEMENTS:,} elements"))
+            return 0
+        return n
 
     def st_table(self, node) -> ast.Table:
         name = str(node.children[0]).upper()
@@ -434,6 +462,8 @@ class Builder:
                 if named_table(node, args):
                     return args[1:]  # LINT2('F', F, N, X): the name is read here
                 return args
+            if node.data == "subscript":
+                return list(node.children[1:])
             if node.data in _BINOPS or node.data in _LOGIC:
                 return [node.children[0], node.children[-1]]
             if node.data in ("neg", "pos", "lnot"):
@@ -516,8 +546,5 @@ class Builder:
                 "the text in a TERMT message or a comment"))
             return ast.Num(0.0, self.span(node), "0")
         if kind == "subscript":
-            name = str(node.children[0]).upper()
-            self.refuse(f"the subscript {name}[...]", self.span(node),
-                        "arrays are not supported: write one scalar per element (X1, X2, ...)")
-            return ast.Num(0.0, self.span(node), "0")
+            return ast.Index(str(node.children[0]).upper(), tuple(args), self.span(node))
         raise AssertionError(f"unknown expression node {kind}")

@@ -191,6 +191,19 @@ class Call(Node):
 
 
 @dataclass(frozen=True)
+class Index(Node):
+    """An array's element, `X[i]` or `X(i, j)` once X is declared an array: only the
+    reader makes one, and `parse.arrays` turns every one into the element's own
+    variable (or, for a subscript known only while the run goes, an ELEMENT call)
+    before anything else reads the program."""
+
+    name: str
+    args: tuple[Expr, ...]
+    span: Span
+    child_fields = ("args",)
+
+
+@dataclass(frozen=True)
 class BinOp(Node):
     # arithmetic + - * / **; relational < <= > >= == /= (a number 1.0 or 0.0);
     # logical AND OR EQV NEQV (operands true when > 0; a number 1.0 or 0.0)
@@ -225,6 +238,8 @@ Expr = Num | Name | Call | BinOp | Neg | Not
 # the expression nodes of the syntax: a visitor of syntax expressions declares
 # `complete = EXPRESSIONS` (ir.EXPRESSIONS adds the IR's own)
 EXPRESSIONS: tuple[type[Node], ...] = (Num, Name, Call, BinOp, Neg, Not)
+# the reader's nodes that `parse.arrays` resolves: no stage after the reader sees one
+RESOLVED_BY_READER: tuple[type[Node], ...] = (Index,)
 
 
 def is_logical(e: Node) -> bool:
@@ -246,6 +261,8 @@ class Assign(Node):
     target_spans: tuple[Span, ...]
     expr: Expr
     span: Span
+    # X(i, j) = ...: the target's subscripts (the reader's; `parse.arrays` resolves them)
+    subscripts: tuple[Expr, ...] = ()
     child_fields = ("expr",)
 
 
@@ -255,6 +272,8 @@ class DataItem(Node):
     values: tuple[float, ...]  # more than one: one run per value
     span: Span
     is_list: bool = False
+    # ACSL's CONSTANT X = 1, 2, 3 (n*v repeats v): the values of the array X's elements
+    is_array: bool = False
 
 
 @dataclass(frozen=True)
@@ -489,6 +508,8 @@ class Declare(Node):
     names: tuple[str, ...]
     name_spans: tuple[Span, ...]
     span: Span
+    # an array's sizes, per name (() for a scalar): `parse.arrays` declares its elements
+    sizes: tuple[tuple[Expr, ...], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -568,3 +589,6 @@ class Program:
     # CSMP III's MACROs, expanded before checking: (name, first and last line of the
     # definition, the spans of its calls), so a fault in a body names the calls too
     macros: tuple[tuple[str, int, int, tuple[Span, ...]], ...] = ()
+    # constants that size an array or bound a loop written out over one: fixed when
+    # the listing is read (a run may not change them)
+    fixed: frozenset[str] = frozenset()

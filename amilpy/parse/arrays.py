@@ -1,0 +1,485 @@
+"""Arrays -> one variable per element, before anything checks the program.
+
+ACSL and Magnolia listings declare arrays (`DIMENSION X(4), A[3, 3]`, `REAL V(5)`,
+`DIMENSION INTEGER N(2)`), give them values (`CONSTANT X = 1.0, 2.0, 2*0.0`, in
+Fortran's order: the first subscript runs fastest) and read and write them element by
+element, mostly in loops (`FOR i = 1, 4 ... END`, `DO i = 1, 4 ... END DO`). Here each
+element becomes a variable of its own, named as the listing would write it, `X(1)`,
+`A(2,3)`; after this pass nothing knows arrays: sorting, the compiler, the Jacobian
+and every route see scalars, and a state that is an element is a state like any other.
+
+- A subscript whose value is known when the listing is read (numbers, constants, the
+  variable of a loop that is written out) names the element: `X[i + 1]` in a loop's
+  third pass from 1 is `X(4)`. A loop whose bounds are known is written out pass by
+  pass (in written-order code its variable then holds the value after the last pass,
+  as Fortran's does); one whose bounds are not known runs as a loop.
+- A subscript known only as the run goes (`DOSE[DAY]` in a DISCRETE section, DAY a
+  variable) reads through ELEMENT(k, X(1), ..., X(n)) and, in written-order code,
+  writes through an IF per element; a subscript outside the array is a fault there,
+  which names its value.
+- A statement that assigns a whole array (`X = INTEG(XD, XIC)`, `V = 2.0*W`) is one
+  statement per element, every array in it read at that element (a scalar as it is).
+- PRINT, OUTPUT, PREPARE, RANGE X and a PROCEDURAL's lists name its elements.
+- The constants that give a size or the bounds of a written-out loop are fixed when
+  the listing is read (`Program.fixed`): a run may not change them.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, fields, replace
+
+from ..diagnostics import Diagnostic, Span
+from ..language import MAX_ELEMENTS
+from . import syntax as ast
+
+# the statements of written-order code (where a subscript known only at run time may
+# be written, and a loop's variable keeps its value after the loop)
+_WRITTEN_BLOCKS = ("INITIAL", "DYNAMIC", "TERMINAL", "DISCRETE")
+_EXPRESSIONS = (*ast.EXPRESSIONS, *ast.RESOLVED_BY_READER)
+
+
+@dataclass(frozen=True)
+class Array:
+    name: str
+    sizes: tuple[int, ...]
+    span: Span
+
+    def element(self, index: tuple[int, ...]) -> str:
+        return f"{self.name}({','.join(str(i) for i in index)})"
+
+    def indices(self) -> list[tuple[int, ...]]:
+        """Every subscript, in Fortran's order (the first subscript fastest)."""
+        ranges = [range(1, n + 1) for n in reversed(self.sizes)]
+        return [tuple(reversed(k)) for k in itertools.product(*ranges)]
+
+    def elements(self) -> list[str]:
+        return [self.element(k) for k in self.indices()]
+
+
+class _Unknown(Exception):
+    """A value not known when the listing is read."""
+
+
+def expand(statements: list, errors: list[Diagnostic]) -> tuple[list, frozenset[str]]:
+    """The statements with every array written out as its elements (see the module),
+    and the constants fixed by it. Faults go to `errors`."""
+    declared = [st for st in _everything(statements)
+                if isinstance(st, ast.Declare) and st.sizes]
+    listed = [it for st in _everything(statements) if isinstance(st, ast.Data)
+              for it in st.items if it.is_array]
+    if not declared and not listed and not any(
+            isinstance(n, ast.Index) or (isinstance(n, ast.Assign) and n.subscripts)
+            for st in statements for n in ast.walk(st)):
+        return statements, frozenset()
+    pass_ = _Arrays(statements, errors)
+    return pass_.statements(statements, {}, written=False), frozenset(pass_.fixed)
+
+
+def _everything(statements) -> list:
+    """Every statement, in blocks and loops too."""
+    out, stack = [], list(reversed(statements))
+    while stack:
+        st = stack.pop()
+        out.append(st)
+        body = getattr(st, "body", None)
+        if isinstance(st, ast.If):
+            body = tuple(s for b in st.branches for s in b.body)
+        if body:
+            stack.extend(reversed(body))
+    return out
+
+
+class _Arrays:
+    def __init__(self, statements: list, errors: list[Diagnostic]) -> None:
+        self.errors = errors
+        self.fixed: set[str] = set()
+        self.written_out = 0  # statements the loops were written out into
+        everything = _everything(statements)
+        # constants: a name given one value, once (or always the same)
+        values: dict[str, float | None] = {}
+        for st in everything:
+            if isinstance(st, ast.Data) and st.keyword != "INCON":
+                for it in st.items:
+                    v = it.values[0] if len(it.values) == 1 and not (
+                        it.is_list or it.is_array) else None
+                    values[it.name] = v if values.get(it.name, v) == v else None
+        self.constants = {n: v for n, v in values.items() if v is not None}
+        self.arrays: dict[str, Array] = {}
+        total = 0
+        for st in everything:
+            if not isinstance(st, ast.Declare) or not st.sizes:
+                continue
+            for name, span, sizes in zip(st.names, st.name_spans, st.sizes, strict=True):
+                if not sizes:
+                    continue
+                dims = tuple(self.size(e, name) for e in sizes)
+                if not all(dims):
+                    continue
+                if name in self.arrays and self.arrays[name].sizes != dims:
+                    self.error(f"{name} is declared twice with other sizes", span,
+                               f"first at line {self.arrays[name].span.line}: declare it once")
+                    continue
+                self.arrays[name] = Array(name, dims, span)
+                total += math.prod(dims)
+                if total > MAX_ELEMENTS:
+                    self.error(f"the arrays hold more than {MAX_ELEMENTS:,} elements", span,
+                               "each element is a variable of its own: use smaller arrays")
+                    self.arrays.pop(name)
+
+    def error(self, message: str, span: Span | None, hint: str | None = None) -> None:
+        self.errors.append(Diagnostic(message, span, hint))
+
+    # ---------------------------------------------------------------- values known
+    def value(self, e: ast.Node, env: dict[str, int]) -> float:
+        """The value of e when the listing is read (numbers, constants, loop
+        variables); raises _Unknown. The constants it reads are fixed from then on."""
+        used: list[str] = []
+        v = self._value(e, env, used)
+        self.fixed.update(used)
+        return v
+
+    def _value(self, e, env, used) -> float:
+        if isinstance(e, ast.Num):
+            return e.value
+        if isinstance(e, ast.Name):
+            if e.name in env:
+                return float(env[e.name])
+            if e.name in self.constants:
+                used.append(e.name)
+                return self.constants[e.name]
+            raise _Unknown
+        if isinstance(e, ast.Neg):
+            return -self._value(e.operand, env, used)
+        if isinstance(e, ast.BinOp) and e.op in ("+", "-", "*", "/", "**"):
+            a, b = self._value(e.left, env, used), self._value(e.right, env, used)
+            try:
+                return {"+": a + b, "-": a - b, "*": a * b}[e.op] if e.op in "+-*" else \
+                    a / b if e.op == "/" else a ** b
+            except (ArithmeticError, ValueError):
+                raise _Unknown from None
+        raise _Unknown
+
+    def whole(self, e: ast.Node, env: dict[str, int], what: str) -> int | None:
+        """A whole number known when the listing is read, else None (said)."""
+        try:
+            v = self.value(e, env)
+        except _Unknown:
+            return None
+        if not (math.isfinite(v) and v == int(v)):
+            self.error(f"{what} is {v:g}, not a whole number", e.span,
+                       "a subscript, size or loop bound is a whole number")
+            return None
+        return int(v)
+
+    def size(self, e: ast.Node, name: str) -> int:
+        n = self.whole(e, {}, f"a size of {name}")
+        if n is None:
+            if not any(d.span == e.span for d in self.errors):
+                self.error(f"the size of {name} is not known when the listing is read", e.span,
+                           "write a number, or a CONSTANT/PARAMETER given one")
+            return 0
+        if n < 1:
+            self.error(f"a size of {name} is {n}", e.span, "an array has 1 element or more")
+            return 0
+        return n
+
+    # ---------------------------------------------------------------- expressions
+    def needs(self, e: ast.Node, env: dict[str, int]) -> bool:
+        for n in ast.walk(e):
+            if isinstance(n, ast.Index) or (isinstance(n, ast.Call) and n.func in self.arrays):
+                return True
+            if isinstance(n, ast.Name) and (n.name in env or n.name in self.arrays):
+                return True
+        return False
+
+    def expr(self, e, env: dict[str, int], whole: dict[str, str] | None = None):
+        """e with its subscripts resolved; `whole`: the element each array read whole
+        stands for (a statement that assigns a whole array, at one of its elements)."""
+        if e is None or not self.needs(e, env):
+            return e
+        try:
+            return self._expr(e, env, whole)
+        except RecursionError:
+            self.error("an expression with subscripts nested too deeply", e.span,
+                       "split it into several assignments")
+            return e
+
+    def _expr(self, e, env, whole):
+        if isinstance(e, ast.Name):
+            if e.name in env:
+                return ast.Num(float(env[e.name]), e.span, str(env[e.name]))
+            if e.name in self.arrays:
+                if whole is not None and e.name in whole:
+                    return ast.Name(whole[e.name], e.span)
+                self.error(f"the array {e.name} stands here without a subscript", e.span,
+                           f"write one element, {e.name}[i], or assign the whole array "
+                           f"({e.name} = ... on the left)")
+            return e
+        if isinstance(e, ast.Index) or (isinstance(e, ast.Call) and e.func in self.arrays):
+            name = e.name if isinstance(e, ast.Index) else e.func
+            args = tuple(self._expr(a, env, whole) for a in e.args)
+            if name not in self.arrays:
+                self.error(f"{name}[...]: {name} is not an array", e.span,
+                           f"declare it, e.g. DIMENSION {name}(10)")
+                return ast.Num(0.0, e.span, "0")
+            return self.read(self.arrays[name], args, e.span, env)
+        if isinstance(e, ast.Call):
+            return replace(e, args=tuple(self._expr(a, env, whole) for a in e.args))
+        if isinstance(e, ast.BinOp):
+            return replace(e, left=self._expr(e.left, env, whole),
+                           right=self._expr(e.right, env, whole))
+        if isinstance(e, (ast.Neg, ast.Not)):
+            return replace(e, operand=self._expr(e.operand, env, whole))
+        return e
+
+    def subscripts(self, a: Array, args, span: Span, env) -> list[int | None] | None:
+        """Each subscript's value when known (None: known only at run time); None
+        when they are wrong (said)."""
+        if len(args) != len(a.sizes):
+            self.error(f"{a.name} has {len(a.sizes)} subscript(s), not {len(args)}", span,
+                       f"write {a.name}[{', '.join('i j k l m'.split()[:len(a.sizes)])}]")
+            return None
+        known: list[int | None] = []
+        for d, (arg, n) in enumerate(zip(args, a.sizes, strict=True)):
+            try:
+                v = self.value(arg, env)
+            except _Unknown:
+                known.append(None)
+                continue
+            if not (math.isfinite(v) and v == int(v) and 1 <= v <= n):
+                self.error(f"the subscript {v:g} of {a.name} is outside 1..{n}"
+                           + (f" (subscript {d + 1})" if len(a.sizes) > 1 else ""), arg.span,
+                           f"{a.name} is declared with {n} element(s) there (line "
+                           f"{a.span.line})")
+                return None
+            known.append(int(v))
+        return known
+
+    def read(self, a: Array, args, span: Span, env):
+        known = self.subscripts(a, args, span, env)
+        if known is None:
+            return ast.Num(0.0, span, "0")
+        return self._pick(a, list(args), known, span, ())
+
+    def _pick(self, a: Array, args, known, span, chosen: tuple[int, ...]):
+        """The element at the subscripts: the last dimension first, ELEMENT over it
+        where its subscript is known only at run time."""
+        d = len(a.sizes) - 1 - len(chosen)
+        if d < 0:
+            return ast.Name(a.element(chosen), span)
+        if known[d] is not None:
+            return self._pick(a, args, known, span, (known[d], *chosen))
+        options = tuple(self._pick(a, args, known, span, (k, *chosen))
+                        for k in range(1, a.sizes[d] + 1))
+        return ast.Call("ELEMENT", (args[d], *options), span)
+
+    # ---------------------------------------------------------------- statements
+    def statements(self, sts, env: dict[str, int], written: bool) -> list:
+        out: list = []
+        for st in sts:
+            if isinstance(st, ast.Section):  # CSMP form: TERMINAL runs in written order
+                written = st.name == "TERMINAL"
+            elif isinstance(st, ast.Nosort):
+                written = not st.sorted
+            out.extend(self.statement(st, env, written))
+        return out
+
+    def statement(self, st, env: dict[str, int], written: bool) -> list:
+        if isinstance(st, ast.Declare):
+            return [self.declare(st)]
+        if isinstance(st, ast.Data):
+            return [self.data(st)]
+        if isinstance(st, ast.Assign):
+            return self.assign(st, env, written)
+        if isinstance(st, ast.Loop):
+            return self.loop(st, env, written)
+        if isinstance(st, ast.If):
+            return [replace(st, branches=tuple(
+                replace(b, cond=self.expr(b.cond, env),
+                        body=tuple(self.statements(b.body, env, written)))
+                for b in st.branches))]
+        if isinstance(st, ast.Procedural):
+            return [replace(st, outputs=self.names(st.outputs), inputs=self.names(st.inputs),
+                            body=tuple(self.statements(st.body, env, True)))]
+        if isinstance(st, ast.Block):
+            return [replace(st, body=tuple(self.statements(
+                st.body, env, st.kind in _WRITTEN_BLOCKS)))]
+        if isinstance(st, ast.FunctionDef):
+            return [replace(st, body=tuple(self.statements(st.body, env, True)))]
+        if isinstance(st, ast.Report):
+            return [self.report(st)]
+        if isinstance(st, ast.Finish):
+            return [replace(st, relations=tuple(self.statement(r, env, written)[0]
+                                                for r in st.relations))]
+        changed = {f.name: self.expr(getattr(st, f.name), env) for f in fields(st)
+                   if isinstance(getattr(st, f.name), _EXPRESSIONS)}
+        return [replace(st, **changed) if changed else st]
+
+    def names(self, names: tuple[str, ...]) -> tuple[str, ...]:
+        return tuple(e for n in names for e in (self.arrays[n].elements()
+                                                if n in self.arrays else [n]))
+
+    def declare(self, st: ast.Declare) -> ast.Declare:
+        names, spans = [], []
+        for name, span in zip(st.names, st.name_spans, strict=True):
+            each = self.arrays[name].elements() if name in self.arrays else [name]
+            names.extend(each)
+            spans.extend([span] * len(each))
+        return ast.Declare(st.type, tuple(names), tuple(spans), st.span)
+
+    def data(self, st: ast.Data) -> ast.Data:
+        items = []
+        for it in st.items:
+            a = self.arrays.get(it.name)
+            if a is None:
+                if it.is_array:
+                    self.error(f"{it.name} is given {len(it.values)} values, but it is no "
+                               "array", it.span,
+                               f"declare it, DIMENSION {it.name}({len(it.values)}); or, for "
+                               "one value, the decimal separator is a point: 1.5, not 1,5")
+                items.append(it)
+                continue
+            count = math.prod(a.sizes)
+            if it.is_list:
+                self.error(f"{it.name} is an array: a list in parentheses (one run per "
+                           "value) cannot give it values", it.span,
+                           f"write CONSTANT {it.name} = v1, v2, ... (n*v repeats v)")
+                continue
+            if len(it.values) != count:
+                self.error(f"{it.name} is given {len(it.values)} value(s) for {count} "
+                           "elements", it.span,
+                           f"give one value per element, in Fortran's order; {count}*0.0 "
+                           f"sets all {count}")
+                continue
+            items.extend(ast.DataItem(e, (v,), it.span)
+                         for e, v in zip(a.elements(), it.values, strict=True))
+        return replace(st, items=tuple(items))
+
+    def report(self, st: ast.Report) -> ast.Report:
+        names, spans = [], []
+        for name, span in zip(st.names, st.name_spans, strict=True):
+            each = self.arrays[name].elements() if name in self.arrays else [name]
+            names.extend(each)
+            spans.extend([span] * len(each))
+        if st.x in self.arrays:
+            self.error(f"VS {st.x}: an array cannot be the horizontal axis", st.x_span,
+                       "plot against one variable")
+        return replace(st, names=tuple(names), name_spans=tuple(spans))
+
+    def assign(self, st: ast.Assign, env, written: bool) -> list:
+        if st.subscripts:
+            name = st.targets[0]
+            a = self.arrays.get(name)
+            if a is None:
+                self.error(f"{name}(...) = ...: {name} is not an array", st.target_spans[0],
+                           f"declare it, e.g. DIMENSION {name}(10)")
+                return []
+            args = tuple(self.expr(s, env) for s in st.subscripts)
+            known = self.subscripts(a, args, st.span, env)
+            if known is None:
+                return []
+            expr = self.expr(st.expr, env)
+            if all(k is not None for k in known):
+                return [replace(st, targets=(a.element(tuple(known)),), expr=expr,
+                                subscripts=())]
+            return self.write_at(st, a, args, known, expr, written)
+        arrays = [t for t in st.targets if t in self.arrays]
+        if not arrays:
+            return [replace(st, expr=self.expr(st.expr, env))]
+        if len(st.targets) > 1:
+            self.error(f"the array {arrays[0]} cannot be one of two outputs", st.span,
+                       "write the call once per element")
+            return []
+        a = self.arrays[arrays[0]]
+        return [self.at_element(st, a, k, env) for k in a.indices()]
+
+    def at_element(self, st: ast.Assign, a: Array, k: tuple[int, ...], env) -> ast.Assign:
+        """The whole-array assignment st at element k: every array of a's sizes read at k."""
+        whole = {}
+        for n in ast.walk(st.expr):
+            if isinstance(n, ast.Name) and n.name in self.arrays:
+                other = self.arrays[n.name]
+                if other.sizes != a.sizes:
+                    self.error(f"{a.name} = ... reads the array {n.name}, whose sizes differ",
+                               n.span, f"{a.name} is {a.sizes}, {n.name} {other.sizes}: "
+                               "write a loop over the elements")
+                    continue
+                whole[n.name] = other.element(k)
+        return replace(st, targets=(a.element(k),), expr=self.expr(st.expr, env, whole))
+
+    def write_at(self, st: ast.Assign, a: Array, args, known, expr, written: bool) -> list:
+        """X(k) = e with k known only at run time: an IF over the elements (written-order
+        code only); a subscript outside X reaches ELEMENT, which says so."""
+        if not written:
+            self.error(f"{a.name}(...) = ... with a subscript known only as the run goes, in "
+                       "sorted code", st.span,
+                       "put it in a PROCEDURAL block, INITIAL, DISCRETE or DYNAMIC, or make "
+                       "the subscript a number or a loop's variable")
+            return []
+        branches = []
+        for k in a.indices():
+            if any(c is not None and c != i for c, i in zip(known, k, strict=True)):
+                continue
+            tests = [ast.BinOp("==", arg, ast.Num(float(i), st.span, str(i)), st.span)
+                     for arg, c, i in zip(args, known, k, strict=True) if c is None]
+            cond = tests[0]
+            for t in tests[1:]:
+                cond = ast.BinOp("AND", cond, t, st.span)
+            branches.append(ast.Branch(cond, (replace(st, targets=(a.element(k),),
+                                                      expr=expr, subscripts=()),), st.span))
+        first = a.element(a.indices()[0])
+        fault = replace(st, targets=(first,), subscripts=(),
+                        expr=self._pick(a, list(args), known, st.span, ()))
+        branches.append(ast.Branch(None, (fault,), st.span))
+        return [ast.If(tuple(branches), st.span)]
+
+    def loop(self, st: ast.Loop, env, written: bool) -> list:
+        body = _everything(st.body)
+        if any(self.reads_arrays(s) for s in body):
+            used: list[str] = []
+            try:
+                start, stop, step = (self._value(e, env, used) if e is not None else 1.0
+                                     for e in (st.start, st.stop, st.step))
+            except _Unknown:
+                start = stop = step = math.nan
+            if step != 0 and all(math.isfinite(b) for b in (start, stop, step)):
+                return self.written_out_loop(st, env, written, (start, stop, step), used,
+                                             len(body))
+        # (a loop that reads no array, or whose bounds are known only as the run goes:
+        # a loop, its subscripts through ELEMENT)
+        return [replace(st, start=self.expr(st.start, env), stop=self.expr(st.stop, env),
+                        step=self.expr(st.step, env),
+                        body=tuple(self.statements(st.body, env, written)))]
+
+    def reads_arrays(self, st) -> bool:
+        if isinstance(st, ast.Assign) and (st.subscripts or set(st.targets) & self.arrays.keys()):
+            return True
+        return any(isinstance(n, ast.Index) or (isinstance(n, ast.Call) and n.func in self.arrays)
+                   or (isinstance(n, ast.Name) and n.name in self.arrays) for n in ast.walk(st))
+
+    def written_out_loop(self, st: ast.Loop, env, written: bool, bounds, used: list[str],
+                         size: int) -> list:
+        """The loop written out pass by pass (its bounds known when it is read)."""
+        start, stop, step = bounds
+        passes = max(0, math.floor((stop - start) / step + 1e-9) + 1)
+        self.written_out += passes * size
+        if self.written_out > MAX_ELEMENTS:
+            self.error(f"the loops over arrays write out more than {MAX_ELEMENTS:,} "
+                       "statements", st.span, "use smaller arrays")
+            return []
+        self.fixed.update(used)
+        out: list = []
+        for p in range(passes):
+            out.extend(self.statements(st.body, {**env, st.var: _number(start + p * step)},
+                                       written))
+        if written:
+            final = _number(start + passes * step)
+            out.append(ast.Assign((st.var,), (st.span,),
+                                  ast.Num(float(final), st.span, str(final)), st.span))
+        return out
+
+
+def _number(v: float) -> int | float:
+    return int(v) if v == int(v) else v

@@ -1,0 +1,213 @@
+"""Arrays in ACSL/Magnolia listings (issue 22): DIMENSION (brackets or parentheses,
+typed), CONSTANT value lists in Fortran's order, subscripts known when the listing is
+read and only as the run goes, loops written out over arrays, whole-array INTEG. Each
+element is a variable of its own (`X(1)`); every test runs to a closed form."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import amilpy
+from amilpy.diagnostics import AmilError, UsageError
+
+DECAYS = """PROGRAM three decays, one array
+  DIMENSION X(3), XD(3), K(3), X0(3)
+  CONSTANT K = 1.0, 2.0, 3.0, X0 = 3*1.0
+  CINTERVAL CINT = 0.1
+  DERIVATIVE
+    PROCEDURAL (XD = X)
+      DO I = 1, 3
+        XD(I) = -K(I)*X[I]
+      END DO
+    END
+    X = INTEG(XD, X0)
+    TERMT(T >= 1.0)
+  END
+END
+"""
+
+
+def test_an_array_of_states_integrates_element_by_element():
+    """X(i)' = -K(i) X(i), X(i)(0) = 1: exp(-K(i) t) at every row (ACSL default RELERR
+    1e-11: 1e-9 holds with room)."""
+    run = amilpy.loads(DECAYS, "decays.csl").run(advice=False)[0]
+    for i, k in enumerate((1.0, 2.0, 3.0), start=1):
+        assert np.max(np.abs(run[f"X({i})"] - np.exp(-k * run.t))) < 1e-9
+    # the loop's variable after the loop, as Fortran leaves it
+    assert run.final["I"] == 4.0
+
+
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "STIFF"])
+def test_a_chain_written_as_a_loop_in_sorted_code(method):
+    """N compartments in a row, X(1)(0) = 1, the loop in DERIVATIVE itself (written out
+    element by element, then sorted): X(n) = (k t)^(n-1)/(n-1)! exp(-k t), Erlang's."""
+    text = """PROGRAM chain
+  CONSTANT N = 5, KT = 2.0
+  DIMENSION X[N], XD[N], X0[N]
+  CONSTANT X0 = 1.0, 4*0.0
+  CINTERVAL CINT = 0.25
+  DERIVATIVE
+    XD[1] = -KT*X[1]
+    for i = 2, N
+      XD[i] = KT*(X[i - 1] - X[i])
+    end
+    X = INTEG(XD, X0)
+    TERMT(T >= 3.0)
+  END
+END
+"""
+    run = amilpy.loads(text, "chain.csl").run(method=method, advice=False)[0]
+    kt = 2.0 * run.t
+    tol = 1e-8 if method == "AUTO" else 1e-5  # (RKS/STIFF at the same RELERR: looser)
+    for n in range(1, 6):
+        exact = kt ** (n - 1) / math.factorial(n - 1) * np.exp(-kt)
+        assert np.max(np.abs(run[f"X({n})"] - exact)) < tol
+
+
+def test_a_value_list_fills_a_two_dimensional_array_in_fortrans_order():
+    """A(2,2) = 1, 2, 3, 4: the first subscript runs fastest, A(2,1) = 2, A(1,2) = 3."""
+    text = """PROGRAM order
+  DIMENSION A(2, 2)
+  CONSTANT A = 1, 2, 3, 4
+  CINTERVAL CINT = 0.5
+  DERIVATIVE
+    Y = INTEG(A(1,2) + 10.0*A[2,1], 0.0)
+    TERMT(T >= 1.0)
+  END
+END
+"""
+    run = amilpy.loads(text, "order.csl").run(advice=False)[0]
+    assert run.final["Y"] == pytest.approx(23.0, rel=1e-12)
+    assert [run.final[f"A({i},{j})"] for j in (1, 2) for i in (1, 2)] == [1, 2, 3, 4]
+
+
+REMDESIVIR_LIKE = """PROGRAM five infusions
+INITIAL
+  dimension real dose[5], tinf[5]
+  constant dose = 200.0, 100.0, 100.0, 100.0, 100.0
+  constant tinf = 2.0, 2.0, 2.0, 2.0, 2.0
+  dimension integer day
+  for day = 1, 5
+    schedule start_infusion at 24.0*(day - 1)
+    schedule end_infusion at 24.0*(day - 1) + tinf[day]
+  end
+  day = 1
+  infrate = 0.0
+  constant TSTOP = 120.0, KE = 0.1
+  CINTERVAL CINT = 1.0
+end
+DERIVATIVE
+  A = INTEG(infrate - KE*A, 0.0)
+  TERMT(T >= TSTOP)
+end
+discrete start_infusion
+  infrate = dose[day]/tinf[day]
+  day = day + 1
+end
+discrete end_infusion
+  infrate = 0.0
+end
+END
+"""
+
+
+def _infused(t: float, ke: float = 0.1) -> float:
+    """The amount after five zero-order infusions (dose D over 2 h each day), by
+    superposition of each infusion's closed form."""
+    total = 0.0
+    for d, dose in enumerate((200.0, 100.0, 100.0, 100.0, 100.0)):
+        t0 = 24.0 * d
+        if t > t0:
+            te = min(t, t0 + 2.0)
+            total += dose / 2.0 / ke * (1 - math.exp(-ke * (te - t0))) * math.exp(-ke * (t - te))
+    return total
+
+
+def test_subscripts_known_only_as_the_run_goes():
+    """The remdesivir listing's dosing (magnoliasci/PBPK): SCHEDULEs in a FOR loop over
+    an array, and dose[day] in a DISCRETE section where DAY counts the doses. Against
+    superposed infusions: 1e-7 of the peak (ACSL default tolerances)."""
+    run = amilpy.loads(REMDESIVIR_LIKE, "dosing.csl").run(advice=False)[0]
+    exact = np.array([_infused(t) for t in run.t])
+    assert np.max(np.abs(run["A"] - exact)) < 1e-7 * exact.max()
+    assert run.final["DAY"] == 6.0
+    assert [e.time for e in run.events if e.kind == "discrete"] == [
+        24.0 * d + h for d in range(5) for h in (0.0, 2.0)]
+
+
+def test_a_subscript_outside_the_array_while_running_is_named():
+    """Six infusions scheduled over an array of five: the sixth reads DOSE[6]."""
+    text = REMDESIVIR_LIKE.replace("for day = 1, 5", "for day = 1, 6").replace(
+        "tinf[day]\n  end", "2.0\n  end")
+    run = amilpy.loads(text, "dosing.csl").run(advice=False)[0]
+    assert not run.ok
+    assert "subscript 6 is outside 1..5" in run.message
+    assert run.t[-1] == pytest.approx(120.0)  # (the sixth dose is due at 120)
+
+
+def test_whole_array_statements_and_print():
+    """V = 2*W + C for arrays V, W and a scalar C: element by element; PRINT V lists
+    the elements."""
+    text = """PROGRAM whole
+  DIMENSION V(3), W(3)
+  CONSTANT W = 1.0, 2.0, 3.0, C = 0.5
+  CINTERVAL CINT = 0.5
+  DERIVATIVE
+    V = 2.0*W + C
+    Y = INTEG(V(3), 0.0)
+    TERMT(T >= 1.0)
+  END
+  PRINT V
+END
+"""
+    run = amilpy.loads(text, "whole.csl").run(advice=False)[0]
+    assert [run.final[f"V({i})"] for i in (1, 2, 3)] == [2.5, 4.5, 6.5]
+    assert [c for c in run.printout.columns if c.startswith("V")] == ["V(1)", "V(2)", "V(3)"]
+
+
+def test_a_size_is_fixed_when_the_listing_is_read():
+    """N sizes the arrays and bounds the loop: a run may not change it."""
+    text = DECAYS.replace("DIMENSION X(3), XD(3), K(3), X0(3)",
+                          "CONSTANT N = 3\n  DIMENSION X(N), XD(N), K(N), X0(N)")
+    model = amilpy.loads(text, "decays.csl")
+    with pytest.raises(UsageError, match="N sizes an array"):
+        model.run(N=4)
+    # an element's value is a value like any other
+    run = model.run(advice=False, **{"K(2)": 0.5})[0]
+    assert np.max(np.abs(run["X(2)"] - np.exp(-0.5 * run.t))) < 1e-9
+
+
+@pytest.mark.parametrize("line, message, hint", [
+    ("  DIMENSION Z(3)\n  Y = Z(4)", "the subscript 4 of Z is outside 1..3", "line 4"),
+    ("  Y = Z[4] + 1.0", "Z[...]: Z is not an array", "DIMENSION Z(10)"),
+    ("  DIMENSION Z(2)\n  CONSTANT Z = 1.0, 2.0, 3.0", "Z is given 3 value(s) for 2",
+     "2*0.0"),
+    ("  CONSTANT Z = 1.0, 2.0", "Z is given 2 values, but it is no array",
+     "DIMENSION Z(2)"),
+    ("  DIMENSION Z(2)\n  CONSTANT Z = 1.0, 2.0\n  Y = Z + 1.0",
+     "the array Z stands here without a subscript", "Z[i]"),
+    ("  DIMENSION Z(2, 2)\n  Y = Z(1)", "Z has 2 subscript(s), not 1", "Z[i, j]"),
+    ("  DimensionZ = 1.0\n  DoublePrecision Z(NZ)", "the size of Z is not known", "CONSTANT"),
+    ("  DIMENSION Z(2)\n  Z(J) = 1.0\n  J = 1.0", "a subscript known only as the run goes",
+     "PROCEDURAL"),
+])
+def test_array_faults_are_located_with_what_to_write(line, message, hint):
+    text = ("PROGRAM faults\n  CINTERVAL CINT = 0.5\n  DERIVATIVE\n"
+            f"{line}\n  X = INTEG(1.0, 0.0)\n  TERMT(T >= 1.0)\n  END\nEND\n")
+    text = text.replace("DERIVATIVE\n  DIMENSION", "DERIVATIVE\n  DIMENSION")
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text, "faults.csl")
+    d = err.value.diagnostics[0]
+    assert message in d.message and hint in (d.hint or "")
+    assert d.span is not None and d.span.line >= 4
+
+
+def test_a_decimal_comma_is_still_one_in_csmp_form():
+    """PARAM K = 1,5 in CSMP form is a slip for 1.5 (arrays are the ACSL form's)."""
+    with pytest.raises(AmilError) as err:
+        amilpy.loads("PARAM K = 1,5\nX = INTGRL(0.0, K)\nTIMER FINTIM = 1.0\nEND\n")
+    d = err.value.diagnostics[0]
+    assert "decimal comma" in d.message and "1.5" in d.hint
