@@ -11,6 +11,8 @@ first). test_listing_references.py checks each against a second, independent met
     diazepam          acsl/diazepam.csl: DISCRETE sections scheduling each other
     lapatinib_md      acsl/lapatinib_md.csl: DISCRETE with INTERVAL and IF; superposition
     minmod4           acsl/minmod4.csl: ALGORITHM IALG=5 (RK4, DELT = MAXT = 0.005)
+    btex              acsl/btex_ruiz2020.csl: PULSE exposure as pieces; DISCRETE sections
+                      (arrays, FOR loops of SCHEDULEs, INTERVAL) that change nothing
     water_stress      fst/legumes_water_stress.fst, fst/maize_water_stress.fst: EUDRIV
                       step-point Euler recurrence with the synthetic CABO weather files
 """
