@@ -144,7 +144,7 @@ def test_a_subscript_outside_the_array_while_running_is_named():
         "tinf[day]\n  end", "2.0\n  end")
     run = amilpy.loads(text, "dosing.csl").run(advice=False)[0]
     assert not run.ok
-    assert "subscript 6 is outside 1..5" in run.message
+    assert "a subscript 6 outside 1..5" in run.message
     assert run.t[-1] == pytest.approx(120.0)  # (the sixth dose is due at 120)
 
 
@@ -193,6 +193,11 @@ def test_a_size_is_fixed_when_the_listing_is_read():
     ("  DimensionZ = 1.0\n  DoublePrecision Z(NZ)", "the size of Z is not known", "CONSTANT"),
     ("  DIMENSION Z(2)\n  Z(J) = 1.0\n  J = 1.0", "a subscript known only as the run goes",
      "PROCEDURAL"),
+    # (an array named SIN would silently turn every SIN(X) into a subscript)
+    ("  DIMENSION SIN(3)\n  Y = SIN(2)", "SIN is a function: an array cannot take its name",
+     "another name"),
+    ("  DIMENSION T(3)\n  Y = T(2)", "T is reserved: an array cannot take its name",
+     "another name"),
 ])
 def test_array_faults_are_located_with_what_to_write(line, message, hint):
     text = ("PROGRAM faults\n  CINTERVAL CINT = 0.5\n  DERIVATIVE\n"

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from conftest import METHODS, run1
 
+import amilpy
 from amilpy.routes import route_for
 
 # The NOTNUL idiom: divide by P unless P is zero. P = 0 at the start, where FCNSW
@@ -103,3 +104,16 @@ def test_an_overflow_inside_radaus_step_names_the_state():
     assert r.status == "failed"
     assert r.message.startswith("integration failed at TIME = 0: X is no longer finite"), \
         r.message
+
+
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "STIFF"])
+def test_a_fault_is_reported_where_the_model_stops_having_values(method):
+    """ASIN(T) has no value past T = 1: the failure is said at T = 1 (within LSODA's
+    last steps), not at the furthest point a failing solver tried (AUTO said TIME = 5,
+    the run's end), and its operands as plain numbers (RKS said np.float64(...))."""
+    text = ("PROGRAM h\n  CINTERVAL CINT = 0.5\nDERIVATIVE\nXD = ASIN(T)\n"
+            "X = INTEG(XD, 1.0)\nTERMT(T >= 5)\nEND\nEND\n")
+    run = amilpy.loads(text, "h.csl").run(method=method, advice=False)[0]
+    assert not run.ok and "ASIN(TIME)" in run.message and "np." not in run.message
+    said = float(run.message.split("TIME = ")[1].split(":")[0])
+    assert 1.0 <= said < 1.0 + 1e-5

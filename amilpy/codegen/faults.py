@@ -253,7 +253,7 @@ def _value(v: float) -> str:
     """An operand as short as %g when that is exact, else every digit it takes:
     ASIN's argument 1.0000000000000002 must not read as 1, which is in range."""
     short = f"{v:g}"
-    return short if float(short) == v or not math.isfinite(v) else repr(v)
+    return short if float(short) == v or not math.isfinite(v) else repr(float(v))
 
 
 def _describe(model: ir.Model, site: _Site, fault: _Fault) -> str:

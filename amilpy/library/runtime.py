@@ -102,7 +102,7 @@ def element(k: float, *xs: float) -> float:
     run goes (parse/arrays.py); a K that is no whole number in 1..n is a fault."""
     i = int(k) if k == k and abs(k) < 2**31 else 0
     if i != k or not 1 <= i <= len(xs):
-        raise ValueError(f"the subscript {k:g} is outside 1..{len(xs)}")
+        raise HelperFault(f"a subscript {k:g} outside 1..{len(xs)} (ELEMENT)")
     return xs[i - 1]
 
 
@@ -112,7 +112,7 @@ def vector_element(np):
         i = np.where(np.isfinite(k), k, 0.0)
         if np.any((i != k) | (i < 1) | (i > len(xs))):
             bad = float(np.ravel(k)[np.ravel((i != k) | (i < 1) | (i > len(xs)))][0])
-            raise ValueError(f"the subscript {bad:g} is outside 1..{len(xs)}")
+            raise HelperFault(f"a subscript {bad:g} outside 1..{len(xs)} (ELEMENT)")
         return np.choose(i.astype(int) - 1, np.broadcast_arrays(*xs))
     return element_v
 

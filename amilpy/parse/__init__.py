@@ -85,7 +85,7 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     items = builder.statements(tree)
     form, name, statements = Nester(builder.errors).nest(items)
     statements, macros = expand(statements, builder.errors)
-    statements, fixed = arrays.expand(statements, builder.errors)
+    statements, fixed = arrays.expand(statements, builder.errors, form == "ACSL")
     if builder.errors:
         raise AmilError(in_macros(sorted(builder.errors, key=_where), macros), path, text)
     return ast.Program(tuple(statements), path, text, form, name, macros, fixed)

@@ -31,7 +31,7 @@ import math
 from dataclasses import dataclass, fields, replace
 
 from ..diagnostics import Diagnostic, Span
-from ..language import MAX_ELEMENTS
+from ..language import ACSL_TIME, MAX_ELEMENTS, RESERVED
 from . import syntax as ast
 
 # the statements of written-order code (where a subscript known only at run time may
@@ -62,7 +62,8 @@ class _Unknown(Exception):
     """A value not known when the listing is read."""
 
 
-def expand(statements: list, errors: list[Diagnostic]) -> tuple[list, frozenset[str]]:
+def expand(statements: list, errors: list[Diagnostic], acsl: bool
+           ) -> tuple[list, frozenset[str]]:
     """The statements with every array written out as its elements (see the module),
     and the constants fixed by it. Faults go to `errors`."""
     declared = [st for st in _everything(statements)
@@ -73,7 +74,7 @@ def expand(statements: list, errors: list[Diagnostic]) -> tuple[list, frozenset[
             isinstance(n, ast.Index) or (isinstance(n, ast.Assign) and n.subscripts)
             for st in statements for n in ast.walk(st)):
         return statements, frozenset()
-    pass_ = _Arrays(statements, errors)
+    pass_ = _Arrays(statements, errors, acsl)
     return pass_.statements(statements, {}, written=False), frozenset(pass_.fixed)
 
 
@@ -92,7 +93,7 @@ def _everything(statements) -> list:
 
 
 class _Arrays:
-    def __init__(self, statements: list, errors: list[Diagnostic]) -> None:
+    def __init__(self, statements: list, errors: list[Diagnostic], acsl: bool) -> None:
         self.errors = errors
         self.fixed: set[str] = set()
         self.written_out = 0  # statements the loops were written out into
@@ -108,11 +109,19 @@ class _Arrays:
         self.constants = {n: v for n, v in values.items() if v is not None}
         self.arrays: dict[str, Array] = {}
         total = 0
+        from ..library import callable_names
+
+        taken = {n: "is a function" for n in callable_names()}
+        taken.update({n: "is reserved" for n in (*RESERVED, *((ACSL_TIME,) if acsl else ()))})
         for st in everything:
             if not isinstance(st, ast.Declare) or not st.sizes:
                 continue
             for name, span, sizes in zip(st.names, st.name_spans, st.sizes, strict=True):
                 if not sizes:
+                    continue
+                if name in taken:
+                    self.error(f"{name} {taken[name]}: an array cannot take its name", span,
+                               "give the array another name")
                     continue
                 dims = tuple(self.size(e, name) for e in sizes)
                 if not all(dims):

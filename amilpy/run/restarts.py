@@ -120,7 +120,9 @@ class Restarts:
         symptom in some state."""
         if not self.faults:
             return stop
-        fault = self.faults[-1]
+        # (the earliest: a solver that fails tries points further on, past the
+        # boundary the model's values end at, before it gives up)
+        fault = min(self.faults, key=lambda f: f.t)
         return Stop(Failure.FAULT, fault.t, detail=fault_text(self.model, self.c, fault))
 
     def _stop_for(self, failure: StepFailure, stepper: Stepper) -> Stop:
