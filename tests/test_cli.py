@@ -511,3 +511,15 @@ def test_the_api_says_usage_errors_and_the_command_line_maps_them(
     assert code == 2, err
     assert (argparse_says in err) if argparse_says else \
         (f"amilpy: {model}: " in err and says in err), err
+
+
+def test_every_help_text_prints(capsys):
+    """`amilpy --help` and each command's: argparse formats help texts with %, so a
+    bare "95 % intervals" in one took the whole --help down with a TypeError."""
+    from amilpy.cli import _parser
+
+    parser = _parser()
+    commands = next(a for a in parser._actions if a.dest == "command").choices
+    for argv in (["--help"], *([c, "--help"] for c in commands)):
+        assert main(argv) == 0, argv
+    assert "95 % intervals" in capsys.readouterr().out

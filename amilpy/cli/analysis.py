@@ -140,7 +140,7 @@ def cmd_steady(args, path: str, signals) -> int:
 
 def add_fit_parser(sub) -> None:
     f = sub.add_parser("fit", help="fit data values to measurements: weighted least "
-                                   "squares, estimates with standard errors and 95 % "
+                                   "squares, estimates with standard errors and 95 %% "
                                    "intervals")
     f.add_argument("file", metavar="FILE", help="the listing (.amil)")
     f.add_argument("--data", metavar="OBS.csv", required=True,
