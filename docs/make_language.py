@@ -80,6 +80,13 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
     ("ACSL", "`ALGORITHM IALG = 3` (Euler)", "`METHOD RECT` in step-point mode"),
     ("ACSL", "`DIMENSION X(3)`, `CONSTANT X = 1.0, 2*0.0`, `X[I]`, `FOR I = 1, 3 ... END`",
      "the elements `X(1)`, `X(2)`, `X(3)`, variables of their own (Arrays, below)"),
+    ("ACSL", "`ARRAY X(3)` (acslX)", "`DIMENSION X(3)`"),
+    ("ACSL", "`DO 10 I = 1, N` ... `10 CONTINUE`, `DO L1 I = 1, N` ... `L1: CONTINUE`",
+     "`DO I = 1, N ... END DO` (one label may end several loops)"),
+    ("ACSL", "`TABLE F, 1, 3 / 0., 1., 2., 0., 1., 4. /`, `Y = F(X)`", "`FUNCTION F = 0.,0., "
+     "1.,1., 2.,4.`, `Y = AFGEN(F, X)`: linear between the breakpoints, the end values "
+     "outside (tables of 2 and 3 variables are refused)"),
+    ("ACSL", "code after the program's final `END`", "not read, with a warning"),
     ("CSMP III", "`MACRO Y = LAG2(T, X) ... ENDMAC`, `A = LAG2(0.1, U)`", "the body "
      "expanded at each call (its own states and locals per call)"),
     ("CSMP III", "`PROCEDURE Y, Z = P(A, B) ... ENDPRO`", "`PROCEDURAL (Y, Z = A, B)`"),

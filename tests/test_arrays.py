@@ -216,3 +216,67 @@ def test_a_decimal_comma_is_still_one_in_csmp_form():
         amilpy.loads("PARAM K = 1,5\nX = INTGRL(0.0, K)\nTIMER FINTIM = 1.0\nEND\n")
     d = err.value.diagnostics[0]
     assert "decimal comma" in d.message and "1.5" in d.hint
+
+
+def test_an_acsl_table_is_read_as_its_function():
+    """TABLE F, 1, 4 / x..., y... / (the Loccisano and Verner listings' form, with a
+    repeat and a continuation line): F(X) interpolates linearly and holds the end
+    values outside, as AFGEN. Y' = F(T) from 0 to 4: the area under the polyline,
+    0..1: T, 1..2: 1, 2..3: 1 + 2(T - 2), then 3 held -> 0.5 + 1 + 2 + 3 = 6.5."""
+    text = """PROGRAM table
+  TABLE F, 1, 4 / 0.0, 1.0, 2.0, 3.0, &
+                  0.0, 2*1.0, 3.0 /   ! breakpoints, then values
+  CINTERVAL CINT = 0.5
+  DERIVATIVE
+    Y = INTEG(F(T), 0.0)
+    TERMT(T >= 4.0)
+  END
+END
+"""
+    run = amilpy.loads(text, "table.csl").run(advice=False)[0]
+    assert run.final["Y"] == pytest.approx(6.5, rel=1e-9)
+    i = int(np.argmin(np.abs(run.t - 2.5)))
+    assert run["Y"][i] == pytest.approx(0.5 + 1.0 + 0.5 + 0.25, rel=1e-9)
+
+
+@pytest.mark.parametrize("line, message", [
+    ("TABLE F, 1, 3 / 0.0, 1.0, 2.0, 0.0, 1.0 /", "TABLE F has 5 values for 3 breakpoints"),
+    ("TABLE F, 1, 2 / 0.0, 1.0, 0.0, Q /", "TABLE F: 'Q' is not a number"),
+])
+def test_table_faults_are_located(line, message):
+    text = (f"PROGRAM t\n  {line}\n  CINTERVAL CINT = 0.5\n  DERIVATIVE\n"
+            "    Y = INTEG(F(T), 0.0)\n    TERMT(T >= 1.0)\n  END\nEND\n")
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text, "t.csl")
+    d = err.value.diagnostics[0]
+    assert message in d.message and d.span.line == 2
+
+
+def test_labelled_do_loops_and_array_as_dimension():
+    """Fortran's DO 10 J ... DO 10 I ... 10 CONTINUE (one label ends both loops), a
+    named label (`do l1 k = ...` / `l1: continue`, acslX), and ARRAY X(n) as DIMENSION
+    (acslX): A(I, J) = 10 I + J, S = A(1,2) + A(2,2) + A(3,2) = 66."""
+    text = """PROGRAM labelled loops
+  ARRAY A(3, 2)
+  CINTERVAL CINT = 0.5
+  INITIAL
+    DO 10 J = 1, 2
+    DO 10 I = 1, 3
+      A(I, J) = 10*I + J
+ 10 CONTINUE
+    S = 0.0
+    do l1 k = 1, 3
+      S = S + A(k, 2)
+l1: continue
+  END
+  DERIVATIVE
+    Y = INTEG(S, 0.0)
+    TERMT(T >= 1.0)
+  END
+END
+"""
+    run = amilpy.loads(text, "loops.csl").run(advice=False)[0]
+    assert [run.final[f"A({i},{j})"] for j in (1, 2) for i in (1, 2, 3)] == [
+        11, 21, 31, 12, 22, 32]
+    assert run.final["S"] == 66.0 and run.final["Y"] == pytest.approx(66.0, rel=1e-12)
+    assert (run.final["I"], run.final["J"], run.final["K"]) == (4.0, 3.0, 4.0)

@@ -75,9 +75,9 @@ def check(program: ast.Program, name: str | None = None) -> ir.Model:
     if program.form == "ACSL":
         from .acsl import check_acsl
 
-        return _fixed(check_acsl(program, name), program.fixed)
+        return _fixed(check_acsl(program, name), program)
     try:
-        return _fixed(_check_csmp(program, name), program.fixed)
+        return _fixed(_check_csmp(program, name), program)
     except AmilError as exc:
         if program.macros:
             from ..parse.macros import in_macros
@@ -86,11 +86,12 @@ def check(program: ast.Program, name: str | None = None) -> ir.Model:
         raise
 
 
-def _fixed(model: ir.Model, fixed: frozenset[str]) -> ir.Model:
+def _fixed(model: ir.Model, program: ast.Program) -> ir.Model:
     """The constants an array's size or a written-out loop's bounds read (parse.arrays)
-    may not change from run to run."""
-    if fixed:
-        model.runs = [replace(r, fixed=fixed) for r in model.runs]
+    may not change from run to run; the reader's warnings go with the model's."""
+    if program.fixed:
+        model.runs = [replace(r, fixed=program.fixed) for r in model.runs]
+    model.warnings = [*program.notes, *model.warnings]
     return model
 
 

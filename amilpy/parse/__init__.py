@@ -83,12 +83,14 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     builder = Builder(text, path)
     builder.acsl = is_acsl(prepared)
     items = builder.statements(tree)
-    form, name, statements = Nester(builder.errors).nest(items)
+    nester = Nester(builder.errors)
+    form, name, statements = nester.nest(items)
     statements, macros = expand(statements, builder.errors)
     statements, fixed = arrays.expand(statements, builder.errors, form == "ACSL")
     if builder.errors:
         raise AmilError(in_macros(sorted(builder.errors, key=_where), macros), path, text)
-    return ast.Program(tuple(statements), path, text, form, name, macros, fixed)
+    return ast.Program(tuple(statements), path, text, form, name, macros, fixed,
+                       tuple(nester.notes))
 
 
 def is_acsl(prepared: str) -> bool:

@@ -20,6 +20,7 @@ and every route see scalars, and a state that is an element is a state like any 
 - A statement that assigns a whole array (`X = INTEG(XD, XIC)`, `V = 2.0*W`) is one
   statement per element, every array in it read at that element (a scalar as it is).
 - PRINT, OUTPUT, PREPARE, RANGE X and a PROCEDURAL's lists name its elements.
+- A function table read as ACSL reads its TABLE, `F(X)`, is `AFGEN(F, X)`.
 - The constants that give a size or the bounds of a written-out loop are fixed when
   the listing is read (`Program.fixed`): a run may not change them.
 """
@@ -70,8 +71,10 @@ def expand(statements: list, errors: list[Diagnostic], acsl: bool
                 if isinstance(st, ast.Declare) and st.sizes]
     listed = [it for st in _everything(statements) if isinstance(st, ast.Data)
               for it in st.items if it.is_array]
+    tables = {st.name for st in _everything(statements) if isinstance(st, ast.Table)}
     if not declared and not listed and not any(
             isinstance(n, ast.Index) or (isinstance(n, ast.Assign) and n.subscripts)
+            or (isinstance(n, ast.Call) and n.func in tables)
             for st in statements for n in ast.walk(st)):
         return statements, frozenset()
     pass_ = _Arrays(statements, errors, acsl)
@@ -107,6 +110,8 @@ class _Arrays:
                         it.is_list or it.is_array) else None
                     values[it.name] = v if values.get(it.name, v) == v else None
         self.constants = {n: v for n, v in values.items() if v is not None}
+        # function tables (ACSL's TABLE F, 1, n / ... /, FUNCTION F = ...), read as F(X)
+        self.tables = {st.name for st in everything if isinstance(st, ast.Table)}
         self.arrays: dict[str, Array] = {}
         total = 0
         from ..library import callable_names
@@ -197,7 +202,8 @@ class _Arrays:
     # ---------------------------------------------------------------- expressions
     def needs(self, e: ast.Node, env: dict[str, int]) -> bool:
         for n in ast.walk(e):
-            if isinstance(n, ast.Index) or (isinstance(n, ast.Call) and n.func in self.arrays):
+            if isinstance(n, ast.Index) or (isinstance(n, ast.Call) and (
+                    n.func in self.arrays or n.func in self.tables)):
                 return True
             if isinstance(n, ast.Name) and (n.name in env or n.name in self.arrays):
                 return True
@@ -235,7 +241,13 @@ class _Arrays:
                 return ast.Num(0.0, e.span, "0")
             return self.read(self.arrays[name], args, e.span, env)
         if isinstance(e, ast.Call):
-            return replace(e, args=tuple(self._expr(a, env, whole) for a in e.args))
+            args = tuple(self._expr(a, env, whole) for a in e.args)
+            if e.func in self.tables:  # ACSL's F(X) of a table: AFGEN(F, X)
+                if len(args) != 1:
+                    self.error(f"the table {e.func} takes one argument, not {len(args)}",
+                               e.span, f"write {e.func}(X)")
+                return ast.Call("AFGEN", (ast.Name(e.func, e.span), *args[:1]), e.span)
+            return replace(e, args=args)
         if isinstance(e, ast.BinOp):
             return replace(e, left=self._expr(e.left, env, whole),
                            right=self._expr(e.right, env, whole))

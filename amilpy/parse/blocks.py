@@ -36,6 +36,7 @@ class Head:
     span: Span
     name: str | None = None
     data: object = None
+    label: str | None = None  # DO 10 I = ...: closed by `10 CONTINUE`
 
 
 @dataclass
@@ -48,6 +49,7 @@ class ElseHead:
 class Close:
     kind: str  # END, ENDIF, ENDDO
     span: Span
+    label: str | None = None  # `10 CONTINUE`: the end of the DO loops labelled 10
 
 
 @dataclass
@@ -69,6 +71,7 @@ class Nester:
 
     def __init__(self, errors: list[Diagnostic]) -> None:
         self.errors = errors
+        self.notes: list[Diagnostic] = []  # warnings the checked program carries
 
     def error(self, message: str, span: Span | None, hint: str | None = None) -> None:
         self.errors.append(Diagnostic(message, span, hint))
@@ -87,9 +90,13 @@ class Nester:
             if acsl and isinstance(item, ast.End):
                 item = Close("END", item.span)
             if closed is not None:
-                if not isinstance(item, ast.Title):  # TITLE lines are fine anywhere
-                    self.error("only comments may follow the program's END", item.span,
-                               f"the program ends at line {closed.line}")
+                # (ACSL's translator reads the program up to its END: what follows is
+                # not read, as published listings that leave code there expect)
+                if not isinstance(item, ast.Title) and not self.notes:
+                    self.notes.append(Diagnostic(
+                        f"the text after the program's END (line {closed.line}) is not "
+                        "read", item.span, "remove it, or move it inside the program",
+                        "warning"))
                 continue
             target = stack[-1].body if stack else top
             if isinstance(item, Head):
@@ -129,6 +136,11 @@ class Nester:
                 done = self.close(stack, item, acsl)
                 if done is None:
                     continue
+                # (DO 10 I ... DO 10 J ... 10 CONTINUE: one label may end several loops)
+                while item.label is not None and stack and stack[-1].head.label == item.label:
+                    inner = self.block(done)
+                    stack[-1].body.append(inner)
+                    done = stack.pop()
                 if done.head.kind == "PROGRAM":
                     top = list(self.block(done))
                     closed = item.span
@@ -171,6 +183,14 @@ class Nester:
         if kind in CLOSERS and item.kind != CLOSERS[kind]:
             self.error(f"{'END' if item.kind == 'END' else item.kind} inside the {kind} of "
                        f"line {line}", item.span, f"a {kind} ends with {CLOSERS[kind]}")
+            return None
+        if item.label is not None and stack[-1].head.label != item.label:
+            self.error(f"{item.label} CONTINUE ends no DO loop labelled {item.label}"
+                       + (f": the innermost open block is the {_describe(kind)} of line "
+                          f"{line}" if kind != "DO" or stack[-1].head.label is None else
+                          f": the innermost is DO {stack[-1].head.label} of line {line}"),
+                       item.span, f"a loop DO {item.label} I = a, b ends at {item.label} "
+                       "CONTINUE")
             return None
         want = {"ENDIF": "IF", "ENDDO": "DO"}.get(item.kind)
         if want is not None and kind != want:

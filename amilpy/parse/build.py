@@ -8,6 +8,7 @@ without recursion; one nested deeper than `syntax.MAX_DEPTH` is a located error
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import replace
 
 from ..diagnostics import AmilError, Diagnostic, Span
@@ -23,11 +24,26 @@ from ..language import (
 )
 from . import syntax as ast
 from .blocks import Close, ElseHead, Head
+from .lexical import code_end
 from .syntax import MAX_DEPTH
 
 # -------------------------------------------------------------- tree -> syntax
 
+# ACSL's TABLE NAME, n, i1[, i2, i3] / values / (the text after TABLE)
+_ACSL_TABLE = re.compile(r"^\s*([A-Za-z][A-Za-z0-9_]*)\s*,\s*([0-9]+(?:\s*,\s*[0-9]+)+)\s*/"
+                         r"([^/]*)/\s*$")
+# ACSL's ARRAY X(220), A(N, 3): sizes that are numbers or names
+_ACSL_ARRAY = re.compile(r"([A-Za-z][A-Za-z0-9_]*)\s*\(\s*((?:[0-9]+|[A-Za-z][A-Za-z0-9_]*)"
+                         r"(?:\s*,\s*(?:[0-9]+|[A-Za-z][A-Za-z0-9_]*))*)\s*\)")
+_ACSL_ARRAYS = re.compile(rf"{_ACSL_ARRAY.pattern}(?:\s*,\s*{_ACSL_ARRAY.pattern})*")
 MAX_RUNS = 10_000  # value-list runs in one group: beyond this, a typo or a sweep
+
+
+def _label(text: str) -> str:
+    """A statement label as a loop names it: 10 and 010 are one label, names folded."""
+    text = text.strip()
+    return str(int(text)) if text.isdigit() else text.upper()
+
 
 _BINOPS = {"add": "+", "sub": "-", "mul": "*", "div": "/", "pow": "**"}
 # relational and logical operators (the token's spelling decides: rel, land, ...)
@@ -161,9 +177,11 @@ class Builder:
     def st_do_head(self, node) -> Head:
         return self.loop("DO", node)
 
-    def st_do_labelled(self, node) -> None:
-        self.refuse(f"a labelled DO (DO {node.children[0]} ...)", self.span(node),
-                    "write DO i = a, b ... END DO")
+    def st_do_labelled(self, node) -> Head:
+        label, var, start, stop, step = node.children
+        return Head("DO", self.span(node), data=(
+            str(var).upper(), self.expr(start), self.expr(stop),
+            self.expr(step) if step is not None else None), label=_label(str(label)))
 
     def st_func_def(self, node) -> Head:
         name, func, params = node.children
@@ -205,8 +223,16 @@ class Builder:
                            tuple(self.span(n) for n in names), self.span(node),
                            sizes if any(sizes) else ())
 
-    def st_refused(self, node) -> None:
+    def st_refused(self, node) -> ast.Table | ast.Declare | None:
         word = " ".join(str(node.children[0]).upper().split())
+        if word == "TABLE" and len(node.children) > 1 and node.children[1]:
+            table = self.acsl_table(node)
+            if table is not None:
+                return table
+        if word == "ARRAY" and self.acsl and len(node.children) > 1 and node.children[1]:
+            declared = self.acsl_array(node)
+            if declared is not None:
+                return declared
         what, hint = REFUSED[word.replace(" ", "")]
         if word.replace(" ", "") == "CALL" and len(node.children) > 1 and node.children[1]:
             routine = str(node.children[1]).split("(")[0].strip().upper() or "it"
@@ -217,7 +243,64 @@ class Builder:
         self.refuse(what, self.span(node), hint)
         return None
 
-    def st_labelled(self, node) -> None:
+    def acsl_array(self, node) -> ast.Declare | None:
+        """ARRAY X(220), A(N, 3) in ACSL form: DIMENSION's synonym (acslX). None if the
+        text is not of that form (FST's ARRAY X(1:N), refused)."""
+        span = self.span(node)
+        code = str(node.children[1])[:code_end(str(node.children[1]))].strip()
+        if _ACSL_ARRAYS.fullmatch(code) is None:
+            return None
+        names, sizes = [], []
+        for m in _ACSL_ARRAY.finditer(code):
+            names.append(m.group(1).upper())
+            sizes.append(tuple(
+                ast.Num(float(d), span, d) if d.isdigit() else ast.Name(d.upper(), span)
+                for d in (k.strip() for k in m.group(2).split(","))))
+        return ast.Declare("REAL", tuple(names), (span,) * len(names), span, tuple(sizes))
+
+    def acsl_table(self, node) -> ast.Table | None:
+        """ACSL's TABLE NAME, 1, N / x1, ..., xN, y1, ..., yN / (n*v repeats v): a
+        function table like FUNCTION NAME = x1,y1, ...; None if the text is not of
+        that form (CSMP's TABLE, which is refused)."""
+        span = self.span(node)
+        code = " ".join(line[:code_end(line)].rstrip().removesuffix("&").removesuffix("...")
+                        for line in str(node.children[1]).split("\n"))
+        m = _ACSL_TABLE.match(code)
+        if m is None:
+            return None
+        name, sizes, body = m.group(1).upper(), [int(k) for k in m.group(2).split(",")], \
+            m.group(3)
+        if sizes[0] != 1 or len(sizes) != 2:
+            self.errors.append(Diagnostic(
+                f"TABLE {name} has {sizes[0]} independent variable(s): only 1 is supported",
+                span, "write a 2- or 3-dimensional table as 1-dimensional TABLEs, one per "
+                "value of the other variables, and interpolate between them"))
+            return ast.Table(name, (0.0, 1.0), (0.0, 0.0), span)
+        values: list[float] = []
+        for item in body.split(","):
+            count, _, value = item.strip().rpartition("*")
+            try:
+                number = fortran_float(value.strip())
+                times = int(count) if count else 1
+            except ValueError:
+                self.errors.append(Diagnostic(
+                    f"TABLE {name}: {item.strip()!r} is not a number", span,
+                    "the values between the slashes are numbers (n*v repeats v)"))
+                return ast.Table(name, (0.0, 1.0), (0.0, 0.0), span)
+            if times > MAX_ELEMENTS:
+                self.errors.append(Diagnostic(f"TABLE {name}: {times}*... is too long", span,
+                                              f"a table has at most {MAX_ELEMENTS:,} points"))
+                return ast.Table(name, (0.0, 1.0), (0.0, 0.0), span)
+            values.extend([number] * times)
+        n = sizes[1]
+        if len(values) != 2 * n:
+            self.errors.append(Diagnostic(
+                f"TABLE {name} has {len(values)} values for {n} breakpoints", span,
+                f"give the {n} breakpoints, then the {n} function values ({2 * n} in all)"))
+            return ast.Table(name, (0.0, 1.0), (0.0, 0.0), span)
+        return ast.Table(name, tuple(values[:n]), tuple(values[n:]), span)
+
+    def st_labelled(self, node) -> Close | None:
         label = str(node.children[0]).strip()
         span = self.span(node)
         lines = split_lines(self.source)
@@ -228,6 +311,9 @@ class Builder:
                 "':=' is not this language's assignment", span,
                 f"write {label} = {rest[2:].split('!')[0].strip() or '...'}"))
             return
+        statement = rest.removeprefix(":").split("!")[0].strip().rstrip(";$").strip()
+        if statement.upper() == "CONTINUE":  # the end of the DO loops with this label
+            return Close("ENDDO", span, label=_label(label))
         self.refuse(f"the statement label {label}", self.span(node),
                     "remove it: GO TO and labelled loops are not supported; write IF (c) "
                     "THEN ... END IF or DO i = a, b ... END DO")

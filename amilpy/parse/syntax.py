@@ -592,3 +592,4 @@ class Program:
     # constants that size an array or bound a loop written out over one: fixed when
     # the listing is read (a run may not change them)
     fixed: frozenset[str] = frozenset()
+    notes: tuple = ()  # the reader's warnings (diagnostics.Diagnostic), kept with the model
