@@ -337,3 +337,14 @@ def test_pi_may_be_assigned_in_acsl_form():
     r = run("PROGRAM p\nINITIAL\nPI = 3.0\nEND\nDERIVATIVE\nX = INTEG(PI, 0.0)\n"
             "TERMT(T >= 1.0)\nEND\nEND\n")
     assert r["X"][-1] == pytest.approx(3.0)
+
+
+def test_program_colon_and_padding_after_the_last_line():
+    """`PROGRAM: name` (acslX listings of the EPA lead model open so) is the program,
+    not a statement label; NULs and ^Z after the last line (an old editor's padding,
+    DOS's end-of-file mark) are not read."""
+    text = ("PROGRAM: demo\nDERIVATIVE\nX = INTEG(1.0, 0.0)\nTERMT(T >= 1.0)\nEND\nEND\r\n"
+            "\x00\x00\x1a")
+    model = amilpy.loads(text, "p.csl")
+    assert model.ir.name == "demo" or model.ir.name.endswith("p.csl")
+    assert run(text)["X"][-1] == pytest.approx(1.0)

@@ -339,6 +339,7 @@ print(run.status, run.warnings, float(run["X"][-1]))
 """
 
 
+@pytest.mark.slow  # (50 s: CI runs it in the [fast] step, -m slow)
 @needs_numba
 def test_a_damaged_numba_cache_is_compiled_again(tmp_path):
     """numba reads its cache with pickle and lets a damaged file raise: every METHOD

@@ -53,6 +53,9 @@ def parse(text: str, path: str | None = None) -> ast.Program:
 
     if text.startswith("\ufeff"):
         text = text[1:]
+    # (NULs and ^Z after the last line: an old editor's padding or DOS end-of-file
+    # mark, which the translators that read these files stopped at)
+    text = text.rstrip("\x00\x1a")
     # one definition of a line (language.split_lines), for the reader and messages
     prepared = prepare("\n".join(split_lines(text)))
     if not prepared.endswith("\n"):

@@ -126,7 +126,7 @@ class Builder:
     # blocks (nested by blocks.Nester) --------------------------------------
     def st_program(self, node) -> Head:
         text = str(node.children[0]).strip() if node.children and node.children[0] else ""
-        return Head("PROGRAM", self.span(node), text)
+        return Head("PROGRAM", self.span(node), text.removeprefix(":").strip())
 
     def st_discrete(self, node) -> Head:
         name = node.children[0] if node.children else None
