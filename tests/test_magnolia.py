@@ -123,3 +123,21 @@ def test_cinterval_cannot_read_a_constant_initial_changes():
     run = amilpy.loads(text.replace("CINTERVAL CINT = TS", "CINTERVAL CINT = 0.5").replace(
         "    TS = 0.1\n", "    TS = 0.1\n    CINT = TS\n"), "p.csl").run(advice=False)[0]
     assert np.allclose(run.t, np.linspace(0.0, 1.0, 11))
+
+
+def test_an_initial_value_computed_in_derivative_from_constants():
+    """AALD (magnoliasci/PBPK) gives INTEG an initial value DERIVATIVE computes from
+    constants only (HT0DO1 = HFREE0*(1 + ATOTAL/(KA + HFREE0)), HFREE0 = 10**(-PHINIT)):
+    one value for the whole run, computed before it. X = X0 exp(-t), X0 = 2*10^-P."""
+    run = amilpy.loads(_program("  CONSTANT P = 2.0\n",
+                                "    X = INTEG(-X, X0)\n    X0 = 2.0*H\n    H = 10**(-P)\n"),
+                       "p.csl").run(advice=False)[0]
+    assert np.max(np.abs(run["X"] - 0.02 * np.exp(-run.t))) < 1e-12
+    assert run.final["X0"] == 0.02
+
+
+def test_an_initial_value_that_changes_in_time_is_still_refused():
+    """X0 reads a state: no value before the run (a located error, as before)."""
+    with pytest.raises(AmilError, match="the initial value uses X0, which changes in time"):
+        amilpy.loads(_program("", "    X = INTEG(-X, X0)\n    Y = INTEG(1.0, 0.0)\n"
+                                  "    X0 = 2.0 + Y\n"), "p.csl")

@@ -309,7 +309,7 @@ END
 @pytest.mark.parametrize("body, message", [
     ("FUNCTION F = G(A)\nF = H(A)\nEND\nFUNCTION R = H(B)\nR = G(B)\nEND\n",
      "FUNCTION G calls itself through other FUNCTIONs"),
-    ("FUNCTION F = G(A)\nF = A + X\nEND\n", "FUNCTION G reads X"),
+    ("FUNCTION F = G(A)\nF = A + Q\nEND\n", "FUNCTION G reads Q"),
     ("FUNCTION F = G(A)\nF = G(A)\nEND\n", "FUNCTION G calls itself"),
     ("FUNCTION F = G(A)\nY = A\nEND\n", "FUNCTION G never assigns its result F"),
 ])
@@ -318,6 +318,32 @@ def test_function_definition_faults(body, message):
         amilpy.loads(f"PROGRAM p\n{body}DERIVATIVE\nX = INTEG(G(1.0), 0.0)\n"
                      "TERMT(T >= 1.0)\nEND\nEND\n", "p.csl")
     assert any(message in d.message for d in err.value.diagnostics)
+
+
+def test_a_function_reads_the_programs_variables_where_it_is_called():
+    """Magnolia's FUNCTIONs see the program's variables (Peters 2008's Kpu functions
+    read Dvow, which INITIAL computes): here G reads K, computed in INITIAL, and the
+    state X, so X' = K + X from 0 with K = 2: X = 2 (e^t - 1), and H, called in
+    INITIAL, reads K there."""
+    run, = amilpy.loads("""PROGRAM p
+FUNCTION F = G(A)
+  F = A*K + X
+END
+FUNCTION R = H(B)
+  R = B + G(0.0) + K
+END
+INITIAL
+  K = 2.0
+  C = H(1.0)
+END
+DERIVATIVE
+  X = INTEG(G(1.0), 0.0)
+  TERMT(T >= 1.0)
+END
+END
+""", "p.csl").run(advice=False)
+    assert np.max(np.abs(run["X"] - 2.0 * np.expm1(run.t))) < 1e-9
+    assert run.final["C"] == 3.0  # 1 + (0*2 + X(0) = 0) + 2
 
 
 def test_equality_on_a_state_is_tested_pointwise_with_a_warning():

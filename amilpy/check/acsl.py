@@ -24,7 +24,13 @@ from .code import CodeLowering, assigned_names
 from .groups import DATA_STATEMENTS, RunGroups
 from .lower import TEXT_LIMIT, Lowering
 from .names import Names
-from .parts import Parts, Renamer, time_names
+from .parts import (
+    Parts,
+    Renamer,
+    globals_as_arguments,
+    initial_values_from_constants,
+    time_names,
+)
 from .units import declared_stores, stored, unit_equations, written_text
 
 _DIRECTION = {"XP": 1, "XN": -1, "XZ": 0}
@@ -38,6 +44,8 @@ def check_acsl(program: ast.Program, name: str | None = None) -> ir.Model:
     data_names = {i.name for d in parts.declarations if isinstance(d, ast.Data)
                   for i in d.items}
     parts = Renamer(time_names(parts, data_names)).parts(parts)
+    parts = globals_as_arguments(parts, data_names)
+    parts = initial_values_from_constants(parts, data_names)
     return _Check(program, parts, rep).model(name or program.name or program.path)
 
 

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field, replace
 from ..diagnostics import Reporter, Span
 from ..language import ACSL_TIME, TIME
 from ..parse import syntax as ast
+from .code import assigned_names
 
 # declarations and data: global wherever they stand
 DECLARATIONS = (ast.Data, ast.Timer, ast.Method, ast.Tolerance, ast.Report, ast.Label,
@@ -233,3 +234,113 @@ class Renamer:
             terminal=[(self.body(b), s) for b, s in parts.terminal],
             declarations=self.body(parts.declarations), functions=parts.functions,
             sections=parts.sections)
+
+
+class ImplicitArguments(Renamer):
+    """Every call of a FUNCTION in `extra` passes the program's variables that function
+    reads as arguments after its own (`globals_as_arguments`)."""
+
+    def __init__(self, extra: dict[str, tuple[str, ...]]) -> None:
+        super().__init__({})
+        self.extra = extra
+
+    def expr(self, e):
+        e = super().expr(e)
+        if isinstance(e, ast.Call) and e.func in self.extra:
+            return replace(e, args=e.args + tuple(ast.Name(n, e.span)
+                                                  for n in self.extra[e.func]))
+        return e
+
+
+def globals_as_arguments(parts: Parts, data: set[str]) -> Parts:
+    """A Magnolia FUNCTION sees the program's variables as they are where it is called
+    (Peters 2008's `kpu = (Dvow*...)` reads Dvow, which INITIAL computes): each one it
+    reads becomes an argument every call passes, so the call's value and, in sorted
+    code, its place in the order follow that variable. Names the program defines
+    nowhere stay what the check says of them."""
+    if not parts.functions:
+        return parts
+    defined = assigned_anywhere(parts) | {TIME}
+    extra: dict[str, tuple[str, ...]] = {f.name: () for f in parts.functions}
+    while True:  # (a function calling another takes the other's too)
+        found = {}
+        for f in parts.functions:
+            own = set(f.params) | {n for st in f.body for node in ast.walk(st)
+                                   for n in (node.targets if isinstance(node, ast.Assign)
+                                             else (node.var,) if isinstance(node, ast.Loop)
+                                             else ())}
+            reads = [node.name for st in f.body for node in ast.walk(st)
+                     if isinstance(node, ast.Name)]
+            reads += [n for st in f.body for node in ast.walk(st)
+                      if isinstance(node, ast.Call) for n in extra.get(node.func, ())]
+            found[f.name] = tuple(dict.fromkeys(
+                n for n in reads if n in defined and n not in own and n not in data))
+        if found == extra:
+            break
+        extra = found
+    extra = {k: v for k, v in extra.items() if v}
+    if not extra:
+        return parts
+    calls = ImplicitArguments(extra)
+    rebuilt = calls.parts(parts)
+    rebuilt.functions = [replace(f, params=f.params + extra.get(f.name, ()),
+                                 body=tuple(calls.body(f.body))) for f in parts.functions]
+    return rebuilt
+
+
+def initial_values_from_constants(parts: Parts, data: set[str]) -> Parts:
+    """An initial value (INTEG's) that reads a name DERIVATIVE computes from constants
+    alone (AALD's `HTOTALDO1 = INTEG(RHDO1, HT0DO1)`, `HT0DO1 = HFREE0*(...)`,
+    `HFREE0 = 10**(-PHINIT)`): those equations hold one value for the whole run, so
+    they are computed once, at the end of INITIAL, where the initial values are read.
+    Only equations of constants (data values no running code assigns, INITIAL's
+    values, PI and other such equations) through plain functions move."""
+    from ..library import Kind, lookup
+    from .lower import arguments_of
+
+    running = set(assigned_names([st for st in parts.dynamic]))
+    for body, _ in parts.discretes.values():
+        running |= set(assigned_names(body))
+    fixed = ((data | {n for b, _ in parts.initial for n in assigned_names(b)} | {"PI"})
+             - running)
+    single = {}  # name -> its one DERIVATIVE equation, when it is a plain one
+    count: dict[str, int] = {}
+    for st in parts.derivative:
+        for n in assigned_names([st]):
+            count[n] = count.get(n, 0) + 1
+        if isinstance(st, ast.Assign) and len(st.targets) == 1 and all(
+                getattr(lookup(c.func, len(c.args)), "kind", None) is Kind.MATH
+                for c in ast.walk(st.expr) if isinstance(c, ast.Call)):
+            single[st.targets[0]] = st
+    single = {n: st for n, st in single.items() if count[n] == 1 and n not in fixed}
+
+    def reads(st) -> set[str]:
+        return {node.name for node in ast.walk(st.expr) if isinstance(node, ast.Name)}
+
+    constant = set(single)
+    while True:  # (those that read only constants, or others of these)
+        keep = {n for n in constant if reads(single[n]) <= fixed | constant}
+        if keep == constant:
+            break
+        constant = keep
+    wanted: list[str] = []
+    # (the arguments the states' initial values read: INTEG's IC, ...)
+    todo = [node.name for st in parts.derivative for call in ast.walk(st)
+            if isinstance(call, ast.Call)
+            for spec in getattr(lookup(call.func, len(call.args)), "states", ())
+            for i in arguments_of(spec.ic) if i < len(call.args)
+            for node in ast.walk(call.args[i]) if isinstance(node, ast.Name)]
+    while todo:
+        n = todo.pop()
+        if n in constant and n not in wanted:
+            wanted.append(n)
+            todo.extend(reads(single[n]))
+    if not wanted:
+        return parts
+    order: list[str] = []  # (each after what it reads)
+    while len(order) < len(wanted):
+        order += [n for n in wanted if n not in order
+                  and reads(single[n]) & set(wanted) <= set(order)]
+    moved = [single[n] for n in order]
+    return replace(parts, derivative=[st for st in parts.derivative if st not in moved],
+                   initial=[*parts.initial, (moved, moved[0].span)])
