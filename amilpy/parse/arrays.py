@@ -339,16 +339,19 @@ class _Arrays:
         return [replace(st, **changed) if changed else st]
 
     def names(self, names: tuple[str, ...]) -> tuple[str, ...]:
-        return tuple(e for n in names for e in (self.arrays[n].elements()
-                                                if n in self.arrays else [n]))
+        return self.named(names, names)[0]
+
+    def named(self, names: tuple[str, ...], spans: tuple) -> tuple[tuple, tuple]:
+        """Names with each array's in place of it, and the span each came from."""
+        out, where = [], []
+        for name, span in zip(names, spans, strict=True):
+            each = self.arrays[name].elements() if name in self.arrays else [name]
+            out.extend(each)
+            where.extend([span] * len(each))
+        return tuple(out), tuple(where)
 
     def declare(self, st: ast.Declare) -> ast.Declare:
-        names, spans = [], []
-        for name, span in zip(st.names, st.name_spans, strict=True):
-            each = self.arrays[name].elements() if name in self.arrays else [name]
-            names.extend(each)
-            spans.extend([span] * len(each))
-        return ast.Declare(st.type, tuple(names), tuple(spans), st.span)
+        return ast.Declare(st.type, *self.named(st.names, st.name_spans), st.span)
 
     def data(self, st: ast.Data) -> ast.Data:
         items = []
@@ -379,15 +382,11 @@ class _Arrays:
         return replace(st, items=tuple(items))
 
     def report(self, st: ast.Report) -> ast.Report:
-        names, spans = [], []
-        for name, span in zip(st.names, st.name_spans, strict=True):
-            each = self.arrays[name].elements() if name in self.arrays else [name]
-            names.extend(each)
-            spans.extend([span] * len(each))
         if st.x in self.arrays:
             self.error(f"VS {st.x}: an array cannot be the horizontal axis", st.x_span,
                        "plot against one variable")
-        return replace(st, names=tuple(names), name_spans=tuple(spans))
+        names, spans = self.named(st.names, st.name_spans)
+        return replace(st, names=names, name_spans=spans)
 
     def assign(self, st: ast.Assign, env, written: bool) -> list:
         if st.subscripts:
