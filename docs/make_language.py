@@ -85,7 +85,8 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
      "`DO I = 1, N ... END DO` (one label may end several loops)"),
     ("ACSL", "`TABLE F, 1, 3 / 0., 1., 2., 0., 1., 4. /`, `Y = F(X)`", "`FUNCTION F = 0.,0., "
      "1.,1., 2.,4.`, `Y = AFGEN(F, X)`: linear between the breakpoints, the end values "
-     "outside (tables of 2 and 3 variables are refused)"),
+     "outside; `TABLE G, 2, NX, NY / x..., y..., values (x fastest) /`, `G(X, Y)`: "
+     "bilinear, and trilinear for 3 variables"),
     ("ACSL", "code after the program's final `END`", "not read, with a warning"),
     ("CSMP III", "`MACRO Y = LAG2(T, X) ... ENDMAC`, `A = LAG2(0.1, U)`", "the body "
      "expanded at each call (its own states and locals per call)"),

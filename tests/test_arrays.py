@@ -280,3 +280,32 @@ END
         11, 21, 31, 12, 22, 32]
     assert run.final["S"] == 66.0 and run.final["Y"] == pytest.approx(66.0, rel=1e-12)
     assert (run.final["I"], run.final["J"], run.final["K"]) == (4.0, 3.0, 4.0)
+
+
+def test_acsl_tables_of_two_and_three_variables():
+    """TABLE G, 2, 3, 2 (x = 0, 1, 2; y = 0, 10): bilinear between the breakpoints and
+    the end values held, as for one variable: G(0.5, 5) = 3.25, G(1.5, 12) = 10 (y held
+    at 10), G(-1, -3) = G(0, 0) = 0; along x = t, y = 10 t it is 6 t + t^2, whose
+    integral to 1 is 10/3. A table of three variables whose values are 1 + x + 2y + 4z
+    at the corners gives that, trilinear, inside: H(0.25, 0.5, 0.75) = 5.25."""
+    text = """PROGRAM two-variable table
+  TABLE G, 2, 3, 2 / 0.0, 1.0, 2.0,  0.0, 10.0, &
+                     0.0, 1.0, 4.0,  5.0, 7.0, 13.0 /
+  TABLE H, 3, 2, 2, 2 / 0.0, 1.0, 0.0, 1.0, 0.0, 1.0, &
+                        1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0 /
+  CINTERVAL CINT = 0.5
+  DERIVATIVE
+    A = G(0.5, 5.0)
+    B = G(1.5, 12.0)
+    C = G(-1.0, -3.0)
+    D = H(0.25, 0.5, 0.75)
+    X = INTEG(G(T, 10.0*T), 0.0)
+    TERMT(T >= 1.0)
+  END
+END
+"""
+    f = amilpy.loads(text, "tables.csl").run(advice=False)[0].final
+    assert (f["A"], f["B"], f["C"], f["D"]) == (3.25, 10.0, 0.0, 5.25)
+    assert f["X"] == pytest.approx(10.0 / 3.0, rel=1e-10)
+    with pytest.raises(AmilError, match="the table G takes 2 argument"):
+        amilpy.loads(text.replace("G(0.5, 5.0)", "G(0.5)"), "tables.csl")

@@ -72,7 +72,8 @@ def expand(statements: list, errors: list[Diagnostic], acsl: bool
     listed = [it for st in _everything(statements) if isinstance(st, ast.Data)
               for it in st.items if it.is_array]
     tables = {st.name for st in _everything(statements) if isinstance(st, ast.Table)}
-    if not declared and not listed and not any(
+    gridded = any(isinstance(st, ast.Table) and st.grid for st in _everything(statements))
+    if not declared and not listed and not gridded and not any(
             isinstance(n, ast.Index) or (isinstance(n, ast.Assign) and n.subscripts)
             or (isinstance(n, ast.Call) and n.func in tables)
             for st in statements for n in ast.walk(st)):
@@ -110,8 +111,13 @@ class _Arrays:
                         it.is_list or it.is_array) else None
                     values[it.name] = v if values.get(it.name, v) == v else None
         self.constants = {n: v for n, v in values.items() if v is not None}
-        # function tables (ACSL's TABLE F, 1, n / ... /, FUNCTION F = ...), read as F(X)
-        self.tables = {st.name for st in everything if isinstance(st, ast.Table)}
+        # function tables (ACSL's TABLE F, n, ... / ... /, FUNCTION F = ...), read as
+        # F(X), F(X, Y), F(X, Y, Z): their names and how many variables each reads
+        self.tables = {st.name: 1 + len(st.grid) for st in everything
+                       if isinstance(st, ast.Table)}
+        self.table_parts: dict[str, list] = {}
+        self.table_statements = {st.name: self.written_out_table(st) for st in everything
+                                 if isinstance(st, ast.Table) and st.grid}
         self.arrays: dict[str, Array] = {}
         total = 0
         from ..library import callable_names
@@ -242,11 +248,8 @@ class _Arrays:
             return self.read(self.arrays[name], args, e.span, env)
         if isinstance(e, ast.Call):
             args = tuple(self._expr(a, env, whole) for a in e.args)
-            if e.func in self.tables:  # ACSL's F(X) of a table: AFGEN(F, X)
-                if len(args) != 1:
-                    self.error(f"the table {e.func} takes one argument, not {len(args)}",
-                               e.span, f"write {e.func}(X)")
-                return ast.Call("AFGEN", (ast.Name(e.func, e.span), *args[:1]), e.span)
+            if e.func in self.tables:
+                return self.lookup(e.func, args, e.span)
             return replace(e, args=args)
         if isinstance(e, ast.BinOp):
             return replace(e, left=self._expr(e.left, env, whole),
@@ -296,6 +299,54 @@ class _Arrays:
                         for k in range(1, a.sizes[d] + 1))
         return ast.Call("ELEMENT", (args[d], *options), span)
 
+    def lookup(self, name: str, args: tuple, span: Span):
+        """ACSL's F(X) of a table: AFGEN(F, X). F(X, Y) of a table of two variables:
+        the sum over Y's breakpoints y_j of AFGEN(F_yj, Y) * AFGEN(F_xj, X), where
+        F_yj is the hat that is 1 at y_j and 0 at the other breakpoints (held past
+        the ends) and F_xj the table over X at y_j: bilinear interpolation, the end
+        values held, through the 1-variable tables only (`written_out_table`);
+        F(X, Y, Z) likewise over Y's and Z's breakpoints."""
+        n = self.tables[name]
+        if len(args) != n:
+            self.error(f"the table {name} takes {n} argument(s), not {len(args)}", span,
+                       f"write {name}({', '.join('XYZ'[:n])})")
+            return ast.Num(0.0, span, "0")
+
+        def afgen(table: str, arg):
+            return ast.Call("AFGEN", (ast.Name(table, span), arg), span)
+        if n == 1:
+            return afgen(name, args[0])
+        total = None
+        for key, hats in self.table_parts[name]:
+            term = afgen(f"{name}_x{key}", args[0])
+            for axis, j in hats:
+                term = ast.BinOp("*", afgen(f"{name}_{axis}{j}", args["yz".index(axis) + 1]),
+                                 term, span)
+            total = term if total is None else ast.BinOp("+", total, term, span)
+        return total
+
+    def written_out_table(self, st: ast.Table) -> list[ast.Table]:
+        """A table of 2 or 3 variables as the 1-variable tables `lookup` reads: one over
+        X for each breakpoint of the others, and each other breakpoint's hat."""
+        nx, out, parts = len(st.xs), [], []
+        axes = list(zip("yz", st.grid, strict=False))
+        for axis, points in axes:
+            if len(points) > 1:
+                out += [ast.Table(f"{st.name}_{axis}{j + 1}", points,
+                                  tuple(float(i == j) for i in range(len(points))), st.span)
+                        for j in range(len(points))]
+        for flat, index in enumerate(itertools.product(*(range(len(p)) for _, p in
+                                                          reversed(axes)))):
+            index = tuple(reversed(index))  # (y's index faster than z's)
+            key = "_".join(str(i + 1) for i in index)
+            out.append(ast.Table(f"{st.name}_x{key}", st.xs,
+                                 st.ys[flat * nx:(flat + 1) * nx], st.span))
+            parts.append((key, [(axis, i + 1) for (axis, points), i in zip(axes, index,
+                                                                           strict=True)
+                                if len(points) > 1]))
+        self.table_parts[st.name] = parts
+        return out
+
     # ---------------------------------------------------------------- statements
     def statements(self, sts, env: dict[str, int], written: bool) -> list:
         out: list = []
@@ -331,6 +382,8 @@ class _Arrays:
             return [replace(st, body=tuple(self.statements(st.body, env, True)))]
         if isinstance(st, ast.Report):
             return [self.report(st)]
+        if isinstance(st, ast.Table) and st.grid:
+            return self.table_statements[st.name]
         if isinstance(st, ast.Finish):
             return [replace(st, relations=tuple(self.statement(r, env, written)[0]
                                                 for r in st.relations))]

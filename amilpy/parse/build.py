@@ -259,9 +259,11 @@ class Builder:
         return ast.Declare("REAL", tuple(names), (span,) * len(names), span, tuple(sizes))
 
     def acsl_table(self, node) -> ast.Table | None:
-        """ACSL's TABLE NAME, 1, N / x1, ..., xN, y1, ..., yN / (n*v repeats v): a
-        function table like FUNCTION NAME = x1,y1, ...; None if the text is not of
-        that form (CSMP's TABLE, which is refused)."""
+        """ACSL's TABLE NAME, n, N1[, N2, N3] / breakpoints of each variable, then the
+        values (the first variable's index fastest) / (n*v repeats v): a function
+        table like FUNCTION NAME = x1,y1, ... for n = 1, with the other variables'
+        breakpoints in `grid` for n = 2, 3 (`parse.arrays` writes those out); None if
+        the text is not of that form (CSMP's TABLE, which is refused)."""
         span = self.span(node)
         code = " ".join(line[:code_end(line)].rstrip().removesuffix("&").removesuffix("...")
                         for line in str(node.children[1]).split("\n"))
@@ -270,12 +272,13 @@ class Builder:
             return None
         name, sizes, body = m.group(1).upper(), [int(k) for k in m.group(2).split(",")], \
             m.group(3)
-        if sizes[0] != 1 or len(sizes) != 2:
+        empty = ast.Table(name, (0.0, 1.0), (0.0, 0.0), span)
+        if not 1 <= sizes[0] <= 3 or len(sizes) != sizes[0] + 1 or min(sizes[1:]) < 1:
             self.errors.append(Diagnostic(
-                f"TABLE {name} has {sizes[0]} independent variable(s): only 1 is supported",
-                span, "write a 2- or 3-dimensional table as 1-dimensional TABLEs, one per "
-                "value of the other variables, and interpolate between them"))
-            return ast.Table(name, (0.0, 1.0), (0.0, 0.0), span)
+                f"TABLE {name}, {m.group(2)}: a table of 1, 2 or 3 variables gives their "
+                "number, then each one's count of breakpoints", span,
+                "e.g. TABLE F, 2, 3, 2 / x1, x2, x3, y1, y2, f11, f21, f31, f12, f22, f32 /"))
+            return empty
         values: list[float] = []
         for item in body.split(","):
             count, _, value = item.strip().rpartition("*")
@@ -286,19 +289,26 @@ class Builder:
                 self.errors.append(Diagnostic(
                     f"TABLE {name}: {item.strip()!r} is not a number", span,
                     "the values between the slashes are numbers (n*v repeats v)"))
-                return ast.Table(name, (0.0, 1.0), (0.0, 0.0), span)
+                return empty
             if times > MAX_ELEMENTS:
                 self.errors.append(Diagnostic(f"TABLE {name}: {times}*... is too long", span,
                                               f"a table has at most {MAX_ELEMENTS:,} points"))
-                return ast.Table(name, (0.0, 1.0), (0.0, 0.0), span)
+                return empty
             values.extend([number] * times)
-        n = sizes[1]
-        if len(values) != 2 * n:
+        counts = sizes[1:]
+        points = math.prod(counts)
+        if len(values) != sum(counts) + points or points > MAX_ELEMENTS:
             self.errors.append(Diagnostic(
-                f"TABLE {name} has {len(values)} values for {n} breakpoints", span,
-                f"give the {n} breakpoints, then the {n} function values ({2 * n} in all)"))
-            return ast.Table(name, (0.0, 1.0), (0.0, 0.0), span)
-        return ast.Table(name, tuple(values[:n]), tuple(values[n:]), span)
+                f"TABLE {name} has {len(values)} values for {' x '.join(map(str, counts))} "
+                "breakpoints", span,
+                f"give the {' + '.join(map(str, counts))} breakpoints, then the {points} "
+                f"function values ({sum(counts) + points} in all)"))
+            return empty
+        axes, at = [], 0
+        for n in counts:
+            axes.append(tuple(values[at:at + n]))
+            at += n
+        return ast.Table(name, axes[0], tuple(values[at:]), span, grid=tuple(axes[1:]))
 
     def st_labelled(self, node) -> Close | None:
         label = str(node.children[0]).strip()

@@ -290,6 +290,9 @@ class Table(Node):
     ys: tuple[float, ...]
     span: Span
     odd_count: bool = False
+    # ACSL's TABLE of 2 or 3 variables: the others' breakpoints (ys then holds every
+    # value, xs's index fastest); `parse.arrays` writes it out as 1-variable tables
+    grid: tuple[tuple[float, ...], ...] = ()
 
 
 @dataclass(frozen=True)
