@@ -116,6 +116,7 @@ class _Arrays:
         self.tables = {st.name: 1 + len(st.grid) for st in everything
                        if isinstance(st, ast.Table)}
         self.table_parts: dict[str, list] = {}
+        self.read_after_loops = _read_outside_loops(statements)
         self.table_statements = {st.name: self.written_out_table(st) for st in everything
                                  if isinstance(st, ast.Table) and st.grid}
         self.arrays: dict[str, Array] = {}
@@ -547,11 +548,42 @@ class _Arrays:
         for p in range(passes):
             out.extend(self.statements(st.body, {**env, st.var: _number(start + p * step)},
                                        written))
-        if written:
+        # (the value after the last pass, as Fortran leaves it, where anything reads it)
+        if written and st.var in self.read_after_loops:
             final = _number(start + passes * step)
             out.append(ast.Assign((st.var,), (st.span,),
                                   ast.Num(float(final), st.span, str(final)), st.span))
         return out
+
+
+def _read_outside_loops(statements) -> set[str]:
+    """The names read (or reported) somewhere no loop over them encloses."""
+    out: set[str] = set()
+    stack = [(st, frozenset()) for st in statements]
+    while stack:
+        st, inside = stack.pop()
+        if isinstance(st, ast.Report):
+            out.update(st.names)
+            continue
+        if isinstance(st, ast.Loop):
+            for e in (st.start, st.stop, st.step):
+                if e is not None:
+                    out.update(n.name for n in ast.walk(e) if isinstance(n, ast.Name)
+                               and n.name not in inside)
+            stack.extend((b, inside | {st.var}) for b in st.body)
+            continue
+        body = st.body if isinstance(st, (ast.Procedural, ast.Block, ast.FunctionDef)) else \
+            tuple(b for br in st.branches for b in br.body) if isinstance(st, ast.If) else ()
+        if body:
+            if isinstance(st, ast.If):
+                out.update(n.name for br in st.branches if br.cond is not None
+                           for n in ast.walk(br.cond) if isinstance(n, ast.Name)
+                           and n.name not in inside)
+            stack.extend((b, inside) for b in body)
+            continue
+        out.update(n.name for n in ast.walk(st) if isinstance(n, ast.Name)
+                   and n.name not in inside)
+    return out
 
 
 def _number(v: float) -> int | float:
