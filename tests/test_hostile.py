@@ -46,6 +46,9 @@ def extreme_results():
                                                   args=args)}
 
 
+# (slow: the module's fixture runs every case in a process of its own, 17 s; CI runs
+# them in its slow step)
+@pytest.mark.slow
 @pytest.mark.parametrize("case", list(mutate.extreme_cases()))
 def test_extreme_input(extreme_results, case):
     r = extreme_results[case]
@@ -53,6 +56,7 @@ def test_extreme_input(extreme_results, case):
     assert "out of memory" not in r.detail, "within the memory bound, not at it"
 
 
+@pytest.mark.slow
 def test_extreme_input_messages(extreme_results):
     """The expected verdicts of a few: a model error with a position, or a failed run."""
     # (bytes that are not UTF-8 in a comment: read as Windows-1250, with a note)
