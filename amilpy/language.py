@@ -74,6 +74,17 @@ WEATHER_KEYS: tuple[str, ...] = ("WTRDIR", "CNTR", "ISTN", "IYEAR")
 LINE_BREAK = re.compile(r"\r\n|\r|\n")
 
 
+_NAME_OR_ELEMENT = re.compile(r"[A-Za-z][A-Za-z0-9_]*(?:\([0-9]+(?:,[0-9]+){0,2}\))?")
+
+
+def given_name(text: str) -> str | None:
+    """A variable's name as a command line or a call gives it, folded as a listing's
+    (`k` -> `K`), an array's element too (`X( 2 )` -> `X(2)`, parse/arrays.py); None if
+    the text is no name."""
+    name = text.strip().replace(" ", "").upper()
+    return name if _NAME_OR_ELEMENT.fullmatch(name) else None
+
+
 def fortran_float(text: str) -> float:
     """A number as listings and command lines write it, Fortran's D exponent
     (1.5D-3) read as E; ValueError if the text is not a number."""

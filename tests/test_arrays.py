@@ -312,3 +312,22 @@ END
     assert f["X"] == pytest.approx(10.0 / 3.0, rel=1e-10)
     with pytest.raises(AmilError, match="the table G takes 2 argument"):
         amilpy.loads(text.replace("G(0.5, 5.0)", "G(0.5)"), "tables.csl")
+
+
+def test_an_element_is_named_on_the_command_line(tmp_path):
+    """`--set K(2)=0.5` and a sweep over `K(2)=0.5:1:0.5` with `--measure X(2)`: an
+    element is a data value like any other (the sweep said "'K(2)' is not a name").
+    X(2) = exp(-K(2) t) falls to exp(-K(2)) at t = 1."""
+    from amilpy.batch.sweep import parse_range
+    from amilpy.cli import main
+
+    assert parse_range("k( 2 )=0.5:1:0.5") == ("K(2)", [0.5, 1.0])
+    path = tmp_path / "decays.csl"
+    path.write_text(DECAYS)
+    csv = tmp_path / "sweep.csv"
+    assert main(["sweep", str(path), "K(2)=0.5:1:0.5", "--measure", "X(2)", "--csv",
+                 str(csv), "--quiet"]) == 0
+    rows = csv.read_text().splitlines()
+    assert rows[0].split(",")[1:3] == ["K(2)", "MIN_X(2)"]
+    assert [float(r.split(",")[2]) for r in rows[1:]] == pytest.approx(
+        [math.exp(-0.5), math.exp(-1.0)], rel=1e-8)

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..diagnostics import AmilError, UsageError, with_hint
-from ..language import fortran_float
+from ..language import fortran_float, given_name
 from ..progress import report
 from ..result import Run
 
@@ -202,7 +202,7 @@ def parse_range(text: str) -> tuple[str, list[float]]:
         start, stop, step = (fortran_float(x) for x in spec.split(":"))
     except ValueError:
         raise AmilError("write it NAME=START:STOP:STEP, e.g. W=60:80:0.5") from None
-    if not name.strip().isidentifier():
+    if given_name(name) is None:
         raise AmilError(f"{name.strip()!r} is not a name (NAME=START:STOP:STEP)")
     if not all(math.isfinite(x) for x in (start, stop, step)):
         raise AmilError("START, STOP and STEP must be finite numbers")
@@ -213,7 +213,7 @@ def parse_range(text: str) -> tuple[str, list[float]]:
         raise AmilError(f"the sweep has {count + 1:.3g} points (limit {MAX_POINTS})")
     n = int(math.floor(count + 1e-9))
     values = [round(start + k * step, 12) for k in range(n + 1)]
-    return name.strip().upper(), values
+    return given_name(name), values
 
 
 def default_measure(model) -> str:

@@ -23,7 +23,7 @@ import warnings
 
 from .. import __version__, interrupts
 from ..diagnostics import AmilError, UsageError
-from ..language import fortran_float
+from ..language import fortran_float, given_name
 from ..output.files import OutputError
 from ..output.options import Outputs, PlotOptions
 from ..output.writers import WRITERS, dest
@@ -466,10 +466,10 @@ def cmd_sweep(args, path: str, signals: Signals) -> int:
 
 def _dist_option(text: str) -> tuple[str, str]:
     name, sep, dist = text.partition("=")
-    if not sep or not name.strip().isidentifier():
+    if not sep or given_name(name) is None:
         raise argparse.ArgumentTypeError(f"takes NAME=DIST, e.g. K=lognormal(0,0.2), got "
                                          f"{text!r}")
-    return name.strip().upper(), dist.strip()
+    return given_name(name), dist.strip()
 
 
 def _correlations(items: list[str]) -> list[tuple[str, float]]:

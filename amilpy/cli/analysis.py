@@ -11,7 +11,7 @@ import argparse
 import math
 import sys
 
-from ..language import fortran_float
+from ..language import fortran_float, given_name
 from . import common as base
 from .console import Progress
 
@@ -24,16 +24,16 @@ def _span(text: str) -> tuple[str, float, float]:
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"write the range NAME=START:STOP, e.g. W=67.5:73, got {text!r}") from None
-    if not name.strip().isidentifier():
+    if given_name(name) is None:
         raise argparse.ArgumentTypeError(f"{name.strip()!r} is not a name (NAME=START:STOP)")
     if not (math.isfinite(start) and math.isfinite(stop)) or start == stop:
         raise argparse.ArgumentTypeError(f"START and STOP must be finite and differ, got "
                                          f"{text!r}")
-    return name.strip().upper(), start, stop
+    return given_name(name), start, stop
 
 
 def _angle(text: str) -> str:
-    if "=" not in text or not text.split("=", 1)[0].strip().isidentifier():
+    if "=" not in text or given_name(text.split("=", 1)[0]) is None:
         raise argparse.ArgumentTypeError(f"takes NAME=VALUE, e.g. PHI=2*PI, got {text!r}")
     return text
 
