@@ -75,9 +75,9 @@ def check(program: ast.Program, name: str | None = None) -> ir.Model:
     if program.form == "ACSL":
         from .acsl import check_acsl
 
-        return _fixed(check_acsl(program, name), program)
+        return _carried(check_acsl(program, name), program)
     try:
-        return _fixed(_check_csmp(program, name), program)
+        return _carried(_check_csmp(program, name), program)
     except AmilError as exc:
         if program.macros:
             from ..parse.macros import in_macros
@@ -86,9 +86,10 @@ def check(program: ast.Program, name: str | None = None) -> ir.Model:
         raise
 
 
-def _fixed(model: ir.Model, program: ast.Program) -> ir.Model:
-    """The constants an array's size or a written-out loop's bounds read (parse.arrays)
-    may not change from run to run; the reader's warnings go with the model's."""
+def _carried(model: ir.Model, program: ast.Program) -> ir.Model:
+    """What the reader found that the checked model carries: the constants an array's
+    size or a written-out loop's bounds read (parse.arrays), which no run may change,
+    and the reader's warnings, before the model's."""
     if program.fixed:
         model.runs = [replace(r, fixed=program.fixed) for r in model.runs]
     model.warnings = [*program.notes, *model.warnings]

@@ -19,8 +19,10 @@ from dataclasses import dataclass, field, replace
 
 from ..diagnostics import Reporter, Span
 from ..language import ACSL_TIME, TIME
+from ..library import Kind, lookup
 from ..parse import syntax as ast
-from .code import assigned_names
+from .code import assigned_names, statement_reads
+from .lower import arguments_of
 
 # declarations and data: global wherever they stand
 DECLARATIONS = (ast.Data, ast.Timer, ast.Method, ast.Tolerance, ast.Report, ast.Label,
@@ -265,12 +267,8 @@ def globals_as_arguments(parts: Parts, data: set[str]) -> Parts:
     while True:  # (a function calling another takes the other's too)
         found = {}
         for f in parts.functions:
-            own = set(f.params) | {n for st in f.body for node in ast.walk(st)
-                                   for n in (node.targets if isinstance(node, ast.Assign)
-                                             else (node.var,) if isinstance(node, ast.Loop)
-                                             else ())}
-            reads = [node.name for st in f.body for node in ast.walk(st)
-                     if isinstance(node, ast.Name)]
+            own = set(f.params) | set(assigned_names(f.body))
+            reads = statement_reads(f.body)
             reads += [n for st in f.body for node in ast.walk(st)
                       if isinstance(node, ast.Call) for n in extra.get(node.func, ())]
             found[f.name] = tuple(dict.fromkeys(
@@ -295,10 +293,7 @@ def initial_values_from_constants(parts: Parts, data: set[str]) -> Parts:
     they are computed once, at the end of INITIAL, where the initial values are read.
     Only equations of constants (data values no running code assigns, INITIAL's
     values, PI and other such equations) through plain functions move."""
-    from ..library import Kind, lookup
-    from .lower import arguments_of
-
-    running = set(assigned_names([st for st in parts.dynamic]))
+    running = set(assigned_names(parts.dynamic))
     for body, _ in parts.discretes.values():
         running |= set(assigned_names(body))
     fixed = ((data | {n for b, _ in parts.initial for n in assigned_names(b)} | {"PI"})
@@ -315,7 +310,7 @@ def initial_values_from_constants(parts: Parts, data: set[str]) -> Parts:
     single = {n: st for n, st in single.items() if count[n] == 1 and n not in fixed}
 
     def reads(st) -> set[str]:
-        return {node.name for node in ast.walk(st.expr) if isinstance(node, ast.Name)}
+        return set(statement_reads([st]))
 
     constant = set(single)
     while True:  # (those that read only constants, or others of these)

@@ -110,8 +110,9 @@ def vector_element(np):
     def element_v(k, *xs):
         k = np.asarray(k, dtype=float)
         i = np.where(np.isfinite(k), k, 0.0)
-        if np.any((i != k) | (i < 1) | (i > len(xs))):
-            bad = float(np.ravel(k)[np.ravel((i != k) | (i < 1) | (i > len(xs)))][0])
+        outside = np.ravel((i != k) | (i < 1) | (i > len(xs)))
+        if outside.any():
+            bad = float(np.ravel(k)[outside][0])
             raise HelperFault(f"a subscript {bad:g} outside 1..{len(xs)} (ELEMENT)")
         return np.choose(i.astype(int) - 1, np.broadcast_arrays(*xs))
     return element_v

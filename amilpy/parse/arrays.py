@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import operator
 from dataclasses import dataclass, fields, replace
 
 from ..diagnostics import Diagnostic, Span
@@ -39,6 +40,9 @@ from . import syntax as ast
 # be written, and a loop's variable keeps its value after the loop)
 _WRITTEN_BLOCKS = ("INITIAL", "DYNAMIC", "TERMINAL", "DISCRETE")
 _EXPRESSIONS = (*ast.EXPRESSIONS, *ast.RESOLVED_BY_READER)
+# the arithmetic a size, a subscript or a loop's bound may be written with
+_ARITHMETIC = {"+": operator.add, "-": operator.sub, "*": operator.mul,
+               "/": operator.truediv, "**": operator.pow}
 
 
 @dataclass(frozen=True)
@@ -67,18 +71,16 @@ def expand(statements: list, errors: list[Diagnostic], acsl: bool
            ) -> tuple[list, frozenset[str]]:
     """The statements with every array written out as its elements (see the module),
     and the constants fixed by it. Faults go to `errors`."""
-    declared = [st for st in _everything(statements)
-                if isinstance(st, ast.Declare) and st.sizes]
-    listed = [it for st in _everything(statements) if isinstance(st, ast.Data)
-              for it in st.items if it.is_array]
-    tables = {st.name for st in _everything(statements) if isinstance(st, ast.Table)}
-    gridded = any(isinstance(st, ast.Table) and st.grid for st in _everything(statements))
-    if not declared and not listed and not gridded and not any(
+    everything = _everything(statements)
+    tables = {st.name for st in everything if isinstance(st, ast.Table)}
+    if not any((isinstance(st, ast.Declare) and st.sizes)
+               or (isinstance(st, ast.Data) and any(it.is_array for it in st.items))
+               or (isinstance(st, ast.Table) and st.grid) for st in everything) and not any(
             isinstance(n, ast.Index) or (isinstance(n, ast.Assign) and n.subscripts)
             or (isinstance(n, ast.Call) and n.func in tables)
             for st in statements for n in ast.walk(st)):
         return statements, frozenset()
-    pass_ = _Arrays(statements, errors, acsl)
+    pass_ = _Arrays(statements, everything, errors, acsl)
     return pass_.statements(statements, {}, written=False), frozenset(pass_.fixed)
 
 
@@ -97,11 +99,12 @@ def _everything(statements) -> list:
 
 
 class _Arrays:
-    def __init__(self, statements: list, errors: list[Diagnostic], acsl: bool) -> None:
+    def __init__(self, statements: list, everything: list, errors: list[Diagnostic],
+                 acsl: bool) -> None:
+        """`everything`: the statements, in blocks and loops too (`_everything`)."""
         self.errors = errors
         self.fixed: set[str] = set()
         self.written_out = 0  # statements the loops were written out into
-        everything = _everything(statements)
         # constants: a name given one value, once (or always the same)
         values: dict[str, float | None] = {}
         for st in everything:
@@ -173,12 +176,11 @@ class _Arrays:
             raise _Unknown
         if isinstance(e, ast.Neg):
             return -self._value(e.operand, env, used)
-        if isinstance(e, ast.BinOp) and e.op in ("+", "-", "*", "/", "**"):
+        if isinstance(e, ast.BinOp) and e.op in _ARITHMETIC:
             a, b = self._value(e.left, env, used), self._value(e.right, env, used)
             try:
-                return {"+": a + b, "-": a - b, "*": a * b}[e.op] if e.op in "+-*" else \
-                    a / b if e.op == "/" else a ** b
-            except (ArithmeticError, ValueError):
+                return float(_ARITHMETIC[e.op](a, b))
+            except (ArithmeticError, ValueError, TypeError):
                 raise _Unknown from None
         raise _Unknown
 

@@ -39,6 +39,13 @@ _ACSL_ARRAYS = re.compile(rf"{_ACSL_ARRAY.pattern}(?:\s*,\s*{_ACSL_ARRAY.pattern
 MAX_RUNS = 10_000  # value-list runs in one group: beyond this, a typo or a sweep
 
 
+def _rest_code(node) -> str:
+    """The code of a refused statement's text (REST), on one line: comments dropped,
+    continuation marks taken out."""
+    return " ".join(line[:code_end(line)].rstrip().removesuffix("&").removesuffix("...")
+                    for line in str(node.children[1]).split("\n")).strip()
+
+
 def _label(text: str) -> str:
     """A statement label as a loop names it: 10 and 010 are one label, names folded."""
     text = text.strip()
@@ -247,7 +254,7 @@ class Builder:
         """ARRAY X(220), A(N, 3) in ACSL form: DIMENSION's synonym (acslX). None if the
         text is not of that form (FST's ARRAY X(1:N), refused)."""
         span = self.span(node)
-        code = str(node.children[1])[:code_end(str(node.children[1]))].strip()
+        code = _rest_code(node)
         if _ACSL_ARRAYS.fullmatch(code) is None:
             return None
         names, sizes = [], []
@@ -265,9 +272,7 @@ class Builder:
         breakpoints in `grid` for n = 2, 3 (`parse.arrays` writes those out); None if
         the text is not of that form (CSMP's TABLE, which is refused)."""
         span = self.span(node)
-        code = " ".join(line[:code_end(line)].rstrip().removesuffix("&").removesuffix("...")
-                        for line in str(node.children[1]).split("\n"))
-        m = _ACSL_TABLE.match(code)
+        m = _ACSL_TABLE.match(_rest_code(node))
         if m is None:
             return None
         name, sizes, body = m.group(1).upper(), [int(k) for k in m.group(2).split(",")], \
