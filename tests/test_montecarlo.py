@@ -292,3 +292,105 @@ def test_an_output_into_the_listing_itself_is_refused(decay, capsys):
     assert decay.read_text() == text
     assert main(["run", str(decay), "--csv", str(decay)]) == 2
     assert decay.read_text() == text
+
+
+DOSING = """PROGRAM repeated oral doses, a drawn elimination rate and volume
+  CONSTANT DOSE = 500.0, KA = 1.2, KE = 0.173, VD = 42.0, TSTOP = {tstop}
+  CINTERVAL CINT = 0.5
+  {timer}
+  INITIAL
+    NDOSE = 0.0
+  END
+  DERIVATIVE
+    AG = INTEG(-KA*AG, 0.0)
+    AB = INTEG(KA*AG - KE*AB, 0.0)
+    CP = AB/VD
+    TERMT(T >= TSTOP, 'end of the regimen')
+  END
+  DISCRETE DOSE
+    INTERVAL DTDOSE = 12.0
+    {dose}
+    NDOSE = NDOSE + 1.0
+  END
+  TERMINAL
+    CLAST = CP
+  END
+  PRINT CP, AG, NDOSE
+END
+"""
+
+
+def dosing(tmp_path, tstop="72.0", timer="", dose="AG = AG + DOSE"):
+    path = tmp_path / "dosing.csl"
+    path.write_text(DOSING.format(tstop=tstop, timer=timer, dose=dose))
+    return path
+
+
+def bateman(t: float, ke: float, vd: float, doses) -> float:
+    """CP of one-compartment oral dosing: one Bateman curve per dose given by t."""
+    ka, d = 1.2, 500.0
+    return sum(d * ka / (ka - ke) * (math.exp(-ke * (t - tk)) - math.exp(-ka * (t - tk)))
+               for tk in doses if tk <= t + 1e-9) / vd
+
+
+def test_acsl_members_dosed_at_the_same_instants_are_integrated_at_once(tmp_path):
+    # The doses come every 12 h for every member and the TERMT is on TIME alone, so
+    # the members share their instants: one stacked integration from dose to dose,
+    # the DISCRETE and TERMINAL code run on the members' columns. Each member is
+    # the superposition of Bateman curves (7 doses, the one at TSTOP given before
+    # the run ends) to the ACSL form's default tolerances (RELERR 1e-11 here: 1e-9
+    # relative allows for 72 h of accumulation), and the same, row by row, as the
+    # members run one by one (both at those tolerances: 1e-9).
+    dists = {"KE": "lognormal(-1.754, 0.25)", "VD": "lognormal(3.738, 0.2)"}
+    path = dosing(tmp_path)
+    together = amilpy.load(path).montecarlo(dists, runs=60, seed=4)
+    alone = amilpy.load(path).montecarlo(dists, runs=60, seed=4, stacked=False)
+    assert "at once" in together.how and "at once" not in alone.how
+    assert np.array_equal(together.times, alone.times)
+    assert together.bands == pytest.approx(alone.bands, rel=1e-9, abs=1e-12)
+    assert together.final == pytest.approx(alone.final, rel=1e-9)
+    assert together.terminal == pytest.approx(alone.terminal, rel=1e-9)
+    assert together.status == alone.status == ["stopped"] * 60
+    assert together.messages == alone.messages
+    doses = [12.0 * k for k in range(7)]
+    for k in (0, 17, 59):
+        ke, vd = together.samples["KE"][k], together.samples["VD"][k]
+        cp, ag, ndose = together.final[k]
+        assert cp == pytest.approx(bateman(72.0, ke, vd, doses), rel=1e-9)
+        assert ndose == 7.0 and together.terminal[k, 0] == cp
+    median = together.band("CP")[together.quantiles.index(50.0)]
+    assert median[-1] == pytest.approx(np.median(together.final[:, 0]), rel=1e-12)
+
+
+@pytest.mark.parametrize("tstop, timer", [
+    ("71.3", ""),  # the TERMT instant between two rows: the run's last row is there
+    ("1000.0", "TIMER FINTIM = 30.25"),  # the end of the run, not a TERMT
+])
+def test_acsl_members_at_once_end_where_each_run_ends(tmp_path, tstop, timer):
+    dists = {"KE": "uniform(0.1, 0.25)"}
+    path = dosing(tmp_path, tstop, timer)
+    together = amilpy.load(path).montecarlo(dists, runs=8, seed=2)
+    alone = amilpy.load(path).montecarlo(dists, runs=8, seed=2, stacked=False)
+    assert "at once" in together.how
+    assert np.array_equal(together.times, alone.times)
+    assert np.array_equal(together.prdel, alone.prdel)
+    assert together.bands == pytest.approx(alone.bands, rel=1e-9, abs=1e-12)
+    assert together.final == pytest.approx(alone.final, rel=1e-9)
+    assert together.status == alone.status and together.messages == alone.messages
+
+
+@pytest.mark.parametrize("dists, tstop, dose, why", [
+    # a drawn stop moves each member's TERMT instant
+    ({"TSTOP": "uniform(60, 70)"}, "72.0", "AG = AG + DOSE", "TERMT"),
+    # a dose that branches on the member's own state cannot run on the columns
+    ({"KE": "uniform(0.1, 0.25)"}, "72.0", "IF (AG .LT. 100.0) AG = AG + DOSE", "branch"),
+])
+def test_acsl_members_with_instants_of_their_own_run_one_by_one(tmp_path, dists, tstop,
+                                                                 dose, why):
+    # The stacked route declines; the runs are the plain ones, still right.
+    path = dosing(tmp_path, tstop, dose=dose)
+    mc = amilpy.load(path).montecarlo(dists, runs=6, seed=3)
+    assert "at once" not in mc.how
+    for k in range(6):
+        run, = amilpy.load(path).run(advice=False, **mc.values_of(k))
+        assert mc.final[k] == pytest.approx([run.final[n] for n in mc.variables], rel=1e-12)

@@ -214,8 +214,6 @@ def run_sets(model, sets: dict[str, np.ndarray], variables: list[str], options, 
         together = run_stacked(model, base, sets, runs, variables, opts)
         if together is not None:
             report(progress, "runs", runs, runs)
-            together.how = (f"the {runs} runs integrated at once (none switches on its "
-                            "own): one LSODA run over every member's states")
             return together
     opts, how = ensemble_route(model, base, opts)
     reduce = partial(member_of, tuple(variables))

@@ -3,13 +3,20 @@ the generated right-hand side evaluated over a member axis (NumPy), one LSODA
 integration (odeint) for all of them, as a competent user would write it by hand
 when the members share their switching instants.
 
-Which ensembles (`why_not`): a listing in CSMP form on a variable-step route,
-with nothing that makes a member's run its own -- no watched switching surface
-(a member would switch at its own instants), no memory function, delay, random
-draw or weather, no breakpoints, resets or settled states, no TERMINAL section,
-no FINISH -- and members whose true constants (CONST, TIMER and what INITIAL
-works out from them) are the same, so that one build serves them all. Anything
-else runs member by member (`montecarlo.run_sets`), as before.
+Which ensembles (`why_not`): a listing on a variable-step route with nothing that
+makes a member's run its own -- no watched switching surface (a member would
+switch at its own instants), no memory function, delay, random draw or weather,
+no breakpoints, resets or settled states, no FINISH -- and members whose true
+constants (CONST, TIMER and what INITIAL works out from them) are the same, so
+that one build serves them all. In CSMP form, no TERMINAL section either. In ACSL
+form (`run_acsl`) the members share their instants when their DISCRETE sections
+run every INTERVAL (the same for every member), their TERMTs are on TIME alone
+(the same instant for every member) and there are no DYNAMIC statements or
+SCHEDULEs: the stacked system is integrated from one such instant to the next, and
+the DISCRETE and TERMINAL code runs there on the members' columns (plain
+arithmetic runs elementwise; code that branches on a member's value raises, and
+the members then run one by one). Anything else runs member by member
+(`montecarlo.run_sets`), as before.
 
 Accuracy. LSODA's error test takes the weighted max-norm over every component
 (ODEPACK's DVMNRM), so each member's local error is held to the tolerances it
@@ -30,27 +37,38 @@ from ..result import Status
 from .members import Batch, Member
 
 MXSTEP = 500_000  # odeint's steps per output interval (its default 500 is too few here)
+# states in one stacked integration: LSODA's work array holds their square for its
+# stiff method (32 MB here), allocated by every call whether it turns stiff or not
+MAX_EQUATIONS = 2048
 
 
 def why_not(model, code, plan, opts) -> str | None:
     """Why this ensemble cannot be integrated at once (None: it can)."""
     ir = model.ir
-    if ir.acsl is not None:
-        return "an ACSL program runs its own code between the steps"
+    acsl = ir.acsl
     if plan.step_point or not plan.route.uses_tolerances:
         return "a fixed-step route"
-    if code.watched:
+    if any(not _termt_on_time(code, w) for w in plan.watched) or \
+            (acsl is None and code.watched):
         return "the members switch at their own instants"
     if ir.units:
         return "statements (IF blocks, loops) run one row at a time"
-    if code.z0 or ir.memories or ir.weather or code.sample is not None or \
-            code.memory_trains or code.seen_times:
+    if code.z0[:len(code.z0) - len(code.kept)] or ir.memories or ir.weather or \
+            code.sample is not None or code.memory_trains or code.seen_times:
         return "memory functions, delays, random draws or weather"
-    if plan.breakpoints or plan.resets or code.settle is not None or code.impulses or \
-            code.trains:
+    if set(plan.breakpoints) - set(plan.roots.values()) or plan.resets or \
+            code.settle is not None or code.impulses or code.trains:
         return "breakpoints, resets or settled states"
-    if ir.terminal or ir.terminal_code:
+    if acsl is None and (ir.terminal or ir.terminal_code):
         return "a TERMINAL section (it runs per member)"
+    if acsl is not None:
+        if acsl.dynamic.body:
+            return "DYNAMIC statements (they run at every CINT instant)"
+        if acsl.crossings:
+            return "a SCHEDULE at a crossing (each member crosses at its own instant)"
+        if acsl.cint_name in code.kept or any(
+                d.interval in code.kept for d in acsl.discretes.values()):
+            return "CINT or an INTERVAL assigned during the run"
     if opts.extrema:
         return "extremes located between the rows (per member)"
     if code.binder is None:
@@ -58,19 +76,47 @@ def why_not(model, code, plan, opts) -> str | None:
     return None
 
 
+def _termt_on_time(code, w) -> bool:
+    """A TERMT on TIME alone (an ACSL program's end): every member that shares its
+    root stops at the same instant."""
+    from ..run.plan import Purpose
+
+    return w.purpose is Purpose.TERMT and w.surface in code.affine_time
+
+
 def run_stacked(model, base, sets: dict[str, np.ndarray], runs: int, variables: list[str],
                 opts) -> Batch | None:
     """The ensemble at once (see the module): `runs` runs of spec `base` with `sets`'
     values, `opts` their options; None when it cannot be (`why_not`) or LSODA fails on
-    the stacked system (the members then run one by one)."""
+    the stacked system (the members then run one by one). At most MAX_EQUATIONS
+    states in one integration: larger ensembles go in parts of that size."""
+    if runs < 2:
+        return None
+    route = run_acsl if model.ir.acsl is not None else _run_csmp
+    part = max(1, MAX_EQUATIONS // max(len(model.ir.states), 1))
+    members: list = []
+    for lo in range(0, runs, part):
+        got = route(model, base, {n: v[lo:lo + part] for n, v in sets.items()},
+                    min(part, runs - lo), variables, opts)
+        if got is None:
+            return None
+        members += got.members
+    between = " from one DISCRETE instant to the next" if model.ir.acsl is not None else ""
+    parts = f", in {math.ceil(runs / part)} parts of {part}" if runs > part else ""
+    return Batch(members, {}, how=f"the {runs} runs integrated at once (none switches on "
+                 f"its own): LSODA over every member's states{between}{parts}")
+
+
+def _run_csmp(model, base, sets: dict[str, np.ndarray], runs: int, variables: list[str],
+              opts) -> Batch | None:
+    """`run_stacked` for a listing in CSMP form: one LSODA integration over the
+    output grid."""
     from scipy.integrate import odeint
 
     from ..codegen.consts import evaluate_constant, initial_values
     from ..run import prepare
     from ..run.plan import reserved_values
 
-    if runs < 2 or model.ir.acsl is not None:
-        return None
     first = base.overridden({n: float(v[0]) for n, v in sets.items()})
     try:
         prepared = prepare(model.ir, first, opts, model.cache)
@@ -94,7 +140,8 @@ def run_stacked(model, base, sets: dict[str, np.ndarray], runs: int, variables: 
             return None  # (a drawn value changes a true constant: another build)
         per_member.append(constants)
     values = {n: np.array([c[n] for c in per_member]) for n in binder.parameters}
-    rhs, out = binder.over_members(values)
+    functions = binder.over_members(values)
+    rhs, out = functions["rhs_vec"], functions["out_vec"]
     states = model.ir.states
     y0 = np.array([[evaluate_constant(model.ir, s.ic, c, base.tables, s.span)
                     for c in per_member] for s in states])  # (states, members)
@@ -138,3 +185,205 @@ def run_stacked(model, base, sets: dict[str, np.ndarray], runs: int, variables: 
         members.append(Member(times, plan.grid.prdel, values_k, tuple(values_k[-1].tolist()),
                               {}, str(Status.FINISHED), ""))
     return Batch(members, {})
+
+
+def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: list[str],
+             opts) -> Batch | None:
+    """`run_stacked` for a program in ACSL form (see the module), in the order one run
+    of it takes (`run.acsl.AcslRun`): at each instant the DISCRETE sections due, in
+    queue order, then the TERMT test, then the row; between instants one LSODA
+    integration of every member's states. None when it cannot be."""
+    import heapq
+
+    from scipy.integrate import odeint
+
+    from ..codegen.consts import evaluate_constant
+    from ..outcome import message
+    from ..run.acsl import (
+        initial_reads,
+        initial_start,
+        prepare_acsl,
+        run_initial,
+        run_values,
+        termination,
+    )
+    from ..run.code import Calls
+    from ..run.prepare import Cache
+
+    ir = model.ir
+    acsl = ir.acsl
+    first = base.overridden({n: float(v[0]) for n, v in sets.items()})
+    try:
+        prepared = prepare_acsl(ir, first, opts, model.cache)
+    except AmilError:
+        return None  # (the first member's fault: one by one, with its message)
+    code, plan = prepared.code, prepared.plan
+    if why_not(model, code, plan, opts) is not None or prepared.schedules or \
+            prepared.stop is not None or prepared.unbounded:
+        return None
+    binder = code.binder
+    fixed = {k: v for k, v in code.constants.items() if k not in binder.parameters}
+    # what sets the instants: the same for every member, or one by one
+    shared = [acsl.cint_name] + [d.interval for d in acsl.discretes.values() if d.interval]
+    scratch = Cache()  # (INITIAL per member: kept out of the model's own cache)
+    # INITIAL once, where it reads no drawn value (its values are every member's)
+    once = None if set(sets) & initial_reads(ir) else run_initial(ir, first, scratch)
+    members: list[tuple[dict[str, float], dict[str, float]]] = []
+    priors0 = None
+    with np.errstate(all="ignore"):
+        for k in range(runs):
+            spec = base.overridden({n: float(v[k]) for n, v in sets.items()})
+            try:
+                start, values, schedules, stop = run_initial(ir, spec, scratch) \
+                    if once is None else (initial_start(spec), *once[1:])
+            except (ArithmeticError, ValueError):
+                return None  # (a member whose INITIAL faults: one by one, with its message)
+            constants, kept, priors = run_values(ir, start, values)
+            priors0 = priors if priors0 is None else priors0
+            if schedules or stop is not None or priors != priors0 or any(
+                    constants.get(n) != v for n, v in fixed.items()
+                    if not (isinstance(v, float) and math.isnan(v))) or any(
+                    constants.get(n) != code.constants.get(n) for n in shared):
+                return None  # (another build, or instants of its own)
+            members.append((constants, kept))
+    values = {n: np.array([c[n] for c, _ in members]) for n in binder.parameters}
+    functions = binder.over_members(values)
+    rhs, out, surf = functions["rhs_vec"], functions["out_vec"], functions["surf_vec"]
+    states = ir.states
+    n = len(states)
+    try:
+        y = np.array([[evaluate_constant(ir, s.ic, {**c, **kept}, base.tables, s.span)
+                       for c, kept in members] for s in states], dtype=float).reshape(n, runs)
+    except (ArithmeticError, ValueError, KeyError):
+        return None
+    z = [np.array([kept[name] for _, kept in members]) for name in code.kept]
+    m = list(code.modes_literal(plan.t0, list(code.y0), [0.0] * len(plan.watched),
+                                list(code.z0)))
+
+    def columns(x) -> np.ndarray:
+        return np.broadcast_to(np.asarray(x, dtype=float), (runs,)).copy()
+
+    # the TERMTs on TIME: every member's root on the same float as the first's
+    stop_at, stop_what = math.inf, ""
+    for k, w in enumerate(plan.watched):
+        root = plan.roots.get(k)
+        probes = (math.nextafter(root, -math.inf), root) if root is not None else \
+            (plan.t0, plan.fintim)
+        with np.errstate(all="ignore"):
+            signs = [np.sign(columns(surf(t, list(y), m, z)[k])) for t in probes]
+        if any(not np.all(sg == sg[0]) for sg in signs):
+            return None  # (a drawn value moves the TERMT's instant)
+        if root is not None and root < stop_at:
+            stop_at, stop_what = root, w.description
+    nw = len(code.kept)
+    fns = {d.name: functions[f"discrete_{k}"] for k, d in enumerate(acsl.discretes.values())}
+    gaps = {d.name: float(code.constants.get(d.interval, 0.0))
+            for d in acsl.discretes.values() if d.interval}
+    queue: list[tuple[float, int, str]] = []
+    order = 0
+    for name in fns:
+        if name in gaps:
+            queue.append((plan.t0, order, name))
+            order += 1
+    rtol = np.repeat(np.broadcast_to(plan.tol.rtol, (n,)), runs)
+    atol = np.repeat(np.broadcast_to(plan.tol.atol, (n,)), runs)
+    hmax = plan.max_step if math.isfinite(plan.max_step) else 0.0
+    times = plan.grid.times
+    segments: list[tuple[np.ndarray, np.ndarray, list[np.ndarray]]] = []
+    t, i, events, stopped = plan.t0, 0, 0, None
+
+    def same(a: float, b: float) -> bool:
+        return math.isfinite(b) and abs(a - b) <= 1e-12 * max(abs(b), 1.0)
+
+    def f(yy, tt):
+        d = rhs(tt, list(yy.reshape(n, runs)), m, z)
+        return np.concatenate([np.broadcast_to(np.asarray(v, dtype=float), (runs,))
+                               for v in d])
+
+    try:
+        with np.errstate(all="ignore"):
+            while True:
+                at_end = t >= plan.fintim or same(t, plan.fintim)
+                while queue and not at_end and stopped is None and \
+                        queue[0][0] <= t + 1e-12 * max(abs(t), 1.0):
+                    _, _, section = heapq.heappop(queue)
+                    calls = Calls()
+                    ys, zs, _ = fns[section](t, list(y), m, list(z), calls)
+                    y = np.array([columns(v) for v in ys]).reshape(n, runs)
+                    z = [columns(v) for v in zs[len(zs) - nw:]]
+                    if calls.schedules:
+                        return None
+                    if calls.termts:
+                        stopped = termination(acsl.termts[calls.termts[0]])
+                    events += 1
+                    if events > opts.max_events:
+                        return None  # (one by one: each run says so)
+                    if gaps.get(section, 0.0) > 0:
+                        heapq.heappush(queue, (t + gaps[section], order, section))
+                        order += 1
+                if stopped is None and (t >= stop_at or same(t, stop_at)):
+                    stopped = stop_what
+                on_grid = i < len(times) and same(t, times[i])
+                if on_grid or stopped is not None:
+                    segments.append((np.array([t]), y[None].copy(), z))
+                    i += on_grid
+                if stopped is not None or at_end:
+                    break
+                t_next = min(queue[0][0] if queue else math.inf, stop_at, plan.fintim)
+                j = i
+                while j < len(times) and times[j] < t_next and not same(times[j], t_next):
+                    j += 1
+                ts = np.concatenate([[t], times[i:j], [t_next]])
+                sol, info = odeint(f, y.reshape(-1), ts, rtol=rtol, atol=atol,
+                                   mxstep=MXSTEP, hmax=hmax, full_output=True)
+                if info.get("message") != "Integration successful." or \
+                        not np.all(np.isfinite(sol)):
+                    return None
+                ys = sol.reshape(len(ts), n, runs)
+                if j > i:
+                    segments.append((ts[1:-1], ys[1:-1], z))
+                i, t, y = j, float(t_next), ys[-1].copy()
+            terminal: dict[str, np.ndarray] = {}
+            yt, zt = list(y), list(z)
+            for k, c in enumerate(acsl.terminal):
+                yt, zt, assigned = functions[f"terminal_{k}"](t, yt, m, zt, Calls())
+                terminal.update({name: columns(v) for name, v in
+                                 zip(c.assigned, assigned, strict=True)})
+            outputs = []
+            for ts, ys, zs in segments:
+                outs = out(ts[:, None], [ys[:, s, :] for s in range(n)], m, zs)
+                outputs.append([np.broadcast_to(np.asarray(v, dtype=float), (len(ts), runs))
+                                for v in outs])
+    except (ArithmeticError, ValueError, TypeError, IndexError):
+        # (a branch on a member's value, a function with no elementwise form, a fault:
+        # the members one by one, where a fault is located and said)
+        return None
+    rows = np.concatenate([ts for ts, _, _ in segments])
+    index = {name: j for j, name in enumerate(code.out_names)}
+    columns_of = {name: np.concatenate([o[index[name]] for o in outputs])
+                  for name in variables if name in index}
+    if any(not np.all(np.isfinite(v)) for v in columns_of.values()):
+        return None
+    every = np.ones(rows.size, bool)
+    status = Status.STOPPED if stopped is not None else Status.FINISHED
+    said = message(Status.STOPPED, t=t, what=stopped) if stopped is not None else ""
+    out_members = []
+    for k, (constants, _) in enumerate(members):
+        cols = [columns_of[name][:, k] if name in columns_of else
+                np.full(rows.size, constants.get(name, math.nan)) for name in variables]
+        values_k = np.column_stack(cols) if cols else np.empty((rows.size, 0))
+        ends = {name: float(v[k]) for name, v in terminal.items()}
+        final = tuple(ends.get(name, float(values_k[-1, j]) if rows.size else math.nan)
+                      for j, name in enumerate(variables))
+        out_members.append(Member(rows, every & _prdel(plan, rows), values_k, final, ends,
+                                  str(status), said))
+    return Batch(out_members, {})
+
+
+def _prdel(plan, rows: np.ndarray) -> np.ndarray:
+    """Which rows are the PRDEL rows of the run's grid (an ACSL run's are every CINT)."""
+    grid = plan.grid
+    keep = np.isin(rows, grid.times[grid.prdel]) if grid.times.size else \
+        np.zeros(rows.size, bool)
+    keep[-1:] = True
+    return keep

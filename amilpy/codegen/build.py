@@ -493,11 +493,14 @@ class Compiler:
             self._source = py.unparse(self.module)
         return self._source
 
-    def over_members(self, values: dict[str, object]) -> tuple[Callable, Callable]:
-        """(rhs, out) over NumPy columns whose parameters are arrays as well, an element
-        per member of an ensemble integrated at once (`batch.stacked`): the generated
-        right-hand side made elementwise (compiled once per build) and the outputs'
-        own elementwise copy, run with `values` (every parameter's array)."""
+    def over_members(self, values: dict[str, object]) -> dict[str, Callable]:
+        """The generated functions over NumPy columns whose parameters are arrays as
+        well, an element per member of an ensemble integrated at once
+        (`batch.stacked`), by name: "rhs_vec" (the right-hand side made elementwise,
+        compiled once per build), "out_vec" and "surf_vec" (their own elementwise
+        copies) and the written-order sections ("discrete_0", "terminal_0", ...: plain
+        arithmetic runs on columns; a branch on a column raises ValueError), run with
+        `values` (every parameter's array)."""
         if "rhs_vec" not in self.shared:
             rhs = next(f for f in self.module.body if getattr(f, "name", "") == "rhs")
             module = py.Module(body=[vectorised(rhs, "rhs_vec")], type_ignores=[])
@@ -509,7 +512,7 @@ class Compiler:
         vector.update({parameter(n): v for n, v in values.items()})
         exec(self.code, vector)  # noqa: S102 - compiler-built tree, closed namespace
         exec(self.shared["rhs_vec"], vector)  # noqa: S102 - the same, elementwise
-        return vector["rhs_vec"], vector["out_vec"]
+        return vector
 
     def bind(self, constants: dict[str, float]) -> ModelCode:
         """The built code for one run's constants: executed with its parameters' values

@@ -79,11 +79,17 @@ def prepare_acsl(model: ir.Model, spec: ir.RunSpec, opts: Options | None = None,
     return before_run(model, lambda: _prepare(model, spec, opts, cache), code_fault)
 
 
-def _initial(model: ir.Model, spec: ir.RunSpec, cache: Cache):
-    """INITIAL, run once: (values of the names it assigns and of CINT and the
-    INTERVALs, what it scheduled, the first TERMT of it that holds)."""
+def initial_start(spec: ir.RunSpec) -> dict[str, float]:
+    """The values INITIAL starts from: the data, PI and the TIMER values."""
+    return {**spec.data, "PI": math.pi, **spec.timer}
+
+
+def run_initial(model: ir.Model, spec: ir.RunSpec, cache: Cache):
+    """INITIAL, run once: (the data and TIMER values it started from, values of the
+    names it assigns and of CINT and the INTERVALs, what it scheduled, the first TERMT
+    of it that holds)."""
     acsl = model.acsl
-    base = {**spec.data, "PI": math.pi, **spec.timer}
+    base = initial_start(spec)
     tables = spec.tables
     starts = {acsl.cint_name: evaluate_constant(model, acsl.cint, base, tables, None)}
     for d in acsl.discretes.values():
@@ -99,10 +105,24 @@ def _initial(model: ir.Model, spec: ir.RunSpec, cache: Cache):
     return base, values, calls.schedules, stop
 
 
-@no_collection()
-def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> AcslPrepared:
+def initial_reads(model: ir.Model) -> frozenset[str]:
+    """Every name `run_initial`'s values depend on: what INITIAL and the CINT and
+    INTERVAL values read (a run whose data differ elsewhere gets the same values)."""
+    from ..parse.syntax import Name, walk
+
     acsl = model.acsl
-    base, values, schedules, stop = _initial(model, spec, cache)
+    roots = [st for code in acsl.initial for st in code.body] + [acsl.cint] + [
+        d.interval_value for d in acsl.discretes.values() if d.interval_value is not None]
+    return frozenset(node.name for root in roots for node in walk(root)
+                     if isinstance(node, Name))
+
+
+def run_values(model: ir.Model, base: dict[str, float], values: dict[str, float]
+               ) -> tuple[dict[str, float], dict[str, float], dict[str, float]]:
+    """From INITIAL's start and its values (`run_initial`): the run's constants, the
+    values written-order code keeps between instants (z slots) and INITIAL's values
+    of the names DERIVATIVE assigns again."""
+    acsl = model.acsl
     # what DERIVATIVE computes (its equations and states) is no constant, even where
     # INITIAL gave it a value
     derived = {e.target for e in model.dynamic} | {s.name for s in model.states}
@@ -110,6 +130,14 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
     constants = {k: v for k, v in {**base, **values}.items()
                  if k not in kept and k not in derived}
     priors = {n: values[n] for n in acsl.priors if n in values}
+    return constants, kept, priors
+
+
+@no_collection()
+def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> AcslPrepared:
+    acsl = model.acsl
+    base, values, schedules, stop = run_initial(model, spec, cache)
+    constants, kept, priors = run_values(model, base, values)
     cint = kept.get(acsl.cint_name, constants.get(acsl.cint_name))
     if not (cint is not None and math.isfinite(cint) and cint > 0):
         raise AmilError(f"the output interval {acsl.cint_name} = {cint} must be positive",
@@ -416,4 +444,5 @@ class AcslRun(_Run):
         return self.stopped
 
 
-__all__ = ["AcslPrepared", "AcslRun", "Grid", "prepare_acsl"]
+__all__ = ["AcslPrepared", "AcslRun", "Grid", "initial_reads", "initial_start", "prepare_acsl",
+           "run_initial", "run_values"]
