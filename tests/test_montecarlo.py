@@ -379,18 +379,95 @@ def test_acsl_members_at_once_end_where_each_run_ends(tmp_path, tstop, timer):
     assert together.status == alone.status and together.messages == alone.messages
 
 
-@pytest.mark.parametrize("dists, tstop, dose, why", [
+def test_acsl_code_that_branches_on_a_members_value_runs_member_by_member(tmp_path):
+    # A dose skipped while the body holds more than 300 mg: the branch cannot run on
+    # the members' columns, so the DISCRETE section runs member by member (each
+    # with its own functions) at the instants they all share, between which the
+    # members are still integrated at once. Some members skip doses, some do not.
+    dists = {"KE": "uniform(0.05, 0.3)"}
+    path = dosing(tmp_path, dose="IF (AB .LT. 300.0) AG = AG + DOSE")
+    together = amilpy.load(path).montecarlo(dists, runs=10, seed=3)
+    alone = amilpy.load(path).montecarlo(dists, runs=10, seed=3, stacked=False)
+    assert "at once" in together.how
+    ndose = together.final[:, together.variables.index("NDOSE")]
+    assert together.bands == pytest.approx(alone.bands, rel=1e-9, abs=1e-12)
+    assert together.final == pytest.approx(alone.final, rel=1e-9)
+    assert len(set(ndose)) == 1 and ndose[0] == 7.0  # (NDOSE counts the section's runs)
+    ag = together.final[:, together.variables.index("AG")]
+    assert np.any(ag < 1.0) and np.any(ag > 400.0)  # (the dose at 72 h skipped or given)
+
+
+@pytest.mark.parametrize("dists, where, instead", [
     # a drawn stop moves each member's TERMT instant
-    ({"TSTOP": "uniform(60, 70)"}, "72.0", "AG = AG + DOSE", "TERMT"),
-    # a dose that branches on the member's own state cannot run on the columns
-    ({"KE": "uniform(0.1, 0.25)"}, "72.0", "IF (AG .LT. 100.0) AG = AG + DOSE", "branch"),
+    ({"TSTOP": "uniform(60, 70)"}, "", ""),
+    # an extra dose SCHEDULEd by INITIAL at an instant of each member's own
+    ({"KE": "uniform(0.1, 0.25)"}, "NDOSE = 0.0", "NDOSE = 0.0\n    SCHEDULE DOSE .AT. 40.0*KE"),
 ])
-def test_acsl_members_with_instants_of_their_own_run_one_by_one(tmp_path, dists, tstop,
-                                                                 dose, why):
+def test_acsl_members_with_instants_of_their_own_run_one_by_one(tmp_path, dists, where,
+                                                                 instead):
     # The stacked route declines; the runs are the plain ones, still right.
-    path = dosing(tmp_path, tstop, dose=dose)
+    path = dosing(tmp_path)
+    path.write_text(path.read_text().replace(where, instead) if where else path.read_text())
     mc = amilpy.load(path).montecarlo(dists, runs=6, seed=3)
     assert "at once" not in mc.how
     for k in range(6):
         run, = amilpy.load(path).run(advice=False, **mc.values_of(k))
         assert mc.final[k] == pytest.approx([run.final[n] for n in mc.variables], rel=1e-12)
+
+
+def test_a_large_ensemble_is_integrated_in_parts(tmp_path, monkeypatch):
+    # LSODA allocates the square of its equations (its stiff method's matrix): an
+    # ensemble of more states than MAX_EQUATIONS goes in parts, each held to the
+    # same tolerances (1e-9 relative, the default RELERR 1e-11 over 72 h).
+    from amilpy.batch import stacked
+
+    dists = {"KE": "uniform(0.1, 0.25)"}
+    path = dosing(tmp_path)
+    whole = amilpy.load(path).montecarlo(dists, runs=12, seed=5)
+    monkeypatch.setattr(stacked, "MAX_EQUATIONS", 10)  # 5 members of 2 states a part
+    parts = amilpy.load(path).montecarlo(dists, runs=12, seed=5)
+    assert "in 3 parts of 5" in parts.how and "parts" not in whole.how
+    assert parts.final == pytest.approx(whole.final, rel=1e-9)
+    assert parts.bands == pytest.approx(whole.bands, rel=1e-9, abs=1e-12)
+
+
+CLEARANCE = """PROGRAM elimination through two FUNCTIONs
+  CONSTANT VMAX = 8.0, KM = 2.0, VD = 10.0, TSTOP = 24.0
+  CINTERVAL CINT = 1.0
+  FUNCTION R = MM(C, V, K)
+    R = V*C/(K + C)
+  END
+  FUNCTION F = FLOOR0(X)
+    IF (X < 0.0) THEN
+      F = 0.0
+    ELSE
+      F = X
+    END IF
+  END
+  DERIVATIVE
+    A = INTEG(-MM(FLOOR0(A/VD), VMAX, KM), 100.0)
+    TERMT(T >= TSTOP)
+  END
+  PRINT A
+END
+"""
+
+
+def test_an_ensembles_functions_run_on_its_columns(tmp_path):
+    # MM is plain arithmetic: it runs on the members' columns as written; FLOOR0
+    # branches on its argument (an IF statement), so on columns it runs element by
+    # element. Either way the members, integrated at once, are the runs one by one
+    # (to 1e-9: RELERR 1e-11 over 24 h), and each member's A is the implicit
+    # closed form of Michaelis-Menten elimination:
+    # VD (C0 - C) + KM VD ln(C0 / C) = VMAX t, with C = A / VD.
+    path = tmp_path / "clearance.csl"
+    path.write_text(CLEARANCE)
+    dists = {"VMAX": "uniform(6, 10)"}
+    together = amilpy.load(path).montecarlo(dists, runs=12, seed=7)
+    alone = amilpy.load(path).montecarlo(dists, runs=12, seed=7, stacked=False)
+    assert "at once" in together.how
+    assert together.bands == pytest.approx(alone.bands, rel=1e-9, abs=1e-12)
+    for k in range(12):
+        c, c0, vmax = together.final[k, 0] / 10.0, 10.0, together.samples["VMAX"][k]
+        assert 10.0 * (c0 - c) + 2.0 * 10.0 * math.log(c0 / c) == \
+            pytest.approx(vmax * 24.0, rel=1e-9)

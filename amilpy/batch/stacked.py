@@ -37,9 +37,9 @@ from ..result import Status
 from .members import Batch, Member
 
 MXSTEP = 500_000  # odeint's steps per output interval (its default 500 is too few here)
-# states in one stacked integration: LSODA's work array holds their square for its
-# stiff method (32 MB here), allocated by every call whether it turns stiff or not
-MAX_EQUATIONS = 2048
+# states in one stacked integration: LSODA's work array holds 3n + 10 values a state
+# for n states a member (its banded Jacobian), allocated by every call
+MAX_EQUATIONS = 16_384
 
 
 def why_not(model, code, plan, opts) -> str | None:
@@ -111,8 +111,6 @@ def _run_csmp(model, base, sets: dict[str, np.ndarray], runs: int, variables: li
               opts) -> Batch | None:
     """`run_stacked` for a listing in CSMP form: one LSODA integration over the
     output grid."""
-    from scipy.integrate import odeint
-
     from ..codegen.consts import evaluate_constant, initial_values
     from ..run import prepare
     from ..run.plan import reserved_values
@@ -139,37 +137,23 @@ def _run_csmp(model, base, sets: dict[str, np.ndarray], runs: int, variables: li
                if not (isinstance(v, float) and math.isnan(v))):
             return None  # (a drawn value changes a true constant: another build)
         per_member.append(constants)
-    values = {n: np.array([c[n] for c in per_member]) for n in binder.parameters}
+    values = {n: shared_or_columns([c[n] for c in per_member]) for n in binder.parameters}
     functions = binder.over_members(values)
     rhs, out = functions["rhs_vec"], functions["out_vec"]
     states = model.ir.states
     y0 = np.array([[evaluate_constant(model.ir, s.ic, c, base.tables, s.span)
                     for c in per_member] for s in states])  # (states, members)
     n = len(states)
-    shape = (n, runs)
-
-    def f(y, t):
-        d = rhs(t, list(y.reshape(shape)), [], [])
-        return np.concatenate([np.broadcast_to(np.asarray(v, dtype=float), (runs,))
-                               for v in d])
-
-    def per_state(x) -> np.ndarray:
-        return np.repeat(np.broadcast_to(np.asarray(x, dtype=float), (n,)), runs)
-
     times = plan.grid.times
     try:
         with np.errstate(all="ignore"):
-            sol, info = odeint(f, y0.reshape(-1), times, rtol=per_state(plan.tol.rtol),
-                               atol=per_state(plan.tol.atol), mxstep=MXSTEP,
-                               hmax=plan.max_step if math.isfinite(plan.max_step) else 0.0,
-                               full_output=True)
-            ys = sol.reshape(len(times), n, runs)  # (times, states, members)
+            ys = lsoda(lambda t, cols: rhs(t, cols, [], []), y0, times, plan)
+            if ys is None:
+                return None
             outs = out(times[:, None], [ys[:, i, :] for i in range(n)], [], [])
     except (ArithmeticError, ValueError, TypeError):
         # (a function with no elementwise form, a fault: the members one by one, where
         # a fault is located and said)
-        return None
-    if info.get("message") != "Integration successful." or not np.all(np.isfinite(sol)):
         return None
     index = {name: i for i, name in enumerate(code.out_names)}
     members = []
@@ -195,8 +179,6 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
     integration of every member's states. None when it cannot be."""
     import heapq
 
-    from scipy.integrate import odeint
-
     from ..codegen.consts import evaluate_constant
     from ..outcome import message
     from ..run.acsl import (
@@ -218,8 +200,8 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
     except AmilError:
         return None  # (the first member's fault: one by one, with its message)
     code, plan = prepared.code, prepared.plan
-    if why_not(model, code, plan, opts) is not None or prepared.schedules or \
-            prepared.stop is not None or prepared.unbounded:
+    if why_not(model, code, plan, opts) is not None or prepared.stop is not None or \
+            prepared.unbounded:
         return None
     binder = code.binder
     fixed = {k: v for k, v in code.constants.items() if k not in binder.parameters}
@@ -240,13 +222,13 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
                 return None  # (a member whose INITIAL faults: one by one, with its message)
             constants, kept, priors = run_values(ir, start, values)
             priors0 = priors if priors0 is None else priors0
-            if schedules or stop is not None or priors != priors0 or any(
+            if schedules != prepared.schedules or stop is not None or priors != priors0 or any(
                     constants.get(n) != v for n, v in fixed.items()
                     if not (isinstance(v, float) and math.isnan(v))) or any(
                     constants.get(n) != code.constants.get(n) for n in shared):
                 return None  # (another build, or instants of its own)
             members.append((constants, kept))
-    values = {n: np.array([c[n] for c, _ in members]) for n in binder.parameters}
+    values = {n: shared_or_columns([c[n] for c, _ in members]) for n in binder.parameters}
     functions = binder.over_members(values)
     rhs, out, surf = functions["rhs_vec"], functions["out_vec"], functions["surf_vec"]
     states = ir.states
@@ -276,7 +258,38 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
         if root is not None and root < stop_at:
             stop_at, stop_what = root, w.description
     nw = len(code.kept)
-    fns = {d.name: functions[f"discrete_{k}"] for k, d in enumerate(acsl.discretes.values())}
+    fns = {d.name: f"discrete_{k}" for k, d in enumerate(acsl.discretes.values())}
+    bound: dict[int, dict] = {}
+
+    def section(name: str, t: float, y: np.ndarray, z: list[np.ndarray]):
+        """Written-order code `name` on every member: (states, kept, values, calls).
+        On the columns where it runs there (plain arithmetic), else member by member
+        with each member's own functions; members whose code SCHEDULEs or TERMTs
+        differently have instants of their own."""
+        calls = Calls()
+        try:
+            ys, zs, vals = functions[name](t, list(y), m, list(z), calls)
+            return (np.array([columns(v) for v in ys]).reshape(n, runs),
+                    [columns(v) for v in zs[len(zs) - nw:]], [columns(v) for v in vals], calls)
+        except (ValueError, TypeError):
+            pass  # (a branch on a member's own value: member by member)
+        outs = []
+        for k in range(runs):
+            if k not in bound:
+                bound[k] = binder.bind(members[k][0]).code
+            ck = Calls()
+            outs.append((*bound[k][name][1](t, y[:, k].tolist(), m, [float(v[k]) for v in z],
+                                            ck), ck))
+        calls = outs[0][3]
+        if any(o[3].schedules != calls.schedules or o[3].termts != calls.termts for o in outs):
+            raise _OwnInstants
+        return (np.array([[o[0][s] for o in outs] for s in range(n)], dtype=float).reshape(
+                    n, runs),
+                [np.array([o[1][len(o[1]) - nw + j] for o in outs], dtype=float)
+                 for j in range(nw)],
+                [np.array([o[2][j] for o in outs], dtype=float) for j in range(len(outs[0][2]))],
+                calls)
+
     gaps = {d.name: float(code.constants.get(d.interval, 0.0))
             for d in acsl.discretes.values() if d.interval}
     queue: list[tuple[float, int, str]] = []
@@ -285,9 +298,10 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
         if name in gaps:
             queue.append((plan.t0, order, name))
             order += 1
-    rtol = np.repeat(np.broadcast_to(plan.tol.rtol, (n,)), runs)
-    atol = np.repeat(np.broadcast_to(plan.tol.atol, (n,)), runs)
-    hmax = plan.max_step if math.isfinite(plan.max_step) else 0.0
+    for when, name in prepared.schedules:  # (INITIAL's, the same for every member)
+        queue.append((when, order, name))
+        order += 1
+    heapq.heapify(queue)
     times = plan.grid.times
     segments: list[tuple[np.ndarray, np.ndarray, list[np.ndarray]]] = []
     t, i, events, stopped = plan.t0, 0, 0, None
@@ -295,31 +309,26 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
     def same(a: float, b: float) -> bool:
         return math.isfinite(b) and abs(a - b) <= 1e-12 * max(abs(b), 1.0)
 
-    def f(yy, tt):
-        d = rhs(tt, list(yy.reshape(n, runs)), m, z)
-        return np.concatenate([np.broadcast_to(np.asarray(v, dtype=float), (runs,))
-                               for v in d])
-
     try:
         with np.errstate(all="ignore"):
             while True:
                 at_end = t >= plan.fintim or same(t, plan.fintim)
                 while queue and not at_end and stopped is None and \
                         queue[0][0] <= t + 1e-12 * max(abs(t), 1.0):
-                    _, _, section = heapq.heappop(queue)
-                    calls = Calls()
-                    ys, zs, _ = fns[section](t, list(y), m, list(z), calls)
-                    y = np.array([columns(v) for v in ys]).reshape(n, runs)
-                    z = [columns(v) for v in zs[len(zs) - nw:]]
-                    if calls.schedules:
-                        return None
+                    _, _, due = heapq.heappop(queue)
+                    y, z, _, calls = section(fns[due], t, y, z)
+                    for when, name in calls.schedules:  # (a time every member shares)
+                        if when < t - 1e-12 * max(abs(t), 1.0):
+                            return None  # (one by one: the run says it is in the past)
+                        heapq.heappush(queue, (max(when, t), order, name))
+                        order += 1
                     if calls.termts:
                         stopped = termination(acsl.termts[calls.termts[0]])
                     events += 1
                     if events > opts.max_events:
                         return None  # (one by one: each run says so)
-                    if gaps.get(section, 0.0) > 0:
-                        heapq.heappush(queue, (t + gaps[section], order, section))
+                    if gaps.get(due, 0.0) > 0:
+                        heapq.heappush(queue, (t + gaps[due], order, due))
                         order += 1
                 if stopped is None and (t >= stop_at or same(t, stop_at)):
                     stopped = stop_what
@@ -334,29 +343,25 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
                 while j < len(times) and times[j] < t_next and not same(times[j], t_next):
                     j += 1
                 ts = np.concatenate([[t], times[i:j], [t_next]])
-                sol, info = odeint(f, y.reshape(-1), ts, rtol=rtol, atol=atol,
-                                   mxstep=MXSTEP, hmax=hmax, full_output=True)
-                if info.get("message") != "Integration successful." or \
-                        not np.all(np.isfinite(sol)):
+                ys = lsoda(lambda tt, cols, zz=z: rhs(tt, cols, m, zz), y, ts, plan)
+                if ys is None:
                     return None
-                ys = sol.reshape(len(ts), n, runs)
                 if j > i:
                     segments.append((ts[1:-1], ys[1:-1], z))
                 i, t, y = j, float(t_next), ys[-1].copy()
             terminal: dict[str, np.ndarray] = {}
-            yt, zt = list(y), list(z)
+            yt, zt = y, z
             for k, c in enumerate(acsl.terminal):
-                yt, zt, assigned = functions[f"terminal_{k}"](t, yt, m, zt, Calls())
-                terminal.update({name: columns(v) for name, v in
-                                 zip(c.assigned, assigned, strict=True)})
+                yt, zt, assigned, _ = section(f"terminal_{k}", t, yt, zt)
+                terminal.update(zip(c.assigned, assigned, strict=True))
             outputs = []
             for ts, ys, zs in segments:
                 outs = out(ts[:, None], [ys[:, s, :] for s in range(n)], m, zs)
                 outputs.append([np.broadcast_to(np.asarray(v, dtype=float), (len(ts), runs))
                                 for v in outs])
-    except (ArithmeticError, ValueError, TypeError, IndexError):
-        # (a branch on a member's value, a function with no elementwise form, a fault:
-        # the members one by one, where a fault is located and said)
+    except (ArithmeticError, ValueError, TypeError, IndexError, _OwnInstants):
+        # (a function with no elementwise form, a fault, instants of a member's own: the
+        # members one by one, where a fault is located and said)
         return None
     rows = np.concatenate([ts for ts, _, _ in segments])
     index = {name: j for j, name in enumerate(code.out_names)}
@@ -378,6 +383,47 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
         out_members.append(Member(rows, every & _prdel(plan, rows), values_k, final, ends,
                                   str(status), said))
     return Batch(out_members, {})
+
+
+def lsoda(rhs_columns, y0: np.ndarray, ts: np.ndarray, plan) -> np.ndarray | None:
+    """The members' states (n, members) from ts[0] to every instant of `ts`: one
+    odeint over them, each member's states side by side, so that the Jacobian is
+    banded (a member's block on the diagonal, n - 1 bands either side): LSODA's stiff
+    method then differences 2n - 1 evaluations a Jacobian, not n x members, and keeps
+    no square matrix of every state. `rhs_columns(t, columns)` gives the derivatives
+    of n columns (a float where all members share one). (len(ts), n, members), or
+    None where LSODA gives up or a state is not finite."""
+    from scipy.integrate import odeint
+
+    n, runs = y0.shape
+
+    def f(flat: np.ndarray, t: float) -> np.ndarray:
+        d = np.empty((runs, n))
+        for s, v in enumerate(rhs_columns(t, list(flat.reshape(runs, n).T))):
+            d[:, s] = v
+        return d.reshape(-1)
+
+    def per_state(x) -> np.ndarray:
+        return np.tile(np.broadcast_to(np.asarray(x, dtype=float), (n,)), runs)
+
+    hmax = plan.max_step if math.isfinite(plan.max_step) else 0.0
+    sol, info = odeint(f, y0.T.reshape(-1), ts, rtol=per_state(plan.tol.rtol),
+                       atol=per_state(plan.tol.atol), ml=n - 1, mu=n - 1, mxstep=MXSTEP,
+                       hmax=hmax, full_output=True)
+    if info.get("message") != "Integration successful." or not np.all(np.isfinite(sol)):
+        return None
+    return sol.reshape(len(ts), runs, n).transpose(0, 2, 1)
+
+
+class _OwnInstants(Exception):
+    """Members whose written-order code schedules or stops at instants of their own."""
+
+
+def shared_or_columns(values: list[float]) -> float | np.ndarray:
+    """A parameter's values over the members: one float where every member has the
+    same (code that branches on it then runs on the columns), else the column."""
+    column = np.array(values, dtype=float)
+    return float(column[0]) if column.size and np.all(column == column[0]) else column
 
 
 def _prdel(plan, rows: np.ndarray) -> np.ndarray:

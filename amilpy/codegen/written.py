@@ -192,6 +192,19 @@ def compile_code(model: ir.Model, name_: str, codes, constants: dict[str, float]
     fn = scope[name_]
     if result is None:
         fn.amil_names = names  # what the returned values are
+    else:
+        # the same function on NumPy columns (an ensemble's members at once): its
+        # conditional expressions made elementwise, the library's functions NumPy's;
+        # a statement that branches on a column raises ValueError there
+        from ..library import vector_functions
+        from .pytree import vectorised
+
+        elementwise = py.Module(body=[vectorised(module.body[0], name_)], type_ignores=[])
+        vector = {"__builtins__": {}, **{f"_{k}": v for k, v in vector_functions().items()},
+                  **em.tables, STATEMENTS: table}
+        exec(compile(py.fix_missing_locations(elementwise), model.path or model.name,  # noqa: S102
+                     "exec"), vector)
+        fn.elementwise = vector[name_]
     return fn
 
 
@@ -215,7 +228,10 @@ def user_callable(model: ir.Model, func: str, constants: dict[str, float], table
             if any(hasattr(a, "shape") for a in args):
                 import numpy as np
 
-                return np.vectorize(scalar, otypes=[float])(*args)
+                try:
+                    return scalar.elementwise(*args)
+                except (ValueError, TypeError):  # (it branches on a column's value)
+                    return np.vectorize(scalar, otypes=[float])(*args)
             return scalar(*args)
         model.memo[key] = call
     return model.memo[key]
