@@ -113,8 +113,15 @@ def _nan_columns():
 def _quantiles(values: np.ndarray, q) -> np.ndarray:
     if not len(values):
         return np.full((len(q), values.shape[1]), math.nan)
-    with _nan_columns():
-        return np.nanquantile(values, np.asarray(q) / 100.0, axis=0)
+    qs = np.asarray(q) / 100.0
+    # (nanquantile takes a column at a time where any holds a NaN: only those)
+    holes = np.isnan(values).any(axis=0)
+    out = np.empty((len(qs),) + values.shape[1:])
+    out[:, ~holes] = np.quantile(values[:, ~holes], qs, axis=0)
+    if holes.any():
+        with _nan_columns():
+            out[:, holes] = np.nanquantile(values[:, holes], qs, axis=0)
+    return out
 
 
 def parse_quantiles(value) -> tuple[float, ...]:

@@ -147,7 +147,8 @@ def _run_csmp(model, base, sets: dict[str, np.ndarray], runs: int, variables: li
     times = plan.grid.times
     try:
         with np.errstate(all="ignore"):
-            ys = lsoda(lambda t, cols: rhs(t, cols, [], []), y0, times, plan)
+            ys = lsoda(lambda t, cols: rhs(t, cols, [], []), y0, times, plan,
+                       with_branches(members_jacobian(code, values), [], []))
             if ys is None:
                 return None
             outs = out(times[:, None], [ys[:, i, :] for i in range(n)], [], [])
@@ -231,6 +232,7 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
     values = {n: shared_or_columns([c[n] for c, _ in members]) for n in binder.parameters}
     functions = binder.over_members(values)
     rhs, out, surf = functions["rhs_vec"], functions["out_vec"], functions["surf_vec"]
+    jacobian = members_jacobian(code, values)
     states = ir.states
     n = len(states)
     try:
@@ -343,7 +345,8 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
                 while j < len(times) and times[j] < t_next and not same(times[j], t_next):
                     j += 1
                 ts = np.concatenate([[t], times[i:j], [t_next]])
-                ys = lsoda(lambda tt, cols, zz=z: rhs(tt, cols, m, zz), y, ts, plan)
+                ys = lsoda(lambda tt, cols, zz=z: rhs(tt, cols, m, zz), y, ts, plan,
+                           with_branches(jacobian, m, z))
                 if ys is None:
                     return None
                 if j > i:
@@ -385,14 +388,17 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
     return Batch(out_members, {})
 
 
-def lsoda(rhs_columns, y0: np.ndarray, ts: np.ndarray, plan) -> np.ndarray | None:
+def lsoda(rhs_columns, y0: np.ndarray, ts: np.ndarray, plan, jacobian=None
+          ) -> np.ndarray | None:
     """The members' states (n, members) from ts[0] to every instant of `ts`: one
     odeint over them, each member's states side by side, so that the Jacobian is
-    banded (a member's block on the diagonal, n - 1 bands either side): LSODA's stiff
-    method then differences 2n - 1 evaluations a Jacobian, not n x members, and keeps
-    no square matrix of every state. `rhs_columns(t, columns)` gives the derivatives
-    of n columns (a float where all members share one). (len(ts), n, members), or
-    None where LSODA gives up or a state is not finite."""
+    banded (a member's block on the diagonal, n - 1 bands either side) and LSODA's
+    stiff method keeps no square matrix of every state. `rhs_columns(t, columns)`
+    gives the derivatives of n columns (a float where all members share one);
+    `jacobian`, a `codegen.jacobian.ModelJacobian` over columns with its branches
+    and memory bound (`jacobian.variable(t, columns)`), gives the blocks from the
+    model's equations (else LSODA differences 2n - 1 evaluations a Jacobian).
+    (len(ts), n, members), or None where LSODA gives up or a state is not finite."""
     from scipy.integrate import odeint
 
     n, runs = y0.shape
@@ -406,13 +412,67 @@ def lsoda(rhs_columns, y0: np.ndarray, ts: np.ndarray, plan) -> np.ndarray | Non
     def per_state(x) -> np.ndarray:
         return np.tile(np.broadcast_to(np.asarray(x, dtype=float), (n,)), runs)
 
+    options = {}
+    if jacobian is not None:
+        band = (n - 1 + jacobian.rows - jacobian.cols)[:, None]
+        members, cols = np.arange(runs)[None, :], jacobian.cols[:, None]
+        varying = np.flatnonzero(np.isnan(jacobian.constant))
+
+        def dfun(flat: np.ndarray, t: float) -> np.ndarray:
+            entries = np.empty((len(jacobian.constant), runs))
+            entries[:] = jacobian.constant[:, None]
+            if varying.size:
+                entries[varying] = [np.broadcast_to(v, (runs,)) for v in
+                                    jacobian.variable(t, list(flat.reshape(runs, n).T))]
+            if not np.all(np.isfinite(entries)):
+                return by_differences(flat, t)
+            out = np.zeros((2 * n - 1, runs, n))
+            out[band, members, cols] = entries
+            return out.reshape(2 * n - 1, runs * n)
+
+        def by_differences(flat: np.ndarray, t: float) -> np.ndarray:
+            # (state j of every member moved at once: one evaluation gives column j of
+            # every member's block, the members being independent)
+            y = flat.reshape(runs, n)
+            f0 = f(flat, t).reshape(runs, n)
+            out = np.zeros((2 * n - 1, runs, n))
+            for j in range(n):
+                moved = y.copy()
+                h = 1.5e-8 * np.maximum(np.abs(y[:, j]), 1.0)
+                moved[:, j] += h
+                column = (f(moved.reshape(-1), t).reshape(runs, n) - f0) / h[:, None]
+                out[n - 1 + np.arange(n) - j, :, j] = column.T
+            return out.reshape(2 * n - 1, runs * n)
+
+        options["Dfun"] = dfun
     hmax = plan.max_step if math.isfinite(plan.max_step) else 0.0
     sol, info = odeint(f, y0.T.reshape(-1), ts, rtol=per_state(plan.tol.rtol),
                        atol=per_state(plan.tol.atol), ml=n - 1, mu=n - 1, mxstep=MXSTEP,
-                       hmax=hmax, full_output=True)
+                       hmax=hmax, full_output=True, **options)
     if info.get("message") != "Integration successful." or not np.all(np.isfinite(sol)):
         return None
     return sol.reshape(len(ts), runs, n).transpose(0, 2, 1)
+
+
+def members_jacobian(code, values: dict[str, object]):
+    """The model's Jacobian over the members' columns (see `lsoda`); None where the
+    model has none."""
+    from ..codegen.jacobian import over_members
+
+    try:
+        return over_members(code, values)
+    except (NotImplementedError, ArithmeticError, ValueError, TypeError, RecursionError):
+        return None
+
+
+def with_branches(jacobian, m, z):
+    """`members_jacobian`'s with the branches m and memory z it is taken in."""
+    from dataclasses import replace
+
+    if jacobian is None:
+        return None
+    variable = jacobian.variable
+    return replace(jacobian, variable=lambda t, cols: variable(t, cols, m, z))
 
 
 class _OwnInstants(Exception):

@@ -381,6 +381,39 @@ def for_compiled(c) -> ModelJacobian:
     return c.derived["jacobian"]
 
 
+def over_members(c, values: dict[str, object]) -> ModelJacobian:
+    """The Jacobian of a run's generated `rhs` over NumPy columns, an element per
+    member of an ensemble integrated at once (`batch.stacked`): its conditionals
+    made elementwise, the library's functions NumPy's, `values` every parameter's
+    value (a column, or one float all members share). `variable` then gives a
+    column (or a float) per varying entry."""
+    from ..library import vector_functions
+    from .pytree import parameter, vectorised
+
+    if "jacobian" not in c.shared:
+        c.shared["jacobian"] = code(c.module, len(c.state_names))
+    _, n, rows, cols, constant, tree = c.shared["jacobian"]
+    if "jacobian_vec" not in c.shared:
+        module = py.Module(body=[vectorised(tree.body[0], "jac")], type_ignores=[])
+        c.shared["jacobian_vec"] = compile(py.fix_missing_locations(module), "<jacobian>",
+                                           "exec")
+    scope: dict[str, object] = {"__builtins__": {}, "_DIFF": _diff_columns,
+                                "_SGN0": np.sign, **c.tables}
+    scope.update({f"_{k}": v for k, v in vector_functions().items()})
+    scope.update({parameter(name): v for name, v in values.items()})
+    exec(c.shared["jacobian_vec"], scope)  # noqa: S102 - compiler-built tree, closed namespace
+    return ModelJacobian(n, rows, cols, constant, scope["jac"], tree)
+
+
+def _diff_columns(f: Callable, k: int, *args):
+    """`_diff` on columns: each element's central difference."""
+    x = np.asarray(args[k], dtype=float)
+    h = 6.055454e-6 * np.maximum(np.abs(x), 1.0)
+    lo, hi = list(args), list(args)
+    lo[k], hi[k] = x - h, x + h
+    return (np.asarray(f(*hi), dtype=float) - np.asarray(f(*lo), dtype=float)) / (2.0 * h)
+
+
 def _live(body: list[py.stmt]) -> list[py.stmt]:
     """The statements whose names are read later (the values the derivatives need),
     the unpacking of y, m and z, and the return."""
