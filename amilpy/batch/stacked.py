@@ -392,66 +392,78 @@ def lsoda(rhs_columns, y0: np.ndarray, ts: np.ndarray, plan, jacobian=None
           ) -> np.ndarray | None:
     """The members' states (n, members) from ts[0] to every instant of `ts`: one
     odeint over them, each member's states side by side, so that the Jacobian is
-    banded (a member's block on the diagonal, n - 1 bands either side) and LSODA's
-    stiff method keeps no square matrix of every state. `rhs_columns(t, columns)`
-    gives the derivatives of n columns (a float where all members share one);
-    `jacobian`, a `codegen.jacobian.ModelJacobian` over columns with its branches
-    and memory bound (`jacobian.variable(t, columns)`), gives the blocks from the
-    model's equations (else LSODA differences 2n - 1 evaluations a Jacobian).
+    banded (a member's block on the diagonal) and LSODA's stiff method keeps no
+    square matrix of every state. `rhs_columns(t, columns)` gives the derivatives
+    of n columns (a float where all members share one); `jacobian`, a
+    `codegen.jacobian.ModelJacobian` over columns with its branches and memory bound
+    (`jacobian.variable(t, columns)`), gives the blocks from the model's equations,
+    each member's states in the order that narrows its block's band (else LSODA
+    differences 2n - 1 evaluations a Jacobian of n - 1 bands either side).
     (len(ts), n, members), or None where LSODA gives up or a state is not finite."""
     from scipy.integrate import odeint
 
+    from ..steppers.jacobian import narrowest
+
     n, runs = y0.shape
+    if jacobian is not None:
+        order, lower, upper = narrowest(n, jacobian.rows, jacobian.cols, always=True)
+    else:
+        order, lower, upper = np.arange(n), n - 1, n - 1
+    position = np.argsort(order)  # (old state i at new position[i])
 
     def f(flat: np.ndarray, t: float) -> np.ndarray:
         d = np.empty((runs, n))
-        for s, v in enumerate(rhs_columns(t, list(flat.reshape(runs, n).T))):
-            d[:, s] = v
+        columns = list(flat.reshape(runs, n)[:, position].T)
+        for s, v in enumerate(rhs_columns(t, columns)):
+            d[:, position[s]] = v
         return d.reshape(-1)
 
     def per_state(x) -> np.ndarray:
-        return np.tile(np.broadcast_to(np.asarray(x, dtype=float), (n,)), runs)
+        return np.tile(np.broadcast_to(np.asarray(x, dtype=float), (n,))[order], runs)
 
     options = {}
+    width = lower + upper + 1
     if jacobian is not None:
-        band = (n - 1 + jacobian.rows - jacobian.cols)[:, None]
-        members, cols = np.arange(runs)[None, :], jacobian.cols[:, None]
+        band = (upper + position[jacobian.rows] - position[jacobian.cols])[:, None]
+        members, cols = np.arange(runs)[None, :], position[jacobian.cols][:, None]
         varying = np.flatnonzero(np.isnan(jacobian.constant))
 
         def dfun(flat: np.ndarray, t: float) -> np.ndarray:
             entries = np.empty((len(jacobian.constant), runs))
             entries[:] = jacobian.constant[:, None]
             if varying.size:
+                columns = list(flat.reshape(runs, n)[:, position].T)
                 entries[varying] = [np.broadcast_to(v, (runs,)) for v in
-                                    jacobian.variable(t, list(flat.reshape(runs, n).T))]
+                                    jacobian.variable(t, columns)]
             if not np.all(np.isfinite(entries)):
                 return by_differences(flat, t)
-            out = np.zeros((2 * n - 1, runs, n))
+            out = np.zeros((width, runs, n))
             out[band, members, cols] = entries
-            return out.reshape(2 * n - 1, runs * n)
+            return out.reshape(width, runs * n)
 
         def by_differences(flat: np.ndarray, t: float) -> np.ndarray:
             # (state j of every member moved at once: one evaluation gives column j of
             # every member's block, the members being independent)
             y = flat.reshape(runs, n)
             f0 = f(flat, t).reshape(runs, n)
-            out = np.zeros((2 * n - 1, runs, n))
+            out = np.zeros((width, runs, n))
             for j in range(n):
                 moved = y.copy()
                 h = 1.5e-8 * np.maximum(np.abs(y[:, j]), 1.0)
                 moved[:, j] += h
                 column = (f(moved.reshape(-1), t).reshape(runs, n) - f0) / h[:, None]
-                out[n - 1 + np.arange(n) - j, :, j] = column.T
-            return out.reshape(2 * n - 1, runs * n)
+                rows = np.arange(max(j - upper, 0), min(j + lower, n - 1) + 1)
+                out[upper + rows - j, :, j] = column[:, rows].T
+            return out.reshape(width, runs * n)
 
         options["Dfun"] = dfun
     hmax = plan.max_step if math.isfinite(plan.max_step) else 0.0
-    sol, info = odeint(f, y0.T.reshape(-1), ts, rtol=per_state(plan.tol.rtol),
-                       atol=per_state(plan.tol.atol), ml=n - 1, mu=n - 1, mxstep=MXSTEP,
+    sol, info = odeint(f, y0.T[:, order].reshape(-1), ts, rtol=per_state(plan.tol.rtol),
+                       atol=per_state(plan.tol.atol), ml=lower, mu=upper, mxstep=MXSTEP,
                        hmax=hmax, full_output=True, **options)
     if info.get("message") != "Integration successful." or not np.all(np.isfinite(sol)):
         return None
-    return sol.reshape(len(ts), runs, n).transpose(0, 2, 1)
+    return sol.reshape(len(ts), runs, n)[:, :, position].transpose(0, 2, 1)
 
 
 def members_jacobian(code, values: dict[str, object]):

@@ -74,23 +74,10 @@ class Banded:
     (a reverse Cuthill-McKee order when it narrows the band), bands ml, mu."""
 
     def __init__(self, jac: SegmentJacobian) -> None:
-        n = jac.n
-        order = np.arange(n)
-        lower, upper = _band(jac.rows, jac.cols)
-        if n > DENSE_UP_TO and lower + upper + 1 > 8:
-            from scipy.sparse import csr_matrix
-            from scipy.sparse.csgraph import reverse_cuthill_mckee
-
-            pattern = csr_matrix((np.ones(len(jac.rows)), (jac.rows, jac.cols)), shape=(n, n))
-            candidate = np.asarray(reverse_cuthill_mckee((pattern + pattern.T).tocsr(),
-                                                         symmetric_mode=True))
-            position = np.argsort(candidate)
-            lo, up = _band(position[jac.rows], position[jac.cols])
-            if lo + up < lower + upper:
-                order, lower, upper = candidate, lo, up
+        order, lower, upper = narrowest(jac.n, jac.rows, jac.cols)
         self.order = order  # new position k holds old state order[k]
         self.position = np.argsort(order)  # old state i sits at position[i]
-        self.identity = bool(np.all(order == np.arange(n)))
+        self.identity = bool(np.all(order == np.arange(jac.n)))
         self.ml, self.mu = lower, upper
         self.jac = jac
         self._band_rows = upper + self.position[jac.rows] - self.position[jac.cols]
@@ -118,6 +105,28 @@ class Banded:
         out = np.zeros((self.ml + self.mu + 1, self.jac.n))
         out[self._band_rows, self._band_cols] = self.jac.values(t, y)
         return out
+
+
+def narrowest(n: int, rows: np.ndarray, cols: np.ndarray, always: bool = False
+              ) -> tuple[np.ndarray, int, int]:
+    """The states' order that narrows the band of a Jacobian with entries at (rows,
+    cols) -- a reverse Cuthill-McKee order where it is narrower, tried for models
+    above DENSE_UP_TO states (or `always`) -- and its lower and upper bands: new
+    position k holds old state order[k]."""
+    order = np.arange(n)
+    lower, upper = _band(rows, cols)
+    if (always or n > DENSE_UP_TO) and lower + upper + 1 > 8:
+        from scipy.sparse import csr_matrix
+        from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+        pattern = csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
+        candidate = np.asarray(reverse_cuthill_mckee((pattern + pattern.T).tocsr(),
+                                                     symmetric_mode=True))
+        position = np.argsort(candidate)
+        lo, up = _band(position[rows], position[cols])
+        if lo + up < lower + upper:
+            order, lower, upper = candidate, lo, up
+    return order, lower, upper
 
 
 def _band(rows: np.ndarray, cols: np.ndarray) -> tuple[int, int]:
