@@ -1,7 +1,10 @@
-"""An ensemble integrated at once: every member's states stacked into one system,
-the generated right-hand side evaluated over a member axis (NumPy), one LSODA
-integration (odeint) for all of them, as a competent user would write it by hand
-when the members share their switching instants.
+"""An ensemble integrated at once: every member's states side by side in one
+system, the generated right-hand side evaluated over a member axis (NumPy), one
+LSODA integration (odeint) for all of them, as a competent user would write it by
+hand when the members share their switching instants. The system's Jacobian is
+banded (each member's block on its diagonal, the states numbered to narrow the
+block), its blocks from the model's generated Jacobian over the same columns
+(`lsoda`).
 
 Which ensembles (`why_not`): a listing on a variable-step route with nothing that
 makes a member's run its own -- no watched switching surface (a member would
@@ -10,13 +13,13 @@ no breakpoints, resets or settled states, no FINISH -- and members whose true
 constants (CONST, TIMER and what INITIAL works out from them) are the same, so
 that one build serves them all. In CSMP form, no TERMINAL section either. In ACSL
 form (`run_acsl`) the members share their instants when their DISCRETE sections
-run every INTERVAL (the same for every member), their TERMTs are on TIME alone
-(the same instant for every member) and there are no DYNAMIC statements or
-SCHEDULEs: the stacked system is integrated from one such instant to the next, and
-the DISCRETE and TERMINAL code runs there on the members' columns (plain
-arithmetic runs elementwise; code that branches on a member's value raises, and
-the members then run one by one). Anything else runs member by member
-(`montecarlo.run_sets`), as before.
+run every INTERVAL or where SCHEDULE puts them (the same for every member), their
+TERMTs are on TIME alone (the same instant for every member) and there are no
+DYNAMIC statements or SCHEDULEs at crossings: the stacked system is integrated from
+one such instant to the next, and the DISCRETE and TERMINAL code runs there on
+the members' columns (plain arithmetic runs elementwise; code that branches on a
+member's value runs member by member, each with its own functions). Anything else
+runs member by member (`montecarlo.run_sets`), as before.
 
 Accuracy. LSODA's error test takes the weighted max-norm over every component
 (ODEPACK's DVMNRM), so each member's local error is held to the tolerances it
