@@ -115,6 +115,7 @@ sheets.write_csv(sys.argv[1], [run])
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc and RLIMIT_AS")
+@pytest.mark.slow  # (10^5 rows written: 7 s; CI runs it in its slow step)
 def test_printout_and_csv_are_streamed(tmp_path):
     """One run of 10^6 rows x 30 variables peaked at 1.9 GB: the printout and CSV
     were built as whole strings. Streamed, 10^5 rows x 20 variables (58 MB of

@@ -60,6 +60,7 @@ def reference_folds():
     return [duffing.fold(w, duffing.hb_state(w, a)) for w, a in duffing.hb_folds()]
 
 
+@pytest.mark.slow  # (the curve: a 9 s fixture; CI runs it in its slow step)
 def test_duffing_folds_against_an_independent_shooting(duffing_curve, reference_folds):
     # Two folds, each located to 1e-6 of the reference's root of [G = 0, det(G_x)
     # = 0] (rtol 1e-12); at a fold the amplitude goes as the square root of the
@@ -76,6 +77,7 @@ def test_duffing_folds_against_an_independent_shooting(duffing_curve, reference_
         assert np.min(np.abs(point.multipliers - 1)) < 1e-2
 
 
+@pytest.mark.slow  # (the curve: a 9 s fixture; CI runs it in its slow step)
 def test_duffing_branches_stable_unstable_stable(duffing_curve, reference_folds):
     # along the curve: the large orbit (stable) up to the upper fold, the middle
     # one (unstable) back to the lower fold, the small one (stable) on; each
