@@ -594,3 +594,39 @@ def test_members_states_are_renumbered_to_narrow_their_band(tmp_path):
         a = np.diag([-500.0] * 11 + [-together.samples["KE"][k]]) + np.diag([500.0] * 11, -1)
         x = expm(2.0 * a) @ np.eye(12)[0]
         assert together.final[k, 0] == pytest.approx(x[11], rel=1e-8)
+
+
+SAMPLED = """PROGRAM a sampled-data controller: U set every CINT, held between
+  CONSTANT K = 1.0, G = 0.5, TSTOP = 2.0
+  CINTERVAL CINT = 0.1
+  DYNAMIC
+    U = -G*X
+  END
+  DERIVATIVE
+    X = INTEG(-K*X + U + 1.0, 1.0)
+    TERMT(T >= TSTOP)
+  END
+  PRINT X, U
+END
+"""
+
+
+def test_acsl_dynamic_statements_run_on_the_members_at_every_cint(tmp_path):
+    # DYNAMIC's statements run at every CINT instant (the integration goes from one
+    # to the next); U held between them makes each member's X the exact recurrence
+    # x' = e^{-K h} x + (1 - e^{-K h}) (u + 1) / K, u = -G x, h = CINT (1e-9
+    # relative: RELERR 1e-11 over 20 intervals), and the same as one by one.
+    path = tmp_path / "sampled.csl"
+    path.write_text(SAMPLED)
+    dists = {"K": "uniform(0.5, 2.0)", "G": "uniform(0.1, 1.0)"}
+    together = amilpy.load(path).montecarlo(dists, runs=12, seed=6)
+    alone = amilpy.load(path).montecarlo(dists, runs=12, seed=6, stacked=False)
+    assert "at once" in together.how
+    assert np.array_equal(together.times, alone.times)
+    assert together.bands == pytest.approx(alone.bands, rel=1e-9, abs=1e-12)
+    for k in (0, 6, 11):
+        kk, g = together.samples["K"][k], together.samples["G"][k]
+        x, decay = 1.0, math.exp(-kk * 0.1)
+        for _ in range(20):
+            x = decay * x + (1.0 - decay) * (1.0 - g * x) / kk
+        assert together.final[k, 0] == pytest.approx(x, rel=1e-9)

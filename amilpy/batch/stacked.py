@@ -15,9 +15,9 @@ that one build serves them all. In CSMP form, no TERMINAL section either. In ACS
 form (`run_acsl`) the members share their instants when their DISCRETE sections
 run every INTERVAL or where SCHEDULE puts them (the same for every member), their
 TERMTs are on TIME alone (the same instant for every member) and there are no
-DYNAMIC statements or SCHEDULEs at crossings: the stacked system is integrated from
-one such instant to the next, and the DISCRETE and TERMINAL code runs there on
-the members' columns (plain arithmetic runs elementwise; code that branches on a
+SCHEDULEs at crossings: the stacked system is integrated from one such instant
+(and, with DYNAMIC statements, one CINT instant) to the next, and the DISCRETE,
+DYNAMIC and TERMINAL code runs there on the members' columns (plain arithmetic runs elementwise; code that branches on a
 member's value runs member by member, each with its own functions). Anything else
 runs member by member (`montecarlo.run_sets`), as before.
 
@@ -65,8 +65,6 @@ def why_not(model, code, plan, opts) -> str | None:
     if acsl is None and (ir.terminal or ir.terminal_code):
         return "a TERMINAL section (it runs per member)"
     if acsl is not None:
-        if acsl.dynamic.body:
-            return "DYNAMIC statements (they run at every CINT instant)"
         if acsl.crossings:
             return "a SCHEDULE at a crossing (each member crosses at its own instant)"
         if acsl.cint_name in code.kept or any(
@@ -314,6 +312,21 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
     def same(a: float, b: float) -> bool:
         return math.isfinite(b) and abs(a - b) <= 1e-12 * max(abs(b), 1.0)
 
+    dynamic = bool(acsl.dynamic.body)  # (its statements run at every CINT instant)
+
+    def reported(calls) -> bool:
+        """What written-order code SCHEDULEd and TERMTed (at times every member shares),
+        taken; False for a SCHEDULE into the past (the runs one by one say so)."""
+        nonlocal order, stopped
+        for when, name in calls.schedules:
+            if when < t - 1e-12 * max(abs(t), 1.0):
+                return False
+            heapq.heappush(queue, (max(when, t), order, name))
+            order += 1
+        if calls.termts and stopped is None:
+            stopped = termination(acsl.termts[calls.termts[0]])
+        return True
+
     try:
         with np.errstate(all="ignore"):
             while True:
@@ -322,28 +335,28 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
                         queue[0][0] <= t + 1e-12 * max(abs(t), 1.0):
                     _, _, due = heapq.heappop(queue)
                     y, z, _, calls = section(fns[due], t, y, z)
-                    for when, name in calls.schedules:  # (a time every member shares)
-                        if when < t - 1e-12 * max(abs(t), 1.0):
-                            return None  # (one by one: the run says it is in the past)
-                        heapq.heappush(queue, (max(when, t), order, name))
-                        order += 1
-                    if calls.termts:
-                        stopped = termination(acsl.termts[calls.termts[0]])
+                    if not reported(calls):
+                        return None  # (one by one: the run says it is in the past)
                     events += 1
                     if events > opts.max_events:
                         return None  # (one by one: each run says so)
                     if gaps.get(due, 0.0) > 0:
                         heapq.heappush(queue, (t + gaps[due], order, due))
                         order += 1
+                on_grid = i < len(times) and same(t, times[i])
+                if dynamic and on_grid and not at_end and stopped is None:
+                    y, z, _, calls = section("dynamic", t, y, z)
+                    if not reported(calls):
+                        return None
                 if stopped is None and (t >= stop_at or same(t, stop_at)):
                     stopped = stop_what
-                on_grid = i < len(times) and same(t, times[i])
                 if on_grid or stopped is not None:
                     segments.append((np.array([t]), y[None].copy(), z))
                     i += on_grid
                 if stopped is not None or at_end:
                     break
-                t_next = min(queue[0][0] if queue else math.inf, stop_at, plan.fintim)
+                t_next = min(queue[0][0] if queue else math.inf, stop_at, plan.fintim,
+                             times[i] if dynamic and i < len(times) else math.inf)
                 j = i
                 while j < len(times) and times[j] < t_next and not same(times[j], t_next):
                     j += 1
