@@ -17,9 +17,10 @@ run every INTERVAL or where SCHEDULE puts them (the same for every member), thei
 TERMTs are on TIME alone (the same instant for every member) and there are no
 SCHEDULEs at crossings: the stacked system is integrated from one such instant
 (and, with DYNAMIC statements, one CINT instant) to the next, and the DISCRETE,
-DYNAMIC and TERMINAL code runs there on the members' columns (plain arithmetic runs elementwise; code that branches on a
-member's value runs member by member, each with its own functions). Anything else
-runs member by member (`montecarlo.run_sets`), as before.
+DYNAMIC and TERMINAL code runs there on the members' columns (plain arithmetic
+runs elementwise; code that branches on a member's value runs member by member,
+each with its own functions). Anything else runs member by member
+(`montecarlo.run_sets`), as before.
 
 Accuracy. LSODA's error test takes the weighted max-norm over every component
 (ODEPACK's DVMNRM), so each member's local error is held to the tolerances it
