@@ -333,6 +333,18 @@ def bateman(t: float, ke: float, vd: float, doses) -> float:
                for tk in doses if tk <= t + 1e-9) / vd
 
 
+def at_once_and_alone(path, dists, runs, seed, rel=1e-9):
+    """The Monte Carlo integrated at once and its runs one by one, which must give
+    the same rows and bands (to `rel`: both at the listing's tolerances)."""
+    together = amilpy.load(path).montecarlo(dists, runs=runs, seed=seed)
+    alone = amilpy.load(path).montecarlo(dists, runs=runs, seed=seed, stacked=False)
+    assert "at once" in together.how and "at once" not in alone.how
+    assert np.array_equal(together.times, alone.times)
+    assert together.bands == pytest.approx(alone.bands, rel=rel, abs=1e-12)
+    assert together.final == pytest.approx(alone.final, rel=rel)
+    return together, alone
+
+
 def test_acsl_members_dosed_at_the_same_instants_are_integrated_at_once(tmp_path):
     # The doses come every 12 h for every member and the TERMT is on TIME alone, so
     # the members share their instants: one stacked integration from dose to dose,
@@ -343,12 +355,7 @@ def test_acsl_members_dosed_at_the_same_instants_are_integrated_at_once(tmp_path
     # members run one by one (both at those tolerances: 1e-9).
     dists = {"KE": "lognormal(-1.754, 0.25)", "VD": "lognormal(3.738, 0.2)"}
     path = dosing(tmp_path)
-    together = amilpy.load(path).montecarlo(dists, runs=60, seed=4)
-    alone = amilpy.load(path).montecarlo(dists, runs=60, seed=4, stacked=False)
-    assert "at once" in together.how and "at once" not in alone.how
-    assert np.array_equal(together.times, alone.times)
-    assert together.bands == pytest.approx(alone.bands, rel=1e-9, abs=1e-12)
-    assert together.final == pytest.approx(alone.final, rel=1e-9)
+    together, alone = at_once_and_alone(path, dists, 60, 4)
     assert together.terminal == pytest.approx(alone.terminal, rel=1e-9)
     assert together.status == alone.status == ["stopped"] * 60
     assert together.messages == alone.messages
@@ -369,13 +376,8 @@ def test_acsl_members_dosed_at_the_same_instants_are_integrated_at_once(tmp_path
 def test_acsl_members_at_once_end_where_each_run_ends(tmp_path, tstop, timer):
     dists = {"KE": "uniform(0.1, 0.25)"}
     path = dosing(tmp_path, tstop, timer)
-    together = amilpy.load(path).montecarlo(dists, runs=8, seed=2)
-    alone = amilpy.load(path).montecarlo(dists, runs=8, seed=2, stacked=False)
-    assert "at once" in together.how
-    assert np.array_equal(together.times, alone.times)
+    together, alone = at_once_and_alone(path, dists, 8, 2)
     assert np.array_equal(together.prdel, alone.prdel)
-    assert together.bands == pytest.approx(alone.bands, rel=1e-9, abs=1e-12)
-    assert together.final == pytest.approx(alone.final, rel=1e-9)
     assert together.status == alone.status and together.messages == alone.messages
 
 
@@ -386,12 +388,8 @@ def test_acsl_code_that_branches_on_a_members_value_runs_member_by_member(tmp_pa
     # members are still integrated at once. Some members skip doses, some do not.
     dists = {"KE": "uniform(0.05, 0.3)"}
     path = dosing(tmp_path, dose="IF (AB .LT. 300.0) AG = AG + DOSE")
-    together = amilpy.load(path).montecarlo(dists, runs=10, seed=3)
-    alone = amilpy.load(path).montecarlo(dists, runs=10, seed=3, stacked=False)
-    assert "at once" in together.how
+    together, alone = at_once_and_alone(path, dists, 10, 3)
     ndose = together.final[:, together.variables.index("NDOSE")]
-    assert together.bands == pytest.approx(alone.bands, rel=1e-9, abs=1e-12)
-    assert together.final == pytest.approx(alone.final, rel=1e-9)
     assert len(set(ndose)) == 1 and ndose[0] == 7.0  # (NDOSE counts the section's runs)
     ag = together.final[:, together.variables.index("AG")]
     assert np.any(ag < 1.0) and np.any(ag > 400.0)  # (the dose at 72 h skipped or given)
@@ -463,10 +461,7 @@ def test_an_ensembles_functions_run_on_its_columns(tmp_path):
     path = tmp_path / "clearance.csl"
     path.write_text(CLEARANCE)
     dists = {"VMAX": "uniform(6, 10)"}
-    together = amilpy.load(path).montecarlo(dists, runs=12, seed=7)
-    alone = amilpy.load(path).montecarlo(dists, runs=12, seed=7, stacked=False)
-    assert "at once" in together.how
-    assert together.bands == pytest.approx(alone.bands, rel=1e-9, abs=1e-12)
+    together, alone = at_once_and_alone(path, dists, 12, 7)
     for k in range(12):
         c, c0, vmax = together.final[k, 0] / 10.0, 10.0, together.samples["VMAX"][k]
         assert 10.0 * (c0 - c) + 2.0 * 10.0 * math.log(c0 / c) == \
@@ -500,10 +495,7 @@ def test_stiff_members_at_once_take_their_jacobian_from_the_equations(tmp_path):
     path = tmp_path / "stiff.csl"
     path.write_text(STIFF)
     dists = {"KE": "uniform(0.1, 0.5)", "K12": "uniform(1500, 2500)"}
-    together = amilpy.load(path).montecarlo(dists, runs=16, seed=8)
-    alone = amilpy.load(path).montecarlo(dists, runs=16, seed=8, stacked=False)
-    assert "at once" in together.how
-    assert together.bands == pytest.approx(alone.bands, rel=1e-8, abs=1e-10)
+    together, _ = at_once_and_alone(path, dists, 16, 8, rel=1e-8)
     for k in (0, 9, 15):
         ke, k12 = together.samples["KE"][k], together.samples["K12"][k]
         a = np.array([[-k12 - ke, 1000.0], [k12, -1000.0]])
@@ -619,11 +611,7 @@ def test_acsl_dynamic_statements_run_on_the_members_at_every_cint(tmp_path):
     path = tmp_path / "sampled.csl"
     path.write_text(SAMPLED)
     dists = {"K": "uniform(0.5, 2.0)", "G": "uniform(0.1, 1.0)"}
-    together = amilpy.load(path).montecarlo(dists, runs=12, seed=6)
-    alone = amilpy.load(path).montecarlo(dists, runs=12, seed=6, stacked=False)
-    assert "at once" in together.how
-    assert np.array_equal(together.times, alone.times)
-    assert together.bands == pytest.approx(alone.bands, rel=1e-9, abs=1e-12)
+    together, alone = at_once_and_alone(path, dists, 12, 6)
     for k in (0, 6, 11):
         kk, g = together.samples["K"][k], together.samples["G"][k]
         x, decay = 1.0, math.exp(-kk * 0.1)
