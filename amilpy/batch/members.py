@@ -5,7 +5,7 @@ at a time (`montecarlo.run_sets`) or every run at once (`stacked`)."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -38,6 +38,16 @@ def member_of(names: tuple[str, ...], run: Run) -> Member:
                   for j, n in enumerate(names))
     return Member(times, run.prdel_mask[grid], values, final, dict(run.terminal),
                   str(run.status), run.message, dict(run.extrema))
+
+
+def shared_times(member: Member, other: Member | None) -> Member:
+    """`member`, holding `other`'s output instants and masks where they are the same
+    (most members of an ensemble: one array for all instead of one a member)."""
+    if other is None or member.times is other.times or \
+            not np.array_equal(member.times, other.times) or \
+            not np.array_equal(member.prdel, other.prdel):
+        return member
+    return replace(member, times=other.times, prdel=other.prdel)
 
 
 @dataclass

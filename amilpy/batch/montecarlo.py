@@ -31,7 +31,7 @@ from ..diagnostics import AmilError, UsageError
 from ..progress import report
 from ..result import Status
 from .distributions import Dist, sample
-from .members import Batch, member_of
+from .members import Batch, member_of, shared_times
 
 QUANTILES = (5.0, 50.0, 95.0)  # percent
 CHUNK = 64  # runs handed to the farm at a time, per worker, at least
@@ -110,17 +110,22 @@ def _nan_columns():
         yield
 
 
+BLOCK_VALUES = 1 << 22  # values sorted at once for the bands (32 MB): a block of rows
+
+
 def _quantiles(values: np.ndarray, q) -> np.ndarray:
+    """(quantiles, columns) of `values` (runs, columns), NaN left out."""
     if not len(values):
         return np.full((len(q), values.shape[1]), math.nan)
     qs = np.asarray(q) / 100.0
     # (nanquantile takes a column at a time where any holds a NaN: only those)
     holes = np.isnan(values).any(axis=0)
-    out = np.empty((len(qs),) + values.shape[1:])
+    if not holes.any():
+        return np.quantile(values, qs, axis=0)
+    out = np.empty((len(qs), values.shape[1]))
     out[:, ~holes] = np.quantile(values[:, ~holes], qs, axis=0)
-    if holes.any():
-        with _nan_columns():
-            out[:, holes] = np.nanquantile(values[:, holes], qs, axis=0)
+    with _nan_columns():
+        out[:, holes] = np.nanquantile(values[:, holes], qs, axis=0)
     return out
 
 
@@ -225,6 +230,7 @@ def run_sets(model, sets: dict[str, np.ndarray], variables: list[str], options, 
     opts, how = ensemble_route(model, base, opts)
     reduce = partial(member_of, tuple(variables))
     batch = Batch([None] * runs, {}, how=how)
+    shared = None  # (the last member kept: its output instants, held once for all)
     start = time.monotonic()
     # (each chunk starts its workers afresh: a tenth of the runs at least, so that
     # starting them costs little, and the time limit and Ctrl-C are looked at often)
@@ -247,7 +253,8 @@ def run_sets(model, sets: dict[str, np.ndarray], variables: list[str], options, 
         outcomes = farm(model.ir, tasks, jobs, scheduler, done, model.cache)
         for k, o in zip(ks, outcomes, strict=True):
             if o.point is not None:
-                batch.members[k] = o.point
+                batch.members[k] = shared_times(o.point, shared)
+                shared = batch.members[k]
             elif not o.interrupted:
                 batch.errors[k] = o.error or "not run"
             batch.interrupted = batch.interrupted or o.interrupted
@@ -310,15 +317,20 @@ def _gather(dists, samples, seed, variables, quantiles, batch: Batch, correlatio
         final[k] = m.final
         for j, n in enumerate(terminal_names):
             terminal[k, j] = m.terminal.get(n, math.nan)
-    kept = cube[counted(status)]
-    bands = _quantiles(kept.reshape(len(kept), -1), quantiles).reshape(
-        len(quantiles), len(times), len(variables)) if len(times) and len(kept) else \
-        np.full((len(quantiles), len(times), len(variables)), np.nan)
-    with _nan_columns():
-        mean = np.nanmean(kept, axis=0) if len(kept) else \
-            np.full((len(times), len(variables)), np.nan)
-    counts = np.sum(np.all(np.isfinite(kept), axis=2), axis=0) if len(kept) else \
-        np.zeros(len(times), int)
+    use = counted(status)
+    kept = cube if use.all() else cube[use]  # (no copy where every run counts)
+    bands = np.full((len(quantiles), len(times), len(variables)), np.nan)
+    mean = np.full((len(times), len(variables)), np.nan)
+    counts = np.zeros(len(times), int)
+    # a block of rows at a time: the quantiles sort a copy of what they are given
+    step = max(1, BLOCK_VALUES // max(len(kept) * len(variables), 1))
+    for lo in range(0, len(times) if len(kept) and variables else 0, step):
+        block = kept[:, lo:lo + step]
+        bands[:, lo:lo + step] = _quantiles(block.reshape(len(kept), -1), quantiles).reshape(
+            len(quantiles), -1, len(variables))
+        with _nan_columns():
+            mean[lo:lo + step] = np.nanmean(block, axis=0)
+        counts[lo:lo + step] = np.sum(np.all(np.isfinite(block), axis=2), axis=0)
     return MonteCarlo(dists, samples, seed, list(variables), quantiles, times, prdel, bands,
                       mean, counts, final, terminal_names, terminal, status, messages,
                       correlation, batch.interrupted, batch.timed_out, params, batch.how)
