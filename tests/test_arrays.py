@@ -243,6 +243,11 @@ END
 @pytest.mark.parametrize("line, message", [
     ("TABLE F, 1, 3 / 0.0, 1.0, 2.0, 0.0, 1.0 /", "TABLE F has 5 values for 3 breakpoints"),
     ("TABLE F, 1, 2 / 0.0, 1.0, 0.0, Q /", "TABLE F: 'Q' is not a number"),
+    # (said of the TABLE, not of the 1-variable tables it is written out as)
+    ("TABLE F, 1, 3 / 0.0, 2.0, 1.0, 0.0, 1.0, 2.0 /",
+     "TABLE F: its breakpoints must increase strictly (2, then 1)"),
+    ("TABLE F, 2, 2, 2 / 0.0, 1.0, 5.0, 5.0, 1.0, 2.0, 3.0, 4.0 /",
+     "TABLE F: its second variable's breakpoints must increase strictly (5, then 5)"),
 ])
 def test_table_faults_are_located(line, message):
     text = (f"PROGRAM t\n  {line}\n  CINTERVAL CINT = 0.5\n  DERIVATIVE\n"

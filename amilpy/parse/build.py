@@ -313,6 +313,16 @@ class Builder:
         for n in counts:
             axes.append(tuple(values[at:at + n]))
             at += n
+        for k, axis in enumerate(axes):
+            for i in range(1, len(axis)):
+                if not axis[i] > axis[i - 1]:
+                    which = f"its {('first', 'second', 'third')[k]} variable's" \
+                        if len(axes) > 1 else "its"
+                    self.errors.append(Diagnostic(
+                        f"TABLE {name}: {which} breakpoints must increase strictly "
+                        f"({axis[i - 1]:g}, then {axis[i]:g})", span,
+                        "write each variable's breakpoints in increasing order"))
+                    return empty
         return ast.Table(name, axes[0], tuple(values[at:]), span, grid=tuple(axes[1:]))
 
     def st_labelled(self, node) -> Close | None:
