@@ -554,7 +554,8 @@ def test_stacked_lsoda_on_a_stiff_linear_ensemble(jacobian):
 
     y0 = np.tile([[1.0], [2.0]], runs)
     ts = np.array([0.0, 0.5, 2.0])
-    ys = lsoda(rhs, y0, ts, Plan, jac)
+    ys, steps = lsoda(rhs, y0, ts, Plan, jac)
+    assert steps > 0
     for k in range(runs):
         a = np.array([[a11[k], a12[k]], [a21[k], a22[k]]])
         for i, t in enumerate(ts):
@@ -635,3 +636,97 @@ def test_acsl_dynamic_statements_run_on_the_members_at_every_cint(tmp_path):
         for _ in range(20):
             x = decay * x + (1.0 - decay) * (1.0 - g * x) / kk
         assert together.final[k, 0] == pytest.approx(x, rel=1e-9)
+
+
+TICKS = """PROGRAM a tick every CINT: the instants gather rounding (0.1 + 0.1 + ...)
+  CONSTANT K = 1.0, TSTOP = 2.0
+  CINTERVAL CINT = 0.1
+  INITIAL
+    N = 0.0
+  END
+  DERIVATIVE
+    X = INTEG(-K*X + N, 1.0)
+    TERMT(T >= TSTOP)
+  END
+  DISCRETE TICK
+    INTERVAL DT = 0.1
+    N = N + 0.1
+  END
+  PRINT X, N
+END
+"""
+
+
+def test_instants_a_few_floats_from_the_grid_are_taken_as_a_run_takes_them(tmp_path):
+    # The ticks fall at sums of 0.1, some a float before a grid instant (0.7999...),
+    # some a float after (1.5000...2), and one after the TERMT's instant (2.0000...4):
+    # a row a float before an event is taken before it, a row at an event after it,
+    # rows print the grid's instants, and the TERMT ends the run before a tick just
+    # after it -- the same rows and values as the runs one by one.
+    path = tmp_path / "ticks.csl"
+    path.write_text(TICKS)
+    together, _ = at_once_and_alone(path, {"K": "uniform(0.5, 1.5)"}, 4, 1)
+    assert together.times[8] == 0.8 and together.times[15] == 1.5
+    assert together.final[0, 1] == pytest.approx(2.0)  # (20 ticks: 0 ... 1.9)
+
+
+FAULTS = """PROGRAM a DISCRETE section that faults for K = 1
+  CONSTANT K = 2.0, TSTOP = 2.0
+  CINTERVAL CINT = 0.25
+  INITIAL
+    Q = 0.0
+  END
+  DERIVATIVE
+    X = INTEG(-K*X, 1.0)
+    TERMT(T >= TSTOP)
+  END
+  DISCRETE S
+    INTERVAL DT = 0.5
+    Q = 1.0/(K - 1.0)
+  END
+  PRINT X
+END
+"""
+
+
+def test_a_member_whose_code_faults_fails_as_its_own_run_does(tmp_path):
+    # On the members' columns 1/(K - 1) would be inf for K = 1 and nothing would say
+    # so: the ensemble runs one by one, and that member fails with the fault's words.
+    path = tmp_path / "faults.csl"
+    path.write_text(FAULTS)
+    table = tmp_path / "k.csv"
+    table.write_text("K\n0.5\n1.0\n1.5\n")
+    mc = amilpy.load(path).montecarlo({"K": f"table({table})"})
+    assert "at once" not in mc.how and mc.failed == [1]
+    assert "Q (line 13): division by zero" in mc.messages[1]
+    assert mc.status[0] == mc.status[2] == "stopped"
+
+
+def test_initial_that_may_assign_a_drawn_value_runs_for_each_member(tmp_path):
+    # INITIAL could assign K (not with FLAG = 0): each member keeps its own K.
+    path = tmp_path / "flag.csl"
+    path.write_text("""PROGRAM INITIAL may assign a drawn constant
+  CONSTANT K = 1.0, FLAG = 0.0, TSTOP = 2.0
+  CINTERVAL CINT = 0.5
+  INITIAL
+    IF (FLAG > 0.5) K = 2.0
+  END
+  DERIVATIVE
+    X = INTEG(-K*X, 1.0)
+    TERMT(T >= TSTOP)
+  END
+  PRINT X
+END
+""")
+    together, _ = at_once_and_alone(path, {"K": "uniform(0.5, 1.5)"}, 5, 2)
+    assert together.final[:, 0] == pytest.approx(np.exp(-2.0 * together.samples["K"]),
+                                                  rel=1e-9)
+
+
+def test_a_step_limit_is_each_members_own(tmp_path):
+    # max_steps bounds each run: the members run one by one, each failing at it.
+    path = dosing(tmp_path)
+    mc = amilpy.load(path).montecarlo({"KE": "uniform(0.1, 0.25)"}, runs=3, seed=1,
+                                      max_steps=30)
+    assert "at once" not in mc.how and mc.failed == [0, 1, 2]
+    assert all("more than 30 steps" in text for text in mc.messages)

@@ -346,6 +346,27 @@ END
     assert run.final["C"] == 3.0  # 1 + (0*2 + X(0) = 0) + 2
 
 
+def test_a_function_reads_the_runs_own_data_values():
+    """A FUNCTION reading a CONSTANT: runs of one model given other values of it
+    share a build, and each call must read its own run's value (it read the first
+    run's, folded into the FUNCTION). A' = -K A: A(2) = exp(-2K) for each K."""
+    model = amilpy.loads("""PROGRAM p
+  CONSTANT K = 1.0
+  CINTERVAL CINT = 0.5
+  FUNCTION R = RATE(X)
+    R = K*X
+  END
+  DERIVATIVE
+    A = INTEG(-RATE(A), 1.0)
+    TERMT(T >= 2.0)
+  END
+END
+""", "p.csl")
+    for k in (1.0, 0.5, 1.7):
+        run, = model.run(advice=False, K=k)
+        assert run.final["A"] == pytest.approx(math.exp(-2.0 * k), rel=1e-9)
+
+
 def test_equality_on_a_state_is_tested_pointwise_with_a_warning():
     m = amilpy.loads("X = INTGRL(0.0, 1.0)\nY = X == 0.5\n" + END)
     w, = m.ir.warnings

@@ -73,6 +73,10 @@ def why_not(model, code, plan, opts) -> str | None:
             return "CINT or an INTERVAL assigned during the run"
     if opts.extrema:
         return "extremes located between the rows (per member)"
+    if not ir.states:
+        return "no states to integrate"
+    if opts.max_time:
+        return "a time limit for each run"
     if code.binder is None:
         return "no build to share"
     return None
@@ -149,9 +153,9 @@ def _run_csmp(model, base, sets: dict[str, np.ndarray], runs: int, variables: li
     times = plan.grid.times
     try:
         with np.errstate(all="ignore"):
-            ys = lsoda(lambda t, cols: rhs(t, cols, [], []), y0, times, plan,
-                       with_branches(members_jacobian(code, values), [], []))
-            if ys is None:
+            ys, steps = lsoda(lambda t, cols: rhs(t, cols, [], []), y0, times, plan,
+                              with_branches(members_jacobian(code, values), [], []))
+            if ys is None or steps > opts.max_steps:
                 return None
             outs = out(times[:, None], [ys[:, i, :] for i in range(n)], [], [])
     except (ArithmeticError, ValueError, TypeError):
@@ -272,7 +276,10 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
         differently have instants of their own."""
         calls = Calls()
         try:
-            ys, zs, vals = functions[name](t, list(y), m, list(z), calls)
+            # (a fault on any member's column raises, as it does in a run of its own:
+            # the members then run one by one, where the fault is located and said)
+            with np.errstate(divide="raise", over="raise", invalid="raise"):
+                ys, zs, vals = functions[name](t, list(y), m, list(z), calls)
             return (np.array([columns(v) for v in ys]).reshape(n, runs),
                     [columns(v) for v in zs[len(zs) - nw:]], [columns(v) for v in vals], calls)
         except (ValueError, TypeError):
@@ -308,7 +315,7 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
     heapq.heapify(queue)
     times = plan.grid.times
     segments: list[tuple[np.ndarray, np.ndarray, list[np.ndarray]]] = []
-    t, i, events, stopped = plan.t0, 0, 0, None
+    t, i, events, steps, stopped = plan.t0, 0, 0, 0, None
 
     def same(a: float, b: float) -> bool:
         return math.isfinite(b) and abs(a - b) <= 1e-12 * max(abs(b), 1.0)
@@ -331,7 +338,12 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
     try:
         with np.errstate(all="ignore"):
             while True:
-                at_end = t >= plan.fintim or same(t, plan.fintim)
+                at_end = t >= plan.fintim
+                if t >= stop_at and not (queue and queue[0][0] <= t) and not (
+                        dynamic and i < len(times) and times[i] <= t):
+                    # (the TERMT's crossing ends the run before an instant just after it;
+                    # one at the very instant acts first, as in a run of its own)
+                    stopped = stop_what
                 while queue and not at_end and stopped is None and \
                         queue[0][0] <= t + 1e-12 * max(abs(t), 1.0):
                     _, _, due = heapq.heappop(queue)
@@ -349,23 +361,30 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
                     y, z, _, calls = section("dynamic", t, y, z)
                     if not reported(calls):
                         return None
-                if stopped is None and (t >= stop_at or same(t, stop_at)):
+                if stopped is None and t >= stop_at:
                     stopped = stop_what
                 if on_grid or stopped is not None:
-                    segments.append((np.array([t]), y[None].copy(), z))
+                    # (a row on the grid is the grid's instant, whatever rounding the
+                    # events' times gathered)
+                    segments.append((np.array([times[i] if on_grid else t]), y[None].copy(),
+                                     z))
                     i += on_grid
                 if stopped is not None or at_end:
                     break
                 t_next = min(queue[0][0] if queue else math.inf, stop_at, plan.fintim,
                              times[i] if dynamic and i < len(times) else math.inf)
-                j = i
-                while j < len(times) and times[j] < t_next and not same(times[j], t_next):
-                    j += 1
+                # (the rows before the next instant, however close: taken before its
+                # events, as a run of its own takes them)
+                j = i + int(np.searchsorted(times[i:], t_next, side="left"))
+                if j == i and t_next - t <= 1e-12 * max(abs(t), 1.0):
+                    t = max(t, float(t_next))  # (as a run of its own: nothing to integrate)
+                    continue
                 ts = np.concatenate([[t], times[i:j], [t_next]])
-                ys = lsoda(lambda tt, cols, zz=z: rhs(tt, cols, m, zz), y, ts, plan,
-                           with_branches(jacobian, m, z))
-                if ys is None:
-                    return None
+                ys, taken = lsoda(lambda tt, cols, zz=z: rhs(tt, cols, m, zz), y, ts, plan,
+                                  with_branches(jacobian, m, z))
+                steps += taken
+                if ys is None or steps > opts.max_steps:
+                    return None  # (one by one: each run says why)
                 if j > i:
                     segments.append((ts[1:-1], ys[1:-1], z))
                 i, t, y = j, float(t_next), ys[-1].copy()
@@ -387,8 +406,9 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
     index = {name: j for j, name in enumerate(code.out_names)}
     columns_of = {name: np.concatenate([o[index[name]] for o in outputs])
                   for name in variables if name in index}
-    if any(not np.all(np.isfinite(v)) for v in columns_of.values()):
-        return None
+    if any(not np.all(np.isfinite(v)) for v in [*columns_of.values(), *terminal.values(),
+                                                 *z]):
+        return None  # (a fault: one by one, where it is said)
     every = np.ones(rows.size, bool)
     status = Status.STOPPED if stopped is not None else Status.FINISHED
     said = message(Status.STOPPED, t=t, what=stopped) if stopped is not None else ""
@@ -406,7 +426,7 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
 
 
 def lsoda(rhs_columns, y0: np.ndarray, ts: np.ndarray, plan, jacobian=None
-          ) -> np.ndarray | None:
+          ) -> tuple[np.ndarray | None, int]:
     """The members' states (n, members) from ts[0] to every instant of `ts`: one
     odeint over them, each member's states side by side, so that the Jacobian is
     banded (a member's block on the diagonal) and LSODA's stiff method keeps no
@@ -416,8 +436,11 @@ def lsoda(rhs_columns, y0: np.ndarray, ts: np.ndarray, plan, jacobian=None
     (`jacobian.variable(t, columns)`), gives the blocks from the model's equations,
     each member's states in the order that narrows its block's band (else LSODA
     differences 2n - 1 evaluations a Jacobian of n - 1 bands either side).
-    (len(ts), n, members), or None where LSODA gives up or a state is not finite."""
-    from scipy.integrate import odeint
+    ((len(ts), n, members), or None where LSODA gives up or a state is not finite;
+    the steps LSODA took)."""
+    import warnings
+
+    from scipy.integrate import ODEintWarning, odeint
 
     from ..steppers.jacobian import narrowest
 
@@ -475,12 +498,16 @@ def lsoda(rhs_columns, y0: np.ndarray, ts: np.ndarray, plan, jacobian=None
 
         options["Dfun"] = dfun
     hmax = plan.max_step if math.isfinite(plan.max_step) else 0.0
-    sol, info = odeint(f, y0.T[:, order].reshape(-1), ts, rtol=per_state(plan.tol.rtol),
-                       atol=per_state(plan.tol.atol), ml=lower, mu=upper, mxstep=MXSTEP,
-                       hmax=hmax, full_output=True, **options)
+    with warnings.catch_warnings():
+        # (LSODA giving up is said by the members run one by one, not by its warning)
+        warnings.simplefilter("ignore", ODEintWarning)
+        sol, info = odeint(f, y0.T[:, order].reshape(-1), ts, rtol=per_state(plan.tol.rtol),
+                           atol=per_state(plan.tol.atol), ml=lower, mu=upper, mxstep=MXSTEP,
+                           hmax=hmax, full_output=True, **options)
+    steps = int(np.max(info["nst"], initial=0))
     if info.get("message") != "Integration successful." or not np.all(np.isfinite(sol)):
-        return None
-    return sol.reshape(len(ts), runs, n)[:, :, position].transpose(0, 2, 1)
+        return None, steps
+    return sol.reshape(len(ts), runs, n)[:, :, position].transpose(0, 2, 1), steps
 
 
 def members_jacobian(code, values: dict[str, object]):

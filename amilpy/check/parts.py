@@ -258,8 +258,10 @@ def globals_as_arguments(parts: Parts, data: set[str]) -> Parts:
     """A Magnolia FUNCTION sees the program's variables as they are where it is called
     (Peters 2008's `kpu = (Dvow*...)` reads Dvow, which INITIAL computes): each one it
     reads becomes an argument every call passes, so the call's value and, in sorted
-    code, its place in the order follow that variable. Names the program defines
-    nowhere stay what the check says of them."""
+    code, its place in the order follow that variable. A data value it reads is an
+    argument too: runs that differ in it share one build (a sweep, a Monte Carlo),
+    and each call passes the run's own value. Names the program defines nowhere stay
+    what the check says of them."""
     if not parts.functions:
         return parts
     defined = assigned_anywhere(parts) | {TIME}
@@ -272,7 +274,7 @@ def globals_as_arguments(parts: Parts, data: set[str]) -> Parts:
             reads += [n for st in f.body for node in ast.walk(st)
                       if isinstance(node, ast.Call) for n in extra.get(node.func, ())]
             found[f.name] = tuple(dict.fromkeys(
-                n for n in reads if n in defined and n not in own and n not in data))
+                n for n in reads if (n in defined or n in data) and n not in own))
         if found == extra:
             break
         extra = found

@@ -229,8 +229,12 @@ def user_callable(model: ir.Model, func: str, constants: dict[str, float], table
                 import numpy as np
 
                 try:
-                    return scalar.elementwise(*args)
-                except (ValueError, TypeError):  # (it branches on a column's value)
+                    # (a fault raises, as on floats: element by element below, the
+                    # same fault is then the caller's, with its words)
+                    with np.errstate(divide="raise", over="raise", invalid="raise"):
+                        return scalar.elementwise(*args)
+                except (ValueError, TypeError, ArithmeticError):
+                    # (it branches on a column's value, or faults on an element)
                     return np.vectorize(scalar, otypes=[float])(*args)
             return scalar(*args)
         model.memo[key] = call

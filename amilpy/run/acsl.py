@@ -106,15 +106,18 @@ def run_initial(model: ir.Model, spec: ir.RunSpec, cache: Cache):
 
 
 def initial_reads(model: ir.Model) -> frozenset[str]:
-    """Every name `run_initial`'s values depend on: what INITIAL and the CINT and
-    INTERVAL values read (a run whose data differ elsewhere gets the same values)."""
+    """Every data name `run_initial`'s values may depend on: what INITIAL and the CINT
+    and INTERVAL values read, and what INITIAL assigns (a constant it assigns keeps
+    its own value where INITIAL's branch does not assign it): a run whose data
+    differ only elsewhere gets the same values."""
     from ..parse.syntax import Name, walk
 
     acsl = model.acsl
     roots = [st for code in acsl.initial for st in code.body] + [acsl.cint] + [
         d.interval_value for d in acsl.discretes.values() if d.interval_value is not None]
     return frozenset(node.name for root in roots for node in walk(root)
-                     if isinstance(node, Name))
+                     if isinstance(node, Name)) | {
+        n for code in acsl.initial for n in code.assigned}
 
 
 def run_values(model: ir.Model, base: dict[str, float], values: dict[str, float]
@@ -379,6 +382,11 @@ class AcslRun(_Run):
         if on_grid:
             self.rec.grid_row(cur.t, cur.y, cur.m, cur.z,
                               shown=self.rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
+        elif self.stopped is not None:
+            # (the instant a TERMT of code ended the run is its last row, as a located
+            # stop's is: its final values are those after the code that ran there)
+            self.rec.row(cur.t, cur.y, cur.m, cur.z,
+                         shown=self.rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
         if changed and self.acsl.cint_name in self.c.kept:
             self.regrid(cur.t, self.value(cur, self.acsl.cint_name))
 
@@ -417,9 +425,15 @@ class AcslRun(_Run):
         while self.stopped is None:
             t_next, acts = self.next_instant(cur.t)
             rec.hold = t_next if acts else None
-            # (a CINT instant or an event that changes nothing the derivatives read
-            # does not restart the integrator)
-            integ.integrate(cur, t_next, rec, pause=acts)
+            if t_next - cur.t <= 1e-12 * max(abs(cur.t), 1.0):
+                # (an instant that rounding put a few floats after this one, FINTIM
+                # after INTERVALs summed up to it: nothing to integrate, and LSODA
+                # refuses a span that short)
+                cur.t = max(cur.t, t_next)
+            else:
+                # (a CINT instant or an event that changes nothing the derivatives read
+                # does not restart the integrator)
+                integ.integrate(cur, t_next, rec, pause=acts)
             rec.hold = None
             reason = integ.stop_reason
             if reason is not None:
