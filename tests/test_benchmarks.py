@@ -154,6 +154,7 @@ def test_longrun_runs(tmp_path):
     assert (tmp_path / "longrun_stream.md").exists()
 
 
+@pytest.mark.slow  # (fresh processes: 6 s; CI runs it in its slow step)
 def test_frontend_runs_each_checkout_in_its_own_process(tmp_path):
     """The front-end table on a 5-mass chain and one model, this checkout against
     itself given as the 'before' one: a fresh process each, the checkout's own amilpy

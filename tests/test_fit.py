@@ -89,6 +89,7 @@ def test_a_dosing_program_fitted_on_a_log_scale(tmp_path):
     assert abs(fit.correlation[0, 1]) < 1.0
 
 
+@pytest.mark.slow  # (100 seeded fits: 6 s; CI runs it in its slow step)
 def test_the_95_percent_intervals_hold_the_truth_at_their_rate(tmp_path):
     """Coverage: 100 seeded data sets of the decay with normal noise of SD 0.02 (given
     as SD_X); the 95 % interval of K must hold K = 0.8 in about 95 of them. A
