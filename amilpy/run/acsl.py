@@ -353,6 +353,15 @@ class AcslRun(_Run):
         cur.m[:] = new
         cur.y = self.watch.apply_resets(cur.y, cur.m)
 
+    def termt_ahead(self, t: float) -> float | None:
+        """The instant of a TERMT on TIME a few floats after t (events summed up to
+        just before it), which the integration loop would take as passed."""
+        plan = self.plan
+        near = [root for k, root in plan.roots.items()
+                if plan.watched[k].purpose is Purpose.TERMT
+                and t < root <= t * (1 + 1e-15) + 1e-300]
+        return min(near) if near else None
+
     def termt_now(self, cur: Cursor) -> None:
         """The TERMTs of DERIVATIVE, tested at an instant (t0, an event)."""
         plan = self.plan
@@ -424,6 +433,13 @@ class AcslRun(_Run):
             raise self.failed
         while self.stopped is None:
             t_next, acts = self.next_instant(cur.t)
+            ahead = self.termt_ahead(cur.t)
+            if ahead is not None and ahead <= t_next:
+                # (the loop takes a breakpoint this close as passed: the TERMT's
+                # instant is here, not at the next instant)
+                cur.t = ahead
+                self.instant(cur)
+                continue
             rec.hold = t_next if acts else None
             if t_next - cur.t <= 1e-12 * max(abs(cur.t), 1.0):
                 # (an instant that rounding put a few floats after this one, FINTIM
