@@ -215,7 +215,8 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
     # what sets the instants: the same for every member, or one by one
     shared = [acsl.cint_name] + [d.interval for d in acsl.discretes.values() if d.interval]
     scratch = Cache()  # (INITIAL per member: kept out of the model's own cache)
-    # INITIAL once, where it reads no drawn value (its values are every member's)
+    # INITIAL once, where it neither reads nor assigns a drawn value (its values are
+    # every member's then)
     once = None if set(sets) & initial_reads(ir) else run_initial(ir, first, scratch)
     members: list[tuple[dict[str, float], dict[str, float]]] = []
     priors0 = None
