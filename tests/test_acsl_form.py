@@ -441,3 +441,20 @@ END
     # TERMT), each decaying at rate 2 to T = 1
     x = math.exp(-2.0) + sum(math.exp(-2.0 * (1.0 - 0.1 * k)) for k in range(11))
     assert run.final["X"] == pytest.approx(x, rel=1e-9)
+
+
+def test_a_stop_a_float_from_a_grid_instant_is_one_row():
+    """The grid's fourth instant is 3 x 0.1 = 0.30000000000000004, a float after
+    TERMT(T >= 0.3): the run printed the state there twice, the second row (the
+    stop's, at 0.3) a float before the first. One row now, and TIME increases."""
+    run, = amilpy.loads("""PROGRAM p
+  CINTERVAL CINT = 0.1
+  DERIVATIVE
+    X = INTEG(-X, 1.0)
+    TERMT(T >= 0.3)
+  END
+  PRINT X
+END
+""", "p.csl").run(advice=False)
+    assert len(run.t) == 4 and np.all(np.diff(run.t) > 0) and run.t_end == 0.3
+    assert run.final["X"] == pytest.approx(math.exp(-0.3), rel=1e-9)

@@ -11,7 +11,7 @@ from ..result import Event
 from ..steppers import StepFailure, Stepper
 from .cursor import Cursor, Stop, WatchedStep
 from .faults import fault_text
-from .plan import Purpose
+from .plan import SAME_INSTANT, Purpose
 from .record import Recorder
 
 
@@ -53,7 +53,11 @@ class Restarts:
         if at_output:
             rec.grid_row(tb, y, m, z, shown=rec.shown_modes(tb, y, m, z))
         if self.stop_reason is not None:
-            if rec is not None and rec.last_t != tb:
+            # (the stop's row, unless the grid's row just taken is this instant: a grid
+            # instant a float from the stop, 3 x 0.1 against TERMT(T >= 0.3), printed
+            # the same state twice, the second row a float before the first)
+            if rec is not None and (rec.last_t is None or
+                                    abs(rec.last_t - tb) > SAME_INSTANT * max(abs(tb), 1.0)):
                 rec.row(tb, y, m, z)
             return True
         if stop_at_event and len(self.events) > n_events:
