@@ -419,12 +419,14 @@ END
     assert any("division by zero at TIME = 1" in w for w in run.warnings)
 
 
-def test_a_termt_a_float_after_an_event_stops_there():
+@pytest.mark.parametrize("cint", ["0.3", "0.5"])  # (1.0 off the grid, and on it)
+def test_a_termt_a_float_after_an_event_stops_there(cint):
     """Ten ticks of 0.1 reach 0.9999999999999999, a float before TERMT(T >= 1.0): the
     integration loop took the TERMT's instant, that close, as passed, and the run went
-    on to the next tick (stopped at 1.1). It stops at 1.0, its last row there."""
-    run, = amilpy.loads("""PROGRAM p
-  CINTERVAL CINT = 0.3
+    on to the next tick (stopped at 1.1). It stops at 1.0, its last row there (one
+    row: with a grid instant at 1.0, the row after the tick is that row)."""
+    run, = amilpy.loads(f"""PROGRAM p
+  CINTERVAL CINT = {cint}
   DERIVATIVE
     X = INTEG(-2.0*X, 1.0)
     TERMT(T >= 1.0)
@@ -437,6 +439,7 @@ def test_a_termt_a_float_after_an_event_stops_there():
 END
 """, "p.csl").run(advice=False)
     assert run.status == "stopped" and run.t_end == 1.0 and run.t[-1] == 1.0
+    assert np.all(np.diff(run.t) > 0)
     # eleven doses at 0, 0.1, ..., 0.9999999999999999 (the last a float before the
     # TERMT), each decaying at rate 2 to T = 1
     x = math.exp(-2.0) + sum(math.exp(-2.0 * (1.0 - 0.1 * k)) for k in range(11))

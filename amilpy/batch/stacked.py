@@ -364,9 +364,10 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
                         return None
                 if stopped is None and t >= stop_at:
                     stopped = stop_what
-                if on_grid or stopped is not None:
+                last = segments[-1][0][-1] if segments else -math.inf
+                if on_grid or (stopped is not None and not same(t, last)):
                     # (a row on the grid is the grid's instant, whatever rounding the
-                    # events' times gathered)
+                    # events' times gathered; a stop a float from the last row is it)
                     segments.append((np.array([times[i] if on_grid else t]), y[None].copy(),
                                      z))
                     i += on_grid

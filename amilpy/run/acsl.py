@@ -38,6 +38,7 @@ from .driver import _Run
 from .loop import Cursor, Stop
 from .plan import (
     DEFAULTS,
+    SAME_INSTANT,
     Grid,
     Options,
     Purpose,
@@ -391,9 +392,11 @@ class AcslRun(_Run):
         if on_grid:
             self.rec.grid_row(cur.t, cur.y, cur.m, cur.z,
                               shown=self.rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
-        elif self.stopped is not None:
+        elif self.stopped is not None and (self.rec.last_t is None or abs(
+                self.rec.last_t - cur.t) > SAME_INSTANT * max(abs(cur.t), 1.0)):
             # (the instant a TERMT of code ended the run is its last row, as a located
-            # stop's is: its final values are those after the code that ran there)
+            # stop's is: its final values are those after the code that ran there; a
+            # row a float before it is that row)
             self.rec.row(cur.t, cur.y, cur.m, cur.z,
                          shown=self.rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
         if changed and self.acsl.cint_name in self.c.kept:

@@ -58,7 +58,11 @@ class Restarts:
             # the same state twice, the second row a float before the first)
             if rec is not None and (rec.last_t is None or
                                     abs(rec.last_t - tb) > SAME_INSTANT * max(abs(tb), 1.0)):
-                rec.row(tb, y, m, z)
+                # (a grid instant a float after the stop is this row: the grid's)
+                g = rec.out_i if rec.out_i < len(rec.times) and abs(
+                    rec.times[rec.out_i] - tb) <= SAME_INSTANT * max(abs(tb), 1.0) else -1
+                rec.row(tb, y, m, z, g)
+                rec.out_i += g >= 0
             return True
         if stop_at_event and len(self.events) > n_events:
             return True
