@@ -660,13 +660,16 @@ END
 def test_instants_a_few_floats_from_the_grid_are_taken_as_a_run_takes_them(tmp_path):
     # The ticks fall at sums of 0.1, some a float before a grid instant (0.7999...),
     # some a float after (1.5000...2), and one after the TERMT's instant (2.0000...4):
-    # a row a float before an event is taken before it, a row at an event after it,
-    # rows print the grid's instants, and the TERMT ends the run before a tick just
-    # after it -- the same rows and values as the runs one by one.
+    # a row a float from a tick is the tick's instant's row, after the tick (a run of
+    # its own held it so one step at a time, and took it before the tick where odeint
+    # gave the rows in a block), rows print the grid's instants, and the TERMT ends
+    # the run before a tick just after it -- the same rows and values either way.
     path = tmp_path / "ticks.csl"
     path.write_text(TICKS)
     together, _ = at_once_and_alone(path, {"K": "uniform(0.5, 1.5)"}, 4, 1)
     assert together.times[8] == 0.8 and together.times[15] == 1.5
+    n = together.band("N")[together.quantiles.index(50.0)]
+    assert n[8] == pytest.approx(0.9) and n[15] == pytest.approx(1.6)  # (after the ticks)
     assert together.final[0, 1] == pytest.approx(2.0)  # (20 ticks: 0 ... 1.9)
 
 

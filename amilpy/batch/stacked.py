@@ -375,9 +375,13 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
                     break
                 t_next = min(queue[0][0] if queue else math.inf, stop_at, plan.fintim,
                              times[i] if dynamic and i < len(times) else math.inf)
-                # (the rows before the next instant, however close: taken before its
-                # events, as a run of its own takes them)
-                j = i + int(np.searchsorted(times[i:], t_next, side="left"))
+                # (the rows before the next instant; one a float from an instant where
+                # code runs is that instant's row, after the code, as a run of its own
+                # holds it)
+                acts = bool(queue) and queue[0][0] <= t_next or \
+                    dynamic and i < len(times) and times[i] <= t_next
+                edge = t_next - 1e-12 * max(abs(t_next), 1e-300) if acts else t_next
+                j = i + int(np.searchsorted(times[i:], edge, side="left"))
                 if j == i and t_next - t <= 1e-12 * max(abs(t), 1.0):
                     t = max(t, float(t_next))  # (as a run of its own: nothing to integrate)
                     continue

@@ -75,8 +75,13 @@ class FastPaths:
 
     def _batch(self, stepper: Stepper, cur: Cursor, seg_end: float, rec: Recorder, e_prev):
         T, Y = stepper.pending()
-        # the segment's end (a breakpoint, a pause) is the step-by-step path's
+        # the segment's end (a breakpoint, a pause) is the step-by-step path's, and so
+        # is a row the recorder holds for its caller (an ACSL instant a float from a
+        # grid instant: the row is taken there, after the instant's code)
         n = int(np.searchsorted(T, seg_end, side="left"))
+        if rec.hold is not None:
+            n = min(n, int(np.searchsorted(
+                T, rec.hold - 1e-12 * max(abs(rec.hold), 1e-300), side="left")))
         if n == 0:
             return e_prev
         T, Y = T[:n], Y[:n]
