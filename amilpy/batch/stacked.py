@@ -197,7 +197,9 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
         termination,
     )
     from ..run.code import Calls
+    from ..run.plan import same_instant, within
     from ..run.prepare import Cache
+    from ..run.record import close_to
 
     ir = model.ir
     acsl = ir.acsl
@@ -318,9 +320,6 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
     segments: list[tuple[np.ndarray, np.ndarray, list[np.ndarray]]] = []
     t, i, events, steps, stopped = plan.t0, 0, 0, 0, None
 
-    def same(a: float, b: float) -> bool:
-        return math.isfinite(b) and abs(a - b) <= 1e-12 * max(abs(b), 1.0)
-
     dynamic = bool(acsl.dynamic.body)  # (its statements run at every CINT instant)
 
     def reported(calls) -> bool:
@@ -328,7 +327,7 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
         taken; False for a SCHEDULE into the past (the runs one by one say so)."""
         nonlocal order, stopped
         for when, name in calls.schedules:
-            if when < t - 1e-12 * max(abs(t), 1.0):
+            if when < t - within(t):
                 return False
             heapq.heappush(queue, (max(when, t), order, name))
             order += 1
@@ -346,7 +345,7 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
                     # one at the very instant acts first, as in a run of its own)
                     stopped = stop_what
                 while queue and not at_end and stopped is None and \
-                        queue[0][0] <= t + 1e-12 * max(abs(t), 1.0):
+                        queue[0][0] <= t + within(t):
                     _, _, due = heapq.heappop(queue)
                     y, z, _, calls = section(fns[due], t, y, z)
                     if not reported(calls):
@@ -357,7 +356,7 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
                     if gaps.get(due, 0.0) > 0:
                         heapq.heappush(queue, (t + gaps[due], order, due))
                         order += 1
-                on_grid = i < len(times) and same(t, times[i])
+                on_grid = i < len(times) and same_instant(t, times[i])
                 if dynamic and on_grid and not at_end and stopped is None:
                     y, z, _, calls = section("dynamic", t, y, z)
                     if not reported(calls):
@@ -365,7 +364,7 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
                 if stopped is None and t >= stop_at:
                     stopped = stop_what
                 last = segments[-1][0][-1] if segments else -math.inf
-                if on_grid or (stopped is not None and not same(t, last)):
+                if on_grid or (stopped is not None and not same_instant(t, last)):
                     # (a row on the grid is the grid's instant, whatever rounding the
                     # events' times gathered; a stop a float from the last row is it)
                     segments.append((np.array([times[i] if on_grid else t]), y[None].copy(),
@@ -380,9 +379,10 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
                 # holds it)
                 acts = bool(queue) and queue[0][0] <= t_next or \
                     dynamic and i < len(times) and times[i] <= t_next
-                edge = t_next - 1e-12 * max(abs(t_next), 1e-300) if acts else t_next
-                j = i + int(np.searchsorted(times[i:], edge, side="left"))
-                if j == i and t_next - t <= 1e-12 * max(abs(t), 1.0):
+                j = i + int(np.searchsorted(times[i:], t_next, side="left"))
+                while acts and j > i and close_to(times[j - 1], t_next):
+                    j -= 1
+                if j == i and t_next - t <= within(t):
                     t = max(t, float(t_next))  # (as a run of its own: nothing to integrate)
                     continue
                 ts = np.concatenate([[t], times[i:j], [t_next]])

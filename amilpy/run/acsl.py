@@ -38,7 +38,6 @@ from .driver import _Run
 from .loop import Cursor, Stop
 from .plan import (
     DEFAULTS,
-    SAME_INSTANT,
     Grid,
     Options,
     Purpose,
@@ -46,6 +45,8 @@ from .plan import (
     make_grid,
     make_plan,
     resolve_step_point,
+    same_instant,
+    within,
 )
 from .prepare import Cache, Prepared, before_run, constant_modes, random_seed
 
@@ -273,14 +274,14 @@ class AcslRun(_Run):
 
     # ------------------------------------------------------------------- queue
     def schedule(self, t: float, section: str, now: float | None = None) -> None:
-        if now is not None and t < now - 1e-12 * max(abs(now), 1.0):
+        if now is not None and t < now - within(now):
             raise Stop(Failure.FAULT, now, detail=f"SCHEDULE {section} at T = {t:.9g}, "
                        "before the present time")
         heapq.heappush(self.queue, (max(t, now) if now is not None else t, next(self.order),
                                     section))
 
     def due(self, t: float) -> bool:
-        return bool(self.queue) and self.queue[0][0] <= t + 1e-12 * max(abs(t), 1.0)
+        return bool(self.queue) and self.queue[0][0] <= t + within(t)
 
     def next_instant(self, t: float) -> tuple[float, bool]:
         """The next instant something happens, and whether it acts (else only ends)."""
@@ -381,7 +382,7 @@ class AcslRun(_Run):
         changed = self.run_due(cur)
         times = self.plan.grid.times
         on_grid = self.rec.out_i < len(times) and \
-            abs(times[self.rec.out_i] - cur.t) <= 1e-12 * max(abs(cur.t), 1.0)
+            same_instant(cur.t, times[self.rec.out_i])
         if on_grid and self.dynamic is not None and self.stopped is None:
             self.run_code(cur, self.dynamic, "DYNAMIC")
             changed = True
@@ -392,8 +393,8 @@ class AcslRun(_Run):
         if on_grid:
             self.rec.grid_row(cur.t, cur.y, cur.m, cur.z,
                               shown=self.rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
-        elif self.stopped is not None and (self.rec.last_t is None or abs(
-                self.rec.last_t - cur.t) > SAME_INSTANT * max(abs(cur.t), 1.0)):
+        elif self.stopped is not None and (self.rec.last_t is None or
+                                           not same_instant(self.rec.last_t, cur.t)):
             # (the instant a TERMT of code ended the run is its last row, as a located
             # stop's is: its final values are those after the code that ran there; a
             # row a float before it is that row)
@@ -444,7 +445,7 @@ class AcslRun(_Run):
                 self.instant(cur)
                 continue
             rec.hold = t_next if acts else None
-            if t_next - cur.t <= 1e-12 * max(abs(cur.t), 1.0):
+            if t_next - cur.t <= within(cur.t):
                 # (an instant that rounding put a few floats after this one, FINTIM
                 # after INTERVALs summed up to it: nothing to integrate, and LSODA
                 # refuses a span that short)

@@ -25,7 +25,7 @@ from ..outcome import Failure
 from ..steppers import Stepper
 from .cursor import Cursor, Stop
 from .plan import SLIDE, Purpose, RunPlan, SurfaceKind
-from .record import Recorder, output_table
+from .record import Recorder, close_to, output_table
 
 
 class FastPaths:
@@ -80,8 +80,8 @@ class FastPaths:
         # grid instant: the row is taken there, after the instant's code)
         n = int(np.searchsorted(T, seg_end, side="left"))
         if rec.hold is not None:
-            n = min(n, int(np.searchsorted(
-                T, rec.hold - 1e-12 * max(abs(rec.hold), 1e-300), side="left")))
+            held = np.flatnonzero(close_to(T[:n], rec.hold))
+            n = int(held[0]) if held.size else n
         if n == 0:
             return e_prev
         T, Y = T[:n], Y[:n]

@@ -420,6 +420,16 @@ def _grid(t0: float, fintim: float, step: float) -> np.ndarray:
 SAME_INSTANT = 1e-12
 
 
+def within(t: float) -> float:
+    """How far from t another instant is still t (SAME_INSTANT)."""
+    return SAME_INSTANT * max(abs(t), 1.0)
+
+
+def same_instant(a: float, b: float) -> bool:
+    """Whether a is the instant b (within SAME_INSTANT of it)."""
+    return math.isfinite(b) and abs(a - b) <= within(b)
+
+
 def nearest_instants(times: np.ndarray, t) -> tuple[np.ndarray, np.ndarray]:
     """For each of the instants t, the index of the nearest of the sorted `times`,
     and whether it is that instant (within SAME_INSTANT)."""

@@ -417,6 +417,12 @@ def vertices(t: np.ndarray, v: np.ndarray, mid: np.ndarray) -> tuple[np.ndarray,
     return np.where(use, top, v1), np.where(use, ts, t1)
 
 
+
+def close_to(t, instant: float):
+    """Whether t (a float or an array) is `instant` to 1e-12 relative: a grid row
+    printed at its grid instant, the row held for an instant of the caller's."""
+    return np.abs(np.asarray(t) - instant) <= 1e-12 * np.maximum(np.abs(t), 1e-300)
+
 class Recorder:
     """The rows of one run, and the `Run` made of them."""
 
@@ -491,7 +497,7 @@ class Recorder:
 
     def row(self, t: float, y: np.ndarray, m, z, g: int = -1, shown=None) -> None:
         """One row at t (grid instant g, or -1), in modes m (shown: as displayed)."""
-        if g >= 0 and abs(t - self.times[g]) <= 1e-12 * max(abs(t), 1e-300):
+        if g >= 0 and close_to(t, self.times[g]):
             t = float(self.times[g])  # print the grid instant, not a float next to it
         values = self.outputs(t, y, m if shown is None else shown, z)
         self.rows.add(t, g, values)
@@ -508,7 +514,7 @@ class Recorder:
 
     def grid_row(self, t: float, y: np.ndarray, m, z, shown=None) -> None:
         """The row of the next grid instant (none at the instant held for the caller)."""
-        if self.hold is not None and abs(t - self.hold) <= 1e-12 * max(abs(t), 1e-300):
+        if self.hold is not None and close_to(t, self.hold):
             return
         self.row(t, y, m, z, self.out_i, shown)
         self.out_i += 1

@@ -11,7 +11,7 @@ from ..result import Event
 from ..steppers import StepFailure, Stepper
 from .cursor import Cursor, Stop, WatchedStep
 from .faults import fault_text
-from .plan import SAME_INSTANT, Purpose
+from .plan import Purpose, same_instant
 from .record import Recorder
 
 
@@ -56,11 +56,10 @@ class Restarts:
             # (the stop's row, unless the grid's row just taken is this instant: a grid
             # instant a float from the stop, 3 x 0.1 against TERMT(T >= 0.3), printed
             # the same state twice, the second row a float before the first)
-            if rec is not None and (rec.last_t is None or
-                                    abs(rec.last_t - tb) > SAME_INSTANT * max(abs(tb), 1.0)):
+            if rec is not None and (rec.last_t is None or not same_instant(rec.last_t, tb)):
                 # (a grid instant a float after the stop is this row: the grid's)
-                g = rec.out_i if rec.out_i < len(rec.times) and abs(
-                    rec.times[rec.out_i] - tb) <= SAME_INSTANT * max(abs(tb), 1.0) else -1
+                g = rec.out_i if rec.out_i < len(rec.times) and \
+                    same_instant(rec.times[rec.out_i], tb) else -1
                 rec.row(tb, y, m, z, g)
                 rec.out_i += g >= 0
             return True
