@@ -350,13 +350,12 @@ def test_program_colon_and_padding_after_the_last_line():
     assert run(text)["X"][-1] == pytest.approx(1.0)
 
 
-def test_a_termt_of_code_at_an_instant_off_the_grid_ends_there_with_its_row():
-    """TERMT inside DISCRETE at T = 1.125 (ticks every 0.375, rows every 0.5): the run
-    stops there and its last row is that instant, after the tick (N = 4): the final
-    values were the 1.0 row's (N = 3), and TERMINAL read them."""
-    run, = amilpy.loads("""PROGRAM p
-  CINTERVAL CINT = 0.5
-  TIMER FINTIM = 5.0
+def ticking(cint: str, fintim: str, interval: str, extra: str = "") -> str:
+    """A state driven by N, the count of the ticks of a DISCRETE section every
+    `interval` (`extra`: more statements of that section)."""
+    return f"""PROGRAM p
+  CINTERVAL CINT = {cint}
+  TIMER FINTIM = {fintim}
   INITIAL
     N = 0.0
   END
@@ -364,13 +363,21 @@ def test_a_termt_of_code_at_an_instant_off_the_grid_ends_there_with_its_row():
     X = INTEG(-X + N, 1.0)
   END
   DISCRETE TICK
-    INTERVAL DT = 0.375
-    N = N + 1.0
-    TERMT(T >= 1.1, 'ticked enough')
+    INTERVAL DT = {interval}
+    N = N + 1.0{extra}
   END
   PRINT X, N
 END
-""", "p.csl").run(advice=False)
+"""
+
+
+def test_a_termt_of_code_at_an_instant_off_the_grid_ends_there_with_its_row():
+    """TERMT inside DISCRETE at T = 1.125 (ticks every 0.375, rows every 0.5): the run
+    stops there and its last row is that instant, after the tick (N = 4): the final
+    values were the 1.0 row's (N = 3), and TERMINAL read them."""
+    run, = amilpy.loads(ticking("0.5", "5.0", "0.375",
+                                "\n    TERMT(T >= 1.1, 'ticked enough')"),
+                        "p.csl").run(advice=False)
     assert run.status == "stopped" and "ticked enough" in run.message
     assert list(run.t) == [0.0, 0.5, 1.0, 1.125]
     assert run["N"][-1] == 4.0 and run.final["N"] == 4.0
@@ -380,22 +387,7 @@ def test_fintim_a_float_after_the_last_event_finishes():
     """INTERVAL 0.7 three times is 2.0999999999999996, a float before FINTIM = 2.1:
     the run went on to integrate that one float and LSODA refused it ("Unexpected
     istate"); it finishes at 2.1 after the third tick."""
-    run, = amilpy.loads("""PROGRAM p
-  CINTERVAL CINT = 0.25
-  TIMER FINTIM = 2.1
-  INITIAL
-    N = 0.0
-  END
-  DERIVATIVE
-    X = INTEG(-X + N, 1.0)
-  END
-  DISCRETE S
-    INTERVAL DT = 0.7
-    N = N + 1.0
-  END
-  PRINT X, N
-END
-""", "p.csl").run(advice=False)
+    run, = amilpy.loads(ticking("0.25", "2.1", "0.7"), "p.csl").run(advice=False)
     assert run.status == "finished" and run.t_end == 2.1 and run.final["N"] == 4.0
 
 

@@ -16,7 +16,7 @@ from itertools import count
 
 from .. import ir
 from ..diagnostics import AmilError, Diagnostic, Span
-from ..library import WEATHER_HOLD, lookup, templates, vector_functions
+from ..library import WEATHER_HOLD, lookup, templates
 from ..library.surfaces import constant_value, is_affine
 from ..library.templates import instantiate
 from ..parse import syntax as syn
@@ -33,6 +33,7 @@ from .pytree import (
     on_line,
     parameter,
     place,
+    vector_namespace,
     vectorised,
 )
 from .written import Statements, start, user_callable
@@ -506,9 +507,8 @@ class Compiler:
             module = py.Module(body=[vectorised(rhs, "rhs_vec")], type_ignores=[])
             self.shared["rhs_vec"] = compile(py.fix_missing_locations(module),
                                              self.model.path or self.model.name, "exec")
-        vector: dict[str, object] = {"__builtins__": {}, STATEMENTS: self.statements}
-        vector.update({f"_{k}": v for k, v in vector_functions().items()})
-        vector.update(self.global_tables)
+        vector: dict[str, object] = {"__builtins__": {}, STATEMENTS: self.statements,
+                                     **vector_namespace(), **self.global_tables}
         vector.update({parameter(n): v for n, v in values.items()})
         exec(self.code, vector)  # noqa: S102 - compiler-built tree, closed namespace
         exec(self.shared["rhs_vec"], vector)  # noqa: S102 - the same, elementwise
@@ -524,10 +524,8 @@ class Compiler:
         scalar: dict[str, object] = {"__builtins__": {}, **namespace(), **self.global_tables,
                                      STATEMENTS: self.statements, **values}
         exec(self.code, scalar)  # noqa: S102 - compiler-built tree, closed namespace
-        vector: dict[str, object] = {"__builtins__": {}, STATEMENTS: self.statements}
-        vector.update({f"_{k}": v for k, v in vector_functions().items()})
-        vector.update(self.global_tables)
-        vector.update(values)
+        vector: dict[str, object] = {"__builtins__": {}, STATEMENTS: self.statements,
+                                     **vector_namespace(), **self.global_tables, **values}
         exec(self.code, vector)  # noqa: S102 - the same code, elementwise functions
         trains, train_surfaces = binder.trains()
         if model.units:

@@ -387,8 +387,7 @@ def over_members(c, values: dict[str, object]) -> ModelJacobian:
     made elementwise, the library's functions NumPy's, `values` every parameter's
     value (a column, or one float all members share). `variable` then gives a
     column (or a float) per varying entry."""
-    from ..library import vector_functions
-    from .pytree import parameter, vectorised
+    from .pytree import parameter, vector_namespace, vectorised
 
     if "jacobian" not in c.shared:
         c.shared["jacobian"] = code(c.module, len(c.state_names))
@@ -398,8 +397,7 @@ def over_members(c, values: dict[str, object]) -> ModelJacobian:
         c.shared["jacobian_vec"] = compile(py.fix_missing_locations(module), "<jacobian>",
                                            "exec")
     scope: dict[str, object] = {"__builtins__": {}, "_DIFF": _diff_columns,
-                                "_SGN0": np.sign, **c.tables}
-    scope.update({f"_{k}": v for k, v in vector_functions().items()})
+                                "_SGN0": np.sign, **c.tables, **vector_namespace()}
     scope.update({parameter(name): v for name, v in values.items()})
     exec(c.shared["jacobian_vec"], scope)  # noqa: S102 - compiler-built tree, closed namespace
     return ModelJacobian(n, rows, cols, constant, scope["jac"], tree)

@@ -10,7 +10,7 @@ import math
 from collections.abc import Callable
 from functools import lru_cache
 
-from ..library import generation, math_functions
+from ..library import generation, math_functions, vector_functions
 from ..library.runtime import HELPERS, safe_pow
 from ..parse.syntax import deep_enough
 
@@ -37,6 +37,12 @@ def namespace() -> dict[str, object]:
     the run-time helpers, each as _NAME (as the library stands now: an entry
     registered later is there too). A fresh dictionary, for the caller to fill."""
     return dict(_current()[0])
+
+
+def vector_namespace() -> dict[str, object]:
+    """`namespace`'s functions elementwise on NumPy arrays, each as _NAME: a fresh
+    dictionary, for the caller to fill."""
+    return {f"_{k}": v for k, v in vector_functions().items()}
 
 
 def local(name: str) -> str:

@@ -26,8 +26,7 @@ from types import FunctionType
 
 import numpy as np
 
-from ..library import vector_functions
-from .pytree import clone, function, place
+from .pytree import clone, function, place, vector_namespace
 
 MIN_STATEMENTS = 400  # below this the scalar code is as fast (measured on the chain)
 MIN_PER_GROUP = 12  # statements per group on average, else nothing repeats enough
@@ -121,7 +120,7 @@ def build(module: py.Module, n: int) -> Callable | None:
     if len(statements) < MIN_PER_GROUP * len(groups):
         return None
     scope: dict[str, object] = {"__builtins__": {}}
-    scope.update({f"_{k}": v for k, v in vector_functions().items()})
+    scope.update(vector_namespace())
     body: list[py.stmt] = [py.parse(f"V = _EMPTY({len(values)})").body[0],
                            py.parse(f"V[:{n}] = y").body[0],
                            py.parse(f"D = _EMPTY({n})").body[0],

@@ -196,12 +196,10 @@ def compile_code(model: ir.Model, name_: str, codes, constants: dict[str, float]
         # the same function on NumPy columns (an ensemble's members at once): its
         # conditional expressions made elementwise, the library's functions NumPy's;
         # a statement that branches on a column raises ValueError there
-        from ..library import vector_functions
-        from .pytree import vectorised
+        from .pytree import vector_namespace, vectorised
 
         elementwise = py.Module(body=[vectorised(module.body[0], name_)], type_ignores=[])
-        vector = {"__builtins__": {}, **{f"_{k}": v for k, v in vector_functions().items()},
-                  **em.tables, STATEMENTS: table}
+        vector = {"__builtins__": {}, **vector_namespace(), **em.tables, STATEMENTS: table}
         exec(compile(py.fix_missing_locations(elementwise), model.path or model.name,  # noqa: S102
                      "exec"), vector)
         fn.elementwise = vector[name_]
