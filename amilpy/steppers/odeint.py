@@ -360,19 +360,27 @@ class OdeintStepper(Chunked):
             options["h0"] = min(self.first_step, ts[0] - self.t)
         if ts[-1] >= self.t_bound:
             options["tcrit"] = np.array([self.t_bound])
+        # (the log holds a list per evaluation: the cyclic collector would go over all
+        # of them again and again while the chunk runs, and once more at the first
+        # allocation after it, for nothing: it is off until they are read and freed)
+        collecting = self.log is not None and gc.isenabled()
         if self.log is not None:
             self.log.start()
-            # (the log holds a list per evaluation: the cyclic collector would go over
-            # all of them again and again while the chunk runs, for nothing)
-            collecting = gc.isenabled()
+        if collecting:
             gc.disable()
+        try:
+            self._integrate_chunk(grid, ts, checks, left, options)
+        finally:
+            if collecting:
+                gc.enable()
+
+    def _integrate_chunk(self, grid: np.ndarray, ts: np.ndarray, checks: np.ndarray,
+                         left: int, options: dict) -> None:
         started = time.perf_counter()
         try:
             ys, info = self._odeint(self.y, grid, self.log.fun if self.log else None, **options)
         finally:
             self._seconds += time.perf_counter() - started
-            if self.log is not None and collecting:
-                gc.enable()
         if info["message"] != "Integration successful.":
             self._keep_passed(ts, ys, info, left)
             self._log_steps()
