@@ -149,7 +149,6 @@ REFUSED: dict[str, tuple[str, str]] = {
     "STORAGE": ("CSMP's STORAGE (arrays)", "write one scalar per element (X1, X2, ...)"),
     "TABLE": ("the TABLE statement", "write a table as FUNCTION F = x1,y1, x2,y2, ... and "
               "read it with AFGEN(F, X)"),
-    "MACRO": ("ACSL's MACRO", "write the statements out, or a FUNCTION y = f(a, b) ... END"),
     "SUBMODEL": ("ACSL's SUBMODEL", "write the statements out"),
     "CHARACTER": ("CHARACTER variables", "remove it: strings are only TERMT messages, "
                   "WEATHER/TRANSLATION values and comments"),

@@ -81,6 +81,12 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
     ("ACSL", "`DIMENSION X(3)`, `CONSTANT X = 1.0, 2*0.0`, `X[I]`, `FOR I = 1, 3 ... END`",
      "the elements `X(1)`, `X(2)`, `X(3)`, variables of their own (Arrays, below)"),
     ("ACSL", "`ARRAY X(3)` (acslX)", "`DIMENSION X(3)`"),
+    ("ACSL", "`MACRO LAG(Y, X, TAU, Y0)` ... `MACRO END`, called `LAG(Z, U, 2.0, 0.0)` or "
+     "`Z = LAG(U, 2.0, 0.0)`; `MACRO STANDVAL Y0 = 0.0`, `MACRO REDEFINE R`",
+     "the body expanded at each call: an argument the body assigns is the call's variable, "
+     "the others the call's expressions (whole), arguments left out at the end their "
+     "STANDVAL values, REDEFINE's names each call's own, every other name the program's; "
+     "MACRO RELABEL, IF, GO TO and EXIT are refused"),
     ("ACSL", "`DO 10 I = 1, N` ... `10 CONTINUE`, `DO L1 I = 1, N` ... `L1: CONTINUE`",
      "`DO I = 1, N ... END DO` (one label may end several loops)"),
     ("ACSL", "`TABLE F, 1, 3 / 0., 1., 2., 0., 1., 4. /`, `Y = F(X)`", "`FUNCTION F = 0.,0., "

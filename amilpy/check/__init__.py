@@ -72,11 +72,11 @@ def _dynamic_in_initial(statements: list, rep: Reporter) -> list:
 def check(program: ast.Program, name: str | None = None) -> ir.Model:
     """The checked, sorted model of a parsed listing; raises AmilError with every
     fault found."""
-    if program.form == "ACSL":
-        from .acsl import check_acsl
-
-        return _carried(check_acsl(program, name), program)
     try:
+        if program.form == "ACSL":
+            from .acsl import check_acsl
+
+            return _carried(check_acsl(program, name), program)
         return _carried(_check_csmp(program, name), program)
     except AmilError as exc:
         if program.macros:

@@ -62,6 +62,11 @@ class _Open:
         return self.branches[-1][2]
 
 
+def _acsl_macro(item) -> bool:
+    """ACSL's MACRO NAME(A1, ...) head (not CSMP III's MACRO O = NAME(P))."""
+    return isinstance(item, Head) and item.kind == "MACRO" and bool(item.data[2])
+
+
 def _describe(kind: str) -> str:
     return _NAMES.get(kind, kind)
 
@@ -79,7 +84,9 @@ class Nester:
     def nest(self, items: list) -> tuple[str, str, list]:
         """(form, program name, top-level statements)."""
         first = next((s for s in items if not isinstance(s, ast.Title)), None)
-        acsl = isinstance(first, Head) and first.kind == "PROGRAM"
+        # (ACSL MACROs may be defined before the PROGRAM they serve)
+        acsl = isinstance(first, Head) and (first.kind == "PROGRAM" or _acsl_macro(first) and any(
+            isinstance(s, Head) and s.kind == "PROGRAM" for s in items))
         form = "ACSL" if acsl else "CSMP"
         stack: list[_Open] = []
         top: list = []
@@ -101,17 +108,22 @@ class Nester:
             target = stack[-1].body if stack else top
             if isinstance(item, Head):
                 if item.kind == "PROGRAM":
-                    if not acsl or stack or top:
+                    if not acsl or stack or not all(isinstance(s, ast.Macro) for s in top):
                         self.error("PROGRAM or MODEL must be the first statement", item.span,
                                    "a file in ACSL form starts with PROGRAM or MODEL")
                         continue
                     name = item.name or ""
-                elif item.kind == "MACRO" and (acsl or stack):
+                elif item.kind == "MACRO" and _acsl_macro(item) and not acsl:
+                    self.error("ACSL's MACRO NAME(A1, A2) ... MACRO END belongs to the ACSL "
+                               "form", item.span, "start the file with PROGRAM, or write "
+                               "CSMP III's MACRO O1 = NAME(P1, P2) ... ENDMAC")
+                    continue
+                elif item.kind == "MACRO" and not _acsl_macro(item) and (acsl or stack):
                     self.error("MACRO ... ENDMAC stands at the top level of a CSMP-form "
-                               "listing" if not acsl else "ACSL's MACRO: not supported",
-                               item.span, "define it before the statements that call it"
-                               if not acsl else "write the statements out, or a FUNCTION "
-                               "y = f(a, b) ... END")
+                               "listing" if not acsl else "CSMP III's MACRO O = NAME(P) ... "
+                               "ENDMAC in the ACSL form", item.span,
+                               "define it before the statements that call it" if not acsl
+                               else "write ACSL's MACRO NAME(O, P) ... MACRO END")
                     continue
                 elif not acsl and item.kind in ACSL_ONLY:
                     self.error(f"{_describe(item.kind)} belongs to the ACSL form", item.span,
@@ -142,7 +154,7 @@ class Nester:
                     stack[-1].body.append(inner)
                     done = stack.pop()
                 if done.head.kind == "PROGRAM":
-                    top = list(self.block(done))
+                    top = top + list(self.block(done))  # (after the MACROs before it)
                     closed = item.span
                     continue
                 built = self.block(done)
@@ -161,6 +173,8 @@ class Nester:
 
     @staticmethod
     def closer(kind: str, acsl: bool) -> str:
+        if kind == "MACRO" and acsl:
+            return "MACRO END"
         if kind == "IF":
             return "END IF" + (" (or END)" if acsl else "")
         if kind == "DO":
@@ -182,7 +196,8 @@ class Nester:
             return None
         if kind in CLOSERS and item.kind != CLOSERS[kind]:
             self.error(f"{'END' if item.kind == 'END' else item.kind} inside the {kind} of "
-                       f"line {line}", item.span, f"a {kind} ends with {CLOSERS[kind]}")
+                       f"line {line}", item.span, f"a {kind} ends with "
+                       f"{self.closer(kind, acsl)}")
             return None
         if item.label is not None and stack[-1].head.label != item.label:
             self.error(f"{item.label} CONTINUE ends no DO loop labelled {item.label}"
@@ -218,8 +233,17 @@ class Nester:
             var, start, stop, step = head.data
             return ast.Loop(var, start, stop, step, body, head.span, head.kind)
         if head.kind == "MACRO":
-            outputs, params = head.data
-            return ast.Macro(head.name or "", outputs, params, body, head.span)
+            outputs, params, acsl = head.data
+            if not acsl:
+                return ast.Macro(head.name or "", outputs, params, body, head.span)
+            directives = [st for st in body if isinstance(st, ast.MacroDirective)]
+            return ast.Macro(
+                head.name or "", (), params,
+                tuple(st for st in body if not isinstance(st, ast.MacroDirective)),
+                head.span, True,
+                tuple(pair for d in directives if d.kind == "STANDVAL"
+                      for pair in zip(d.names, d.values, strict=True)),
+                tuple(n for d in directives if d.kind == "REDEFINE" for n in d.names))
         if head.kind == "FUNCTION":
             result, params = head.data
             return ast.FunctionDef(head.name or "", result, params, body, head.span)

@@ -42,8 +42,20 @@ MAX_RUNS = 10_000  # value-list runs in one group: beyond this, a typo or a swee
 def _rest_code(node) -> str:
     """The code of a refused statement's text (REST), on one line: comments dropped,
     continuation marks taken out."""
+    return _code(str(node.children[1]))
+
+
+def _code(text: str) -> str:
+    """Statement text on one line: comments dropped, continuation marks taken out."""
     return " ".join(line[:code_end(line)].rstrip().removesuffix("&").removesuffix("...")
-                    for line in str(node.children[1]).split("\n")).strip()
+                    for line in text.split("\n")).strip()
+
+
+# ACSL's MACRO directives, besides STANDVAL, REDEFINE and END (MACRO NAME(...) with one
+# of these words is the directive, not a MACRO of that name)
+ACSL_MACRO_WORDS = frozenset({"RELABEL", "IF", "GO", "GOTO", "CONTINUE", "EXIT",
+                              "DECREMENT", "INCREMENT", "ASSIGN", "PRINT", "REDEFINE",
+                              "STANDVAL", "END", "ENDMACRO"})
 
 
 def _label(text: str) -> str:
@@ -161,7 +173,7 @@ class Builder:
         built = self.statement(inner)
         if built is None:
             return None
-        if not isinstance(built, (ast.Assign, ast.Termt, ast.Schedule, ast.If)):
+        if not isinstance(built, (ast.Assign, ast.Termt, ast.Schedule, ast.If, ast.MacroCall)):
             return None
         span = self.span(node)
         return ast.If((ast.Branch(self.expr(cond), (built,), span),), span)
@@ -521,17 +533,64 @@ class Builder:
     def st_endpro(self, node) -> Close:
         return Close("ENDPRO", self.span(node))
 
-    def st_macro(self, node) -> Head | None:
-        """MACRO O1, O2 = NAME(P1, ...): CSMP III's; anything else (ACSL's MACRO
-        NAME(args), with its own substitution rules) is refused."""
+    def st_macro(self, node) -> Head | Close | ast.MacroDirective | None:
+        """MACRO O1, O2 = NAME(P1, ...) (CSMP III's); ACSL's MACRO NAME(A1, ...), MACRO
+        END, MACRO STANDVAL A = v, ... and MACRO REDEFINE X, ...; ACSL's other MACRO
+        directives (RELABEL, IF, GO TO, EXIT, ...) are refused by name."""
+        import re
+
+        span = self.span(node)
         lists = self._named_lists(node)
-        if lists is None:
-            what, hint = REFUSED["MACRO"]
-            self.refuse(what, self.span(node), hint + "; CSMP III's MACRO O = NAME(P, ...) "
-                        "... ENDMAC is expanded")
+        if lists is not None:
+            outputs, name, params = lists
+            return Head("MACRO", span, name, (outputs, params, False))
+        text = _code(str(node.children[0]) if node.children and node.children[0] else "")
+        head = re.fullmatch(r"([A-Za-z]\w*)\s*\(\s*([A-Za-z]\w*(?:\s*,\s*[A-Za-z]\w*)*)?"
+                            r"\s*\)", text)
+        if head is not None and head.group(1).upper() not in ACSL_MACRO_WORDS:
+            params = tuple(n.strip().upper() for n in (head.group(2) or "").split(",")
+                           if n.strip())
+            return Head("MACRO", span, head.group(1).upper(), ((), params, True))
+        word = re.match(r"[A-Za-z]+", text)
+        word = word.group().upper() if word else ""
+        rest = text[len(word):].strip()
+        if word in ("END", "ENDMACRO") and not rest:
+            return Close("ENDMAC", span)
+        if word == "REDEFINE":
+            names = [n.strip().upper() for n in rest.split(",")]
+            if names and all(re.fullmatch(r"[A-Z]\w*", n) for n in names):
+                return ast.MacroDirective("REDEFINE", tuple(names), (), span)
+            self.errors.append(Diagnostic(
+                "MACRO REDEFINE takes names: MACRO REDEFINE X, Y", span,
+                "list the names each call of the MACRO keeps to itself"))
             return None
-        outputs, name, params = lists
-        return Head("MACRO", self.span(node), name, (outputs, params))
+        if word == "STANDVAL":
+            items = [re.fullmatch(r"([A-Za-z]\w*)\s*=\s*([-+]?[0-9.]+(?:[EDed][-+]?\d+)?)",
+                                  part.strip()) for part in rest.split(",")]
+            if rest and all(items):
+                return ast.MacroDirective(
+                    "STANDVAL", tuple(m.group(1).upper() for m in items),
+                    tuple(fortran_float(m.group(2)) for m in items), span)
+            self.errors.append(Diagnostic(
+                "MACRO STANDVAL takes NAME = number items: MACRO STANDVAL IC = 0.0", span,
+                "give each argument that may be left out its number"))
+            return None
+        if word in ACSL_MACRO_WORDS:
+            self.refuse(f"ACSL's MACRO {word}", span,
+                        "amilpy expands ACSL MACROs with their arguments, MACRO STANDVAL and "
+                        "MACRO REDEFINE: write the MACRO's statements without it")
+            return None
+        self.errors.append(Diagnostic(
+            "a MACRO head reads MACRO NAME(A1, A2, ...) (ACSL) or MACRO O1, O2 = NAME(P1, "
+            "P2) (CSMP III)", span,
+            "name the MACRO and its arguments; end an ACSL MACRO with MACRO END"))
+        return None
+
+    def st_macro_call(self, node) -> ast.MacroCall:
+        name, *args = node.children
+        args = [a for a in args if a is not None]
+        return ast.MacroCall(str(name).upper(), tuple(self.expr(a) for a in args),
+                             self.span(node))
 
     def st_nosort(self, node) -> ast.Nosort:
         return ast.Nosort(False, self.span(node))

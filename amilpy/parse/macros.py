@@ -144,17 +144,205 @@ def _substitute(expr: ast.Node, names: dict[str, str], values: dict[str, ast.Nod
     return replace(expr, **changes) if changes else expr
 
 
+class AcslExpander:
+    """ACSL's MACROs (`Macro.acsl`): defined anywhere in the program (or before it),
+    called as a statement NAME(e1, e2, ...) -- or A1, A2 = NAME(e3, ...), whose names
+    before '=' are the first arguments -- wherever a statement may stand. An argument
+    the body assigns must be given a name (the call's variable); the others stand for
+    the call's expressions (as a whole: an argument A + B is (A + B) wherever the body
+    reads it). Arguments left out at the end take their MACRO STANDVAL values. Names
+    listed in MACRO REDEFINE are each call's own (`NAME#k.X`); every other name of the
+    body is the program's, as ACSL has it."""
+
+    def __init__(self, errors: list[Diagnostic]) -> None:
+        self.errors = errors
+        self.macros: dict[str, ast.Macro] = {}
+        self.calls: dict[str, int] = {}
+        self.call_spans: dict[str, list] = {}
+        self.made = 0
+
+    def collect(self, statements) -> list:
+        """The statements without the ACSL MACROs they define (kept in `macros`)."""
+        out = []
+        for st in statements:
+            if isinstance(st, ast.Macro) and st.acsl:
+                if st.name in self.macros:
+                    self.errors.append(Diagnostic(
+                        f"MACRO {st.name} is defined twice", st.span,
+                        f"the first definition is at line {self.macros[st.name].span.line}"))
+                else:
+                    self.macros[st.name] = replace(st, body=tuple(self.collect(st.body)))
+                continue
+            out.append(_with_bodies(st, self.collect))
+        return out
+
+    def expand(self, statements, calling: tuple[str, ...] = ()) -> list:
+        out: list = []
+        for st in statements:
+            out.extend(self.statement(st, calling))
+        return out
+
+    def statement(self, st, calling: tuple[str, ...]) -> list:
+        if isinstance(st, ast.MacroDirective):
+            self.errors.append(Diagnostic(
+                f"MACRO {st.kind} stands inside a MACRO NAME(...) ... MACRO END", st.span,
+                "move it into the MACRO it belongs to"))
+            return []
+        if isinstance(st, ast.MacroCall):
+            return self.call(st.name, (), st.args, st.span, calling)
+        if isinstance(st, ast.Assign) and isinstance(st.expr, ast.Call) and \
+                st.expr.func in self.macros and not st.subscripts:
+            outputs = tuple(ast.Name(t, sp) for t, sp in
+                            zip(st.targets, st.target_spans, strict=True))
+            return self.call(st.expr.func, outputs, st.expr.args, st.span, calling)
+        if isinstance(st, ast.Assign):
+            for node in ast.walk(st.expr):
+                if isinstance(node, ast.Call) and node.func in self.macros:
+                    self.errors.append(Diagnostic(
+                        f"MACRO {node.func} is called inside an expression", node.span,
+                        f"call it as a statement of its own: {node.func}(...), or NAME = "
+                        f"{node.func}(...), then use NAME"))
+            return [st]
+        return [_with_bodies(st, lambda body: self.expand(body, calling))]
+
+    def call(self, name: str, outputs: tuple, args: tuple, span, calling) -> list:
+        macro = self.macros.get(name)
+        if macro is None:
+            self.errors.append(Diagnostic(
+                f"{name}(...) as a statement calls an ACSL MACRO, and no MACRO {name} is "
+                "defined", span, f"define MACRO {name}(A1, A2, ...) ... MACRO END, or write "
+                f"NAME = {name}(...) to use a function's value"))
+            return []
+        if name in calling:
+            self.errors.append(Diagnostic(
+                f"MACRO {name} calls itself" + (f" (through {', '.join(calling)})"
+                                                if calling[-1] != name else ""),
+                span, "a MACRO may call other MACROs, not itself"))
+            return []
+        given = outputs + tuple(args)
+        defaults = dict(macro.defaults)
+        signature = f"MACRO {name}({', '.join(macro.params)}) (line {macro.span.line})"
+        if len(given) > len(macro.params) or any(
+                p not in defaults for p in macro.params[len(given):]):
+            missing = [p for p in macro.params[len(given):] if p not in defaults]
+            self.errors.append(Diagnostic(
+                f"{name} takes {len(macro.params)} argument(s), "
+                + (f"{len(given)} given" if len(given) > len(macro.params) else
+                   f"and {', '.join(missing)} {'has' if len(missing) == 1 else 'have'} no "
+                   "MACRO STANDVAL value")
+                + f": {signature}", span, f"write {name}({', '.join(macro.params)}) with "
+                "your names and expressions"))
+            return []
+        values = dict(zip(macro.params, given, strict=False))
+        values |= {p: ast.Num(defaults[p], span, repr(defaults[p]))
+                   for p in macro.params[len(given):]}
+        self.calls[name] = k = self.calls.get(name, 0) + 1
+        self.call_spans.setdefault(name, []).append(span)
+        names = {n: f"{name}#{k}.{n}" for n in macro.local}
+        for p in sorted(_assigned(macro.body) & set(macro.params)):
+            actual = values.pop(p)
+            if not isinstance(actual, ast.Name):
+                self.errors.append(Diagnostic(
+                    f"argument {p} of MACRO {name} is assigned in it: the call must give a "
+                    "name there", span, f"{signature}: pass a variable as {p}"))
+                return []
+            names[p] = actual.name
+        body = [_rename(st, names, values) for st in macro.body]
+        self.made += len(body)
+        if self.made > MAX_EXPANSIONS:
+            self.errors.append(Diagnostic(
+                f"the MACRO calls expand to more than {MAX_EXPANSIONS} statements", span,
+                "call fewer MACROs, or MACROs with fewer statements"))
+            return []
+        return self.expand(body, calling + (name,))
+
+
+def _with_bodies(st, fix):
+    """st with `fix` applied to each statement list it holds (IF branches, blocks,
+    PROCEDURAL, loops, an ACSL MACRO's body)."""
+    if isinstance(st, ast.If):
+        return replace(st, branches=tuple(replace(b, body=tuple(fix(b.body)))
+                                          for b in st.branches))
+    if isinstance(st, (ast.Block, ast.Procedural, ast.Loop, ast.FunctionDef)):
+        return replace(st, body=tuple(fix(st.body)))
+    return st
+
+
+def _assigned(body) -> set[str]:
+    """The names a MACRO body gives values to (assignments, loop variables, PROCEDURAL
+    outputs), at any depth."""
+    out: set[str] = set()
+    for st in body:
+        for node in ast.walk(st) if isinstance(st, ast.Node) else ():
+            if isinstance(node, ast.Assign):
+                out.update(node.targets)
+            elif isinstance(node, ast.Loop):
+                out.add(node.var)
+            elif isinstance(node, ast.Procedural):
+                out.update(node.outputs)
+    return out
+
+
+def _rename(st, names: dict[str, str], values: dict[str, ast.Node]):
+    """A statement of an ACSL MACRO's body for one call: names renamed, arguments
+    replaced by the call's expressions."""
+    def expr(e):
+        return None if e is None else _substitute(e, names, values)
+
+    def name(n: str) -> str:
+        return names.get(n, n)
+
+    def reads(n: str) -> tuple[str, ...]:
+        if n in values:  # (a PROCEDURAL's input given as an expression: what it reads)
+            return tuple(x.name for x in ast.walk(values[n]) if isinstance(x, ast.Name))
+        return (name(n),)
+
+    def body(statements):
+        return tuple(_rename(s, names, values) for s in statements)
+
+    if isinstance(st, ast.Assign):
+        return replace(st, targets=tuple(name(t) for t in st.targets), expr=expr(st.expr),
+                       subscripts=tuple(expr(e) for e in st.subscripts))
+    if isinstance(st, ast.MacroCall):
+        return replace(st, args=tuple(expr(a) for a in st.args))
+    if isinstance(st, ast.If):
+        return replace(st, branches=tuple(replace(b, cond=expr(b.cond), body=body(b.body))
+                                          for b in st.branches))
+    if isinstance(st, ast.Procedural):
+        return replace(st, outputs=tuple(name(o) for o in st.outputs),
+                       inputs=tuple(dict.fromkeys(r for i in st.inputs for r in reads(i))),
+                       body=body(st.body))
+    if isinstance(st, ast.Loop):
+        return replace(st, var=name(st.var), start=expr(st.start), stop=expr(st.stop),
+                       step=expr(st.step), body=body(st.body))
+    if isinstance(st, ast.Block):
+        return replace(st, body=body(st.body))
+    if isinstance(st, (ast.Termt, ast.Schedule, ast.Interval, ast.Cinterval)):
+        return replace(st, expr=expr(st.expr))
+    return st
+
+
 def expand(statements: list, errors: list[Diagnostic]) -> tuple[list, tuple]:
     """The top-level statements with every MACRO call expanded, the MACROs removed;
     and (name, first line, last line, call spans) of each MACRO (`Program.macros`)."""
     expander = Expander(errors)
+    acsl = AcslExpander(errors)
     with ast.deep_enough():
-        out = expander.expand(statements)
+        out = acsl.expand(acsl.collect(statements)) if _any_acsl(statements) else statements
+        out = expander.expand(out)
     where = tuple((m.name, m.span.line,
                    max([m.span.line] + [s.span.end_line for s in m.body]),
-                   tuple(expander.call_spans.get(m.name, ())))
-                  for m in expander.macros.values())
+                   tuple(e.call_spans.get(m.name, ())))
+                  for e in (expander, acsl) for m in e.macros.values())
     return out, where
+
+
+def _any_acsl(statements) -> bool:
+    """Whether ACSL MACROs are defined or called (else the statements stay as they
+    are, not rebuilt)."""
+    return any(isinstance(n, (ast.MacroCall, ast.MacroDirective)) or
+               isinstance(n, ast.Macro) and n.acsl
+               for st in statements for n in ast.walk(st))
 
 
 def in_macros(diagnostics: list[Diagnostic], macros) -> list[Diagnostic]:

@@ -543,15 +543,41 @@ class Weather(Node):
 
 @dataclass(frozen=True)
 class Macro(Node):
-    """MACRO O1, O2 = NAME(P1, P2) ... ENDMAC (CSMP III): expanded at each call
-    before checking (parse/macros.py); no later stage sees one."""
+    """MACRO O1, O2 = NAME(P1, P2) ... ENDMAC (CSMP III), or ACSL's MACRO NAME(A1,
+    A2) ... MACRO END (`acsl`: every argument positional, `defaults` from MACRO
+    STANDVAL, `local` the names MACRO REDEFINE makes each call's own): expanded at
+    each call before checking (parse/macros.py); no later stage sees one."""
 
     name: str
     outputs: tuple[str, ...]
     params: tuple[str, ...]
     body: tuple[Statement, ...]
     span: Span
+    acsl: bool = False
+    defaults: tuple[tuple[str, float], ...] = ()
+    local: tuple[str, ...] = ()
     child_fields = ("body",)
+
+
+@dataclass(frozen=True)
+class MacroCall(Node):
+    """NAME(e1, e2, ...) as a statement: a call of an ACSL MACRO (parse/macros.py)."""
+
+    name: str
+    args: tuple[Expr, ...]
+    span: Span
+    child_fields = ("args",)
+
+
+@dataclass(frozen=True)
+class MacroDirective(Node):
+    """MACRO STANDVAL A = v, ... or MACRO REDEFINE X, Y inside an ACSL MACRO: folded
+    into the MACRO when its body is read (parse/blocks.py)."""
+
+    kind: str  # STANDVAL or REDEFINE
+    names: tuple[str, ...]
+    values: tuple[float, ...]
+    span: Span
 
 
 @dataclass(frozen=True)
@@ -573,13 +599,14 @@ Statement = (
     Assign | Data | Table | Timer | Method | Tolerance | Finish | Termt | Report | Label
     | Title | Section | End | Stop | If | Procedural | Loop | FunctionDef | Block | Schedule
     | Interval | Cinterval | Variable | Control | Declare | Translation | Weather | DefineCall
-    | Macro | Nosort
+    | Macro | MacroCall | MacroDirective | Nosort
 )
 STATEMENTS: tuple[type[Node], ...] = (Assign, Data, Table, Timer, Method, Tolerance, Finish,
                                       Termt, Report, Label, Title, Section, End, Stop, If,
                                       Procedural, Loop, FunctionDef, Block, Schedule, Interval,
                                       Cinterval, Variable, Control, Declare, Translation,
-                                      Weather, DefineCall, Macro, Nosort)
+                                      Weather, DefineCall, Macro, MacroCall, MacroDirective,
+                                      Nosort)
 
 
 @dataclass(frozen=True)
@@ -589,8 +616,9 @@ class Program:
     source: str
     form: str = "CSMP"  # ACSL when the file starts with PROGRAM or MODEL (section 9)
     name: str = ""  # the ACSL program's name (the rest of its PROGRAM/MODEL line)
-    # CSMP III's MACROs, expanded before checking: (name, first and last line of the
-    # definition, the spans of its calls), so a fault in a body names the calls too
+    # the MACROs (CSMP III's and ACSL's), expanded before checking: (name, first and
+    # last line of the definition, the spans of its calls), so a fault in a body names
+    # the calls too
     macros: tuple[tuple[str, int, int, tuple[Span, ...]], ...] = ()
     # constants that size an array or bound a loop written out over one: fixed when
     # the listing is read (a run may not change them)
