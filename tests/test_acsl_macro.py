@@ -170,3 +170,24 @@ def test_macro_directives_and_blocks_out_of_place():
         amilpy.loads("MACRO M(Y, X)\nY = X\nMACRO END\nA = INTGRL(0.0, 1.0)\n"
                      "TIMER FINTIM = 1.0\nEND\n", name="m.amil")
     assert "belongs to the ACSL form" in err.value.render()
+
+
+def test_macros_before_the_program_leave_it_in_the_acsl_form():
+    # (the file's first statement is a MACRO: CONSTANT TAUS = 2.0, 4.0 still fills the
+    # array, as in any ACSL program) and array elements are arguments like any value
+    text = LAG + """PROGRAM arrays
+INITIAL
+  DIMENSION TAUS(2)
+  CONSTANT TAUS = 2.0, 4.0
+  CINTERVAL CINT = 1.0
+END
+DERIVATIVE
+  LAG(Z1, 1.0, TAUS(1))
+  LAG(Z2, 1.0, TAUS(2))
+  TERMT(T >= 4.0)
+END
+END
+"""
+    r = run(text)
+    assert np.max(np.abs(r["Z1"] - (1 - np.exp(-r.t / 2)))) < 1e-9
+    assert np.max(np.abs(r["Z2"] - (1 - np.exp(-r.t / 4)))) < 1e-9

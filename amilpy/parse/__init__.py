@@ -97,14 +97,23 @@ def parse(text: str, path: str | None = None) -> ast.Program:
 
 
 def is_acsl(prepared: str) -> bool:
-    """The file is in ACSL form: its first statement is PROGRAM or MODEL."""
+    """The file is in ACSL form: its first statement is PROGRAM or MODEL, or the first
+    after the ACSL MACROs (MACRO NAME(A1, ...) ... MACRO END) defined before it."""
     import re
 
+    in_macro = False
     for line in prepared.split("\n"):
         code = line[:code_end(line)].strip()
-        if code:
-            word = re.match(r"[A-Za-z]+", code)
-            return word is not None and word.group().upper() in ACSL_HEADS
+        if not code:
+            continue
+        if in_macro:
+            in_macro = re.fullmatch(r"(?i)MACRO\s+END(MACRO)?", code) is None
+            continue
+        if re.match(r"(?i)MACRO\s+[A-Za-z]\w*\s*\(", code):
+            in_macro = True  # (CSMP III's MACRO O = NAME(P) has '=' before its '(')
+            continue
+        word = re.match(r"[A-Za-z]+", code)
+        return word is not None and word.group().upper() in ACSL_HEADS
     return False
 
 
