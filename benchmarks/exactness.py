@@ -4,6 +4,7 @@ switching surfaces at every integrator step costs on each candidate way of doing
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/exactness.py [--repeats 5] [--out DIR]
     python benchmarks/exactness.py --before /path/to/older/checkout --rtol 1e-10 ...
+    python benchmarks/exactness.py --before ... --instructions   # (needs valgrind)
 
 Table 1 (`default route`): METHOD AUTO at RELERR `--rtol` (default: the listing's
 default, which is 1e-10 now), ABSERR = RELERR x `--atol-ratio` (1e-3, as the defaults):
@@ -114,8 +115,54 @@ def _in_child(tree: str | None, name: str, rtol, atol_ratio: float) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def default_route(names, rtol, atol_ratio, repeats, before: str | None = None
-                  ) -> list[dict]:
+# A child that counts the instructions of `runs` runs of one model under callgrind:
+# only those runs (the imports, the code generation and a first run are not counted),
+# with Python's hashing fixed and the chunks' wall-clock limit lifted (under valgrind a
+# chunk takes 50 times longer, and a tree that sizes its chunks by the clock would cut
+# them shorter than it does when not counted)
+_COUNTED = """
+import os, subprocess, sys
+sys.path.insert(0, {tree!r})
+import amilpy
+try:
+    from amilpy.run import segment
+    segment.CHUNK_SECONDS = 1e9
+except ImportError:
+    pass
+sys.path.insert(1, {here!r})
+from cases import all_cases
+case = all_cases()[{name!r}]
+kw = {kw!r}
+model = amilpy.loads(case.text, case.name)
+model.run(advice=False, **kw)
+subprocess.run(["callgrind_control", "-i", "on", str(os.getpid())], capture_output=True)
+for _ in range({runs}):
+    model.run(advice=False, **kw)
+subprocess.run(["callgrind_control", "-i", "off", str(os.getpid())], capture_output=True)
+"""
+
+
+def instructions(tree: str | None, name: str, rtol, atol_ratio: float, runs: int = 2
+                 ) -> float:
+    """Millions of instructions a run of `name` takes on the default route with the
+    amilpy in `tree` (None: this one), counted by callgrind: the same count every
+    time, whatever else the machine does, where CPU time on a shared 2-core machine
+    varies by a third from one run to the next."""
+    import subprocess
+
+    kw = {} if rtol is None else {"rtol": rtol, "atol": rtol * atol_ratio}
+    code = _COUNTED.format(tree=tree or os.path.dirname(HERE), here=HERE, name=name, kw=kw,
+                           runs=runs)
+    out = subprocess.run(["valgrind", "--tool=callgrind", "--instr-atstart=no",
+                          "--callgrind-out-file=/dev/null", sys.executable, "-c", code],
+                         capture_output=True, text=True, check=True, cwd=tree or os.getcwd(),
+                         env=dict(os.environ, PYTHONHASHSEED="0", OPENBLAS_NUM_THREADS="1"))
+    counted = [line for line in out.stderr.splitlines() if "Collected" in line]
+    return int(counted[-1].split()[-1]) / runs / 1e6
+
+
+def default_route(names, rtol, atol_ratio, repeats, before: str | None = None,
+                  counted: bool = False) -> list[dict]:
     rows = []
     for name in names:
         if before is None:
@@ -130,6 +177,9 @@ def default_route(names, rtol, atol_ratio, repeats, before: str | None = None
             for key in ("before", "before, defaults"):
                 row[key] = dict(runs[key][0],
                                 ms=statistics.median(r["ms"] for r in runs[key]))
+            if counted:
+                row["Minstr"] = instructions(None, name, rtol, atol_ratio)
+                row["before"]["Minstr"] = instructions(before, name, rtol, atol_ratio)
         rows.append(row)
         print(f"{name:22s} {row['ms']:8.1f} ms  nfev {row['nfev']:7d}  "
               f"events {row['events']:4d}  error {row['error']:.1e}  | OUTDEL x20: "
@@ -308,6 +358,16 @@ def markdown(table1, table2, args) -> str:
                        f"{r['ms'] / b['ms']:.2f} | {b['error']:.1e} | {b['coarse events']} "
                        f"({r['events']}) | {d['settings']} | {d['ms']:.1f} | "
                        f"{d['error']:.1e} | {d['coarse events']} |")
+        if "Minstr" in table1[0]:
+            out += ["", "Instructions a run takes at the same RELERR (callgrind, `--instructions`:"
+                    " the same count every time, where the CPU times above vary by a third "
+                    "from one round to the next on this machine):\n",
+                    "| model | now, M instructions | before | now / before |",
+                    "|---|---:|---:|---:|"]
+            for r in table1:
+                b = r["before"]
+                out.append(f"| {r['model']} | {r['Minstr']:.1f} | {b['Minstr']:.1f} | "
+                           f"{r['Minstr'] / b['Minstr']:.2f} |")
     if table2:
         ways = [k for k in table2[0] if k != "model"]
         out += ["", f"## Watching every step: the candidates (RELERR {args.cand_rtol:g}, "
@@ -333,8 +393,11 @@ def main(argv=None) -> tuple[list[dict], list[dict]]:
     p.add_argument("--out", default=None, help="write exactness.md here")
     p.add_argument("--before", default=None,
                    help="a checkout of older amilpy code: its columns side by side")
+    p.add_argument("--instructions", action="store_true",
+                   help="with --before: also count each run's instructions (valgrind)")
     args = p.parse_args(argv)
-    t1 = default_route(args.models, args.rtol, args.atol_ratio, args.repeats, args.before)
+    t1 = default_route(args.models, args.rtol, args.atol_ratio, args.repeats, args.before,
+                       args.instructions)
     t2 = [] if args.no_candidates else candidates(args.models, args.cand_rtol, args.atol_ratio,
                                                   args.repeats)
     text = markdown(t1, t2, args)
