@@ -1,4 +1,5 @@
-"""CSMP III's MACROs expanded (contract section 13): the last step of reading.
+"""MACROs expanded, the last step of reading: CSMP III's (contract section 13, below)
+and ACSL's (`AcslExpander`).
 
     MACRO Y = LAG2(T, X)          a call   A = LAG2(0.1, U)   becomes
        Y1 = REALPL(0., T, X)         LAG2#1.Y1 = REALPL(0., 0.1, U)
