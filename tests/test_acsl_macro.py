@@ -191,3 +191,142 @@ END
     r = run(text)
     assert np.max(np.abs(r["Z1"] - (1 - np.exp(-r.t / 2)))) < 1e-9
     assert np.max(np.abs(r["Z2"] - (1 - np.exp(-r.t / 4)))) < 1e-9
+
+
+# Arguments that are no plain values: an array read by subscript, a table read as a
+# function, a DISCRETE section a SCHEDULE names, an INTERVAL's name; and REDEFINE'd
+# names that are a CONSTANT or an array of each call. (what a run gives, by hand)
+VSUM = """PROGRAM arr
+MACRO VSUM(S, V, N)
+   MACRO REDEFINE I
+   PROCEDURAL(S = V)
+   S = 0.0
+   DO I = 1, N
+      S = S + V(I) + V[I]
+   END DO
+   END
+MACRO END
+DIMENSION A(3)
+CONSTANT A = 1.0, 2.0, 3.0
+DERIVATIVE
+  VSUM(Q, A, 3)                   ! Q = 2 (1 + 2 + 3) = 12
+  Z = INTEG(Q, 0.0)
+  TERMT(T >= 1.0)
+END
+END
+"""
+LOOKUP = """PROGRAM tab
+MACRO LOOKUP(Y, F, X)
+   Y = F(X)
+MACRO END
+TABLE GAIN, 1, 3 / 0.0, 1.0, 2.0, 0.0, 1.0, 4.0 /
+DERIVATIVE
+  LOOKUP(G, GAIN, 1.5)            ! G = 2.5, halfway from 1 to 4
+  Z = INTEG(G, 0.0)
+  TERMT(T >= 1.0)
+END
+END
+"""
+LOCALS = """PROGRAM arr
+MACRO TWO(S, X)
+   MACRO REDEFINE W, K
+   DIMENSION W(2)
+   CONSTANT K = 2.0
+   W(1) = X
+   W(2) = K*X
+   S = W(1) + W(2)
+MACRO END
+DERIVATIVE
+  TWO(P, 1.0)                     ! 3
+  TWO(Q, 2.0)                     ! 6
+  Z = INTEG(P + Q, 0.0)
+  TERMT(T >= 1.0)
+END
+END
+"""
+SECTIONS = """PROGRAM sp
+MACRO AFTER(SEC, D)
+   SCHEDULE SEC .AT. T + D
+MACRO END
+MACRO EVERY(DTN, DT)
+   INTERVAL DTN = DT
+MACRO END
+INITIAL
+  AFTER(bump, 0.25)
+END
+DYNAMIC
+  DERIVATIVE
+    C = INTEG(0.0, 0.0)
+    D = INTEG(0.0, 0.0)
+  END
+  DISCRETE bump                   ! C = 10 from 0.25 on
+    C = C + 10.0
+  END
+  DISCRETE tick                   ! D + 1 at 0, 0.5 and 1.0
+    EVERY(DTA, 0.5)
+    D = D + 1.0
+  END
+  TERMT(T >= 1.0)
+END
+END
+"""
+
+
+@pytest.mark.parametrize("text, name, final", [
+    (VSUM, "Z", 12.0), (LOOKUP, "Z", 2.5), (LOCALS, "Z", 9.0), (SECTIONS, "C", 10.0),
+    (SECTIONS, "D", 3.0),
+])
+def test_arguments_that_name_arrays_tables_sections_and_local_declarations(text, name, final):
+    r = run(text, rtol=1e-12, atol=1e-14)
+    assert r.t[-1] == pytest.approx(1.0, abs=1e-12)
+    assert r[name][-1] == pytest.approx(final, rel=1e-10)
+
+
+@pytest.mark.parametrize("definition, where, words", [
+    ("MACRO M(Y, X, X)\n   Y = X", "2:1", "MACRO M names its argument X twice"),
+    ("MACRO M(Y, X)\n   MACRO STANDVAL B = 1.0\n   Y = X", "2:1",
+     "MACRO STANDVAL B: no argument of MACRO M (Y, X)"),
+    ("MACRO M(Y, X)\n   MACRO STANDVAL X = 1.2.3\n   Y = X", "3:4",
+     "MACRO STANDVAL takes NAME = number items"),
+    ("MACRO ABS(Y, X)\n   Y = 2.0*X", "2:1",
+     "MACRO ABS: ABS is a function, which a MACRO of that name would hide"),
+    ("MACRO SET(Y, X)\n   Y = X", "2:1", "MACRO SET: SET is a keyword"),
+    ("MACRO M(Y, X)\n   IF (X > 0.0) THEN\n      MACRO REDEFINE Q\n   END IF\n   Y = X",
+     "4:7", "MACRO REDEFINE stands in the MACRO's own body, not inside a block of it"),
+])
+def test_a_faulty_definition_is_said_once_and_its_calls_are_not(definition, where, words):
+    name = definition.split()[1].split("(")[0]
+    text = ("PROGRAM p\n" + definition + f"\nMACRO END\nDERIVATIVE\n  {name}(Z, 1.0)\n"
+            "  W = INTEG(1.0, 0.0)\n  TERMT(T >= 1.0)\nEND\nEND\n")
+    message = fault(text)
+    assert f"m.csl:{where}: error: {words}" in message, message
+    assert "is defined" not in message  # (the definition's fault only, not its calls')
+
+
+def test_a_macro_call_in_a_condition_and_misplaced_calls_say_what_to_write():
+    text = ("PROGRAM p\nMACRO TWICE(Y, X)\n   Y = 2.0*X\nMACRO END\nDIMENSION B(2)\n"
+            "DERIVATIVE\n  W = INTEG(1.0, 0.0)\n  IF (TWICE(T) > 1.0) Q = 1.0\n"
+            "  TERMT(TWICE(T) >= 2.0)\n  B(1) = TWICE(1.0)\nEND\nEND\n")
+    message = fault(text)
+    assert "m.csl:8:7: error: MACRO TWICE is called inside an expression" in message
+    assert "m.csl:9:9: error: MACRO TWICE is called inside an expression" in message
+    assert "m.csl:10:3: error: MACRO TWICE gives its values to names, not to an array's " \
+           "element" in message
+    with pytest.raises(AmilError) as err:  # a statement NAME(...) in the CSMP form
+        amilpy.loads("A = INTGRL(0.0, 1.0)\nDEBUG(1)\nTIMER FINTIM = 1.0\nEND\n",
+                     name="m.amil")
+    assert "m.amil:2:1: error: DEBUG(...) is no statement of the CSMP form" in \
+        err.value.render()
+    with pytest.raises(AmilError) as err:  # CSMP III's MACRO called ACSL's way
+        amilpy.loads("MACRO Y = LAG1(T1, X)\nY = REALPL(0.0, T1, X)\nENDMAC\n"
+                     "LAG1(2.0, 1.0)\nTIMER FINTIM = 1.0\nEND\n", name="m.amil")
+    assert "MACRO LAG1 is CSMP III's: it is called Y = LAG1(T1, X)" in err.value.render()
+
+
+def test_a_fault_inside_a_block_of_a_macro_names_the_call():
+    text = ("PROGRAM p\nMACRO SAT(Y, X)\n   IF (X > 1.0) THEN\n      Y = 1.0\n   ELSE\n"
+            "      Y = X + UNDEFINEDNAME\n   END IF\nMACRO END\nDERIVATIVE\n  SAT(Z, T)\n"
+            "  W = INTEG(Z, 0.0)\n  TERMT(T >= 1.0)\nEND\nEND\n")
+    message = fault(text)
+    assert "m.csl:6:15: error: UNDEFINEDNAME is used but never defined" in message
+    assert "m.csl:10:3: note: in MACRO SAT, called here" in message

@@ -88,7 +88,7 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     items = builder.statements(tree)
     nester = Nester(builder.errors)
     form, name, statements = nester.nest(items)
-    statements, macros = expand(statements, builder.errors)
+    statements, macros = expand(statements, builder.errors, form == "ACSL")
     statements, fixed = arrays.expand(statements, builder.errors, form == "ACSL")
     if builder.errors:
         raise AmilError(in_macros(sorted(builder.errors, key=_where), macros), path, text)

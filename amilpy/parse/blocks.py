@@ -182,15 +182,16 @@ class Nester:
         return CLOSERS.get(kind, "END")
 
     def close(self, stack: list[_Open], item: Close, acsl: bool) -> _Open | None:
+        said = "MACRO END" if acsl and item.kind == "ENDMAC" else item.kind
         if not stack:
-            self.error(f"{'END' if item.kind == 'END' else item.kind} with no open block",
-                       item.span, "every END closes a block opened before it")
+            self.error(f"{said} with no open block", item.span,
+                       "every END closes a block opened before it")
             return None
         kind = stack[-1].head.kind
         line = stack[-1].head.span.line
         opens = {v: k for k, v in CLOSERS.items()}
         if item.kind in opens and kind != opens[item.kind]:
-            self.error(f"{item.kind} closes a {opens[item.kind]}, but the innermost open "
+            self.error(f"{said} closes a {opens[item.kind]}, but the innermost open "
                        f"block is the {_describe(kind)} of line {line}", item.span,
                        f"close that {_describe(kind)} first with {self.closer(kind, acsl)}")
             return None

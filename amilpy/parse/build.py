@@ -565,8 +565,9 @@ class Builder:
                 "list the names each call of the MACRO keeps to itself"))
             return None
         if word == "STANDVAL":
-            items = [re.fullmatch(r"([A-Za-z]\w*)\s*=\s*([-+]?[0-9.]+(?:[EDed][-+]?\d+)?)",
-                                  part.strip()) for part in rest.split(",")]
+            items = [re.fullmatch(r"([A-Za-z]\w*)\s*=\s*([-+]?(?:\d+\.?\d*|\.\d+)"
+                                  r"(?:[EDed][-+]?\d+)?)", part.strip())
+                     for part in rest.split(",")]
             if rest and all(items):
                 return ast.MacroDirective(
                     "STANDVAL", tuple(m.group(1).upper() for m in items),
@@ -576,7 +577,7 @@ class Builder:
                 "give each argument that may be left out its number"))
             return None
         if word in ACSL_MACRO_WORDS:
-            self.refuse(f"ACSL's MACRO {word}", span,
+            self.refuse(f"ACSL's MACRO {'GO TO' if word == 'GO' else word}", span,
                         "amilpy expands ACSL MACROs with their arguments, MACRO STANDVAL and "
                         "MACRO REDEFINE: write the MACRO's statements without it")
             return None

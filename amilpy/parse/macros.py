@@ -136,6 +136,17 @@ def _substitute(expr: ast.Node, names: dict[str, str], values: dict[str, ast.Nod
             return values[expr.name]
         return replace(expr, name=names[expr.name]) if expr.name in names else expr
     changes = {}
+    # (an argument read as an array, X(I) or X[I], or as a table, F(X): the call's
+    # name stands there; an ACSL MACRO's argument given as a name is in `values`)
+    key = "func" if isinstance(expr, ast.Call) else "name" if isinstance(expr, ast.Index) \
+        else None
+    if key is not None:
+        called = getattr(expr, key)
+        given = values.get(called)
+        if isinstance(given, ast.Name):
+            changes[key] = given.name
+        elif called in names:
+            changes[key] = names[called]
     for field in expr.child_fields:
         value = getattr(expr, field)
         if isinstance(value, tuple):
@@ -155,9 +166,13 @@ class AcslExpander:
     listed in MACRO REDEFINE are each call's own (`NAME#k.X`); every other name of the
     body is the program's, as ACSL has it."""
 
-    def __init__(self, errors: list[Diagnostic]) -> None:
+    def __init__(self, errors: list[Diagnostic], acsl: bool, csmp: dict[str, ast.Macro]
+                 ) -> None:
         self.errors = errors
+        self.acsl = acsl  # (the listing's form, for the message of a call of no MACRO)
+        self.csmp = csmp  # CSMP III's MACROs by name (called otherwise)
         self.macros: dict[str, ast.Macro] = {}
+        self.rejected: set[str] = set()
         self.calls: dict[str, int] = {}
         self.call_spans: dict[str, list] = {}
         self.made = 0
@@ -171,11 +186,53 @@ class AcslExpander:
                     self.errors.append(Diagnostic(
                         f"MACRO {st.name} is defined twice", st.span,
                         f"the first definition is at line {self.macros[st.name].span.line}"))
-                else:
+                elif self.well_formed(st):
                     self.macros[st.name] = replace(st, body=tuple(self.collect(st.body)))
+                else:
+                    self.rejected.add(st.name)  # (its calls: nothing more to say)
                 continue
             out.append(_with_bodies(st, self.collect))
         return out
+
+    def well_formed(self, macro: ast.Macro) -> bool:
+        """A MACRO whose name no built-in function, reserved or refused word has (a call
+        would mean two things), with its parameters once each, and STANDVAL values for
+        parameters only."""
+        from ..language import REFUSED, RESERVED
+        from ..library import callable_names
+
+        taken = "a function" if macro.name in callable_names() else \
+            "reserved" if macro.name in RESERVED else \
+            "a keyword" if macro.name in REFUSED else None
+        if taken is not None:
+            self.errors.append(Diagnostic(
+                f"MACRO {macro.name}: {macro.name} is {taken}, which a MACRO of that name "
+                "would hide", macro.span, "give the MACRO another name"))
+            return False
+        seen: set[str] = set()
+        for p in macro.params:
+            if p in seen:
+                self.errors.append(Diagnostic(
+                    f"MACRO {macro.name} names its argument {p} twice", macro.span,
+                    "give each argument its own name"))
+                return False
+            seen.add(p)
+        for st in macro.body:
+            for node in ast.walk(st):
+                if isinstance(node, ast.MacroDirective) and node is not st:
+                    self.errors.append(Diagnostic(
+                        f"MACRO {node.kind} stands in the MACRO's own body, not inside a "
+                        "block of it", node.span, f"move it up to the lines after MACRO "
+                        f"{macro.name}(...)"))
+                    return False
+        stray = [n for n, _ in macro.defaults if n not in seen]
+        if stray:
+            self.errors.append(Diagnostic(
+                f"MACRO STANDVAL {', '.join(stray)}: no argument of MACRO {macro.name} "
+                f"({', '.join(macro.params)})", macro.span,
+                "give STANDVAL values to the MACRO's own arguments"))
+            return False
+        return True
 
     def expand(self, statements, calling: tuple[str, ...] = ()) -> list:
         out: list = []
@@ -192,27 +249,45 @@ class AcslExpander:
         if isinstance(st, ast.MacroCall):
             return self.call(st.name, (), st.args, st.span, calling)
         if isinstance(st, ast.Assign) and isinstance(st.expr, ast.Call) and \
-                st.expr.func in self.macros and not st.subscripts:
+                st.expr.func in self.macros:
+            if st.subscripts:
+                self.errors.append(Diagnostic(
+                    f"MACRO {st.expr.func} gives its values to names, not to an array's "
+                    "element", st.span, f"write {st.expr.func}(NAME, ...), then "
+                    f"{st.targets[0]}(...) = NAME"))
+                return []
             outputs = tuple(ast.Name(t, sp) for t, sp in
                             zip(st.targets, st.target_spans, strict=True))
             return self.call(st.expr.func, outputs, st.expr.args, st.span, calling)
-        if isinstance(st, ast.Assign):
-            for node in ast.walk(st.expr):
-                if isinstance(node, ast.Call) and node.func in self.macros:
+        for node in _expressions(st):
+            for inner in ast.walk(node):
+                if isinstance(inner, ast.Call) and inner.func in self.macros:
                     self.errors.append(Diagnostic(
-                        f"MACRO {node.func} is called inside an expression", node.span,
-                        f"call it as a statement of its own: {node.func}(...), or NAME = "
-                        f"{node.func}(...), then use NAME"))
-            return [st]
+                        f"MACRO {inner.func} is called inside an expression", inner.span,
+                        f"call it as a statement of its own: {inner.func}(...), or NAME = "
+                        f"{inner.func}(...), then use NAME"))
         return [_with_bodies(st, lambda body: self.expand(body, calling))]
 
     def call(self, name: str, outputs: tuple, args: tuple, span, calling) -> list:
         macro = self.macros.get(name)
+        if macro is None and name in self.rejected:
+            return []
         if macro is None:
-            self.errors.append(Diagnostic(
-                f"{name}(...) as a statement calls an ACSL MACRO, and no MACRO {name} is "
-                "defined", span, f"define MACRO {name}(A1, A2, ...) ... MACRO END, or write "
-                f"NAME = {name}(...) to use a function's value"))
+            csmp = self.csmp.get(name)
+            if csmp is not None:
+                signature = f"{', '.join(csmp.outputs)} = {name}({', '.join(csmp.params)})"
+                self.errors.append(Diagnostic(
+                    f"MACRO {name} is CSMP III's: it is called {signature}", span,
+                    f"write {signature} with your names and expressions"))
+            elif not self.acsl:
+                self.errors.append(Diagnostic(
+                    f"{name}(...) is no statement of the CSMP form", span,
+                    f"write NAME = {name}(...) to use a function's value"))
+            else:
+                self.errors.append(Diagnostic(
+                    f"{name}(...) as a statement calls an ACSL MACRO, and no MACRO {name} is "
+                    "defined", span, f"define MACRO {name}(A1, A2, ...) ... MACRO END, or "
+                    f"write NAME = {name}(...) to use a function's value"))
             return []
         if name in calling:
             self.errors.append(Diagnostic(
@@ -293,6 +368,12 @@ def _rename(st, names: dict[str, str], values: dict[str, ast.Node]):
     def name(n: str) -> str:
         return names.get(n, n)
 
+    def name_of(n: str) -> str:
+        """A name the statement holds as text (a section, an INTERVAL, a declared name):
+        an argument's name at the call, a REDEFINE'd name the call's own."""
+        given = values.get(n)
+        return given.name if isinstance(given, ast.Name) else names.get(n, n)
+
     def reads(n: str) -> tuple[str, ...]:
         if n in values:  # (a PROCEDURAL's input given as an expression: what it reads)
             return tuple(x.name for x in ast.walk(values[n]) if isinstance(x, ast.Name))
@@ -318,24 +399,53 @@ def _rename(st, names: dict[str, str], values: dict[str, ast.Node]):
                        step=expr(st.step), body=body(st.body))
     if isinstance(st, ast.Block):
         return replace(st, body=body(st.body))
-    if isinstance(st, (ast.Termt, ast.Schedule, ast.Interval, ast.Cinterval)):
+    if isinstance(st, ast.Schedule):
+        return replace(st, section=name_of(st.section), expr=expr(st.expr))
+    if isinstance(st, (ast.Interval, ast.Cinterval)):
+        return replace(st, name=name_of(st.name), expr=expr(st.expr))
+    if isinstance(st, ast.Termt):
         return replace(st, expr=expr(st.expr))
+    if isinstance(st, ast.Data):
+        return replace(st, items=tuple(replace(i, name=name_of(i.name)) for i in st.items))
+    if isinstance(st, ast.Declare):
+        return replace(st, names=tuple(name_of(n) for n in st.names),
+                       sizes=tuple(tuple(expr(e) for e in dims) for dims in st.sizes))
     return st
 
 
-def expand(statements: list, errors: list[Diagnostic]) -> tuple[list, tuple]:
+def expand(statements: list, errors: list[Diagnostic], acsl_form: bool = False
+           ) -> tuple[list, tuple]:
     """The top-level statements with every MACRO call expanded, the MACROs removed;
     and (name, first line, last line, call spans) of each MACRO (`Program.macros`)."""
     expander = Expander(errors)
-    acsl = AcslExpander(errors)
+    csmp = {st.name: st for st in statements if isinstance(st, ast.Macro) and not st.acsl}
+    acsl = AcslExpander(errors, acsl_form, csmp)
     with ast.deep_enough():
         out = acsl.expand(acsl.collect(statements)) if _any_acsl(statements) else statements
         out = expander.expand(out)
+    # (the last line: of any statement in the body, a block's inner ones too)
     where = tuple((m.name, m.span.line,
-                   max([m.span.line] + [s.span.end_line for s in m.body]),
+                   max(n.span.end_line for st in (m, *m.body) for n in ast.walk(st)
+                       if getattr(n, "span", None) is not None),
                    tuple(e.call_spans.get(m.name, ())))
                   for e in (expander, acsl) for m in e.macros.values())
     return out, where
+
+
+def _expressions(st) -> tuple:
+    """The expressions a statement holds itself (not those of the statements in its
+    blocks: the expander goes through those one by one)."""
+    if isinstance(st, ast.If):
+        return tuple(b.cond for b in st.branches if b.cond is not None)
+    if isinstance(st, ast.Loop):
+        return tuple(e for e in (st.start, st.stop, st.step) if e is not None)
+    if isinstance(st, ast.Assign):
+        return (st.expr, *st.subscripts)
+    if isinstance(st, ast.MacroCall):
+        return st.args
+    if isinstance(st, (ast.Termt, ast.Schedule, ast.Interval, ast.Cinterval)):
+        return (st.expr,)
+    return ()
 
 
 def _any_acsl(statements) -> bool:
