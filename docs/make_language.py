@@ -100,6 +100,8 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
     ("CSMP III", "`NOSORT ... SORT`", "a written-order unit inside sorted code"),
     ("CSMP III", "`Y = IMPL(Y0, P, FY)` ... `FY = ...`", "Y solved from Y = FY(Y) at every "
      "evaluation, to abs(FY - Y) <= P*max(1, abs(Y))"),
+    ("CSMP III, FST", "`ENDJOB`, the job's last statement", "the end of the runs, as "
+     "`STOP`: the text after it is not read"),
     ("CSMP III", "`FIXED I, J`", "`INTEGER I, J`"),
     ("CSMP III", "`FINISH X = 10.0`", "the run stops where X crosses 10, located"),
     ("CSMP III", "`METHOD RECT`, `TIMER DELT = 0.1`", "Euler in step-point mode, the classic "

@@ -258,3 +258,14 @@ def test_a_fault_in_a_macro_body_is_said_once_with_the_calls_it_came_through():
     assert len(faults) == 1 and faults[0].span.line == 4  # the body's line
     assert [span.line for span, _ in faults[0].related] == [8, 9]  # both calls
     assert "in MACRO LAG2, called here" in err.value.render()
+
+
+def test_endjob_ends_the_runs_as_stop_does():
+    # CSMP III's and FST's job ends with ENDJOB, after STOP or in its place: the runs
+    # before it run (X = t), and what follows it is not read (the Fortran below would
+    # be a syntax error)
+    body = "TITLE T\nX = INTGRL(0.0, 1.0)\nTIMER FINTIM = 1.0, PRDEL = 0.5\nEND\n"
+    for ending in ("ENDJOB\n", "STOP\nENDJOB\n"):
+        runs = amilpy.loads(body + ending + "      SUBROUTINE F(A)\n      A = 1\n"
+                            "      RETURN\n      END\n", name="m.amil").run()
+        assert len(runs) == 1 and runs[0]["X"][-1] == pytest.approx(1.0, abs=1e-12)

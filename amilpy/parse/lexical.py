@@ -10,7 +10,7 @@ diagnostic still points into the listing as written:
   the line still ends the statement. Everywhere else `;` separates statements;
 - `!=` inside parentheses is not-equal (it becomes `/=`); elsewhere `!` starts a
   comment, so banner comments such as `!======` stay comments;
-- text after a `STOP` statement is not read (FST files keep Fortran there);
+- text after a `STOP` (or `ENDJOB`) statement is not read (FST files keep Fortran there);
 - Magnolia's `IF T < TCHNG THEN` (and `ELSE IF`, and an IF alone on its line) has
   its condition put in parentheses: the blank after IF becomes `(`, the blank before
   THEN (or a comment), or the line's end, `)`.
@@ -26,7 +26,8 @@ import re
 from ..language import ITEM_KEYWORDS
 
 _WORD = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
-_STOP = re.compile(r"^[ \t]*STOP[ \t]*(?:[;$][ \t]*)?(?:!.*)?$", re.IGNORECASE)
+# (CSMP III's and FST's ENDJOB, the job's last statement, ends the reading as STOP does)
+_STOP = re.compile(r"^[ \t]*(?:STOP|ENDJOB)[ \t]*(?:[;$][ \t]*)?(?:!.*)?$", re.IGNORECASE)
 
 
 def code_end(line: str) -> int:
@@ -98,7 +99,7 @@ def _bare_if(line: str) -> str:
 
 
 def _after_stop(lines: list[str]) -> list[str]:
-    """Lines after the first STOP statement line are blanked (not read)."""
+    """Lines after the first STOP (or ENDJOB) statement line are blanked (not read)."""
     continued = False
     for k, line in enumerate(lines):
         if not continued and _STOP.match(line):
