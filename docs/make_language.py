@@ -206,6 +206,35 @@ assigns a whole array hold for each element; `PRINT X` lists the elements. The
 constants that size an array or bound a written-out loop are fixed when the listing
 is read: `--set` may not change them.
 
+### MACRO
+
+```
+MACRO LAG(Y, X, TAU, Y0)
+  MACRO STANDVAL Y0 = 0.0
+  MACRO REDEFINE RATE
+  RATE = (X - Y)/TAU
+  Y = INTEG(RATE, Y0)
+MACRO END
+PROGRAM  two lags in series
+  CONSTANT U = 1.0, TAU = 2.0
+  CINTERVAL CINT = 0.5
+  DERIVATIVE
+    Z = LAG(U, TAU)
+    LAG(W, Z, TAU)
+    TERMT(T >= 4.0)
+  END
+END
+```
+
+`MACRO NAME(A1, A2, ...) ... MACRO END` (before the PROGRAM or anywhere in it) is
+written out at each call: `LAG(W, Z, TAU)` as a statement, or `Z = LAG(U, TAU)`, whose
+names before `=` are the first arguments. An argument the body assigns must be given a
+name; any other stands for the call's expression as a whole, and one the body reads as
+an array or a table (`V(I)`, `F(X)`) for the call's array or table. `MACRO STANDVAL`
+gives the arguments left out at the end; the names `MACRO REDEFINE` lists are each
+call's own (`LAG#1.RATE`, `LAG#2.RATE` in the printout); every other name of the body is
+the program's. ACSL's other MACRO directives (RELABEL, IF, GO TO, EXIT) are refused.
+
 ## The FST form
 
 FST listings are CSMP-form listings with FST's statements: `;` between the items of

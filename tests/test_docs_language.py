@@ -69,3 +69,16 @@ def test_the_acsl_form_example_doses_by_superposition(tmp_path):
         exact = sum(100.0 * math.exp(-0.2 * (t - 8.0 * k)) for k in range(7)
                     if 8.0 * k <= t + 1e-9)
         assert a == pytest.approx(exact, rel=1e-5)
+
+
+def test_the_acsl_macro_example_is_two_lags_in_series(tmp_path):
+    # Z = 1 - e^(-t/2), W (a lag of Z) = 1 - e^(-t/2)(1 + t/2); 1e-8 at the ACSL form's
+    # default RELERR 1e-11
+    text = next(t for t in _listings() if t.startswith("MACRO LAG"))
+    path = tmp_path / "lags.csl"
+    path.write_text(text, "utf-8")
+    run, = amilpy.load(str(path)).run(advice=False)
+    for t, z, w in zip(run.times, run.values["Z"], run.values["W"], strict=True):
+        assert z == pytest.approx(1 - math.exp(-t / 2), abs=1e-8)
+        assert w == pytest.approx(1 - math.exp(-t / 2) * (1 + t / 2), abs=1e-8)
+    assert {"LAG#1.RATE", "LAG#2.RATE"} <= set(run.values)
