@@ -162,7 +162,6 @@ REFUSED: dict[str, tuple[str, str]] = {
     "ENDEVENT": ("the end of an FST 3 EVENT block", "write a DISCRETE section ... END (ACSL "
                  "form)"),
     "SET": ("FST's SET", "give the value in INCON or PARAM, or compute it as NAME = expression"),
-    "CALL": ("CALL of a Fortran subroutine", "rewrite it as statements or a PROCEDURE"),
     "SUBROUTINE": ("a Fortran subroutine", "rewrite it as statements or a PROCEDURE; text "
                    "after STOP is not read"),
     "COMMON": ("Fortran COMMON", "remove it: every name of a listing is global"),

@@ -100,6 +100,12 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
     ("CSMP III", "`NOSORT ... SORT`", "a written-order unit inside sorted code"),
     ("CSMP III", "`Y = IMPL(Y0, P, FY)` ... `FY = ...`", "Y solved from Y = FY(Y) at every "
      "evaluation, to abs(FY - Y) <= P*max(1, abs(Y))"),
+    ("FST", "`CALL GLA(TIME, ..., GLAI)` with `SUBROUTINE GLA(...)` ... `END` after STOP",
+     "the subroutine run as a PROCEDURAL at the CALL: the arguments its body assigns are "
+     "outputs (the CALL gives names there), the others inputs; its other names are its own. "
+     "A first subset of Fortran 77: fixed form, IMPLICIT REAL (A-Z) or REAL declarations, "
+     "assignments, logical and block IFs, RETURN at the end; INTEGER, arrays, DO, GO TO, "
+     "SAVE, DATA, COMMON and FUNCTION are refused at their line"),
     ("CSMP III, FST", "`ENDJOB`, the job's last statement", "the end of the runs, as "
      "`STOP`: the text after it is not read"),
     ("CSMP III", "`FIXED I, J`", "`INTEGER I, J`"),
@@ -243,7 +249,8 @@ PARAM/INCON/TIMER/FINISH lines, `TIMER STTIME`, relational FINISH conditions,
 and `WEATHER`, whose daily variables are read from CABO-format files (the file
 `NLD1.990` for `CNTR = 'NLD'; ISTN = 1; IYEAR = 1990`, looked for in WTRDIR, the
 listing's folder, its `weather/` and `../weather/`, and `--weather-dir`). A `CALL`
-of a Fortran subroutine is refused: rewrite it as statements or a PROCEDURE.
+of a Fortran subroutine written after STOP runs it, in a first subset of Fortran 77 (the
+FST row of the table below says which); one of no subroutine there is refused.
 """
 
 

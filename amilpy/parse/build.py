@@ -253,12 +253,6 @@ class Builder:
             if declared is not None:
                 return declared
         what, hint = REFUSED[word.replace(" ", "")]
-        if word.replace(" ", "") == "CALL" and len(node.children) > 1 and node.children[1]:
-            routine = str(node.children[1]).split("(")[0].strip().upper() or "it"
-            self.errors.append(Diagnostic(
-                f"CALL {routine} (line {self.span(node).line}): Fortran subroutines are not "
-                "run", self.span(node), f"rewrite {routine} as statements or a PROCEDURE"))
-            return None
         self.refuse(what, self.span(node), hint)
         return None
 
@@ -601,6 +595,12 @@ class Builder:
 
     def st_endmac(self, node) -> Close:
         return Close("ENDMAC", self.span(node))
+
+    def st_call_sub(self, node) -> ast.SubroutineCall:
+        name, *args = node.children
+        return ast.SubroutineCall(str(name).upper(),
+                                  tuple(self.expr(a) for a in args if a is not None),
+                                  self.span(node))
 
     def st_define_call(self, node) -> ast.DefineCall:
         return ast.DefineCall(self.span(node))

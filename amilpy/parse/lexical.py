@@ -98,6 +98,16 @@ def _bare_if(line: str) -> str:
     return head + cond + rest
 
 
+def stop_line(lines: list[str]) -> int | None:
+    """The index of the STOP (or ENDJOB) statement line, None if there is none."""
+    continued = False
+    for k, line in enumerate(lines):
+        if not continued and _STOP.match(line):
+            return k
+        continued = continues(line)
+    return None
+
+
 def _after_stop(lines: list[str]) -> list[str]:
     """Lines after the first STOP (or ENDJOB) statement line are blanked (not read)."""
     continued = False

@@ -570,6 +570,17 @@ class MacroCall(Node):
 
 
 @dataclass(frozen=True)
+class SubroutineCall(Node):
+    """CALL NAME(e1, e2, ...): a subroutine written after STOP, run as a PROCEDURAL
+    (parse/fortran.py)."""
+
+    name: str
+    args: tuple[Expr, ...]
+    span: Span
+    child_fields = ("args",)
+
+
+@dataclass(frozen=True)
 class MacroDirective(Node):
     """MACRO STANDVAL A = v, ... or MACRO REDEFINE X, Y inside an ACSL MACRO: folded
     into the MACRO when its body is read (parse/blocks.py)."""
@@ -599,14 +610,14 @@ Statement = (
     Assign | Data | Table | Timer | Method | Tolerance | Finish | Termt | Report | Label
     | Title | Section | End | Stop | If | Procedural | Loop | FunctionDef | Block | Schedule
     | Interval | Cinterval | Variable | Control | Declare | Translation | Weather | DefineCall
-    | Macro | MacroCall | MacroDirective | Nosort
+    | Macro | MacroCall | MacroDirective | SubroutineCall | Nosort
 )
 STATEMENTS: tuple[type[Node], ...] = (Assign, Data, Table, Timer, Method, Tolerance, Finish,
                                       Termt, Report, Label, Title, Section, End, Stop, If,
                                       Procedural, Loop, FunctionDef, Block, Schedule, Interval,
                                       Cinterval, Variable, Control, Declare, Translation,
                                       Weather, DefineCall, Macro, MacroCall, MacroDirective,
-                                      Nosort)
+                                      SubroutineCall, Nosort)
 
 
 @dataclass(frozen=True)

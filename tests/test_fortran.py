@@ -1,0 +1,126 @@
+"""The Fortran subroutines written after an FST listing's STOP (issue 23, a first
+subset): `CALL LEAFGR(...)` in the listing's sorted code runs SUBROUTINE LEAFGR as a
+PROCEDURAL, its outputs the arguments the body assigns. A leaf-area routine in the
+crop modellers' manner against the Euler recurrence written here in Python; what the
+subset does not run is refused at its line, by name."""
+
+import math
+
+import pytest
+
+import amilpy
+from amilpy.diagnostics import AmilError
+
+# A leaf-area routine of our own in the manner of the Wageningen crop listings (LINTUL1's
+# GLA computes the same quantity): exponential juvenile growth on the temperature sum,
+# then growth from the leaf weight; driven by a temperature of our own, no weather file
+LISTING = """DEFINE_CALL LEAFGR(INPUT,INPUT,INPUT,INPUT,INPUT,INPUT,INPUT,INPUT, ...
+                   INPUT,INPUT,OUTPUT)
+TITLE LEAF AREA BY A SUBROUTINE
+INITIAL
+INCON ZERO = 0.
+DYNAMIC
+      TEMP   = 10. + 5.*SIN(2.*3.14159265*TIME/365.)
+      TEFF   = MAX(0., TEMP - TBASE)
+      TSUM   = INTGRL(ZERO, TEFF)
+      CALL LEAFGR(TIME, TEMERG, TEFF, TSUM, AINIT, RGR, DELT, SLA, AREA, ...
+                  GLEAF, RAREA)
+      GLEAF  = 0.01*AREA
+      AREA   = INTGRL(ZERO, RAREA)
+PARAM AINIT = 0.012; SLA = 0.022; TBASE = 0.; TEMERG = 60.; RGR = 0.009
+TIMER STTIME = 58.; FINTIM = 400.; DELT = 1.; PRDEL = 1.
+TRANSLATION_GENERAL DRIVER='EUDRIV'
+PRINT AREA, TSUM, RAREA
+END
+STOP
+
+C     LEAFGR: the rate of increase of the leaf area (m2 leaf / m2 ground / d)
+      SUBROUTINE LEAFGR(T, TEMRG, TE, TS, A0, R, DT, SPECA, A, GW, RATE)
+      IMPLICIT REAL (A-Z)
+      IF (T .LT. TEMRG) THEN
+C        not emerged yet
+         RATE = 0.
+      ELSE IF (A .EQ. 0.) THEN
+C        the day of emergence: the initial area at once
+         RATE = A0 / DT
+      ELSE IF (TS .LT. 330. .AND. A .LT. 0.75) THEN
+C        young crop: exponential on the temperature sum
+         GROWTH = EXP(R * TE * DT) - 1.
+         RATE   = A * GROWTH / DT
+      ELSE
+         RATE = SPECA * GW
+      END IF
+      RETURN
+      END
+"""
+
+
+def euler_reference():
+    """FST's EUDRIV by hand: at each day the rates from the states, then one day on."""
+    out, tsum, lai = [], 0.0, 0.0
+    for day in range(58, 401):
+        t = float(day)
+        dteff = max(0.0, 10.0 + 5.0 * math.sin(2.0 * 3.14159265 * t / 365.0))
+        glai = 0.022 * (0.01 * lai)
+        if tsum < 330.0 and lai < 0.75:
+            glai = lai * (math.exp(0.009 * dteff) - 1.0)
+        if t >= 60.0 and lai == 0.0:
+            glai = 0.012
+        if t < 60.0:
+            glai = 0.0
+        out.append((t, lai, tsum, glai))
+        tsum, lai = tsum + dteff, lai + glai
+    return out
+
+
+def test_a_subroutine_after_stop_runs_as_the_euler_recurrence():
+    # every day's LAI, TSUM and GLAI the recurrence's to round-off (1e-12 relative:
+    # the same operations, summed over 342 days); the juvenile branch, the emergence
+    # day and the maturation branch (TSUM passes 330 on day 85) are all taken
+    run, = amilpy.loads(LISTING, name="leaf.fst").run(advice=False)
+    ref = euler_reference()
+    assert len(run.times) == len(ref)
+    for k, (t, lai, tsum, glai) in enumerate(ref):
+        assert run.times[k] == t
+        assert run.values["AREA"][k] == pytest.approx(lai, rel=1e-12, abs=1e-15)
+        assert run.values["TSUM"][k] == pytest.approx(tsum, rel=1e-12)
+        assert run.values["RAREA"][k] == pytest.approx(glai, rel=1e-12, abs=1e-15)
+    # the routine's own name is each call's: LEAFGR#1.GROWTH
+    assert "LEAFGR#1.GROWTH" in run.values
+    assert any(r[2] > 330.0 for r in ref) and ref[2][3] == 0.012
+
+
+def _fault(subroutine: str, call: str = "CALL F(X, Y)") -> str:
+    text = ("TITLE T\nX = INTGRL(0., 1.)\n" + call + "\nTIMER FINTIM = 1., DELT = 0.5\n"
+            "TRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT Y\nEND\nSTOP\n" + subroutine)
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text, name="f.fst")
+    return err.value.render()
+
+
+SUB = "      SUBROUTINE F(A, B)\n      IMPLICIT REAL (A-Z)\n{body}      RETURN\n      END\n"
+
+
+@pytest.mark.parametrize("body, where, words", [
+    ("      DO 10 K = 1, 3\n      B = A\n   10 CONTINUE\n", "11:7", "DO loops in a subroutine"),
+    ("      SAVE Q\n      B = A\n", "11:7", "Fortran's SAVE in a subroutine"),
+    ("      B = A\n      RETURN\n      B = 2.*A\n", "12:7",
+     "RETURN before the end of SUBROUTINE F"),
+    ("      B = A + Q\n", "9:7", "Q is read in SUBROUTINE F before it has a value"),
+])
+def test_what_the_subset_does_not_run_is_refused_at_its_line(body, where, words):
+    message = _fault(SUB.format(body=body))
+    assert f"f.fst:{where}: error: " in message and words in message, message
+    assert "follows STOP" not in message  # (the subroutine's fault only, not its CALL's)
+
+
+def test_calls_that_cannot_be_run_say_what_to_write():
+    missing = _fault("")
+    assert "f.fst:3:1: error: CALL F (line 3): no SUBROUTINE F follows STOP" in missing
+    count = _fault(SUB.format(body="      B = A\n"), call="CALL F(X)")
+    assert "CALL F gives 1 argument(s); SUBROUTINE F (line 9) takes 2" in count
+    expression = _fault(SUB.format(body="      B = A\n"), call="CALL F(X, 2.*Y)")
+    assert "argument B of SUBROUTINE F is assigned in it" in expression
+    integer = _fault(SUB.format(body="      B = A\n").replace(
+        "      IMPLICIT REAL (A-Z)\n", "").replace("B = A", "B = A + KQ"))
+    assert "KQ is an INTEGER by Fortran's implicit typing" in integer
