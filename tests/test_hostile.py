@@ -322,6 +322,7 @@ _CONSTRUCTS = {
     "acsl_macro": "MACRO D(Y, A)\n MACRO STANDVAL A = 1.\n MACRO REDEFINE W\n W = 2.*A\n"
                   " Y = W\nMACRO END\nD(Q, X)\nR = D(X)\nD(P)\n",
     "endjob": "ENDJOB\n",
+    "call": "CALL TWICE(X, Q)\n",
     "procedure": "PROCEDURE Q = P(X)\n Q = 2.*X\nENDPRO\n",
     "nosort": "NOSORT\n Q = X\n Q = Q*2.\nSORT\n",
     "impl": "Q = IMPL(1., 1.E-6, G)\nG = 0.5*Q + 0.5*X\n",
