@@ -110,8 +110,10 @@ def _subroutines_called(statements: list, text: str, path: str | None,
 
     lines = split_lines(text)
     stop = stop_line(blank_comment_lines("\n".join(lines)).split("\n"))
-    subroutines = fortran.read_subroutines(lines, stop + 1, path, errors, _parser()) \
-        if stop is not None else {}
+    called = {n.name for st in statements for n in ast.walk(st)
+              if isinstance(n, ast.SubroutineCall)}
+    subroutines = fortran.read_subroutines(lines, stop + 1, path, errors, _parser(),
+                                           called) if stop is not None else {}
     return fortran.expand_calls(statements, subroutines, errors)
 
 

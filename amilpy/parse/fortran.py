@@ -24,13 +24,14 @@ subroutine, a RETURN before the end -- is refused at its line and column, by nam
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 from ..diagnostics import Diagnostic, Span
 from . import syntax as ast
 
 # statements of the subset read here (the rest are read by the listing's grammar)
 _SUBROUTINE = re.compile(r"SUBROUTINE\s+([A-Za-z]\w*)\s*(?:\(\s*([^)]*)\))?\s*$", re.I)
+_HEAD = re.compile(r"SUBROUTINE\s+[A-Za-z]\w*\s*(?:\(|$)", re.I)
 _END = re.compile(r"END(?:\s*SUBROUTINE(?:\s+\w+)?)?\s*$", re.I)
 _IMPLICIT = re.compile(r"IMPLICIT\s+(.*)$", re.I)
 _REAL = re.compile(r"(?:REAL(?:\*\d+)?|DOUBLE\s*PRECISION)\s+(.*)$", re.I)
@@ -65,42 +66,52 @@ def after_stop(lines: list[str], stop_at) -> int | None:
 
 
 def read_subroutines(lines: list[str], first: int, path: str | None,
-                     errors: list[Diagnostic], parser) -> dict[str, Subroutine | None]:
-    """The subroutines in lines[first:] (0-based; diagnostics count lines from 1); None
-    for one whose faults are said (its CALLs add nothing to them). `parser`: the
+                     errors: list[Diagnostic], parser, called: set[str]
+                     ) -> dict[str, Subroutine | None]:
+    """The subroutines `called` in lines[first:] (0-based; diagnostics count lines from
+    1); None for one whose faults are said (its CALLs add nothing to them). The other
+    text after STOP (notes, data, routines nothing calls) is not read. `parser`: the
     listing's own (the statements of a body are read by its grammar)."""
     units: dict[str, Subroutine | None] = {}
     for unit in _units(_statements(lines, first), errors):
-        sub = _read_unit(unit, len(lines), path, errors, parser)
-        if sub is None:
-            units.setdefault(_SUBROUTINE.match(unit[0][2]).group(1).upper(), None)
+        name = _SUBROUTINE.match(unit[0][2]).group(1).upper()
+        if name not in called:
             continue
-        if sub.name in units:
-            errors.append(Diagnostic(f"SUBROUTINE {sub.name} is written twice", sub.span,
+        if name in units:
+            errors.append(Diagnostic(f"SUBROUTINE {name} is written twice",
+                                     Span(unit[0][0] + 1, unit[0][1] + 1),
                                      "a subroutine has one definition"))
             continue
-        units[sub.name] = sub
+        units[name] = _read_unit(unit, len(lines), path, errors, parser)
     return units
 
 
-def _statements(lines: list[str], first: int) -> list[tuple[int, int, str]]:
-    """(line index, column of the code, code) of each statement, fixed form:
-    continuation lines joined to the statement they continue."""
+def _statements(lines: list[str], first: int) -> list[tuple[int, int, str, str]]:
+    """(line index, column of the code, code, label) of each statement of the
+    SUBROUTINE ... END units, fixed form: columns 7 to 72, continuation lines joined to
+    the statement they continue; the lines outside the units are not read."""
     out: list[list] = []
+    inside = False
     for k in range(first, len(lines)):
-        line = lines[k].rstrip("\n").expandtabs(6)
+        line = lines[k].rstrip("\n").expandtabs(6)[:72]
         if not line.strip() or line[:1] in "Cc*!":
             continue
         code = line[6:] if len(line) > 6 else ""
-        bang = _bang(code)
-        code = code[:bang]
-        if len(line) > 5 and line[5] not in " 0" and out:
+        code = code[:_bang(code)]
+        if inside and len(line) > 5 and line[5] not in " 0" and out:
             out[-1][2] += " " + code.strip()
             continue
+        if not inside:
+            # (the head's arguments may go on in continuation lines)
+            if not _HEAD.match(code.strip()) or line[:6].strip():
+                continue
+            inside = True
         label = line[:5].strip()
         if not code.strip() and not label:
             continue
         out.append([k, 6 + len(code) - len(code.lstrip()), code.strip(), label])
+        if _END.match(code.strip()) and not label:
+            inside = False
     return [(k, col, code, label) for k, col, code, label in out]
 
 
@@ -118,16 +129,10 @@ def _units(statements, errors: list[Diagnostic]):
     """The statements of each SUBROUTINE ... END."""
     unit: list | None = None
     for st in statements:
-        k, col, code, _ = st
+        code = st[2]
         if unit is None:
             if _SUBROUTINE.match(code):
                 unit = [st]
-            elif re.match(r"(?:REAL\s+|INTEGER\s+|LOGICAL\s+|DOUBLE\s*PRECISION\s+)?"
-                          r"FUNCTION\b", code, re.I):
-                errors.append(Diagnostic(
-                    "a Fortran FUNCTION after STOP: not supported", Span(k + 1, col + 1),
-                    "write it as a SUBROUTINE with the value as its last argument"))
-                return
             continue
         unit.append(st)
         if _END.match(code):
@@ -196,11 +201,11 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
         return None
     # the executable statements read by the listing's own grammar (ACSL form: IF blocks,
     # .LT. and the rest), each at its own line and column
-    text = ["" for _ in range(n_lines + 2)]
-    text[0] = "PROGRAM " + name
+    text = ["" for _ in range(n_lines)]
+    text[k0] = "PROGRAM " + name  # (where the SUBROUTINE line is: every line in its place)
     for k, col, code in executable:
-        text[k + 1] = " " * col + code
-    text[n_lines + 1] = "END"
+        text[k] = " " * col + code
+    text[unit[-1][0]] = "END"
     source = "\n".join(text) + "\n"
     from lark.exceptions import UnexpectedInput
 
@@ -210,25 +215,22 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
     try:
         tree = parser.parse(prepare(source))
     except UnexpectedInput as exc:
-        d = syntax_diagnostic(exc, prepare(source), parser)
-        errors.append(replace(d, span=Span(d.span.line - 1, d.span.column, d.span.end_line - 1,
-                                           d.span.end_column) if d.span else None))
+        errors.append(syntax_diagnostic(exc, prepare(source), parser))
         return None
     builder = Builder(source, path)
     builder.acsl = True
     items = builder.statements(tree)
     _, _, statements = Nester(builder.errors).nest(items)
-    shifted = [_shift(d) for d in builder.errors]
-    errors.extend(shifted)
-    if shifted:
+    errors.extend(builder.errors)
+    if builder.errors:
         return None
     for st in statements:
         if not isinstance(st, (ast.Assign, ast.If)):
             errors.append(Diagnostic(
-                f"{type(st).__name__.upper()} in SUBROUTINE {name}: not supported",
-                _line_down(st.span), "the subroutines after STOP run assignments and IFs"))
+                f"this statement in SUBROUTINE {name}: not supported", st.span,
+                "the subroutines after STOP run assignments and IFs"))
             return None
-    body_nodes = tuple(_lines_down(st) for st in statements)
+    body_nodes = tuple(statements)
     if not real_all:
         for node in (n for st in body_nodes for n in ast.walk(st)):
             names = [node.name] if isinstance(node, ast.Name) else \
@@ -242,32 +244,6 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
                     return None
     last = unit[-1][0] + 1
     return Subroutine(name, params, body_nodes, span, last)
-
-
-def _shift(d: Diagnostic) -> Diagnostic:
-    return replace(d, span=_line_down(d.span)) if d.span is not None else d
-
-
-def _line_down(span: Span | None) -> Span | None:
-    # (the synthetic text puts line k of the file at line k + 1)
-    if span is None:
-        return None
-    return Span(span.line - 1, span.column, span.end_line - 1, span.end_column)
-
-
-def _lines_down(node):
-    """node, and every node under it, with spans one line up (see `_line_down`)."""
-    changes = {}
-    for field in getattr(node, "__dataclass_fields__", {}):
-        value = getattr(node, field)
-        if isinstance(value, Span):
-            changes[field] = _line_down(value)
-        elif isinstance(value, ast.Node):
-            changes[field] = _lines_down(value)
-        elif isinstance(value, tuple) and value and isinstance(value[0], (ast.Node, Span)):
-            changes[field] = tuple(_line_down(v) if isinstance(v, Span) else _lines_down(v)
-                                   for v in value)
-    return replace(node, **changes) if changes else node
 
 
 def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
@@ -296,7 +272,7 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
                 f"write CALL {st.name}({', '.join(sub.params)})"))
             return []
         assigned = _assigned(sub.body)
-        reads = _read_before_assigned(sub.body)
+        reads, everywhere = _flow(sub.body)
         counts[st.name] = k = counts.get(st.name, 0) + 1
         names: dict[str, str] = {}
         values: dict[str, ast.Node] = {}
@@ -304,58 +280,82 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
         inputs: list[str] = []
         for p, actual in zip(sub.params, st.args, strict=True):
             if p in assigned:
+                fault = None
                 if not isinstance(actual, ast.Name):
-                    errors.append(Diagnostic(
-                        f"argument {p} of SUBROUTINE {st.name} is assigned in it: the CALL "
-                        "must give a name there", st.span, f"pass a variable as {p}"))
-                    return []
-                if p in reads:
-                    errors.append(Diagnostic(
-                        f"argument {p} of SUBROUTINE {st.name} is read before it is assigned "
-                        "(an input and an output at once): not supported", st.span,
-                        "pass its value in an argument of its own"))
+                    fault = (f"argument {p} of SUBROUTINE {st.name} is assigned in it: the "
+                             "CALL must give a name there", f"pass a variable as {p}")
+                elif p in reads:
+                    fault = (f"argument {p} of SUBROUTINE {st.name} is read before it is "
+                             "assigned (an input and an output at once): not supported",
+                             "pass its value in an argument of its own")
+                elif p not in everywhere:
+                    fault = (f"argument {p} of SUBROUTINE {st.name} is not assigned on every "
+                             "path through it (where it is not, Fortran keeps its value "
+                             "from before the CALL): not supported",
+                             f"give {p} a value on every path, first thing in the routine")
+                elif actual.name in outputs:
+                    fault = (f"the CALL gives {actual.name} to two arguments SUBROUTINE "
+                             f"{st.name} assigns", "give each its own variable")
+                if fault is not None:
+                    errors.append(Diagnostic(fault[0], st.span, fault[1]))
                     return []
                 names[p] = actual.name
                 outputs.append(actual.name)
             else:
                 values[p] = actual
                 inputs.extend(n.name for n in ast.walk(actual) if isinstance(n, ast.Name))
+        both = sorted(set(outputs) & set(inputs))
+        if both:
+            errors.append(Diagnostic(
+                f"the CALL gives {both[0]} to SUBROUTINE {st.name} both as a value it reads "
+                "and as an argument it assigns: not supported", st.span,
+                "pass the value in a variable of its own"))
+            return []
         params = set(sub.params)
-        for n in sorted(reads - params):
+        unknown = sorted((n, span) for n, span in reads.items() if n not in params)
+        if unknown:
+            n, span = unknown[0]
             errors.append(Diagnostic(
                 f"{n} is read in SUBROUTINE {st.name} before it has a value (its names are "
-                "its own)", sub.span, f"pass {n} as an argument"))
+                "its own)", span, f"pass {n} as an argument, or give it a value before"))
             return []
-        names |= {n: f"{st.name}#{k}.{n}" for n in assigned - params}
+        local = {n: f"{st.name}#{k}.{n}" for n in assigned - params}
+        names |= local
         body = tuple(_rename(s, names, values) for s in sub.body)
-        return [ast.Procedural(tuple(dict.fromkeys(outputs)), tuple(dict.fromkeys(inputs)),
-                               body, st.span)]
+        # (the routine's own names are outputs too: each call's, shown as NAME#k.X)
+        return [ast.Procedural(tuple(dict.fromkeys(outputs + sorted(local.values()))),
+                               tuple(dict.fromkeys(inputs)), body, st.span)]
 
     return [x for st in statements for x in one(st)]
 
 
-def _read_before_assigned(body) -> set[str]:
-    """Names read where no assignment before them (in written order, on every path)
-    has given them a value."""
-    out: set[str] = set()
+def _flow(body) -> tuple[dict[str, object], set[str]]:
+    """The names read where no assignment before them (in written order, on every
+    path) has given them a value, with where the first such read is; and the names
+    every path through the body assigns."""
+    reads: dict[str, object] = {}
+
+    def read(expr, given: set[str]) -> None:
+        for n in ast.walk(expr):
+            if isinstance(n, ast.Name) and n.name not in given:
+                reads.setdefault(n.name, n.span)
 
     def walk(statements, given: set[str]) -> set[str]:
         given = set(given)
         for st in statements:
             if isinstance(st, ast.Assign):
-                out.update(n.name for e in (st.expr, *st.subscripts) for n in ast.walk(e)
-                           if isinstance(n, ast.Name) and n.name not in given)
+                for e in (st.expr, *st.subscripts):
+                    read(e, given)
                 given.update(st.targets)
             elif isinstance(st, ast.If):
                 branch_given = []
                 for b in st.branches:
                     if b.cond is not None:
-                        out.update(n.name for n in ast.walk(b.cond)
-                                   if isinstance(n, ast.Name) and n.name not in given)
+                        read(b.cond, given)
                     branch_given.append(walk(b.body, given))
                 if st.branches[-1].cond is None:  # (an ELSE: every path passes a branch)
                     given |= set.intersection(*branch_given)
         return given
 
-    walk(body, set())
-    return out
+    everywhere = walk(body, set())
+    return reads, everywhere
