@@ -104,8 +104,10 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
      "the subroutine run as a PROCEDURAL at the CALL: the arguments its body assigns are "
      "outputs (the CALL gives names there), the others inputs; its other names are its own. "
      "A first subset of Fortran 77: fixed form, IMPLICIT REAL (A-Z) or REAL declarations, "
-     "assignments, logical and block IFs, RETURN at the end; INTEGER, arrays, DO, GO TO, "
-     "SAVE, DATA, COMMON and FUNCTION are refused at their line"),
+     "assignments, logical and block IFs, RETURN at the end; in a called subroutine INTEGER, "
+     "arrays, DO, GO TO, SAVE, DATA and COMMON are refused at their line, and so are a name "
+     "given both as a value it reads and as an argument it assigns, and an argument it "
+     "assigns on some paths only; the rest of the text after STOP is not read"),
     ("CSMP III, FST", "`ENDJOB`, the job's last statement", "the end of the runs, as "
      "`STOP`: the text after it is not read"),
     ("CSMP III", "`FIXED I, J`", "`INTEGER I, J`"),

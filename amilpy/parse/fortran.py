@@ -15,10 +15,15 @@ IF `IF (c) statement`, block IFs with ELSE IF and ELSE, intrinsics as the listin
 them, and `RETURN` as the last statement. An argument the body assigns is an output
 (the call must give a name there); one it only reads is an input and stands for the
 call's expression; every other name is the subroutine's own (each call's, `NAME#k.X`),
-and must be given a value before it is read. What the subset does not run -- INTEGER
+and must be given a value before it is read. Only the subroutines a CALL names are
+read: notes, data and other routines after STOP are left as they are. What the subset
+does not run in a called subroutine -- INTEGER
 and the names Fortran types as integers by default (I to N, with no IMPLICIT REAL),
 arrays, DO, GO TO and labels, SAVE, DATA, PARAMETER, COMMON, FUNCTION, a CALL inside a
-subroutine, a RETURN before the end -- is refused at its line and column, by name.
+subroutine, a RETURN before the end -- is refused at its line and column, by name, and
+so are the CALLs whose Fortran meaning a PROCEDURAL cannot have: a name given both as a
+value the routine reads and as an argument it assigns, one given to two assigned
+arguments, an assigned argument some path leaves as it was.
 """
 
 from __future__ import annotations
