@@ -151,3 +151,18 @@ def test_only_the_called_subroutines_are_read_and_other_text_is_left():
             "TRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT Y\nEND\nSTOP\n" + after)
     run, = amilpy.loads(text, name="f.fst").run(advice=False)
     assert list(run.values["Y"]) == [2.0, 4.0, 6.0]
+
+
+def test_a_call_under_a_one_line_if_and_one_in_initial():
+    # IF (c) CALL F(...) is the IF block with the CALL in it (Y = 2 X where X > 0, which
+    # is every row here); INITIAL, sorted in the CSMP form, takes no CALL: said so
+    sub = SUB.format(body="      B = 2.*A\n")
+    text = ("TITLE T\nX = INTGRL(1., 1.)\nIF (X > 0.) CALL F(X, Y)\nTIMER FINTIM = 2., "
+            "DELT = 1.\nTRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT Y\nEND\nSTOP\n" + sub)
+    run, = amilpy.loads(text, name="f.fst").run(advice=False)
+    assert list(run.values["Y"]) == [2.0, 4.0, 6.0]
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text.replace("IF (X > 0.) CALL F(X, Y)", "INITIAL\nCALL F(2., Y)\n"
+                                  "DYNAMIC"), name="f.fst")
+    assert "f.fst:4:1: error: a PROCEDURE block (or a CALL of a subroutine) cannot stand " \
+           "in INITIAL" in err.value.render()

@@ -99,9 +99,9 @@ def sections(group: list[ast.Node], rep: Reporter) -> dict[str, list[ast.Node]]:
                       "start the file with PROGRAM or MODEL (ACSL form)")
         elif isinstance(st, ast.Procedural):  # CSMP III's PROCEDURE ... ENDPRO
             if current == "INITIAL":
-                rep.error("a PROCEDURE block cannot stand in INITIAL", st.span,
-                          "INITIAL is sorted: write the statements out there, or put the "
-                          "PROCEDURE in DYNAMIC")
+                rep.error("a PROCEDURE block (or a CALL of a subroutine) cannot stand in "
+                          "INITIAL", st.span, "INITIAL is sorted: write the statements out "
+                          "there, or put the PROCEDURE or the CALL in DYNAMIC")
             elif current == "TERMINAL":
                 out[current].extend(st.body)  # written order there anyway
             else:

@@ -173,7 +173,8 @@ class Builder:
         built = self.statement(inner)
         if built is None:
             return None
-        if not isinstance(built, (ast.Assign, ast.Termt, ast.Schedule, ast.If, ast.MacroCall)):
+        if not isinstance(built, (ast.Assign, ast.Termt, ast.Schedule, ast.If, ast.MacroCall,
+                                  ast.SubroutineCall)):
             return None
         span = self.span(node)
         return ast.If((ast.Branch(self.expr(cond), (built,), span),), span)
