@@ -166,3 +166,20 @@ def test_a_call_under_a_one_line_if_and_one_in_initial():
                                   "DYNAMIC"), name="f.fst")
     assert "f.fst:4:1: error: a PROCEDURE block (or a CALL of a subroutine) cannot stand " \
            "in INITIAL" in err.value.render()
+
+
+def test_implicit_none_and_a_call_with_no_arguments():
+    # IMPLICIT NONE: a name not declared is said so (not called an implicit INTEGER);
+    # declared REAL, the routine runs; CALL G with no parentheses calls G() (a routine
+    # with no arguments changes nothing the listing sees: it runs, Y = 2 X)
+    none = SUB.format(body="      REAL A, B\n      B = 2.*A + KQ\n").replace(
+        "IMPLICIT REAL (A-Z)", "IMPLICIT NONE")
+    message = _fault(none)
+    assert "f.fst:12:18: error: KQ is not declared (IMPLICIT NONE in SUBROUTINE F)" in message
+    ok = SUB.format(body="      REAL A, B\n      B = 2.*A\n").replace(
+        "IMPLICIT REAL (A-Z)", "IMPLICIT NONE")
+    text = ("TITLE T\nX = INTGRL(1., 1.)\nCALL F(X, Y)\nCALL G\nTIMER FINTIM = 2., "
+            "DELT = 1.\nTRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT Y\nEND\nSTOP\n" + ok
+            + "      SUBROUTINE G\n      END\n")
+    run, = amilpy.loads(text, name="f.fst").run(advice=False)
+    assert list(run.values["Y"]) == [2.0, 4.0, 6.0]

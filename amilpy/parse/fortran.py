@@ -160,7 +160,7 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
     span = Span(k0 + 1, col0 + 1, k0 + 1, col0 + 1 + len(code0))
     params = tuple(p.strip().upper() for p in (head.group(2) or "").split(",") if p.strip())
     body = unit[1:-1]
-    real_all, declared, bad = False, set(), False
+    real_all, declared, bad, none = False, set(), False, False
     executable: list = []
     for i, (k, col, code, label) in enumerate(body):
         where = Span(k + 1, col + 1, k + 1, col + 1 + len(code))
@@ -174,7 +174,9 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
             what = implicit.group(1).replace(" ", "").upper()
             if what == "REAL(A-Z)":
                 real_all = True
-            elif what != "NONE":
+            elif what == "NONE":
+                none = True
+            else:
                 errors.append(Diagnostic(f"IMPLICIT {implicit.group(1)}: not supported", where,
                                          "write IMPLICIT REAL (A-Z)"))
                 bad = True
@@ -241,7 +243,14 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
             names = [node.name] if isinstance(node, ast.Name) else \
                 list(node.targets) if isinstance(node, ast.Assign) else []
             for n in names:
-                if n[:1] in "IJKLMN" and n not in declared:
+                if n in declared:
+                    continue
+                if none:  # (IMPLICIT NONE: every name is declared)
+                    errors.append(Diagnostic(
+                        f"{n} is not declared (IMPLICIT NONE in SUBROUTINE {name})",
+                        node.span, f"declare it: REAL {n}"))
+                    return None
+                if n[:1] in "IJKLMN":
                     errors.append(Diagnostic(
                         f"{n} is an INTEGER by Fortran's implicit typing (SUBROUTINE {name}): "
                         "integer arithmetic is not supported", node.span,
