@@ -89,8 +89,10 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     nester = Nester(builder.errors)
     form, name, statements = nester.nest(items)
     statements, macros = expand(statements, builder.errors, form == "ACSL")
-    if _any_calls(statements):
-        statements = _subroutines_called(statements, text, path, builder.errors)
+    called = {n.name for st in statements for n in ast.walk(st)
+              if isinstance(n, ast.SubroutineCall)}
+    if called:
+        statements = _subroutines_called(statements, called, text, path, builder.errors)
     statements, fixed = arrays.expand(statements, builder.errors, form == "ACSL")
     if builder.errors:
         raise AmilError(in_macros(sorted(builder.errors, key=_where), macros), path, text)
@@ -98,20 +100,15 @@ def parse(text: str, path: str | None = None) -> ast.Program:
                        tuple(nester.notes))
 
 
-def _any_calls(statements) -> bool:
-    return any(isinstance(n, ast.SubroutineCall) for st in statements for n in ast.walk(st))
-
-
-def _subroutines_called(statements: list, text: str, path: str | None,
+def _subroutines_called(statements: list, called: set[str], text: str, path: str | None,
                         errors: list[Diagnostic]) -> list:
-    """CALLs of the subroutines written after STOP, written out (parse/fortran.py)."""
+    """CALLs of the subroutines written after STOP (those `called`), written out
+    (parse/fortran.py)."""
     from . import fortran
     from .lexical import stop_line
 
     lines = split_lines(text)
     stop = stop_line(blank_comment_lines("\n".join(lines)).split("\n"))
-    called = {n.name for st in statements for n in ast.walk(st)
-              if isinstance(n, ast.SubroutineCall)}
     subroutines = fortran.read_subroutines(lines, stop + 1, path, errors, _parser(),
                                            called) if stop is not None else {}
     return fortran.expand_calls(statements, subroutines, errors)

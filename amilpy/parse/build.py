@@ -532,8 +532,6 @@ class Builder:
         """MACRO O1, O2 = NAME(P1, ...) (CSMP III's); ACSL's MACRO NAME(A1, ...), MACRO
         END, MACRO STANDVAL A = v, ... and MACRO REDEFINE X, ...; ACSL's other MACRO
         directives (RELABEL, IF, GO TO, EXIT, ...) are refused by name."""
-        import re
-
         span = self.span(node)
         lists = self._named_lists(node)
         if lists is not None:

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 from ..diagnostics import Diagnostic, Span
 from . import syntax as ast
+from .lexical import code_end
 
 # statements of the subset read here (the rest are read by the listing's grammar)
 _SUBROUTINE = re.compile(r"SUBROUTINE\s+([A-Za-z]\w*)\s*(?:\(\s*([^)]*)\))?\s*$", re.I)
@@ -58,16 +59,6 @@ class Subroutine:
     params: tuple[str, ...]
     body: tuple  # the listing's statements (Assign, If)
     span: Span
-    last_line: int
-
-
-def after_stop(lines: list[str], stop_at) -> int | None:
-    """The index of the first line after the STOP (or ENDJOB) statement line, None if
-    there is none. `stop_at(line) -> bool` says which line that is (the reader's rule)."""
-    for k, line in enumerate(lines):
-        if stop_at(line):
-            return k + 1
-    return None
 
 
 def read_subroutines(lines: list[str], first: int, path: str | None,
@@ -102,7 +93,7 @@ def _statements(lines: list[str], first: int) -> list[tuple[int, int, str, str]]
         if not line.strip() or line[:1] in "Cc*!":
             continue
         code = line[6:] if len(line) > 6 else ""
-        code = code[:_bang(code)]
+        code = code[:code_end(code)]
         if inside and len(line) > 5 and line[5] not in " 0" and out:
             out[-1][2] += " " + code.strip()
             continue
@@ -118,16 +109,6 @@ def _statements(lines: list[str], first: int) -> list[tuple[int, int, str, str]]
         if _END.match(code.strip()) and not label:
             inside = False
     return [(k, col, code, label) for k, col, code, label in out]
-
-
-def _bang(code: str) -> int:
-    quoted = False
-    for i, ch in enumerate(code):
-        if ch == "'":
-            quoted = not quoted
-        elif ch == "!" and not quoted:
-            return i
-    return len(code)
 
 
 def _units(statements, errors: list[Diagnostic]):
@@ -192,11 +173,11 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
                     "write the statements after it in the ELSE of an IF"))
                 bad = True
             continue
-        refused = next(((p, what) for p, what in _REFUSED if p.match(code)), None)
-        if refused is not None or real:
-            pattern, what = refused or (None, "arrays in a subroutine")
-            word = pattern.match(code).group(1).upper() if pattern is not None and \
-                pattern.match(code).groups() and pattern.match(code).group(1) else ""
+        found = next(((m, what) for p, what in _REFUSED if (m := p.match(code))), None)
+        if found is not None or real:  # (a REAL declaration here declares an array)
+            match, what = found or (None, "arrays in a subroutine")
+            word = (match.group(1) or "").upper() if match is not None and match.groups() \
+                else ""
             errors.append(Diagnostic(f"{what.format(word)} (SUBROUTINE {name}, line {k + 1}): "
                                      "not supported", where,
                                      "the subroutines after STOP run assignments and IFs "
@@ -256,8 +237,7 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
                         "integer arithmetic is not supported", node.span,
                         "write IMPLICIT REAL (A-Z), or declare it REAL"))
                     return None
-    last = unit[-1][0] + 1
-    return Subroutine(name, params, body_nodes, span, last)
+    return Subroutine(name, params, body_nodes, span)
 
 
 def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],

@@ -110,12 +110,8 @@ def stop_line(lines: list[str]) -> int | None:
 
 def _after_stop(lines: list[str]) -> list[str]:
     """Lines after the first STOP (or ENDJOB) statement line are blanked (not read)."""
-    continued = False
-    for k, line in enumerate(lines):
-        if not continued and _STOP.match(line):
-            return lines[:k + 1] + [""] * (len(lines) - k - 1)
-        continued = continues(line)
-    return lines
+    k = stop_line(lines)
+    return lines if k is None else lines[:k + 1] + [""] * (len(lines) - k - 1)
 
 
 class _Scanner:
