@@ -8,7 +8,8 @@ notebook view and `str(event)` hand over to the output package.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from array import array
+from collections.abc import Callable, Iterable, Iterator, MutableSequence
 from dataclasses import dataclass, field
 from enum import Enum
 
@@ -100,6 +101,91 @@ class Event:
         return f"TIME = {self.time:.9g}: {self.switch}: {self.change()}"
 
 
+class Events(MutableSequence):
+    """A run's events in order, as a list of `Event`s reads; held as two columns,
+    the instant (8 bytes) and which change it is (4 bytes: a long run's hundreds of
+    thousands of events are a few kinds of change, each switch of each surface), an
+    `Event` made each time one is read. (As Event objects a long run's 445,634 took
+    53 MB.)"""
+
+    __slots__ = ("_t", "_k", "_kinds", "_index")
+
+    def __init__(self, events: Iterable[Event] = ()) -> None:
+        self._t, self._k = array("d"), array("i")
+        self._kinds: list[tuple] = []  # (switch, surface, old, new, kind, text)
+        self._index: dict[tuple, int] = {}
+        for e in events:
+            self.append(e)
+
+    def _kind(self, e: Event) -> int:
+        kind = (e.switch, e.surface, e.old, e.new, e.kind, e.text)
+        # (-0.0 and 0.0 are two branches: the sign is part of the key)
+        key = kind + (math.copysign(1.0, e.old), math.copysign(1.0, e.new))
+        k = self._index.get(key)
+        if k is None:
+            k = self._index[key] = len(self._kinds)
+            self._kinds.append(kind)
+        return k
+
+    def _event(self, i: int) -> Event:
+        return Event(self._t[i], *self._kinds[self._k[i]])
+
+    def __len__(self) -> int:
+        return len(self._t)
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self._event(j) for j in range(*i.indices(len(self._t)))]
+        return self._event(i if i >= 0 else i + len(self._t))
+
+    def __setitem__(self, i, e: Event) -> None:
+        if isinstance(i, slice):
+            raise TypeError("a run's events are set one at a time")
+        self._t[i], self._k[i] = e.time, self._kind(e)
+
+    def __delitem__(self, i) -> None:
+        del self._t[i], self._k[i]
+
+    def insert(self, i: int, e: Event) -> None:
+        self._t.insert(i, e.time)
+        self._k.insert(i, self._kind(e))
+
+    def append(self, e: Event) -> None:
+        self._t.append(e.time)
+        self._k.append(self._kind(e))
+
+    def remove(self, e: Event) -> None:
+        """The last event equal to e goes (the one removed is a recent one)."""
+        for i in range(len(self._t) - 1, -1, -1):
+            if self._t[i] == e.time and self._event(i) == e:
+                del self[i]
+                return
+        raise ValueError("Events.remove(e): e is not among them")
+
+    def clear(self) -> None:
+        del self._t[:], self._k[:]
+
+    def __iter__(self) -> Iterator[Event]:
+        kinds = self._kinds
+        for t, k in zip(self._t, self._k, strict=True):
+            yield Event(t, *kinds[k])
+
+    def __reversed__(self) -> Iterator[Event]:
+        for i in range(len(self._t) - 1, -1, -1):
+            yield self._event(i)
+
+    def __eq__(self, other) -> bool:
+        if isinstance(other, (Events, list, tuple)):
+            return len(self) == len(other) and all(a == b for a, b in zip(self, other, strict=True))
+        return NotImplemented
+
+    def __repr__(self) -> str:
+        return f"Events({list(self)!r})"
+
+    def __reduce__(self):
+        return Events, (list(self),)
+
+
 @dataclass
 class Table:
     """Values of some variables on a time grid (the printout, or PREPARE)."""
@@ -148,7 +234,7 @@ class Run:
     values: dict[str, np.ndarray]  # name -> values at `times`
     outdel_mask: np.ndarray
     prdel_mask: np.ndarray
-    events: list[Event]
+    events: MutableSequence[Event]  # `Events` as a run makes them
     status: Status
     message: str
     final: dict[str, float]

@@ -197,3 +197,72 @@ def test_a_run_that_stops_early_asks_no_memory_for_the_rows_it_did_not_make(tmp_
     status, rows = out.stdout.split()
     # V = -9.81 t reaches -12 at t = 1.2232 s: rows at 0, 0.1, ..., 1.2 and the stop
     assert status == "stopped" and int(rows) == 14
+
+
+@pytest.mark.parametrize("listing, method", [
+    ("models/hoist_backlash.amil", "AUTO"), ("models/hoist_backlash.amil", "COMPILED"),
+    ("models/machine_unit.amil", "COMPILED"),  # (no event: kernel calls fill their rows)
+    ("models/crank_slider_startup.amil", "RK4"), ("models/machine_unit.amil", "RKS"),
+    ("models/ex4_clutch.amil", "AUTO"), ("models/examples/oral_dosing.csl", "AUTO"),
+    ("models/examples/csmp_diode_filter.amil", "LSODA"),
+])
+def test_a_run_on_a_grid_made_as_it_is_read_is_the_same_run(monkeypatch, listing, method):
+    """A streamed run's grid (over LAZY_FROM instants) is made as the run reads it:
+    made so from the first instant, a run is the same bit for bit -- rows, masks,
+    events, RANGE -- on each way the routes read their grid (AUTO's chunks, the
+    compiled kernel's windows, the step-by-step routes' rows one at a time, the ACSL
+    form's CINT grid)."""
+    import numpy as np
+
+    import amilpy
+    from amilpy.run import plan
+
+    if method == "COMPILED":
+        pytest.importorskip("numba")
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    text = open(os.path.join(root, listing)).read()
+
+    def run():
+        r, = amilpy.loads(text, listing).run(method=method, advice=False)
+        return r
+
+    written = run()
+    monkeypatch.setattr(plan, "LAZY_FROM", 0)
+    lazy = run()
+    assert np.array_equal(lazy.t, written.t) and lazy.status == written.status
+    assert all(np.array_equal(lazy.values[k], v, equal_nan=True)
+               for k, v in written.values.items())
+    assert np.array_equal(lazy.outdel_mask, written.outdel_mask)
+    assert np.array_equal(lazy.prdel_mask, written.prdel_mask)
+    assert lazy.events == written.events and lazy.range == written.range
+
+
+def test_a_long_runs_events_take_twelve_bytes_each_and_read_as_events():
+    """The 10,000 s hoist switches 445,634 times: as Event objects its events took
+    53 MB (120 bytes each). `Events` holds the instant and which change it is (a
+    few kinds: each switch of each surface), and gives back equal Events, -0.0
+    branches included (a surface held at an exact zero reads its sign)."""
+    import pickle
+    import tracemalloc
+
+    from amilpy.result import Event, EventKind, Events
+
+    kinds = [("FSW(X1 - X2)", 3, 1.0, -1.0, EventKind.SWITCH, "X1 - X2"),
+             ("FSW(X1 - X2)", 3, -1.0, 1.0, EventKind.SWITCH, "X1 - X2"),
+             ("DEADSP(-G, G, Y)", 5, 0.0, -0.0, EventKind.SWITCH, "Y")]
+    want = [Event(1e-3 * i, *kinds[i % 3]) for i in range(50_000)]
+    tracemalloc.start()
+    try:
+        events = Events(want)
+        held, _ = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert held / len(want) < 14  # (array growth leaves up to an eighth spare)
+    assert events == want and list(reversed(events)) == want[::-1]
+    assert events[-1] == want[-1] and events[10:13] == want[10:13]
+    assert str(events[2].new) == "-0.0" and str(events[2].old) == "0.0"
+    assert pickle.loads(pickle.dumps(events)) == want
+    events.remove(want[-2])  # (a switch and its switch back at one instant: undone)
+    assert len(events) == len(want) - 1 and events[-2] == want[-3]
+    events.clear()
+    assert not events and events == []

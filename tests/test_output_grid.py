@@ -71,6 +71,64 @@ def test_the_grid_of_a_long_run_takes_its_own_ten_bytes_an_instant():
     assert peak / rows < 13.0  # 10 held; a part of 65,536 being written out, 2 MB
 
 
+GRIDS = [(0.0, 10.0, 1e-3, 0.05, ()),  # the hoist's
+         (0.0, 10.0, 1e-3, 0.0037, (0.5, 1.23456, 3.0001)),  # PRDEL's own, extras
+         (-2.0, 3.0, 0.1, 0.1, (0.05,)),
+         (0.3, 9.9, 0.07, 0.07, ())]  # FINTIM no instant of OUTDEL's
+
+
+@pytest.mark.parametrize("t0, fintim, outdel, prdel, extra", GRIDS)
+def test_a_grid_made_as_it_is_read_is_the_written_one_bit_for_bit(monkeypatch, t0, fintim,
+                                                                 outdel, prdel, extra):
+    """A grid over LAZY_FROM instants (a streamed run's) is made as the run reads it:
+    by index, window and searchsorted it answers what the written-out array does,
+    exactly (the rows' instants are these numbers)."""
+    from amilpy.run import plan
+
+    written = make_grid(t0, fintim, outdel, prdel, extra)
+    monkeypatch.setattr(plan, "LAZY_FROM", 0)
+    grid = make_grid(t0, fintim, outdel, prdel, extra)
+    lazy, want = grid.times, written.times
+    assert isinstance(lazy, plan.GridTimes) and len(lazy) == len(want)
+    assert np.array_equal(np.asarray(lazy), want)
+    assert np.array_equal(grid.outdel, written.outdel)
+    assert np.array_equal(grid.prdel, written.prdel)
+    n = len(want)
+    assert [lazy[i] for i in range(n)] == want.tolist()  # (in order, a block at a time)
+    assert lazy[-1] == want[-1] and lazy[n // 3] == want[n // 3]
+    probes = np.concatenate([want, np.nextafter(want, np.inf), np.nextafter(want, -np.inf),
+                             [t0 - 1.0, fintim + 1.0],
+                             np.random.default_rng(0).uniform(t0 - 1, fintim + 1, 200)])
+    for lo, hi in [(0, n), (7, n - 3), (n // 2, n), (5, 5 + plan.GridTimes.BLOCK + 10),
+                   (3, 40)]:
+        view = lazy[lo:hi]
+        assert np.array_equal(np.asarray(view), want[lo:hi])
+        for side in ("left", "right"):
+            assert np.array_equal(view.searchsorted(probes, side),
+                                  want[lo:hi].searchsorted(probes, side))
+            assert view.searchsorted(float(probes[5]), side) == \
+                want[lo:hi].searchsorted(probes[5], side)
+    with pytest.raises(IndexError):
+        lazy[n]
+
+
+def test_a_streamed_runs_grid_holds_no_instants():
+    """1E7 OUTDEL instants and PRDEL's on every 50th: made, the grid holds its PRDEL
+    mask (a byte an instant) and nothing of its instants; written out they took 80 MB."""
+    tracemalloc.start()
+    try:
+        grid = make_grid(0.0, 10_000.0, 1e-3, 0.05)
+        held, peak = tracemalloc.get_traced_memory()
+        assert grid.times[9_999_999] == 9999.999 and grid.times[-1] == 10_000.0
+        assert grid.times.searchsorted(5000.0) == 5_000_000
+    finally:
+        tracemalloc.stop()
+    assert len(grid.times) == 10_000_001
+    # (held: the mask, 10 MB; at the peak also PRDEL's 200,001 instants matched to
+    # OUTDEL's, four candidates each: 21 MB measured)
+    assert held < 12e6 and peak < 30e6
+
+
 def model_with(fintim: float, outdel: float, prdel: float | None = None):
     import amilpy
 

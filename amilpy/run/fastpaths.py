@@ -101,7 +101,7 @@ class FastPaths:
         # own exact instants between rows, samples for RANGE)
         times = self.plan.grid.times
         rows = np.zeros(n, bool)
-        ahead = times[rec.out_i:rec.out_i + n]
+        ahead = np.asarray(times[rec.out_i:rec.out_i + n])
         at = np.searchsorted(T, ahead)
         hit = at < n
         hit[hit] = T[at[hit]] == ahead[hit]

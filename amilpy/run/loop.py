@@ -25,7 +25,7 @@ from ..codegen import ModelCode
 from ..diagnostics import AmilError
 from ..outcome import Failure
 from ..progress import report
-from ..result import Event
+from ..result import Events
 from ..steppers import Stepper, first_bad
 from .cursor import Cursor, Observer, Paused, Stop
 from .fastpaths import FastPaths
@@ -53,7 +53,7 @@ class RunLoop:
         self.model, self.plan, self.c, self.watch, self.opts = model, plan, c, watch, opts
         self.started = _clock.perf_counter() if started is None else started
         self.deadline = self.started + opts.max_time if opts.max_time else None
-        self.events: list[Event] = []
+        self.events = Events()
         self.warnings: list[str] = []
         if plan.route.uses_tolerances and plan.tol.floored is not None:
             self.warnings.append(f"RELERR {plan.tol.floored:g} is below what double "

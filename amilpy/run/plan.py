@@ -395,11 +395,13 @@ class _Uniform:
         k = np.floor((t - self.t0) / self.step).clip(0, self.size - 1).astype(np.int64)
         return k[:, None] + np.arange(-1, 3)
 
-    def below(self, t: np.ndarray) -> np.ndarray:
-        """np.searchsorted(the instants, t): how many are below each t."""
+    def below(self, t: np.ndarray, side: str = "left") -> np.ndarray:
+        """np.searchsorted(the instants, t, side): how many are below each t (or at
+        it too, side "right")."""
         near = self._near(t)
         inside = (near >= 0) & (near < self.size)
-        under = inside & (self.at(near.clip(0, self.size - 1)) < t[:, None])
+        at = self.at(near.clip(0, self.size - 1))
+        under = inside & ((at < t[:, None]) if side == "left" else (at <= t[:, None]))
         return np.maximum(near[:, 0], 0) + under.sum(axis=1)
 
     def nearest(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -408,6 +410,81 @@ class _Uniform:
         d = np.abs(self.at(near) - t[:, None])
         pick = near[np.arange(len(t)), d.argmin(axis=1)]
         return pick, np.abs(self.at(pick) - t) <= SAME_INSTANT * np.maximum(1.0, np.abs(t))
+
+
+class GridTimes:
+    """The instants of a grid too long to write out (`LAZY_FROM`), made as they are
+    read: OUTDEL's uniform instants (`_Uniform`) with the few put between them (PRDEL's
+    own, the observations'). It answers what the run asks of its grid -- its length,
+    an instant by index, a window by slice, `searchsorted` -- as the written array
+    would, bit for bit; a slice of more than `BLOCK` instants is a view of the same
+    kind, and anything else (`np.asarray`) writes the instants out.
+
+    A streamed run of 1E7 rows would otherwise hold 80 MB of instants it reads once,
+    in order: here it holds one block of them."""
+
+    BLOCK = 1 << 12
+
+    def __init__(self, rows: _Uniform, put: np.ndarray, at: np.ndarray,
+                 lo: int = 0, hi: int | None = None) -> None:
+        self.rows, self.put, self.at = rows, put, at  # put[j] goes before rows' at[j]
+        self._new = at + np.arange(len(put))  # where each put instant lands
+        self.lo, self.hi = lo, rows.size + len(put) if hi is None else hi
+        self._b0 = self._b1 = 0  # the block read last, [b0, b1) of this view
+        self._block = np.empty(0)
+
+    def window(self, i0: int, i1: int) -> np.ndarray:
+        """The instants [i0, i1) of this view, a new array."""
+        i0, i1 = self.lo + i0, self.lo + i1
+        idx = np.arange(i0, i1)
+        before = np.searchsorted(self._new, idx)  # put instants before each
+        is_put = before < len(self._new)
+        is_put[is_put] = self._new[before[is_put]] == idx[is_put]
+        out = np.empty(len(idx))
+        out[~is_put] = self.rows.at(idx[~is_put] - before[~is_put])
+        out[is_put] = self.put[before[is_put]]
+        return out
+
+    def __len__(self) -> int:
+        return self.hi - self.lo
+
+    @property
+    def size(self) -> int:
+        return self.hi - self.lo
+
+    def __getitem__(self, key):
+        n = self.hi - self.lo
+        if isinstance(key, slice) and key.step in (None, 1):
+            i0, i1, _ = key.indices(n)
+            i1 = max(i0, i1)
+            if i1 - i0 <= self.BLOCK:
+                return self.window(i0, i1)
+            return GridTimes(self.rows, self.put, self.at, self.lo + i0, self.lo + i1)
+        if isinstance(key, (int, np.integer)):
+            i = int(key) + n if key < 0 else int(key)
+            if not 0 <= i < n:
+                raise IndexError(f"index {key} is out of bounds for a grid of {n}")
+            if not self._b0 <= i < self._b1:  # (read in order: a block at a time)
+                self._b0, self._b1 = i, min(n, i + self.BLOCK)
+                self._block = self.window(self._b0, self._b1)
+            return self._block[i - self._b0]
+        return np.asarray(self)[key]
+
+    def __array__(self, dtype=None, copy=None) -> np.ndarray:
+        out = self.window(0, len(self))
+        return out if dtype is None else out.astype(dtype)
+
+    def searchsorted(self, v, side: str = "left"):
+        """As `np.ndarray.searchsorted` on this view's instants."""
+        t = np.atleast_1d(np.asarray(v, dtype=float))
+        count = self.rows.below(t, side) + np.searchsorted(self.put, t, side)
+        out = (count - self.lo).clip(0, len(self))
+        return out if np.ndim(v) else out[0]
+
+
+# a grid of more instants is made as it is read (`GridTimes`): more than a run kept
+# whole may print (max_rows), so only a streamed run has one
+LAZY_FROM = 1 << 21
 
 
 def _grid(t0: float, fintim: float, step: float) -> np.ndarray:
@@ -473,10 +550,10 @@ def make_grid(t0: float, fintim: float, outdel: float, prdel: float,
     put, put_prdel = put[order], (np.arange(len(put)) < len(own))[order]
     at = rows.below(put)  # put[j] goes before OUTDEL instant at[j]
     size = rows.size
-    times = np.empty(size + len(put))
+    lazy = GridTimes(rows, put, at)
+    times = lazy if size + len(put) > LAZY_FROM else np.empty(size + len(put))
     if len(put):
         new = at + np.arange(len(put))
-        times[new] = put
         outdel_mask = np.ones(len(times), bool)
         outdel_mask[new] = False
         prdel_mask = outdel_mask.copy() if prdel == outdel else np.zeros(len(times), bool)
@@ -484,11 +561,10 @@ def make_grid(t0: float, fintim: float, outdel: float, prdel: float,
     else:  # (every instant an OUTDEL one: a mask that takes no memory, read-only)
         outdel_mask = np.broadcast_to(np.True_, (size,))
         prdel_mask = outdel_mask if prdel == outdel else np.zeros(size, bool)
-    # where each OUTDEL instant k lands: k plus the instants put before it
-    part = 1 << 16
-    for a in range(0, size, part):
-        k = np.arange(a, min(a + part, size))
-        times[k + np.searchsorted(at, k, side="right")] = rows.at(k)
+    if times is not lazy:
+        part = 1 << 14  # (a part's making takes 40 bytes an instant for a while)
+        for a in range(0, len(times), part):
+            times[a:a + part] = lazy.window(a, min(a + part, len(times)))
     if prdel != outdel:
         prdel_mask[pick[same] + np.searchsorted(at, pick[same], side="right")] = True
     return Grid(times, outdel_mask, prdel_mask)

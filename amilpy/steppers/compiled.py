@@ -163,6 +163,11 @@ class KernelStepper(Stepper):
             self._rows = (np.empty(size), np.empty((size, len(self._y))),
                           np.empty((size, len(m_arr))))
         T, Y, M = self._rows
+        # the instants the buffer has room for, and one more: the kernel stops where
+        # its buffer is full only while an instant is left (a view of an array; a long
+        # grid made as it is read, `run.plan.GridTimes`, written out this far)
+        grid = np.asarray(grid[gi:gi + len(T) + 1], dtype=float)
+        gi = 0
         et, ek, en, ey, em = self._ev
         # the surfaces where the kernel stands, in the branches now in force (the loop
         # may have changed a silent one)

@@ -132,7 +132,8 @@ class Instants:
     __slots__ = ("grid", "i", "extra")
 
     def __init__(self, grid, end: float) -> None:
-        self.grid = np.asarray(grid, dtype=float)
+        # (an array, or a long grid made as it is read, `run.plan.GridTimes`, kept so)
+        self.grid = grid if hasattr(grid, "searchsorted") else np.asarray(grid, dtype=float)
         self.i = 0
         self.extra = [end]  # sorted; the end is always the last
 
