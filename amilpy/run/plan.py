@@ -45,7 +45,7 @@ DEFAULTS = {
     "max_events": 200_000,
     "max_rows": 2_000_000,
     # OUTDEL rows of a run that writes them to its CSV as it goes (output.stream): it
-    # holds 10 bytes an instant (the grid), 200 MB at this
+    # holds up to 2 bytes an instant of its grid (the masks: `GridTimes`), 40 MB at this
     "max_streamed_rows": 20_000_000,
     # values all the runs of one call keep (rows x variables, summed over the runs):
     # 2E8 float64 are 1.6 GB, what a laptop can spare for a printout
@@ -524,8 +524,10 @@ def make_grid(t0: float, fintim: float, outdel: float, prdel: float,
     """The output instants; `extra`: more instants in (t0, fintim) to have rows at
     (in neither grid), each within SAME_INSTANT of a grid instant taken as that one.
 
-    Written into the run's arrays part by part: a streamed run of 1E7 rows holds its
-    grid (8 to 10 bytes an instant) and no more (a union of the two grids took 95)."""
+    Written into the run's arrays part by part, or, over LAZY_FROM instants (a
+    streamed run's), made as the run reads it (`GridTimes`): a streamed run of 1E7
+    rows holds its masks (0 to 2 bytes an instant) and no more (its written-out
+    instants took 8, and a union of the two grids 95)."""
     scale = max(1.0, abs(t0), abs(fintim))
     for name, step in (("OUTDEL", outdel), ("PRDEL", prdel)):
         if step <= SAME_INSTANT * scale:
