@@ -103,11 +103,16 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
     ("FST", "`CALL GLA(TIME, ..., GLAI)` with `SUBROUTINE GLA(...)` ... `END` after STOP",
      "the subroutine run as a PROCEDURAL at the CALL: the arguments its body assigns are "
      "outputs (the CALL gives names there), the others inputs; its other names are its own. "
-     "A first subset of Fortran 77: fixed form, IMPLICIT REAL (A-Z) or REAL declarations, "
-     "assignments, logical and block IFs, RETURN at the end; in a called subroutine INTEGER, "
-     "arrays, DO, GO TO, SAVE, DATA and COMMON are refused at their line, and so are a name "
-     "given both as a value it reads and as an argument it assigns, and an argument it "
-     "assigns on some paths only; the rest of the text after STOP is not read"),
+     "A subset of Fortran 77: fixed form, IMPLICIT REAL (A-Z) or NONE, REAL, INTEGER and "
+     "DIMENSION declarations, the routine's own arrays of one subscript with DATA, "
+     "assignments, logical and block IFs, DO loops (labelled, with CONTINUE, or DO ... END "
+     "DO), CALLs of the other routines after STOP, RETURN at the end. Refused at their "
+     "line: GO TO and other labels, SAVE, COMMON, PARAMETER, FUNCTION, array arguments, "
+     "LOGICAL and CHARACTER, an INTEGER given a value that is no whole number or divided "
+     "by one (Fortran cuts both), a DATA value the routine changes (memory between CALLs), "
+     "recursion; and a name given both as a value it reads and as an argument it assigns, "
+     "and an argument it assigns on some paths only. The rest of the text after STOP is "
+     "not read"),
     ("CSMP III, FST", "`ENDJOB`, the job's last statement", "the end of the runs, as "
      "`STOP`: the text after it is not read"),
     ("CSMP III", "`FIXED I, J`", "`INTEGER I, J`"),
@@ -251,7 +256,7 @@ PARAM/INCON/TIMER/FINISH lines, `TIMER STTIME`, relational FINISH conditions,
 and `WEATHER`, whose daily variables are read from CABO-format files (the file
 `NLD1.990` for `CNTR = 'NLD'; ISTN = 1; IYEAR = 1990`, looked for in WTRDIR, the
 listing's folder, its `weather/` and `../weather/`, and `--weather-dir`). A `CALL`
-of a Fortran subroutine written after STOP runs it, in a first subset of Fortran 77 (the
+of a Fortran subroutine written after STOP runs it, in a subset of Fortran 77 (the
 FST row of the table below says which); one of no subroutine there is refused.
 """
 

@@ -103,7 +103,18 @@ SUB = "      SUBROUTINE F(A, B)\n      IMPLICIT REAL (A-Z)\n{body}      RETURN\n
 
 
 @pytest.mark.parametrize("body, where, words", [
-    ("      DO 10 K = 1, 3\n      B = A\n   10 CONTINUE\n", "11:7", "DO loops in a subroutine"),
+    ("      GO TO 10\n      B = A\n", "11:7", "GO TO (SUBROUTINE F, line 11)"),
+    ("   10 B = A\n", "11:7", "the statement label 10 (in SUBROUTINE F): not supported"),
+    # Fortran's integers where they would give other numbers: a quotient cut, a value cut
+    ("      INTEGER I\n      I = 3\n      B = A*(I/2)\n", "13:14",
+     "a division of whole numbers (SUBROUTINE F): Fortran's integer division"),
+    ("      INTEGER N\n      N = 2.5*A\n      B = N\n", "12:7",
+     "N is an INTEGER (SUBROUTINE F): Fortran would cut this value"),
+    # a DATA value the routine changes is memory from one CALL to the next (SAVE)
+    ("      DATA Q /1./\n      Q = Q + A\n      B = Q\n", "12:7",
+     "Q has its value from DATA and is assigned in SUBROUTINE F"),
+    ("      REAL A(3)\n      B = 1.\n", "11:7", "A(3) in SUBROUTINE F: an array argument"),
+    ("      CALL F(A, B)\n", "9:7", "SUBROUTINE F calls itself (through F -> F)"),
     ("      SAVE Q\n      B = A\n", "11:7", "Fortran's SAVE in a subroutine"),
     ("      B = A\n      RETURN\n      B = 2.*A\n", "12:7",
      "RETURN before the end of SUBROUTINE F"),
@@ -122,9 +133,11 @@ def test_calls_that_cannot_be_run_say_what_to_write():
     assert "CALL F gives 1 argument(s); SUBROUTINE F (line 9) takes 2" in count
     expression = _fault(SUB.format(body="      B = A\n"), call="CALL F(X, 2.*Y)")
     assert "argument B of SUBROUTINE F is assigned in it" in expression
+    # (an implicit INTEGER read as a value is the same number in real arithmetic; here it
+    # has none)
     integer = _fault(SUB.format(body="      B = A\n").replace(
         "      IMPLICIT REAL (A-Z)\n", "").replace("B = A", "B = A + KQ"))
-    assert "KQ is an INTEGER by Fortran's implicit typing" in integer
+    assert "KQ is read in SUBROUTINE F before it has a value" in integer
 
 
 @pytest.mark.parametrize("call, body, words", [
@@ -183,3 +196,70 @@ def test_implicit_none_and_a_call_with_no_arguments():
             + "      SUBROUTINE G\n      END\n")
     run, = amilpy.loads(text, name="f.fst").run(advice=False)
     assert list(run.values["Y"]) == [2.0, 4.0, 6.0]
+
+
+GAUSS = """TITLE THE AREA UNDER X**P BY THREE-POINT GAUSS, IN A SUBROUTINE
+INCON ZERO = 0.
+PARAM P = 2.
+      B    = 1. + TIME
+      CALL GAUSS3(0., B, P, AREA)
+      W    = INTGRL(ZERO, AREA)
+TIMER FINTIM = 6., DELT = 1., PRDEL = 1.
+TRANSLATION_GENERAL DRIVER='EUDRIV'
+PRINT AREA, W
+END
+STOP
+
+C     GAUSS3: the integral of SHAPE from A to B by Gauss-Legendre on three points
+      SUBROUTINE GAUSS3(A, B, P, AREA)
+      IMPLICIT REAL (A-Z)
+      INTEGER I
+      REAL XG(3), WG(3)
+      DATA XG /0.1127016653792583, 0.5, 0.8872983346207417/
+      DATA WG /0.2777777777777778, 0.4444444444444444,
+     &         0.2777777777777778/
+      AREA = 0.
+      DO 10 I = 1, 3
+         X = A + (B - A)*XG(I)
+         IF (X .GE. 0.) THEN
+            CALL SHAPE(X, P, Y)
+         ELSE
+            Y = 0.
+         END IF
+         AREA = AREA + Y*WG(I)
+   10 CONTINUE
+      AREA = AREA*(B - A)
+      RETURN
+      END
+
+C     SHAPE: X**P, by way of an array of its own
+      SUBROUTINE SHAPE(X, P, Y)
+      IMPLICIT REAL (A-Z)
+      REAL Q(2)
+      DATA Q /2*1./
+      Y = Q(1)*X**P/Q(2)
+      RETURN
+      END
+"""
+
+
+def test_a_do_loop_over_the_routines_own_arrays_calling_another_routine():
+    """SUCROS's TOTASS integrates over the day the same way: a labelled DO over
+    Gauss's points and weights (local arrays given by DATA), calling another routine
+    (ASSIM) at each point. Three points integrate a polynomial of degree 5 exactly:
+    AREA = (1 + t)^3/3 at every day, to the weights' rounding (1e-15 relative), and W
+    (Euler, a day a step) the sum of the days before. The loop's I and the routines'
+    own names are each CALL's (GAUSS3#1.I, ...), not the listing's."""
+    run, = amilpy.loads(GAUSS, name="gauss.fst").run(advice=False)
+    t = run.t.tolist()
+    assert t == [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0]
+    for k, tk in enumerate(t):
+        assert run.values["AREA"][k] == pytest.approx((1.0 + tk) ** 3 / 3.0, rel=1e-14)
+        assert run.values["W"][k] == pytest.approx(
+            sum((1.0 + d) ** 3 / 3.0 for d in range(k)), rel=1e-14, abs=1e-300)
+    assert "I" not in run.final and "GAUSS3#1.I" in run.final
+    # written with DO ... END DO and P = 4: still exact (degree 4)
+    block = GAUSS.replace("      DO 10 I = 1, 3", "      DO I = 1, 3").replace(
+        "   10 CONTINUE", "      END DO").replace("P = 2.", "P = 4.")
+    run, = amilpy.loads(block, name="gauss.fst").run(advice=False)
+    assert run.values["AREA"][-1] == pytest.approx(7.0 ** 5 / 5.0, rel=1e-14)

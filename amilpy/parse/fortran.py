@@ -10,20 +10,27 @@ and never handed to a compiler or to Python as text.
 
 The subset: fixed-form source (a `C`, `c`, `*` or `!` in column 1 comments a line, a
 mark in column 6 continues one), `SUBROUTINE NAME(A1, ...)` ... `END`, `IMPLICIT REAL
-(A-Z)` or `IMPLICIT NONE` with `REAL` declarations of scalars, assignments, the logical
-IF `IF (c) statement`, block IFs with ELSE IF and ELSE, intrinsics as the listing has
-them, and `RETURN` as the last statement. An argument the body assigns is an output
-(the call must give a name there); one it only reads is an input and stands for the
-call's expression; every other name is the subroutine's own (each call's, `NAME#k.X`),
-and must be given a value before it is read. Only the subroutines a CALL names are
-read: notes, data and other routines after STOP are left as they are. What the subset
-does not run in a called subroutine -- INTEGER
-and the names Fortran types as integers by default (I to N, with no IMPLICIT REAL),
-arrays, DO, GO TO and labels, SAVE, DATA, PARAMETER, COMMON, FUNCTION, a CALL inside a
-subroutine, a RETURN before the end -- is refused at its line and column, by name, and
-so are the CALLs whose Fortran meaning a PROCEDURAL cannot have: a name given both as a
-value the routine reads and as an argument it assigns, one given to two assigned
-arguments, an assigned argument some path leaves as it was.
+(A-Z)` or `IMPLICIT NONE`, `REAL`, `INTEGER` and `DIMENSION` declarations, the
+routine's own arrays of one subscript (`REAL XG(3)`) and `DATA` for them, assignments,
+the logical IF `IF (c) statement`, block IFs with ELSE IF and ELSE, DO loops (`DO 10 I
+= 1, 3` ... `10 CONTINUE`, or `DO I = 1, 3` ... `END DO`: the listing's own, written
+out pass by pass), CALLs of the other routines after STOP (each written out in place),
+intrinsics as the listing has them, and `RETURN` as the last statement. An argument the
+body assigns is an output (the call must give a name there); one it only reads is an
+input and stands for the call's expression; every other name is the subroutine's own
+(each call's, `NAME#k.X`), and must be given a value before it is read. Only the
+subroutines a CALL names, and those they call, are read: notes, data and other
+routines after STOP are left as they are.
+
+The listing computes in real numbers. Fortran's INTEGERs (declared, or by its implicit
+typing I to N) give the same numbers while they hold whole numbers and are not divided
+by one another: an INTEGER given any other value, or a division of two, is refused, as
+is a DATA value the routine changes (Fortran keeps it from one CALL to the next). Also
+refused at its line and column, by name: GO TO and the labels it needs, SAVE,
+PARAMETER, COMMON, FUNCTION, array arguments, LOGICAL and CHARACTER, recursion, a
+RETURN before the end; and the CALLs whose Fortran meaning a PROCEDURAL cannot have: a
+name given both as a value the routine reads and as an argument it assigns, one given
+to two assigned arguments, an assigned argument some path leaves as it was.
 """
 
 from __future__ import annotations
@@ -40,25 +47,77 @@ _SUBROUTINE = re.compile(r"SUBROUTINE\s+([A-Za-z]\w*)\s*(?:\(\s*([^)]*)\))?\s*$"
 _HEAD = re.compile(r"SUBROUTINE\s+[A-Za-z]\w*\s*(?:\(|$)", re.I)
 _END = re.compile(r"END(?:\s*SUBROUTINE(?:\s+\w+)?)?\s*$", re.I)
 _IMPLICIT = re.compile(r"IMPLICIT\s+(.*)$", re.I)
-_REAL = re.compile(r"(?:REAL(?:\*\d+)?|DOUBLE\s*PRECISION)\s+(.*)$", re.I)
+# declarations: REAL, DOUBLE PRECISION, INTEGER, DIMENSION (scalars and arrays)
+_DECLARE = re.compile(r"(REAL(?:\*\d+)?|DOUBLE\s*PRECISION|INTEGER(?:\*\d+)?|DIMENSION)"
+                      r"\s+([A-Za-z].*)$", re.I)
+_DATA = re.compile(r"DATA\s+(.*)$", re.I)
+_CONTINUE = re.compile(r"CONTINUE\s*$", re.I)
 _RETURN = re.compile(r"RETURN\s*$", re.I)
 # refused by name: (pattern, the construct as a reader knows it)
 _REFUSED = [
-    (re.compile(r"(INTEGER|LOGICAL|CHARACTER)\b", re.I), "{0} variables in a subroutine"),
-    (re.compile(r"DO\b\s*(\d+\s*,?\s*)?[A-Za-z]\w*\s*=", re.I), "DO loops in a subroutine"),
+    (re.compile(r"(LOGICAL|CHARACTER)\b", re.I), "{0} variables in a subroutine"),
     (re.compile(r"GO\s*TO\b", re.I), "GO TO"),
-    (re.compile(r"(SAVE|DATA|PARAMETER|COMMON|EQUIVALENCE|EXTERNAL|DIMENSION|CALL|"
+    (re.compile(r"(SAVE|PARAMETER|COMMON|EQUIVALENCE|EXTERNAL|"
                 r"FUNCTION|ENTRY|READ|WRITE|FORMAT|OPEN|CLOSE|STOP)\b", re.I),
      "Fortran's {0} in a subroutine"),
 ]
+_NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[EeDd][+-]?\d+)?"
 
 
 @dataclass(frozen=True)
 class Subroutine:
     name: str
     params: tuple[str, ...]
-    body: tuple  # the listing's statements (Assign, If)
+    body: tuple  # the listing's statements (Assign, If, Loop, Declare, SubroutineCall)
     span: Span
+
+
+def _split(text: str) -> list[str]:
+    """text split at the commas outside parentheses."""
+    out, depth, start = [], 0, 0
+    for i, ch in enumerate(text):
+        depth += (ch == "(") - (ch == ")")
+        if ch == "," and depth == 0:
+            out.append(text[start:i])
+            start = i + 1
+    out.append(text[start:])
+    return [x.strip() for x in out if x.strip()]
+
+
+def _declared(text: str) -> list[tuple[str, str | None]]:
+    """(NAME, its sizes as written or None) of each name a declaration lists."""
+    out = []
+    for item in _split(text):
+        m = re.fullmatch(r"([A-Za-z]\w*)\s*(?:\((.*)\))?", item)
+        if m is None:
+            raise ValueError(item)
+        out.append((m.group(1).upper(), m.group(2)))
+    return out
+
+
+def _data(text: str, sizes: dict[str, int]) -> list[str]:
+    """`DATA names /values/ [, names /values/]...` as assignments, one per element, in
+    Fortran's order (a whole array's elements first to last; `3*0.` three values)."""
+    out = []
+    for names, values in re.findall(r"([^/]+)/([^/]*)/\s*,?", text):
+        targets = []
+        for name, sub in _declared(names):
+            if sub is None and name in sizes:
+                targets += [f"{name}({k})" for k in range(1, sizes[name] + 1)]
+            else:
+                targets.append(name if sub is None else f"{name}({sub})")
+        got = []
+        for v in _split(values):
+            m = re.fullmatch(rf"(?:(\d+)\s*\*\s*)?({_NUMBER})", v.replace(" ", ""))
+            if m is None:
+                raise ValueError(v)
+            got += [m.group(2)] * int(m.group(1) or 1)
+        if len(got) != len(targets):
+            raise ValueError(f"{len(targets)} names, {len(got)} values")
+        out += [f"{t} = {v}" for t, v in zip(targets, got, strict=True)]
+    if not out:
+        raise ValueError(text)
+    return out
 
 
 def read_subroutines(lines: list[str], first: int, path: str | None,
@@ -68,17 +127,26 @@ def read_subroutines(lines: list[str], first: int, path: str | None,
     1); None for one whose faults are said (its CALLs add nothing to them). The other
     text after STOP (notes, data, routines nothing calls) is not read. `parser`: the
     listing's own (the statements of a body are read by its grammar)."""
-    units: dict[str, Subroutine | None] = {}
+    written: dict[str, list] = {}
     for unit in _units(_statements(lines, first), errors):
         name = _SUBROUTINE.match(unit[0][2]).group(1).upper()
-        if name not in called:
+        if name in written:
+            if name in called:
+                errors.append(Diagnostic(f"SUBROUTINE {name} is written twice",
+                                         Span(unit[0][0] + 1, unit[0][1] + 1),
+                                         "a subroutine has one definition"))
             continue
-        if name in units:
-            errors.append(Diagnostic(f"SUBROUTINE {name} is written twice",
-                                     Span(unit[0][0] + 1, unit[0][1] + 1),
-                                     "a subroutine has one definition"))
+        written[name] = unit
+    units: dict[str, Subroutine | None] = {}
+    wanted = sorted(called)
+    while wanted:  # (the routines called, and those they call)
+        name = wanted.pop()
+        if name in units or name not in written:
             continue
-        units[name] = _read_unit(unit, len(lines), path, errors, parser)
+        units[name] = sub = _read_unit(written[name], len(lines), path, errors, parser)
+        if sub is not None:
+            wanted += [n.name for st in sub.body for n in ast.walk(st)
+                       if isinstance(n, ast.SubroutineCall)]
     return units
 
 
@@ -142,13 +210,25 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
     params = tuple(p.strip().upper() for p in (head.group(2) or "").split(",") if p.strip())
     body = unit[1:-1]
     real_all, declared, bad, none = False, set(), False, False
+    integers: set[str] = set()  # declared INTEGER
+    sizes: dict[str, int] = {}  # the routine's own arrays and their lengths
+    data: dict[str, int] = {}  # the names DATA gives values, and its line
     executable: list = []
+
+    def refuse(what: str, where: Span, instead: str) -> None:
+        nonlocal bad
+        errors.append(Diagnostic(what, where, instead))
+        bad = True
+
     for i, (k, col, code, label) in enumerate(body):
         where = Span(k + 1, col + 1, k + 1, col + 1 + len(code))
         if label:
-            errors.append(Diagnostic(f"the statement label {label} (in SUBROUTINE {name}): "
-                                     "not supported", where, "write IF ... END IF"))
-            bad = True
+            if not _CONTINUE.match(code):
+                refuse(f"the statement label {label} (in SUBROUTINE {name}): not supported",
+                       where, "label only the CONTINUE that ends a DO loop; write IF ... "
+                       "END IF for GO TO")
+                continue
+            executable.append((k, 0, f"{label:<5} {code}"))  # (the listing reads it so)
             continue
         implicit = _IMPLICIT.match(code)
         if implicit:
@@ -158,31 +238,59 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
             elif what == "NONE":
                 none = True
             else:
-                errors.append(Diagnostic(f"IMPLICIT {implicit.group(1)}: not supported", where,
-                                         "write IMPLICIT REAL (A-Z)"))
-                bad = True
+                refuse(f"IMPLICIT {implicit.group(1)}: not supported", where,
+                       "write IMPLICIT REAL (A-Z)")
             continue
-        real = _REAL.match(code)
-        if real and "(" not in real.group(1):
-            declared.update(n.strip().upper() for n in real.group(1).split(","))
+        declare = _DECLARE.match(code)
+        if declare:
+            word = declare.group(1).split("*")[0].upper()
+            try:
+                names = _declared(declare.group(2))
+            except ValueError as exc:
+                refuse(f"{word} {exc}: not a declaration the subset reads", where,
+                       "write NAME or NAME(n), n a number")
+                continue
+            for n, dims in names:
+                if dims is None:
+                    (integers if word.startswith("INTEGER") else declared).add(n)
+                    continue
+                if n in params or word.startswith("INTEGER") or \
+                        not re.fullmatch(r"\s*\d+\s*", dims):
+                    what = "an array argument" if n in params else \
+                        "an INTEGER array" if word.startswith("INTEGER") else \
+                        "an array of more than one subscript, or of a size not a number"
+                    refuse(f"{n}({dims}) in SUBROUTINE {name}: {what} is not supported",
+                           where, "the subset's arrays are the routine's own REAL X(n)")
+                    continue
+                sizes[n] = int(dims)
+                declared.add(n)
+                executable.append((k, col, f"DIMENSION {n}({int(dims)})"))
+            continue
+        given = _DATA.match(code)
+        if given:
+            try:
+                lines = _data(given.group(1), sizes)
+            except ValueError as exc:
+                refuse(f"DATA {given.group(1)}: not read ({exc})", where,
+                       "write DATA X /1.0, 2.0/ with as many values as names, X "
+                       "declared before")
+                continue
+            for line in lines:
+                data.setdefault(line.split("=")[0].split("(")[0].strip().upper(), k + 1)
+            executable.append((k, col, "; ".join(lines)))
             continue
         if _RETURN.match(code):
             if any(not _RETURN.match(c) for _, _, c, _ in body[i + 1:]):
-                errors.append(Diagnostic(
-                    f"RETURN before the end of SUBROUTINE {name}: not supported", where,
-                    "write the statements after it in the ELSE of an IF"))
-                bad = True
+                refuse(f"RETURN before the end of SUBROUTINE {name}: not supported", where,
+                       "write the statements after it in the ELSE of an IF")
             continue
         found = next(((m, what) for p, what in _REFUSED if (m := p.match(code))), None)
-        if found is not None or real:  # (a REAL declaration here declares an array)
-            match, what = found or (None, "arrays in a subroutine")
-            word = (match.group(1) or "").upper() if match is not None and match.groups() \
-                else ""
-            errors.append(Diagnostic(f"{what.format(word)} (SUBROUTINE {name}, line {k + 1}): "
-                                     "not supported", where,
-                                     "the subroutines after STOP run assignments and IFs "
-                                     "(issue 23's first subset)"))
-            bad = True
+        if found is not None:
+            match, what = found
+            word = (match.group(1) or "").upper() if match.groups() else ""
+            refuse(f"{what.format(word)} (SUBROUTINE {name}, line {k + 1}): not supported",
+                   where, "the subroutines after STOP run assignments, IFs, DO loops, "
+                   "the routine's own arrays with DATA, and CALLs of the others")
             continue
         executable.append((k, col, code))
     if bad:
@@ -192,7 +300,7 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
     text = ["" for _ in range(n_lines)]
     text[k0] = "PROGRAM " + name  # (where the SUBROUTINE line is: every line in its place)
     for k, col, code in executable:
-        text[k] = " " * col + code
+        text[k] = (text[k] + "; " if text[k] else " " * col) + code
     text[unit[-1][0]] = "END"
     source = "\n".join(text) + "\n"
     from lark.exceptions import UnexpectedInput
@@ -212,32 +320,79 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
     errors.extend(builder.errors)
     if builder.errors:
         return None
-    for st in statements:
-        if not isinstance(st, (ast.Assign, ast.If)):
+    allowed = (ast.Assign, ast.If, ast.Loop, ast.Declare, ast.SubroutineCall)
+    for st in (n for top in statements for n in ast.walk(top)):
+        if isinstance(st, ast.STATEMENTS) and not isinstance(st, allowed):
             errors.append(Diagnostic(
                 f"this statement in SUBROUTINE {name}: not supported", st.span,
-                "the subroutines after STOP run assignments and IFs"))
+                "the subroutines after STOP run assignments, IFs, DO loops and CALLs"))
             return None
     body_nodes = tuple(statements)
-    if not real_all:
-        for node in (n for st in body_nodes for n in ast.walk(st)):
-            names = [node.name] if isinstance(node, ast.Name) else \
-                list(node.targets) if isinstance(node, ast.Assign) else []
-            for n in names:
-                if n in declared:
-                    continue
-                if none:  # (IMPLICIT NONE: every name is declared)
-                    errors.append(Diagnostic(
-                        f"{n} is not declared (IMPLICIT NONE in SUBROUTINE {name})",
-                        node.span, f"declare it: REAL {n}"))
-                    return None
-                if n[:1] in "IJKLMN":
-                    errors.append(Diagnostic(
-                        f"{n} is an INTEGER by Fortran's implicit typing (SUBROUTINE {name}): "
-                        "integer arithmetic is not supported", node.span,
-                        "write IMPLICIT REAL (A-Z), or declare it REAL"))
-                    return None
+    fault = _typing(body_nodes, declared, integers, real_all, none, name) or \
+        _data_kept(body_nodes, data, name)
+    if fault is not None:
+        errors.append(fault)
+        return None
     return Subroutine(name, params, body_nodes, span)
+
+
+def _typing(body, declared: set[str], integers: set[str], real_all: bool, none: bool,
+            routine: str) -> Diagnostic | None:
+    """Fortran's types where they would give other numbers than the listing's real
+    arithmetic: a name not declared under IMPLICIT NONE; an INTEGER (declared, or by
+    Fortran's implicit typing, I to N) given a value that is no whole number, or
+    divided by one (Fortran truncates both)."""
+    def integer(n: str) -> bool:
+        return n in integers or (not real_all and not none and n not in declared
+                                 and n[:1] in "IJKLMN")
+
+    def whole(e) -> bool:  # (an expression Fortran computes in integers)
+        if isinstance(e, ast.Num):
+            return not re.search(r"[.EeDd]", e.text or repr(e.value))
+        if isinstance(e, ast.Name):
+            return integer(e.name)
+        if isinstance(e, ast.BinOp) and e.op in "+-*":
+            return whole(e.left) and whole(e.right)
+        if isinstance(e, ast.Neg):
+            return whole(e.operand)
+        return False
+
+    for node in (n for st in body for n in ast.walk(st)):
+        names = [node.name] if isinstance(node, ast.Name) else \
+            list(node.targets) if isinstance(node, ast.Assign) else \
+            [node.var] if isinstance(node, ast.Loop) else []
+        for n in names:
+            if none and n not in declared and n not in integers:
+                return Diagnostic(f"{n} is not declared (IMPLICIT NONE in SUBROUTINE "
+                                  f"{routine})", node.span, f"declare it: REAL {n}")
+        if isinstance(node, ast.Assign) and not node.subscripts and \
+                integer(node.targets[0]) and not whole(node.expr):
+            return Diagnostic(
+                f"{node.targets[0]} is an INTEGER (SUBROUTINE {routine}): Fortran would cut "
+                "this value to a whole number, which is not supported", node.span,
+                f"write IMPLICIT REAL (A-Z), or declare it REAL {node.targets[0]}")
+        if isinstance(node, ast.BinOp) and node.op == "/" and whole(node.left) and \
+                whole(node.right):
+            return Diagnostic(
+                f"a division of whole numbers (SUBROUTINE {routine}): Fortran's integer "
+                "division, which cuts the quotient, is not supported", node.span,
+                "write FLOAT(I)/FLOAT(J), or declare the names REAL")
+    return None
+
+
+def _data_kept(body, data: dict[str, int], routine: str) -> Diagnostic | None:
+    """A name DATA gives a value that the routine also assigns keeps its last value
+    from call to call in Fortran (as SAVE would): refused."""
+    for node in (n for st in body for n in ast.walk(st)):
+        if isinstance(node, ast.Assign) and node.targets[0] in data and \
+                node.span.line != data[node.targets[0]]:
+            return Diagnostic(
+                f"{node.targets[0]} has its value from DATA and is assigned in SUBROUTINE "
+                f"{routine}: Fortran keeps its value from one CALL to the next (as SAVE), "
+                "which is not supported", node.span,
+                f"give {node.targets[0]} its value with an assignment first thing in the "
+                "routine")
+    return None
 
 
 def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
@@ -246,10 +401,24 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
     from .macros import _assigned, _rename, _with_bodies
 
     counts: dict[str, int] = {}
+    bodies: dict[str, tuple | None] = {}  # each routine's body, its own CALLs written out
 
-    def one(st):
+    def body_of(sub: Subroutine, stack: tuple[str, ...]) -> tuple | None:
+        if sub.name not in bodies:
+            if sub.name in stack:
+                errors.append(Diagnostic(
+                    f"SUBROUTINE {sub.name} calls itself (through "
+                    f"{' -> '.join(stack + (sub.name,))}): Fortran 77 has no recursion",
+                    sub.span, "write the repetition as a DO loop"))
+                return None
+            before = len(errors)
+            out = tuple(x for st in sub.body for x in one(st, stack + (sub.name,)))
+            bodies[sub.name] = out if len(errors) == before else None
+        return bodies[sub.name]
+
+    def one(st, stack: tuple[str, ...] = ()):
         if not isinstance(st, ast.SubroutineCall):
-            return [_with_bodies(st, lambda body: [x for s in body for x in one(s)])]
+            return [_with_bodies(st, lambda body: [x for s in body for x in one(s, stack)])]
         if st.name in subroutines and subroutines[st.name] is None:
             return []  # (its faults are said at the subroutine)
         sub = subroutines.get(st.name)
@@ -265,8 +434,11 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
                 f"(line {sub.span.line}) takes {len(sub.params)}", st.span,
                 f"write CALL {st.name}({', '.join(sub.params)})"))
             return []
-        assigned = _assigned(sub.body)
-        reads, everywhere = _flow(sub.body)
+        sub_body = body_of(sub, stack)
+        if sub_body is None:
+            return []
+        assigned = _assigned(sub_body)
+        reads, everywhere = _flow(sub_body)
         counts[st.name] = k = counts.get(st.name, 0) + 1
         names: dict[str, str] = {}
         values: dict[str, ast.Node] = {}
@@ -315,10 +487,20 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
             return []
         local = {n: f"{st.name}#{k}.{n}" for n in assigned - params}
         names |= local
-        body = tuple(_rename(s, names, values) for s in sub.body)
+        body = tuple(_rename(s, names, values) for s in sub_body)
+        # (the routine's arrays are declared where the listing declares its own: no
+        # declaration stands in a PROCEDURAL)
+        declared: list = []
+
+        def hoist(statements):
+            declared.extend(s for s in statements if isinstance(s, ast.Declare))
+            return [_with_bodies(s, hoist) for s in statements
+                    if not isinstance(s, ast.Declare)]
+        body = tuple(hoist(body))
         # (the routine's own names are outputs too: each call's, shown as NAME#k.X)
-        return [ast.Procedural(tuple(dict.fromkeys(outputs + sorted(local.values()))),
-                               tuple(dict.fromkeys(inputs)), body, st.span)]
+        return declared + [ast.Procedural(
+            tuple(dict.fromkeys(outputs + sorted(local.values()))),
+            tuple(dict.fromkeys(inputs)), body, st.span)]
 
     return [x for st in statements for x in one(st)]
 
@@ -349,6 +531,24 @@ def _flow(body) -> tuple[dict[str, object], set[str]]:
                     branch_given.append(walk(b.body, given))
                 if st.branches[-1].cond is None:  # (an ELSE: every path passes a branch)
                     given |= set.intersection(*branch_given)
+            elif isinstance(st, ast.Loop):
+                for e in (st.start, st.stop, st.step):
+                    if e is not None:
+                        read(e, given)
+                inside = walk(st.body, given | {st.var})
+                # (a loop of whole-number bounds that makes a pass assigns what its
+                # body does; one that may make none, nothing)
+                bounds = [e.value if isinstance(e, ast.Num) else None
+                          for e in (st.start, st.stop, st.step or ast.Num(1.0, st.span))]
+                if None not in bounds and bounds[2] != 0 and \
+                        (bounds[1] - bounds[0]) * bounds[2] >= 0:
+                    given |= inside
+                given.add(st.var)
+            elif isinstance(st, ast.Procedural):  # (a CALL of another routine)
+                for n in st.inputs:
+                    if n not in given:
+                        reads.setdefault(n, st.span)
+                given.update(st.outputs)
         return given
 
     everywhere = walk(body, set())
