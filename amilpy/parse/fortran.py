@@ -11,7 +11,9 @@ and never handed to a compiler or to Python as text.
 The subset: fixed-form source (a `C`, `c`, `*` or `!` in column 1 comments a line, a
 mark in column 6 continues one), `SUBROUTINE NAME(A1, ...)` ... `END`, `IMPLICIT REAL
 (A-Z)` or `IMPLICIT NONE`, `REAL`, `INTEGER` and `DIMENSION` declarations, the
-routine's own arrays of one subscript (`REAL XG(3)`) and `DATA` for them, assignments,
+routine's own arrays of one subscript (`REAL XG(3)`) and `DATA` for them, `PARAMETER`
+(named constants), `SAVE` (a routine that reads nothing before assigning it keeps
+nothing from CALL to CALL: SAVE then changes no number), assignments,
 the logical IF `IF (c) statement`, block IFs with ELSE IF and ELSE, DO loops (`DO 10 I
 = 1, 3` ... `10 CONTINUE`, or `DO I = 1, 3` ... `END DO`: the listing's own, written
 out pass by pass), CALLs of the other routines after STOP (each written out in place),
@@ -26,8 +28,8 @@ The listing computes in real numbers. Fortran's INTEGERs (declared, or by its im
 typing I to N) give the same numbers while they hold whole numbers and are not divided
 by one another: an INTEGER given any other value, or a division of two, is refused, as
 is a DATA value the routine changes (Fortran keeps it from one CALL to the next). Also
-refused at its line and column, by name: GO TO and the labels it needs, SAVE,
-PARAMETER, COMMON, FUNCTION, array arguments, LOGICAL and CHARACTER, recursion, a
+refused at its line and column, by name: GO TO and the labels it needs, a PARAMETER
+assigned, COMMON, FUNCTION, array arguments, LOGICAL and CHARACTER, recursion, a
 RETURN before the end; and the CALLs whose Fortran meaning a PROCEDURAL cannot have: a
 name given both as a value the routine reads and as an argument it assigns, one given
 to two assigned arguments, an assigned argument some path leaves as it was.
@@ -51,13 +53,15 @@ _IMPLICIT = re.compile(r"IMPLICIT\s+(.*)$", re.I)
 _DECLARE = re.compile(r"(REAL(?:\*\d+)?|DOUBLE\s*PRECISION|INTEGER(?:\*\d+)?|DIMENSION)"
                       r"\s+([A-Za-z].*)$", re.I)
 _DATA = re.compile(r"DATA\s+(.*)$", re.I)
+_PARAMETER = re.compile(r"PARAMETER\s*\((.*)\)\s*$", re.I)
+_SAVE = re.compile(r"SAVE\b\s*(.*)$", re.I)
 _CONTINUE = re.compile(r"CONTINUE\s*$", re.I)
 _RETURN = re.compile(r"RETURN\s*$", re.I)
 # refused by name: (pattern, the construct as a reader knows it)
 _REFUSED = [
     (re.compile(r"(LOGICAL|CHARACTER)\b", re.I), "{0} variables in a subroutine"),
     (re.compile(r"GO\s*TO\b", re.I), "GO TO"),
-    (re.compile(r"(SAVE|PARAMETER|COMMON|EQUIVALENCE|EXTERNAL|"
+    (re.compile(r"(COMMON|EQUIVALENCE|EXTERNAL|"
                 r"FUNCTION|ENTRY|READ|WRITE|FORMAT|OPEN|CLOSE|STOP)\b", re.I),
      "Fortran's {0} in a subroutine"),
 ]
@@ -212,7 +216,7 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
     real_all, declared, bad, none = False, set(), False, False
     integers: set[str] = set()  # declared INTEGER
     sizes: dict[str, int] = {}  # the routine's own arrays and their lengths
-    data: dict[str, int] = {}  # the names DATA gives values, and its line
+    data: dict[str, tuple[int, str]] = {}  # names DATA or PARAMETER give: (line, which)
     executable: list = []
 
     def refuse(what: str, where: Span, instead: str) -> None:
@@ -276,8 +280,26 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
                        "declared before")
                 continue
             for line in lines:
-                data.setdefault(line.split("=")[0].split("(")[0].strip().upper(), k + 1)
+                data.setdefault(line.split("=")[0].split("(")[0].strip().upper(),
+                                (k + 1, "DATA"))
             executable.append((k, col, "; ".join(lines)))
+            continue
+        constants = _PARAMETER.match(code)
+        if constants:
+            # (named constants: assignments first thing, the routine may not assign them)
+            given_here = [c.split("=")[0].strip().upper() for c in _split(constants.group(1))]
+            if any("=" not in c for c in _split(constants.group(1))):
+                refuse(f"PARAMETER ({constants.group(1)}): not read", where,
+                       "write PARAMETER (NAME = value, ...)")
+                continue
+            for n in given_here:
+                data.setdefault(n, (k + 1, "PARAMETER"))
+            executable.append((k, col, "; ".join(_split(constants.group(1)))))
+            continue
+        if _SAVE.match(code):
+            # (what SAVE keeps matters only for a name read before the routine assigns
+            # it, which is refused as read before it has a value; or a DATA value the
+            # routine changes, refused too: SAVE changes nothing the subset runs)
             continue
         if _RETURN.match(code):
             if any(not _RETURN.match(c) for _, _, c, _ in body[i + 1:]):
@@ -380,12 +402,22 @@ def _typing(body, declared: set[str], integers: set[str], real_all: bool, none: 
     return None
 
 
-def _data_kept(body, data: dict[str, int], routine: str) -> Diagnostic | None:
+def _data_kept(body, data: dict[str, tuple[int, str]], routine: str) -> Diagnostic | None:
     """A name DATA gives a value that the routine also assigns keeps its last value
-    from call to call in Fortran (as SAVE would): refused."""
+    from call to call in Fortran (as SAVE would): refused; a PARAMETER assigned is no
+    Fortran."""
     for node in (n for st in body for n in ast.walk(st)):
-        if isinstance(node, ast.Assign) and node.targets[0] in data and \
-                node.span.line != data[node.targets[0]]:
+        if not (isinstance(node, ast.Assign) and node.targets[0] in data):
+            continue
+        line, which = data[node.targets[0]]
+        if node.span.line == line:
+            continue
+        if which == "PARAMETER":
+            return Diagnostic(
+                f"{node.targets[0]} is a PARAMETER of SUBROUTINE {routine}: Fortran does not "
+                "let the routine assign it", node.span,
+                f"give the value another name, or remove {node.targets[0]} from PARAMETER")
+        if which == "DATA":
             return Diagnostic(
                 f"{node.targets[0]} has its value from DATA and is assigned in SUBROUTINE "
                 f"{routine}: Fortran keeps its value from one CALL to the next (as SAVE), "
