@@ -320,3 +320,20 @@ def test_parameter_assigned_and_what_save_would_keep_are_refused(body, where, wo
     # such, so the subset never runs a routine whose numbers depend on the last CALL)
     message = _fault(SUB.format(body=body))
     assert words in message, message
+
+
+def test_real_of_a_loop_index_and_integers_given_whole_numbers():
+    """REAL(I - 1) (the listing's FLOAT) spaces five points k A/4 over [0, A]; N =
+    INT(4.5) and MOD of INTEGERs are whole numbers, as Fortran computes them: the mean
+    of X**2 over the points is 0.375 A**2 (0 + 1 + 4 + 9 + 16 over 5, in quarters of
+    A), and the sum at odd k 0.625 A**2 (1 + 9 over 16)."""
+    sub = ("      SUBROUTINE F(A, B)\n      IMPLICIT REAL (A-Z)\n      INTEGER I, N, J\n"
+           "      N = INT(4.5)\n      S = 0.\n      B = 0.\n      DO 10 I = 1, N + 1\n"
+           "         X = A*REAL(I - 1)/4.\n         S = S + X**2/5.\n"
+           "         J = MOD(I, 2)\n         IF (J .EQ. 0) B = B + X**2\n"
+           "   10 CONTINUE\n      B = B + S\n      RETURN\n      END\n")
+    text = ("TITLE T\nX = INTGRL(1., 1.)\nCALL F(X, Y)\nTIMER FINTIM = 2., DELT = 1.\n"
+            "TRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT Y\nEND\nSTOP\n" + sub)
+    run, = amilpy.loads(text, name="f.fst").run(advice=False)
+    for x, y in zip(run.values["X"], run.values["Y"], strict=True):
+        assert y == pytest.approx(0.375 * x * x + 0.625 * x * x, rel=1e-14)

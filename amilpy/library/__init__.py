@@ -372,7 +372,8 @@ _math("ATAN(X)", math.atan, "arctan")
 _math("SINH(X)", rt.nan_on_domain(math.sinh), "sinh")
 _math("COSH(X)", rt.nan_on_domain(math.cosh), "cosh")
 _math("TANH(X)", math.tanh, "tanh")
-_math("FLOAT(X)", float, lambda np: (lambda x: np.asarray(x, dtype=float)))
+_math("FLOAT(X)", float, lambda np: (lambda x: np.asarray(x, dtype=float)),
+      "REAL", "DBLE", "SNGL", doc="X as a real number (Fortran's conversions)")
 _math("ATAN2(Y, X)", math.atan2, "arctan2")
 _math("POW(X, Y)", rt.safe_pow, "power", doc="X**Y (Magnolia's pow; NaN for a negative X "
       "to a fractional Y)")

@@ -65,6 +65,8 @@ _REFUSED = [
                 r"FUNCTION|ENTRY|READ|WRITE|FORMAT|OPEN|CLOSE|STOP)\b", re.I),
      "Fortran's {0} in a subroutine"),
 ]
+# intrinsics whose value is a whole number (Fortran's INTEGER functions)
+_WHOLE = {"INT", "NINT", "IFIX", "IDINT", "IDNINT"}
 _NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[EeDd][+-]?\d+)?"
 
 
@@ -377,6 +379,8 @@ def _typing(body, declared: set[str], integers: set[str], real_all: bool, none: 
             return whole(e.left) and whole(e.right)
         if isinstance(e, ast.Neg):
             return whole(e.operand)
+        if isinstance(e, ast.Call):
+            return e.func in _WHOLE or (e.func == "MOD" and all(map(whole, e.args)))
         return False
 
     for node in (n for st in body for n in ast.walk(st)):
@@ -398,7 +402,7 @@ def _typing(body, declared: set[str], integers: set[str], real_all: bool, none: 
             return Diagnostic(
                 f"a division of whole numbers (SUBROUTINE {routine}): Fortran's integer "
                 "division, which cuts the quotient, is not supported", node.span,
-                "write FLOAT(I)/FLOAT(J), or declare the names REAL")
+                "write REAL(I)/REAL(J), or declare the names REAL")
     return None
 
 
