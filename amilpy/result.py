@@ -136,11 +136,18 @@ class Events(MutableSequence):
     def __getitem__(self, i):
         if isinstance(i, slice):
             return [self._event(j) for j in range(*i.indices(len(self._t)))]
-        return self._event(i if i >= 0 else i + len(self._t))
+        n = len(self._t)
+        if not -n <= i < n:
+            raise IndexError("event index out of range")
+        return self._event(i if i >= 0 else i + n)
 
-    def __setitem__(self, i, e: Event) -> None:
-        if isinstance(i, slice):
-            raise TypeError("a run's events are set one at a time")
+    def __setitem__(self, i, e) -> None:
+        if isinstance(i, slice):  # (as a list does: the events in the slice replaced)
+            events = list(self)
+            events[i] = e
+            self._t, self._k = array("d"), array("i")
+            self.extend(events)
+            return
         self._t[i], self._k[i] = e.time, self._kind(e)
 
     def __delitem__(self, i) -> None:
@@ -175,9 +182,28 @@ class Events(MutableSequence):
             yield self._event(i)
 
     def __eq__(self, other) -> bool:
-        if isinstance(other, (Events, list, tuple)):
-            return len(self) == len(other) and all(a == b for a, b in zip(self, other, strict=True))
+        if isinstance(other, (Events, list)):  # (as a list: never equal to a tuple)
+            return len(self) == len(other) and \
+                all(a == b for a, b in zip(self, other, strict=True))
         return NotImplemented
+
+    # what a list of events did before: + and * give lists, copy() and sort() as a list's
+    def __add__(self, other) -> list[Event]:
+        return list(self) + list(other)
+
+    def __radd__(self, other) -> list[Event]:
+        return list(other) + list(self)
+
+    def __mul__(self, n: int) -> list[Event]:
+        return list(self) * n
+
+    __rmul__ = __mul__
+
+    def copy(self) -> Events:
+        return Events(self)
+
+    def sort(self, *, key=None, reverse: bool = False) -> None:
+        self[:] = sorted(self, key=key, reverse=reverse)
 
     def __repr__(self) -> str:
         return f"Events({list(self)!r})"

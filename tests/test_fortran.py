@@ -114,6 +114,22 @@ SUB = "      SUBROUTINE F(A, B)\n      IMPLICIT REAL (A-Z)\n{body}      RETURN\n
     ("      DATA Q /1./\n      Q = Q + A\n      B = Q\n", "12:7",
      "Q has its value from DATA and is assigned in SUBROUTINE F"),
     ("      REAL A(3)\n      B = 1.\n", "11:7", "A(3) in SUBROUTINE F: an array argument"),
+    # (a review's cases: each ran with other numbers than Fortran's before)
+    ("      INTEGER I\n      I = 4\n      B = MOD(I, 3)/2\n", "13:11",
+     "a division of whole numbers"),
+    ("      INTEGER I\n      I = 4\n      B = I**2/5\n", "13:11", "a division of whole numbers"),
+    ("      B = INT(A + 1.)/2\n", "11:11", "a division of whole numbers"),
+    ("      B = 2**(-1)\n", "11:11", "a power of whole numbers whose exponent may be"),
+    ("      INTEGER K\n      DIMENSION K(2)\n      K(1) = 2.5\n      B = K(1)\n", "12:7",
+     "K in SUBROUTINE F: an INTEGER array"),
+    ("      INTEGER J\n      B = 0.\n      DO 10 J = A + 0.5, 4\n      B = B + J\n"
+     "   10 CONTINUE\n", "13:7", "the bounds of DO J, an INTEGER, are no whole numbers"),
+    ("      B = 0.\n      DO 10 I = 1, 3\n      I = I + 1\n      B = B + 1.\n"
+     "   10 CONTINUE\n", "13:7", "I is assigned inside its own DO loop"),
+    ("      B = 0.\n      DO 10 I = 1, 3, 0\n      B = B + 1.\n   10 CONTINUE\n", "12:23",
+     "a DO loop with step 0 never ends"),
+    ("      B = 0.\n      DO 20 I = 1, 3\n      B = B + 1.\n   10 CONTINUE\n", "12:7",
+     "DO 20 (in SUBROUTINE F): no 20 CONTINUE in SUBROUTINE F ends it"),
     ("      CALL F(A, B)\n", "9:7", "SUBROUTINE F calls itself (through F -> F)"),
     ("      COMMON /W/ Q\n      B = A\n", "11:7", "Fortran's COMMON in a subroutine"),
     ("      B = A\n      RETURN\n      B = 2.*A\n", "12:7",
@@ -138,6 +154,11 @@ def test_calls_that_cannot_be_run_say_what_to_write():
     integer = _fault(SUB.format(body="      B = A\n").replace(
         "      IMPLICIT REAL (A-Z)\n", "").replace("B = A", "B = A + KQ"))
     assert "KQ is read in SUBROUTINE F before it has a value" in integer
+    # (DIMENSION K(2) with no IMPLICIT REAL: K is an INTEGER array, as Fortran types it)
+    implicit = _fault(SUB.format(body="      DIMENSION K(2)\n      K(1) = 2.5\n      B = K(1)\n"
+                                 ).replace("      IMPLICIT REAL (A-Z)\n", ""))
+    assert "f.fst:10:7: error: K in SUBROUTINE F: an INTEGER array (by Fortran's implicit " \
+           "typing)" in implicit
 
 
 @pytest.mark.parametrize("call, body, words", [
@@ -337,3 +358,21 @@ def test_real_of_a_loop_index_and_integers_given_whole_numbers():
     run, = amilpy.loads(text, name="f.fst").run(advice=False)
     for x, y in zip(run.values["X"], run.values["Y"], strict=True):
         assert y == pytest.approx(0.375 * x * x + 0.625 * x * x, rel=1e-14)
+
+
+def test_a_real_do_loop_counts_as_fortran_and_do_label_comma():
+    """DO T = 0., 0.7, 0.1 makes Fortran's MAX(INT((0.7 - 0 + 0.1)/0.1), 0) = 7 passes,
+    whether its body reads an array (the loop written out when it is read) or not (a
+    loop as the run goes): it made 8 and 7 before. `DO 10, I = 1, 4` (a comma after
+    the label, legal Fortran 77) sums 1 to 4; a labelled CONTINUE no DO ends does
+    nothing (no GO TO may reach it)."""
+    sub = ("      SUBROUTINE F(A, B)\n      IMPLICIT REAL (A-Z)\n      REAL W(1)\n"
+           "      DATA W /1./\n      B = 0.\n      DO T = 0., 0.7, 0.1\n"
+           "         B = B + W(1)\n      END DO\n      DO T = 0., 0.7, 0.1\n"
+           "         B = B + 100.\n      END DO\n      DO 10, I = 1, 4\n"
+           "         B = B + 10000.*I\n   10 CONTINUE\n   20 CONTINUE\n"
+           "      B = B + 0.*A\n      RETURN\n      END\n")
+    text = ("TITLE T\nX = INTGRL(1., 1.)\nCALL F(X, Y)\nTIMER FINTIM = 1., DELT = 1.\n"
+            "TRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT Y\nEND\nSTOP\n" + sub)
+    run, = amilpy.loads(text, name="f.fst").run(advice=False)
+    assert list(run.values["Y"]) == [100707.0, 100707.0]

@@ -266,3 +266,13 @@ def test_a_long_runs_events_take_twelve_bytes_each_and_read_as_events():
     assert len(events) == len(want) - 1 and events[-2] == want[-3]
     events.clear()
     assert not events and events == []
+    # what a list of events did, it still does (a run's events are public)
+    three = Events(want[:3])
+    with pytest.raises(IndexError):
+        three[-4]
+    assert three + want[:1] == want[:3] + want[:1] and 2 * three == want[:3] * 2
+    assert three != tuple(want[:3]) and three.copy() == three
+    three.sort(key=lambda e: -e.time)
+    assert three == want[2::-1]
+    three[0:2] = [want[5]]
+    assert three == [want[5], want[0]]

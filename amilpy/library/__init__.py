@@ -403,14 +403,14 @@ def _nonsmooth(signature: str, scalar: Callable, vector, values: str, surfaces: 
                   scalar=scalar, vector=vector))
 
 
-_nonsmooth("ABS(X)", abs, "abs", "(-A if M0 < 0 else A)", ("A",), doc="|X|")
+_nonsmooth("ABS(X)", abs, "abs", "(-A if M0 < 0 else A)", ("A",), "IABS", doc="|X|")
 _nonsmooth("SIGN(A, B)", rt.fortran_sign, _vector_sign,
            "((A if M0 >= 0 else -A) if M1 >= 0 else (-A if M0 >= 0 else A))", ("A", "B"),
-           doc="|A| if B >= 0, else -|A|")
+           "ISIGN", doc="|A| if B >= 0, else -|A|")
 _nonsmooth("AMAX1(X1, X2, ...)", max, _vector_many("maximum"), "(B if M0 < 0 else A)",
-           ("A - B",), "MAX", "AMAX0", "MAX1", doc="the largest argument")
+           ("A - B",), "MAX", "AMAX0", "MAX1", "MAX0", doc="the largest argument")
 _nonsmooth("AMIN1(X1, X2, ...)", min, _vector_many("minimum"), "(A if M0 < 0 else B)",
-           ("A - B",), "MIN", "AMIN0", "MIN1", doc="the smallest argument")
+           ("A - B",), "MIN", "AMIN0", "MIN1", "MIN0", doc="the smallest argument")
 _nonsmooth("DIM(X, Y)", rt.fortran_dim, _vector_dim, "((A - B) if M0 > 0 else 0.0)",
            ("A - B",), "IDIM", doc="X - Y if X > Y, else 0")
 _nonsmooth("AINT(X)", rt.fortran_aint, "trunc", "(-M0 * SGN(A))", ("0.5 - ABS(A)",), "INT",

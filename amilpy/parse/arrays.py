@@ -538,8 +538,15 @@ class _Arrays:
     def written_out_loop(self, st: ast.Loop, env, written: bool, bounds, used: list[str],
                          size: int) -> list:
         """The loop written out pass by pass (its bounds known when it is read)."""
+        from ..library.runtime import loop_count  # (the library imports the IR, which
+        # imports this package)
+
         start, stop, step = bounds
-        passes = max(0, math.floor((stop - start) / step + 1e-9) + 1)
+        try:
+            passes = loop_count(start, stop, step)  # (Fortran's trip count, as at run time)
+        except ValueError as exc:
+            self.error(str(exc), st.span, "write bounds that give fewer passes")
+            return []
         self.written_out += passes * size
         if self.written_out > MAX_ELEMENTS:
             self.error(f"the loops over arrays write out more than {MAX_ELEMENTS:,} "

@@ -232,6 +232,9 @@ class Nester:
             return ast.Procedural(outputs, inputs, body, head.span)
         if head.kind in ("FOR", "DO"):
             var, start, stop, step = head.data
+            if isinstance(step, ast.Num) and step.value == 0.0:
+                self.error(f"a {head.kind} loop with step 0 never ends", step.span,
+                           "write a step other than 0 (or none: 1)")
             return ast.Loop(var, start, stop, step, body, head.span, head.kind)
         if head.kind == "MACRO":
             outputs, params, acsl = head.data

@@ -65,8 +65,10 @@ _REFUSED = [
                 r"FUNCTION|ENTRY|READ|WRITE|FORMAT|OPEN|CLOSE|STOP)\b", re.I),
      "Fortran's {0} in a subroutine"),
 ]
-# intrinsics whose value is a whole number (Fortran's INTEGER functions)
+# Fortran's INTEGER functions, and the generic ones that are INTEGER of INTEGERs
 _WHOLE = {"INT", "NINT", "IFIX", "IDINT", "IDNINT"}
+_WHOLE_OF_WHOLE = {"MOD", "MAX", "MIN", "MAX0", "MIN0", "ABS", "IABS", "SIGN", "ISIGN",
+                   "DIM", "IDIM"}
 _NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[EeDd][+-]?\d+)?"
 
 
@@ -217,6 +219,7 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
     body = unit[1:-1]
     real_all, declared, bad, none = False, set(), False, False
     integers: set[str] = set()  # declared INTEGER
+    by_dimension: dict[str, Span] = {}  # arrays DIMENSION declares (typed implicitly)
     sizes: dict[str, int] = {}  # the routine's own arrays and their lengths
     data: dict[str, tuple[int, str]] = {}  # names DATA or PARAMETER give: (line, which)
     executable: list = []
@@ -226,15 +229,26 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
         errors.append(Diagnostic(what, where, instead))
         bad = True
 
+    ends = {label.lstrip("0") for _, _, code, label in body if label and _CONTINUE.match(code)}
+    starts = {m.group(1).lstrip("0") for _, _, code, _ in body
+              if (m := re.match(r"DO\s+(\d+)", code, re.I))}
     for i, (k, col, code, label) in enumerate(body):
         where = Span(k + 1, col + 1, k + 1, col + 1 + len(code))
+        do = re.match(r"DO\s+(\d+)", code, re.I)
+        if do and do.group(1).lstrip("0") not in ends:
+            refuse(f"DO {do.group(1)} (in SUBROUTINE {name}): no {do.group(1)} CONTINUE "
+                   f"in SUBROUTINE {name} ends it", where,
+                   f"end the loop with {do.group(1)} CONTINUE before the routine's END")
+            continue
         if label:
             if not _CONTINUE.match(code):
                 refuse(f"the statement label {label} (in SUBROUTINE {name}): not supported",
                        where, "label only the CONTINUE that ends a DO loop; write IF ... "
                        "END IF for GO TO")
                 continue
-            executable.append((k, 0, f"{label:<5} {code}"))  # (the listing reads it so)
+            if label.lstrip("0") in starts:
+                executable.append((k, 0, f"{label:<5} {code}"))  # (the listing reads it so)
+            # (else a CONTINUE no DO ends, and no GO TO reaches: it does nothing)
             continue
         implicit = _IMPLICIT.match(code)
         if implicit:
@@ -269,7 +283,10 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
                            where, "the subset's arrays are the routine's own REAL X(n)")
                     continue
                 sizes[n] = int(dims)
-                declared.add(n)
+                if word == "DIMENSION":
+                    by_dimension[n] = where
+                else:
+                    declared.add(n)
                 executable.append((k, col, f"DIMENSION {n}({int(dims)})"))
             continue
         given = _DATA.match(code)
@@ -316,7 +333,17 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
                    where, "the subroutines after STOP run assignments, IFs, DO loops, "
                    "the routine's own arrays with DATA, and CALLs of the others")
             continue
-        executable.append((k, col, code))
+        # (DO 10, I = 1, N: the comma a blank, the columns as they are)
+        executable.append((k, col, re.sub(r"^(DO\s+\d+\s*),", r"\1 ", code, flags=re.I)))
+    for n, where in by_dimension.items():
+        if n in integers or (not real_all and n not in declared and n[:1] in "IJKLMN"):
+            refuse(f"{n} in SUBROUTINE {name}: an INTEGER array (by Fortran's implicit "
+                   "typing) is not supported", where, f"declare it REAL {n}(...)")
+        elif none and n not in declared:
+            refuse(f"{n} is not declared (IMPLICIT NONE in SUBROUTINE {name})", where,
+                   f"declare it: REAL {n}")
+        else:
+            declared.add(n)
     if bad:
         return None
     # the executable statements read by the listing's own grammar (ACSL form: IF blocks,
@@ -375,13 +402,16 @@ def _typing(body, declared: set[str], integers: set[str], real_all: bool, none: 
             return not re.search(r"[.EeDd]", e.text or repr(e.value))
         if isinstance(e, ast.Name):
             return integer(e.name)
-        if isinstance(e, ast.BinOp) and e.op in "+-*":
+        if isinstance(e, ast.BinOp) and e.op in ("+", "-", "*", "**", "/"):
             return whole(e.left) and whole(e.right)
         if isinstance(e, ast.Neg):
             return whole(e.operand)
         if isinstance(e, ast.Call):
-            return e.func in _WHOLE or (e.func == "MOD" and all(map(whole, e.args)))
+            return e.func in _WHOLE or (e.func in _WHOLE_OF_WHOLE and all(map(whole, e.args)))
         return False
+
+    def fault(message: str, span, hint: str) -> Diagnostic:
+        return Diagnostic(f"{message} (SUBROUTINE {routine})", span, hint)
 
     for node in (n for st in body for n in ast.walk(st)):
         names = [node.name] if isinstance(node, ast.Name) else \
@@ -403,6 +433,24 @@ def _typing(body, declared: set[str], integers: set[str], real_all: bool, none: 
                 f"a division of whole numbers (SUBROUTINE {routine}): Fortran's integer "
                 "division, which cuts the quotient, is not supported", node.span,
                 "write REAL(I)/REAL(J), or declare the names REAL")
+        if isinstance(node, ast.BinOp) and node.op == "**" and whole(node.left) and \
+                whole(node.right) and not (isinstance(node.right, ast.Num)
+                                           and node.right.value >= 0):
+            return fault("a power of whole numbers whose exponent may be negative: "
+                         "Fortran's is then 0 or 1, which is not supported", node.span,
+                         "write REAL(I)**J, or declare the names REAL")
+        if isinstance(node, ast.Loop):
+            if integer(node.var) and not all(whole(e) for e in (node.start, node.stop,
+                                                                  node.step) if e is not None):
+                return fault(f"the bounds of DO {node.var}, an INTEGER, are no whole numbers: "
+                             "Fortran cuts them, which is not supported", node.span,
+                             "write whole-number bounds, or declare the variable REAL")
+            assigned = next((n for st in node.body for n in ast.walk(st)
+                             if isinstance(n, ast.Assign) and node.var in n.targets), None)
+            if assigned is not None:
+                return fault(f"{node.var} is assigned inside its own DO loop, which Fortran "
+                             "does not allow", assigned.span,
+                             f"use another name for the value, not {node.var}")
     return None
 
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..result import Event, EventKind, Run
+from ..result import Event, EventKind, Events, Run
 
 STREAK = 6  # successive intervals that shrink by the same ratio
 RATIO = (0.05, 0.95)  # what "shrink" is
@@ -78,6 +78,6 @@ def cut(run: Run, at: float) -> None:
         if len(keep_last):  # (the last row kept is shown, as a stop instant is)
             run.outdel_mask[-1] = run.prdel_mask[-1] = True
         run.final.update({n: float(v[-1]) for n, v in run.values.items() if len(v)})
-    run.events = [e for e in run.events if e.time <= at]
+    run.events = Events(e for e in run.events if e.time <= at)
     run.extrema = {n: x for n, x in run.extrema.items() if x[1] <= at and x[3] <= at}
     run.t_end = at
