@@ -29,6 +29,7 @@ from .pytree import (
     fold,
     function,
     local,
+    locate,
     namespace,
     on_line,
     parameter,
@@ -40,6 +41,11 @@ from .written import Statements, start, user_callable
 
 # models with more memory slots than this read them from z instead of unpacking
 MAX_UNPACKED_SLOTS = 32
+
+# the code (keys of `Compiler.shared`) that a run builds from rhs's tree on first use:
+# the rolled rhs of a large model (rolled.py, tried by every run), the Jacobian
+# (jacobian.py, an implicit method's); the tree is kept until both are there
+RHS_USERS = ("rolled", "jacobian")
 
 
 def _deepest(model: ir.Model) -> Span | None:
@@ -466,6 +472,25 @@ class Compiler:
     def _build(self) -> ModelCode:
         model = self.model
         self.check_arguments()
+        module = self.module()
+        self._source: str | None = None
+        self.code = compile(module, model.path or model.name, "exec")
+        # the slots of z that rhs and surf read: the same for every binding
+        nz = sum(m.nslots for m in model.memories)
+        self.seen = frozenset().union(*(memory_read(fn, nz, list(self.kept))
+                                        for fn in module.body[:2]))
+        # The code object is kept, not the tree it was compiled from: a large model's
+        # tree takes twenty times the memory of its code (the 1000-mass chain's: 20 MB
+        # against 1). Only rhs's is kept, until the code every run may build from it
+        # on first use is there (`from_rhs`); a rare user builds the tree again
+        # (`tree`).
+        self.rhs_tree: py.FunctionDef | None = module.body[0]
+        self.lines = {}  # (only the build numbers lines: `statements` is the table)
+        return self.bind(self.constants)
+
+    def module(self) -> py.Module:
+        """The generated functions' tree, folded, every node on its line."""
+        model = self.model
         out_names = self.outputs if self.outputs is not None else model.variables
         fns = [self.rhs(), self.surfaces(), self.modes(), self.outputs_function(out_names),
                self.memory()]
@@ -482,16 +507,47 @@ class Compiler:
         fns += [vectorised(fns[1], "surf_vec"), vectorised(fns[3], "out_vec")] + extra
         module = fold(py.Module(body=fns, type_ignores=[]))
         place(module, closed=True)  # (and assert_closed's check, in the same walk)
-        self._source: str | None = None
-        self.code = compile(module, model.path or model.name, "exec")
-        self.module, self.out_names = module, list(out_names)
-        return self.bind(self.constants)
+        self.out_names = list(out_names)
+        return module
+
+    @deep_enough()
+    @no_collection()
+    def tree(self) -> py.Module:
+        """The tree of the built code, built again from the IR for its rare users (the
+        source text, a fault's explanation, METHOD COMPILED's translation): a new tree
+        at each call, the caller's to change. The build is deterministic: the same
+        statements on the same lines, so a line of the kept code is this tree's."""
+        return Compiler(self.model, self.constants, self.tables, self.const_modes,
+                        self.outputs, self.events, self.setting, self.kept, self.priors,
+                        self.parameters).module()
+
+    def from_rhs(self, key: str, make: Callable[[py.FunctionDef, bool], object]) -> object:
+        """shared[key]: code made from rhs's tree on first use, for every binding of
+        this build, by `make(tree, own)`: `own` says whether the tree is make's to
+        change (no one else needs it: the last of RHS_USERS, or a tree built again),
+        else make leaves it as it is. The kept tree is let go once each of RHS_USERS
+        has made its code; a later user gets it built again."""
+        if key not in self.shared:
+            own = self.rhs_tree is None or all(k in self.shared for k in RHS_USERS
+                                               if k != key)
+            with no_collection():  # (a large model's makes a million nodes, as a build)
+                self.shared[key] = make(self.rhs_function(), own)
+            if all(k in self.shared for k in RHS_USERS):
+                self.rhs_tree = None
+        return self.shared[key]
+
+    def rhs_function(self) -> py.FunctionDef:
+        """rhs's tree: the one kept from the build (not to be changed but by its last
+        user, `from_rhs`), else built again."""
+        if self.rhs_tree is not None:
+            return self.rhs_tree
+        return next(f for f in self.tree().body if f.name == "rhs")
 
     @deep_enough()
     def source_text(self) -> str:
-        """The generated module as Python text, written once."""
+        """The generated module as Python text, written once (when asked for)."""
         if self._source is None:
-            self._source = py.unparse(self.module)
+            self._source = py.unparse(self.tree())
         return self._source
 
     def over_members(self, values: dict[str, object]) -> dict[str, Callable]:
@@ -502,16 +558,14 @@ class Compiler:
         copies) and the written-order sections ("discrete_0", "terminal_0", ...: plain
         arithmetic runs on columns; a branch on a column raises ValueError), run with
         `values` (every parameter's array)."""
-        if "rhs_vec" not in self.shared:
-            rhs = next(f for f in self.module.body if getattr(f, "name", "") == "rhs")
-            module = py.Module(body=[vectorised(rhs, "rhs_vec")], type_ignores=[])
-            self.shared["rhs_vec"] = compile(py.fix_missing_locations(module),
-                                             self.model.path or self.model.name, "exec")
+        rhs_vec = self.from_rhs("rhs_vec", lambda rhs, _: compile(locate(
+            py.Module(body=[vectorised(rhs, "rhs_vec")], type_ignores=[])),
+            self.model.path or self.model.name, "exec"))
         vector: dict[str, object] = {"__builtins__": {}, STATEMENTS: self.statements,
                                      **vector_namespace(), **self.global_tables}
         vector.update({parameter(n): v for n, v in values.items()})
         exec(self.code, vector)  # noqa: S102 - compiler-built tree, closed namespace
-        exec(self.shared["rhs_vec"], vector)  # noqa: S102 - the same, elementwise
+        exec(rhs_vec, vector)  # noqa: S102 - the same, elementwise
         return vector
 
     def bind(self, constants: dict[str, float]) -> ModelCode:
@@ -532,9 +586,6 @@ class Compiler:
             # statements (IF, loops) cannot run on columns: one row at a time
             vector["surf_vec"], vector["out_vec"] = by_rows(scalar["surf"]), \
                 by_rows(scalar["out"])
-        seen = frozenset().union(*(
-            memory_read(fn, sum(m.nslots for m in model.memories), list(self.kept))
-            for fn in self.module.body[:2]))  # rhs and surf
         return ModelCode(
             state_names=[s.name for s in model.states],
             y0=[binder.constant(s.ic, s.span) for s in model.states],
@@ -552,13 +603,13 @@ class Compiler:
             memory_times=self.memory_times(),
             memory_trains=[(0.0, 1.0)] if model.weather else [],
             statements=self.statements, model=model,
-            module=self.module, namespace=scalar, shared=self.shared, binder=self,
+            namespace=scalar, shared=self.shared, binder=self,
             trains=trains, train_surfaces=train_surfaces,
             settle=scalar["settle"] if self.settles else None, kept=list(self.kept),
             code={fname: (self.code_sections[fname], scalar[fname])
                   for fname in self.code_sections},
-            seen_memory=seen, seen_times=any(
-                seen.intersection(range(m.slot, m.slot + m.nslots))
+            seen_memory=self.seen, seen_times=any(
+                self.seen.intersection(range(m.slot, m.slot + m.nslots))
                 for m, f in zip(model.memories, self.entries, strict=True)
                 if f.memory.wakes is not None or m.func == WEATHER_HOLD),
             sample=scalar["smp"] if self.samples else None, next_sample=self.sampling(),

@@ -12,7 +12,6 @@ reports its operands: only when a fault has happened, never on the hot path.
 from __future__ import annotations
 
 import ast as py
-import copy
 import math
 from dataclasses import dataclass
 
@@ -22,6 +21,7 @@ from ..language import plain_float
 from ..library.runtime import HelperFault
 from ..parse.syntax import deep_enough
 from ..parse.unparse import expr_text
+from .pytree import locate
 
 # the key under which generated code's globals hold its statement table (a name
 # generated code never reads: it reads only the compiler's names)
@@ -164,11 +164,10 @@ def _rebuilt(compiled, name: str, transformer: py.NodeTransformer, helpers: dict
              what: str):
     """A copy of the generated function `name`, its tree changed by `transformer`,
     compiled in the model's namespace with `helpers` beside it."""
+    # (a tree built for this call: changed in place)
     fn = next(f for f in compiled.module.body if f.name == name)
-    # the IR nodes the tree remembers are shared, not copied
-    memo = {id(n.amil_src): n.amil_src for n in py.walk(fn) if hasattr(n, "amil_src")}
-    tree = py.Module(body=[transformer.visit(copy.deepcopy(fn, memo))], type_ignores=[])
-    py.fix_missing_locations(tree)
+    tree = py.Module(body=[transformer.visit(fn)], type_ignores=[])
+    locate(tree)
     scope = dict(compiled.namespace)
     scope.update(helpers)
     exec(compile(tree, f"<amilpy {what}>", "exec"), scope)  # noqa: S102 - our own tree

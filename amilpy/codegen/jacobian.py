@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .pytree import clone, const_value, fold, function, namespace, nodes, place
+from .pytree import clone, const_value, fold, function, locate, namespace, nodes, place
 
 _ONE = py.Constant(1.0)
 
@@ -248,13 +248,15 @@ class ModelJacobian:
     cols: np.ndarray
     constant: np.ndarray
     variable: Callable
-    tree: py.Module  # of `variable`, for `source`
+    # () -> the tree of `variable`, built again when its text is asked for (`source`):
+    # a large model's is as large as its rhs's, and only its code is used
+    written: Callable[[], py.Module] | None = None
 
     @property
     def source(self) -> str:
         """The generated Jacobian as Python text (written when asked for: a large
         model's takes as long to write as to build)."""
-        return py.unparse(self.tree)
+        return py.unparse(self.written())
 
     @property
     def nnz(self) -> int:
@@ -298,24 +300,47 @@ def build(module: py.Module, n: int, tables: dict | None = None,
           values: dict | None = None) -> ModelJacobian:
     """The Jacobian of the `rhs` function in a generated module (`ModelCode.module`);
     `values`: the parameters' globals (p_NAME) it reads."""
-    return bind(code(module, n), tables, values)
+    rhs = next(f for f in module.body if isinstance(f, py.FunctionDef) and f.name == "rhs")
+    return bind(code(rhs, n), tables, values, lambda: tree(rhs, n)[0])
 
 
-def bind(built: tuple, tables: dict | None = None, values: dict | None = None
-         ) -> ModelJacobian:
-    """The Jacobian's code (`code`) executed with one run's tables and parameters."""
-    compiled, n, rows, cols, constant, tree = built
+def bind(built: tuple, tables: dict | None = None, values: dict | None = None,
+         written: Callable[[], py.Module] | None = None) -> ModelJacobian:
+    """The Jacobian's code (`code`) executed with one run's tables and parameters;
+    `written`: its tree, built again (`ModelJacobian.source`)."""
+    compiled, n, rows, cols, constant = built
     scope: dict[str, object] = {"__builtins__": {}, **namespace(), "_DIFF": _diff,
                                 "_SGN0": _sgn0, **(tables or {}), **(values or {})}
     exec(compiled, scope)  # noqa: S102 - compiler-built tree, closed namespace
-    return ModelJacobian(n, rows, cols, constant, scope["jac"], tree)
+    return ModelJacobian(n, rows, cols, constant, scope["jac"], written)
 
 
-def code(module: py.Module, n: int) -> tuple:
-    """The generated Jacobian of a module's `rhs`, compiled: (code, n, rows, cols,
-    constant entries, source)."""
-    rhs = next(f for f in module.body if isinstance(f, py.FunctionDef) and f.name == "rhs")
-    body = [clone(s) for s in rhs.body]
+def code(rhs: py.FunctionDef, n: int, own: bool = False) -> tuple:
+    """The generated Jacobian of a generated `rhs`, compiled: (code, n, rows, cols,
+    constant entries). Its tree is not kept: as large as rhs's, for its text only."""
+    fn, rows, cols, constant = tree(rhs, n, own)
+    return compile(fn, "<jacobian>", "exec"), n, rows, cols, constant
+
+
+def tree(rhs: py.FunctionDef, n: int, own: bool = False) -> tuple:
+    """The generated Jacobian of a generated `rhs`: (its module, rows, cols, constant
+    entries). rhs is left as it is, unless `own` (no one else needs it): then its
+    statements become the Jacobian's, not copies, and rhs lets go of them at once, so
+    that those the Jacobian does not read are freed before it is compiled (a large
+    model's rhs is the largest tree its run has). An rhs this cannot differentiate
+    (NotImplementedError, raised before any statement is changed) gets them back."""
+    if not own:
+        return _tree([clone(s) for s in rhs.body])
+    body, rhs.body = rhs.body, []
+    try:
+        return _tree(body)
+    except BaseException:
+        rhs.body = body
+        raise
+
+
+def _tree(body: list[py.stmt]) -> tuple:
+    """`tree` of rhs's statements (changed: placed on line 1)."""
     states: dict[str, int] = {}
     deriv = _Deriv(states)
     out: list[py.stmt] = []
@@ -364,21 +389,28 @@ def code(module: py.Module, n: int) -> tuple:
     varying = [e for e, c in zip(folded, constant, strict=True) if math.isnan(c)]
     out.append(py.Return(py.List(varying, py.Load())))
     fn = function("jac", ("t", "y", "m", "z"), _live(out))
-    tree = py.Module(body=[fn], type_ignores=[])
-    place(tree, closed=True, also=_ours)  # (every node a location, checked closed)
+    module = py.Module(body=[fn], type_ignores=[])
+    # (every node a location, line 1: rhs's lines are not the Jacobian's; checked closed)
+    place(module, closed=True, also=_ours, lines=False)
     rows = np.array([i for i, _, _ in entries], dtype=int)
     cols = np.array([j for _, j, _ in entries], dtype=int)
-    return compile(tree, "<jacobian>", "exec"), n, rows, cols, constant, tree
+    return module, rows, cols, constant
 
 
 def for_compiled(c) -> ModelJacobian:
     """The Jacobian of a run's generated `rhs` (`codegen.ModelCode`), built once."""
     if "jacobian" not in c.derived:
-        if "jacobian" not in c.shared:  # one code for every binding of the module
-            c.shared["jacobian"] = code(c.module, len(c.state_names))
+        n = len(c.state_names)
+        # one code for every binding of the module
+        built = c.binder.from_rhs("jacobian", lambda rhs, own: code(rhs, n, own))
         values = {k: v for k, v in c.namespace.items() if k.startswith("p_")}
-        c.derived["jacobian"] = bind(c.shared["jacobian"], c.tables, values)
+        c.derived["jacobian"] = bind(built, c.tables, values, lambda: _written(c))
     return c.derived["jacobian"]
+
+
+def _written(c) -> py.Module:
+    """The tree of a run's Jacobian, built again."""
+    return tree(c.binder.rhs_function(), len(c.state_names))[0]
 
 
 def over_members(c, values: dict[str, object]) -> ModelJacobian:
@@ -389,18 +421,24 @@ def over_members(c, values: dict[str, object]) -> ModelJacobian:
     column (or a float) per varying entry."""
     from .pytree import parameter, vector_namespace, vectorised
 
-    if "jacobian" not in c.shared:
-        c.shared["jacobian"] = code(c.module, len(c.state_names))
-    _, n, rows, cols, constant, tree = c.shared["jacobian"]
-    if "jacobian_vec" not in c.shared:
-        module = py.Module(body=[vectorised(tree.body[0], "jac")], type_ignores=[])
-        c.shared["jacobian_vec"] = compile(py.fix_missing_locations(module), "<jacobian>",
-                                           "exec")
+    n = len(c.state_names)
+
+    def elementwise(rhs: py.FunctionDef, own: bool):
+        module, rows, cols, constant = tree(rhs, n, own)
+        if "jacobian" not in c.shared:  # (the scalar code from the same tree)
+            c.shared["jacobian"] = compile(module, "<jacobian>", "exec"), n, rows, cols, \
+                constant
+        vector = py.Module(body=[vectorised(module.body[0], "jac")], type_ignores=[])
+        return compile(locate(vector), "<jacobian>", "exec")
+
+    compiled = c.binder.from_rhs("jacobian_vec", elementwise)
+    _, n, rows, cols, constant = c.binder.from_rhs("jacobian",
+                                                   lambda rhs, own: code(rhs, n, own))
     scope: dict[str, object] = {"__builtins__": {}, "_DIFF": _diff_columns,
                                 "_SGN0": np.sign, **c.tables, **vector_namespace()}
     scope.update({parameter(name): v for name, v in values.items()})
-    exec(c.shared["jacobian_vec"], scope)  # noqa: S102 - compiler-built tree, closed namespace
-    return ModelJacobian(n, rows, cols, constant, scope["jac"], tree)
+    exec(compiled, scope)  # noqa: S102 - compiler-built tree, closed namespace
+    return ModelJacobian(n, rows, cols, constant, scope["jac"], lambda: _written(c))
 
 
 def _diff_columns(f: Callable, k: int, *args):

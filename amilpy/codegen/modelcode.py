@@ -71,13 +71,18 @@ class ModelCode:
     # the derivatives read): then such an instant is most likely a restart
     seen_times: bool = False
     model: ir.Model | None = field(default=None, repr=False)
-    module: py.Module | None = field(default=None, repr=False)  # the scalar functions' tree
     namespace: dict = field(default_factory=dict, repr=False)
     checking: dict = field(default_factory=dict, repr=False)  # built on the first fault
     derived: dict = field(default_factory=dict, repr=False)  # built on first use (jacobian)
-    # code built from `module` on first use, for every binding of it (see `rebound`)
+    # code built from the tree on first use, for every binding of it (see `rebound`)
     shared: dict = field(default_factory=dict, repr=False)
     binder: object = field(default=None, repr=False)  # the Compiler, for `rebound`
+
+    @property
+    def module(self) -> py.Module | None:
+        """The generated functions' tree, built again at each call (only the code is
+        kept: `Compiler.tree`), the caller's to change."""
+        return None if self.binder is None else self.binder.tree()
 
     @property
     def source(self) -> str:

@@ -206,42 +206,76 @@ _LOCATED: dict[type, bool] = {}  # node type -> whether it has a source location
 
 
 def place(module: py.Module, closed: bool = False,
-          also: Callable[[str], bool] | None = None) -> None:
+          also: Callable[[str], bool] | None = None, lines: bool = True) -> None:
     """Give every node the line of the statement it belongs to (`on_line`; line 1
-    for the scaffolding), so the code object's own line table says which statement
-    an instruction belongs to; every node gets a location (no
-    `ast.fix_missing_locations` needed after). `closed`: check on the way what
-    `assert_closed` checks, `also` as there (one walk of a large module instead of
-    two)."""
+    for the scaffolding; `lines` False: line 1 for all), so the code object's own
+    line table says which statement an instruction belongs to; every node gets a
+    location (no `ast.fix_missing_locations` needed after). `closed`: check on the
+    way what `assert_closed` checks, `also` as there (one walk of a large module
+    instead of two).
+
+    Only the start (lineno, col_offset) is set, and an end a node has (a template's,
+    parsed) taken away: compile() takes a node's missing end for its start, which is
+    what this would set (the code is the same byte for byte), and the two more
+    attributes took a quarter of a large tree's memory. A change to a placed tree is
+    located with `locate`, not ast.fix_missing_locations (which would give each node
+    the end of the node above it)."""
     located = _LOCATED
     allowed = _current()[1]
     for fn in module.body:
-        fn.lineno = fn.end_lineno = 1
-        fn.col_offset = fn.end_col_offset = 0
+        fn.lineno = 1
+        fn.col_offset = 0
         if closed:
             _assert_node(fn, allowed, also)
         stack: list[tuple[py.AST, int]] = [(child, 1) for child in children(fn)]
         while stack:
             node, line = stack.pop()
-            line = getattr(node, "amil_line", line)
+            if lines:
+                line = getattr(node, "amil_line", line)
             kind = node.__class__
             has = located.get(kind)
             if has is None:
                 has = located[kind] = "lineno" in kind._attributes
             if has:
-                node.lineno = node.end_lineno = line
-                node.col_offset = node.end_col_offset = 0
+                node.lineno = line
+                node.col_offset = 0
+                if "end_lineno" in node.__dict__:  # (a library template's node, parsed)
+                    del node.end_lineno, node.end_col_offset
             if closed:
                 _assert_node(node, allowed, also)
             stack.extend((child, line) for child in children(node))
 
 
+def locate(tree: py.AST) -> py.AST:
+    """A placed tree (`place`) with nodes added: each new node the start of the
+    node above it, as ast.fix_missing_locations gives, and no end (see `place`)."""
+    stack: list[tuple[py.AST, int, int]] = [(tree, 1, 0)]
+    while stack:
+        node, line, col = stack.pop()
+        if "lineno" in node._attributes:
+            if getattr(node, "lineno", None) is None:
+                node.lineno = line
+            else:
+                line = node.lineno
+            if getattr(node, "col_offset", None) is None:
+                node.col_offset = col
+            else:
+                col = node.col_offset
+        stack.extend((child, line, col) for child in children(node))
+    return tree
+
+
 def clone(node):
     """A copy of a syntax tree, its nodes' fields only (no positions, no notes): far
     cheaper than copy.deepcopy, which would also copy the IR each node remembers
-    (`amil_src`)."""
+    (`amil_src`). An operator or a context (Add, Load: no fields, no position) is
+    the same node in both, as the parser shares them (half the nodes of the 1000-mass
+    chain's rhs)."""
     if isinstance(node, py.AST):
-        new = type(node)()
+        kind = type(node)
+        if not kind._fields and not kind._attributes:
+            return node
+        new = kind()
         for name in node._fields:
             setattr(new, name, clone(getattr(node, name, None)))
         return new

@@ -103,17 +103,16 @@ class _Vector(py.NodeTransformer):
         return py.Call(py.Name(fn, py.Load()), node.values, [])
 
 
-def build(module: py.Module, n: int) -> Callable | None:
-    """The rolled right-hand side `rhs(t, y, m, z) -> array` of a generated module, or
+def build(rhs: py.FunctionDef, n: int) -> Callable | None:
+    """The rolled right-hand side `rhs(t, y, m, z) -> array` of a generated `rhs`, or
     None when the model is too small or its statements do not repeat."""
-    rhs = next(f for f in module.body if isinstance(f, py.FunctionDef) and f.name == "rhs")
     statements, values = _statements(rhs, n)
     if statements is None or len(statements) < MIN_STATEMENTS:
         return None
     groups: dict[tuple, list[tuple[_Statement, _Shape]]] = {}
     for s in statements:
         shape = _Shape(values)
-        # (on a copy: the module's own tree is what METHOD COMPILED translates)
+        # (on a copy: the tree is the Jacobian's to differentiate too)
         key_tree = shape.visit(clone(s.expr))
         key = (s.level, s.target < 0, py.dump(key_tree))
         groups.setdefault(key, []).append((s, shape))
@@ -193,10 +192,9 @@ def for_compiled(c) -> Callable | None:
     guarded (see the module docstring), built once; None for a model it does not pay
     for."""
     if "rolled" not in c.derived:
-        if "rolled" not in c.shared:  # one code for every binding of the module
-            c.shared["rolled"] = build(c.module, len(c.state_names)) \
-                if c.module is not None else None
-        fn = c.shared["rolled"]
+        # one code for every binding of the module
+        fn = None if c.binder is None else \
+            c.binder.from_rhs("rolled", lambda rhs, _: build(rhs, len(c.state_names)))
         if fn is not None:  # its own globals, with this run's parameters
             values = {k: v for k, v in c.namespace.items() if k.startswith("p_")}
             fn = FunctionType(fn.__code__, {**fn.__globals__, **values})

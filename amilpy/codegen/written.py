@@ -196,11 +196,11 @@ def compile_code(model: ir.Model, name_: str, codes, constants: dict[str, float]
         # the same function on NumPy columns (an ensemble's members at once): its
         # conditional expressions made elementwise, the library's functions NumPy's;
         # a statement that branches on a column raises ValueError there
-        from .pytree import vector_namespace, vectorised
+        from .pytree import locate, vector_namespace, vectorised
 
         elementwise = py.Module(body=[vectorised(module.body[0], name_)], type_ignores=[])
         vector = {"__builtins__": {}, **vector_namespace(), **em.tables, STATEMENTS: table}
-        exec(compile(py.fix_missing_locations(elementwise), model.path or model.name,  # noqa: S102
+        exec(compile(locate(elementwise), model.path or model.name,  # noqa: S102
                      "exec"), vector)
         fn.elementwise = vector[name_]
     return fn
