@@ -453,3 +453,31 @@ END
 """, "p.csl").run(advice=False)
     assert len(run.t) == 4 and np.all(np.diff(run.t) > 0) and run.t_end == 0.3
     assert run.final["X"] == pytest.approx(math.exp(-0.3), rel=1e-9)
+
+
+def test_a_dynamic_block_on_the_euler_route_keeps_every_cint_row():
+    """METHOD EULER runs step point by step point; DYNAMIC's code at each CINT instant
+    restarts it there, and the next call's last step point is the next CINT instant
+    (0.09 + 10*0.001 is not 0.1 in floats): every row is kept. The rows stopped
+    after TIME = 0.09 (11 rows, the next at 20), found by a review. Euler exactly:
+    X = t, Y = (1 - DELT)^(t/DELT) (1e-12 relative: the same products)."""
+    text = """PROGRAM dynamic statements at each CINT instant
+  INITIAL
+    CINTERVAL CINT = 0.01
+    N = 0.0
+  END
+  DYNAMIC
+    DERIVATIVE
+      X = INTEG(1.0, 0.0)
+      Y = INTEG(-Y, 1.0)
+      TERMT(T >= 2.0)
+    END
+    N = N + 1.0
+  END
+END
+"""
+    run = amilpy.loads(text, "dyn.csl").run(method="EULER", advice=False)[0]
+    assert len(run.t) == 201 and run.t[-1] == pytest.approx(2.0)
+    np.testing.assert_allclose(run.values["X"], run.t, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(run.values["Y"], (1.0 - 1e-3) ** np.rint(run.t / 1e-3),
+                               rtol=1e-12)

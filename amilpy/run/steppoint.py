@@ -38,7 +38,7 @@ from ..result import Event, EventKind
 from ..steppers import FIXED, first_bad
 from .faults import Fault, fault_text
 from .loop import Cursor, RunLoop, Stop
-from .plan import Grid, Options, Purpose, RunPlan
+from .plan import Grid, Options, Purpose, RunPlan, same_instant
 from .record import Recorder
 from .watch import SurfaceWatch
 
@@ -125,8 +125,15 @@ class StepPoint(RunLoop):
         delt = self.plan.timer["DELT"]
         t0, n = cur.t, steps(t_end - cur.t, delt)
         n_events = len(self.events)
+        times = self.plan.grid.times
         for k in range(n + 1):
             t = t0 + k * delt
+            if k == n and t != t_end and same_instant(t, t_end) and rec is not None and \
+                    rec.out_i < len(times) and times[rec.out_i] == t_end:
+                # (a call that starts between the grid's instants, after an ACSL
+                # DYNAMIC block's restart, ends on the grid's instant, not a float off:
+                # 0.09 + 10*0.001 is not 0.1)
+                t = t_end
             if self._point(t, cur, rec, k == n):
                 break
             if k == n or (stop_at_event and len(self.events) > n_events):
@@ -160,9 +167,10 @@ class StepPoint(RunLoop):
         self._points += 1
         if rec is not None:
             times = plan.grid.times
-            if rec.out_i < len(times) and times[rec.out_i] == t:
+            held = rec.hold is not None and rec.hold == t  # (the ACSL form's caller's)
+            if rec.out_i < len(times) and times[rec.out_i] == t and not (stop and held):
                 rec.grid_row(t, y, cur.m, cur.z)
-            elif stop or last:
+            elif stop or last:  # (a stop at a held instant: no caller takes its row)
                 rec.row(t, y, cur.m, cur.z)
             if rec.extrema.names:
                 self._range(t, y, cur, rec)
