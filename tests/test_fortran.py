@@ -99,6 +99,16 @@ def _fault(subroutine: str, call: str = "CALL F(X, Y)") -> str:
     return err.value.render()
 
 
+def _run_f(after_stop: str, fintim: float = 2.0):
+    """The run of a listing that calls F(X, Y), X = 1 + t, a day a step (EUDRIV), with
+    `after_stop` after its STOP."""
+    text = ("TITLE T\nX = INTGRL(1., 1.)\nCALL F(X, Y)\n"
+            f"TIMER FINTIM = {fintim!r}, DELT = 1.\n"
+            "TRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT Y\nEND\nSTOP\n" + after_stop)
+    run, = amilpy.loads(text, name="f.fst").run(advice=False)
+    return run
+
+
 SUB = "      SUBROUTINE F(A, B)\n      IMPLICIT REAL (A-Z)\n{body}      RETURN\n      END\n"
 
 
@@ -181,9 +191,7 @@ def test_only_the_called_subroutines_are_read_and_other_text_is_left():
              "      SUBROUTINE UNUSED(N)\n      INTEGER N\n      DO 10 I = 1, N\n"
              "   10 CONTINUE\n      END\n"
              + SUB.format(body="      B = 2.*A\n") + "Data after the routine: 1 2 3\n")
-    text = ("TITLE T\nX = INTGRL(1., 1.)\nCALL F(X, Y)\nTIMER FINTIM = 2., DELT = 1.\n"
-            "TRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT Y\nEND\nSTOP\n" + after)
-    run, = amilpy.loads(text, name="f.fst").run(advice=False)
+    run = _run_f(after)
     assert list(run.values["Y"]) == [2.0, 4.0, 6.0]
 
 
@@ -353,9 +361,7 @@ def test_real_of_a_loop_index_and_integers_given_whole_numbers():
            "         X = A*REAL(I - 1)/4.\n         S = S + X**2/5.\n"
            "         J = MOD(I, 2)\n         IF (J .EQ. 0) B = B + X**2\n"
            "   10 CONTINUE\n      B = B + S\n      RETURN\n      END\n")
-    text = ("TITLE T\nX = INTGRL(1., 1.)\nCALL F(X, Y)\nTIMER FINTIM = 2., DELT = 1.\n"
-            "TRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT Y\nEND\nSTOP\n" + sub)
-    run, = amilpy.loads(text, name="f.fst").run(advice=False)
+    run = _run_f(sub)
     for x, y in zip(run.values["X"], run.values["Y"], strict=True):
         assert y == pytest.approx(0.375 * x * x + 0.625 * x * x, rel=1e-14)
 
@@ -372,7 +378,5 @@ def test_a_real_do_loop_counts_as_fortran_and_do_label_comma():
            "         B = B + 100.\n      END DO\n      DO 10, I = 1, 4\n"
            "         B = B + 10000.*I\n   10 CONTINUE\n   20 CONTINUE\n"
            "      B = B + 0.*A\n      RETURN\n      END\n")
-    text = ("TITLE T\nX = INTGRL(1., 1.)\nCALL F(X, Y)\nTIMER FINTIM = 1., DELT = 1.\n"
-            "TRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT Y\nEND\nSTOP\n" + sub)
-    run, = amilpy.loads(text, name="f.fst").run(advice=False)
+    run = _run_f(sub, fintim=1.0)
     assert list(run.values["Y"]) == [100707.0, 100707.0]

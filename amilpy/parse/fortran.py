@@ -56,6 +56,7 @@ _DATA = re.compile(r"DATA\s+(.*)$", re.I)
 _PARAMETER = re.compile(r"PARAMETER\s*\((.*)\)\s*$", re.I)
 _SAVE = re.compile(r"SAVE\b\s*(.*)$", re.I)
 _CONTINUE = re.compile(r"CONTINUE\s*$", re.I)
+_DO_LABEL = re.compile(r"DO\s+(\d+)", re.I)  # a labelled DO's label
 _RETURN = re.compile(r"RETURN\s*$", re.I)
 # refused by name: (pattern, the construct as a reader knows it)
 _REFUSED = [
@@ -230,11 +231,10 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
         bad = True
 
     ends = {label.lstrip("0") for _, _, code, label in body if label and _CONTINUE.match(code)}
-    starts = {m.group(1).lstrip("0") for _, _, code, _ in body
-              if (m := re.match(r"DO\s+(\d+)", code, re.I))}
+    starts = {m.group(1).lstrip("0") for _, _, code, _ in body if (m := _DO_LABEL.match(code))}
     for i, (k, col, code, label) in enumerate(body):
         where = Span(k + 1, col + 1, k + 1, col + 1 + len(code))
-        do = re.match(r"DO\s+(\d+)", code, re.I)
+        do = _DO_LABEL.match(code)
         if do and do.group(1).lstrip("0") not in ends:
             refuse(f"DO {do.group(1)} (in SUBROUTINE {name}): no {do.group(1)} CONTINUE "
                    f"in SUBROUTINE {name} ends it", where,
@@ -264,6 +264,7 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
         declare = _DECLARE.match(code)
         if declare:
             word = declare.group(1).split("*")[0].upper()
+            integer = word == "INTEGER"
             try:
                 names = _declared(declare.group(2))
             except ValueError as exc:
@@ -272,12 +273,11 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
                 continue
             for n, dims in names:
                 if dims is None:
-                    (integers if word.startswith("INTEGER") else declared).add(n)
+                    (integers if integer else declared).add(n)
                     continue
-                if n in params or word.startswith("INTEGER") or \
-                        not re.fullmatch(r"\s*\d+\s*", dims):
+                if n in params or integer or not re.fullmatch(r"\s*\d+\s*", dims):
                     what = "an array argument" if n in params else \
-                        "an INTEGER array" if word.startswith("INTEGER") else \
+                        "an INTEGER array" if integer else \
                         "an array of more than one subscript, or of a size not a number"
                     refuse(f"{n}({dims}) in SUBROUTINE {name}: {what} is not supported",
                            where, "the subset's arrays are the routine's own REAL X(n)")
@@ -306,14 +306,14 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
         constants = _PARAMETER.match(code)
         if constants:
             # (named constants: assignments first thing, the routine may not assign them)
-            given_here = [c.split("=")[0].strip().upper() for c in _split(constants.group(1))]
-            if any("=" not in c for c in _split(constants.group(1))):
+            items = _split(constants.group(1))
+            if any("=" not in c for c in items):
                 refuse(f"PARAMETER ({constants.group(1)}): not read", where,
                        "write PARAMETER (NAME = value, ...)")
                 continue
-            for n in given_here:
-                data.setdefault(n, (k + 1, "PARAMETER"))
-            executable.append((k, col, "; ".join(_split(constants.group(1)))))
+            for c in items:
+                data.setdefault(c.split("=")[0].strip().upper(), (k + 1, "PARAMETER"))
+            executable.append((k, col, "; ".join(items)))
             continue
         if _SAVE.match(code):
             # (what SAVE keeps matters only for a name read before the routine assigns

@@ -428,7 +428,7 @@ class GridTimes:
     def __init__(self, rows: _Uniform, put: np.ndarray, at: np.ndarray,
                  lo: int = 0, hi: int | None = None) -> None:
         self.rows, self.put, self.at = rows, put, at  # put[j] goes before rows' at[j]
-        self._new = at + np.arange(len(put))  # where each put instant lands
+        self.landed = at + np.arange(len(put))  # where each put instant lands
         self.lo, self.hi = lo, rows.size + len(put) if hi is None else hi
         self._b0 = self._b1 = 0  # the block read last, [b0, b1) of this view
         self._block = np.empty(0)
@@ -437,9 +437,9 @@ class GridTimes:
         """The instants [i0, i1) of this view, a new array."""
         i0, i1 = self.lo + i0, self.lo + i1
         idx = np.arange(i0, i1)
-        before = np.searchsorted(self._new, idx)  # put instants before each
-        is_put = before < len(self._new)
-        is_put[is_put] = self._new[before[is_put]] == idx[is_put]
+        before = np.searchsorted(self.landed, idx)  # put instants before each
+        is_put = before < len(self.landed)
+        is_put[is_put] = self.landed[before[is_put]] == idx[is_put]
         out = np.empty(len(idx))
         out[~is_put] = self.rows.at(idx[~is_put] - before[~is_put])
         out[is_put] = self.put[before[is_put]]
@@ -555,7 +555,7 @@ def make_grid(t0: float, fintim: float, outdel: float, prdel: float,
     lazy = GridTimes(rows, put, at)
     times = lazy if size + len(put) > LAZY_FROM else np.empty(size + len(put))
     if len(put):
-        new = at + np.arange(len(put))
+        new = lazy.landed
         outdel_mask = np.ones(len(times), bool)
         outdel_mask[new] = False
         prdel_mask = outdel_mask.copy() if prdel == outdel else np.zeros(len(times), bool)

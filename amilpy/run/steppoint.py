@@ -167,7 +167,7 @@ class StepPoint(RunLoop):
         self._points += 1
         if rec is not None:
             times = plan.grid.times
-            held = rec.hold is not None and rec.hold == t  # (the ACSL form's caller's)
+            held = rec.hold == t  # (the ACSL form's caller takes this row)
             if rec.out_i < len(times) and times[rec.out_i] == t and not (stop and held):
                 rec.grid_row(t, y, cur.m, cur.z)
             elif stop or last:  # (a stop at a held instant: no caller takes its row)
