@@ -1,8 +1,9 @@
 """A run keeps its generated code objects, not the syntax trees they were compiled
 from (issue 29.3: a 1000-mass chain's trees took 46 MB after its first run): the
 trees are built again, the same, for their rare users; rhs's tree is kept only until
-the rolled rhs and the Jacobian are made from it; placing leaves the end positions
-to compile(), which gives the same code."""
+the rolled rhs and the Jacobian (or, for a large model with a narrow band, only where
+its entries are) are made from it; placing leaves the end positions to compile(),
+which gives the same code."""
 
 from __future__ import annotations
 
@@ -76,8 +77,8 @@ def test_the_tree_built_again_is_the_one_the_kept_code_was_compiled_from(source)
     module = c.module
     assert module is not c.module
     names = [f.name for f in module.body]
-    assert names[:5] == ["rhs", "surf", "modes", "out", "mem"]
-    kept = _functions([c.binder.code])
+    assert names[:7] == ["rhs", "surf", "surf_vec", "modes", "out", "out_vec", "mem"]
+    kept = _functions(c.binder.code)  # (a code object per group, compiled as built)
     assert _functions([compile(module, c.model.path or c.model.name, "exec")]) == kept
     assert set(kept) == set(names)
     # what the built module says is what it always said: its text
@@ -132,3 +133,43 @@ def test_placing_leaves_the_ends_to_compile_which_takes_them_for_the_starts():
     for node in located:
         node.end_lineno, node.end_col_offset = node.lineno, node.col_offset
     assert _functions([compile(module, path, "exec")]) == bare
+
+
+def test_the_structure_is_where_the_jacobian_can_be_nonzero():
+    # the dependency graph alone: every entry the built Jacobian has is in it (the
+    # rest: a switch's branch whose derivative is zero in the branch at hand); none
+    # for an rhs with a unit's IF, whose Jacobian is built
+    for source in (chain_listing(30), SOURCES[0], SOURCES[1]):
+        c = _compiled(source)
+        rows, cols = jacobian.structure(c.binder.rhs_function())
+        jac = jacobian.for_compiled(c)
+        entries = set(zip(rows.tolist(), cols.tolist(), strict=True))
+        assert set(zip(jac.rows.tolist(), jac.cols.tolist(), strict=True)) <= entries
+        if source is not SOURCES[1]:  # (the hoist's backlash: branches of zero slope)
+            assert len(entries) == jac.nnz
+    assert jacobian.structure(_compiled(TEMPLATES).binder.rhs_function()) is None
+
+
+def test_a_large_narrow_model_lets_odeint_difference_its_band():
+    # 600 masses (1,200 states, band 7 once renumbered): the model's Jacobian is never
+    # built, rhs's tree is let go once the rolled rhs and the structure are made, and
+    # the run is the one with the built Jacobian to within its tolerance (the Jacobian
+    # steers LSODA's Newton iterations only: here 2e-16 apart, RELERR 1e-8 asked)
+    from amilpy.steppers import jacobian as bands
+
+    text = chain_listing(600).replace("OUTDEL = 0.02", "OUTDEL = 0.1")
+    model = amilpy.loads(text)
+    r, = model.run(advice=False, rtol=1e-8, atol=1e-11)
+    c = model.flow().code if hasattr(model, "flow") else None
+    assert c is not None
+    assert "jacobian" not in c.shared and c.shared.get("structure") is not None
+    assert c.binder.rhs_tree is None
+    saved = bands.DIFFERENCED_FROM
+    try:
+        bands.DIFFERENCED_FROM = 10**9
+        built, = amilpy.loads(text).run(advice=False, rtol=1e-8, atol=1e-11)
+    finally:
+        bands.DIFFERENCED_FROM = saved
+    for name in ("X1", "V1", "X300", "V300"):
+        scale = float(np.max(np.abs(built[name])))
+        assert np.max(np.abs(r[name] - built[name])) <= 1e-6 * scale

@@ -11,7 +11,7 @@ from __future__ import annotations
 import ast as py
 import copy
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from itertools import count
 
 from .. import ir
@@ -44,8 +44,10 @@ MAX_UNPACKED_SLOTS = 32
 
 # the code (keys of `Compiler.shared`) that a run builds from rhs's tree on first use:
 # the rolled rhs of a large model (rolled.py, tried by every run), the Jacobian
-# (jacobian.py, an implicit method's); the tree is kept until both are there
-RHS_USERS = ("rolled", "jacobian")
+# (jacobian.py, an implicit method's) or, for a large model with a narrow band, only
+# where its entries are (`jacobian.structure`: odeint differences the band itself);
+# the tree is kept until the Jacobian or its structure is there
+RHS_USERS = ("rolled", ("jacobian", "structure"))
 
 
 def _deepest(model: ir.Model) -> Span | None:
@@ -97,6 +99,10 @@ def by_rows(fn: Callable) -> Callable:
         width = len(out[0]) if out else 0
         return [np.array([r[j] for r in out], dtype=float) for j in range(width)]
     return columns
+
+
+def _keys(user: str | tuple[str, ...]) -> tuple[str, ...]:
+    return user if isinstance(user, tuple) else (user,)
 
 
 class Compiler:
@@ -472,43 +478,69 @@ class Compiler:
     def _build(self) -> ModelCode:
         model = self.model
         self.check_arguments()
-        module = self.module()
-        self._source: str | None = None
-        self.code = compile(module, model.path or model.name, "exec")
-        # the slots of z that rhs and surf read: the same for every binding
+        name = model.path or model.name
+        # Each group of functions is compiled as it is built and its tree let go
+        # before the next is built: the code objects are kept, not the trees they
+        # were compiled from (a large model's tree takes twenty times the memory of
+        # its code: the 1000-mass chain's 20 MB against 1), and one group's tree at
+        # most is alive (the 3000-mass chain's whole module took 64 MB, and compiling
+        # it 27 MB more). Only rhs's tree is kept, until the code every run may build
+        # from it on first use is there (`from_rhs`); a rare user builds the whole
+        # tree again (`tree`).
+        self.code: list = []
+        seen: set[int] = set()
         nz = sum(m.nslots for m in model.memories)
-        self.seen = frozenset().union(*(memory_read(fn, nz, list(self.kept))
-                                        for fn in module.body[:2]))
-        # The code object is kept, not the tree it was compiled from: a large model's
-        # tree takes twenty times the memory of its code (the 1000-mass chain's: 20 MB
-        # against 1). Only rhs's is kept, until the code every run may build from it
-        # on first use is there (`from_rhs`); a rare user builds the tree again
-        # (`tree`).
-        self.rhs_tree: py.FunctionDef | None = module.body[0]
+        for group in self.groups():
+            self.code.append(compile(py.Module(body=group, type_ignores=[]), name, "exec"))
+            if group[0].name == "rhs":
+                self.rhs_tree: py.FunctionDef | None = group[0]
+            if group[0].name in ("rhs", "surf"):
+                # the slots of z that rhs and surf read: the same for every binding
+                seen.update(memory_read(group[0], nz, list(self.kept)))
+            del group
+        self.seen = frozenset(seen)
+        self._source: str | None = None
         self.lines = {}  # (only the build numbers lines: `statements` is the table)
         return self.bind(self.constants)
 
-    def module(self) -> py.Module:
-        """The generated functions' tree, folded, every node on its line."""
+    def groups(self) -> Iterator[list[py.FunctionDef]]:
+        """The generated functions, folded, every node on its line, a group at a time
+        (a function with the elementwise copy that shares its nodes), built in the
+        same order every time: the lines and names a build gives are the same."""
         model = self.model
         out_names = self.outputs if self.outputs is not None else model.variables
-        fns = [self.rhs(), self.surfaces(), self.modes(), self.outputs_function(out_names),
-               self.memory()]
-        self.samples = any(f.memory.samples is not None for f in self.entries)
-        if self.samples:
-            fns.append(self.sample())
-        self.settles = any(s.onto for s in model.states)
-        if self.settles:
-            fns.append(self.settle())
-        self.code_sections = self.sections()
-        extra = [self.section(fname, c) for fname, c in self.code_sections.items()]
+        self.out_names = list(out_names)
         # surf and out once more for NumPy columns: a condition there may be an array
         # (a memory function reading its condition), so if/else becomes a where()
-        fns += [vectorised(fns[1], "surf_vec"), vectorised(fns[3], "out_vec")] + extra
-        module = fold(py.Module(body=fns, type_ignores=[]))
+        yield self._ready([self.rhs()])
+        surf = self.surfaces()
+        yield self._ready([surf, vectorised(surf, "surf_vec")])
+        del surf
+        yield self._ready([self.modes()])
+        out = self.outputs_function(out_names)
+        yield self._ready([out, vectorised(out, "out_vec")])
+        del out
+        yield self._ready([self.memory()])
+        self.samples = any(f.memory.samples is not None for f in self.entries)
+        if self.samples:
+            yield self._ready([self.sample()])
+        self.settles = any(s.onto for s in model.states)
+        if self.settles:
+            yield self._ready([self.settle()])
+        self.code_sections = self.sections()
+        for fname, c in self.code_sections.items():
+            yield self._ready([self.section(fname, c)])
+
+    @staticmethod
+    def _ready(group: list[py.FunctionDef]) -> list[py.FunctionDef]:
+        module = fold(py.Module(body=group, type_ignores=[]))
         place(module, closed=True)  # (and assert_closed's check, in the same walk)
-        self.out_names = list(out_names)
-        return module
+        return module.body
+
+    def module(self) -> py.Module:
+        """The generated functions' tree, whole (`groups`)."""
+        return py.Module(body=[fn for group in self.groups() for fn in group],
+                         type_ignores=[])
 
     @deep_enough()
     @no_collection()
@@ -528,13 +560,20 @@ class Compiler:
         else make leaves it as it is. The kept tree is let go once each of RHS_USERS
         has made its code; a later user gets it built again."""
         if key not in self.shared:
-            own = self.rhs_tree is None or all(k in self.shared for k in RHS_USERS
-                                               if k != key)
+            own = self.rhs_tree is None or all(self._made(u) for u in RHS_USERS
+                                               if key not in _keys(u))
             with no_collection():  # (a large model's makes a million nodes, as a build)
                 self.shared[key] = make(self.rhs_function(), own)
-            if all(k in self.shared for k in RHS_USERS):
+            if all(self._made(u) for u in RHS_USERS):
                 self.rhs_tree = None
         return self.shared[key]
+
+    def _made(self, user: str | tuple[str, ...]) -> bool:
+        """Whether one of RHS_USERS has made its code: for alternatives (a tuple), one
+        that made something (a None structure: the Jacobian must be built after all)."""
+        if isinstance(user, str):
+            return user in self.shared
+        return any(self.shared.get(k) is not None for k in user)
 
     def rhs_function(self) -> py.FunctionDef:
         """rhs's tree: the one kept from the build (not to be changed but by its last
@@ -564,7 +603,8 @@ class Compiler:
         vector: dict[str, object] = {"__builtins__": {}, STATEMENTS: self.statements,
                                      **vector_namespace(), **self.global_tables}
         vector.update({parameter(n): v for n, v in values.items()})
-        exec(self.code, vector)  # noqa: S102 - compiler-built tree, closed namespace
+        for code in self.code:
+            exec(code, vector)  # noqa: S102 - compiler-built tree, closed namespace
         exec(rhs_vec, vector)  # noqa: S102 - the same, elementwise
         return vector
 
@@ -577,10 +617,11 @@ class Compiler:
         values = {parameter(n): float(constants[n]) for n in self.parameters}
         scalar: dict[str, object] = {"__builtins__": {}, **namespace(), **self.global_tables,
                                      STATEMENTS: self.statements, **values}
-        exec(self.code, scalar)  # noqa: S102 - compiler-built tree, closed namespace
         vector: dict[str, object] = {"__builtins__": {}, STATEMENTS: self.statements,
                                      **vector_namespace(), **self.global_tables, **values}
-        exec(self.code, vector)  # noqa: S102 - the same code, elementwise functions
+        for code in self.code:
+            exec(code, scalar)  # noqa: S102 - compiler-built tree, closed namespace
+            exec(code, vector)  # noqa: S102 - the same code, elementwise functions
         trains, train_surfaces = binder.trains()
         if model.units:
             # statements (IF, loops) cannot run on columns: one row at a time

@@ -339,6 +339,68 @@ def tree(rhs: py.FunctionDef, n: int, own: bool = False) -> tuple:
         raise
 
 
+def _unpacked(stmt: py.stmt) -> dict[str, int] | None:
+    """The states' locals an rhs statement unpacks from y (name -> index), if it does."""
+    if isinstance(stmt, py.Assign) and isinstance(stmt.value, py.Name) and \
+            stmt.value.id == "y":
+        target = stmt.targets[0]
+        names = target.elts if isinstance(target, py.Tuple) else [target]
+        return {t.id: i for i, t in enumerate(names)}
+    if isinstance(stmt, py.Assign) and isinstance(stmt.value, py.Subscript) and \
+            isinstance(stmt.value.value, py.Name) and stmt.value.value.id == "y":
+        return {stmt.targets[0].id: 0}  # one state: v = y[0]
+    return None
+
+
+def _local(stmt: py.stmt) -> str | None:
+    """The local an rhs statement assigns (one name), if it does."""
+    if isinstance(stmt, py.Assign) and len(stmt.targets) == 1 and \
+            isinstance(stmt.targets[0], py.Name):
+        return stmt.targets[0].id
+    return None
+
+
+def structure(rhs: py.FunctionDef) -> tuple[np.ndarray, np.ndarray] | None:
+    """The entries of the Jacobian of a generated `rhs` that can be nonzero (rows,
+    cols), from the dependency graph alone: which states each returned derivative
+    reads, through the locals, in any branch (a superset of `tree`'s entries,
+    which leaves out a branch's zero derivatives). None for an rhs with statements
+    other than assignments (a unit's IF): the caller builds the Jacobian instead.
+    A small part of `tree`'s work: no derivative is built."""
+    states: dict[str, int] = {}
+    deriv = _Deriv(states)
+    rows: list[int] = []
+    cols: list[int] = []
+    for stmt in rhs.body:
+        unpacked = _unpacked(stmt)
+        if unpacked is not None:
+            states.update(unpacked)
+        elif isinstance(stmt, py.Return):
+            for i, value in enumerate(stmt.value.elts):
+                dep = sorted(deriv.deps(value))
+                rows += [i] * len(dep)
+                cols += dep
+        elif _local(stmt) is not None:
+            deriv.local_deps[_local(stmt)] = deriv.deps(stmt.value)
+        elif not (isinstance(stmt, py.Assign) and isinstance(stmt.value, py.Name)):
+            return None  # (m and z unpacked read no state; anything else may)
+    return np.array(rows, dtype=int), np.array(cols, dtype=int)
+
+
+def structure_for(c, enough: Callable[[np.ndarray, np.ndarray], bool]
+                  ) -> tuple[np.ndarray, np.ndarray] | None:
+    """`structure` of a run's generated `rhs` (`codegen.ModelCode`), found once, if
+    `enough(rows, cols)` says it does instead of the Jacobian (else None: the
+    Jacobian is built, and rhs's tree is kept for it)."""
+    if "structure" not in c.derived:
+        def make(rhs: py.FunctionDef, _own: bool):
+            found = structure(rhs)
+            return found if found is not None and enough(*found) else None
+        c.derived["structure"] = None if c.binder is None else \
+            c.binder.from_rhs("structure", make)
+    return c.derived["structure"]
+
+
 def _tree(body: list[py.stmt]) -> tuple:
     """`tree` of rhs's statements (changed: placed on line 1)."""
     states: dict[str, int] = {}
@@ -346,19 +408,12 @@ def _tree(body: list[py.stmt]) -> tuple:
     out: list[py.stmt] = []
     entries: list[tuple[int, int, py.expr]] = []
     for stmt in body:
-        if isinstance(stmt, py.Assign) and isinstance(stmt.value, py.Name) and \
-                stmt.value.id == "y":
-            target = stmt.targets[0]
-            names = target.elts if isinstance(target, py.Tuple) else [target]
-            states.update({t.id: i for i, t in enumerate(names)})
+        unpacked = _unpacked(stmt)
+        if unpacked is not None:
+            states.update(unpacked)
             out.append(stmt)
-        elif isinstance(stmt, py.Assign) and isinstance(stmt.value, py.Subscript) and \
-                isinstance(stmt.value.value, py.Name) and stmt.value.value.id == "y":
-            states[stmt.targets[0].id] = 0  # one state: v = y[0]
-            out.append(stmt)
-        elif isinstance(stmt, py.Assign) and len(stmt.targets) == 1 and \
-                isinstance(stmt.targets[0], py.Name):
-            name = stmt.targets[0].id
+        elif _local(stmt) is not None:
+            name = _local(stmt)
             out.append(stmt)
             dep = deriv.deps(stmt.value)
             deriv.local_deps[name] = dep

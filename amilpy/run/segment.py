@@ -11,6 +11,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..codegen.jacobian import for_compiled as jacobian_for
+from ..codegen.jacobian import structure_for
 from ..codegen.rolled import for_compiled as rolled_rhs
 from ..outcome import Failure
 from ..steppers import LOG_BUDGET, Evaluations, Stepper, first_bad, make_stepper
@@ -193,4 +194,5 @@ class SegmentStart:
         if route.fixed or route.explicit or SLIDE in cur.m or not len(cur.y):
             return None
         c = self.c
-        return SegmentJacobian(len(cur.y), lambda: jacobian_for(c), cur.m, cur.z, f)
+        return SegmentJacobian(len(cur.y), lambda: jacobian_for(c), cur.m, cur.z, f,
+                               lambda enough: structure_for(c, enough))

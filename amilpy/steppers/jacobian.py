@@ -14,6 +14,13 @@ from collections.abc import Callable
 import numpy as np
 
 DENSE_UP_TO = 32  # states: a dense Jacobian (and LU) is cheaper than any bookkeeping
+# A model of at least DIFFERENCED_FROM states whose band (renumbered) is at most
+# DIFFERENCED_BAND wide: odeint differences the band itself, ml + mu + 1 evaluations
+# of the right-hand side a Jacobian, and the model's Jacobian is never built (for the
+# 10,000-mass chain that build took more time and memory than the run: see
+# benchmarks/results/largemem.md)
+DIFFERENCED_FROM = 1000
+DIFFERENCED_BAND = 16
 
 
 class SegmentJacobian:
@@ -22,9 +29,13 @@ class SegmentJacobian:
     z. Where the generated derivatives fault or are not finite at a point (0.5 /
     SQRT(X) at X = 0), that call takes central differences of `fun` instead."""
 
-    def __init__(self, n: int, model: Callable[[], object], m, z, fun: Callable) -> None:
+    def __init__(self, n: int, model: Callable[[], object], m, z, fun: Callable,
+                 structure: Callable[[Callable], tuple | None] | None = None) -> None:
         self.n, self._make, self.m, self.z, self.fun = n, model, m, z, fun
         self._model = None
+        # structure(enough) -> (rows, cols) of the entries that can be nonzero, if
+        # enough(rows, cols) says they do without the model's Jacobian, else None
+        self._structure = structure
 
     @property
     def model(self):
@@ -66,6 +77,20 @@ class SegmentJacobian:
         return self.dense if self.n <= DENSE_UP_TO else self.sparse
 
     def banded(self) -> Banded:
+        """odeint's banded Jacobian: differenced by odeint itself (`Banded.dfun` None)
+        for a large model with a narrow band, else from the model's Jacobian."""
+        if self.n >= DIFFERENCED_FROM and self._structure is not None:
+            narrow: list = []
+
+            def enough(rows: np.ndarray, cols: np.ndarray) -> bool:
+                narrow[:] = [narrowest(self.n, rows, cols)]
+                return narrow[0][1] + narrow[0][2] + 1 <= DIFFERENCED_BAND
+
+            found = self._structure(enough)
+            if found is not None:
+                if not narrow:  # (found before, by another segment)
+                    narrow.append(narrowest(self.n, *found))
+                return Banded(self, narrow[0])
         return Banded(self)
 
 
@@ -73,15 +98,20 @@ class Banded:
     """odeint's banded Jacobian of a renumbered system: states in the order `order`
     (a reverse Cuthill-McKee order when it narrows the band), bands ml, mu."""
 
-    def __init__(self, jac: SegmentJacobian) -> None:
-        order, lower, upper = narrowest(jac.n, jac.rows, jac.cols)
+    def __init__(self, jac: SegmentJacobian, differenced: tuple | None = None) -> None:
+        """`differenced`: (order, ml, mu) of a band odeint differences itself (`dfun`
+        is None), else the model's Jacobian gives the entries."""
+        order, lower, upper = differenced or narrowest(jac.n, jac.rows, jac.cols)
         self.order = order  # new position k holds old state order[k]
         self.position = np.argsort(order)  # old state i sits at position[i]
         self.identity = bool(np.all(order == np.arange(jac.n)))
         self.ml, self.mu = lower, upper
         self.jac = jac
-        self._band_rows = upper + self.position[jac.rows] - self.position[jac.cols]
-        self._band_cols = self.position[jac.cols]
+        if differenced is None:
+            self._band_rows = upper + self.position[jac.rows] - self.position[jac.cols]
+            self._band_cols = self.position[jac.cols]
+        else:
+            self.dfun = None
 
     def wrap(self, fun: Callable) -> Callable:
         """The vector field in the new order."""

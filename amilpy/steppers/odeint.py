@@ -300,7 +300,9 @@ class OdeintStepper(Chunked):
                     self._banded = self.jac.banded()
                 b = self._banded
                 fun, y0 = b.wrap(fun), b.to_new(y0)
-                options.update(Dfun=b.dfun, ml=b.ml, mu=b.mu)
+                options.update(ml=b.ml, mu=b.mu)
+                if b.dfun is not None:  # (else odeint differences the band)
+                    options["Dfun"] = b.dfun
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # a failure is handled by the caller
             ys, info = odeint(fun, y0, grid, rtol=self.rtol, atol=self.atol, tfirst=True,
