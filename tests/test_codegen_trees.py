@@ -77,7 +77,10 @@ def test_the_tree_built_again_is_the_one_the_kept_code_was_compiled_from(source)
     module = c.module
     assert module is not c.module
     names = [f.name for f in module.body]
-    assert names[:7] == ["rhs", "surf", "surf_vec", "modes", "out", "out_vec", "mem"]
+    # (surf_vec and out_vec only where a condition must become elementwise: else surf
+    # and out work on columns themselves)
+    assert [n for n in names if not n.endswith("_vec")][:5] == \
+        ["rhs", "surf", "modes", "out", "mem"]
     kept = _functions(c.binder.code)  # (a code object per group, compiled as built)
     assert _functions([compile(module, c.model.path or c.model.name, "exec")]) == kept
     assert set(kept) == set(names)
@@ -150,26 +153,42 @@ def test_the_structure_is_where_the_jacobian_can_be_nonzero():
     assert jacobian.structure(_compiled(TEMPLATES).binder.rhs_function()) is None
 
 
-def test_a_large_narrow_model_lets_odeint_difference_its_band():
-    # 600 masses (1,200 states, band 7 once renumbered): the model's Jacobian is never
-    # built, rhs's tree is let go once the rolled rhs and the structure are made, and
-    # the run is the one with the built Jacobian to within its tolerance (the Jacobian
-    # steers LSODA's Newton iterations only: here 2e-16 apart, RELERR 1e-8 asked)
-    from amilpy.steppers import jacobian as bands
+def test_a_large_narrow_model_lets_odeint_difference_its_band(monkeypatch):
+    # 600 masses (1,200 states, band 7 once renumbered): the rolled rhs and the
+    # structure are made with the build and rhs's tree let go at once, the model's
+    # Jacobian is never built, and the run is the one with the built Jacobian to
+    # within its tolerance (the Jacobian steers LSODA's Newton iterations only: 4e-15
+    # apart on the 3,000-mass chain, RELERR 1e-8 asked here)
+    from amilpy.codegen import build
 
     text = chain_listing(600).replace("OUTDEL = 0.02", "OUTDEL = 0.1")
     model = amilpy.loads(text)
     r, = model.run(advice=False, rtol=1e-8, atol=1e-11)
-    c = model.flow().code if hasattr(model, "flow") else None
-    assert c is not None
-    assert "jacobian" not in c.shared and c.shared.get("structure") is not None
-    assert c.binder.rhs_tree is None
-    saved = bands.DIFFERENCED_FROM
-    try:
-        bands.DIFFERENCED_FROM = 10**9
-        built, = amilpy.loads(text).run(advice=False, rtol=1e-8, atol=1e-11)
-    finally:
-        bands.DIFFERENCED_FROM = saved
+    c = model.flow().code
+    assert c.binder.rhs_tree is None and c.shared["rolled"] is not None
+    assert "jacobian" not in c.shared and c.shared["structure"] is not None
+    monkeypatch.setattr(build, "EARLY_FROM", 10**9)
+    lazy = amilpy.loads(text)
+    built, = lazy.run(advice=False, rtol=1e-8, atol=1e-11)
+    assert "jacobian" in lazy.flow().code.shared
     for name in ("X1", "V1", "X300", "V300"):
         scale = float(np.max(np.abs(built[name])))
         assert np.max(np.abs(r[name] - built[name])) <= 1e-6 * scale
+    # a run that needs the Jacobian after all builds rhs's tree again for it
+    jac = jacobian.for_compiled(c)
+    assert jac.nnz and set(zip(jac.rows.tolist(), jac.cols.tolist(), strict=True)) <= \
+        set(zip(*(a.tolist() for a in c.shared["structure"]), strict=True))
+
+
+def test_surf_and_out_are_copied_for_columns_only_where_a_condition_needs_it():
+    # the chain has no condition: its surf and out are their own column versions (a
+    # second copy of a large model's out took a quarter of its compile); the
+    # templates' out has LIMIT's and FSW's conditions, made elementwise in its copy
+    chain, templates = _compiled(chain_listing(30)), _compiled(TEMPLATES)
+    assert not {"surf_vec", "out_vec"} & _functions(chain.binder.code).keys()
+    assert "out_vec" in _functions(templates.binder.code)
+    rows = np.random.default_rng(3).normal(size=(len(chain.state_names), 4))
+    columns = np.array(chain.out_v(0.5, list(rows), [], []), dtype=float)
+    for k in range(4):  # (NumPy's power and Python's may differ in the last bit)
+        assert np.allclose(columns[:, k], chain.out(0.5, rows[:, k].tolist(), [], []),
+                           rtol=1e-14, atol=0)

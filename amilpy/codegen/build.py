@@ -21,11 +21,13 @@ from ..library.surfaces import constant_value, is_affine
 from ..library.templates import instantiate
 from ..parse import syntax as syn
 from ..parse.syntax import deep_enough, no_collection
+from . import jacobian, rolled
 from .consts import evaluate_constant, initial_slots
 from .emit import Emitter, Setting, needs, needs_memories, printed_only_surfaces
 from .faults import STATEMENTS, Statement
 from .modelcode import ModelCode
 from .pytree import (
+    column_copy,
     fold,
     function,
     local,
@@ -44,10 +46,16 @@ MAX_UNPACKED_SLOTS = 32
 
 # the code (keys of `Compiler.shared`) that a run builds from rhs's tree on first use:
 # the rolled rhs of a large model (rolled.py, tried by every run), the Jacobian
-# (jacobian.py, an implicit method's) or, for a large model with a narrow band, only
-# where its entries are (`jacobian.structure`: odeint differences the band itself);
-# the tree is kept until the Jacobian or its structure is there
-RHS_USERS = ("rolled", ("jacobian", "structure"))
+# (jacobian.py, an implicit method's); the tree is kept until both are there
+RHS_USERS = ("rolled", "jacobian")
+# A model of this many states or more has what every run makes from rhs's tree made
+# as soon as rhs is compiled -- the rolled rhs and where its Jacobian can be nonzero
+# (`jacobian.structure`: odeint differences a narrow band itself) -- and the tree let
+# go before the other functions are built: the 10,000-mass chain's first run peaked
+# 148 MB above what reading holds with the tree kept, 0 MB without
+# (benchmarks/results/largemem.md). A run that needs its Jacobian after all (a wide
+# band, METHOD STIFF, steady states) builds rhs's tree again.
+EARLY_FROM = 1000
 
 
 def _deepest(model: ir.Model) -> Span | None:
@@ -63,6 +71,20 @@ def _deepest(model: ir.Model) -> Span | None:
                 best, where = depth, span
             stack.extend((c, depth + 1) for c in node.children())
     return where
+
+
+def _with_columns(fn: py.FunctionDef, name: str) -> list[py.FunctionDef]:
+    """fn, and its copy for NumPy columns (`name`) if it needs one."""
+    copy_ = column_copy(fn, name)
+    return [fn] if copy_ is None else [fn, copy_]
+
+
+def _columns(vector: dict[str, object]) -> dict[str, object]:
+    """The functions executed among NumPy's (the vector namespace) with surf_vec and
+    out_vec: surf and out themselves where no copy was needed (`_with_columns`)."""
+    vector.setdefault("surf_vec", vector["surf"])
+    vector.setdefault("out_vec", vector["out"])
+    return vector
 
 
 def memory_read(fn: py.FunctionDef, nz: int, kept: list[str]) -> frozenset[int]:
@@ -99,10 +121,6 @@ def by_rows(fn: Callable) -> Callable:
         width = len(out[0]) if out else 0
         return [np.array([r[j] for r in out], dtype=float) for j in range(width)]
     return columns
-
-
-def _keys(user: str | tuple[str, ...]) -> tuple[str, ...]:
-    return user if isinstance(user, tuple) else (user,)
 
 
 class Compiler:
@@ -492,16 +510,26 @@ class Compiler:
         nz = sum(m.nslots for m in model.memories)
         for group in self.groups():
             self.code.append(compile(py.Module(body=group, type_ignores=[]), name, "exec"))
-            if group[0].name == "rhs":
-                self.rhs_tree: py.FunctionDef | None = group[0]
             if group[0].name in ("rhs", "surf"):
                 # the slots of z that rhs and surf read: the same for every binding
                 seen.update(memory_read(group[0], nz, list(self.kept)))
+            if group[0].name == "rhs":
+                self.rhs_tree: py.FunctionDef | None = group[0]
+                if len(model.states) >= EARLY_FROM:
+                    self._made_early()
             del group
         self.seen = frozenset(seen)
         self._source: str | None = None
         self.lines = {}  # (only the build numbers lines: `statements` is the table)
         return self.bind(self.constants)
+
+    def _made_early(self) -> None:
+        """What every run of a large model makes from rhs's tree (EARLY_FROM), made
+        now, and the tree let go."""
+        n = len(self.model.states)
+        self.from_rhs("rolled", lambda rhs, _: rolled.build(rhs, n))
+        self.shared["structure"] = jacobian.structure(self.rhs_tree)
+        self.rhs_tree = None
 
     def groups(self) -> Iterator[list[py.FunctionDef]]:
         """The generated functions, folded, every node on its line, a group at a time
@@ -510,16 +538,13 @@ class Compiler:
         model = self.model
         out_names = self.outputs if self.outputs is not None else model.variables
         self.out_names = list(out_names)
-        # surf and out once more for NumPy columns: a condition there may be an array
-        # (a memory function reading its condition), so if/else becomes a where()
+        # surf and out once more for NumPy columns where they have a condition: it may
+        # be an array (a memory function reading its condition), so if/else becomes a
+        # where(); without one, surf and out work on columns themselves (`_columns`)
         yield self._ready([self.rhs()])
-        surf = self.surfaces()
-        yield self._ready([surf, vectorised(surf, "surf_vec")])
-        del surf
+        yield self._ready(_with_columns(self.surfaces(), "surf_vec"))
         yield self._ready([self.modes()])
-        out = self.outputs_function(out_names)
-        yield self._ready([out, vectorised(out, "out_vec")])
-        del out
+        yield self._ready(_with_columns(self.outputs_function(out_names), "out_vec"))
         yield self._ready([self.memory()])
         self.samples = any(f.memory.samples is not None for f in self.entries)
         if self.samples:
@@ -560,20 +585,13 @@ class Compiler:
         else make leaves it as it is. The kept tree is let go once each of RHS_USERS
         has made its code; a later user gets it built again."""
         if key not in self.shared:
-            own = self.rhs_tree is None or all(self._made(u) for u in RHS_USERS
-                                               if key not in _keys(u))
+            own = self.rhs_tree is None or all(k in self.shared for k in RHS_USERS
+                                               if k != key)
             with no_collection():  # (a large model's makes a million nodes, as a build)
                 self.shared[key] = make(self.rhs_function(), own)
-            if all(self._made(u) for u in RHS_USERS):
+            if all(k in self.shared for k in RHS_USERS):
                 self.rhs_tree = None
         return self.shared[key]
-
-    def _made(self, user: str | tuple[str, ...]) -> bool:
-        """Whether one of RHS_USERS has made its code: for alternatives (a tuple), one
-        that made something (a None structure: the Jacobian must be built after all)."""
-        if isinstance(user, str):
-            return user in self.shared
-        return any(self.shared.get(k) is not None for k in user)
 
     def rhs_function(self) -> py.FunctionDef:
         """rhs's tree: the one kept from the build (not to be changed but by its last
@@ -606,7 +624,7 @@ class Compiler:
         for code in self.code:
             exec(code, vector)  # noqa: S102 - compiler-built tree, closed namespace
         exec(rhs_vec, vector)  # noqa: S102 - the same, elementwise
-        return vector
+        return _columns(vector)
 
     def bind(self, constants: dict[str, float]) -> ModelCode:
         """The built code for one run's constants: executed with its parameters' values
@@ -622,6 +640,7 @@ class Compiler:
         for code in self.code:
             exec(code, scalar)  # noqa: S102 - compiler-built tree, closed namespace
             exec(code, vector)  # noqa: S102 - the same code, elementwise functions
+        _columns(vector)
         trains, train_surfaces = binder.trains()
         if model.units:
             # statements (IF, loops) cannot run on columns: one row at a time

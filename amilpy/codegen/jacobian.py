@@ -387,18 +387,10 @@ def structure(rhs: py.FunctionDef) -> tuple[np.ndarray, np.ndarray] | None:
     return np.array(rows, dtype=int), np.array(cols, dtype=int)
 
 
-def structure_for(c, enough: Callable[[np.ndarray, np.ndarray], bool]
-                  ) -> tuple[np.ndarray, np.ndarray] | None:
-    """`structure` of a run's generated `rhs` (`codegen.ModelCode`), found once, if
-    `enough(rows, cols)` says it does instead of the Jacobian (else None: the
-    Jacobian is built, and rhs's tree is kept for it)."""
-    if "structure" not in c.derived:
-        def make(rhs: py.FunctionDef, _own: bool):
-            found = structure(rhs)
-            return found if found is not None and enough(*found) else None
-        c.derived["structure"] = None if c.binder is None else \
-            c.binder.from_rhs("structure", make)
-    return c.derived["structure"]
+def structure_for(c) -> tuple[np.ndarray, np.ndarray] | None:
+    """`structure` of a run's generated `rhs` (`codegen.ModelCode`) if its build made
+    it (a large model's: `build.EARLY_FROM`), else None."""
+    return None if c.binder is None else c.binder.shared.get("structure")
 
 
 def _tree(body: list[py.stmt]) -> tuple:

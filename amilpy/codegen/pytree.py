@@ -301,9 +301,22 @@ def vectorised(fn: py.FunctionDef, name: str) -> py.FunctionDef:
     """A copy of a generated function whose conditionals work elementwise. Only the
     nodes above a conditional are copied; the rest (most of a large model) is
     shared with `fn`, as are the IR nodes the tree remembers (emit's `amil_src`)."""
-    new = _elementwise(fn)
-    if new is fn:  # (nothing elementwise in it: a copy under another name)
+    new = column_copy(fn, name)
+    if new is None:  # (nothing elementwise in it: a copy under another name)
         new = copy.copy(fn)
+        new.name = name
+    return new
+
+
+@deep_enough()
+def column_copy(fn: py.FunctionDef, name: str) -> py.FunctionDef | None:
+    """`vectorised`'s copy where it differs from `fn`, else None: with nothing to make
+    elementwise, fn itself works on NumPy columns among NumPy's functions (the
+    vector namespace), and a second copy of a large model's code would cost its
+    compile time and memory again."""
+    new = _elementwise(fn)
+    if new is fn:
+        return None
     new.name = name
     return new
 

@@ -195,4 +195,4 @@ class SegmentStart:
             return None
         c = self.c
         return SegmentJacobian(len(cur.y), lambda: jacobian_for(c), cur.m, cur.z, f,
-                               lambda enough: structure_for(c, enough))
+                               lambda: structure_for(c))

@@ -14,12 +14,11 @@ from collections.abc import Callable
 import numpy as np
 
 DENSE_UP_TO = 32  # states: a dense Jacobian (and LU) is cheaper than any bookkeeping
-# A model of at least DIFFERENCED_FROM states whose band (renumbered) is at most
-# DIFFERENCED_BAND wide: odeint differences the band itself, ml + mu + 1 evaluations
-# of the right-hand side a Jacobian, and the model's Jacobian is never built (for the
-# 10,000-mass chain that build took more time and memory than the run: see
-# benchmarks/results/largemem.md)
-DIFFERENCED_FROM = 1000
+# A model whose structure is known without its Jacobian (a large one's: see
+# codegen.build.EARLY_FROM) and whose band (renumbered) is at most DIFFERENCED_BAND
+# wide: odeint differences the band itself, ml + mu + 1 evaluations of the
+# right-hand side a Jacobian, and the model's Jacobian is never built (for the
+# 10,000-mass chain that build took more time and memory than the run)
 DIFFERENCED_BAND = 16
 
 
@@ -30,11 +29,11 @@ class SegmentJacobian:
     SQRT(X) at X = 0), that call takes central differences of `fun` instead."""
 
     def __init__(self, n: int, model: Callable[[], object], m, z, fun: Callable,
-                 structure: Callable[[Callable], tuple | None] | None = None) -> None:
+                 structure: Callable[[], tuple | None] | None = None) -> None:
         self.n, self._make, self.m, self.z, self.fun = n, model, m, z, fun
         self._model = None
-        # structure(enough) -> (rows, cols) of the entries that can be nonzero, if
-        # enough(rows, cols) says they do without the model's Jacobian, else None
+        # structure() -> (rows, cols) of the entries that can be nonzero, where known
+        # without the model's Jacobian (else None)
         self._structure = structure
 
     @property
@@ -78,19 +77,13 @@ class SegmentJacobian:
 
     def banded(self) -> Banded:
         """odeint's banded Jacobian: differenced by odeint itself (`Banded.dfun` None)
-        for a large model with a narrow band, else from the model's Jacobian."""
-        if self.n >= DIFFERENCED_FROM and self._structure is not None:
-            narrow: list = []
-
-            def enough(rows: np.ndarray, cols: np.ndarray) -> bool:
-                narrow[:] = [narrowest(self.n, rows, cols)]
-                return narrow[0][1] + narrow[0][2] + 1 <= DIFFERENCED_BAND
-
-            found = self._structure(enough)
-            if found is not None:
-                if not narrow:  # (found before, by another segment)
-                    narrow.append(narrowest(self.n, *found))
-                return Banded(self, narrow[0])
+        where the structure is known and the band narrow, else from the model's
+        Jacobian."""
+        found = self._structure() if self._structure is not None else None
+        if found is not None:
+            order, lower, upper = narrowest(self.n, *found)
+            if lower + upper + 1 <= DIFFERENCED_BAND:
+                return Banded(self, (order, lower, upper))
         return Banded(self)
 
 
