@@ -51,10 +51,10 @@ RHS_USERS = ("rolled", "jacobian")
 # A model of this many states or more has what every run makes from rhs's tree made
 # as soon as rhs is compiled -- the rolled rhs and where its Jacobian can be nonzero
 # (`jacobian.structure`: odeint differences a narrow band itself) -- and the tree let
-# go before the other functions are built: the 10,000-mass chain's first run peaked
-# 148 MB above what reading holds with the tree kept, 0 MB without
-# (benchmarks/results/largemem.md). A run that needs its Jacobian after all (a wide
-# band, METHOD STIFF, steady states) builds rhs's tree again.
+# go before the other functions are built (the 10,000-mass chain's first run peaked at
+# 478 MB with the tree kept to then, 462 MB without; benchmarks/largemem.py). A run
+# that needs its Jacobian after all (a wide band, METHOD STIFF, steady states) builds
+# rhs's tree again.
 EARLY_FROM = 1000
 
 
