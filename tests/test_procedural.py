@@ -275,6 +275,34 @@ def test_a_loop_of_more_than_a_million_iterations_is_an_error():
     assert d.span.line == 4
 
 
+def test_a_loop_whose_step_is_0_when_it_runs_stops_the_run_with_a_located_message():
+    # a step that is a CONSTANT is known only when the run starts: the loop's line,
+    # its bounds and what to write, with the rows before it kept (a TypeError from the
+    # copy of the code that makes a fault's values NaN was a traceback)
+    from amilpy.result import Status
+
+    run = amilpy.loads("""PROGRAM P
+INITIAL
+CONSTANT S = 0.0, N = 3.0
+END
+DERIVATIVE
+PROCEDURAL (Y = X)
+Y = 0.0
+DO 10 I = 1, N, S
+Y = Y + X
+10 CONTINUE
+END
+X = INTEG(-X, 1.0)
+TERMT (T .GE. 1.0)
+END
+END
+""", "p.csl").run(advice=False)[0]
+    assert run.status is Status.FAILED
+    assert "(line 8): a FOR/DO loop from 1 to 3 with step 0 never ends: give its step " \
+        "a value that is not 0" in run.message
+    assert len(run.t) == 1 and run["X"][0] == 1.0
+
+
 def test_a_loop_in_derivative_outside_procedural_is_refused():
     with pytest.raises(AmilError) as err:
         amilpy.loads("PROGRAM p\nDERIVATIVE\nDO I = 1, 3\nX = 1.0\nEND DO\nY = INTEG(1., 0.)"

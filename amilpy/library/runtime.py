@@ -533,11 +533,21 @@ def loop_count(start: float, stop: float, step: float) -> int:
     from ..language import MAX_LOOP
 
     if step == 0.0:
-        raise ValueError("a FOR/DO loop with step 0")
+        raise HelperFault(f"a FOR/DO loop from {start:g} to {stop:g} with step 0 never "
+                          "ends: give its step a value that is not 0")
     n = math.floor((stop - start + step) / step)
     if n > MAX_LOOP:
-        raise ValueError(f"a FOR/DO loop of {n} iterations (at most {MAX_LOOP})")
+        raise HelperFault(f"a FOR/DO loop of {n} iterations (at most {MAX_LOOP})")
     return max(0, int(n))
+
+
+def loop_range(count: int) -> range:
+    """The passes of a FOR/DO loop, `loop_count` of them. A count that could not be
+    computed (NaN: the copy of the code that gives NaN for a fault and goes on, when
+    the count's own statement faulted) is that fault again, not a TypeError."""
+    if count != count:
+        raise HelperFault("a FOR/DO loop whose count could not be computed")
+    return range(count)
 
 
 HELPERS: dict[str, Callable] = {
@@ -545,7 +555,7 @@ HELPERS: dict[str, Callable] = {
     "DELAY": delay, "DELAY_STORE": delay_store, "DELAY_INIT": delay_init,
     "LINT": lint, "PULSE_ON": pulse_on, "IMPULS_STEP": impulse_step, "DRAW": draw,
     "SGN": sign, "LEVEL": level, "AMODAT": amod_at, "WHERE": _where, "ALL": _all, "ANY": _any,
-    "NITER": loop_count, "RANGE": range,  # FOR/DO loops of procedural code
+    "NITER": loop_count, "RANGE": loop_range,  # FOR/DO loops of procedural code
     "WDAY": weather_day, "IMPL_FAIL": impl_fail,
 }
 
