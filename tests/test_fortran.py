@@ -380,3 +380,15 @@ def test_a_real_do_loop_counts_as_fortran_and_do_label_comma():
            "      B = B + 0.*A\n      RETURN\n      END\n")
     run = _run_f(sub, fintim=1.0)
     assert list(run.values["Y"]) == [100707.0, 100707.0]
+
+
+@pytest.mark.parametrize("body", ["      B = FOO(A) + 1.\n",
+                                  "      I = 1\n      B = FOO(A) + I\n"])
+def test_a_fault_in_a_routine_is_said_once_not_again_where_its_outputs_are_read(body):
+    # the CALL's outputs and the routine's own names are still defined: no "PRINT names
+    # Y, which the model never defines", no "F#1.I is used but never defined" (a name
+    # the user never wrote) after the one fault
+    with pytest.raises(AmilError) as err:
+        _run_f(SUB.format(body=body))
+    messages = [d.message for d in err.value.diagnostics]
+    assert messages == ["unknown function FOO"]

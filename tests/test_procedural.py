@@ -451,3 +451,16 @@ END
     assert crossings == pytest.approx([a, math.pi - a, math.pi + a, 2 * math.pi - a],
                                       abs=1e-9)
     assert run["Z"][-1] == pytest.approx(2 * (math.pi - 2 * a), abs=1e-8)
+
+
+@pytest.mark.parametrize("text", [
+    "PROGRAM P\nDERIVATIVE\nPROCEDURAL (Y, W = X)\nW = 2.0\nY = FOO(X) + W\nEND\n"
+    "Z = Y + 1.0\nX = INTEG(-X, 1.0)\nTERMT (T .GE. 1.0)\nEND\nEND\n",
+    "PROGRAM P\nDERIVATIVE\nIF (X .GT. 0.5) THEN\nY = FOO(X)\nELSE\nY = 1.0\nEND IF\n"
+    "Z = Y + 1.0\nX = INTEG(-X, 1.0)\nTERMT (T .GE. 1.0)\nEND\nEND\n"])
+def test_a_fault_inside_a_block_is_said_once_not_again_where_its_outputs_are_read(text):
+    # what the block assigns is still defined: "W/Y is used but never defined" after
+    # the one fault sent the reader to the wrong line
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text, "p.csl")
+    assert [d.message for d in err.value.diagnostics] == ["unknown function FOO"]

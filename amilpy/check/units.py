@@ -61,6 +61,13 @@ def unit_equations(code: CodeLowering, names: Names, st: ast.If | ast.Procedural
     each of its outputs (its value: the unit's)."""
     unit = code.unit(st, len(units), section)
     if unit is None:
+        # (its faults are said; what it assigns is still defined, so that what reads
+        # it is not reported too: a PRINT of a CALL's output, a name the block reads
+        # after assigning it)
+        body = st.body if isinstance(st, ast.Procedural) else (st,)
+        listed = st.outputs if isinstance(st, ast.Procedural) else ()
+        for name in dict.fromkeys([*listed, *assigned_names(body)]):
+            names.define(name, first_assignment(st, name), section)
         return []
     units.append(unit)
     if isinstance(st, ast.If):
