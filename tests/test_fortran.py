@@ -392,3 +392,81 @@ def test_a_fault_in_a_routine_is_said_once_not_again_where_its_outputs_are_read(
         _run_f(SUB.format(body=body))
     messages = [d.message for d in err.value.diagnostics]
     assert messages == ["unknown function FOO"]
+
+
+FUNCTIONS = """TITLE FUNCTIONS AFTER STOP
+X = INTGRL(1., RATE(X, K))
+Y = 2.*SQ(X) + CUBE(X)
+PARAM K = 0.5
+TIMER FINTIM = 6., DELT = 1.
+TRANSLATION_GENERAL DRIVER='EUDRIV'
+PRINT X, Y
+END
+STOP
+      REAL FUNCTION RATE(A, B)
+      IMPLICIT REAL (A-Z)
+      RATE = -B*A
+      RETURN
+      END
+      FUNCTION SQ(A)
+      SQ = A*A
+      RETURN
+      END
+      FUNCTION CUBE(A)
+      CUBE = A*SQ(A)
+      END
+"""
+
+
+def test_function_subprograms_run_where_the_listing_refers_to_them():
+    # X' = RATE(X, K) = -K X a day at a time (EUDRIV): X = 0.5**t exactly in binary;
+    # Y = 2 SQ(X) + CUBE(X) = 2 X^2 + X^3, CUBE referring to SQ in turn
+    run, = amilpy.loads(FUNCTIONS, name="fn.fst").run(advice=False)
+    assert list(run.times) == [0., 1., 2., 3., 4., 5., 6.]
+    for k, t in enumerate(run.times):
+        x = 0.5 ** t
+        assert run["X"][k] == x and run["Y"][k] == 2 * x * x + x ** 3
+
+
+def test_a_function_in_a_subroutine_an_if_condition_and_a_loop_bound():
+    # SQ(A) in the IF's condition and its branch, TWO(A) in a DO loop's bound: the
+    # references are written out before the IF and the loop, in the routine's order;
+    # X = 1 + t: B = sum over I = 1..NINT(2X) of X**2 where X**2 > 2, else -X**2
+    run = _run_f(SUB.format(body="      IF (SQ(A) .GT. 2.) THEN\n      B = 0.\n"
+                            "      DO 10 I = 1, NINT(TWO(A))\n      B = B + SQ(A)\n"
+                            "   10 CONTINUE\n      ELSE\n      B = -SQ(A)\n      END IF\n")
+                 + "      FUNCTION SQ(Z)\n      SQ = Z*Z\n      END\n"
+                 "      REAL FUNCTION TWO(Z)\n      TWO = 2.*Z\n      END\n", fintim=3.0)
+    for k, t in enumerate(run.times):
+        x = 1.0 + t
+        want = -x * x if x * x <= 2.0 else round(2 * x) * x * x
+        assert run["Y"][k] == want
+
+
+@pytest.mark.parametrize("functions, words", [
+    ("      FUNCTION SQ(Z)\n      SQ = SQ(Z - 1.)\n      END\n",
+     "FUNCTION SQ calls itself (through F -> SQ -> SQ)"),
+    ("      FUNCTION SQ(Z, W)\n      SQ = Z*W\n      END\n",
+     "SQ gives 1 argument(s); FUNCTION SQ (line 14) takes 2"),
+    ("      FUNCTION SQ(Z)\n      Z = Z*Z\n      SQ = Z\n      END\n",
+     "argument Z of FUNCTION SQ is read before it is assigned"),
+    ("      FUNCTION SQ(Z)\n      IF (Z .GT. 0.) SQ = Z*Z\n      END\n",
+     "argument SQ of FUNCTION SQ is not assigned on every path"),
+    # Fortran's INTEGER results: cut to a whole number, or divided as whole numbers
+    ("      INTEGER FUNCTION SQ(Z)\n      SQ = Z*Z\n      END\n",
+     "SQ is an INTEGER (FUNCTION SQ): Fortran would cut this value"),
+    ("      FUNCTION ISQ(Z)\n      ISQ = Z*Z\n      END\n",
+     "ISQ is an INTEGER (FUNCTION ISQ): Fortran would cut this value"),
+])
+def test_functions_whose_fortran_meaning_differs_are_refused(functions, words):
+    body = "      B = ISQ(A)\n" if "ISQ" in functions else "      B = SQ(A)\n"
+    message = _fault(SUB.format(body=body) + functions)
+    assert words in message, message
+
+
+def test_an_integer_function_divided_in_a_routine_that_types_it_integer_is_refused():
+    # IHALF(A) is INTEGER in F (no IMPLICIT there): IHALF(A)/2 is Fortran's integer
+    # division there
+    message = _fault("      SUBROUTINE F(A, B)\n      B = IHALF(A)/2\n      END\n"
+                     "      INTEGER FUNCTION IHALF(Z)\n      IHALF = 2\n      END\n")
+    assert "a division of whole numbers (SUBROUTINE F)" in message, message

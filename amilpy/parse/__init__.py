@@ -89,10 +89,7 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     nester = Nester(builder.errors)
     form, name, statements = nester.nest(items)
     statements, macros = expand(statements, builder.errors, form == "ACSL")
-    called = {n.name for st in statements for n in ast.walk(st)
-              if isinstance(n, ast.SubroutineCall)}
-    if called:
-        statements = _subroutines_called(statements, called, text, path, builder.errors)
+    statements = _subroutines_called(statements, text, path, builder.errors)
     statements, fixed = arrays.expand(statements, builder.errors, form == "ACSL")
     if builder.errors:
         raise AmilError(in_macros(sorted(builder.errors, key=_where), macros), path, text)
@@ -100,17 +97,27 @@ def parse(text: str, path: str | None = None) -> ast.Program:
                        tuple(nester.notes))
 
 
-def _subroutines_called(statements: list, called: set[str], text: str, path: str | None,
+def _subroutines_called(statements: list, text: str, path: str | None,
                         errors: list[Diagnostic]) -> list:
-    """CALLs of the subroutines written after STOP (those `called`), written out
-    (parse/fortran.py)."""
+    """CALLs of the subroutines written after STOP, and references to the FUNCTIONs
+    written there, written out (parse/fortran.py); the statements as they are when
+    there is neither."""
     from . import fortran
     from .lexical import stop_line
 
+    called = {n.name for st in statements for n in ast.walk(st)
+              if isinstance(n, ast.SubroutineCall)}
+    named = {n.func for st in statements for n in ast.walk(st) if isinstance(n, ast.Call)}
+    if not called and not named:
+        return statements
     lines = split_lines(text)
     stop = stop_line(blank_comment_lines("\n".join(lines)).split("\n"))
-    subroutines = fortran.read_subroutines(lines, stop + 1, path, errors, _parser(),
-                                           called) if stop is not None else {}
+    if stop is None:
+        return statements if not called else fortran.expand_calls(statements, {}, errors)
+    called |= named & fortran.function_names(lines, stop + 1)
+    if not called:
+        return statements
+    subroutines = fortran.read_subroutines(lines, stop + 1, path, errors, _parser(), called)
     return fortran.expand_calls(statements, subroutines, errors)
 
 

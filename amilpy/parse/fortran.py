@@ -17,7 +17,10 @@ nothing from CALL to CALL: SAVE then changes no number), assignments,
 the logical IF `IF (c) statement`, block IFs with ELSE IF and ELSE, DO loops (`DO 10 I
 = 1, 3` ... `10 CONTINUE`, or `DO I = 1, 3` ... `END DO`: the listing's own, written
 out pass by pass), CALLs of the other routines after STOP (each written out in place),
-intrinsics as the listing has them, and `RETURN` as the last statement. An argument the
+FUNCTION subprograms (`REAL FUNCTION F(X)` ... `F = ...` ... `END`; a reference F(X) in
+the listing or in a routine is written out as a CALL of F before the statement that
+holds it, with F's value its last argument: `expand_functions`), intrinsics as the
+listing has them, and `RETURN` as the last statement. An argument the
 body assigns is an output (the call must give a name there); one it only reads is an
 input and stands for the call's expression; every other name is the subroutine's own
 (each call's, `NAME#k.X`), and must be given a value before it is read. Only the
@@ -29,7 +32,7 @@ typing I to N) give the same numbers while they hold whole numbers and are not d
 by one another: an INTEGER given any other value, or a division of two, is refused, as
 is a DATA value the routine changes (Fortran keeps it from one CALL to the next). Also
 refused at its line and column, by name: GO TO and the labels it needs, a PARAMETER
-assigned, COMMON, FUNCTION, array arguments, LOGICAL and CHARACTER, recursion, a
+assigned, COMMON, array arguments, LOGICAL and CHARACTER, recursion, a
 RETURN before the end; and the CALLs whose Fortran meaning a PROCEDURAL cannot have: a
 name given both as a value the routine reads and as an argument it assigns, one given
 to two assigned arguments, an assigned argument some path leaves as it was.
@@ -46,8 +49,13 @@ from .lexical import code_end
 
 # statements of the subset read here (the rest are read by the listing's grammar)
 _SUBROUTINE = re.compile(r"SUBROUTINE\s+([A-Za-z]\w*)\s*(?:\(\s*([^)]*)\))?\s*$", re.I)
-_HEAD = re.compile(r"SUBROUTINE\s+[A-Za-z]\w*\s*(?:\(|$)", re.I)
-_END = re.compile(r"END(?:\s*SUBROUTINE(?:\s+\w+)?)?\s*$", re.I)
+# a FUNCTION subprogram: its type (REAL, INTEGER, ... or none: Fortran's implicit
+# typing of its name), its name and its arguments
+_FUNCTION = re.compile(r"(?:(REAL(?:\*\d+)?|DOUBLE\s*PRECISION|INTEGER(?:\*\d+)?)\s+)?"
+                       r"FUNCTION\s+([A-Za-z]\w*)\s*\(\s*([^)]*)\)\s*$", re.I)
+_HEAD = re.compile(r"(?:(?:REAL(?:\*\d+)?|DOUBLE\s*PRECISION|INTEGER(?:\*\d+)?)\s+)?"
+                   r"(?:SUBROUTINE|FUNCTION)\s+[A-Za-z]\w*\s*(?:\(|$)", re.I)
+_END = re.compile(r"END(?:\s*(?:SUBROUTINE|FUNCTION)(?:\s+\w+)?)?\s*$", re.I)
 _IMPLICIT = re.compile(r"IMPLICIT\s+(.*)$", re.I)
 # declarations: REAL, DOUBLE PRECISION, INTEGER, DIMENSION (scalars and arrays)
 _DECLARE = re.compile(r"(REAL(?:\*\d+)?|DOUBLE\s*PRECISION|INTEGER(?:\*\d+)?|DIMENSION)"
@@ -75,10 +83,43 @@ _NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[EeDd][+-]?\d+)?"
 
 @dataclass(frozen=True)
 class Subroutine:
+    """A SUBROUTINE, or a FUNCTION: then its last parameter is its name, the value
+    the body gives it the function's (a reference F(X) is written out as CALL F(X, r)
+    with r a name of its own, `expand_functions`)."""
+
     name: str
     params: tuple[str, ...]
     body: tuple  # the listing's statements (Assign, If, Loop, Declare, SubroutineCall)
     span: Span
+    kind: str = "SUBROUTINE"  # or "FUNCTION"
+
+    @property
+    def label(self) -> str:
+        return f"{self.kind} {self.name}"
+
+
+def _head(code: str) -> tuple[str, str | None, str, tuple[str, ...]] | None:
+    """(SUBROUTINE or FUNCTION, a FUNCTION's type as written or None, the name, the
+    parameters) of a routine's first statement, else None."""
+    m = _SUBROUTINE.match(code)
+    if m is not None:
+        return "SUBROUTINE", None, m.group(1).upper(), _params(m.group(2))
+    m = _FUNCTION.match(code)
+    if m is not None:
+        kind = m.group(1) and re.sub(r"\s+|\*\d+", "", m.group(1)).upper()
+        return "FUNCTION", kind, m.group(2).upper(), _params(m.group(3))
+    return None
+
+
+def _params(text: str | None) -> tuple[str, ...]:
+    return tuple(p.strip().upper() for p in (text or "").split(",") if p.strip())
+
+
+def function_names(lines: list[str], first: int) -> set[str]:
+    """The names of the FUNCTION subprograms in lines[first:] (after STOP): a reference
+    to one in the listing, F(X), runs it (`expand_functions`)."""
+    return {head[2] for _, _, code, _ in _statements(lines, first)
+            if (head := _head(code)) is not None and head[0] == "FUNCTION"}
 
 
 def _split(text: str) -> list[str]:
@@ -138,24 +179,28 @@ def read_subroutines(lines: list[str], first: int, path: str | None,
     listing's own (the statements of a body are read by its grammar)."""
     written: dict[str, list] = {}
     for unit in _units(_statements(lines, first), errors):
-        name = _SUBROUTINE.match(unit[0][2]).group(1).upper()
+        kind, _, name, _ = _head(unit[0][2])
         if name in written:
             if name in called:
-                errors.append(Diagnostic(f"SUBROUTINE {name} is written twice",
+                errors.append(Diagnostic(f"{kind} {name} is written twice",
                                          Span(unit[0][0] + 1, unit[0][1] + 1),
                                          "a subroutine has one definition"))
             continue
         written[name] = unit
     units: dict[str, Subroutine | None] = {}
+    functions = {n for n, unit in written.items() if _head(unit[0][2])[0] == "FUNCTION"}
     wanted = sorted(called)
     while wanted:  # (the routines called, and those they call)
         name = wanted.pop()
         if name in units or name not in written:
             continue
-        units[name] = sub = _read_unit(written[name], len(lines), path, errors, parser)
+        units[name] = sub = _read_unit(written[name], len(lines), path, errors, parser,
+                                       functions)
         if sub is not None:
             wanted += [n.name for st in sub.body for n in ast.walk(st)
                        if isinstance(n, ast.SubroutineCall)]
+            wanted += [n.func for st in sub.body for n in ast.walk(st)
+                       if isinstance(n, ast.Call) and n.func in written]
     return units
 
 
@@ -189,12 +234,12 @@ def _statements(lines: list[str], first: int) -> list[tuple[int, int, str, str]]
 
 
 def _units(statements, errors: list[Diagnostic]):
-    """The statements of each SUBROUTINE ... END."""
+    """The statements of each SUBROUTINE (or FUNCTION) ... END."""
     unit: list | None = None
     for st in statements:
         code = st[2]
         if unit is None:
-            if _SUBROUTINE.match(code):
+            if _head(code) is not None:
                 unit = [st]
             continue
         unit.append(st)
@@ -207,19 +252,24 @@ def _units(statements, errors: list[Diagnostic]):
                                  "end it with END"))
 
 
-def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], parser
-               ) -> Subroutine | None:
+def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], parser,
+               functions: set[str] = frozenset()) -> Subroutine | None:
+    """One routine read (None: its faults are said); `functions`: the FUNCTIONs
+    written after STOP, whose references it may hold."""
     from .blocks import Nester
     from .build import Builder
 
     k0, col0, code0, _ = unit[0]
-    head = _SUBROUTINE.match(code0)
-    name = head.group(1).upper()
+    kind, typed, name, params = _head(code0)
+    routine = f"{kind} {name}"
     span = Span(k0 + 1, col0 + 1, k0 + 1, col0 + 1 + len(code0))
-    params = tuple(p.strip().upper() for p in (head.group(2) or "").split(",") if p.strip())
+    if kind == "FUNCTION":
+        params += (name,)  # (its value: the last argument, one the body assigns)
     body = unit[1:-1]
     real_all, declared, bad, none = False, set(), False, False
     integers: set[str] = set()  # declared INTEGER
+    if typed is not None:
+        (integers if typed == "INTEGER" else declared).add(name)
     by_dimension: dict[str, Span] = {}  # arrays DIMENSION declares (typed implicitly)
     sizes: dict[str, int] = {}  # the routine's own arrays and their lengths
     data: dict[str, tuple[int, str]] = {}  # names DATA or PARAMETER give: (line, which)
@@ -236,13 +286,13 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
         where = Span(k + 1, col + 1, k + 1, col + 1 + len(code))
         do = _DO_LABEL.match(code)
         if do and do.group(1).lstrip("0") not in ends:
-            refuse(f"DO {do.group(1)} (in SUBROUTINE {name}): no {do.group(1)} CONTINUE "
-                   f"in SUBROUTINE {name} ends it", where,
+            refuse(f"DO {do.group(1)} (in {routine}): no {do.group(1)} CONTINUE "
+                   f"in {routine} ends it", where,
                    f"end the loop with {do.group(1)} CONTINUE before the routine's END")
             continue
         if label:
             if not _CONTINUE.match(code):
-                refuse(f"the statement label {label} (in SUBROUTINE {name}): not supported",
+                refuse(f"the statement label {label} (in {routine}): not supported",
                        where, "label only the CONTINUE that ends a DO loop; write IF ... "
                        "END IF for GO TO")
                 continue
@@ -279,7 +329,7 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
                     what = "an array argument" if n in params else \
                         "an INTEGER array" if integer else \
                         "an array of more than one subscript, or of a size not a number"
-                    refuse(f"{n}({dims}) in SUBROUTINE {name}: {what} is not supported",
+                    refuse(f"{n}({dims}) in {routine}: {what} is not supported",
                            where, "the subset's arrays are the routine's own REAL X(n)")
                     continue
                 sizes[n] = int(dims)
@@ -322,14 +372,14 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
             continue
         if _RETURN.match(code):
             if any(not _RETURN.match(c) for _, _, c, _ in body[i + 1:]):
-                refuse(f"RETURN before the end of SUBROUTINE {name}: not supported", where,
+                refuse(f"RETURN before the end of {routine}: not supported", where,
                        "write the statements after it in the ELSE of an IF")
             continue
         found = next(((m, what) for p, what in _REFUSED if (m := p.match(code))), None)
         if found is not None:
             match, what = found
             word = (match.group(1) or "").upper() if match.groups() else ""
-            refuse(f"{what.format(word)} (SUBROUTINE {name}, line {k + 1}): not supported",
+            refuse(f"{what.format(word)} ({routine}, line {k + 1}): not supported",
                    where, "the subroutines after STOP run assignments, IFs, DO loops, "
                    "the routine's own arrays with DATA, and CALLs of the others")
             continue
@@ -337,10 +387,10 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
         executable.append((k, col, re.sub(r"^(DO\s+\d+\s*),", r"\1 ", code, flags=re.I)))
     for n, where in by_dimension.items():
         if n in integers or (not real_all and n not in declared and n[:1] in "IJKLMN"):
-            refuse(f"{n} in SUBROUTINE {name}: an INTEGER array (by Fortran's implicit "
+            refuse(f"{n} in {routine}: an INTEGER array (by Fortran's implicit "
                    "typing) is not supported", where, f"declare it REAL {n}(...)")
         elif none and n not in declared:
-            refuse(f"{n} is not declared (IMPLICIT NONE in SUBROUTINE {name})", where,
+            refuse(f"{n} is not declared (IMPLICIT NONE in {routine})", where,
                    f"declare it: REAL {n}")
         else:
             declared.add(n)
@@ -375,24 +425,26 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
     for st in (n for top in statements for n in ast.walk(top)):
         if isinstance(st, ast.STATEMENTS) and not isinstance(st, allowed):
             errors.append(Diagnostic(
-                f"this statement in SUBROUTINE {name}: not supported", st.span,
+                f"this statement in {routine}: not supported", st.span,
                 "the subroutines after STOP run assignments, IFs, DO loops and CALLs"))
             return None
     body_nodes = tuple(statements)
-    fault = _typing(body_nodes, declared, integers, real_all, none, name) or \
-        _data_kept(body_nodes, data, name)
+    fault = _typing(body_nodes, declared, integers, real_all, none, routine,
+                    functions) or \
+        _data_kept(body_nodes, data, routine)
     if fault is not None:
         errors.append(fault)
         return None
-    return Subroutine(name, params, body_nodes, span)
+    return Subroutine(name, params, body_nodes, span, kind)
 
 
 def _typing(body, declared: set[str], integers: set[str], real_all: bool, none: bool,
-            routine: str) -> Diagnostic | None:
+            routine: str, functions: set[str] = frozenset()) -> Diagnostic | None:
     """Fortran's types where they would give other numbers than the listing's real
     arithmetic: a name not declared under IMPLICIT NONE; an INTEGER (declared, or by
     Fortran's implicit typing, I to N) given a value that is no whole number, or
-    divided by one (Fortran truncates both)."""
+    divided by one (Fortran truncates both). A reference to one of the FUNCTIONs
+    written after STOP has the type its name has here, as in Fortran."""
     def integer(n: str) -> bool:
         return n in integers or (not real_all and not none and n not in declared
                                  and n[:1] in "IJKLMN")
@@ -407,11 +459,12 @@ def _typing(body, declared: set[str], integers: set[str], real_all: bool, none: 
         if isinstance(e, ast.Neg):
             return whole(e.operand)
         if isinstance(e, ast.Call):
-            return e.func in _WHOLE or (e.func in _WHOLE_OF_WHOLE and all(map(whole, e.args)))
+            return e.func in _WHOLE or (e.func in _WHOLE_OF_WHOLE and all(map(whole, e.args))) \
+                or (e.func in functions and integer(e.func))
         return False
 
     def fault(message: str, span, hint: str) -> Diagnostic:
-        return Diagnostic(f"{message} (SUBROUTINE {routine})", span, hint)
+        return Diagnostic(f"{message} ({routine})", span, hint)
 
     for node in (n for st in body for n in ast.walk(st)):
         names = [node.name] if isinstance(node, ast.Name) else \
@@ -419,18 +472,18 @@ def _typing(body, declared: set[str], integers: set[str], real_all: bool, none: 
             [node.var] if isinstance(node, ast.Loop) else []
         for n in names:
             if none and n not in declared and n not in integers:
-                return Diagnostic(f"{n} is not declared (IMPLICIT NONE in SUBROUTINE "
+                return Diagnostic(f"{n} is not declared (IMPLICIT NONE in "
                                   f"{routine})", node.span, f"declare it: REAL {n}")
         if isinstance(node, ast.Assign) and not node.subscripts and \
                 integer(node.targets[0]) and not whole(node.expr):
             return Diagnostic(
-                f"{node.targets[0]} is an INTEGER (SUBROUTINE {routine}): Fortran would cut "
+                f"{node.targets[0]} is an INTEGER ({routine}): Fortran would cut "
                 "this value to a whole number, which is not supported", node.span,
                 f"write IMPLICIT REAL (A-Z), or declare it REAL {node.targets[0]}")
         if isinstance(node, ast.BinOp) and node.op == "/" and whole(node.left) and \
                 whole(node.right):
             return Diagnostic(
-                f"a division of whole numbers (SUBROUTINE {routine}): Fortran's integer "
+                f"a division of whole numbers ({routine}): Fortran's integer "
                 "division, which cuts the quotient, is not supported", node.span,
                 "write REAL(I)/REAL(J), or declare the names REAL")
         if isinstance(node, ast.BinOp) and node.op == "**" and whole(node.left) and \
@@ -466,12 +519,12 @@ def _data_kept(body, data: dict[str, tuple[int, str]], routine: str) -> Diagnost
             continue
         if which == "PARAMETER":
             return Diagnostic(
-                f"{node.targets[0]} is a PARAMETER of SUBROUTINE {routine}: Fortran does not "
+                f"{node.targets[0]} is a PARAMETER of {routine}: Fortran does not "
                 "let the routine assign it", node.span,
                 f"give the value another name, or remove {node.targets[0]} from PARAMETER")
         if which == "DATA":
             return Diagnostic(
-                f"{node.targets[0]} has its value from DATA and is assigned in SUBROUTINE "
+                f"{node.targets[0]} has its value from DATA and is assigned in "
                 f"{routine}: Fortran keeps its value from one CALL to the next (as SAVE), "
                 "which is not supported", node.span,
                 f"give {node.targets[0]} its value with an assignment first thing in the "
@@ -479,24 +532,84 @@ def _data_kept(body, data: dict[str, tuple[int, str]], routine: str) -> Diagnost
     return None
 
 
+def expand_functions(statements, functions: set[str], counts: dict[str, int]) -> list:
+    """The statements with each reference to a FUNCTION subprogram (`functions`),
+    F(X), written as a CALL before the statement that holds it, CALL F(X, F#k), and
+    the name F#k where the reference was (the k-th of F's: `counts`). The arguments'
+    own references come first; a reference in an IF's condition (an ELSE IF's too)
+    or a DO loop's bounds comes before the IF or the loop (a FUNCTION computes its
+    value and changes nothing else: the subset refuses the rest)."""
+    from dataclasses import replace
+
+    from .macros import _with_bodies
+
+    def pull(e, calls: list):
+        if e is None or not isinstance(e, ast.Node):
+            return e
+        changes = {}
+        for field in e.child_fields:
+            value = getattr(e, field)
+            new = tuple(pull(v, calls) for v in value) if isinstance(value, tuple) else \
+                pull(value, calls)
+            if new != value:
+                changes[field] = new
+        e = replace(e, **changes) if changes else e
+        if isinstance(e, ast.Call) and e.func in functions:
+            counts[e.func] = k = counts.get(e.func, 0) + 1
+            value = ast.Name(f"{e.func}#{k}", e.span)
+            calls.append(ast.SubroutineCall(e.func, e.args + (value,), e.span))
+            return value
+        return e
+
+    def statement(st, calls: list):
+        if isinstance(st, ast.Assign):
+            return replace(st, expr=pull(st.expr, calls),
+                           subscripts=tuple(pull(x, calls) for x in st.subscripts))
+        if isinstance(st, ast.If):
+            return replace(st, branches=tuple(
+                replace(b, cond=pull(b.cond, calls), body=tuple(each(b.body)))
+                for b in st.branches))
+        if isinstance(st, ast.Loop):
+            return replace(st, start=pull(st.start, calls), stop=pull(st.stop, calls),
+                           step=pull(st.step, calls), body=tuple(each(st.body)))
+        if isinstance(st, ast.SubroutineCall):
+            return replace(st, args=tuple(pull(a, calls) for a in st.args))
+        return _with_bodies(st, each)
+
+    def each(body) -> list:
+        out: list = []
+        for st in body:
+            calls: list = []
+            st = statement(st, calls)
+            out += calls + [st]
+        return out
+
+    return each(statements)
+
+
 def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
                  errors: list[Diagnostic]) -> list:
-    """The statements with each CALL of a subroutine written out as a PROCEDURAL."""
+    """The statements with each CALL of a subroutine written out as a PROCEDURAL, and
+    each reference to a FUNCTION as a CALL of it first (`expand_functions`)."""
     from .macros import _assigned, _rename, _with_bodies
 
     counts: dict[str, int] = {}
     bodies: dict[str, tuple | None] = {}  # each routine's body, its own CALLs written out
+    functions = {n for n, sub in subroutines.items() if sub is not None and
+                 sub.kind == "FUNCTION"}
+    references: dict[str, int] = {}
 
     def body_of(sub: Subroutine, stack: tuple[str, ...]) -> tuple | None:
         if sub.name not in bodies:
             if sub.name in stack:
                 errors.append(Diagnostic(
-                    f"SUBROUTINE {sub.name} calls itself (through "
+                    f"{sub.label} calls itself (through "
                     f"{' -> '.join(stack + (sub.name,))}): Fortran 77 has no recursion",
                     sub.span, "write the repetition as a DO loop"))
                 return None
             before = len(errors)
-            out = tuple(x for st in sub.body for x in one(st, stack + (sub.name,)))
+            written = expand_functions(sub.body, functions, references)
+            out = tuple(x for st in written for x in one(st, stack + (sub.name,)))
             bodies[sub.name] = out if len(errors) == before else None
         return bodies[sub.name]
 
@@ -513,10 +626,13 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
                 "as statements or a PROCEDURE"))
             return []
         if len(st.args) != len(sub.params):
+            result = sub.kind == "FUNCTION"  # (its value: the last argument, not written)
+            given, takes = len(st.args) - result, sub.params[:len(sub.params) - result]
+            what = st.name if result else f"CALL {st.name}"
             errors.append(Diagnostic(
-                f"CALL {st.name} gives {len(st.args)} argument(s); SUBROUTINE {st.name} "
-                f"(line {sub.span.line}) takes {len(sub.params)}", st.span,
-                f"write CALL {st.name}({', '.join(sub.params)})"))
+                f"{what} gives {given} argument(s); {sub.label} "
+                f"(line {sub.span.line}) takes {len(takes)}", st.span,
+                f"write {what}({', '.join(takes)})"))
             return []
         sub_body = body_of(sub, stack)
         if sub_body is None:
@@ -532,14 +648,14 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
             if p in assigned:
                 fault = None
                 if not isinstance(actual, ast.Name):
-                    fault = (f"argument {p} of SUBROUTINE {st.name} is assigned in it: the "
+                    fault = (f"argument {p} of {sub.label} is assigned in it: the "
                              "CALL must give a name there", f"pass a variable as {p}")
                 elif p in reads:
-                    fault = (f"argument {p} of SUBROUTINE {st.name} is read before it is "
+                    fault = (f"argument {p} of {sub.label} is read before it is "
                              "assigned (an input and an output at once): not supported",
                              "pass its value in an argument of its own")
                 elif p not in everywhere:
-                    fault = (f"argument {p} of SUBROUTINE {st.name} is not assigned on every "
+                    fault = (f"argument {p} of {sub.label} is not assigned on every "
                              "path through it (where it is not, Fortran keeps its value "
                              "from before the CALL): not supported",
                              f"give {p} a value on every path, first thing in the routine")
@@ -557,7 +673,7 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
         both = sorted(set(outputs) & set(inputs))
         if both:
             errors.append(Diagnostic(
-                f"the CALL gives {both[0]} to SUBROUTINE {st.name} both as a value it reads "
+                f"the CALL gives {both[0]} to {sub.label} both as a value it reads "
                 "and as an argument it assigns: not supported", st.span,
                 "pass the value in a variable of its own"))
             return []
@@ -566,7 +682,7 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
         if unknown:
             n, span = unknown[0]
             errors.append(Diagnostic(
-                f"{n} is read in SUBROUTINE {st.name} before it has a value (its names are "
+                f"{n} is read in {sub.label} before it has a value (its names are "
                 "its own)", span, f"pass {n} as an argument, or give it a value before"))
             return []
         local = {n: f"{st.name}#{k}.{n}" for n in assigned - params}
@@ -586,7 +702,8 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
             tuple(dict.fromkeys(outputs + sorted(local.values()))),
             tuple(dict.fromkeys(inputs)), body, st.span)]
 
-    return [x for st in statements for x in one(st)]
+    return [x for st in expand_functions(statements, functions, references)
+            for x in one(st)]
 
 
 def _flow(body) -> tuple[dict[str, object], set[str]]:
