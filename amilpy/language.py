@@ -142,7 +142,7 @@ STATEMENT_KEYWORDS: tuple[str, ...] = (
 # What amilpy does not run (section 14): the construct as a reader knows it, and what
 # to write instead. Statement keywords first, then functions.
 REFUSED: dict[str, tuple[str, str]] = {
-    "GOTO": ("GO TO", "write IF (c) THEN ... ELSE ... END IF"),
+    "GOTO": ("GO TO outside the ACSL form", "write IF (c) THEN ... ELSE ... END IF"),
     "CONTINUE": ("CONTINUE (the end of a labelled DO)", "write DO i = a, b ... END DO"),
     "ARRAY": ("FST's ARRAY (arrays)", "write one scalar per element (X1, X2, ...)"),
     "ARRAY_SIZE": ("FST's ARRAY_SIZE (arrays)", "write one scalar per element (X1, X2, ...)"),

@@ -72,6 +72,11 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
      "located; in written-order code a branch"),
     ("ACSL", "`PROCEDURAL (Y = X) ... END`", "one sorted unit with outputs Y and inputs X, "
      "written order inside"),
+    ("ACSL", "`IF (C) GO TO 10`, `GO TO P`, `10: X = 1.0`, `P: CONTINUE`", "a jump forward in "
+     "written-order code (a PROCEDURAL, INITIAL, DISCRETE, TERMINAL), out of IF blocks and "
+     "DO loops: written out as IF blocks with a flag per label (`GOk#10`, a variable of "
+     "the section); refused: a jump back (a loop), into a block, in DERIVATIVE's sorted "
+     "code"),
     ("ACSL", "`A .AND. B`, `A && B`, `X .NE. Y`, `X != Y`", "`A AND B`, `X /= Y`"),
     ("ACSL", "`PULSE(TZ, P, W)`, `HARM(TZ, W, P)`, `RSW(C, A, B)`, `BCKLSH(IC, DL, X)`",
      "a pulse train, `SINE(TZ, W, P)`, a switch on C, `HSTRSS(IC, -DL, DL, X)`"),

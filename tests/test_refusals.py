@@ -27,12 +27,17 @@ CASES = [
     (CSMP, "CALL TOTASS(DOY, LAT, DTR)", 1,
      "CALL TOTASS (line 1): no SUBROUTINE TOTASS follows STOP",
      "rewrite it as statements or a PROCEDURE"),
-    (DERIV, "IF( T.LE.1.0E-6) GO TO P", 4, "GO TO (line 4)", "IF (c) THEN"),
-    (DERIV, "GOTO 10", 4, "GO TO (line 4)", "IF (c) THEN"),
-    (DERIV, "10 CONTINUE", 4, "10 CONTINUE ends no DO loop labelled 10", "DO 10 I = a, b"),
-    (DERIV, " 10:   ScAcAc=1.3555", 4, "the statement label 10", "IF (c) THEN"),
-    (DERIV, "AnotherLoop: Continue", 4, "ANOTHERLOOP CONTINUE ends no DO loop labelled",
-     "ends at ANOTHERLOOP CONTINUE"),
+    # GO TO runs in written-order code (a PROCEDURAL's), not in DERIVATIVE's sorted code
+    (DERIV, "IF( T.LE.1.0E-6) GO TO P\nP: CONTINUE", 4, "GO TO in DERIVATIVE's sorted code",
+     "inside a PROCEDURAL block"),
+    (DERIV, "GOTO 10\n10 CONTINUE", 4, "GO TO in DERIVATIVE's sorted code",
+     "inside a PROCEDURAL block"),
+    (DERIV, "DO 10 I = 1, 2\nY = 1.0\n20 CONTINUE", 6,
+     "20 CONTINUE ends no DO loop labelled 20", "DO 20 I = a, b"),
+    (CSMP, "GO TO 10", 1, "GO TO outside the ACSL form", "IF (c) THEN"),
+    (CSMP, " 10   X = 1.0", 1, "the statement label 10", "IF (c) THEN"),
+    (DERIV, "PROCEDURAL\nDO L I = 1, 2\nY = 1.0\nAnotherLoop: Continue\nEND", 7,
+     "ANOTHERLOOP CONTINUE ends no DO loop labelled", "ends at ANOTHERLOOP CONTINUE"),
     (DERIV, "CONTINUE", 4, "CONTINUE (the end of a labelled DO)", "END DO"),
     (PROGRAM, "MACRO first(y, x)\nMACRO RELABEL L1\ny = x\nMACRO END", 3,
      "ACSL's MACRO RELABEL", "MACRO STANDVAL and MACRO REDEFINE"),
@@ -110,7 +115,8 @@ END
     # (the reader goes on past the value list, an array's, now that arrays are read)
     assert messages == ["INITCOND is given 3 values, but it is no array",
                         "CHARACTER variables (line 6): not supported",
-                        "GO TO (line 9): not supported"]
+                        "GO TO in DERIVATIVE's sorted code, whose order is not the written "
+                        "one"]
 
 
 @pytest.mark.parametrize("call, hint", [

@@ -19,6 +19,7 @@ from . import syntax as ast
 from .blocks import Nester
 from .build import Builder
 from .errors import syntax_diagnostic
+from .jumps import lower_jumps
 from .lexical import blank_comment_lines, code_end, continues, prepare
 from .macros import expand, in_macros
 from .syntax import MAX_DEPTH, no_collection
@@ -83,12 +84,13 @@ def parse(text: str, path: str | None = None) -> ast.Program:
         break
     if errors:
         raise AmilError(errors, path, text)
-    builder = Builder(text, path)
+    builder = Builder(text, path, _parser())
     builder.acsl = is_acsl(prepared)
     items = builder.statements(tree)
     nester = Nester(builder.errors)
     form, name, statements = nester.nest(items)
     statements, macros = expand(statements, builder.errors, form == "ACSL")
+    statements = lower_jumps(statements, builder.errors)
     statements = _subroutines_called(statements, text, path, builder.errors)
     statements, fixed = arrays.expand(statements, builder.errors, form == "ACSL")
     if builder.errors:

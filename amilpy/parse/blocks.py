@@ -144,6 +144,10 @@ class Nester:
                                f"the IF opened at line {open_if.head.span.line} has its ELSE")
                     continue
                 open_if.branches.append((item.cond, item.span, []))
+            elif isinstance(item, Close) and item.label is not None and acsl and \
+                    not any(o.head.label is not None for o in stack):
+                # `13 CONTINUE` with no labelled DO open: a place a GO TO jumps to
+                target.append(ast.Target(item.label, item.span))
             elif isinstance(item, Close):
                 done = self.close(stack, item, acsl)
                 if done is None:

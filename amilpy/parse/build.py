@@ -86,11 +86,12 @@ def string_value(token: str) -> str:
 class Builder:
     """Turns lark trees into `syntax` nodes; iterative over statements and expressions."""
 
-    def __init__(self, source: str, path: str | None) -> None:
+    def __init__(self, source: str, path: str | None, parser=None) -> None:
         self.source = source
         self.path = path
         self.errors: list[Diagnostic] = []  # refusals and misplaced strings
         self.acsl = False  # the ACSL form (where CONSTANT X = 1, 2 fills an array)
+        self.parser = parser  # the listing's (a labelled statement's text is read again)
 
     def refuse(self, construct: str, span: Span, hint: str) -> None:
         """A construct amilpy does not run (contract section 14)."""
@@ -110,7 +111,9 @@ class Builder:
         out: list = []
         for node in tree.children:
             built = self.statement(node)
-            if built is not None:
+            if isinstance(built, list):  # (a labelled statement: the label, then it)
+                out.extend(built)
+            elif built is not None:
                 out.append(built)
         return out
 
@@ -174,7 +177,7 @@ class Builder:
         if built is None:
             return None
         if not isinstance(built, (ast.Assign, ast.Termt, ast.Schedule, ast.If, ast.MacroCall,
-                                  ast.SubroutineCall)):
+                                  ast.SubroutineCall, ast.GoTo)):
             return None
         span = self.span(node)
         return ast.If((ast.Branch(self.expr(cond), (built,), span),), span)
@@ -344,11 +347,49 @@ class Builder:
                 f"write {label} = {rest[2:].split('!')[0].strip() or '...'}"))
             return
         statement = rest.removeprefix(":").split("!")[0].strip().rstrip(";$").strip()
-        if statement.upper() == "CONTINUE":  # the end of the DO loops with this label
+        if statement.upper() == "CONTINUE":
+            # the end of the DO loops with this label, else a place a GO TO jumps to
             return Close("ENDDO", span, label=_label(label))
-        self.refuse(f"the statement label {label}", self.span(node),
-                    "remove it: GO TO and labelled loops are not supported; write IF (c) "
-                    "THEN ... END IF or DO i = a, b ... END DO")
+        if not self.acsl:
+            self.refuse(f"the statement label {label}", self.span(node),
+                        "remove it: GO TO is the ACSL form's; write IF (c) THEN ... END IF "
+                        "or DO i = a, b ... END DO")
+            return None
+        # `10: X = 1.0`: the place a GO TO jumps to, then the statement, read as if the
+        # label were not written (at its own line and column)
+        rest_token = node.children[-1] if len(node.children) > 1 else None
+        if rest_token is None or not str(rest_token).strip().removeprefix(":").strip():
+            return [ast.Target(_label(label), span)]
+        return [ast.Target(_label(label), span), *self.labelled_statement(rest_token)]
+
+    def labelled_statement(self, token) -> list:
+        """The statements of the text after a label (a REST token), read by the
+        listing's grammar where they stand."""
+        from lark.exceptions import UnexpectedInput
+
+        from .errors import syntax_diagnostic
+        from .lexical import prepare
+
+        text = str(token)
+        colon = len(text) - len(text.lstrip())
+        if text.lstrip().startswith(":"):
+            colon += 1 + len(text.lstrip()[1:]) - len(text.lstrip()[1:].lstrip())
+        source = "\n" * (token.line - 1) + " " * (token.column - 1 + colon) + \
+            text[colon:] + "\n"
+        try:
+            tree = self.parser.parse(prepare(source))
+        except UnexpectedInput as exc:
+            self.errors.append(syntax_diagnostic(exc, prepare(source), self.parser))
+            return []
+        return self.statements(tree)
+
+    def st_goto(self, node) -> ast.GoTo | None:
+        label = _label(str(node.children[0]))
+        if not self.acsl:
+            what, hint = REFUSED["GOTO"]
+            self.refuse(what, self.span(node), hint)
+            return None
+        return ast.GoTo(label, self.span(node))
 
     def st_assign_subscript(self, node) -> ast.Assign:
         name, *subscripts, expr = node.children

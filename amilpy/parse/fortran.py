@@ -414,7 +414,7 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
     except UnexpectedInput as exc:
         errors.append(syntax_diagnostic(exc, prepare(source), parser))
         return None
-    builder = Builder(source, path)
+    builder = Builder(source, path, parser)
     builder.acsl = True
     items = builder.statements(tree)
     _, _, statements = Nester(builder.errors).nest(items)

@@ -581,6 +581,23 @@ class SubroutineCall(Node):
 
 
 @dataclass(frozen=True)
+class GoTo(Node):
+    """GO TO label: a jump forward in written-order code (parse/jumps.py writes it
+    out as IF blocks)."""
+
+    label: str  # as written, upper case; a number without its leading zeros
+    span: Span
+
+
+@dataclass(frozen=True)
+class Target(Node):
+    """`label:` (or a Fortran label) before a statement a GO TO jumps to."""
+
+    label: str
+    span: Span
+
+
+@dataclass(frozen=True)
 class MacroDirective(Node):
     """MACRO STANDVAL A = v, ... or MACRO REDEFINE X, Y inside an ACSL MACRO: folded
     into the MACRO when its body is read (parse/blocks.py)."""
@@ -617,7 +634,7 @@ STATEMENTS: tuple[type[Node], ...] = (Assign, Data, Table, Timer, Method, Tolera
                                       Procedural, Loop, FunctionDef, Block, Schedule, Interval,
                                       Cinterval, Variable, Control, Declare, Translation,
                                       Weather, DefineCall, Macro, MacroCall, MacroDirective,
-                                      SubroutineCall, Nosort)
+                                      SubroutineCall, Nosort, GoTo, Target)
 
 
 @dataclass(frozen=True)
