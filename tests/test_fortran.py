@@ -113,8 +113,12 @@ SUB = "      SUBROUTINE F(A, B)\n      IMPLICIT REAL (A-Z)\n{body}      RETURN\n
 
 
 @pytest.mark.parametrize("body, where, words", [
-    ("      GO TO 10\n      B = A\n", "11:7", "GO TO (SUBROUTINE F, line 11)"),
-    ("   10 B = A\n", "11:7", "the statement label 10 (in SUBROUTINE F): not supported"),
+    ("      GO TO 10\n      B = A\n", "11:7", "GO TO 10: no label 10 where it can jump"),
+    ("   10 B = A\n      GO TO 10\n", "12:7", "GO TO 10 jumps back (to line 11): a loop"),
+    ("      GO TO (10, 20), K\n   10 B = A\n   20 CONTINUE\n", "11:7",
+     "a computed GO TO (SUBROUTINE F, line 11): not supported"),
+    ("   10 REAL Q\n      B = A\n", "11:7",
+     "the statement label 10 on a declaration (in SUBROUTINE F)"),
     # Fortran's integers where they would give other numbers: a quotient cut, a value cut
     ("      INTEGER I\n      I = 3\n      B = A*(I/2)\n", "13:14",
      "a division of whole numbers (SUBROUTINE F): Fortran's integer division"),
@@ -470,3 +474,15 @@ def test_an_integer_function_divided_in_a_routine_that_types_it_integer_is_refus
     message = _fault("      SUBROUTINE F(A, B)\n      B = IHALF(A)/2\n      END\n"
                      "      INTEGER FUNCTION IHALF(Z)\n      IHALF = 2\n      END\n")
     assert "a division of whole numbers (SUBROUTINE F)" in message, message
+
+
+def test_go_to_forward_in_a_routine_the_cycle_idiom_and_a_skip():
+    # Fortran's GO TO 10 to a CONTINUE before the loop's own (the rest of the pass
+    # skipped: I = 3 left out) and a jump over B = -B: written out as IF blocks
+    # (parse/jumps.py); X = 1 + t: B = 12 X, negated where X <= 2.5
+    run = _run_f(SUB.format(body="      B = 0.\n      DO 20 I = 1, 5\n"
+                            "      IF (I .EQ. 3) GO TO 10\n      B = B + I*A\n"
+                            "   10 CONTINUE\n   20 CONTINUE\n"
+                            "      IF (A .GT. 2.5) GO TO 30\n      B = -B\n"
+                            "   30 CONTINUE\n"), fintim=3.0)
+    assert list(run["Y"]) == [-12.0, -24.0, 36.0, 48.0]

@@ -109,7 +109,7 @@ END
     ("10: X0 = 1.0\n   GO TO 10", "5:4", "GO TO 10 jumps back (to line 4): a loop"),
     ("GO TO 20\nIF (X0 .GT. 0.0) THEN\n20: X0 = 1.0\nEND IF",
      "4:1", "GO TO 20 jumps into an IF or DO block"),
-    ("GO TO 99\nX0 = 1.0", "4:1", "GO TO 99: no label 99 in this section or PROCEDURAL"),
+    ("GO TO 99\nX0 = 1.0", "4:1", "GO TO 99: no label 99 where it can jump"),
     ("GO TO 7\n7: X0 = 1.0\n7: X0 = 2.0", "6:1", "the label 7 is written twice"),
 ])
 def test_jumps_that_cannot_be_written_out_are_refused_at_the_go_to(body, where, words):

@@ -88,6 +88,9 @@ class Nester:
         acsl = isinstance(first, Head) and (first.kind == "PROGRAM" or _acsl_macro(first) and any(
             isinstance(s, Head) and s.kind == "PROGRAM" for s in items))
         form = "ACSL" if acsl else "CSMP"
+        # the labels a GO TO names (a `13 CONTINUE` no DO ends is its place)
+        jumped_to = {n.label for s in items if isinstance(s, ast.Node)
+                     for n in ast.walk(s) if isinstance(n, ast.GoTo)}
         stack: list[_Open] = []
         top: list = []
         name, closed = "", None
@@ -144,9 +147,9 @@ class Nester:
                                f"the IF opened at line {open_if.head.span.line} has its ELSE")
                     continue
                 open_if.branches.append((item.cond, item.span, []))
-            elif isinstance(item, Close) and item.label is not None and acsl and \
-                    not any(o.head.label is not None for o in stack):
-                # `13 CONTINUE` with no labelled DO open: a place a GO TO jumps to
+            elif isinstance(item, Close) and item.label in jumped_to and \
+                    not any(o.head.label == item.label for o in stack):
+                # `13 CONTINUE` that a GO TO names and no DO ends: the place it jumps to
                 target.append(ast.Target(item.label, item.span))
             elif isinstance(item, Close):
                 done = self.close(stack, item, acsl)

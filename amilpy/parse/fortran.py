@@ -19,8 +19,9 @@ the logical IF `IF (c) statement`, block IFs with ELSE IF and ELSE, DO loops (`D
 out pass by pass), CALLs of the other routines after STOP (each written out in place),
 FUNCTION subprograms (`REAL FUNCTION F(X)` ... `F = ...` ... `END`; a reference F(X) in
 the listing or in a routine is written out as a CALL of F before the statement that
-holds it, with F's value its last argument: `expand_functions`), intrinsics as the
-listing has them, and `RETURN` as the last statement. An argument the
+holds it, with F's value its last argument: `expand_functions`), GO TO forward with
+its labels (written out as IF blocks, as the ACSL form's: parse/jumps.py), intrinsics
+as the listing has them, and `RETURN` as the last statement. An argument the
 body assigns is an output (the call must give a name there); one it only reads is an
 input and stands for the call's expression; every other name is the subroutine's own
 (each call's, `NAME#k.X`), and must be given a value before it is read. Only the
@@ -31,7 +32,7 @@ The listing computes in real numbers. Fortran's INTEGERs (declared, or by its im
 typing I to N) give the same numbers while they hold whole numbers and are not divided
 by one another: an INTEGER given any other value, or a division of two, is refused, as
 is a DATA value the routine changes (Fortran keeps it from one CALL to the next). Also
-refused at its line and column, by name: GO TO and the labels it needs, a PARAMETER
+refused at its line and column, by name: a GO TO back or computed, a PARAMETER
 assigned, COMMON, array arguments, LOGICAL and CHARACTER, recursion, a
 RETURN before the end; and the CALLs whose Fortran meaning a PROCEDURAL cannot have: a
 name given both as a value the routine reads and as an argument it assigns, one given
@@ -45,6 +46,7 @@ from dataclasses import dataclass
 
 from ..diagnostics import Diagnostic, Span
 from . import syntax as ast
+from .jumps import lower_jumps
 from .lexical import code_end
 
 # statements of the subset read here (the rest are read by the listing's grammar)
@@ -69,7 +71,7 @@ _RETURN = re.compile(r"RETURN\s*$", re.I)
 # refused by name: (pattern, the construct as a reader knows it)
 _REFUSED = [
     (re.compile(r"(LOGICAL|CHARACTER)\b", re.I), "{0} variables in a subroutine"),
-    (re.compile(r"GO\s*TO\b", re.I), "GO TO"),
+    (re.compile(r"GO\s*TO\s*\(", re.I), "a computed GO TO"),
     (re.compile(r"(COMMON|EQUIVALENCE|EXTERNAL|"
                 r"FUNCTION|ENTRY|READ|WRITE|FORMAT|OPEN|CLOSE|STOP)\b", re.I),
      "Fortran's {0} in a subroutine"),
@@ -282,6 +284,8 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
 
     ends = {label.lstrip("0") for _, _, code, label in body if label and _CONTINUE.match(code)}
     starts = {m.group(1).lstrip("0") for _, _, code, _ in body if (m := _DO_LABEL.match(code))}
+    jumped_to = {m.group(1).lstrip("0") for _, _, code, _ in body
+                 for m in re.finditer(r"GO\s*TO\s*(\d+)", code, re.I)}
     for i, (k, col, code, label) in enumerate(body):
         where = Span(k + 1, col + 1, k + 1, col + 1 + len(code))
         do = _DO_LABEL.match(code)
@@ -290,15 +294,16 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
                    f"in {routine} ends it", where,
                    f"end the loop with {do.group(1)} CONTINUE before the routine's END")
             continue
-        if label:
-            if not _CONTINUE.match(code):
-                refuse(f"the statement label {label} (in {routine}): not supported",
-                       where, "label only the CONTINUE that ends a DO loop; write IF ... "
-                       "END IF for GO TO")
-                continue
-            if label.lstrip("0") in starts:
+        if label and _CONTINUE.match(code):
+            # the end of the DO loops with this label, or a place a GO TO jumps to
+            # (parse/jumps.py); else it does nothing
+            if label.lstrip("0") in starts | jumped_to:
                 executable.append((k, 0, f"{label:<5} {code}"))  # (the listing reads it so)
-            # (else a CONTINUE no DO ends, and no GO TO reaches: it does nothing)
+            continue
+        if label and any(p.match(code) for p in (_IMPLICIT, _DECLARE, _DATA, _PARAMETER,
+                                                 _SAVE, _RETURN)):
+            refuse(f"the statement label {label} on a declaration (in {routine}): not "
+                   "supported", where, "label an executable statement or a CONTINUE")
             continue
         implicit = _IMPLICIT.match(code)
         if implicit:
@@ -384,7 +389,11 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
                    "the routine's own arrays with DATA, and CALLs of the others")
             continue
         # (DO 10, I = 1, N: the comma a blank, the columns as they are)
-        executable.append((k, col, re.sub(r"^(DO\s+\d+\s*),", r"\1 ", code, flags=re.I)))
+        code = re.sub(r"^(DO\s+\d+\s*),", r"\1 ", code, flags=re.I)
+        if label:  # (a place a GO TO jumps to: `10: X = 1.0`, the code where it was)
+            executable.append((k, 0, f"{label}:".ljust(max(col, len(label) + 2)) + code))
+        else:
+            executable.append((k, col, code))
     for n, where in by_dimension.items():
         if n in integers or (not real_all and n not in declared and n[:1] in "IJKLMN"):
             refuse(f"{n} in {routine}: an INTEGER array (by Fortran's implicit "
@@ -418,6 +427,7 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
     builder.acsl = True
     items = builder.statements(tree)
     _, _, statements = Nester(builder.errors).nest(items)
+    statements = lower_jumps(statements, builder.errors)
     errors.extend(builder.errors)
     if builder.errors:
         return None
@@ -471,7 +481,7 @@ def _typing(body, declared: set[str], integers: set[str], real_all: bool, none: 
             list(node.targets) if isinstance(node, ast.Assign) else \
             [node.var] if isinstance(node, ast.Loop) else []
         for n in names:
-            if none and n not in declared and n not in integers:
+            if none and n not in declared and n not in integers and "#" not in n:
                 return Diagnostic(f"{n} is not declared (IMPLICIT NONE in "
                                   f"{routine})", node.span, f"declare it: REAL {n}")
         if isinstance(node, ast.Assign) and not node.subscripts and \

@@ -196,8 +196,10 @@ class _Scope:
             return True
         target = self.labels.get(st.label)
         if target is None:
-            what, hint = f"GO TO {st.label}: no label {st.label} in this section or " \
-                "PROCEDURAL", f"write {st.label}: before the statement to go to"
+            what, hint = f"GO TO {st.label}: no label {st.label} where it can jump (its " \
+                "section, PROCEDURAL or routine)", \
+                f"write {st.label}: (a routine's {st.label} in columns 1-5) before the " \
+                "statement to go to"
         elif st.label in before or target.span.line < st.span.line:
             what, hint = f"GO TO {st.label} jumps back (to line {target.span.line}): a " \
                 "loop, which is not supported", "write DO i = a, b ... END DO, or the " \
