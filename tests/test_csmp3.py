@@ -235,8 +235,8 @@ END
 """
     with pytest.raises(AmilError) as err:
         amilpy.loads(initial)
-    assert "a PROCEDURE block (or a CALL of a subroutine) cannot stand in INITIAL" in \
-        err.value.render()
+    assert "a PROCEDURE block (or a CALL of a subroutine, or a reference to a FUNCTION " \
+        "written after STOP) cannot stand in INITIAL" in err.value.render()
     terminal = """TITLE P
 X = INTGRL(1., -X)
 TERMINAL

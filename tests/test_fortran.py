@@ -210,8 +210,8 @@ def test_a_call_under_a_one_line_if_and_one_in_initial():
     with pytest.raises(AmilError) as err:
         amilpy.loads(text.replace("IF (X > 0.) CALL F(X, Y)", "INITIAL\nCALL F(2., Y)\n"
                                   "DYNAMIC"), name="f.fst")
-    assert "f.fst:4:1: error: a PROCEDURE block (or a CALL of a subroutine) cannot stand " \
-           "in INITIAL" in err.value.render()
+    assert "f.fst:4:1: error: a PROCEDURE block (or a CALL of a subroutine, or a reference " \
+           "to a FUNCTION written after STOP) cannot stand in INITIAL" in err.value.render()
 
 
 def test_implicit_none_and_a_call_with_no_arguments():
@@ -486,3 +486,31 @@ def test_go_to_forward_in_a_routine_the_cycle_idiom_and_a_skip():
                             "      IF (A .GT. 2.5) GO TO 30\n      B = -B\n"
                             "   30 CONTINUE\n"), fintim=3.0)
     assert list(run["Y"]) == [-12.0, -24.0, 36.0, 48.0]
+
+
+@pytest.mark.parametrize("body, want", [
+    # the search idiom: I where the jump leaves the loop (X = 1 + t: the first I >= X)
+    ("      DO 10 I = 1, 10\n      IF (I .GE. A) GO TO 20\n   10 CONTINUE\n"
+     "   20 B = I\n", [1.0, 2.0, 3.0]),
+    # GO TO the loop's own CONTINUE: the pass's rest skipped (B counts I <= X)
+    ("      B = 0.\n      DO 10 I = 1, 5\n      IF (I .GT. A) GO TO 10\n      B = B + 1.\n"
+     "   10 CONTINUE\n", [1.0, 2.0, 3.0]),
+    # to a labelled RETURN, and to a labelled END
+    ("      B = 1.\n      IF (A .GT. 1.5) GO TO 99\n      B = 2.\n   99 RETURN\n",
+     [2.0, 1.0, 1.0]),
+])
+def test_go_to_a_routines_usual_targets(body, want):
+    run = _run_f(SUB.format(body=body).replace("      RETURN\n      RETURN\n",
+                                               "      RETURN\n"))
+    assert list(run["Y"]) == want
+
+
+def test_go_to_a_labelled_end_and_a_function_in_termt():
+    run = _run_f("      SUBROUTINE F(A, B)\n      IMPLICIT REAL (A-Z)\n      B = 1.\n"
+                 "      IF (A .GT. 1.5) GO TO 99\n      B = 2.\n   99 END\n")
+    assert list(run["Y"]) == [2.0, 1.0, 1.0]
+    text = ("TITLE T\nX = INTGRL(1., 1.)\nTERMT (G(X) .GT. 0.)\nTIMER FINTIM = 9., DELT = 1.\n"
+            "TRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT X\nEND\nSTOP\n"
+            "      REAL FUNCTION G(A)\n      G = A - 3.5\n      END\n")
+    run, = amilpy.loads(text, name="g.fst").run(advice=False)
+    assert run.times[-1] == 3.0 and run["X"][-1] == 4.0

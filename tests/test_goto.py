@@ -119,3 +119,77 @@ def test_jumps_that_cannot_be_written_out_are_refused_at_the_go_to(body, where, 
         amilpy.loads(text, "p.csl")
     rendered = err.value.render()
     assert f"p.csl:{where}: error: " in rendered and words in rendered, rendered
+
+
+def test_a_loop_left_by_a_jump_keeps_its_variable_and_a_jump_to_its_own_continue():
+    # Fortran's search idiom: I is 3 where the jump leaves the loop, not the count's end
+    # (11); GO TO 5, the loop's own CONTINUE, skips the rest of the pass (2 and 4 left
+    # out of S); J, K where a jump leaves two loops at once
+    run, = amilpy.loads("""PROGRAM P
+INITIAL
+   J0 = 0.0
+   DO 5 I = 1, 10
+      IF (I .GE. 3) GO TO 20
+ 5 CONTINUE
+20: J0 = I
+   S = 0.0
+   DO 6 M = 1, 5
+      IF (M .EQ. 2 .OR. M .EQ. 4) GO TO 6
+      S = S + M
+ 6 CONTINUE
+   DO J = 1, 3
+      DO K = 1, 3
+         IF (J*K .GE. 4) GO TO 50
+      END DO
+   END DO
+50: CONTINUE
+END
+DERIVATIVE
+X = INTEG(J0 + S + 10.0*J + 100.0*K, 0.0)
+TERMT (T .GE. 1.0)
+END
+END
+""", "p.csl").run(advice=False)
+    c = run.constants
+    assert (c["J0"], c["I"], c["S"], c["M"], c["J"], c["K"]) == (3.0, 3.0, 9.0, 6.0, 2.0, 2.0)
+    assert run["X"][-1] == pytest.approx(3 + 9 + 20 + 200, rel=1e-12)
+
+
+def test_labels_in_a_macro_are_each_calls_own():
+    # CLIP called twice in one section: each call's label 9 its own (MACRO RELABEL's
+    # work), each jump within its call
+    run, = amilpy.loads("""PROGRAM P
+MACRO CLIP(Y, U)
+   Y = U
+   IF (U .LT. 10.0) GO TO 9
+   Y = 10.0
+9: CONTINUE
+MACRO END
+INITIAL
+   CLIP(A, 5.0)
+   CLIP(B, 50.0)
+END
+DERIVATIVE
+X = INTEG(A + B, 0.0)
+TERMT (T .GE. 1.0)
+END
+END
+""", "p.csl").run(advice=False)
+    assert (run.constants["A"], run.constants["B"]) == (5.0, 10.0)
+
+
+@pytest.mark.parametrize("text, where, words", [
+    # an ACSL program without section keywords: its statements are DERIVATIVE's, sorted
+    ("PROGRAM P\nCONSTANT A = 1.0\nR = -X\nIF (A .GT. 0.5) GO TO 20\nR = -2.0*X\n"
+     "20: CONTINUE\nX = INTEG(R, 1.0)\nTERMT (T .GE. 1.0)\nEND\n", "4:17",
+     "GO TO in DERIVATIVE's sorted code"),
+    # back on one line is back, not into a block
+    ("PROGRAM P\nINITIAL\nB = 0.0\n10: B = 1.0; GO TO 10\nEND\nDERIVATIVE\n"
+     "X = INTEG(B, 0.0)\nTERMT (T .GE. 1.0)\nEND\nEND\n", "4:14", "GO TO 10 jumps back"),
+])
+def test_more_jumps_refused_where_they_stand(text, where, words):
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text, "p.csl")
+    rendered = err.value.render()
+    assert f"p.csl:{where}: error: " in rendered and words in rendered, rendered
+    assert rendered.count("error:") == 1

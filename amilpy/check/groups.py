@@ -99,9 +99,10 @@ def sections(group: list[ast.Node], rep: Reporter) -> dict[str, list[ast.Node]]:
                       "start the file with PROGRAM or MODEL (ACSL form)")
         elif isinstance(st, ast.Procedural):  # CSMP III's PROCEDURE ... ENDPRO
             if current == "INITIAL":
-                rep.error("a PROCEDURE block (or a CALL of a subroutine) cannot stand in "
-                          "INITIAL", st.span, "INITIAL is sorted: write the statements out "
-                          "there, or put the PROCEDURE or the CALL in DYNAMIC")
+                rep.error("a PROCEDURE block (or a CALL of a subroutine, or a reference to "
+                          "a FUNCTION written after STOP) cannot stand in INITIAL", st.span,
+                          "INITIAL is sorted: write the statements out there, or put the "
+                          "PROCEDURE, the CALL or the reference in DYNAMIC")
             elif current == "TERMINAL":
                 out[current].extend(st.body)  # written order there anyway
             else:

@@ -267,6 +267,10 @@ class Names:
         return set(WEATHER_NAMES) if self.data.weather is not None else set()
 
     def undefined(self, node: ast.Name, known: set[str]) -> None:
+        if "#" in node.name:
+            # (a name the reader made -- a routine's own, a FUNCTION's value, a GO TO's
+            # flag -- is defined with what made it, unless that was refused: said there)
+            return
         if node.name in WEATHER_NAMES and node.name not in self.defined:
             if self.data.weather is not None:
                 self.rep.error(f"{node.name} is the day's weather, which changes in time",

@@ -90,7 +90,7 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     nester = Nester(builder.errors)
     form, name, statements = nester.nest(items)
     statements, macros = expand(statements, builder.errors, form == "ACSL")
-    statements = lower_jumps(statements, builder.errors)
+    statements = lower_jumps(statements, builder.errors, sorted_top=form == "ACSL")
     statements = _subroutines_called(statements, text, path, builder.errors)
     statements, fixed = arrays.expand(statements, builder.errors, form == "ACSL")
     if builder.errors:

@@ -152,6 +152,9 @@ class Nester:
                 # `13 CONTINUE` that a GO TO names and no DO ends: the place it jumps to
                 target.append(ast.Target(item.label, item.span))
             elif isinstance(item, Close):
+                if item.label in jumped_to and stack and stack[-1].head.label == item.label:
+                    # GO TO the loop's own CONTINUE: the rest of the pass skipped
+                    stack[-1].body.append(ast.Target(item.label, item.span))
                 done = self.close(stack, item, acsl)
                 if done is None:
                     continue

@@ -230,7 +230,7 @@ def _statements(lines: list[str], first: int) -> list[tuple[int, int, str, str]]
         if not code.strip() and not label:
             continue
         out.append([k, 6 + len(code) - len(code.lstrip()), code.strip(), label])
-        if _END.match(code.strip()) and not label:
+        if _END.match(code.strip()):
             inside = False
     return [(k, col, code, label) for k, col, code, label in out]
 
@@ -294,6 +294,10 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
                    f"in {routine} ends it", where,
                    f"end the loop with {do.group(1)} CONTINUE before the routine's END")
             continue
+        if label and _RETURN.match(code) and label.lstrip("0") in jumped_to:
+            # `99 RETURN` a GO TO names: its place, then the RETURN (the last statement)
+            executable.append((k, 0, f"{label:<5} CONTINUE"))
+            label = ""
         if label and _CONTINUE.match(code):
             # the end of the DO loops with this label, or a place a GO TO jumps to
             # (parse/jumps.py); else it does nothing
@@ -301,7 +305,7 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
                 executable.append((k, 0, f"{label:<5} {code}"))  # (the listing reads it so)
             continue
         if label and any(p.match(code) for p in (_IMPLICIT, _DECLARE, _DATA, _PARAMETER,
-                                                 _SAVE, _RETURN)):
+                                                 _SAVE)):
             refuse(f"the statement label {label} on a declaration (in {routine}): not "
                    "supported", where, "label an executable statement or a CONTINUE")
             continue
@@ -411,7 +415,13 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
     text[k0] = "PROGRAM " + name  # (where the SUBROUTINE line is: every line in its place)
     for k, col, code in executable:
         text[k] = (text[k] + "; " if text[k] else " " * col) + code
-    text[unit[-1][0]] = "END"
+    end_k, _, _, end_label = unit[-1]
+    if end_label and end_label.lstrip("0") in jumped_to:
+        # `99 END` a GO TO names: its place (a CONTINUE), then the END on a line of its own
+        text[end_k] = f"{end_label:<5} CONTINUE"
+        end_k += 1
+        text += [""] * max(0, end_k + 1 - len(text))
+    text[end_k] = "END"
     source = "\n".join(text) + "\n"
     from lark.exceptions import UnexpectedInput
 
@@ -584,7 +594,9 @@ def expand_functions(statements, functions: set[str], counts: dict[str, int]) ->
                            step=pull(st.step, calls), body=tuple(each(st.body)))
         if isinstance(st, ast.SubroutineCall):
             return replace(st, args=tuple(pull(a, calls) for a in st.args))
-        return _with_bodies(st, each)
+        if isinstance(st, (ast.Block, ast.Procedural, ast.FunctionDef)):
+            return _with_bodies(st, each)
+        return pull(st, calls)  # (TERMT, SCHEDULE, ...: their expressions)
 
     def each(body) -> list:
         out: list = []

@@ -32,9 +32,12 @@ from .macros import _with_bodies
 _SCOPES = (ast.Block, ast.Procedural, ast.FunctionDef, ast.Macro)
 
 
-def lower_jumps(statements: list, errors: list[Diagnostic]) -> list:
+def lower_jumps(statements: list, errors: list[Diagnostic], sorted_top: bool = False
+                ) -> list:
     """The statements with every GO TO and its label written out as IF blocks (the
-    statements as they are where there is none)."""
+    statements as they are where there is none). `sorted_top`: the statements outside
+    any section are sorted code (an ACSL program's DERIVATIVE without its keyword),
+    where no GO TO can stand."""
     if not any(isinstance(n, (ast.GoTo, ast.Target)) for st in statements
                for n in ast.walk(st)):
         return statements
@@ -52,6 +55,9 @@ def lower_jumps(statements: list, errors: list[Diagnostic]) -> list:
         return out
 
     top = _Scope(tuple(scopes(statements)), next(places), errors)
+    if sorted_top and top.used:
+        top.refuse_sorted()
+        return statements
     return top.lowered_top()
 
 
@@ -76,10 +82,13 @@ class _Scope:
         self.body, self.place, self.errors = body, place, errors
         self.used: dict[str, object] = {}  # label -> the first GO TO naming it
         self.labels: dict[str, object] = {}
+        self.order: dict[int, int] = {}  # id of a GO TO or a label -> its place in the text
         self._collect(body)
 
     def _collect(self, body) -> None:
         for st in body:
+            if isinstance(st, (ast.Target, ast.GoTo)):
+                self.order[id(st)] = len(self.order)
             if isinstance(st, ast.Target):
                 if st.label in self.labels:
                     self.errors.append(Diagnostic(
@@ -92,6 +101,8 @@ class _Scope:
             elif isinstance(st, (ast.If, ast.Loop)):
                 for b in (st.branches if isinstance(st, ast.If) else (st,)):
                     self._collect(b.body)
+            elif isinstance(st, ast.Branch):
+                self._collect(st.body)
 
     def flag(self, label: str) -> str:
         return f"GO{self.place}#{label}"
@@ -101,10 +112,7 @@ class _Scope:
         if not self.used and not self.labels:
             return st
         if isinstance(st, ast.Block) and st.kind == "DERIVATIVE" and self.used:
-            first = next(iter(self.used.values()))
-            self.errors.append(Diagnostic(
-                "GO TO in DERIVATIVE's sorted code, whose order is not the written one",
-                first.span, "put the GO TO and its label inside a PROCEDURAL block"))
+            self.refuse_sorted()
             return st
         body = self.lowered_top()
         if isinstance(st, ast.Procedural) and (st.outputs or st.inputs):
@@ -113,10 +121,21 @@ class _Scope:
             st = replace(st, outputs=st.outputs + flags)
         return replace(st, body=tuple(body))
 
+    def refuse_sorted(self) -> None:
+        first = next(iter(self.used.values()))
+        self.errors.append(Diagnostic(
+            "GO TO in DERIVATIVE's sorted code, whose order is not the written one",
+            first.span, "put the GO TO and its label inside a PROCEDURAL block"))
+
     def lowered_top(self) -> list:
         start = self.body[0].span if self.body else None
-        first = [self._set(label, 0.0, start) for label in sorted(self.used)]
+        self.kept_vars: set[str] = set()
         body, _ = self.lower(self.body, frozenset(), frozenset())
+        # (each flag and each kept loop variable has a value from the start: written-
+        # order code reads no name before it has one)
+        first = [self._set(label, 0.0, start) for label in sorted(self.used)]
+        first += [ast.Assign((self.kept(v),), (start,), ast.Num(0.0, start, "0"), start)
+                  for v in sorted(self.kept_vars)]
         return first + body
 
     def _set(self, label: str, value: float, span) -> ast.Assign:
@@ -127,18 +146,20 @@ class _Scope:
         """statements, run only where no flag of `pending` is set."""
         if not pending or not statements:
             return statements
-        flags = [ast.Name(self.flag(x), span) for x in sorted(pending)]
-        total = flags[0]
-        for f in flags[1:]:
-            total = ast.BinOp("+", total, f, span)
-        cond = ast.BinOp("<", total, ast.Num(0.5, span, "0.5"), span)
+        cond = ast.BinOp("<", self._total(pending, span), ast.Num(0.5, span, "0.5"), span)
         return [ast.If((ast.Branch(cond, tuple(statements), span),), span)]
 
-    def lower(self, body, ahead: frozenset, pending: frozenset) -> tuple[list, frozenset]:
-        """body written out, where the labels `ahead` follow it in the lists around it
-        and the flags `pending` may be set where it starts: (its statements, the flags
+    def kept(self, var: str) -> str:
+        """Where a loop's variable is kept when a GO TO leaves the loop (its name first:
+        Fortran's implicit type is the variable's)."""
+        return f"{var}#GO{self.place}"
+
+    def lower(self, body, ahead: frozenset, pending: frozenset, loops: tuple = ()
+              ) -> tuple[list, frozenset]:
+        """body written out, where the labels `ahead` follow it in the lists around it,
+        the flags `pending` may be set where it starts, and `loops` are the DO loops
+        around it (their variable, the labels inside them): (its statements, the flags
         that may be set where it ends)."""
-        here = [st.label for st in body if isinstance(st, ast.Target)]
         out: list = []
         run: list = []
         run_pending = pending
@@ -156,14 +177,19 @@ class _Scope:
                 pending = pending - {st.label}
             elif isinstance(st, ast.GoTo):
                 flush()
-                if self._check(st, later, here[:here.index(st.label)] if st.label in here
-                               else ()):
-                    out += self._guard(pending, [self._set(st.label, 1.0, st.span)], st.span)
+                if self._check(st, later):
+                    # (and the variable of each loop it leaves keeps its value there)
+                    left = [var for var, inside in loops if st.label not in inside]
+                    self.kept_vars.update(left)
+                    kept = [ast.Assign((self.kept(var),), (st.span,), ast.Name(var, st.span),
+                                       st.span) for var in left]
+                    out += self._guard(pending, [self._set(st.label, 1.0, st.span), *kept],
+                                       st.span)
                     pending = pending | {st.label}
             elif isinstance(st, (ast.If, ast.Loop)) and _jumps_in(st):
                 flush()
-                inner, after = self._nested(st, later)
-                out += self._guard(pending, [inner], st.span)
+                inner, after = self._nested(st, later, loops)
+                out += self._guard(pending, inner, st.span)
                 pending = pending | after
             else:
                 if run and run_pending != pending:
@@ -174,24 +200,44 @@ class _Scope:
         flush()
         return out, pending
 
-    def _nested(self, st, later: frozenset):
-        """An IF or DO loop holding jumps: each list written out; the flags that may be
-        set after it (its jumps to labels after it)."""
+    def _nested(self, st, later: frozenset, loops: tuple):
+        """An IF or DO loop holding jumps: its statements, each list written out; the
+        flags that may be set after it (its jumps to labels after it)."""
         if isinstance(st, ast.If):
             branches, after = [], frozenset()
             for b in st.branches:
-                body, left = self.lower(b.body, later, frozenset())
+                body, left = self.lower(b.body, later, frozenset(), loops)
                 branches.append(replace(b, body=tuple(body)))
                 after |= left
-            return replace(st, branches=tuple(branches)), after
+            return [replace(st, branches=tuple(branches))], after
         # a loop: a jump out of it leaves its flag set for the passes that remain, so
-        # each pass runs only where none of the flags it may set is
-        exits = frozenset(n.label for n in ast.walk(st) if isinstance(n, ast.GoTo)) - \
-            frozenset(n.label for n in ast.walk(st) if isinstance(n, ast.Target))
-        body, after = self.lower(st.body, later, exits)
-        return replace(st, body=tuple(body)), after
+        # each pass runs only where none of the flags it may set is; after it, the loop
+        # variable is the one the jump left it with, not the count's end
+        inside = frozenset(n.label for n in ast.walk(st) if isinstance(n, ast.Target))
+        exits = frozenset(n.label for n in ast.walk(st) if isinstance(n, ast.GoTo)) - inside
+        body, after = self.lower(st.body, later, exits, loops + ((st.var, inside),))
+        out = [replace(st, body=tuple(body))]
+        if exits:
+            span = st.span
+            out += self._guard_set(exits, [ast.Assign((st.var,), (span,),
+                                                      ast.Name(self.kept(st.var), span),
+                                                      span)], span)
+        return out, after
 
-    def _check(self, st: ast.GoTo, later: frozenset, before) -> bool:
+    def _guard_set(self, flags: frozenset, statements: list, span) -> list:
+        """statements, run only where a flag of `flags` is set."""
+        total = self._total(flags, span)
+        cond = ast.BinOp(">", total, ast.Num(0.5, span, "0.5"), span)
+        return [ast.If((ast.Branch(cond, tuple(statements), span),), span)]
+
+    def _total(self, flags: frozenset, span):
+        names = [ast.Name(self.flag(x), span) for x in sorted(flags)]
+        total = names[0]
+        for f in names[1:]:
+            total = ast.BinOp("+", total, f, span)
+        return total
+
+    def _check(self, st: ast.GoTo, later: frozenset) -> bool:
         if st.label in later:
             return True
         target = self.labels.get(st.label)
@@ -200,7 +246,7 @@ class _Scope:
                 "section, PROCEDURAL or routine)", \
                 f"write {st.label}: (a routine's {st.label} in columns 1-5) before the " \
                 "statement to go to"
-        elif st.label in before or target.span.line < st.span.line:
+        elif self.order[id(target)] < self.order[id(st)]:
             what, hint = f"GO TO {st.label} jumps back (to line {target.span.line}): a " \
                 "loop, which is not supported", "write DO i = a, b ... END DO, or the " \
                 "passes one after another"

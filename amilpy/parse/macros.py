@@ -315,6 +315,10 @@ class AcslExpander:
         self.calls[name] = k = self.calls.get(name, 0) + 1
         self.call_spans.setdefault(name, []).append(span)
         names = {n: f"{name}#{k}.{n}" for n in macro.local}
+        # (each call's labels its own, as MACRO RELABEL would make them: a GO TO in the
+        # body jumps within its own call)
+        names |= {_LABEL + x.label: f"{name}#{k}.{x.label}" for st in macro.body
+                  for x in ast.walk(st) if isinstance(x, ast.Target)}
         for p in sorted(_assigned(macro.body) & set(macro.params)):
             actual = values.pop(p)
             if not isinstance(actual, ast.Name):
@@ -357,6 +361,9 @@ def _assigned(body) -> set[str]:
             elif isinstance(node, ast.Procedural):
                 out.update(node.outputs)
     return out
+
+
+_LABEL = "label "  # (a label's key among a call's names: no name has a blank)
 
 
 def _rename(st, names: dict[str, str], values: dict[str, ast.Node]):
@@ -405,6 +412,8 @@ def _rename(st, names: dict[str, str], values: dict[str, ast.Node]):
         return replace(st, name=name_of(st.name), expr=expr(st.expr))
     if isinstance(st, ast.Termt):
         return replace(st, expr=expr(st.expr))
+    if isinstance(st, (ast.GoTo, ast.Target)):
+        return replace(st, label=names.get(_LABEL + st.label, st.label))
     if isinstance(st, ast.Data):
         return replace(st, items=tuple(replace(i, name=name_of(i.name)) for i in st.items))
     if isinstance(st, ast.Declare):
