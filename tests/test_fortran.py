@@ -514,3 +514,13 @@ def test_go_to_a_labelled_end_and_a_function_in_termt():
             "      REAL FUNCTION G(A)\n      G = A - 3.5\n      END\n")
     run, = amilpy.loads(text, name="g.fst").run(advice=False)
     assert run.times[-1] == 3.0 and run["X"][-1] == 4.0
+
+
+def test_a_call_refused_in_initial_is_the_only_error():
+    # Y is assigned by the CALL that was refused: "PRINT names Y, which the model never
+    # defines" would follow that fault and point at the PRINT
+    with pytest.raises(AmilError) as err:
+        amilpy.loads("TITLE T\nINITIAL\nCALL F(2., Y)\nDYNAMIC\nX = INTGRL(0., 1.)\n"
+                     "TIMER FINTIM = 1., DELT = 0.5\nTRANSLATION_GENERAL DRIVER='EUDRIV'\n"
+                     "PRINT Y\nEND\nSTOP\n" + SUB.format(body="      B = A\n"), name="f.fst")
+    assert [d.span.line for d in err.value.diagnostics] == [3]

@@ -33,6 +33,7 @@ class Names:
 
     def __init__(self, rep: Reporter, program: ast.Program, data: Data) -> None:
         self.rep = rep
+        self.program = program
         self.source_lines = split_lines(program.source or "")
         self.data = data
         self.data_names = set(data.names)
@@ -239,7 +240,7 @@ class Names:
             if st.x is not None:
                 named.append((st.x, st.x_span))
             for n, s in named:
-                if n not in report_known and n != TIME:
+                if n not in report_known and n != TIME and not self.refused_definition(n):
                     self.rep.error(f"{st.kind} names {n}, which the model never defines", s,
                                    did_you_mean(n, report_known - {TIME}) or None)
         for st in self.data.finish_relations:
@@ -260,6 +261,18 @@ class Names:
                 (f"did you mean {hint}? " if hint else "")
                 + "a per-variable tolerance applies to a state (an INTGRL output)"
                 + ("" if hint or not states else ": " + ", ".join(sorted(states)[:8])))
+
+    def refused_definition(self, name: str) -> bool:
+        """Whether a statement the listing writes assigns `name` and a fault has been said
+        (that statement refused, or the block around it): "never defines" would follow
+        that fault and point at the wrong line."""
+        if not self.rep.errors:
+            return False
+        if not hasattr(self, "_written"):
+            self._written = {t for st in self.program.statements for n in ast.walk(st)
+                             for t in (n.targets if isinstance(n, ast.Assign) else
+                                       n.outputs if isinstance(n, ast.Procedural) else ())}
+        return name in self._written
 
     @property
     def weather_names(self) -> set[str]:
