@@ -503,6 +503,7 @@ def test_go_to_a_routines_usual_targets(body, want):
     run = _run_f(SUB.format(body=body).replace("      RETURN\n      RETURN\n",
                                                "      RETURN\n"))
     assert list(run["Y"]) == want
+    assert not run.warnings  # (the flags' tests, which no one wrote, say nothing)
 
 
 def test_go_to_a_labelled_end_and_a_function_in_termt():

@@ -197,9 +197,12 @@ class _Unit:
         if not names.check_calls(expr, UNIT_CALLS, "an IF or PROCEDURAL block"):
             return ast.Num(0.0, expr.span)  # (reported: lowering it would fail on it)
         value = substitute(expr, env)
-        literal = bool(opaque & set(read_names(value)))
+        opaque_read = opaque & set(read_names(value))
+        literal = bool(opaque_read)
+        # (a GO TO's flags, names the reader made, are set by tests of their own, said
+        # or located where they stand: a test of the flags alone is no news)
         switch = next((n for n in ast.walk(value) if _switch_in_sorted_code(n)), None) \
-            if literal else None
+            if literal and not all("#" in n for n in opaque_read) else None
         if switch is not None:
             what = "this test" if isinstance(switch, ast.BinOp) else f"{switch.func} here"
             self.code.low.warn(
