@@ -34,6 +34,7 @@ CASES = [
      "inside a PROCEDURAL block"),
     (DERIV, "10 CONTINUE", 4, "10 CONTINUE ends no DO loop labelled 10", "DO 10 I = a, b"),
     (CSMP, "GO TO 10", 1, "GO TO outside the ACSL form", "IF (c) THEN"),
+    (PROGRAM, "GO TO (10, 20), K", 2, "a computed GO TO", "IF (K .EQ. 1) GO TO 10"),
     (CSMP, " 10   X = 1.0", 1, "the statement label 10", "IF (c) THEN"),
     (DERIV, "PROCEDURAL\nDO L I = 1, 2\nY = 1.0\nAnotherLoop: Continue\nEND", 7,
      "ANOTHERLOOP CONTINUE ends no DO loop labelled", "ends at ANOTHERLOOP CONTINUE"),

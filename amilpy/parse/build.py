@@ -383,6 +383,10 @@ class Builder:
             return []
         return self.statements(tree)
 
+    def st_goto_computed(self, node) -> None:
+        self.refuse("a computed GO TO", self.span(node),
+                    "write one IF (K .EQ. 1) GO TO 10 per label, or IF ... ELSE IF blocks")
+
     def st_goto(self, node) -> ast.GoTo | None:
         label = _label(str(node.children[0]))
         if not self.acsl:
