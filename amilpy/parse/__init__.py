@@ -107,9 +107,13 @@ def _subroutines_called(statements: list, text: str, path: str | None,
     from . import fortran
     from .lexical import stop_line
 
-    called = {n.name for st in statements for n in ast.walk(st)
-              if isinstance(n, ast.SubroutineCall)}
-    named = {n.func for st in statements for n in ast.walk(st) if isinstance(n, ast.Call)}
+    called: set[str] = set()
+    named: set[str] = set()  # (the functions called: a FUNCTION's references among them)
+    for n in (n for st in statements for n in ast.walk(st)):
+        if isinstance(n, ast.SubroutineCall):
+            called.add(n.name)
+        elif isinstance(n, ast.Call):
+            named.add(n.func)
     if not called and not named:
         return statements
     lines = split_lines(text)

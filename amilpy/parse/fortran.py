@@ -50,18 +50,17 @@ from .jumps import lower_jumps
 from .lexical import code_end
 
 # statements of the subset read here (the rest are read by the listing's grammar)
+_TYPE = r"REAL(?:\*\d+)?|DOUBLE\s*PRECISION|INTEGER(?:\*\d+)?"  # a declaration's, a FUNCTION's
 _SUBROUTINE = re.compile(r"SUBROUTINE\s+([A-Za-z]\w*)\s*(?:\(\s*([^)]*)\))?\s*$", re.I)
 # a FUNCTION subprogram: its type (REAL, INTEGER, ... or none: Fortran's implicit
 # typing of its name), its name and its arguments
-_FUNCTION = re.compile(r"(?:(REAL(?:\*\d+)?|DOUBLE\s*PRECISION|INTEGER(?:\*\d+)?)\s+)?"
-                       r"FUNCTION\s+([A-Za-z]\w*)\s*\(\s*([^)]*)\)\s*$", re.I)
-_HEAD = re.compile(r"(?:(?:REAL(?:\*\d+)?|DOUBLE\s*PRECISION|INTEGER(?:\*\d+)?)\s+)?"
-                   r"(?:SUBROUTINE|FUNCTION)\s+[A-Za-z]\w*\s*(?:\(|$)", re.I)
+_FUNCTION = re.compile(rf"(?:({_TYPE})\s+)?FUNCTION\s+([A-Za-z]\w*)\s*\(\s*([^)]*)\)\s*$",
+                       re.I)
+_HEAD = re.compile(rf"(?:(?:{_TYPE})\s+)?(?:SUBROUTINE|FUNCTION)\s+[A-Za-z]\w*\s*(?:\(|$)", re.I)
 _END = re.compile(r"END(?:\s*(?:SUBROUTINE|FUNCTION)(?:\s+\w+)?)?\s*$", re.I)
 _IMPLICIT = re.compile(r"IMPLICIT\s+(.*)$", re.I)
 # declarations: REAL, DOUBLE PRECISION, INTEGER, DIMENSION (scalars and arrays)
-_DECLARE = re.compile(r"(REAL(?:\*\d+)?|DOUBLE\s*PRECISION|INTEGER(?:\*\d+)?|DIMENSION)"
-                      r"\s+([A-Za-z].*)$", re.I)
+_DECLARE = re.compile(rf"({_TYPE}|DIMENSION)\s+([A-Za-z].*)$", re.I)
 _DATA = re.compile(r"DATA\s+(.*)$", re.I)
 _PARAMETER = re.compile(r"PARAMETER\s*\((.*)\)\s*$", re.I)
 _SAVE = re.compile(r"SAVE\b\s*(.*)$", re.I)

@@ -83,6 +83,7 @@ class _Scope:
         self.used: dict[str, object] = {}  # label -> the first GO TO naming it
         self.labels: dict[str, object] = {}
         self.order: dict[int, int] = {}  # id of a GO TO or a label -> its place in the text
+        self.kept_vars: set[str] = set()  # loop variables a jump out of a loop keeps
         self._collect(body)
 
     def _collect(self, body) -> None:
@@ -101,8 +102,6 @@ class _Scope:
             elif isinstance(st, (ast.If, ast.Loop)):
                 for b in (st.branches if isinstance(st, ast.If) else (st,)):
                     self._collect(b.body)
-            elif isinstance(st, ast.Branch):
-                self._collect(st.body)
 
     def flag(self, label: str) -> str:
         return f"GO{self.place}#{label}"
@@ -129,7 +128,6 @@ class _Scope:
 
     def lowered_top(self) -> list:
         start = self.body[0].span if self.body else None
-        self.kept_vars: set[str] = set()
         body, _ = self.lower(self.body, frozenset(), frozenset())
         # (each flag and each kept loop variable has a value from the start: written-
         # order code reads no name before it has one)
@@ -168,8 +166,15 @@ class _Scope:
             out.extend(self._guard(run_pending, list(run), run[0].span if run else None))
             run.clear()
 
-        for i, st in enumerate(body):
-            later = ahead | {x.label for x in body[i + 1:] if isinstance(x, ast.Target)}
+        # the labels after each statement, in its list and the lists around it (one
+        # pass from the end: a long section with one jump stays linear)
+        after, seen = [], ahead
+        for st in reversed(body):
+            after.append(seen)
+            if isinstance(st, ast.Target):
+                seen = seen | {st.label}
+        after.reverse()
+        for st, later in zip(body, after, strict=True):
             if isinstance(st, ast.Target):
                 flush()
                 if st.label in self.used:

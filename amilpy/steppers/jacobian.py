@@ -76,7 +76,7 @@ class SegmentJacobian:
         return self.dense if self.n <= DENSE_UP_TO else self.sparse
 
     def banded(self) -> Banded:
-        """odeint's banded Jacobian: differenced by odeint itself (`Banded.dfun` None)
+        """odeint's banded Jacobian: differenced by odeint itself (`Banded.differenced`)
         where the structure is known and the band narrow, else from the model's
         Jacobian."""
         found = self._structure() if self._structure is not None else None
@@ -92,19 +92,18 @@ class Banded:
     (a reverse Cuthill-McKee order when it narrows the band), bands ml, mu."""
 
     def __init__(self, jac: SegmentJacobian, differenced: tuple | None = None) -> None:
-        """`differenced`: (order, ml, mu) of a band odeint differences itself (`dfun`
-        is None), else the model's Jacobian gives the entries."""
+        """`differenced`: (order, ml, mu) of a band odeint differences itself (no
+        `dfun`), else the model's Jacobian gives the entries."""
         order, lower, upper = differenced or narrowest(jac.n, jac.rows, jac.cols)
         self.order = order  # new position k holds old state order[k]
         self.position = np.argsort(order)  # old state i sits at position[i]
         self.identity = bool(np.all(order == np.arange(jac.n)))
         self.ml, self.mu = lower, upper
         self.jac = jac
-        if differenced is None:
+        self.differenced = differenced is not None
+        if not self.differenced:
             self._band_rows = upper + self.position[jac.rows] - self.position[jac.cols]
             self._band_cols = self.position[jac.cols]
-        else:
-            self.dfun = None
 
     def wrap(self, fun: Callable) -> Callable:
         """The vector field in the new order."""

@@ -301,7 +301,7 @@ class OdeintStepper(Chunked):
                 b = self._banded
                 fun, y0 = b.wrap(fun), b.to_new(y0)
                 options.update(ml=b.ml, mu=b.mu)
-                if b.dfun is not None:  # (else odeint differences the band)
+                if not b.differenced:
                     options["Dfun"] = b.dfun
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # a failure is handled by the caller
