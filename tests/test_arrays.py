@@ -211,6 +211,69 @@ def test_array_faults_are_located_with_what_to_write(line, message, hint):
     assert d.span is not None and d.span.line >= 4
 
 
+NAMED = """PROGRAM values named by PARAMETERs, as Molly writes them
+  PARAMETER (NH = 3, IA = 2)
+  DIMENSION F(NH), G(4), H(2, 3)
+  CONSTANT F = NH*1.5
+  CONSTANT G = IA, 7.0, 2*IA
+  CONSTANT H = 1.0, 2.0
+  CINTERVAL CINT = 0.5
+  DERIVATIVE
+    PROCEDURAL (R = )
+      CONSTANT S = IA
+      R = F(1) + F(3) + G(1) + G(4) + H(1,1) + H(2,1) + H(1,2) + H(2,3) + S
+    END
+    X = INTEG(R, 0.0)
+    TERMT(T >= 1.0)
+  END
+END
+"""
+
+
+def test_a_value_list_reads_parameter_names_and_zero_fills():
+    """A count or a value of a CONSTANT list may name a PARAMETER (Fortran's DATA
+    takes named constants): NH*1.5 is three 1.5s, G = (2, 7, 2, 2). H gets its first
+    two elements, the rest 0 (the zero of static storage; Molly relies on it), with a
+    warning; a CONSTANT inside a PROCEDURAL is a declaration like any other. So
+    R = 1.5 + 1.5 + 2 + 2 + 1 + 2 + 0 + 0 + 2 = 12 and X(t) = 12 t, exact at every
+    row to rounding."""
+    model = amilpy.loads(NAMED, "named.csl")
+    run = model.run(advice=False)[0]
+    assert np.max(np.abs(run["X"] - 12.0 * run.t)) < 1e-12
+    assert any("H is given 2 value(s) for 6 elements: the other 4 are 0" in w
+               for w in run.warnings)
+    # the PARAMETERs the lists read are fixed when the listing is read
+    with pytest.raises(UsageError, match="NH sizes an array"):
+        model.run(NH=4)
+
+
+@pytest.mark.parametrize("line, message", [
+    ("  DIMENSION Z(2)\n  CONSTANT Z = NZ*0.0", "Z's values name NZ, which has no value"),
+    ("  DIMENSION Z(2)\n  CONSTANT Z = 1.0, W", "Z's values name W, which has no value"),
+    ("  PARAMETER (NZ = 1.5)\n  DIMENSION Z(2)\n  CONSTANT Z = NZ*0.0",
+     "the repeat count NZ is 1.5"),
+])
+def test_a_named_value_that_is_not_known_is_located(line, message):
+    text = ("PROGRAM faults\n  CINTERVAL CINT = 0.5\n  DERIVATIVE\n"
+            f"{line}\n  X = INTEG(1.0, 0.0)\n  TERMT(T >= 1.0)\n  END\nEND\n")
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text, "faults.csl")
+    d = err.value.diagnostics[0]
+    assert message in d.message and d.span is not None and d.span.line >= 4
+
+
+def test_csmp_data_statements_still_take_numbers_only():
+    """In CSMP form PARAM A = B or CONST A = 2*B is a derived value written in the
+    wrong place: refused as before, with where it belongs."""
+    for line in ("PARAM A = B", "CONST A = 2*B", "PARAM A = 1, B = C"):
+        text = f"TITLE t\n{line}\nX = INTGRL(0.0, 1.0)\nTIMER FINTIM = 1.0, OUTDEL = 0.5\nEND\n"
+        with pytest.raises(AmilError) as err:
+            amilpy.loads(text, "t.amil")
+        d = err.value.diagnostics[0]
+        assert "a data statement takes NAME = number" in d.message, line
+        assert "INITIAL" in d.hint and d.span.line == 2
+
+
 def test_a_decimal_comma_is_still_one_in_csmp_form():
     """PARAM K = 1,5 in CSMP form is a slip for 1.5 (arrays are the ACSL form's)."""
     with pytest.raises(AmilError) as err:

@@ -87,11 +87,31 @@ class Parts:
                               "move FUNCTION ... END out of the section")
                 self.functions.append(st)
             elif isinstance(st, EXECUTABLE):
-                out.append(st)
+                out.append(self.hoisted(st))
             else:
                 rep.error(f"{type(st).__name__.upper()} cannot stand in the ACSL form",
                           st.span)
         return out
+
+    def hoisted(self, st):
+        """st with the declarations inside its blocks (a CONSTANT in a PROCEDURAL, as
+        Molly writes them) taken out to the program's: a translator reads them wherever
+        they stand."""
+        def body(statements) -> tuple:
+            kept = []
+            for s in statements:
+                if isinstance(s, DECLARATIONS):
+                    self.declarations.append(s)
+                else:
+                    kept.append(self.hoisted(s) if isinstance(s, EXECUTABLE) else s)
+            return tuple(kept)
+
+        if isinstance(st, ast.If):
+            return replace(st, branches=tuple(replace(b, body=body(b.body))
+                                              for b in st.branches))
+        if isinstance(st, (ast.Loop, ast.Procedural)):
+            return replace(st, body=body(st.body))
+        return st
 
     def block(self, st: ast.Block, where: str, rep: Reporter) -> None:
         self.sections = True

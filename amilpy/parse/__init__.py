@@ -92,7 +92,8 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     statements, macros = expand(statements, builder.errors, form == "ACSL")
     statements = lower_jumps(statements, builder.errors, sorted_top=form == "ACSL")
     statements = _subroutines_called(statements, text, path, builder.errors)
-    statements, fixed = arrays.expand(statements, builder.errors, form == "ACSL")
+    statements, fixed = arrays.expand(statements, builder.errors, form == "ACSL",
+                                      nester.notes)
     if builder.errors:
         raise AmilError(in_macros(sorted(builder.errors, key=_where), macros), path, text)
     return ast.Program(tuple(statements), path, text, form, name, macros, fixed,

@@ -67,20 +67,23 @@ class _Unknown(Exception):
     """A value not known when the listing is read."""
 
 
-def expand(statements: list, errors: list[Diagnostic], acsl: bool
-           ) -> tuple[list, frozenset[str]]:
+def expand(statements: list, errors: list[Diagnostic], acsl: bool,
+           notes: list[Diagnostic] | None = None) -> tuple[list, frozenset[str]]:
     """The statements with every array written out as its elements (see the module),
-    and the constants fixed by it. Faults go to `errors`."""
+    and the constants fixed by it. Faults go to `errors`, warnings to `notes`."""
     everything = _everything(statements)
     tables = {st.name for st in everything if isinstance(st, ast.Table)}
     if not any((isinstance(st, ast.Declare) and st.sizes)
-               or (isinstance(st, ast.Data) and any(it.is_array for it in st.items))
+               or (isinstance(st, ast.Data) and any(it.is_array or it.pieces
+                                                     for it in st.items))
                or (isinstance(st, ast.Table) and st.grid) for st in everything) and not any(
             isinstance(n, ast.Index) or (isinstance(n, ast.Assign) and n.subscripts)
             or (isinstance(n, ast.Call) and n.func in tables)
             for st in statements for n in ast.walk(st)):
         return statements, frozenset()
     pass_ = _Arrays(statements, everything, errors, acsl)
+    if notes is not None:
+        pass_.notes = notes
     return pass_.statements(statements, {}, written=False), frozenset(pass_.fixed)
 
 
@@ -103,6 +106,8 @@ class _Arrays:
                  acsl: bool) -> None:
         """`everything`: the statements, in blocks and loops too (`_everything`)."""
         self.errors = errors
+        self.notes: list[Diagnostic] = []
+        self.acsl = acsl
         self.fixed: set[str] = set()
         self.written_out = 0  # statements the loops were written out into
         # constants: a name given one value, once (or always the same)
@@ -412,6 +417,11 @@ class _Arrays:
     def data(self, st: ast.Data) -> ast.Data:
         items = []
         for it in st.items:
+            if it.pieces:
+                values = self.pieces(it)
+                if values is None:
+                    continue
+                it = replace(it, values=values, pieces=())
             a = self.arrays.get(it.name)
             if a is None:
                 if it.is_array:
@@ -427,15 +437,50 @@ class _Arrays:
                            "value) cannot give it values", it.span,
                            f"write CONSTANT {it.name} = v1, v2, ... (n*v repeats v)")
                 continue
-            if len(it.values) != count:
-                self.error(f"{it.name} is given {len(it.values)} value(s) for {count} "
+            values = it.values
+            if len(values) < count and self.acsl:
+                # (a DATA statement of the translators' Fortran: the elements after the
+                # list keep the zero of static storage, which published listings use
+                # for the unused rows of a table)
+                self.notes.append(Diagnostic(
+                    f"{it.name} is given {len(values)} value(s) for {count} elements: "
+                    f"the other {count - len(values)} are 0", it.span, severity="warning"))
+                values = values + (0.0,) * (count - len(values))
+            if len(values) != count:
+                self.error(f"{it.name} is given {len(values)} value(s) for {count} "
                            "elements", it.span,
                            f"give one value per element, in Fortran's order; {count}*0.0 "
                            f"sets all {count}")
                 continue
             items.extend(ast.DataItem(e, (v,), it.span)
-                         for e, v in zip(a.elements(), it.values, strict=True))
+                         for e, v in zip(a.elements(), values, strict=True))
         return replace(st, items=tuple(items))
+
+    def pieces(self, it: ast.DataItem) -> tuple[float, ...] | None:
+        """The values of a data item whose counts or values name constants (ACSL's
+        CONSTANT X = N*0.0 after PARAMETER (N = 4)); None where a name has no value
+        when the listing is read (said)."""
+        values: list[float] = []
+        for count, value, span in it.pieces:
+            try:
+                n = count if isinstance(count, int) else \
+                    self.value(ast.Name(count, span), {})
+                v = value if isinstance(value, float) else \
+                    self.value(ast.Name(value, span), {})
+            except _Unknown:
+                name = value if isinstance(value, str) and value not in self.constants \
+                    else count
+                self.error(f"{it.name}'s values name {name}, which has no value when the "
+                           "listing is read", span,
+                           "write a number, or the name of a PARAMETER/CONSTANT given a "
+                           "number before")
+                return None
+            if not (math.isfinite(n) and n == int(n) and 0 <= n <= MAX_ELEMENTS):
+                self.error(f"{it.name}: the repeat count {count} is {n:g}", span,
+                           f"a repeat count is a whole number from 0 to {MAX_ELEMENTS:,}")
+                return None
+            values.extend([v] * int(n))
+        return tuple(values)
 
     def report(self, st: ast.Report) -> ast.Report:
         if st.x in self.arrays:

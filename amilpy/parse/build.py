@@ -445,19 +445,39 @@ class Builder:
                         "a decimal comma in a data statement", self.span(item),
                         "the decimal separator is a point: write 1.5, not 1,5"))
                     continue
+                if not items:  # (a fault in the item before it, said there)
+                    continue
                 last = items[-1]
-                count = self.count(item.children[0]) if item.data == "more_repeat" else 1
-                value = self.value(item.children[-1])
+                piece = self.piece(item, item.children[0] if item.data == "more_repeat"
+                                   else None, item.children[-1])
+                if piece is None:
+                    continue
+                if last.pieces or not isinstance(piece[0], int) or \
+                        not isinstance(piece[1], float):
+                    pieces = last.pieces or tuple((1, v, last.span) for v in last.values)
+                    items[-1] = replace(last, values=(), pieces=(*pieces, piece),
+                                        is_array=True)
+                    continue
+                count, value = piece[0], piece[1]
                 if whole and math.isfinite(value):
                     value = float(math.trunc(value))
                 items[-1] = replace(last, values=last.values + (value,) * count,
                                     is_array=True)
                 continue
             name = str(item.children[0]).upper()
-            if item.data == "data_repeat":
-                count = self.count(item.children[1])
-                items.append(ast.DataItem(name, (self.value(item.children[2]),) * count,
-                                          self.span(item), is_array=True))
+            if item.data in ("data_item", "data_repeat"):
+                piece = self.piece(item, item.children[1] if item.data == "data_repeat"
+                                   else None, item.children[-1])
+                if piece is None:
+                    continue
+                count, value, _ = piece
+                array = item.data == "data_repeat"
+                if isinstance(count, int) and isinstance(value, float):
+                    items.append(ast.DataItem(name, (value,) * count, self.span(item),
+                                              is_array=array))
+                else:
+                    items.append(ast.DataItem(name, (), self.span(item), is_array=array,
+                                              pieces=(piece,)))
             elif item.data == "data_list":
                 values: list[float] = []
                 for entry in item.children[1:]:
@@ -470,12 +490,27 @@ class Builder:
                     value = self.value(entry.children[1] if entry.data == "repeat" else entry)
                     values.extend([value] * count)
                 items.append(ast.DataItem(name, tuple(values), self.span(item), True))
-            else:
-                items.append(ast.DataItem(name, (self.value(item.children[1]),), self.span(item)))
-            if whole:
+            if whole and items:
                 items[-1] = replace(items[-1], values=tuple(
                     float(math.trunc(v)) if math.isfinite(v) else v for v in items[-1].values))
         return ast.Data(keyword, tuple(items), self.span(node))
+
+    def piece(self, item, count, datum) -> tuple | None:
+        """(n, v, span) of a data value `n*v` (n = 1 without a count): a number, or in
+        the ACSL form the name of a constant given a value before (kept as its name,
+        for `arrays` to read when the constants are known); None when it cannot be."""
+        named = [t for t in (count, datum) if getattr(t, "type", None) == "NAME"]
+        if named and not self.acsl:
+            found = "*".join(str(t) for t in (count, datum) if t is not None)
+            self.errors.append(Diagnostic(
+                f"a data statement takes NAME = number (found {found!r})", self.span(item),
+                "PARAM, CONST and INCON take numbers only (in their lines `;` separates "
+                "items like `,`); derived values belong in INITIAL"))
+            return None
+        n = 1 if count is None else str(count).upper() if count in named else \
+            self.count(count)
+        v = str(datum).upper() if datum in named else self.value(datum)
+        return n, v, self.span(item)
 
     def count(self, token) -> int:
         """n of an array's n*v (at most language.MAX_ELEMENTS)."""

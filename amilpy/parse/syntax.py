@@ -274,6 +274,9 @@ class DataItem(Node):
     is_list: bool = False
     # ACSL's CONSTANT X = 1, 2, 3 (n*v repeats v): the values of the array X's elements
     is_array: bool = False
+    # the values as written where a count or a value names a constant, (n, v, span)
+    # each, n an int or a name, v a float or a name (`arrays` reads them; values is ())
+    pieces: tuple = ()
 
 
 @dataclass(frozen=True)
