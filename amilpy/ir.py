@@ -223,6 +223,11 @@ class Surface:
     span: Span
     description: str
     text: str = ""  # the expression as the listing writes it ("W1", "TIME - T1")
+    # where the program reads it only on some branches of IF blocks (an ELSE IF's test,
+    # a switch inside a THEN): the condition of those branches, a test of the modes of
+    # surfaces before it (None: read always). Elsewhere it is not evaluated: its value
+    # there may be a fault (1/X in an ELSE IF after IF (X == 0)) the program never meets
+    guard: Expr | None = None
 
 
 @dataclass(frozen=True)

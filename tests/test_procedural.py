@@ -464,3 +464,55 @@ def test_a_fault_inside_a_block_is_said_once_not_again_where_its_outputs_are_rea
     with pytest.raises(AmilError) as err:
         amilpy.loads(text, "p.csl")
     assert [d.message for d in err.value.diagnostics] == ["unknown function FOO"]
+
+
+GUARDED = """PROGRAM tests read only where their branch is taken
+  CINTERVAL CINT = 0.25
+  DERIVATIVE
+    PROCEDURAL (Y, W = X)
+      IF (X .LE. 0.5) THEN
+        Y = 0.0
+      ELSE IF (LOG(X - 0.5) .LT. -1.0) THEN
+        Y = 1.0
+      ELSE
+        Y = 2.0
+      END IF
+      W = 0.0
+      IF (X .GT. 0.5) THEN
+        IF (SQRT(X - 0.5) .GT. 0.3) W = 1.0
+      END IF
+    END
+    X = INTEG(1.0, 0.0)
+    Z = INTEG(Y + W, 0.0)
+    TERMT(T >= 1.5)
+  END
+END
+"""
+
+
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "STIFF", "LSODA", "DOP853", "RK4"])
+def test_a_test_is_read_only_where_its_branch_is_taken(method):
+    """Fortran reads an ELSE IF's test only where the tests before it are false, and
+    a test inside a THEN only where the THEN's is true: LOG(X - 0.5) and
+    SQRT(X - 0.5) have no value for X < 0.5, where neither is read. (They were read
+    at every step, and the run stopped at TIME 0 on a math domain error.) With
+    X = t: Y is 0, then 1 from 0.5 to 0.5 + 1/e, then 2; W is 1 from X = 0.59 on. So
+    Z(1.5) = 1/e + 2 (1 - 1/e) + (1.5 - 0.59) = 2.542120558828558; the crossings
+    are located (1e-9: RELERR 1e-11, a fixed-step route's step points on its grid
+    DELT = CINT/10 are exact for X = t)."""
+    run = amilpy.loads(GUARDED, "guarded.csl").run(method=method, advice=False)[0]
+    assert run.ok, run.message
+    assert abs(run.final["Z"] - (2.0 - math.exp(-1.0) + 0.91)) < 1e-9
+    turns = [e.time for e in run.events if "LOG" in e.switch]
+    assert turns and abs(turns[-1] - (0.5 + math.exp(-1.0))) < 1e-9
+
+
+def test_a_fault_in_a_test_is_said_where_it_happens():
+    """1/(X - 1) in a test that is read: the run stops where X = 1 (TIME 1, the point
+    the test was evaluated at, inside a step), not where the step began, with the
+    operand that was 0."""
+    text = GUARDED.replace("ELSE IF (LOG(X - 0.5) .LT. -1.0)", "ELSE IF (1.0/(X - 1.0) .LT. 0.0)")
+    run = amilpy.loads(text, "pole.csl").run(advice=False)[0]
+    assert not run.ok
+    assert "TIME = 1:" in run.message and "division by zero: X - 1.0 = 0" in run.message
+    assert "(line 7)" not in run.message  # (the test says its line once: "at line 7")

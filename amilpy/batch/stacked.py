@@ -200,6 +200,7 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
     from ..run.plan import same_instant, within
     from ..run.prepare import Cache
     from ..run.record import close_to
+    from ..run.watch import literal_modes
 
     ir = model.ir
     acsl = ir.acsl
@@ -250,8 +251,8 @@ def run_acsl(model, base, sets: dict[str, np.ndarray], runs: int, variables: lis
     except (ArithmeticError, ValueError, KeyError):
         return None
     z = [np.array([kept[name] for _, kept in members]) for name in code.kept]
-    m = list(code.modes_literal(plan.t0, list(code.y0), [0.0] * len(plan.watched),
-                                list(code.z0)))
+    m = literal_modes(code, plan, plan.t0, list(code.y0), [0.0] * len(plan.watched),
+                      list(code.z0))
 
     def columns(x) -> np.ndarray:
         return np.broadcast_to(np.asarray(x, dtype=float), (runs,)).copy()

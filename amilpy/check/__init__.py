@@ -189,7 +189,8 @@ def _check_csmp(program: ast.Program, name: str | None) -> ir.Model:
     model = ir.Model(
         name=name or program.path or "<listing>", path=program.path, source=program.source,
         initial=initial, dynamic=dynamic, terminal=terminal, states=low.states,
-        switches=low.switches, surfaces=low.surfaces, memories=low.memories, runs=data.runs,
+        switches=low.switches, surfaces=low.guarded_surfaces(), memories=low.memories,
+        runs=data.runs,
         data_names=data.names, spans={**data.spans, **names.defined}, data_kinds=data.kinds,
         units=units, warnings=low.warnings, terminal_code=terminal_code,
         weather=sorted(low.weather_used), closed=low.closed,

@@ -130,7 +130,7 @@ class _Check:
         model = ir.Model(
             name=name or "<listing>", path=self.program.path, source=self.program.source,
             initial=[], dynamic=dynamic, terminal=[], states=low.states,
-            switches=low.switches, surfaces=low.surfaces, memories=low.memories,
+            switches=low.switches, surfaces=low.guarded_surfaces(), memories=low.memories,
             runs=data.runs, data_names=data.names,
             spans={**data.spans, **self.names.defined}, data_kinds=data.kinds, units=units,
             acsl=acsl, warnings=low.warnings + self.warnings(initial, kept, initial_names),

@@ -234,14 +234,23 @@ class _Unit:
             elif isinstance(st, ast.If):
                 branches, after = [], []
                 inner: set[str] = set()
+                # the program reads a branch's test only where the tests before it are
+                # false, and its code only where its own is true: the surfaces made
+                # there are guarded so (`Lowering.guarded_surfaces`)
+                low, outer, passed = self.code.low, self.code.low.guard, []
                 for b in st.branches:
+                    low.guard = _all_of(outer, passed)
                     cond = None if b.cond is None else \
                         self.expr(b.cond, None, env, opaque, condition=True)
+                    low.guard = _all_of(outer, passed + ([cond] if cond is not None else []))
                     here = path + ((b.cond,) if b.cond is not None else ())
                     benv, bopaque = dict(env), set(opaque)
                     branches.append((cond, tuple(self.block(b.body, benv, bopaque, here))))
                     after.append((b.cond, benv, bopaque))
                     inner.update(assigned_names(b.body))
+                    if cond is not None:
+                        passed.append(ast.Not(cond, cond.span))
+                low.guard = outer
                 out.append(ir.IfThen(tuple(branches), st.span))
                 # (where the IF starts: a surface over it reads as RSW(...), not as
                 # the IF's first line)
@@ -278,6 +287,14 @@ class _Unit:
                 self.code.rep.error(f"{what} cannot stand inside an IF or PROCEDURAL block "
                                     f"of {self.section}", st.span)
         return out
+
+
+def _all_of(outer: ast.Node | None, tests: list) -> ast.Node | None:
+    """outer .AND. each of tests (None: no test at all)."""
+    out = outer
+    for t in tests:
+        out = t if out is None else ast.BinOp("AND", out, t, t.span)
+    return out
 
 
 def _selected(name: str, env: dict, opaque: set, after: list, span: Span) -> ast.Node | None:

@@ -10,6 +10,7 @@ purpose are one `ir.Surface`, so a run has one mode for it wherever it stands.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 
 from .. import ir
 from ..diagnostics import Diagnostic, Reporter, Span
@@ -138,6 +139,10 @@ class Lowering:
         self.weather_used: dict[str, list[Span]] = {}
         self.weather_memory: dict[str, int] = {}  # the memory holding each name's value
         self.closed: set[int] = set()  # TERMT surfaces true at zero (>=, <=)
+        # the condition of the IF branches whose code is being lowered (None: none),
+        # and each surface's so far: the branches it is read on (`guarded_surfaces`)
+        self.guard: ast.Node | None = None
+        self.guards: dict[int, ast.Node | None] = {}
 
     def weather_value(self, name: str, span: Span) -> ir.MemoryValue:
         """A weather name's value: the day's, held from the last restart (library's
@@ -238,14 +243,46 @@ class Lowering:
         key = None
         if purpose in (ir.Purpose.SWITCH, ir.Purpose.MEMORY):
             key = (kind, purpose, self.shapes.shape(expr))
-            if key in self.interned:
-                return self.interned[key]
-        index = len(self.surfaces)
-        self.surfaces.append(ir.Surface(index, expr, kind, owner, purpose, ir.Depends.STATE,
-                                        span, description, text))
-        if key is not None:
-            self.interned[key] = index
+        index = self.interned.get(key) if key is not None else None
+        if index is None:
+            index = len(self.surfaces)
+            self.surfaces.append(ir.Surface(index, expr, kind, owner, purpose,
+                                            ir.Depends.STATE, span, description, text))
+            if key is not None:
+                self.interned[key] = index
+            self.guards[index] = self.guard
+        else:  # (read on these branches too: on either)
+            old = self.guards[index]
+            self.guards[index] = None if old is None or self.guard is None else \
+                old if old == self.guard else ast.BinOp("OR", old, self.guard, span)
         return index
+
+    def guarded_surfaces(self) -> list[ir.Surface]:
+        """The surfaces, each a switch's read only on some branches of IF blocks with
+        the condition of those branches (`ir.Surface.guard`) where that condition
+        tests modes of surfaces before it alone (so the code that evaluates surfaces
+        can test it from the modes, without computing anything else)."""
+        relations = set(RELATIONS.values())
+
+        def modes_only(e: ast.Node, k: int) -> bool:
+            for n in ast.walk(e):
+                if isinstance(n, ir.SwitchValue):
+                    sw = self.switches[n.switch]
+                    if sw.func not in relations or any(j >= k for j in sw.surfaces):
+                        return False
+                elif not (isinstance(n, (ast.Not, ast.Num)) or
+                          (isinstance(n, ast.BinOp) and n.op in ("AND", "OR"))):
+                    return False
+            return True
+
+        out = []
+        for s in self.surfaces:
+            g = self.guards.get(s.index)
+            if g is not None and s.purpose is ir.Purpose.SWITCH and \
+                    s.kind is ir.SurfaceKind.SIGN and modes_only(g, s.index):
+                s = replace(s, guard=g)
+            out.append(s)
+        return out
 
     def memory(self, call: ast.Call, target: str | None) -> int:
         func = lookup(call.func, len(call.args))

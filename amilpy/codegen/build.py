@@ -23,7 +23,7 @@ from ..parse import syntax as syn
 from ..parse.syntax import deep_enough, no_collection
 from . import jacobian, rolled
 from .consts import evaluate_constant, initial_slots
-from .emit import Emitter, Setting, needs, needs_memories, printed_only_surfaces
+from .emit import Emitter, Setting, needs, needs_memories, printed_only_surfaces, truth
 from .faults import STATEMENTS, Statement
 from .modelcode import ModelCode
 from .pytree import (
@@ -287,17 +287,30 @@ class Compiler:
                 k = py.Name(self.mode_names[i], py.Load())
                 v = py.BinOp(py.Constant(0.5), py.Sub(),
                              py.Call(py.Name("_ABS", py.Load()), [py.BinOp(v, py.Sub(), k)], []))
+            if s.guard is not None:
+                # (not read where its branch is not taken: there it stays on its side)
+                v = py.IfExp(truth(em.emit(s.guard)), v,
+                             py.Name(self.mode_names[i], py.Load()))
             values.append(on_line(v, self.surface_line(i)))
         body.append(py.Return(py.List(values, py.Load())))
         return function("surf", ("t", "y", "m", "z"), body)
 
     def modes(self) -> py.FunctionDef:
-        """The literal modes of the watched surfaces (the restart rule starts there)."""
+        """The literal modes of the watched surfaces (the restart rule starts there).
+        A guarded surface (`ir.Surface.guard`) is read where the modes given select
+        its branch, else keeps its mode: a restart settles them in turn
+        (`SurfaceWatch.choose_modes`), the step-point mode likewise
+        (`watch.literal_modes`)."""
         em = self.emitter("rhs")
         model = self.model
         body = self.prologue() + self.surface_algebra(em)
-        values = [on_line(em.literal_mode(model.surfaces[i].kind, em.emit(model.surfaces[i].expr)),
-                          self.surface_line(i)) for i in self.watched]
+        values = []
+        for i in self.watched:
+            s = model.surfaces[i]
+            v = em.literal_mode(s.kind, em.emit(s.expr))
+            if s.guard is not None:
+                v = py.IfExp(truth(em.emit(s.guard)), v, py.Name(self.mode_names[i], py.Load()))
+            values.append(on_line(v, self.surface_line(i)))
         body.append(py.Return(py.List(values, py.Load())))
         return function("modes", ("t", "y", "m", "z"), body)
 

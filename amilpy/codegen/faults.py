@@ -47,7 +47,9 @@ class FaultReport:
     text: str  # the operation with its operand values: "division by zero: JL = 0"
 
     def __str__(self) -> str:
-        where = f" (line {self.span.line})" if self.span else ""
+        # (a surface's description already says its line: "X .LT. 1 at line 9")
+        where = f" (line {self.span.line})" if self.span and \
+            not self.target.endswith(f" at line {self.span.line}") else ""
         return f"{self.target}{where}: {self.text}"
 
 
@@ -72,6 +74,24 @@ def statement_of(exc: BaseException) -> tuple[Statement | None, str, list] | Non
             found = (stmt, tb.tb_frame.f_code.co_name, table)
         tb = tb.tb_next
     return found
+
+
+def fault_point(exc: BaseException) -> tuple[float, list, list, list] | None:
+    """(t, y, m, z) the innermost generated function in `exc`'s traceback was called
+    with, where that was one point (not columns): where the fault happened, which may
+    lie past the last instant the run took (a surface evaluated inside a step)."""
+    point = None
+    tb = exc.__traceback__
+    while tb is not None:
+        frame, code = tb.tb_frame, tb.tb_frame.f_code
+        if frame.f_globals.get(STATEMENTS) is not None:
+            point = None
+            if code.co_varnames[:code.co_argcount] == ("t", "y", "m", "z"):
+                args = tuple(frame.f_locals.get(k) for k in ("t", "y", "m", "z"))
+                if isinstance(args[0], float) and isinstance(args[1], list):
+                    point = args
+        tb = tb.tb_next
+    return point
 
 
 class _Fault(Exception):

@@ -49,6 +49,7 @@ from .plan import (
     within,
 )
 from .prepare import Cache, Prepared, before_run, constant_modes, random_seed
+from .watch import literal_modes
 
 MIN_INTERVAL = 1e-100  # the least CINT a run takes
 
@@ -340,7 +341,7 @@ class AcslRun(_Run):
         at zero to rounding (a crossing just located) goes the way the motion takes
         it, not by the sign of its rounding error."""
         if self.plan.step_point:  # the branches as they read here, nothing located
-            new = list(self.c.modes_literal(cur.t, cur.y.tolist(), cur.m, cur.z))
+            new = literal_modes(self.c, self.plan, cur.t, cur.y.tolist(), cur.m, cur.z)
             self.integ.record_changes(cur.t, cur.y, cur.m, new, cur.z, set())
             cur.m[:] = new
             return

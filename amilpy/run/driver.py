@@ -16,6 +16,7 @@ import numpy as np
 
 from .. import interrupts, ir
 from ..codegen import ModelCode, evaluate_constant
+from ..codegen.faults import fault_point
 from ..diagnostics import AmilError
 from ..library.runtime import table_warnings
 from ..outcome import Failure, message
@@ -160,8 +161,11 @@ class _Run:
             # non-finite values an earlier fault gave: the run ends here, with what it
             # computed so far, and the fault that really happened
             status = Status.FAILED
-            stop = Stop(Failure.FAULT, cur.t, detail=fault_text(
-                self.model, c, Fault(exc, cur.t, cur.y.tolist(), cur.m, cur.z)))
+            # (at the point the generated code was evaluated at, where it says: a
+            # surface inside a step is past the cursor)
+            t, y, m, z = fault_point(exc) or (cur.t, cur.y.tolist(), cur.m, cur.z)
+            stop = Stop(Failure.FAULT, t, detail=fault_text(self.model, c,
+                                                            Fault(exc, t, y, m, z)))
             if c.fault_line(exc) is None:
                 stop = integ.fault_or(stop)
             text = message(stop.kind, t=stop.t, **stop.fields)

@@ -58,7 +58,7 @@ from .prepare import Cache, prepare
 from .slide import MAX_SLIDING
 from .steppoint import StepPoint
 from .variational import Tangent
-from .watch import SurfaceWatch, TooManySlides
+from .watch import SurfaceWatch, TooManySlides, literal_modes
 
 MAX_REFINES = 64  # steps taken again in pieces, per advance (see grazing.py)
 GIVE_UP = 8  # dips of one surface found in one advance before it is left alone
@@ -170,8 +170,8 @@ class Flow:
                 # the branches as they read at t0; memory is updated at each step point,
                 # the first one included, when the flow advances
                 when = self.plan.t0 if t is None else t
-                m = self.c.modes_literal(when, y.tolist(), [0.0] * len(
-                    self.plan.watched), z) if m is None else m
+                m = literal_modes(self.c, self.plan, when, y.tolist(),
+                                  [0.0] * len(self.plan.watched), z) if m is None else m
                 return Cursor(when, y, list(m), list(z))
             return start_cursor(self.c, self.plan, self.watch, self.opts, y, z, m, t)
         except (ArithmeticError, ValueError, TooManySlides) as exc:

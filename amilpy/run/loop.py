@@ -212,7 +212,7 @@ class Integrator(RunLoop, SegmentStart, StepWatch, Restarts, FastPaths):
         """Step until the segment ends: its bound, a restart, or a stop; or until it
         pauses at t_end, when it goes on past it (see `integrate`)."""
         c, plan = self.c, self.plan
-        e_prev = c.surf(cur.t, cur.y.tolist(), cur.m, cur.z) if plan.watch_idx else []
+        e_prev = self.watch.surfaces_here(cur.t, cur.y, cur.m, cur.z) if plan.watch_idx else []
         self._grazing = self._grazing_bands(cur, e_prev, self._exited)
         self._exited = set()
         take = self._fast_path(stepper, cur, rec)

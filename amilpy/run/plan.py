@@ -104,6 +104,7 @@ class Watched:
     gradient: np.ndarray | None  # d e/d y when the surface is linear in the states
     breakpoint_only: bool  # affine in TIME: handled as breakpoints
     direction: int = 0  # SCHEDULE: +1 .XP., -1 .XN., 0 .XZ. (either way)
+    guarded: bool = False  # read by the program on some branches only (`ir.Surface.guard`)
 
     def fires(self, old: float, new: float) -> bool:
         """Whether entering `new` from `old` is a crossing this SCHEDULE runs on:
@@ -616,7 +617,7 @@ def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: ModelCode,
         watched.append(Watched(i, kind, Purpose(s.purpose), s.description, s.text,
                                None if g is None else np.asarray(g),
                                i in c.affine_time or i in c.train_surfaces,
-                               crossing[1] if crossing else 0))
+                               crossing[1] if crossing else 0, s.guard is not None))
     roots, breakpoints = time_breakpoints(c, watched, t0, fintim)
     pos = {i: k for k, i in enumerate(c.watched)}
     resets = []

@@ -40,7 +40,7 @@ from .faults import Fault, fault_text
 from .loop import Cursor, RunLoop, Stop
 from .plan import Grid, Options, Purpose, RunPlan, same_instant
 from .record import Recorder
-from .watch import SurfaceWatch
+from .watch import SurfaceWatch, literal_modes
 
 
 def steps(length: float, delt: float) -> int:
@@ -159,7 +159,7 @@ class StepPoint(RunLoop):
             cur.z[:] = c.mem(t, yl, cur.m, cur.m, cur.z)
         stop, m = False, cur.m
         if plan.watched:
-            m = c.modes_literal(t, yl, cur.m, cur.z)
+            m = literal_modes(c, plan, t, yl, cur.m, cur.z)
             stop = self._changes(t, cur.m, m)
             cur.m[:] = m
         cur.t, cur.y = t, y

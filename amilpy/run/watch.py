@@ -18,6 +18,8 @@ step). It never steps; the loop hands it states, modes and dense outputs.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..codegen import ModelCode
@@ -112,7 +114,7 @@ class SurfaceWatch:
         # settle the signs again with the new branches until nothing moves.
         for _ in range(len(new) + 1):
             before = list(new)
-            lit = self.c.modes_literal(t, y.tolist(), new, z)
+            lit = self.literal_here(t, y, new, z)
             for k in range(len(new)):
                 if self.watched[k].kind is SurfaceKind.LEVEL:
                     if k not in decided and (k in at_zero or first or lit[k] != new[k]):
@@ -131,6 +133,40 @@ class SurfaceWatch:
             if new == before:
                 break
         return new
+
+    def literal_here(self, t: float, y: np.ndarray, m, z) -> list[float]:
+        """The literal modes at (t, y) in the branches m; a surface read on some
+        branches only (`Watched.guarded`) that has no sign at that point itself takes
+        the one it has just after it, along the motion. (Such a test may be undefined
+        where its branch begins: ELSE IF (LOG(X - 0.5) < -1) after IF (X <= 0.5), at
+        X = 0.5, a located crossing a float either side; the program first reads it
+        just after.)"""
+        return self._ahead(self.c.modes_literal, t, y, m, z, lambda v: v == 0.0)
+
+    def surfaces_here(self, t: float, y: np.ndarray, m, z) -> list[float]:
+        """The surfaces at (t, y) in the branches m (a segment's start); a guarded one
+        with no value there, its value just after it (`literal_here`)."""
+        return self._ahead(self.c.surf, t, y, m, z, lambda v: not math.isfinite(v))
+
+    def _ahead(self, fn, t: float, y: np.ndarray, m, z, undefined) -> list[float]:
+        guarded = [k for k, w in enumerate(self.watched) if w.guarded]
+        try:
+            here = list(fn(t, y.tolist(), m, z))
+        except (ArithmeticError, ValueError):
+            if not guarded:
+                raise
+            here = None
+        if here is not None and not any(undefined(here[k]) for k in guarded):
+            return here
+        h = self.lookahead_h
+        f = np.asarray(self.field(t, y, m, z), dtype=float)
+        after = list(fn(t + h, (y + h * f).tolist(), m, z))
+        if here is None:
+            return after
+        for k in guarded:
+            if undefined(here[k]):
+                here[k] = after[k]
+        return here
 
     def after_memory(self, t: float, y: np.ndarray, m: list[float], z_before, z_after
                      ) -> list[float]:
@@ -338,6 +374,21 @@ class SurfaceWatch:
         if ga > 0 or gb <= 0:
             return tb
         return brentq(g, ta, tb, xtol=_XTOL * max(abs(tb), 1e-300), maxiter=200)
+
+
+def literal_modes(c, plan: RunPlan, t: float, y: list[float], m, z) -> list[float]:
+    """The modes the tests read at (t, y), from the modes m: where a surface is read on
+    some branches only (`Watched.guarded`: an ELSE IF's test), read again from the
+    modes found until nothing moves, as the program reads its tests in turn (the
+    step-point mode's branches, a flow's first ones)."""
+    new = list(c.modes_literal(t, y, m, z))
+    if any(w.guarded for w in plan.watched):
+        for _ in range(len(new)):
+            again = list(c.modes_literal(t, y, new, z))
+            if again == new:
+                break
+            new = again
+    return new
 
 
 def crossings(plan: RunPlan, surfaces: list[np.ndarray], m) -> dict[int, np.ndarray]:
