@@ -124,7 +124,9 @@ CONTROL_KEYWORDS: tuple[str, ...] = ("ALGORITHM", "NSTEPS", "MAXTERVAL", "MINTER
 # type statements -> what they store (double precision arithmetic throughout)
 TYPE_KEYWORDS: dict[str, str] = {"LOGICAL": "LOGICAL", "INTEGER": "INTEGER", "REAL": "REAL",
                                  "DOUBLEPRECISION": "REAL", "DIMENSION": "REAL",
-                                 "FIXED": "INTEGER"}  # CSMP III's FIXED (section 13)
+                                 "FIXED": "INTEGER",  # CSMP III's FIXED (section 13)
+                                 # a text a CONSTANT gives, read by nothing that computes
+                                 "CHARACTER": "CHARACTER"}
 
 # Every statement keyword of the three forms, as the highlighter and the editors'
 # grammars show them (grammar/amil.lark is the parser's own list); TITLE, LABEL and
@@ -150,8 +152,6 @@ REFUSED: dict[str, tuple[str, str]] = {
     "TABLE": ("the TABLE statement", "write a table as FUNCTION F = x1,y1, x2,y2, ... and "
               "read it with AFGEN(F, X)"),
     "SUBMODEL": ("ACSL's SUBMODEL", "write the statements out"),
-    "CHARACTER": ("CHARACTER variables", "remove it: strings are only TERMT messages, "
-                  "WEATHER/TRANSLATION values and comments"),
     "EVENT": ("FST 3's EVENT blocks", "write a DISCRETE section run by SCHEDULE (ACSL form)"),
     "ZEROCONDITION": ("an FST 3 EVENT block's ZEROCONDITION", "write a DISCRETE section run by "
                       "SCHEDULE name .XN. condition (ACSL form)"),

@@ -399,3 +399,37 @@ def test_an_element_is_named_on_the_command_line(tmp_path):
     assert rows[0].split(",")[1:3] == ["K(2)", "MIN_X(2)"]
     assert [float(r.split(",")[2]) for r in rows[1:]] == pytest.approx(
         [math.exp(-0.5), math.exp(-1.0)], rel=1e-8)
+
+
+def test_character_names_keep_their_texts_aside():
+    """Molly declares text for messages only routines amilpy does not run would print:
+    CHARACTER bufferslp*80 and CONSTANT bufferslp = '...' are read and set aside (a
+    length, CHARACTER*40 or REAL*8, is read and left). X' = K = 2: X(1) = 2."""
+    text = """PROGRAM texts
+  INITIAL
+    CHARACTER bufferslp*80;
+    Character*40 other
+    REAL*8 K
+    Constant bufferslp = 'RumPartSizeSlp is positive - it''s likely non-biological'
+    CONSTANT other = 'x', K = 2.0
+  END
+  DERIVATIVE
+    X = INTEG(K, 0.0)
+    TERMT(T >= 1.0)
+  END
+END
+"""
+    run = amilpy.loads(text, "texts.csl").run(advice=False)[0]
+    assert abs(run.final["X"] - 2.0) < 1e-12 and "BUFFERSLP" not in run.final
+    # read in a computation: said where it is read, not "used but never defined"
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text.replace("INTEG(K, 0.0)", "INTEG(K + bufferslp, 0.0)"), "t.csl")
+    d = err.value.diagnostics[0]
+    assert d.message == "BUFFERSLP is CHARACTER text: a run computes with numbers only"
+    assert (d.span.line, d.span.column) == (10, 19)
+    # a text for a name that is no CHARACTER
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text.replace("CHARACTER bufferslp*80;", ""), "t.csl")
+    d = err.value.diagnostics[0]
+    assert d.message.startswith("the string 'RumPartSizeSlp is positive - it's likely")
+    assert "CHARACTER BUFFERSLP*80" in d.hint and d.span.line == 6

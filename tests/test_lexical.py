@@ -67,7 +67,7 @@ def test_a_string_as_a_value_is_an_error_naming_it():
     err = fault("PROGRAM p\nCONSTANT B = 'text'\nDERIVATIVE\nX = INTEG('abc', 0.0)\n"
                 "TERMT(X >= 1.0)\nEND\nEND\n", "p.csl")
     assert [(d.span.line, d.message) for d in err.diagnostics] == [
-        (2, "the string 'text' cannot be a value"), (4, "the string 'abc' cannot be a value")]
+        (2, "the string 'text' cannot be a value of B"), (4, "the string 'abc' cannot be a value")]
     assert "TERMT message" in err.diagnostics[0].hint
 
 

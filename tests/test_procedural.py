@@ -507,12 +507,18 @@ def test_a_test_is_read_only_where_its_branch_is_taken(method):
     assert turns and abs(turns[-1] - (0.5 + math.exp(-1.0))) < 1e-9
 
 
-def test_a_fault_in_a_test_is_said_where_it_happens():
-    """1/(X - 1) in a test that is read: the run stops where X = 1 (TIME 1, the point
-    the test was evaluated at, inside a step), not where the step began, with the
-    operand that was 0."""
-    text = GUARDED.replace("ELSE IF (LOG(X - 0.5) .LT. -1.0)", "ELSE IF (1.0/(X - 1.0) .LT. 0.0)")
+def test_the_rows_before_a_fault_in_a_test_are_kept():
+    """1/(X - 1) < 0 read at every step, X = t: the test has no value at TIME 1, a row
+    instant. The rows before it are printed (they were lost with the batch of rows
+    the fault fell in) and the run stops at TIME 1, where the test was evaluated
+    (it said TIME 0, where the step began), with the operand that was 0 and the
+    test's line once."""
+    text = ("PROGRAM pole\n  CINTERVAL CINT = 0.5\n  DERIVATIVE\n    PROCEDURAL (Y = X)\n"
+            "      IF (1.0/(X - 1.0) .LT. 0.0) THEN\n        Y = 1.0\n      ELSE\n"
+            "        Y = 2.0\n      END IF\n    END\n    X = INTEG(1.0, 0.0)\n"
+            "    Z = INTEG(Y, 0.0)\n    TERMT(T >= 2.0)\n  END\nEND\n")
     run = amilpy.loads(text, "pole.csl").run(advice=False)[0]
-    assert not run.ok
-    assert "TIME = 1:" in run.message and "division by zero: X - 1.0 = 0" in run.message
-    assert "(line 7)" not in run.message  # (the test says its line once: "at line 7")
+    assert not run.ok and "TIME = 1:" in run.message
+    assert "division by zero: X - 1.0 = 0" in run.message
+    assert "at line 5" in run.message and "(line 5)" not in run.message
+    assert list(run.t[:2]) == [0.0, 0.5] and abs(run["Z"][1] - 0.5) < 1e-12

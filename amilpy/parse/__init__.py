@@ -14,7 +14,7 @@ from importlib import resources
 
 from ..diagnostics import AmilError, Diagnostic, Span
 from ..language import ACSL_HEADS, split_lines
-from . import arrays
+from . import arrays, texts
 from . import syntax as ast
 from .blocks import Nester
 from .build import Builder
@@ -92,6 +92,7 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     statements, macros = expand(statements, builder.errors, form == "ACSL")
     statements = lower_jumps(statements, builder.errors, sorted_top=form == "ACSL")
     statements = _subroutines_called(statements, text, path, builder.errors)
+    statements = texts.set_aside(statements, builder.errors)
     statements, fixed = arrays.expand(statements, builder.errors, form == "ACSL",
                                       nester.notes)
     if builder.errors:

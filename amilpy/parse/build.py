@@ -238,10 +238,11 @@ class Builder:
     def st_declare(self, node) -> ast.Declare | None:
         words = [str(c).upper().replace(" ", "").replace("\t", "") for c in node.children
                  if not hasattr(c, "data")]
-        items = [c for c in node.children if hasattr(c, "data")]
+        items = [c for c in node.children if getattr(c, "data", "length") != "length"]
         kind = TYPE_KEYWORDS[words[-1]]
         names = [c.children[0] for c in items]
-        sizes = tuple(tuple(self.expr(e) for e in c.children[1:]) for c in items)
+        sizes = tuple(tuple(self.expr(e) for e in c.children[1:]
+                            if getattr(e, "data", None) != "length") for c in items)
         return ast.Declare(kind, tuple(str(n).upper() for n in names),
                            tuple(self.span(n) for n in names), self.span(node),
                            sizes if any(sizes) else ())
@@ -465,6 +466,12 @@ class Builder:
                                     is_array=True)
                 continue
             name = str(item.children[0]).upper()
+            if item.data == "data_item" and self.acsl and \
+                    getattr(item.children[-1], "data", None) == "string":
+                # (a CHARACTER name's text: `texts` keeps it aside, or says it is none)
+                items.append(ast.DataItem(name, (), self.span(item), text=string_value(
+                    str(item.children[-1].children[0]))))
+                continue
             if item.data in ("data_item", "data_repeat"):
                 piece = self.piece(item, item.children[1] if item.data == "data_repeat"
                                    else None, item.children[-1])

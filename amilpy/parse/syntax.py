@@ -277,6 +277,7 @@ class DataItem(Node):
     # the values as written where a count or a value names a constant, (n, v, span)
     # each, n an int or a name, v a float or a name (`arrays` reads them; values is ())
     pieces: tuple = ()
+    text: str | None = None  # a text in quotes (ACSL form), for a CHARACTER name
 
 
 @dataclass(frozen=True)

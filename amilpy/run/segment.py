@@ -169,8 +169,17 @@ class SegmentStart:
         def wrong_at(T: np.ndarray, Y: np.ndarray, only=None) -> tuple[int, int]:
             if not len(T):
                 return 0, 0
-            with np.errstate(all="ignore"):
-                E = [column(v, len(T)) for v in c.surf_v(T, list(Y.T), m, z)]
+            try:
+                with np.errstate(all="ignore"):
+                    E = [column(v, len(T)) for v in c.surf_v(T, list(Y.T), m, z)]
+            except (ArithmeticError, ValueError):
+                # a surface with no value at one of the instants (1/(X - 1) where X = 1):
+                # the instants before it are taken, and the fault is met and said
+                # where it happens, step by step
+                bad = next((i for i in range(len(T)) if _faults(c, T[i], Y[i], m, z)), None)
+                if bad is None:
+                    raise
+                return bad, bad
             found = crossings(plan, E, m)
             if only is not None:
                 found = {k: mask for k, mask in found.items() if k in only}
@@ -196,3 +205,12 @@ class SegmentStart:
         c = self.c
         return SegmentJacobian(len(cur.y), lambda: jacobian_for(c), cur.m, cur.z, f,
                                lambda: structure_for(c))
+
+
+def _faults(c, t: float, y: np.ndarray, m, z) -> bool:
+    """Whether the surfaces have no value at (t, y)."""
+    try:
+        c.surf(float(t), y.tolist(), m, z)
+    except (ArithmeticError, ValueError):
+        return True
+    return False
