@@ -46,8 +46,7 @@ def locate_crossings(watch: SurfaceWatch, stepper, hits: list[int], m, z, ta: fl
     """The root in [ta, tb] of every crossed surface in `hits` (by watched position),
     and those with nothing to bracket (they take their sign at tb). `ends`: the
     watched surfaces at ta and at tb, when the caller has them."""
-    refines = hasattr(stepper, "refine")
-    coarse = refines and not stepper.sharpen()
+    coarse = stepper.refines and not stepper.sharpen()
     interp = stepper.interpolant()
     roots, departed = _roots(watch, hits, m, z, interp, ta, tb, segment_start,
                              COARSE * (tb - ta) if coarse else None, ends)

@@ -27,6 +27,14 @@ Optional capability, declared by subclassing `Chunked` (the AUTO route):
                                    the wrong side, as the stepper found (None: it
                                    does not look; the loop does)
 
+Optional capability, declared by `refines = True` (AUTO's odeint chunks, whose dense
+output is a cubic between two instants many LSODA steps apart):
+
+    sharpen() -> bool              a quintic through a third instant, if close enough
+    refine(t, surfaces)            integrate a narrow window around t again; the
+                                   dense output with its exact ends
+    resolved(t, surfaces) -> bool  whether the dense output around t is that narrow
+
 To add a route: subclass `Stepper` (the constructor takes what `make_stepper`
 passes for its kind), then add a row to `routes.ROUTES` whose `stepper` names
 the class in `steppers.STEPPERS`. Per-route constants (stability limits, local
@@ -83,6 +91,12 @@ class Stepper:
     # (a `Chunked` stepper: many accepted instants handed over at once); "ahead" (the
     # compiled kernel: steps, locates and switches on its own, `advance`/`done`).
     fast_path: str | None = None
+    # Whether its dense output between two accepted instants may be too coarse to
+    # locate a crossing on (AUTO's cubic over many of LSODA's steps): then it has
+    # `sharpen()`, `refine(t, surfaces)` and `resolved(t, surfaces)`, which
+    # `run.edges.locate_crossings` calls (every other route's dense output is its
+    # method's own, as accurate as its steps)
+    refines: bool = False
 
     @property
     def nfev(self) -> int:  # pragma: no cover - interface

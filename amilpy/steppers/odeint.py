@@ -596,6 +596,7 @@ class OdeintStepper(Chunked):
             self._nfev += 1
         return f
 
+    refines = True  # (the cubic over an interval of many LSODA steps: `refine`)
     SHARP = 10.0  # a quintic whose cubic is this many tolerances off needs no window
     WINDOW = 0.01  # share of the interval integrated again around a crossing
 
