@@ -69,7 +69,12 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
     ("ACSL", "`SCHEDULE D .XN. H`", "D runs where H crosses zero downwards, located"),
     ("ACSL", "`DISCRETE D` / `INTERVAL DT = 0.5`", "D runs every 0.5 from the start"),
     ("ACSL", "`IF (X .GT. 0.0) THEN ... ELSE ... END IF`", "in sorted code a switch on X, "
-     "located; in written-order code a branch"),
+     "located; in written-order code a branch. An ELSE IF's test is read only where the "
+     "tests before it are false, a test inside a THEN only where the THEN's is true, as "
+     "Fortran reads them (`ELSE IF (LOG(X - 0.5) < -1.0)` after `IF (X <= 0.5)`)"),
+    ("ACSL", "`CHARACTER MSG*80`, `CONSTANT MSG = 'text'`", "read and set aside: a run "
+     "computes with numbers, so a CHARACTER name read in a computation is an error; a "
+     "length (`CHARACTER*40`, `REAL*8`) is read and left"),
     ("ACSL", "`PROCEDURAL (Y = X) ... END`", "one sorted unit with outputs Y and inputs X, "
      "written order inside"),
     ("ACSL", "`IF (C) GO TO 10`, `GO TO P`, `10: X = 1.0`, `P: CONTINUE`", "a jump forward in "
@@ -226,7 +231,12 @@ DISCRETE section) reads through `ELEMENT(K, X1, ...)`, and a subscript outside t
 array stops the run with its value. `X = INTEG(XD, X0)` and any statement that
 assigns a whole array hold for each element; `PRINT X` lists the elements. The
 constants that size an array or bound a written-out loop are fixed when the listing
-is read: `--set` may not change them.
+is read: `--set` may not change them. A value or a repeat count in a CONSTANT list
+may name a constant given a number before, as Fortran's DATA takes a PARAMETER
+(`PARAMETER (NH = 3)` ... `CONSTANT F = NH*0.0`; it is fixed too), and a list shorter
+than its array leaves the other elements 0, with a warning (the translators' static
+storage; published tables rely on it). A CONSTANT inside a PROCEDURAL or an IF is a
+declaration like any other.
 
 ### MACRO
 
