@@ -262,6 +262,7 @@ class OdeintStepper(Chunked):
         self._exam_bad = math.inf  # the first instant on the wrong side
         self._exam_limit = t0  # the step ends before it looked at up to here
         self._exam_to = t0
+        self._crossing: tuple | None = None  # (what `_crossing_step` was asked, found)
 
     @property
     def nfev(self) -> int:
@@ -671,6 +672,16 @@ class OdeintStepper(Chunked):
         the interval's first step is not where they cross.)"""
         if self.watch is None or not len(self.S):
             return None
+        # (refine and resolved ask the same of one interval: looked at once)
+        key = (self.t_old, self.t, frozenset(surfaces) if surfaces is not None else None,
+               id(self.S), tuple(self.watch[1]), tuple(self.watch[2]))
+        if self._crossing is not None and self._crossing[0] == key:
+            return self._crossing[1]
+        found = self._crossing_in(surfaces)
+        self._crossing = (key, found)
+        return found
+
+    def _crossing_in(self, surfaces) -> tuple[float, float] | None:
         lo = int(np.searchsorted(self.S, self.t_old, side="right"))
         hi = int(np.searchsorted(self.S, self.t, side="left"))
         if hi <= lo:
