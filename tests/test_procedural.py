@@ -522,3 +522,53 @@ def test_the_rows_before_a_fault_in_a_test_are_kept():
     assert "division by zero: X - 1.0 = 0" in run.message
     assert "at line 5" in run.message and "(line 5)" not in run.message
     assert list(run.t[:2]) == [0.0, 0.5] and abs(run["Z"][1] - 0.5) < 1e-12
+
+
+ACOS_TEST = """PROGRAM a test with no value past its branch
+  CINTERVAL CINT = 0.25
+  INITIAL
+    SCHEDULE UP .AT. TUP
+  END
+  DERIVATIVE
+    CONSTANT X0 = 0.0, V = 1.0, TUP = 9.0, JUMP = 0.0
+    PROCEDURAL (Y = X)
+      IF (X .GT. 1.0) THEN
+        Y = 0.0
+      ELSE IF (ACOS(X) .GT. 1.0) THEN
+        Y = 1.0
+      ELSE
+        Y = 2.0
+      END IF
+    END
+    X = INTEG(V, X0)
+    Z = INTEG(Y, 0.0)
+    TERMT(T >= 1.5)
+  END
+  DISCRETE UP
+    X = X + JUMP
+  END
+END
+"""
+
+
+@pytest.mark.parametrize("values, expected", [
+    # X = t leaves the ELSE IF's branch inside a step: ACOS(X) is not read past X = 1
+    # (the step's end was read with the branch it began in: math domain error)
+    ({}, math.cos(1.0) + 2.0 * (1.0 - math.cos(1.0))),
+    # X = 1.5 - t starts where the ELSE IF is not read (the first modes are zeros: it
+    # was read, and the run could not start)
+    ({"X0": 1.5, "V": -1.0}, math.cos(1.0) + 2.0 * (1.0 - math.cos(1.0))),
+    # a DISCRETE section moves X from 0.4 to 1.1 past the branch: the restart reads
+    # the test after it, where the program does (it was read at X = 1.1). Y = 1 up to
+    # TIME 0.4 (X < cos 1), 0 after (X > 1)
+    ({"TUP": 0.4, "JUMP": 0.7}, 0.4),
+])
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "DOP853", "RK4"])
+def test_a_test_past_its_branch_is_not_read(values, expected, method):
+    """ACOS(X) has no value for X > 1, where the IF before it takes its own branch.
+    Y = 2 while ACOS(X) <= 1 (X >= cos 1), 1 below, 0 above X = 1; Z = int Y dt,
+    exact at the located crossings (1e-9)."""
+    run = amilpy.loads(ACOS_TEST, "acos.csl").run(method=method, advice=False,
+                                                  **values)[0]
+    assert run.ok, run.message
+    assert abs(run.final["Z"] - expected) < 1e-9

@@ -287,32 +287,62 @@ class Compiler:
                 k = py.Name(self.mode_names[i], py.Load())
                 v = py.BinOp(py.Constant(0.5), py.Sub(),
                              py.Call(py.Name("_ABS", py.Load()), [py.BinOp(v, py.Sub(), k)], []))
-            if s.guard is not None:
-                # (not read where its branch is not taken: there it stays on its side)
-                v = py.IfExp(truth(em.emit(s.guard)), v,
-                             py.Name(self.mode_names[i], py.Load()))
             values.append(on_line(v, self.surface_line(i)))
+        # a guarded surface is read where the tests before it, read here, take its
+        # branch (the program's own reading of this point: a step's end past where the
+        # branch ends does not read it)
+        values = self.in_order(body, values, lambda i, value: py.Call(
+            py.Name("_SGN", py.Load()), [value], []))
         body.append(py.Return(py.List(values, py.Load())))
         return function("surf", ("t", "y", "m", "z"), body)
 
     def modes(self) -> py.FunctionDef:
         """The literal modes of the watched surfaces (the restart rule starts there).
-        A guarded surface (`ir.Surface.guard`) is read where the modes given select
-        its branch, else keeps its mode: a restart settles them in turn
-        (`SurfaceWatch.choose_modes`), the step-point mode likewise
-        (`watch.literal_modes`)."""
+        A guarded surface (`ir.Surface.guard`) is read where the surfaces before it
+        take its branch: by their literal modes here (by the modes given where one is
+        0, on its surface); where not, it keeps its mode. A restart reads them just
+        after its instant (`SurfaceWatch.literal_here`)."""
         em = self.emitter("rhs")
         model = self.model
         body = self.prologue() + self.surface_algebra(em)
-        values = []
-        for i in self.watched:
-            s = model.surfaces[i]
-            v = em.literal_mode(s.kind, em.emit(s.expr))
-            if s.guard is not None:
-                v = py.IfExp(truth(em.emit(s.guard)), v, py.Name(self.mode_names[i], py.Load()))
-            values.append(on_line(v, self.surface_line(i)))
+        values = [on_line(em.literal_mode(model.surfaces[i].kind, em.emit(model.surfaces[i].expr)),
+                          self.surface_line(i)) for i in self.watched]
+        values = self.in_order(body, values, lambda i, value: py.BoolOp(py.Or(), [
+            value, py.Name(self.mode_names[i], py.Load())]))
         body.append(py.Return(py.List(values, py.Load())))
         return function("modes", ("t", "y", "m", "z"), body)
+
+    def in_order(self, body: list, values: list, side: Callable) -> list:
+        """`values` (one per watched surface) read as the program reads its tests: in
+        order, a guarded surface's only where its guard holds by the sides of the
+        surfaces before it (`side(i, value)`: surface i's side from its value here),
+        else its mode. Unchanged where no surface is guarded."""
+        model = self.model
+        if not any(model.surfaces[i].guard is not None for i in self.watched):
+            return values
+        read = {j for i in self.watched if (g := model.surfaces[i].guard) is not None
+                for n in syn.walk(g) if isinstance(n, ir.SwitchValue)
+                for j in model.switches[n.switch].surfaces}
+        guards = self.emitter("rhs")
+        sides = dict(self.mode_names)
+        out = []
+        for i, value in zip(self.watched, values, strict=True):
+            guard = model.surfaces[i].guard
+            if guard is not None:
+                guards.mode_names = dict(sides)
+                value = py.IfExp(truth(guards.emit(guard)), value,
+                                 py.Name(self.mode_names[i], py.Load()))
+            local = f"w{next(self.names)}"
+            body.append(on_line(py.Assign([py.Name(local, py.Store())], value),
+                                self.surface_line(i)))
+            out.append(py.Name(local, py.Load()))
+            if i in read:
+                sided = f"w{next(self.names)}"
+                body.append(on_line(py.Assign([py.Name(sided, py.Store())],
+                                              side(i, py.Name(local, py.Load()))),
+                                    self.surface_line(i)))
+                sides[i] = sided
+        return out
 
     def outputs_function(self, out_names: list[str]) -> py.FunctionDef:
         em = self.emitter("out" if self.events else "literal")

@@ -616,7 +616,10 @@ def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: ModelCode,
         crossing = model.acsl.crossings.get(i) if model.acsl is not None else None
         watched.append(Watched(i, kind, Purpose(s.purpose), s.description, s.text,
                                None if g is None else np.asarray(g),
-                               i in c.affine_time or i in c.train_surfaces,
+                               # (a guarded one is read on its branch only: its
+                               # root is located, not worked out from t0 and FINTIM)
+                               (i in c.affine_time and s.guard is None)
+                               or i in c.train_surfaces,
                                crossing[1] if crossing else 0, s.guard is not None))
     roots, breakpoints = time_breakpoints(c, watched, t0, fintim)
     pos = {i: k for k, i in enumerate(c.watched)}

@@ -135,13 +135,30 @@ class SurfaceWatch:
         return new
 
     def literal_here(self, t: float, y: np.ndarray, m, z) -> list[float]:
-        """The literal modes at (t, y) in the branches m; a surface read on some
-        branches only (`Watched.guarded`) that has no sign at that point itself takes
-        the one it has just after it, along the motion. (Such a test may be undefined
-        where its branch begins: ELSE IF (LOG(X - 0.5) < -1) after IF (X <= 0.5), at
-        X = 0.5, a located crossing a float either side; the program first reads it
-        just after.)"""
-        return self._ahead(self.c.modes_literal, t, y, m, z, lambda v: v == 0.0)
+        """The literal modes at (t, y) in the branches m; those of a surface read on
+        some branches only (`Watched.guarded`: an ELSE IF's test) just after t, along
+        the motion, as the program first reads them: at a located crossing of the
+        test before it, or after a DISCRETE section moved the states, the point itself
+        may be a rounding error either side of where the branch begins, and the test
+        may have no value there (ELSE IF (LOG(X - 0.5) < -1) after IF (X <= 0.5), at
+        X = 0.5)."""
+        guarded = [k for k, w in enumerate(self.watched) if w.guarded]
+        try:
+            here = list(self.c.modes_literal(t, y.tolist(), m, z))
+        except (ArithmeticError, ValueError):
+            if not guarded:
+                raise
+            here = None
+        if not guarded:
+            return here
+        h = self.lookahead_h
+        f = np.asarray(self.field(t, y, m, z), dtype=float)
+        after = list(self.c.modes_literal(t + h, (y + h * f).tolist(), m, z))
+        if here is None:
+            return after
+        for k in guarded:
+            here[k] = after[k]
+        return here
 
     def surfaces_here(self, t: float, y: np.ndarray, m, z) -> list[float]:
         """The surfaces at (t, y) in the branches m (a segment's start); a guarded one
@@ -315,6 +332,8 @@ class SurfaceWatch:
         gb = g(tb)
         if gb == 0.0:
             return tb
+        if not math.isfinite(ga) and self.watched[k].guarded:
+            ga = 0.0  # (a test that has no value where its branch begins: as on zero)
         if ga == 0.0 or sign(ga) == sign(gb):
             # The step began on the surface (a restart there): find where it had
             # left to the consistent side, and bracket the crossing from there.
@@ -322,6 +341,8 @@ class SurfaceWatch:
             for j in range(1, 33):
                 tj = ta + (tb - ta) * j / 32.0
                 gj = g(tj)
+                if not math.isfinite(gj):
+                    continue
                 if gj != 0.0 and sign(gj) != sign(gb):
                     ta_new = tj
                 elif ta_new is not None:
