@@ -256,6 +256,14 @@ def _on_processes(model: ir.Model, tasks: list[Task], jobs: int,
         for child in mp.active_children():
             child.terminate()
         if pool is not None:
+            # (a worker ended while it was sending its results leaves the pool's
+            # reading thread waiting for the rest of that message for ever -- a Ctrl-C
+            # under load hung so; with this process's copy of the pipe's writing end
+            # closed, the workers' gone with them, it reads the pipe's end instead and
+            # stops, the pool broken, as it is)
+            writer = getattr(getattr(pool, "_result_queue", None), "_writer", None)
+            if writer is not None:
+                writer.close()
             # (and the pool's thread, which then sees its workers gone, joined: a
             # shutdown that does not wait forgets it, and Python's exit would wake it
             # through a pipe it is closing, printing a traceback after the last line)
