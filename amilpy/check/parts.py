@@ -97,21 +97,16 @@ class Parts:
         """st with the declarations inside its blocks (a CONSTANT in a PROCEDURAL, as
         Molly writes them) taken out to the program's: a translator reads them wherever
         they stand."""
-        def body(statements) -> tuple:
+        def body(statements) -> list:
             kept = []
             for s in statements:
                 if isinstance(s, DECLARATIONS):
                     self.declarations.append(s)
                 else:
                     kept.append(self.hoisted(s) if isinstance(s, EXECUTABLE) else s)
-            return tuple(kept)
+            return kept
 
-        if isinstance(st, ast.If):
-            return replace(st, branches=tuple(replace(b, body=body(b.body))
-                                              for b in st.branches))
-        if isinstance(st, (ast.Loop, ast.Procedural)):
-            return replace(st, body=body(st.body))
-        return st
+        return ast.with_bodies(st, body)
 
     def block(self, st: ast.Block, where: str, rep: Reporter) -> None:
         self.sections = True

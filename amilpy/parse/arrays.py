@@ -71,7 +71,7 @@ def expand(statements: list, errors: list[Diagnostic], acsl: bool,
            notes: list[Diagnostic] | None = None) -> tuple[list, frozenset[str]]:
     """The statements with every array written out as its elements (see the module),
     and the constants fixed by it. Faults go to `errors`, warnings to `notes`."""
-    everything = _everything(statements)
+    everything = ast.every_statement(statements)
     tables = {st.name for st in everything if isinstance(st, ast.Table)}
     if not any((isinstance(st, ast.Declare) and st.sizes)
                or (isinstance(st, ast.Data) and any(it.is_array or it.pieces
@@ -87,24 +87,10 @@ def expand(statements: list, errors: list[Diagnostic], acsl: bool,
     return pass_.statements(statements, {}, written=False), frozenset(pass_.fixed)
 
 
-def _everything(statements) -> list:
-    """Every statement, in blocks and loops too."""
-    out, stack = [], list(reversed(statements))
-    while stack:
-        st = stack.pop()
-        out.append(st)
-        body = getattr(st, "body", None)
-        if isinstance(st, ast.If):
-            body = tuple(s for b in st.branches for s in b.body)
-        if body:
-            stack.extend(reversed(body))
-    return out
-
-
 class _Arrays:
     def __init__(self, statements: list, everything: list, errors: list[Diagnostic],
                  acsl: bool) -> None:
-        """`everything`: the statements, in blocks and loops too (`_everything`)."""
+        """`everything`: the statements, in blocks and loops too (`syntax.every_statement`)."""
         self.errors = errors
         self.notes: list[Diagnostic] = []
         self.acsl = acsl
@@ -557,7 +543,7 @@ class _Arrays:
         return [ast.If(tuple(branches), st.span)]
 
     def loop(self, st: ast.Loop, env, written: bool) -> list:
-        body = _everything(st.body)
+        body = ast.every_statement(st.body)
         if any(self.reads_arrays(s) for s in body):
             used: list[str] = []
             try:

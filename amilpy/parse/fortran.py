@@ -560,8 +560,6 @@ def expand_functions(statements, functions: set[str], counts: dict[str, int]) ->
     value and changes nothing else: the subset refuses the rest)."""
     from dataclasses import replace
 
-    from .macros import _with_bodies
-
     def pull(e, calls: list):
         if e is None or not isinstance(e, ast.Node):
             return e
@@ -594,7 +592,7 @@ def expand_functions(statements, functions: set[str], counts: dict[str, int]) ->
         if isinstance(st, ast.SubroutineCall):
             return replace(st, args=tuple(pull(a, calls) for a in st.args))
         if isinstance(st, (ast.Block, ast.Procedural, ast.FunctionDef)):
-            return _with_bodies(st, each)
+            return ast.with_bodies(st, each)
         return pull(st, calls)  # (TERMT, SCHEDULE, ...: their expressions)
 
     def each(body) -> list:
@@ -612,7 +610,7 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
                  errors: list[Diagnostic]) -> list:
     """The statements with each CALL of a subroutine written out as a PROCEDURAL, and
     each reference to a FUNCTION as a CALL of it first (`expand_functions`)."""
-    from .macros import _assigned, _rename, _with_bodies
+    from .macros import _assigned, _rename
 
     counts: dict[str, int] = {}
     bodies: dict[str, tuple | None] = {}  # each routine's body, its own CALLs written out
@@ -636,7 +634,7 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
 
     def one(st, stack: tuple[str, ...] = ()):
         if not isinstance(st, ast.SubroutineCall):
-            return [_with_bodies(st, lambda body: [x for s in body for x in one(s, stack)])]
+            return [ast.with_bodies(st, lambda body: [x for s in body for x in one(s, stack)])]
         if st.name in subroutines and subroutines[st.name] is None:
             return []  # (its faults are said at the subroutine)
         sub = subroutines.get(st.name)
@@ -715,7 +713,7 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
 
         def hoist(statements):
             declared.extend(s for s in statements if isinstance(s, ast.Declare))
-            return [_with_bodies(s, hoist) for s in statements
+            return [ast.with_bodies(s, hoist) for s in statements
                     if not isinstance(s, ast.Declare)]
         body = tuple(hoist(body))
         # (the routine's own names are outputs too: each call's, shown as NAME#k.X)

@@ -26,7 +26,6 @@ from itertools import count
 
 from ..diagnostics import Diagnostic
 from . import syntax as ast
-from .macros import _with_bodies
 
 # the statement lists no jump leaves: a section, a PROCEDURAL, a FUNCTION, a MACRO
 _SCOPES = (ast.Block, ast.Procedural, ast.FunctionDef, ast.Macro)
@@ -50,7 +49,7 @@ def lower_jumps(statements: list, errors: list[Diagnostic], sorted_top: bool = F
                 st = replace(st, body=tuple(scopes(st.body)))
                 st = _Scope(st.body, next(places), errors).written(st)
             elif isinstance(st, (ast.If, ast.Loop)):
-                st = _with_bodies(st, scopes)
+                st = ast.with_bodies(st, scopes)
             out.append(st)
         return out
 

@@ -191,7 +191,7 @@ class AcslExpander:
                 else:
                     self.rejected.add(st.name)  # (its calls: nothing more to say)
                 continue
-            out.append(_with_bodies(st, self.collect))
+            out.append(ast.with_bodies(st, self.collect))
         return out
 
     def well_formed(self, macro: ast.Macro) -> bool:
@@ -266,7 +266,7 @@ class AcslExpander:
                         f"MACRO {inner.func} is called inside an expression", inner.span,
                         f"call it as a statement of its own: {inner.func}(...), or NAME = "
                         f"{inner.func}(...), then use NAME"))
-        return [_with_bodies(st, lambda body: self.expand(body, calling))]
+        return [ast.with_bodies(st, lambda body: self.expand(body, calling))]
 
     def call(self, name: str, outputs: tuple, args: tuple, span, calling) -> list:
         macro = self.macros.get(name)
@@ -335,17 +335,6 @@ class AcslExpander:
                 "call fewer MACROs, or MACROs with fewer statements"))
             return []
         return self.expand(body, calling + (name,))
-
-
-def _with_bodies(st, fix):
-    """st with `fix` applied to each statement list it holds (IF branches, blocks,
-    PROCEDURAL, loops, an ACSL MACRO's body)."""
-    if isinstance(st, ast.If):
-        return replace(st, branches=tuple(replace(b, body=tuple(fix(b.body)))
-                                          for b in st.branches))
-    if isinstance(st, (ast.Block, ast.Procedural, ast.Loop, ast.FunctionDef)):
-        return replace(st, body=tuple(fix(st.body)))
-    return st
 
 
 def _assigned(body) -> set[str]:

@@ -18,7 +18,7 @@ import gc
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, ClassVar
 
 from ..diagnostics import Span
@@ -656,3 +656,28 @@ class Program:
     # the listing is read (a run may not change them)
     fixed: frozenset[str] = frozenset()
     notes: tuple = ()  # the reader's warnings (diagnostics.Diagnostic), kept with the model
+
+
+def with_bodies(st, fix):
+    """st with `fix` applied to each statement list it holds (IF branches, blocks,
+    PROCEDURAL, loops, an ACSL MACRO's body)."""
+    if isinstance(st, If):
+        return replace(st, branches=tuple(replace(b, body=tuple(fix(b.body)))
+                                          for b in st.branches))
+    if isinstance(st, (Block, Procedural, Loop, FunctionDef)):
+        return replace(st, body=tuple(fix(st.body)))
+    return st
+
+
+def every_statement(statements) -> list:
+    """Every statement, in blocks and loops too, in written order."""
+    out, stack = [], list(reversed(statements))
+    while stack:
+        st = stack.pop()
+        out.append(st)
+        body = getattr(st, "body", None)
+        if isinstance(st, If):
+            body = tuple(s for b in st.branches for s in b.body)
+        if body:
+            stack.extend(reversed(body))
+    return out

@@ -19,23 +19,14 @@ from . import syntax as ast
 def set_aside(statements: list, errors: list[Diagnostic]) -> list:
     """The statements without CHARACTER declarations and the texts of those names;
     faults go to `errors`."""
-    texts = {name for st in _all(statements) if isinstance(st, ast.Declare)
+    everything = ast.every_statement(statements)
+    texts = {name for st in everything if isinstance(st, ast.Declare)
              and st.type == "CHARACTER" for name in st.names}
     if not texts and not any(isinstance(st, ast.Data) and any(it.text is not None
                                                               for it in st.items)
-                             for st in _all(statements)):
+                             for st in everything):
         return statements
     return _keep(statements, texts, errors)
-
-
-def _all(statements):
-    for st in statements:
-        yield st
-        if isinstance(st, ast.If):
-            for b in st.branches:
-                yield from _all(b.body)
-        elif hasattr(st, "body") and isinstance(st.body, tuple):
-            yield from _all(st.body)
 
 
 def _keep(statements, texts: set[str], errors: list[Diagnostic]) -> list:
@@ -64,13 +55,7 @@ def _keep(statements, texts: set[str], errors: list[Diagnostic]) -> list:
                 out.append(replace(st, items=tuple(items)))
             continue
         _said(st, texts, errors)
-        if isinstance(st, ast.If):
-            st = replace(st, branches=tuple(replace(b, body=tuple(_keep(b.body, texts,
-                                                                          errors)))
-                                            for b in st.branches))
-        elif hasattr(st, "body") and isinstance(st.body, tuple):
-            st = replace(st, body=tuple(_keep(st.body, texts, errors)))
-        out.append(st)
+        out.append(ast.with_bodies(st, lambda body: _keep(body, texts, errors)))
     return out
 
 

@@ -142,23 +142,7 @@ class SurfaceWatch:
         may be a rounding error either side of where the branch begins, and the test
         may have no value there (ELSE IF (LOG(X - 0.5) < -1) after IF (X <= 0.5), at
         X = 0.5)."""
-        guarded = [k for k, w in enumerate(self.watched) if w.guarded]
-        try:
-            here = list(self.c.modes_literal(t, y.tolist(), m, z))
-        except (ArithmeticError, ValueError):
-            if not guarded:
-                raise
-            here = None
-        if not guarded:
-            return here
-        h = self.lookahead_h
-        f = np.asarray(self.field(t, y, m, z), dtype=float)
-        after = list(self.c.modes_literal(t + h, (y + h * f).tolist(), m, z))
-        if here is None:
-            return after
-        for k in guarded:
-            here[k] = after[k]
-        return here
+        return self._ahead(self.c.modes_literal, t, y, m, z, lambda v: True)
 
     def surfaces_here(self, t: float, y: np.ndarray, m, z) -> list[float]:
         """The surfaces at (t, y) in the branches m (a segment's start); a guarded one
@@ -166,6 +150,8 @@ class SurfaceWatch:
         return self._ahead(self.c.surf, t, y, m, z, lambda v: not math.isfinite(v))
 
     def _ahead(self, fn, t: float, y: np.ndarray, m, z, undefined) -> list[float]:
+        """fn at (t, y), its guarded entries for which `undefined(value)` holds (all,
+        if fn fails there) taken just after t, along the motion."""
         guarded = [k for k, w in enumerate(self.watched) if w.guarded]
         try:
             here = list(fn(t, y.tolist(), m, z))
