@@ -34,7 +34,9 @@ class Purpose(str, Enum):
     MEMORY = "memory"  # a memory function's condition
     FINISH = "finish"  # FINISH X = value: ends the run when crossed
     TERMT = "termt"  # TERMT(expr): ends the run when it turns positive
-    SCHEDULE = "schedule"  # SCHEDULE s .XP./.XN./.XZ. e: runs DISCRETE s when crossed
+    # a crossing that runs written-order code: SCHEDULE s .XP./.XN./.XZ. e (ACSL's
+    # DISCRETE s), or an EVENT's ZEROCONDITION e (FST's NEWVALUEs)
+    SCHEDULE = "schedule"
 
     def __str__(self) -> str:
         return self.value
@@ -320,6 +322,17 @@ class Discrete:
 
 
 @dataclass(frozen=True)
+class StateEvent:
+    """FST's EVENT: its NEWVALUEs (`code`, written order; they set states and SET
+    variables) run where the ZEROCONDITION surface reaches zero from either side: a
+    located crossing, or in step-point mode the first step point where it has."""
+
+    surface: int
+    code: Code
+    span: Span
+
+
+@dataclass(frozen=True)
 class Termination:
     """A TERMT: where it stands (DERIVATIVE: located; else tested when its code runs),
     its condition as written and its message."""
@@ -428,6 +441,9 @@ class Model:
     units: list[Unit] = field(default_factory=list)  # IF/PROCEDURAL blocks of DYNAMIC
     terminal_code: list[Code] = field(default_factory=list)  # TERMINAL with IF/DO blocks
     acsl: Acsl | None = None  # the ACSL form's sections and events
+    # FST's EVENT blocks, and its SET variables (kept between events, like states)
+    events: list[StateEvent] = field(default_factory=list)
+    sets: list[str] = field(default_factory=list)
     # notes for the listing (read before any value, == tested pointwise, ...)
     warnings: list = field(default_factory=list)
     # names -> where defined, for reports and hints
@@ -451,6 +467,12 @@ class Model:
         ACSL form the names written-order code keeps)."""
         names = [s.name for s in self.states if not s.hidden]
         names += [e.target for e in self.dynamic]
-        if self.acsl is not None:
-            names += [n for n in self.acsl.discrete_vars if n not in names]
+        names += [n for n in self.kept if n not in names]
         return names
+
+    @property
+    def kept(self) -> list[str]:
+        """The names code run at instants changes and the run keeps between them (in
+        z, after the memory functions' slots): ACSL's written-order code's, FST's SET
+        variables."""
+        return self.acsl.discrete_vars if self.acsl is not None else self.sets

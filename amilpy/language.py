@@ -133,13 +133,14 @@ TYPE_KEYWORDS: dict[str, str] = {"LOGICAL": "LOGICAL", "INTEGER": "INTEGER", "RE
 # the section words are apart.
 BLOCK_KEYWORDS: tuple[str, ...] = (
     "IF", "THEN", "ELSE", "ELSEIF", "ENDIF", "DO", "ENDDO", "FOR", "PROCEDURAL",
-    "DISCRETE", "MACRO", "ENDMAC", "PROCEDURE", "ENDPRO", "NOSORT", "SORT")
+    "DISCRETE", "MACRO", "ENDMAC", "PROCEDURE", "ENDPRO", "NOSORT", "SORT", "EVENT",
+    "ENDEVENT")
 STATEMENT_KEYWORDS: tuple[str, ...] = (
     *DATA_KEYWORDS, "FUNCTION", "TIMER", "METHOD", *TOLERANCE_KEYWORDS, "FINISH", "TERMT",
     *REPORT_KEYWORDS, *ACSL_HEADS, "SCHEDULE", "INTERVAL", "CINTERVAL", "VARIABLE",
     *CONTROL_KEYWORDS, *(k for k in TYPE_KEYWORDS if k != "DOUBLEPRECISION"), "DOUBLE",
     "PRECISION", "WEATHER", "TRANSLATION_GENERAL", "TRANSLATION_FSE", "DEFINE_CALL",
-    *BLOCK_KEYWORDS)
+    "ZEROCONDITION", "NEWVALUE", "SET", *BLOCK_KEYWORDS)
 
 # What amilpy does not run (section 14): the construct as a reader knows it, and what
 # to write instead. Statement keywords first, then functions.
@@ -152,16 +153,10 @@ REFUSED: dict[str, tuple[str, str]] = {
     "TABLE": ("the TABLE statement", "write a table as FUNCTION F = x1,y1, x2,y2, ... and "
               "read it with AFGEN(F, X)"),
     "SUBMODEL": ("ACSL's SUBMODEL", "write the statements out"),
-    "EVENT": ("FST 3's EVENT blocks", "write a DISCRETE section run by SCHEDULE (ACSL form)"),
-    "ZEROCONDITION": ("an FST 3 EVENT block's ZEROCONDITION", "write a DISCRETE section run by "
-                      "SCHEDULE name .XN. condition (ACSL form)"),
-    "FIRSTTIME": ("an FST 3 EVENT block's FIRSTTIME", "write a DISCRETE section run by "
-                  "SCHEDULE (ACSL form)"),
-    "NEWVALUE": ("an FST 3 EVENT block's NEWVALUE", "assign the state in the DISCRETE section "
-                 "(ACSL form)"),
-    "ENDEVENT": ("the end of an FST 3 EVENT block", "write a DISCRETE section ... END (ACSL "
-                 "form)"),
-    "SET": ("FST's SET", "give the value in INCON or PARAM, or compute it as NAME = expression"),
+    "FIRSTTIME": ("an FST 3 EVENT's FIRSTTIME (a time event)", "for one instant write "
+                  "ZEROCONDITION TIME - t in the EVENT"),
+    "NEXTTIME": ("an FST 3 EVENT's NEXTTIME (a repeated time event)", "for one instant write "
+                 "ZEROCONDITION TIME - t in the EVENT"),
     "SUBROUTINE": ("a Fortran subroutine", "rewrite it as statements or a PROCEDURE; text "
                    "after STOP is not read"),
     "COMMON": ("Fortran COMMON", "remove it: every name of a listing is global"),

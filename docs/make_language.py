@@ -127,6 +127,13 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
      "recursion; and a name given both as a value it reads and as an argument it assigns, "
      "and an argument it assigns on some paths only. The rest of the text after STOP is "
      "not read"),
+    ("FST", "`EVENT` / `ZEROCONDITION E` / `NEWVALUE X = e` ... / `ENDEVENT`",
+     "a state event: where E reaches zero from either side (located; in step-point mode "
+     "at the first step point where it has, before that point's row) the NEWVALUEs run "
+     "in written order; X is a state or a SET variable. `FIRSTTIME`/`NEXTTIME` (time "
+     "events) are refused: write `ZEROCONDITION TIME - t` for one instant"),
+    ("FST", "`SET EMERG = 0.` in INITIAL", "EMERG's first value; afterwards it changes "
+     "only where an EVENT's NEWVALUE sets it (kept between events, like a state)"),
     ("CSMP III, FST", "`ENDJOB`, the job's last statement", "the end of the runs, as "
      "`STOP`: the text after it is not read"),
     ("CSMP III", "`FIXED I, J`", "`INTEGER I, J`"),
@@ -277,6 +284,10 @@ and `WEATHER`, whose daily variables are read from CABO-format files (the file
 listing's folder, its `weather/` and `../weather/`, and `--weather-dir`). A `CALL`
 of a Fortran subroutine written after STOP runs it, in a subset of Fortran 77 (the
 FST row of the table below says which); one of no subroutine there is refused.
+FST 3's state events run as FSE runs them: `SET EMERG = 0.` in INITIAL gives a
+variable its first value, and an `EVENT ... ENDEVENT` block gives new values to states
+and such variables where its `ZEROCONDITION` reaches zero (LINTUL2-Cassava's emergence:
+`ZEROCONDITION 1. - EMERGFAVOURABLE`, a condition that jumps from 1 to 0).
 """
 
 

@@ -356,3 +356,45 @@ def test_same_time_entries_run_in_the_order_they_were_scheduled():
 END
 """, "p.csl").run()
     assert run["LOG"][-1] == 213.0
+
+
+JUMP = """PROGRAM a schedule on a condition that jumps to zero
+  CONSTANT TSTOP = 3.0, X1 = 1.3
+  CINTERVAL CINT = 0.25
+  DERIVATIVE
+    X = INTEG(1.0, 0.0)
+    F = RSW(X > X1, 1.0, 0.0)
+    Y = INTEG(K, 0.0)
+    SCHEDULE ON .XN. 1.0 - F
+    TERMT(T >= TSTOP)
+  END
+  DISCRETE ON
+    K = 1.0
+  END
+END
+"""
+
+
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "DOP853"])
+def test_a_schedule_whose_condition_jumps_to_zero_runs_its_section(method):
+    """1 - RSW(X > X1, 1, 0) is 1, then 0 from where X = t crosses X1: it reaches zero
+    by a jump, at the restart of the RSW's own crossing. It was listed as crossed but
+    its DISCRETE never ran (Y stayed 0); now K = 1 from t = X1, and Y = t - X1."""
+    run, = amilpy.loads(JUMP, "jump.csl").run(method=method, advice=False)
+    assert [e.time for e in run.events if e.kind == "discrete"] == pytest.approx([1.3],
+                                                                                 abs=1e-12)
+    assert run["Y"] == pytest.approx(np.maximum(run.t - 1.3, 0.0), abs=1e-10)
+
+
+def test_in_step_point_mode_a_schedule_crossing_runs_its_section_at_the_point():
+    """ALGORITHM IALG = 3 reads the SCHEDULE's condition at the step points (h = 0.25):
+    1 - X reaches zero at the point t = 1 (X = t exactly there), where DISCRETE ON
+    runs before the row; the Euler step from it takes K = 1: Y(t) = t - 1 from there.
+    Before, the crossing was listed and the section never ran."""
+    text = JUMP.replace("1.0 - F", "1.0 - X").replace(
+        "CINTERVAL CINT = 0.25", "CINTERVAL CINT = 0.25\n  ALGORITHM IALG = 3\n"
+        "  NSTEPS NSTP = 1")
+    run, = amilpy.loads(text, "jump.csl").run(advice=False)
+    assert run.method == "RECT"
+    assert [e.time for e in run.events if e.kind == "discrete"] == [1.0]
+    assert run["Y"] == pytest.approx(np.maximum(run.t - 1.0, 0.0), abs=1e-14)

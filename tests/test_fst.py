@@ -247,20 +247,156 @@ def test_the_report_writes_weather_and_impl_as_the_listing_does():
     assert expr_text(impl, y.expr) == "(the IMPL loop at line 2)"
 
 
-def test_fst_event_blocks_and_set_are_refused_by_name():
-    """FST 3's EVENT ... ZEROCONDITION ... NEWVALUE ... ENDEVENT and SET are not run
-    yet: each line is refused by its construct's name, at its line, with what to
-    write (they gave "this statement needs '='", and the EVENT line nothing)."""
+SAWTOOTH = """TITLE FST STATE EVENT: X GROWS AT R; WHERE IT REACHES XMAX IT STARTS AGAIN
+INITIAL
+INCON ZERO = 0.
+SET K = 0.
+DYNAMIC
+PARAM R = 0.7; XMAX = 2.5
+X = INTGRL(ZERO, R)
+N = INTGRL(ZERO, K)
+EVENT
+   ZEROCONDITION X - XMAX
+   NEWVALUE X = 0.
+   NEWVALUE K = K + 1.
+ENDEVENT
+TIMER STTIME = 0.; FINTIM = 10.; DELT = 0.5; PRDEL = 0.5
+PRINT X, K, N
+END
+STOP
+"""
 
-    text = ("TITLE T\nPARAM K = 1.0\nSET EMERG = 0.\nX = INTGRL(1.0, -K*X)\nEVENT\n"
-            "ZEROCONDITION X - 0.5\nNEWVALUE X = 1.0\nENDEVENT\n"
-            "TIMER FINTIM = 1.0, OUTDEL = 0.1\nPRINT X\nEND\n")
+
+def test_an_event_resets_a_state_where_its_zero_condition_is_located():
+    """EVENT / ZEROCONDITION X - XMAX / NEWVALUE X = 0 / NEWVALUE K = K + 1: X = R*t
+    reaches XMAX at t_k = k*XMAX/R, where X starts again and the SET variable K counts
+    (N = INTGRL(0, K) integrates the count). Closed forms: X = R t mod XMAX, K =
+    floor(R t / XMAX), N = sum of (t - t_k). The instants are located on every
+    variable-step route, to 1e-12 (the crossing of a state linear in time)."""
+    period = 2.5 / 0.7
+    for method in ("AUTO", "RKS", "DOP853", "STIFF"):
+        run, = amilpy.loads(SAWTOOTH, "saw.fst").run(method=method, advice=False)
+        ran = [e.time for e in run.events if e.kind == "discrete"]
+        assert ran == pytest.approx([period, 2 * period], abs=1e-12), method
+        for t, x, k, n in zip(run.t, run["X"], run["K"], run["N"], strict=True):
+            kk = math.floor(t / period + 1e-12)
+            assert k == kk, (method, t)
+            assert x == pytest.approx(0.7 * (t - kk * period), abs=1e-10), (method, t)
+            assert n == pytest.approx(sum(t - j * period for j in range(1, kk + 1)),
+                                      abs=1e-10), (method, t)
+        assert "EVENT at line 9 (NEWVALUE X, K): ran" in [str(e).split(": ", 1)[1]
+                                                          for e in run.events]
+
+
+def test_in_step_point_mode_an_event_runs_at_the_step_point_it_is_seen():
+    """FSE's Euler driver: the zero condition is read at the step points; at the first
+    where it has reached zero (from either side) the NEWVALUEs run, before that
+    point's row, and the step from it takes the rates of the new values. The plain
+    recurrence: X(k+1) = X(k) + DELT*R, reset where X - XMAX <= 0 turns false."""
+    text = SAWTOOTH.replace("TIMER", "TRANSLATION_GENERAL DRIVER = 'EUDRIV'\nTIMER")
+    run, = amilpy.loads(text, "saw.fst").run(advice=False)
+    assert run.method == "RECT"
+    x, k, n, z_prev, rows, fired = 0.0, 0.0, 0.0, None, [], []
+    for i in range(21):
+        t = 0.5 * i
+        z = x - 2.5
+        if z_prev is not None and ((z_prev > 0 >= z) or (z_prev < 0 <= z)):
+            x, k = 0.0, k + 1.0
+            fired.append(t)
+            z = x - 2.5
+        rows.append((t, x, k, n))
+        z_prev = z
+        x, n = x + 0.5 * 0.7, n + 0.5 * k
+    assert [e.time for e in run.events if e.kind == "discrete"] == fired == [4.0, 8.0]
+    for row, t, x_, k_, n_ in zip(rows, run.t, run["X"], run["K"], run["N"], strict=True):
+        assert (t, x_, k_) == pytest.approx(row[:3], abs=1e-13)
+        assert n_ == pytest.approx(row[3], abs=1e-13)
+
+
+EMERGENCE = """TITLE EMERGENCE AS LINTUL2-CASSAVA WRITES IT: A FLAG SET ONCE BY AN EVENT
+INITIAL
+SET EMERG = 0.
+DYNAMIC
+PARAM RT = 1.3; TSE = 5.; W0 = 2.; RGR = 0.5
+TSUM = INTGRL(0., RT)
+W = INTGRL(0., RGR*W*EMERG)
+FAVOURABLE = INSW(TSUM - TSE, 0., 1.)*INSW(-W, 0., 1.)
+EVENT
+   ZEROCONDITION 1. - FAVOURABLE
+   NEWVALUE EMERG = 1.
+   NEWVALUE W = W + W0
+ENDEVENT
+TIMER STTIME = 0.; FINTIM = 8.; DELT = 0.25; PRDEL = 0.25
+PRINT W, EMERG, TSUM
+END
+STOP
+"""
+
+
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "RECT"])
+def test_a_zero_condition_that_jumps_to_zero_fires_once(method):
+    """The condition 1 - FAVOURABLE is 1 or 0: it reaches zero by a jump, where the
+    switch INSW(TSUM - TSE) changes branch (TSUM = RT t reaches TSE at t_e = TSE/RT),
+    and is 1 again as soon as W > 0: the EVENT runs once. Then W = W0 exp(RGR (t -
+    t_e)). Located routes: t_e to 1e-12 and W to their tolerance; RECT (step-point):
+    the first step point with TSUM >= TSE, 4.0, and W the Euler recurrence from it."""
+    run, = amilpy.loads(EMERGENCE, "em.fst").run(method=method, advice=False)
+    ran = [e.time for e in run.events if e.kind == "discrete"]
+    if method == "RECT":
+        assert ran == [4.0]
+        w, rows = 0.0, {}
+        for i in range(33):
+            t = 0.25 * i
+            if t == 4.0:
+                w += 2.0
+            rows[t] = w
+            w += 0.25 * 0.5 * w * (1.0 if t >= 4.0 else 0.0)
+        assert list(run["W"]) == pytest.approx([rows[t] for t in run.t], rel=1e-14)
+    else:
+        t_e = 5.0 / 1.3
+        assert ran == pytest.approx([t_e], abs=1e-12)
+        exact = [2.0 * math.exp(0.5 * (t - t_e)) if t > t_e else 0.0 for t in run.t]
+        assert list(run["W"]) == pytest.approx(exact, rel=1e-7, abs=1e-12)
+    assert list(run["EMERG"]) == [1.0 if t >= ran[0] else 0.0 for t in run.t]
+
+
+@pytest.mark.parametrize("text, line, message, hint", [
+    (EMERGENCE.replace("NEWVALUE W = W + W0", "NEWVALUE FAVOURABLE = 0."), 12,
+     "NEWVALUE FAVOURABLE: FAVOURABLE is neither a state nor a SET variable",
+     "SET FAVOURABLE = value in INITIAL"),
+    (EMERGENCE.replace("SET EMERG = 0.\nDYNAMIC", "DYNAMIC\nSET EMERG = 0."), 4,
+     "SET cannot stand in DYNAMIC", "write it in INITIAL"),
+    (EMERGENCE.replace("   ZEROCONDITION 1. - FAVOURABLE\n", ""), 9,
+     "this EVENT has no ZEROCONDITION", "where e reaches zero"),
+    (EMERGENCE.replace("ENDEVENT\n", ""), 9, "EVENT opened at line 9 is never closed",
+     "ENDEVENT"),
+    (EMERGENCE.replace("   NEWVALUE W = W + W0\n", "   NEWVALUE EMERG = 2.\n"), 12,
+     "NEWVALUE EMERG twice in one EVENT", "line 11"),
+    (EMERGENCE.replace("   NEWVALUE W = W + W0\n", "   W0 = 3.\n"), 12,
+     "an EVENT holds ZEROCONDITION and NEWVALUE statements only", "NEWVALUE X = value"),
+    ("PROGRAM P\nDERIVATIVE\nX = INTEG(1.0, 0.0)\nEVENT\nZEROCONDITION X - 1.\n"
+     "NEWVALUE X = 0.\nENDEVENT\nTERMT(T >= 2.)\nEND\nEND\n", 4,
+     "FST's EVENT ... ENDEVENT belongs to the CSMP (FST) form", "SCHEDULE name .XZ."),
+    ("PROGRAM P\nINITIAL\nSET K = 1.0\nEND\nDERIVATIVE\nX = INTEG(K, 0.0)\n"
+     "TERMT(T >= 2.)\nEND\nEND\n", 3, "FST's SET belongs to the FST (CSMP) form",
+     "assign it in INITIAL (K = ...)"),
+])
+def test_event_and_set_faults_are_located_and_say_what_to_write(text, line, message, hint):
     with pytest.raises(AmilError) as err:
         amilpy.loads(text, "e.fst")
-    said = [(d.span.line, d.message) for d in err.value.diagnostics]
-    assert said == [(3, "FST's SET (line 3): not supported"),
-                    (5, "FST 3's EVENT blocks (line 5): not supported"),
-                    (6, "an FST 3 EVENT block's ZEROCONDITION (line 6): not supported"),
-                    (7, "an FST 3 EVENT block's NEWVALUE (line 7): not supported"),
-                    (8, "the end of an FST 3 EVENT block (line 8): not supported")]
-    assert "needs '='" not in err.value.render()
+    d = err.value.diagnostics[0]
+    assert (d.span.line, d.message) == (line, message), err.value.render()
+    assert hint in d.hint
+
+
+def test_fst_time_events_are_refused_by_name():
+    """FIRSTTIME/NEXTTIME (FST 3's time events) are not run: refused by name, at their
+    line, with what to write for one instant (the EVENT left without a condition
+    says so too)."""
+    text = EMERGENCE.replace("   ZEROCONDITION 1. - FAVOURABLE\n", "   FIRSTTIME 3.\n")
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text, "e.fst")
+    said = {d.span.line: (d.message, d.hint) for d in err.value.diagnostics}
+    assert said[10][0] == "an FST 3 EVENT's FIRSTTIME (a time event) (line 10): not supported"
+    assert "ZEROCONDITION TIME - t" in said[10][1]
+    assert said[9][0] == "this EVENT has no ZEROCONDITION"

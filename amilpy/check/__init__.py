@@ -20,10 +20,11 @@ from ..diagnostics import AmilError, Reporter
 from ..library.surfaces import classify
 from ..parse import syntax as ast
 from ..parse.syntax import deep_enough, no_collection
+from ..parse.unparse import expr_text
 from . import order
 from .code import CodeLowering, assigned_names
 from .groups import RunGroups, reject_late_equations, sections, split_groups
-from .lower import Lowering
+from .lower import TEXT_LIMIT, Lowering
 from .names import PURE, Names
 from .units import (
     ImplGroup,
@@ -94,6 +95,35 @@ def _carried(model: ir.Model, program: ast.Program) -> ir.Model:
         model.runs = [replace(r, fixed=program.fixed) for r in model.runs]
     model.warnings = [*program.notes, *model.warnings]
     return model
+
+
+def _state_events(blocks: list[ast.Event], sets: set[str], low: Lowering,
+                  code: CodeLowering, names: Names, rep: Reporter) -> list[ir.StateEvent]:
+    """FST's EVENT blocks: the ZEROCONDITION a surface the run watches, the NEWVALUEs
+    written-order code that sets states and SET variables."""
+    states = {s.name for s in low.states if not s.hidden}
+    out = []
+    for ev in blocks:
+        ok = True
+        for nv in ev.values:
+            if nv.target not in states and nv.target not in sets:
+                ok = False
+                rep.error(f"NEWVALUE {nv.target}: {nv.target} is neither a state nor a SET "
+                          "variable", nv.target_span,
+                          "an EVENT changes states (X = INTGRL(...)) and SET variables: "
+                          f"give {nv.target} its first value with SET {nv.target} = value "
+                          "in INITIAL, and read it in DYNAMIC")
+        zero = ev.zero.expr
+        if not names.check_calls(zero, PURE, "EVENT") or not ok:
+            continue
+        index = low.surface(low.expr(zero, "ZEROCONDITION"), ir.SurfaceKind.SIGN, None,
+                            ir.Purpose.SCHEDULE, ev.zero.span,
+                            f"EVENT at line {ev.span.line}",
+                            low.written(zero.span) or expr_text(None, zero, TEXT_LIMIT))
+        body = [ast.Assign((nv.target,), (nv.target_span,), nv.expr, nv.span)
+                for nv in ev.values]
+        out.append(ir.StateEvent(index, code.written(body, "EVENT", ev.span), ev.span))
+    return out
 
 
 def _check_csmp(program: ast.Program, name: str | None) -> ir.Model:
@@ -167,8 +197,10 @@ def _check_csmp(program: ast.Program, name: str | None) -> ir.Model:
             terminal.append(ir.Equation(st.targets[0], low.expr(st.expr, None, literal=True),
                                         st.span))
 
-    names.check_references(parts, low.before_run,
-                           {s.name for s in low.states if not s.hidden})
+    sets = {st.target for st in parts["SET"]}
+    events = _state_events(parts["EVENT"], sets, low, code, names, rep)
+    names.check_references({**parts, "DYNAMIC": parts["DYNAMIC"] + parts["EVENT"]},
+                           low.before_run, {s.name for s in low.states if not s.hidden})
     # a weather name a report asks for is a variable of the run (PRINT RDD)
     reported = {n: st.span for st in data.reports for n in st.names if n in low.weather}
     dynamic += [ir.Equation(n, low.expr(ast.Name(n, span), n), span)
@@ -193,6 +225,7 @@ def _check_csmp(program: ast.Program, name: str | None) -> ir.Model:
         runs=data.runs,
         data_names=data.names, spans={**data.spans, **names.defined}, data_kinds=data.kinds,
         units=units, warnings=low.warnings, terminal_code=terminal_code,
+        events=events, sets=sorted(sets),
         weather=sorted(low.weather_used), closed=low.closed,
         weather_lines=sorted({s for spans in low.weather_used.values() for s in spans},
                              key=lambda s: (s.line, s.column)),

@@ -77,12 +77,30 @@ ACSL_STATEMENTS = (ast.Schedule, ast.Interval, ast.Cinterval, ast.Variable, ast.
 def sections(group: list[ast.Node], rep: Reporter) -> dict[str, list[ast.Node]]:
     """The equations of the first group by section (none: DYNAMIC); TERMT stands in
     DYNAMIC only. IF blocks stand in DYNAMIC (a sorting unit) and TERMINAL, DO loops
-    in TERMINAL (written order)."""
-    out: dict[str, list[ast.Node]] = {"INITIAL": [], "DYNAMIC": [], "TERMINAL": []}
+    in TERMINAL (written order). FST's EVENT blocks (under "EVENT") stand anywhere but
+    in TERMINAL, its SET statements (under "SET", and as INITIAL's assignments) in
+    INITIAL."""
+    out: dict[str, list[ast.Node]] = {"INITIAL": [], "DYNAMIC": [], "TERMINAL": [],
+                                      "EVENT": [], "SET": []}
     current = "DYNAMIC"
     for st in group:
         if isinstance(st, ast.Section):
             current = st.name
+        elif isinstance(st, ast.SetValue):
+            if current != "INITIAL":
+                rep.error(f"SET cannot stand in {current}", st.span,
+                          "SET X = value gives a variable its first value: write it in "
+                          "INITIAL; an EVENT's NEWVALUE X = value changes it later")
+                continue
+            out["SET"].append(st)
+            out["INITIAL"].append(ast.Assign((st.target,), (st.target_span,), st.expr,
+                                             st.span))
+        elif isinstance(st, ast.Event):
+            if current == "TERMINAL":
+                rep.error("an EVENT cannot stand in TERMINAL", st.span,
+                          "TERMINAL runs once, after the run: put the EVENT in DYNAMIC")
+                continue
+            out["EVENT"].append(st)
         elif isinstance(st, ast.Termt) and current != "DYNAMIC":
             rep.error(f"TERMT cannot stand in {current}", st.span,
                       "TERMT(expr) ends the run when expr turns positive: put it in DYNAMIC")

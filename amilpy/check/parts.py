@@ -88,6 +88,10 @@ class Parts:
                 self.functions.append(st)
             elif isinstance(st, EXECUTABLE):
                 out.append(self.hoisted(st))
+            elif isinstance(st, ast.SetValue):
+                rep.error("FST's SET belongs to the FST (CSMP) form", st.span,
+                          f"in ACSL form assign it in INITIAL ({st.target} = ...) and "
+                          "change it in a DISCRETE section")
             else:
                 rep.error(f"{type(st).__name__.upper()} cannot stand in the ACSL form",
                           st.span)

@@ -512,12 +512,14 @@ class Compiler:
 
     def sections(self) -> dict[str, ir.Code]:
         """Written-order code run during a run (the ACSL form's DYNAMIC, DISCRETE and
-        TERMINAL; a CSMP TERMINAL with IF or DO blocks), by function name."""
+        TERMINAL; FST's EVENT NEWVALUEs; a CSMP TERMINAL with IF or DO blocks), by
+        function name."""
         acsl = self.model.acsl
         out: dict[str, ir.Code] = {}
         if acsl is not None:
             out["dynamic"] = acsl.dynamic
             out.update({f"discrete_{k}": d.code for k, d in enumerate(acsl.discretes.values())})
+        out.update({f"event_{k}": e.code for k, e in enumerate(self.model.events)})
         terminal = acsl.terminal if acsl is not None else self.model.terminal_code
         out.update({f"terminal_{k}": c for k, c in enumerate(terminal)})
         return out

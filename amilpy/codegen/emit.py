@@ -402,8 +402,8 @@ def printed_only_surfaces(model: ir.Model) -> set[int]:
     exact value at each row), and the run is not cut at every kink of a printed
     formula (a chain of ABS in outputs made 344 restarts and events). The switch
     functions (FSW, QNTZR...) stay watched: their instants are the event list's.
-    Written-order code (IF blocks, ACSL sections) keeps them all."""
-    if model.units or model.acsl is not None or model.terminal_code:
+    Written-order code (IF blocks, ACSL sections, FST's NEWVALUEs) keeps them all."""
+    if model.units or model.acsl is not None or model.terminal_code or model.events:
         return set()
     visitor = _Needs(model)
     visitor.pending.extend(s.deriv for s in model.states)

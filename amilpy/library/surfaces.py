@@ -297,10 +297,10 @@ class _Dependence(Visitor):
     def __init__(self, model: ir.Model) -> None:
         self.model = model
         self.states = {s.name for s in model.states}
-        # names written-order code keeps (ACSL form) change at events: like states,
-        # a surface on them is watched (its branch is chosen again at each restart)
-        if model.acsl is not None:
-            self.states |= set(model.acsl.discrete_vars)
+        # names code run at instants keeps (ACSL's written-order code, FST's SET
+        # variables) change at events: like states, a surface on them is watched (its
+        # branch is chosen again at each restart)
+        self.states |= set(model.kept)
         self.equations = {e.target: e.expr for e in model.dynamic}
         self.names: dict[str, ir.Depends] = {}
         self.switches: dict[int, ir.Depends] = {}

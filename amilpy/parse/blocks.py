@@ -20,9 +20,11 @@ from . import syntax as ast
 _NAMES = {"IF": "IF", "FOR": "FOR loop", "DO": "DO loop", "PROCEDURAL": "PROCEDURAL",
           "FUNCTION": "FUNCTION", "DISCRETE": "DISCRETE", "PROGRAM": "PROGRAM",
           "INITIAL": "INITIAL", "DYNAMIC": "DYNAMIC", "DERIVATIVE": "DERIVATIVE",
-          "TERMINAL": "TERMINAL", "MACRO": "MACRO", "PROCEDURE": "PROCEDURE"}
-# CSMP III's blocks and the closer each needs (END ends a run group in CSMP form)
-CLOSERS = {"MACRO": "ENDMAC", "PROCEDURE": "ENDPRO"}
+          "TERMINAL": "TERMINAL", "MACRO": "MACRO", "PROCEDURE": "PROCEDURE",
+          "EVENT": "EVENT"}
+# CSMP III's and FST's blocks and the closer each needs (END ends a run group in CSMP
+# form)
+CLOSERS = {"MACRO": "ENDMAC", "PROCEDURE": "ENDPRO", "EVENT": "ENDEVENT"}
 ACSL_ONLY = ("FOR", "PROCEDURAL", "FUNCTION", "DISCRETE", "INCLUDED")
 
 
@@ -128,6 +130,16 @@ class Nester:
                                "define it before the statements that call it" if not acsl
                                else "write ACSL's MACRO NAME(O, P) ... MACRO END")
                     continue
+                elif acsl and item.kind == "EVENT":
+                    self.error("FST's EVENT ... ENDEVENT belongs to the CSMP (FST) form",
+                               item.span, "in ACSL form write SCHEDULE name .XZ. condition "
+                               "and DISCRETE name ... END")
+                    continue
+                elif stack and item.kind == "EVENT":
+                    self.error(f"an EVENT cannot stand inside the {_describe(stack[-1].head.kind)} "
+                               f"of line {stack[-1].head.span.line}", item.span,
+                               "write EVENT ... ENDEVENT among the listing's statements")
+                    continue
                 elif not acsl and item.kind in ACSL_ONLY:
                     self.error(f"{_describe(item.kind)} belongs to the ACSL form", item.span,
                                "start the file with PROGRAM or MODEL (ACSL form)"
@@ -171,7 +183,7 @@ class Nester:
                 into = stack[-1].body if stack else top
                 if done.head.kind == "INCLUDED":  # its statements stand where it stands
                     into.extend(built)
-                else:
+                elif built is not None:  # (None: an EVENT whose fault is said)
                     into.append(built)
             else:
                 target.append(item)
@@ -261,4 +273,35 @@ class Nester:
         if head.kind == "FUNCTION":
             result, params = head.data
             return ast.FunctionDef(head.name or "", result, params, body, head.span)
+        if head.kind == "EVENT":
+            return self.event(head, body)
         return ast.Block(head.kind, head.name, body, head.span)
+
+    def event(self, head: Head, body: tuple) -> ast.Event | None:
+        """EVENT ... ENDEVENT: one ZEROCONDITION and its NEWVALUEs, nothing else."""
+        zeros = [st for st in body if isinstance(st, ast.ZeroCondition)]
+        values = tuple(st for st in body if isinstance(st, ast.NewValue))
+        for st in body:
+            if not isinstance(st, (ast.ZeroCondition, ast.NewValue)):
+                self.error("an EVENT holds ZEROCONDITION and NEWVALUE statements only",
+                           getattr(st, "span", head.span), "compute the value among the "
+                           "listing's statements and give it in NEWVALUE X = value")
+        for extra in zeros[1:]:
+            self.error("a second ZEROCONDITION in one EVENT", extra.span,
+                       f"the EVENT of line {head.span.line} has its condition at line "
+                       f"{zeros[0].span.line}: write another EVENT for this one")
+        if not zeros:
+            self.error("this EVENT has no ZEROCONDITION", head.span,
+                       "write ZEROCONDITION e: the NEWVALUEs run where e reaches zero")
+        if not values:
+            self.error("this EVENT has no NEWVALUE", head.span,
+                       "write NEWVALUE X = value for each state or SET variable it changes")
+        seen: dict[str, ast.NewValue] = {}
+        for st in values:
+            if st.target in seen:
+                self.error(f"NEWVALUE {st.target} twice in one EVENT", st.target_span,
+                           f"line {seen[st.target].span.line} gives its new value already")
+            seen.setdefault(st.target, st)
+        if not zeros or not values:
+            return None
+        return ast.Event(zeros[0], values, head.span)

@@ -688,6 +688,23 @@ class Builder:
                                   tuple(self.expr(a) for a in args if a is not None),
                                   self.span(node))
 
+    def st_event(self, node) -> Head:
+        return Head("EVENT", self.span(node))
+
+    def st_endevent(self, node) -> Close:
+        return Close("ENDEVENT", self.span(node))
+
+    def st_zerocondition(self, node) -> ast.ZeroCondition:
+        return ast.ZeroCondition(self.expr(node.children[0]), self.span(node))
+
+    def st_newvalue(self, node) -> ast.NewValue:
+        name, expr = node.children
+        return ast.NewValue(str(name).upper(), self.span(name), self.expr(expr), self.span(node))
+
+    def st_set_value(self, node) -> ast.SetValue:
+        name, expr = node.children
+        return ast.SetValue(str(name).upper(), self.span(name), self.expr(expr), self.span(node))
+
     def st_define_call(self, node) -> ast.DefineCall:
         return ast.DefineCall(self.span(node))
 

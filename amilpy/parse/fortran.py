@@ -67,6 +67,8 @@ _SAVE = re.compile(r"SAVE\b\s*(.*)$", re.I)
 _CONTINUE = re.compile(r"CONTINUE\s*$", re.I)
 _DO_LABEL = re.compile(r"DO\s+(\d+)", re.I)  # a labelled DO's label
 _RETURN = re.compile(r"RETURN\s*$", re.I)
+# columns 73-80 of a punched card: blank, or a sequence number (letters, then digits)
+_SEQUENCE = re.compile(r"[ \t]*(?:[A-Za-z]{0,6}[0-9]{1,8}[ \t]*)?")
 # refused by name: (pattern, the construct as a reader knows it)
 _REFUSED = [
     (re.compile(r"(LOGICAL|CHARACTER)\b", re.I), "{0} variables in a subroutine"),
@@ -207,12 +209,16 @@ def read_subroutines(lines: list[str], first: int, path: str | None,
 
 def _statements(lines: list[str], first: int) -> list[tuple[int, int, str, str]]:
     """(line index, column of the code, code, label) of each statement of the
-    SUBROUTINE ... END units, fixed form: columns 7 to 72, continuation lines joined to
-    the statement they continue; the lines outside the units are not read."""
+    SUBROUTINE ... END units, fixed form: columns 7 to 72, or to 132 where a line
+    goes on past 72 with more than a card's sequence number (FSE's compilers read
+    extended source: LINTUL2-Cassava's routines have lines of 102 columns),
+    continuation lines joined to the statement they continue; the lines outside the
+    units are not read."""
     out: list[list] = []
     inside = False
     for k in range(first, len(lines)):
-        line = lines[k].rstrip("\n").expandtabs(6)[:72]
+        line = lines[k].rstrip("\n").expandtabs(6)
+        line = line[:72] if _SEQUENCE.fullmatch(line[72:]) else line[:132]
         if not line.strip() or line[:1] in "Cc*!":
             continue
         code = line[6:] if len(line) > 6 else ""

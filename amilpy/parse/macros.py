@@ -198,12 +198,12 @@ class AcslExpander:
         """A MACRO whose name no built-in function, reserved or refused word has (a call
         would mean two things), with its parameters once each, and STANDVAL values for
         parameters only."""
-        from ..language import REFUSED, RESERVED
+        from ..language import REFUSED, RESERVED, STATEMENT_KEYWORDS
         from ..library import callable_names
 
         taken = "a function" if macro.name in callable_names() else \
             "reserved" if macro.name in RESERVED else \
-            "a keyword" if macro.name in REFUSED else None
+            "a keyword" if macro.name in REFUSED or macro.name in STATEMENT_KEYWORDS else None
         if taken is not None:
             self.errors.append(Diagnostic(
                 f"MACRO {macro.name}: {macro.name} is {taken}, which a MACRO of that name "

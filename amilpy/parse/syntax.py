@@ -546,6 +546,50 @@ class Weather(Node):
 
 
 @dataclass(frozen=True)
+class ZeroCondition(Node):
+    """ZEROCONDITION e inside an FST EVENT block (the nester puts it in `Event`)."""
+
+    expr: Expr
+    span: Span
+    child_fields = ("expr",)
+
+
+@dataclass(frozen=True)
+class NewValue(Node):
+    """NEWVALUE X = e inside an FST EVENT block: X's value from the event on."""
+
+    target: str
+    target_span: Span
+    expr: Expr
+    span: Span
+    child_fields = ("expr",)
+
+
+@dataclass(frozen=True)
+class Event(Node):
+    """EVENT / ZEROCONDITION e / NEWVALUE X = e ... / ENDEVENT (FST 3): a state event.
+    Where e reaches zero from either side the NEWVALUEs run in written order; X is a
+    state or a SET variable."""
+
+    zero: ZeroCondition
+    values: tuple[NewValue, ...]
+    span: Span
+    child_fields = ("zero", "values")
+
+
+@dataclass(frozen=True)
+class SetValue(Node):
+    """SET X = e (FST 3, in INITIAL): X's first value; afterwards only an EVENT's
+    NEWVALUE changes it."""
+
+    target: str
+    target_span: Span
+    expr: Expr
+    span: Span
+    child_fields = ("expr",)
+
+
+@dataclass(frozen=True)
 class Macro(Node):
     """MACRO O1, O2 = NAME(P1, P2) ... ENDMAC (CSMP III), or ACSL's MACRO NAME(A1,
     A2) ... MACRO END (`acsl`: every argument positional, `defaults` from MACRO
@@ -638,7 +682,8 @@ STATEMENTS: tuple[type[Node], ...] = (Assign, Data, Table, Timer, Method, Tolera
                                       Procedural, Loop, FunctionDef, Block, Schedule, Interval,
                                       Cinterval, Variable, Control, Declare, Translation,
                                       Weather, DefineCall, Macro, MacroCall, MacroDirective,
-                                      SubroutineCall, Nosort, GoTo, Target)
+                                      SubroutineCall, Nosort, GoTo, Target, Event,
+                                      ZeroCondition, NewValue, SetValue)
 
 
 @dataclass(frozen=True)

@@ -41,7 +41,6 @@ from .plan import (
     Grid,
     Options,
     Purpose,
-    SurfaceKind,
     make_grid,
     make_plan,
     resolve_step_point,
@@ -49,7 +48,6 @@ from .plan import (
     within,
 )
 from .prepare import Cache, Prepared, before_run, constant_modes, random_seed
-from .watch import literal_modes
 
 MIN_INTERVAL = 1e-100  # the least CINT a run takes
 
@@ -336,25 +334,11 @@ class AcslRun(_Run):
             return float(cur.z[len(cur.z) - len(kept) + kept.index(name)])
         return float(self.constants.get(name, 0.0))
 
-    def restart(self, cur: Cursor) -> None:
-        """The branches in force after code changed states or kept names. A surface
-        at zero to rounding (a crossing just located) goes the way the motion takes
-        it, not by the sign of its rounding error."""
-        if self.plan.step_point:  # the branches as they read here, nothing located
-            new = literal_modes(self.c, self.plan, cur.t, cur.y.tolist(), cur.m, cur.z)
-            self.integ.record_changes(cur.t, cur.y, cur.m, new, cur.z, set())
-            cur.m[:] = new
-            return
-        near: set[int] = set()
-        if self.plan.watch_idx:
-            e = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z)
-            scale = 1e-12 * max(1.0, float(np.max(np.abs(cur.y))) if len(cur.y) else 1.0)
-            near = {k for k in self.plan.watch_idx if abs(e[k]) <= scale
-                    and self.plan.watched[k].kind is SurfaceKind.SIGN}
-        new = self.watch.choose_modes(cur.t, cur.y, cur.z, cur.m, near)
-        self.integ.record_changes(cur.t, cur.y, cur.m, new, cur.z, set())
-        cur.m[:] = new
-        cur.y = self.watch.apply_resets(cur.y, cur.m)
+    def run_crossing(self, cur: Cursor, surface: int) -> None:
+        """A SCHEDULE crossing seen at a step point: its DISCRETE section runs now
+        (with any others due)."""
+        self.schedule(cur.t, self.acsl.crossings[surface][0], cur.t)
+        self.run_due(cur)
 
     def termt_ahead(self, t: float) -> float | None:
         """The instant of a TERMT on TIME a few floats after t (events summed up to

@@ -21,16 +21,16 @@ from ..diagnostics import AmilError
 from ..library.runtime import table_warnings
 from ..outcome import Failure, message
 from ..result import Event, EventKind, Run, Status
-from .code import run_terminal
+from .code import Calls, code_fault, run_terminal
 from .faults import Fault, fault_text
 from .loop import Cursor, Integrator, Stop
 from .peaks import Context, locate_range
-from .plan import SLIDE, Options, RunPlan
+from .plan import SLIDE, Options, Purpose, RunPlan, SurfaceKind, same_instant
 from .prepare import Prepared
 from .record import Recorder
 from .slide import MAX_SLIDING
 from .steppoint import StepPoint
-from .watch import SurfaceWatch, TooManySlides
+from .watch import SurfaceWatch, TooManySlides, literal_modes
 from .zeno import accumulation, cut
 
 
@@ -73,7 +73,13 @@ class _Run:
         # step-point mode runs the classic loop (steppoint.py) instead of the located one
         self.integ = (StepPoint if self.plan.step_point else Integrator)(
             model, self.plan, self.c, self.watch, opts, started)
+        if self.plan.step_point:  # (a crossing's code runs at the point it is seen)
+            self.integ.crossed = self.crossed
         self.started = started
+        # FST's EVENTs by the surface of their ZEROCONDITION (two may share one)
+        self.events_on: dict[int, list[int]] = {}
+        for k, e in enumerate(model.events):
+            self.events_on.setdefault(e.surface, []).append(k)
 
     def run(self) -> Run:
         """The run, within its wall-clock limit even where no loop looks at the clock
@@ -202,10 +208,72 @@ class _Run:
                           shown=self.rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
 
     def advance(self, cur: Cursor) -> str | None:
-        """Integrate to the end; what stopped the run early (FINISH, TERMT), if any."""
-        self.integ.integrate(cur, self.plan.fintim, self.rec)
-        reason = self.integ.stop_reason
-        return self.plan.watched[reason].description if reason is not None else None
+        """Integrate to the end; what stopped the run early (FINISH, TERMT), if any. A
+        located EVENT crossing ends the integration there: its NEWVALUEs run, and the
+        run goes on from the new values (the row of that instant after them)."""
+        plan, integ, rec = self.plan, self.integ, self.rec
+        while True:
+            integ.integrate(cur, plan.fintim, rec)
+            reason = integ.stop_reason
+            if reason is None:
+                return None
+            if plan.watched[reason].purpose is not Purpose.SCHEDULE:
+                return plan.watched[reason].description
+            integ.stop_reason = None
+            self.crossed(cur, [reason])
+            if rec.out_i < len(plan.grid.times) and \
+                    same_instant(cur.t, plan.grid.times[rec.out_i]):
+                rec.grid_row(cur.t, cur.y, cur.m, cur.z,
+                             shown=rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
+            if cur.t >= plan.fintim:
+                return None
+
+    def crossed(self, cur: Cursor, ks: list[int]) -> None:
+        """The code the crossings of watched surfaces `ks` run, at cur.t, in the order
+        the listing writes it; then the branches in force after it."""
+        for k in sorted(ks, key=lambda k: self.plan.watched[k].surface):
+            self.run_crossing(cur, self.plan.watched[k].surface)
+        self.restart(cur)
+
+    def run_crossing(self, cur: Cursor, surface: int) -> None:
+        """The NEWVALUEs of the EVENTs on `surface`, each in written order."""
+        for k in self.events_on.get(surface, ()):
+            event = self.model.events[k]
+            try:
+                y, z, _ = self.c.code[f"event_{k}"][1](cur.t, cur.y.tolist(), cur.m, cur.z,
+                                                       Calls())
+            except (ArithmeticError, ValueError) as exc:
+                raise Stop(Failure.FAULT, cur.t, detail=f"EVENT at line {event.span.line}: "
+                           f"{code_fault(exc)}") from None
+            cur.y = np.asarray(y, dtype=float)
+            cur.z[:] = z
+            self.integ.events.append(Event(
+                cur.t, f"EVENT at line {event.span.line} (NEWVALUE "
+                f"{', '.join(event.code.assigned)})", -1, 0.0, 0.0, EventKind.DISCRETE))
+            if len(self.integ.events) > self.opts.max_events:
+                raise Stop(Failure.EVENTS, cur.t, limit=self.opts.max_events)
+
+    def restart(self, cur: Cursor) -> None:
+        """The branches in force after code changed states or kept names. A surface
+        at zero to rounding (a crossing just located) goes the way the motion takes
+        it, not by the sign of its rounding error. (A crossing's own surface, moved
+        by its code, 1 - FLAG back to 1, is no event: its crossing was.)"""
+        quiet = set(self.integ.scheduling)
+        if self.plan.step_point:  # the branches as they read here, nothing located
+            new = literal_modes(self.c, self.plan, cur.t, cur.y.tolist(), cur.m, cur.z)
+            self.integ.record_changes(cur.t, cur.y, cur.m, new, cur.z, set(), quiet)
+            cur.m[:] = new
+            return
+        near: set[int] = set()
+        if self.plan.watch_idx:
+            e = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z)
+            scale = 1e-12 * max(1.0, float(np.max(np.abs(cur.y))) if len(cur.y) else 1.0)
+            near = {k for k in self.plan.watch_idx if abs(e[k]) <= scale
+                    and self.plan.watched[k].kind is SurfaceKind.SIGN}
+        new = self.watch.choose_modes(cur.t, cur.y, cur.z, cur.m, near)
+        self.integ.record_changes(cur.t, cur.y, cur.m, new, cur.z, set(), quiet)
+        cur.m[:] = new
+        cur.y = self.watch.apply_resets(cur.y, cur.m)
 
     def terminal(self, run: Run, cur: Cursor) -> dict[str, float]:
         """TERMINAL's values, in written order."""

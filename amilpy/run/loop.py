@@ -30,7 +30,7 @@ from ..steppers import Stepper, first_bad
 from .cursor import Cursor, Observer, Paused, Stop
 from .fastpaths import FastPaths
 from .faults import Fault
-from .plan import SLIDE, Options, RunPlan, time_breakpoints
+from .plan import SLIDE, Options, Purpose, RunPlan, time_breakpoints
 from .record import Recorder
 from .restarts import Restarts
 from .segment import SegmentStart
@@ -62,6 +62,10 @@ class RunLoop:
         self.nfev = 0
         self.last_good: tuple[float, np.ndarray, list[float]] | None = None
         self.stop_reason: int | None = None  # the FINISH/TERMT surface that ended the run
+        # the crossings that run code (SCHEDULE, EVENT): one may change branch at a
+        # restart another surface made (1 - RSW(X > 1, 1, 0) reaches zero with X - 1)
+        self.scheduling = tuple(k for k, w in enumerate(plan.watched)
+                                if w.purpose is Purpose.SCHEDULE)
 
 
 class Integrator(RunLoop, SegmentStart, StepWatch, Restarts, FastPaths):

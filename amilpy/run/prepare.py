@@ -152,6 +152,8 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
     ikey = (tuple(sorted(spec.data.items())), tuple(sorted(reserved.items())), tables)
     constants = dict(cache.get("initial", ikey, lambda: initial_values(
         model, spec.data, spec.tables, reserved)))
+    # FST's SET variables start from their INITIAL values and change at EVENTs
+    kept = {n: float(constants.pop(n)) for n in model.sets}
     const_modes = constant_modes(model, constants, spec.tables, step_point)
     setting = Setting(seed=random_seed(opts, constants),
                       # a random draw is held for an output interval, DELT with a fixed step
@@ -159,14 +161,16 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
                                                                  timer["PRDEL"]),
                       step=timer["DELT"] if step_point else None)
     outputs = tuple(opts.outputs) if opts.outputs is not None else None
-    ckey = (tuple(sorted(constants.items())), tables, outputs, opts.events, setting)
+    ckey = (tuple(sorted(constants.items())), tuple(kept.items()), tables, outputs,
+            opts.events, setting)
     # a run whose parameters alone differ binds the code built for another (no compile)
     params = cache.get("parameters", id(model), lambda: parameter_names(model))
     skey = (tuple(sorted((k, v) for k, v in constants.items() if k not in params)),
-            tuple(sorted(const_modes.items())), tables, outputs, opts.events, setting)
+            tuple(sorted(const_modes.items())), tuple(kept.items()), tables, outputs,
+            opts.events, setting)
     code = cache.get("bound", ckey, lambda: cache.get("code", skey, lambda: Compiler(
         model, constants, spec.tables, const_modes, opts.outputs, opts.events, setting,
-        parameters=params).build()).rebound(constants))
+        kept=kept, parameters=params).build()).rebound(constants))
     t0 = start_time(spec, opts)
     fintim = t0 + timer["FINTIM"]
     gkey = (t0, fintim, timer["OUTDEL"], timer["PRDEL"], step_point and timer["DELT"],

@@ -32,7 +32,7 @@ class Restarts:
             memory = c.mem(tb, yb.tolist(), m, new_m, z)
             new_m = watch.after_memory(tb, yb, new_m, z, memory)
             z[:] = memory
-        for k in step.triggered:
+        for k in (*step.triggered, *self._jumped(tb, yb, m, new_m, z, step.triggered)):
             w = self.plan.watched[k]
             if (w.purpose is Purpose.TERMT and new_m[k] > 0) or \
                     (w.purpose is Purpose.FINISH and new_m[k] != m[k]) or \
@@ -50,15 +50,18 @@ class Restarts:
             rec.restarted(tb, y, m, z)
             if changed or not np.array_equal(y, yb):
                 rec.sample(tb, y, m, z)
-        if at_output:
+        scheduled = self.stop_reason is not None and \
+            self.plan.watched[self.stop_reason].purpose is Purpose.SCHEDULE
+        if at_output and not scheduled:  # (the code a crossing runs comes before its row)
             rec.grid_row(tb, y, m, z, shown=rec.shown_modes(tb, y, m, z))
         if self.stop_reason is not None:
             # (the stop's row, unless the grid's row just taken is this instant: a grid
             # instant a float from the stop, 3 x 0.1 against TERMT(T >= 0.3), printed
             # the same state twice, the second row a float before the first)
             if rec is not None and (rec.last_t is None or not same_instant(rec.last_t, tb)):
-                # (a grid instant a float after the stop is this row: the grid's)
-                g = rec.out_i if rec.out_i < len(rec.times) and \
+                # (a grid instant a float after the stop is this row: the grid's; a
+                # crossing's row there is taken after its code)
+                g = rec.out_i if rec.out_i < len(rec.times) and not scheduled and \
                     same_instant(rec.times[rec.out_i], tb) else -1
                 rec.row(tb, y, m, z, g)
                 rec.out_i += g >= 0
@@ -75,12 +78,27 @@ class Restarts:
             return True
         return False
 
+    def _jumped(self, tb: float, yb: np.ndarray, m, new_m, z, triggered) -> list[int]:
+        """The crossings that run code (SCHEDULE, EVENT) whose value jumped over zero
+        at this restart because other surfaces changed branch (1 - RSW(X > 1, 1, 0)
+        reaches zero where X - 1 does): in the old branches still on their side, in
+        the new ones not. (One the motion took across unseen is no such jump.)"""
+        ks = [k for k in self.scheduling if new_m[k] != m[k] and k not in triggered]
+        if not ks:
+            return []
+        e = self.c.surf(tb, yb.tolist(), m, z)
+        return [k for k in ks if (m[k] > 0 and e[k] > 0) or (m[k] < 0 and e[k] < 0)]
+
     def record_changes(self, t: float, y: np.ndarray, m, new_m, z, at_zero: set[int],
                        quiet: set[int] = frozenset()) -> None:
         """An event for every watched surface whose branch changes at t (`quiet`:
-        located, but changing no derivative: not an event)."""
+        located, but changing no derivative: not an event). A crossing that runs code
+        is an event where it runs it (1 - FLAG leaving zero is none)."""
         for k in range(len(self.plan.watched)):
             if new_m[k] == m[k] or k in quiet:
+                continue
+            w = self.plan.watched[k]
+            if w.purpose is Purpose.SCHEDULE and not w.fires(m[k], new_m[k]):
                 continue
             if k not in at_zero and self.watch.silent(k, t, y, new_m, z):
                 continue  # a branch nothing uses now: not an event

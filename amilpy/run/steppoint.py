@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 import time as _clock
+from collections.abc import Callable
 
 import numpy as np
 
@@ -100,6 +101,10 @@ class StepPoint(RunLoop):
         self._stepper = None
         self._own = 0  # rates evaluated here (the stepper counts its own stages)
         self._points = 0  # step points processed (the first one has no events)
+        # the run's code for crossings (SCHEDULE's DISCRETE, an EVENT's NEWVALUEs):
+        # called with the cursor at the point and the surfaces that crossed there
+        self.crossed: Callable[[Cursor, list[int]], None] | None = None
+        self._fired: list[int] = []
 
     # the members of loop.Integrator that callers use ------------------------------
     def window(self, t0: float, t1: float) -> None:
@@ -163,6 +168,13 @@ class StepPoint(RunLoop):
             stop = self._changes(t, cur.m, m)
             cur.m[:] = m
         cur.t, cur.y = t, y
+        if self._fired:
+            # (the code runs before the point's row, and the step from it takes the
+            # rates of the new values)
+            fired, self._fired = self._fired, []
+            if self.crossed is not None:
+                self.crossed(cur, fired)
+                y, m = cur.y, list(cur.m)
         self.last_good = (t, y, m)  # m is not changed in place later
         self._points += 1
         if rec is not None:
@@ -191,9 +203,13 @@ class StepPoint(RunLoop):
             elif purpose is Purpose.FINISH:
                 hit = not first and now != was and (now == 0.0 or now * was < 0)
             else:
-                if not first and now != was:
+                fires = purpose is Purpose.SCHEDULE and w.fires(was, now)
+                if not first and now != was and (fires or purpose is not Purpose.SCHEDULE):
+                    # (a crossing that runs code is an event where it runs it)
                     self._event(Event(t, w.description, w.surface, was, now,
                                       w.event_kind(now), w.text))
+                    if fires:
+                        self._fired.append(k)
                 continue
             if hit and stop is None:
                 stop = k
@@ -202,10 +218,13 @@ class StepPoint(RunLoop):
         self.stop_reason = stop
         return stop is not None
 
-    def record_changes(self, t: float, y, m, new_m, z, at_zero: set[int]) -> None:
-        """Events for the branches that code changed at an instant (ACSL's DISCRETE)."""
+    def record_changes(self, t: float, y, m, new_m, z, at_zero: set[int],
+                       quiet: set[int] = frozenset()) -> None:
+        """Events for the branches that code changed at an instant (ACSL's DISCRETE,
+        FST's NEWVALUEs; `quiet`: changes that are no event)."""
         for k, (w, purpose) in enumerate(self._purposes):
-            if new_m[k] != m[k] and purpose not in (Purpose.TERMT, Purpose.FINISH):
+            if new_m[k] != m[k] and purpose not in (Purpose.TERMT, Purpose.FINISH) and \
+                    k not in quiet:
                 self._event(Event(t, w.description, w.surface, m[k], new_m[k],
                                   w.event_kind(new_m[k]), w.text))
 

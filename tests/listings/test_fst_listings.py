@@ -47,3 +47,39 @@ def test_water_stress_listing_is_the_euler_recurrence(name, key):
     assert np.max(np.abs(run.values["BALANCE"])) < 1e-9
     # both branches of the stress switch and of the percolation are exercised
     assert run.values["RATIOACTPOT"].min() < 1.0 and run.values["WPERC"][-1] > 0.0
+
+
+CASSAVA = {"lintul2_cassava.fst":
+           "1cd04154db533a240343a936343fc4d9120a601aa76ce16e093a4c3d0d03aece",
+           "SVK6.013": "a1998c0922088d695ba3ff4d39d425fa973a3d66c63bd34999f97175090a882d",
+           "SVK6.014": "dfc7d2e71da4a7e05a4d335a0be79a6cae83ccf5d170cf8984c9775f9e659ba9"}
+CASSAVA_COLUMNS = ("DAP", "TSUM", "TSUMCROP", "EMERG", "LAI", "WLVG", "WLVD", "WST", "WSO",
+                   "WRT", "WCUTTING", "WGTOTAL", "TRANRF", "DORMANCY", "PTRAN", "TRAIN",
+                   "DAVTMP", "WA", "WC", "ROOTD", "PUSHREDIST", "PUSHDORMREC", "CUMEVA")
+
+
+def test_lintul2_cassava_runs_as_written_and_is_the_euler_recurrence():
+    """LINTUL2-Cassava (Ezui & Leffelaar 2016, SOURCES.md F5) as published: DEFINE_CALL
+    and four Fortran routines after STOP (one with lines of 102 columns), SET EMERG =
+    0. and an EVENT whose ZEROCONDITION 1. - EMERGFAVOURABLE reaches zero (REAAND,
+    INSW) where emergence resets five states, and two runs (IRRIGF 0, then 1 after
+    END), on its own weather SVK6.013-014 across the new year. Against a hand
+    translation into plain Python written without amilpy (references/lintul2_cassava):
+    every row of both runs equal to the last bit; emergence on day 126 in both."""
+    for name, sha in CASSAVA.items():
+        published_copy(HERE, name, sha)
+    from listings.references import lintul2_cassava
+
+    runs = amilpy.load(HERE / "lintul2_cassava.fst").run(outputs=CASSAVA_COLUMNS,
+                                                         advice=False)
+    assert [r.method for r in runs] == ["RECT", "RECT"]
+    for run, irrigf in zip(runs, (0.0, 1.0), strict=True):
+        rows, fired = lintul2_cassava.run(irrigf, str(HERE))
+        ref = np.array(rows)
+        assert [t for t, *_ in fired] == [126.0]
+        assert [e.time for e in run.events if e.kind == "discrete"] == [126.0]
+        assert np.array_equal(run.t, ref[:, 0])
+        for k, column in enumerate(CASSAVA_COLUMNS, start=1):
+            assert np.array_equal(run[column], ref[:, k]), column
+    # the irrigated run's storage roots outgrow the rain-fed one's (its dormancy)
+    assert runs[1]["WSO"][-1] > runs[0]["WSO"][-1] > 900.0
