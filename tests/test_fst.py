@@ -153,6 +153,22 @@ def test_weather_with_located_finish_is_exact_between_day_starts(tmp_path, rate)
         assert run.t_end == pytest.approx(crossing, abs=1e-6), method
 
 
+def test_a_weather_statement_after_end_is_that_runs_weather(tmp_path):
+    """FST's reruns: LINTUL2 gives a WEATHER ... IYEAR after each END, one run a year.
+    Each run reads its own year's file (every run read the last year's before, and
+    failed when that one file was missing); its label says the year."""
+    path = _listing(tmp_path, CROP.replace("END\nSTOP", "END\nWEATHER IYEAR = 2019\nEND\n"
+                                           "STOP"))
+    runs = amilpy.load(path).run(weather_dir=str(WEATHER), advice=False)
+    assert [r.label for r in runs] == ["RUN 1", "WEATHER TZ 2 2019"]
+    for run, year in zip(runs, ("018", "019"), strict=True):
+        end, ref = _crop_reference(cabo.days(WEATHER / f"TZ2.{year}"))
+        assert run.t_end == end
+        for t, tsum in zip(run.times, run.values["TSUM"], strict=True):
+            assert tsum == pytest.approx(ref[round(t)][0], rel=1e-13)
+    assert runs[0].t_end != runs[1].t_end
+
+
 def test_a_missing_weather_file_names_where_it_looked_and_the_lines(tmp_path):
     path = _listing(tmp_path, CROP)
     with pytest.raises(AmilError) as err:

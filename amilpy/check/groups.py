@@ -169,6 +169,7 @@ class _Group:
     lists: dict[str, tuple[float, ...]] = field(default_factory=dict)
     reports: list[ir.Report] | None = None
     titles: list[str] | None = None
+    weather: bool = False  # it has a WEATHER statement
 
 
 class RunGroups(Visitor):
@@ -197,6 +198,7 @@ class RunGroups(Visitor):
         self.driver: tuple[str, Span] | None = None  # FST's DRIVER and where
         self.weather_items: dict[str, ast.Item] = {}
         self.weather_span: Span | None = None
+        self.weather: WeatherSpec | None = None  # the runs' of the group being read
         self.all_reports: list[ast.Report] = []
         self.all_tolerances: list[tuple[str, ast.Setting]] = []
         self.runs: list[ir.RunSpec] = []
@@ -245,12 +247,9 @@ class RunGroups(Visitor):
                     f"give {name} a value before the first END; a statement after END "
                     "changes it for the runs that follow",
                 )
-        weather = self.weather_spec()
-        for run in self.runs:
-            run.weather = weather
         return Data(self.runs, list(self.data), self.spans, dict(self.kinds), self.tables,
                     finish_first, self.all_reports, self.all_tolerances, relations_first,
-                    weather)
+                    self.runs[0].weather if self.runs else None)
 
     def add_runs(self) -> None:
         """The runs of the group just read: one per value of its value lists."""
@@ -263,6 +262,9 @@ class RunGroups(Visitor):
                 self.spans.get(first),
                 ", ".join(f"{k} has {len(v)}" for k, v in lists.items()),
             )
+        # (FST's reruns: a WEATHER after an END, IYEAR = 2011 say, is that run's)
+        if self.group.index == 0 or self.group.weather:
+            self.weather = self.weather_spec()
         for k in range(max(lengths) if lengths else 1):
             values = dict(self.data)
             for lname, lvalues in lists.items():
@@ -273,6 +275,9 @@ class RunGroups(Visitor):
             if lists:
                 changed.update({n: values[n] for n in lists})
             label = ", ".join(f"{n} = {v:g}" for n, v in changed.items())
+            first = self.runs[0].weather if self.runs else self.weather
+            if self.weather is not None and first is not None and self.weather.what != first.what:
+                label = ", ".join(filter(None, [label, self.weather.what]))
             self.runs.append(ir.RunSpec(
                 label=label or ("RUN 1" if self.group.index == 0 else f"RUN {len(self.runs) + 1}"),
                 data=values, changed=changed, tables=dict(self.tables), timer=dict(self.timer),
@@ -281,6 +286,7 @@ class RunGroups(Visitor):
                 abserr_each=dict(self.each["ABSERR"]), reports=list(self.reports),
                 titles=list(self.titles), timer_spans=dict(self.timer_spans),
                 step_point=DRIVERS[self.driver[0]][1] if self.driver else None,
+                weather=self.weather,
             ))
         # a later group inherits everything; value lists collapse to their first value
         for lname in lists:
@@ -423,8 +429,10 @@ class RunGroups(Visitor):
                            "remove one of them")
 
     def visit_Weather(self, st: ast.Weather) -> None:
-        """WEATHER items, gathered over every WEATHER statement (FST splits them)."""
-        self.weather_span = self.weather_span or st.span
+        """WEATHER items, gathered over every WEATHER statement (FST splits them); the
+        last one is where a run's weather is said to come from."""
+        self.weather_span = st.span
+        self.group.weather = True
         for item in st.items:
             if item.name not in WEATHER_KEYS:
                 self.rep.error(f"WEATHER has no setting {item.name}", item.span,

@@ -46,6 +46,11 @@ class WeatherSpec:
     wtrdir: str | None = None
     span: Span | None = None  # the statement, for errors
 
+    @property
+    def what(self) -> str:
+        """The station and year as a run's label says them."""
+        return f"WEATHER {self.country} {self.station} {self.year}"
+
 
 @dataclass
 class WeatherYear:
