@@ -525,3 +525,20 @@ def test_a_call_refused_in_initial_is_the_only_error():
                      "TIMER FINTIM = 1., DELT = 0.5\nTRANSLATION_GENERAL DRIVER='EUDRIV'\n"
                      "PRINT Y\nEND\nSTOP\n" + SUB.format(body="      B = A\n"), name="f.fst")
     assert [d.span.line for d in err.value.diagnostics] == [3]
+
+
+@pytest.mark.parametrize("method", ["RECT", "RKS"])
+def test_a_stop_in_a_routine_ends_the_run_there_with_its_words(method):
+    """SUCROS's ASTRO checks its input as Fortran does, `IF (LAT.GT.67.) STOP 'ERROR IN
+    ASTRO: LAT> 67'`: the run ends where the STOP is reached (here where X = TIME
+    reaches 1.5, located on RKS; at the step point t = 1.5 on RECT, DELT 0.5), saying
+    the routine's words; the rows before it are kept. (STOP was refused, and SUCROS1
+    and SUCROS2 with it.)"""
+    sub = SUB.format(body="      IF (A .GT. 1.5)  STOP 'ERROR IN F: A> 1.5'\n      B = 2.*A\n")
+    text = ("TITLE T\nX = INTGRL(0., 1.)\nCALL F(X, Y)\nTIMER FINTIM = 3., DELT = 0.5, "
+            "OUTDEL = 0.5\nPRINT Y\nEND\nSTOP\n" + sub)
+    run, = amilpy.loads(text, name="f.fst").run(method=method, advice=False)
+    assert run.status == "stopped" and "ERROR IN F: A> 1.5 (STOP in SUBROUTINE F at line 10)" in \
+        run.message, run.message
+    assert run.t_end == pytest.approx(2.0 if method == "RECT" else 1.5, abs=1e-9)
+    assert list(run["Y"][:4]) == pytest.approx([0.0, 1.0, 2.0, 3.0])

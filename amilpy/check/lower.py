@@ -354,7 +354,8 @@ class Lowering:
         FST's FINISH c, the same thing."""
         cond = st.expr if cond is None else cond
         text = self.written(st.expr.span) or expr_text(None, st.expr, TEXT_LIMIT)
-        where = f"{'FINISH ' + text if finish else f'TERMT({text})'} at line {st.span.line}"
+        where = f"{st.written or ('FINISH ' + text if finish else f'TERMT({text})')} at " \
+            f"line {st.span.line}"
         description = f"{st.message} ({where})" if st.message else where
         surface = condition_surface(cond, lambda e: self.expr(e, "TERMT"))
         index = self.surface(surface, ir.SurfaceKind.SIGN, None, ir.Purpose.TERMT, st.span,

@@ -21,7 +21,8 @@ FUNCTION subprograms (`REAL FUNCTION F(X)` ... `F = ...` ... `END`; a reference 
 the listing or in a routine is written out as a CALL of F before the statement that
 holds it, with F's value its last argument: `expand_functions`), GO TO forward with
 its labels (written out as IF blocks, as the ACSL form's: parse/jumps.py), intrinsics
-as the listing has them, and `RETURN` as the last statement. An argument the
+as the listing has them, `RETURN` as the last statement, and `STOP` or `STOP 'text'`
+(read as a TERMT: the run stops where it is reached, saying the text). An argument the
 body assigns is an output (the call must give a name there); one it only reads is an
 input and stands for the call's expression; every other name is the subroutine's own
 (each call's, `NAME#k.X`), and must be given a value before it is read. Only the
@@ -42,7 +43,7 @@ to two assigned arguments, an assigned argument some path leaves as it was.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ..diagnostics import Diagnostic, Span
 from . import syntax as ast
@@ -67,6 +68,8 @@ _SAVE = re.compile(r"SAVE\b\s*(.*)$", re.I)
 _CONTINUE = re.compile(r"CONTINUE\s*$", re.I)
 _DO_LABEL = re.compile(r"DO\s+(\d+)", re.I)  # a labelled DO's label
 _RETURN = re.compile(r"RETURN\s*$", re.I)
+# STOP, STOP 'text' or STOP 123, alone or as a logical IF's statement
+_STOP = re.compile(r"((?:IF\s*\(.*\)\s*)?)STOP\b\s*('(?:[^']|'')*'|\d+)?\s*$", re.I)
 # columns 73-80 of a punched card: blank, or a sequence number (letters, then digits)
 _SEQUENCE = re.compile(r"[ \t]*(?:[A-Za-z]{0,6}[0-9]{1,8}[ \t]*)?")
 # refused by name: (pattern, the construct as a reader knows it)
@@ -74,7 +77,7 @@ _REFUSED = [
     (re.compile(r"(LOGICAL|CHARACTER)\b", re.I), "{0} variables in a subroutine"),
     (re.compile(r"GO\s*TO\s*\(", re.I), "a computed GO TO"),
     (re.compile(r"(COMMON|EQUIVALENCE|EXTERNAL|"
-                r"FUNCTION|ENTRY|READ|WRITE|FORMAT|OPEN|CLOSE|STOP)\b", re.I),
+                r"FUNCTION|ENTRY|READ|WRITE|FORMAT|OPEN|CLOSE)\b", re.I),
      "Fortran's {0} in a subroutine"),
 ]
 # Fortran's INTEGER functions, and the generic ones that are INTEGER of INTEGERs
@@ -281,6 +284,7 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
     sizes: dict[str, int] = {}  # the routine's own arrays and their lengths
     data: dict[str, tuple[int, str]] = {}  # names DATA or PARAMETER give: (line, which)
     executable: list = []
+    stops: set[int] = set()  # the lines of STOPs (read as TERMTs)
 
     def refuse(what: str, where: Span, instead: str) -> None:
         nonlocal bad
@@ -389,6 +393,14 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
                 refuse(f"RETURN before the end of {routine}: not supported", where,
                        "write the statements after it in the ELSE of an IF")
             continue
+        stop = _STOP.match(code)
+        if stop is not None:
+            # (Fortran's STOP ends the program: the run ends there, saying the
+            # routine's words, as TERMT ends it)
+            said = stop.group(2)[1:-1] if stop.group(2) and stop.group(2).startswith("'") \
+                else f"STOP {stop.group(2) or ''}".strip()
+            code = stop.group(1) + "TERMT(1.0, '" + said + "')"
+            stops.add(k + 1)
         found = next(((m, what) for p, what in _REFUSED if (m := p.match(code))), None)
         if found is not None:
             match, what = found
@@ -446,7 +458,15 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
     errors.extend(builder.errors)
     if builder.errors:
         return None
-    allowed = (ast.Assign, ast.If, ast.Loop, ast.Declare, ast.SubroutineCall)
+    allowed = (ast.Assign, ast.If, ast.Loop, ast.Declare, ast.SubroutineCall,
+               ast.Termt)  # (a STOP's)
+
+    def named(st):  # (a STOP's TERMT says it is the routine's STOP)
+        if isinstance(st, ast.Termt) and st.span.line in stops:
+            return replace(st, written=f"STOP in {routine}")
+        return ast.with_bodies(st, lambda body: [named(b) for b in body])
+
+    statements = [named(st) for st in statements]
     for st in (n for top in statements for n in ast.walk(top)):
         if isinstance(st, ast.STATEMENTS) and not isinstance(st, allowed):
             errors.append(Diagnostic(

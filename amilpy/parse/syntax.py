@@ -339,6 +339,8 @@ class Termt(Node):
     expr: Expr
     span: Span
     message: str | None = None  # TERMT(c, 'message'): said with the time when it stops
+    # what the listing wrote, where that is no TERMT: "STOP in SUBROUTINE ASTRO"
+    written: str = ""
     child_fields = ("expr",)
 
 
