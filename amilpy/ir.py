@@ -322,12 +322,17 @@ class Discrete:
 
 
 @dataclass(frozen=True)
-class StateEvent:
-    """FST's EVENT: its NEWVALUEs (`code`, written order; they set states and SET
-    variables) run where the ZEROCONDITION surface reaches zero from either side: a
-    located crossing, or in step-point mode the first step point where it has."""
+class FstEvent:
+    """FST's EVENT: its code (the event's own values, then the NEWVALUEs, all from the
+    values before it, given at once to states and SET variables) runs where the
+    ZEROCONDITION surface reaches zero from either side (a located crossing; in
+    step-point mode the first step point where it has), or, a time event, at FIRSTTIME
+    (`first`, a value before the run) and then at each NEXTTIME (`next`: the name the
+    code gives that value, None: once)."""
 
-    surface: int
+    surface: int | None
+    first: Expr | None
+    next: str | None
     code: Code
     span: Span
 
@@ -442,7 +447,7 @@ class Model:
     terminal_code: list[Code] = field(default_factory=list)  # TERMINAL with IF/DO blocks
     acsl: Acsl | None = None  # the ACSL form's sections and events
     # FST's EVENT blocks, and its SET variables (kept between events, like states)
-    events: list[StateEvent] = field(default_factory=list)
+    events: list[FstEvent] = field(default_factory=list)
     sets: list[str] = field(default_factory=list)
     # notes for the listing (read before any value, == tested pointwise, ...)
     warnings: list = field(default_factory=list)

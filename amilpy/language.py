@@ -14,7 +14,7 @@ import re
 TIMER_KEYS: tuple[str, ...] = ("FINTIM", "DELT", "PRDEL", "OUTDEL", "DELMIN", "DELMAX")
 TIME = "TIME"
 RESERVED: tuple[str, ...] = (TIME, *("DELT", "DELMIN", "DELMAX", "FINTIM", "PRDEL", "OUTDEL"),
-                             "PI")
+                             "STTIME", "PI")  # (STTIME: FST's start, 0 where none is given)
 # Reserved names an INITIAL statement or an initial value may read (TIME is t0).
 KNOWN_BEFORE_RUN: frozenset[str] = frozenset(RESERVED)
 # Reserved names that are settings, not quantities: never a column of a printout.
@@ -140,7 +140,7 @@ STATEMENT_KEYWORDS: tuple[str, ...] = (
     *REPORT_KEYWORDS, *ACSL_HEADS, "SCHEDULE", "INTERVAL", "CINTERVAL", "VARIABLE",
     *CONTROL_KEYWORDS, *(k for k in TYPE_KEYWORDS if k != "DOUBLEPRECISION"), "DOUBLE",
     "PRECISION", "WEATHER", "TRANSLATION_GENERAL", "TRANSLATION_FSE", "DEFINE_CALL",
-    "ZEROCONDITION", "NEWVALUE", "SET", *BLOCK_KEYWORDS)
+    "ZEROCONDITION", "FIRSTTIME", "NEXTTIME", "NEWVALUE", "SET", *BLOCK_KEYWORDS)
 
 # What amilpy does not run (section 14): the construct as a reader knows it, and what
 # to write instead. Statement keywords first, then functions.
@@ -153,10 +153,6 @@ REFUSED: dict[str, tuple[str, str]] = {
     "TABLE": ("the TABLE statement", "write a table as FUNCTION F = x1,y1, x2,y2, ... and "
               "read it with AFGEN(F, X)"),
     "SUBMODEL": ("ACSL's SUBMODEL", "write the statements out"),
-    "FIRSTTIME": ("an FST 3 EVENT's FIRSTTIME (a time event)", "for one instant write "
-                  "ZEROCONDITION TIME - t in the EVENT"),
-    "NEXTTIME": ("an FST 3 EVENT's NEXTTIME (a repeated time event)", "for one instant write "
-                 "ZEROCONDITION TIME - t in the EVENT"),
     "SUBROUTINE": ("a Fortran subroutine", "rewrite it as statements or a PROCEDURE; text "
                    "after STOP is not read"),
     "COMMON": ("Fortran COMMON", "remove it: every name of a listing is global"),

@@ -121,8 +121,8 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
      "routine, runs it first, as a CALL with F's value its last argument), SAVE (where it "
      "keeps nothing the routine reads), GO TO forward to a labelled statement (as the "
      "ACSL form's), RETURN at the end, STOP or STOP 'text' (the run stops there, as at a "
-     "TERMT, saying the text: SUCROS's ASTRO checks its latitude so). Refused at their line: a GO TO back or computed, "
-     "COMMON, array arguments, "
+     "TERMT, saying the text: SUCROS's ASTRO checks its latitude so). Refused at their "
+     "line: a GO TO back or computed, COMMON, array arguments, "
      "LOGICAL and CHARACTER, an INTEGER given a value that is no whole number or divided "
      "by one (Fortran cuts both), a DATA value the routine changes (memory between CALLs), "
      "recursion; and a name given both as a value it reads and as an argument it assigns, "
@@ -130,9 +130,14 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
      "not read"),
     ("FST", "`EVENT` / `ZEROCONDITION E` / `NEWVALUE X = e` ... / `ENDEVENT`",
      "a state event: where E reaches zero from either side (located; in step-point mode "
-     "at the first step point where it has, before that point's row) the NEWVALUEs run "
-     "in written order; X is a state or a SET variable. `FIRSTTIME`/`NEXTTIME` (time "
-     "events) are refused: write `ZEROCONDITION TIME - t` for one instant"),
+     "at the first step point where it has, before that point's row) the NEWVALUEs are "
+     "computed from the values before the event and given at once; X is a state or a "
+     "SET variable. The EVENT may also hold assignments (values of its own, computed "
+     "first) and PARAMETERs (the listing's)"),
+    ("FST", "`EVENT` / `FIRSTTIME t1` / `NEXTTIME t2` / `NEWVALUE X = e` / `ENDEVENT`",
+     "a time event: at t1 (a value before the run: `STTIME + 30.`), then at each t2 it "
+     "gives there (`TIME + 30.`); the integration stops at each instant (in step-point "
+     "mode: the first step point at or after it)"),
     ("FST", "`SET EMERG = 0.` in INITIAL", "EMERG's first value; afterwards it changes "
      "only where an EVENT's NEWVALUE sets it (kept between events, like a state)"),
     ("CSMP III, FST", "`ENDJOB`, the job's last statement", "the end of the runs, as "
@@ -285,10 +290,12 @@ and `WEATHER`, whose daily variables are read from CABO-format files (the file
 listing's folder, its `weather/` and `../weather/`, and `--weather-dir`). A `CALL`
 of a Fortran subroutine written after STOP runs it, in a subset of Fortran 77 (the
 FST row of the table below says which); one of no subroutine there is refused.
-FST 3's state events run as FSE runs them: `SET EMERG = 0.` in INITIAL gives a
-variable its first value, and an `EVENT ... ENDEVENT` block gives new values to states
-and such variables where its `ZEROCONDITION` reaches zero (LINTUL2-Cassava's emergence:
-`ZEROCONDITION 1. - EMERGFAVOURABLE`, a condition that jumps from 1 to 0).
+FST 3's events run as FSE runs them: `SET EMERG = 0.` in INITIAL gives a variable its
+first value, and an `EVENT ... ENDEVENT` block gives new values to states and such
+variables where its `ZEROCONDITION` reaches zero (LINTUL2-Cassava's emergence:
+`ZEROCONDITION 1. - EMERGFAVOURABLE`, a condition that jumps from 1 to 0), or at the
+instants `FIRSTTIME` and `NEXTTIME` give (LINTUL-banana's pruning every 30 days).
+Fortran's `STOP 'text'` in a routine after STOP ends the run there, saying the text.
 """
 
 

@@ -169,6 +169,24 @@ def test_a_weather_statement_after_end_is_that_runs_weather(tmp_path):
     assert runs[0].t_end != runs[1].t_end
 
 
+def test_a_routine_loop_reads_the_days_weather(tmp_path):
+    """A statement of a routine's DO loop that reads what the loop assigns is
+    evaluated where it stands; the weather names in it are still the day's (SUCROS's
+    TOTASS reads LAT so: it stopped with a Python NameError). S = (1 + 2 + 3)*LAT +
+    3*TMMX, LAT from the file's station line, TMMX the day's."""
+    text = ("TITLE T\nWEATHER CNTR = 'TZ'; ISTN = 2; IYEAR = 2018\nCALL G(LAT, TMMX, S)\n"
+            "X = INTGRL(0., 1.)\nTIMER STTIME = 100.; FINTIM = 103.; DELT = 1.; PRDEL = 1.\n"
+            "TRANSLATION_GENERAL DRIVER = 'EUDRIV'\nPRINT S\nEND\nSTOP\n"
+            "      SUBROUTINE G(A, T, S)\n      IMPLICIT REAL (A-Z)\n      INTEGER I\n"
+            "      S = 0.\n      DO 10 I = 1, 3\n         S = S + A*I + T\n"
+            "   10 CONTINUE\n      RETURN\n      END\n")
+    run, = amilpy.load(_listing(tmp_path, text)).run(weather_dir=str(WEATHER), advice=False)
+    lat = cabo.station(WEATHER / "TZ2.018")[1]
+    days = cabo.days(WEATHER / "TZ2.018")
+    assert list(run["S"]) == pytest.approx([6.0 * lat + 3.0 * days[round(t)][2]
+                                            for t in run.t], rel=1e-14)
+
+
 def test_a_missing_weather_file_names_where_it_looked_and_the_lines(tmp_path):
     path = _listing(tmp_path, CROP)
     with pytest.raises(AmilError) as err:
@@ -388,8 +406,20 @@ def test_a_zero_condition_that_jumps_to_zero_fires_once(method):
      "ENDEVENT"),
     (EMERGENCE.replace("   NEWVALUE W = W + W0\n", "   NEWVALUE EMERG = 2.\n"), 12,
      "NEWVALUE EMERG twice in one EVENT", "line 11"),
-    (EMERGENCE.replace("   NEWVALUE W = W + W0\n", "   W0 = 3.\n"), 12,
-     "an EVENT holds ZEROCONDITION and NEWVALUE statements only", "NEWVALUE X = value"),
+    (EMERGENCE.replace("   NEWVALUE W = W + W0\n", "   NEWVALUE W = W + W0\n   W0 = 3.\n"),
+     13, "W0 is the EVENT's own value and a variable of the model", "another name"),
+    (EMERGENCE.replace("   NEWVALUE W = W + W0\n", "   NEWVALUE W = W + W0\n   PRINT W\n"),
+     13, "an EVENT holds ZEROCONDITION (or FIRSTTIME and NEXTTIME), NEWVALUE statements, "
+     "assignments and PARAMETERs only", "NEWVALUE X = value"),
+    (EMERGENCE.replace("   ZEROCONDITION 1. - FAVOURABLE\n", "   NEXTTIME TIME + 1.\n"), 10,
+     "NEXTTIME without FIRSTTIME", "FIRSTTIME t"),
+    (EMERGENCE.replace("   ZEROCONDITION 1. - FAVOURABLE\n",
+                       "   ZEROCONDITION 1. - FAVOURABLE\n   FIRSTTIME 2.\n"), 11,
+     "an EVENT has a ZEROCONDITION or a FIRSTTIME, not both", "another EVENT"),
+    (EMERGENCE.replace("ENDEVENT\n", "ENDEVENT\nNEWVALUE W = 0.\n"), 14,
+     "NEWVALUE stands inside an EVENT", "EVENT / NEWVALUE ... / ENDEVENT"),
+    (EMERGENCE.replace("   ZEROCONDITION 1. - FAVOURABLE\n", "   FIRSTTIME W\n"), 10,
+     "FIRSTTIME uses W, which changes in time", "a number, a data value"),
     ("PROGRAM P\nDERIVATIVE\nX = INTEG(1.0, 0.0)\nEVENT\nZEROCONDITION X - 1.\n"
      "NEWVALUE X = 0.\nENDEVENT\nTERMT(T >= 2.)\nEND\nEND\n", 4,
      "FST's EVENT ... ENDEVENT belongs to the CSMP (FST) form", "SCHEDULE name .XZ."),
@@ -405,14 +435,80 @@ def test_event_and_set_faults_are_located_and_say_what_to_write(text, line, mess
     assert hint in d.hint
 
 
-def test_fst_time_events_are_refused_by_name():
-    """FIRSTTIME/NEXTTIME (FST 3's time events) are not run: refused by name, at their
-    line, with what to write for one instant (the EVENT left without a condition
-    says so too)."""
-    text = EMERGENCE.replace("   ZEROCONDITION 1. - FAVOURABLE\n", "   FIRSTTIME 3.\n")
-    with pytest.raises(AmilError) as err:
-        amilpy.loads(text, "e.fst")
-    said = {d.span.line: (d.message, d.hint) for d in err.value.diagnostics}
-    assert said[10][0] == "an FST 3 EVENT's FIRSTTIME (a time event) (line 10): not supported"
-    assert "ZEROCONDITION TIME - t" in said[10][1]
-    assert said[9][0] == "this EVENT has no ZEROCONDITION"
+PRUNING = """TITLE TIME EVENTS: X GROWS AT 1 A DAY, HALVED AT DAY 10 AND EVERY 7 DAYS ON
+INITIAL
+SET N = 0.
+DYNAMIC
+X = INTGRL(0., 1.)
+EVENT
+   FIRSTTIME STTIME + 10.
+   NEXTTIME TIME + GAP
+   PARAMETER GAP = 7.
+   HALF = X/2.
+   NEWVALUE X = HALF
+   NEWVALUE N = N + 1.
+ENDEVENT
+TIMER STTIME = 2.; FINTIM = 32.; DELT = 0.5; PRDEL = 0.5
+PRINT X, N
+END
+STOP
+"""
+
+
+def test_a_time_event_at_firsttime_and_then_at_each_nexttime():
+    """FIRSTTIME STTIME + 10 and NEXTTIME TIME + GAP (a PARAMETER inside the EVENT, the
+    listing's like any other), with a value of the event's own (HALF): X = t - 2
+    halved at t = 12, 19, 26. Located (AUTO, RKS): the integration stops at each
+    instant; step-point (EUDRIV, DELT 0.5): the same instants are step points. Both
+    are the recurrence x -> x/2 at the instants, to round-off; the rows at an instant
+    show the values after the event."""
+    def exact(t):
+        x, last = 0.0, 2.0
+        for at in (12.0, 19.0, 26.0):
+            if t < at:
+                break
+            x, last = (x + at - last) / 2.0, at
+        return x + t - last
+
+    for text, method in ((PRUNING, "AUTO"), (PRUNING, "RKS"), (PRUNING.replace(
+            "TIMER", "TRANSLATION_GENERAL DRIVER = 'EUDRIV'\nTIMER"), None)):
+        run, = amilpy.loads(text, "prune.fst").run(method=method, advice=False)
+        assert [e.time for e in run.events if e.kind == "discrete"] == [12.0, 19.0, 26.0]
+        assert list(run["X"]) == pytest.approx([exact(t) for t in run.t], abs=1e-9)
+        assert list(run["N"]) == [float(sum(t >= a for a in (12, 19, 26))) for t in run.t]
+
+
+def test_in_step_point_mode_a_time_event_runs_at_the_first_step_point_at_or_after_it():
+    """DELT 0.3: day 12 is no step point; the event runs at the first after it, 12.2
+    (2 + 34*0.3), and NEXTTIME TIME + 7 counts from there: 19.2 is none either, so
+    19.4, then 26.6 (FSE's Euler driver does not shorten its step to an event)."""
+    text = PRUNING.replace("DELT = 0.5; PRDEL = 0.5", "DELT = 0.3; PRDEL = 0.3").replace(
+        "TIMER", "TRANSLATION_GENERAL DRIVER = 'EUDRIV'\nTIMER")
+    run, = amilpy.loads(text, "prune.fst").run(advice=False)
+    ran = [e.time for e in run.events if e.kind == "discrete"]
+    assert ran == pytest.approx([12.2, 19.4, 26.6], abs=1e-9)
+    x, t, rows, k, due = 0.0, 2.0, [], 0, 12.0
+    while t <= 32.0 + 1e-9:
+        if t >= due - 1e-9:
+            x, due = x / 2.0, t + 7.0
+        rows.append(x)
+        x, k = x + 0.3, k + 1
+        t = 2.0 + 0.3 * k
+    assert list(run["X"]) == pytest.approx(rows, abs=1e-12)
+
+
+def test_newvalues_are_given_at_once_from_the_values_before_the_event():
+    """FST's statements have no order, so neither may an EVENT's: NEWVALUE A = B and
+    NEWVALUE B = A swap them (in written order both would end as B)."""
+    text = ("TITLE SWAP\nA = INTGRL(1., 0.)\nB = INTGRL(2., 0.)\nEVENT\nFIRSTTIME 1.\n"
+            "NEWVALUE A = B\nNEWVALUE B = A\nENDEVENT\nTIMER FINTIM = 2.; DELT = 1.; "
+            "PRDEL = 1.\nPRINT A, B\nEND\nSTOP\n")
+    for method in ("AUTO", "RECT"):
+        run, = amilpy.loads(text, "swap.fst").run(method=method, advice=False)
+        assert (list(run["A"]), list(run["B"])) == ([1.0, 2.0, 2.0], [2.0, 1.0, 1.0])
+
+
+def test_a_nexttime_that_is_not_later_stops_the_run_saying_so():
+    text = PRUNING.replace("NEXTTIME TIME + GAP", "NEXTTIME TIME")
+    run, = amilpy.loads(text, "prune.fst").run(advice=False)
+    assert run.status == "failed" and "NEXTTIME = 12 is not after TIME = 12" in run.message

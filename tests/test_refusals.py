@@ -49,8 +49,7 @@ CASES = [
     (DERIV, "Y = DBLINT(X, 0.0, 0.0, -1.0, 1.0)", 4, "ACSL's DBLINT", "two INTEGs"),
     (PROGRAM, "Constant bufferslp = 'RumPartSizeSlp is positive'", 2,
      "the string 'RumPartSizeSlp is positive' cannot be a value", "TERMT message"),
-    (CSMP, "NEXTTIME 10.", 1, "an FST 3 EVENT's NEXTTIME (a repeated time event)",
-     "ZEROCONDITION TIME - t"),
+    (CSMP, "STORAGE X(10)", 1, "CSMP's STORAGE (arrays)", "one scalar per element"),
     (CSMP, "COMMON /BLK/ A, B", 1, "Fortran COMMON", "global"),
     (PROGRAM, "DERIVATIVE one\nALGORITHM IALG = 2\nY = INTEG(1.0, 0.)\nEND\n"
      "DERIVATIVE two\nALGORITHM IALG = 5\nZ = INTEG(1.0, 0.)\nEND", 7,

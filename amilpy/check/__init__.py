@@ -22,7 +22,7 @@ from ..parse import syntax as ast
 from ..parse.syntax import deep_enough, no_collection
 from ..parse.unparse import expr_text
 from . import order
-from .code import CodeLowering, assigned_names
+from .code import CodeLowering, assigned_names, substitute
 from .groups import RunGroups, reject_late_equations, sections, split_groups
 from .lower import TEXT_LIMIT, Lowering
 from .names import PURE, Names
@@ -97,13 +97,16 @@ def _carried(model: ir.Model, program: ast.Program) -> ir.Model:
     return model
 
 
-def _state_events(blocks: list[ast.Event], sets: set[str], low: Lowering,
-                  code: CodeLowering, names: Names, rep: Reporter) -> list[ir.StateEvent]:
-    """FST's EVENT blocks: the ZEROCONDITION a surface the run watches, the NEWVALUEs
-    written-order code that sets states and SET variables."""
+def _fst_events(blocks: list[ast.Event], sets: set[str], low: Lowering, code: CodeLowering,
+                names: Names, rep: Reporter) -> tuple[list[ir.FstEvent], list[ast.Node]]:
+    """FST's EVENT blocks, and the expressions they read (for the names check): a
+    ZEROCONDITION a surface the run watches, a FIRSTTIME a value before the run; the
+    event's own values (EVENT#k.NAME), its NEWVALUEs and its NEXTTIME written-order
+    code, every one computed from the values before the event, then the NEWVALUEs
+    given at once (FST's statements have no order, so neither may their effect)."""
     states = {s.name for s in low.states if not s.hidden}
-    out = []
-    for ev in blocks:
+    out, reads = [], []
+    for k, ev in enumerate(blocks, start=1):
         ok = True
         for nv in ev.values:
             if nv.target not in states and nv.target not in sets:
@@ -113,17 +116,44 @@ def _state_events(blocks: list[ast.Event], sets: set[str], low: Lowering,
                           "an EVENT changes states (X = INTGRL(...)) and SET variables: "
                           f"give {nv.target} its first value with SET {nv.target} = value "
                           "in INITIAL, and read it in DYNAMIC")
-        zero = ev.zero.expr
-        if not names.check_calls(zero, PURE, "EVENT") or not ok:
-            continue
-        index = low.surface(low.expr(zero, "ZEROCONDITION"), ir.SurfaceKind.SIGN, None,
-                            ir.Purpose.SCHEDULE, ev.zero.span,
-                            f"EVENT at line {ev.span.line}",
-                            low.written(zero.span) or expr_text(None, zero, TEXT_LIMIT))
-        body = [ast.Assign((nv.target,), (nv.target_span,), nv.expr, nv.span)
-                for nv in ev.values]
-        out.append(ir.StateEvent(index, code.written(body, "EVENT", ev.span), ev.span))
-    return out
+        own = {h.targets[0]: ast.Name(f"EVENT#{k}.{h.targets[0]}", h.span) for h in ev.helpers}
+        for h in ev.helpers:
+            if h.targets[0] in names.defined or h.targets[0] in names.data_names:
+                ok = False
+                rep.error(f"{h.targets[0]} is the EVENT's own value and a variable of the "
+                          "model", h.target_spans[0], "give the EVENT's own value another name")
+        body = [replace(h, targets=(own[h.targets[0]].name,), expr=substitute(h.expr, own))
+                for h in ev.helpers]
+        new = [ast.Assign((f"EVENT#{k}.NEW.{nv.target}",), (nv.target_span,),
+                          substitute(nv.expr, own), nv.span) for nv in ev.values]
+        after = None
+        if ev.next is not None:
+            after = f"EVENT#{k}.NEXTTIME"
+            new.append(ast.Assign((after,), (ev.next.span,), substitute(ev.next.expr, own),
+                                  ev.next.span))
+        given = [ast.Assign((nv.target,), (nv.target_span,), ast.Name(t.targets[0], nv.span),
+                            nv.span) for nv, t in zip(ev.values, new, strict=False)]
+        reads += [st.expr for st in body + new]
+        surface = first = None
+        if ev.zero is not None:
+            reads.append(ev.zero.expr)
+            if names.check_calls(ev.zero.expr, PURE, "EVENT"):
+                surface = low.surface(
+                    low.expr(ev.zero.expr, "ZEROCONDITION"), ir.SurfaceKind.SIGN, None,
+                    ir.Purpose.SCHEDULE, ev.zero.span, f"EVENT at line {ev.span.line}",
+                    low.written(ev.zero.expr.span) or expr_text(None, ev.zero.expr, TEXT_LIMIT))
+            else:
+                ok = False
+        else:
+            low.before_run.append((ev.first.expr, "FIRSTTIME"))
+            if names.check_calls(ev.first.expr, PURE, "FIRSTTIME"):
+                first = low.expr(ev.first.expr, None, literal=True)
+            else:
+                ok = False
+        if ok:
+            out.append(ir.FstEvent(surface, first, after,
+                                   code.written(body + new + given, "EVENT", ev.span), ev.span))
+    return out, reads
 
 
 def _check_csmp(program: ast.Program, name: str | None) -> ir.Model:
@@ -198,8 +228,8 @@ def _check_csmp(program: ast.Program, name: str | None) -> ir.Model:
                                         st.span))
 
     sets = {st.target for st in parts["SET"]}
-    events = _state_events(parts["EVENT"], sets, low, code, names, rep)
-    names.check_references({**parts, "DYNAMIC": parts["DYNAMIC"] + parts["EVENT"]},
+    events, reads = _fst_events(parts["EVENT"], sets, low, code, names, rep)
+    names.check_references({**parts, "DYNAMIC": parts["DYNAMIC"] + reads},
                            low.before_run, {s.name for s in low.states if not s.hidden})
     # a weather name a report asks for is a variable of the run (PRINT RDD)
     reported = {n: st.span for st in data.reports for n in st.names if n in low.weather}

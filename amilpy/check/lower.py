@@ -379,7 +379,10 @@ class _Lowerer(Visitor):
         return expr
 
     def visit_Name(self, expr: ast.Name) -> ast.Node:
-        if expr.name in self.lowering.weather and not self.literal:
+        # (literal too: a statement of a routine's DO loop that reads a value the loop
+        # assigns is evaluated where it stands, and the day's weather is still the
+        # day's: SUCROS's TOTASS reads LAT so)
+        if expr.name in self.lowering.weather:
             return self.lowering.weather_value(expr.name, expr.span)
         return expr
 

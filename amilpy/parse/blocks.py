@@ -185,6 +185,13 @@ class Nester:
                     into.extend(built)
                 elif built is not None:  # (None: an EVENT whose fault is said)
                     into.append(built)
+                    if isinstance(built, ast.Event):  # (its PARAMETERs are the listing's)
+                        into.extend(built.data)
+            elif isinstance(item, (ast.ZeroCondition, ast.NewValue)) and \
+                    not (stack and stack[-1].head.kind == "EVENT"):
+                word = item.kind if isinstance(item, ast.ZeroCondition) else "NEWVALUE"
+                self.error(f"{word} stands inside an EVENT", item.span,
+                           f"write EVENT / {word} ... / ENDEVENT")
             else:
                 target.append(item)
         for opened in reversed(stack):
@@ -278,21 +285,34 @@ class Nester:
         return ast.Block(head.kind, head.name, body, head.span)
 
     def event(self, head: Head, body: tuple) -> ast.Event | None:
-        """EVENT ... ENDEVENT: one ZEROCONDITION and its NEWVALUEs, nothing else."""
-        zeros = [st for st in body if isinstance(st, ast.ZeroCondition)]
-        values = tuple(st for st in body if isinstance(st, ast.NewValue))
+        """EVENT ... ENDEVENT: its condition (ZEROCONDITION, or FIRSTTIME and maybe
+        NEXTTIME), NEWVALUEs, assignments of its own and PARAMETERs."""
+        conditions: dict[str, ast.ZeroCondition] = {}
         for st in body:
-            if not isinstance(st, (ast.ZeroCondition, ast.NewValue)):
-                self.error("an EVENT holds ZEROCONDITION and NEWVALUE statements only",
-                           getattr(st, "span", head.span), "compute the value among the "
-                           "listing's statements and give it in NEWVALUE X = value")
-        for extra in zeros[1:]:
-            self.error("a second ZEROCONDITION in one EVENT", extra.span,
-                       f"the EVENT of line {head.span.line} has its condition at line "
-                       f"{zeros[0].span.line}: write another EVENT for this one")
-        if not zeros:
+            if isinstance(st, ast.ZeroCondition):
+                if st.kind in conditions:
+                    self.error(f"a second {st.kind} in one EVENT", st.span,
+                               f"the EVENT of line {head.span.line} has its {st.kind} at "
+                               f"line {conditions[st.kind].span.line}: write another EVENT")
+                conditions.setdefault(st.kind, st)
+            elif not isinstance(st, (ast.NewValue, ast.Assign, ast.Data)):
+                self.error("an EVENT holds ZEROCONDITION (or FIRSTTIME and NEXTTIME), "
+                           "NEWVALUE statements, assignments and PARAMETERs only",
+                           getattr(st, "span", head.span), "compute other values among the "
+                           "listing's statements and give them in NEWVALUE X = value")
+        values = tuple(st for st in body if isinstance(st, ast.NewValue))
+        zero, first, nxt = (conditions.get(k) for k in ("ZEROCONDITION", "FIRSTTIME",
+                                                        "NEXTTIME"))
+        if zero is None and first is None and nxt is None:
             self.error("this EVENT has no ZEROCONDITION", head.span,
-                       "write ZEROCONDITION e: the NEWVALUEs run where e reaches zero")
+                       "write ZEROCONDITION e (the NEWVALUEs run where e reaches zero), or "
+                       "FIRSTTIME t (at t) for a time event")
+        if zero is not None and (first or nxt) is not None:
+            self.error("an EVENT has a ZEROCONDITION or a FIRSTTIME, not both",
+                       (first or nxt).span, "write a time event as another EVENT")
+        elif nxt is not None and first is None:
+            self.error("NEXTTIME without FIRSTTIME", nxt.span,
+                       "a time event starts at FIRSTTIME t; NEXTTIME gives each next time")
         if not values:
             self.error("this EVENT has no NEWVALUE", head.span,
                        "write NEWVALUE X = value for each state or SET variable it changes")
@@ -302,6 +322,9 @@ class Nester:
                 self.error(f"NEWVALUE {st.target} twice in one EVENT", st.target_span,
                            f"line {seen[st.target].span.line} gives its new value already")
             seen.setdefault(st.target, st)
-        if not zeros or not values:
+        if (zero is None and first is None) or not values or \
+                (zero is not None and (first or nxt) is not None) or (nxt and not first):
             return None
-        return ast.Event(zeros[0], values, head.span)
+        return ast.Event(zero, first, nxt, tuple(st for st in body if isinstance(st, ast.Assign)),
+                         values, head.span,
+                         tuple(st for st in body if isinstance(st, ast.Data)))

@@ -697,6 +697,10 @@ class Builder:
     def st_zerocondition(self, node) -> ast.ZeroCondition:
         return ast.ZeroCondition(self.expr(node.children[0]), self.span(node))
 
+    def st_event_time(self, node) -> ast.ZeroCondition:
+        kind, expr = node.children
+        return ast.ZeroCondition(self.expr(expr), self.span(node), str(kind).upper())
+
     def st_newvalue(self, node) -> ast.NewValue:
         name, expr = node.children
         return ast.NewValue(str(name).upper(), self.span(name), self.expr(expr), self.span(node))

@@ -549,10 +549,12 @@ class Weather(Node):
 
 @dataclass(frozen=True)
 class ZeroCondition(Node):
-    """ZEROCONDITION e inside an FST EVENT block (the nester puts it in `Event`)."""
+    """ZEROCONDITION e, FIRSTTIME t or NEXTTIME t (`kind`) inside an FST EVENT block
+    (the nester puts them in `Event`)."""
 
     expr: Expr
     span: Span
+    kind: str = "ZEROCONDITION"
     child_fields = ("expr",)
 
 
@@ -569,14 +571,24 @@ class NewValue(Node):
 
 @dataclass(frozen=True)
 class Event(Node):
-    """EVENT / ZEROCONDITION e / NEWVALUE X = e ... / ENDEVENT (FST 3): a state event.
-    Where e reaches zero from either side the NEWVALUEs run in written order; X is a
-    state or a SET variable."""
+    """EVENT ... ENDEVENT (FST 3): a state event (ZEROCONDITION e: where e reaches zero
+    from either side) or a time event (FIRSTTIME t1, and NEXTTIME t2: at t1, then at
+    each t2 it gives). There its assignments (`helpers`, values of the event's own)
+    and then its NEWVALUEs are computed, all from the values before it, and the
+    NEWVALUEs given at once: X a state or a SET variable. Its PARAMETERs are the
+    listing's (`data`, taken out by the nester)."""
 
-    zero: ZeroCondition
+    zero: ZeroCondition | None
+    first: ZeroCondition | None
+    next: ZeroCondition | None
+    helpers: tuple[Assign, ...]
     values: tuple[NewValue, ...]
     span: Span
-    child_fields = ("zero", "values")
+    data: tuple = ()
+
+    def children(self) -> tuple[Node, ...]:
+        return tuple(n for n in (self.zero, self.first, self.next) if n is not None) + \
+            self.helpers + self.values
 
 
 @dataclass(frozen=True)

@@ -10,7 +10,9 @@ fault in the data is an AmilError.
 
 from __future__ import annotations
 
+import heapq
 import time as _clock
+from itertools import count
 
 import numpy as np
 
@@ -25,7 +27,7 @@ from .code import Calls, code_fault, run_terminal
 from .faults import Fault, fault_text
 from .loop import Cursor, Integrator, Stop
 from .peaks import Context, locate_range
-from .plan import SLIDE, Options, Purpose, RunPlan, SurfaceKind, same_instant
+from .plan import SLIDE, Options, Purpose, RunPlan, SurfaceKind, same_instant, within
 from .prepare import Prepared
 from .record import Recorder
 from .slide import MAX_SLIDING
@@ -76,10 +78,19 @@ class _Run:
         if self.plan.step_point:  # (a crossing's code runs at the point it is seen)
             self.integ.crossed = self.crossed
         self.started = started
-        # FST's EVENTs by the surface of their ZEROCONDITION (two may share one)
+        # FST's EVENTs by the surface of their ZEROCONDITION (two may share one), and
+        # the time events' next instants: (TIME, order, event)
         self.events_on: dict[int, list[int]] = {}
+        self.timed: list[tuple[float, int, int]] = []
         for k, e in enumerate(model.events):
-            self.events_on.setdefault(e.surface, []).append(k)
+            if e.surface is not None:
+                self.events_on.setdefault(e.surface, []).append(k)
+            else:
+                at = evaluate_constant(model, e.first, self.constants, spec.tables, e.span)
+                heapq.heappush(self.timed, (at, k, k))
+        self.order = count(len(model.events))
+        if self.plan.step_point and self.timed:  # (at the first step point at or after)
+            self.integ.due = self.time_events
 
     def run(self) -> Run:
         """The run, within its wall-clock limit even where no loop looks at the clock
@@ -213,20 +224,47 @@ class _Run:
         run goes on from the new values (the row of that instant after them)."""
         plan, integ, rec = self.plan, self.integ, self.rec
         while True:
-            integ.integrate(cur, plan.fintim, rec)
+            # (a time event's instant: the loop pauses there, its row held for after it)
+            timed = not plan.step_point and bool(self.timed) and self.timed[0][0] < plan.fintim
+            t_end = self.timed[0][0] if timed else plan.fintim
+            if timed and t_end - cur.t <= within(cur.t):
+                cur.t = max(cur.t, t_end)  # (an instant a few floats on: nothing to step)
+            else:
+                rec.hold = t_end if timed else None
+                integ.integrate(cur, t_end, rec, pause=timed)
+                rec.hold = None
             reason = integ.stop_reason
-            if reason is None:
-                return None
-            if plan.watched[reason].purpose is not Purpose.SCHEDULE:
+            if reason is not None and plan.watched[reason].purpose is not Purpose.SCHEDULE:
                 return plan.watched[reason].description
-            integ.stop_reason = None
-            self.crossed(cur, [reason])
+            if reason is not None:
+                integ.stop_reason = None
+                self.crossed(cur, [reason])
+            elif timed and cur.t >= t_end:
+                self.time_events(cur.t, cur)
+                self.restart(cur)
+            elif cur.t >= plan.fintim:
+                return None
             if rec.out_i < len(plan.grid.times) and \
                     same_instant(cur.t, plan.grid.times[rec.out_i]):
                 rec.grid_row(cur.t, cur.y, cur.m, cur.z,
                              shown=rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
             if cur.t >= plan.fintim:
                 return None
+
+    def time_events(self, t: float, cur: Cursor) -> None:
+        """The time events due at t (at or before it, to rounding), in the order of
+        their instants; each gives its next instant (NEXTTIME), which must be later."""
+        while self.timed and self.timed[0][0] <= t + within(t):
+            at, _, k = heapq.heappop(self.timed)
+            cur.t = t
+            after = self.run_event(cur, k)
+            if after is not None:
+                if not after > t:
+                    raise Stop(Failure.FAULT, t, detail=(
+                        f"EVENT at line {self.model.events[k].span.line}: NEXTTIME = "
+                        f"{after:.9g} is not after TIME = {t:.9g}: the event would run "
+                        "again at once, for ever"))
+                heapq.heappush(self.timed, (after, next(self.order), k))
 
     def crossed(self, cur: Cursor, ks: list[int]) -> None:
         """The code the crossings of watched surfaces `ks` run, at cur.t, in the order
@@ -236,22 +274,30 @@ class _Run:
         self.restart(cur)
 
     def run_crossing(self, cur: Cursor, surface: int) -> None:
-        """The NEWVALUEs of the EVENTs on `surface`, each in written order."""
+        """The EVENTs whose ZEROCONDITION is `surface`, in written order."""
         for k in self.events_on.get(surface, ()):
-            event = self.model.events[k]
-            try:
-                y, z, _ = self.c.code[f"event_{k}"][1](cur.t, cur.y.tolist(), cur.m, cur.z,
-                                                       Calls())
-            except (ArithmeticError, ValueError) as exc:
-                raise Stop(Failure.FAULT, cur.t, detail=f"EVENT at line {event.span.line}: "
-                           f"{code_fault(exc)}") from None
-            cur.y = np.asarray(y, dtype=float)
-            cur.z[:] = z
-            self.integ.events.append(Event(
-                cur.t, f"EVENT at line {event.span.line} (NEWVALUE "
-                f"{', '.join(event.code.assigned)})", -1, 0.0, 0.0, EventKind.DISCRETE))
-            if len(self.integ.events) > self.opts.max_events:
-                raise Stop(Failure.EVENTS, cur.t, limit=self.opts.max_events)
+            self.run_event(cur, k)
+
+    def run_event(self, cur: Cursor, k: int) -> float | None:
+        """EVENT k's code at cur.t: its new values given; its NEXTTIME, if it has one."""
+        event = self.model.events[k]
+        try:
+            y, z, values = self.c.code[f"event_{k}"][1](cur.t, cur.y.tolist(), cur.m,
+                                                        cur.z, Calls())
+        except (ArithmeticError, ValueError) as exc:
+            raise Stop(Failure.FAULT, cur.t, detail=f"EVENT at line {event.span.line}: "
+                       f"{code_fault(exc)}") from None
+        cur.y = np.asarray(y, dtype=float)
+        cur.z[:] = z
+        given = [n for n in event.code.assigned if "#" not in n]
+        self.integ.events.append(Event(
+            cur.t, f"EVENT at line {event.span.line} (NEWVALUE {', '.join(given)})", -1,
+            0.0, 0.0, EventKind.DISCRETE))
+        if len(self.integ.events) > self.opts.max_events:
+            raise Stop(Failure.EVENTS, cur.t, limit=self.opts.max_events)
+        if event.next is None:
+            return None
+        return float(values[event.code.assigned.index(event.next)])
 
     def restart(self, cur: Cursor) -> None:
         """The branches in force after code changed states or kept names. A surface

@@ -358,7 +358,8 @@ def reserved_values(timer: dict[str, float]) -> dict[str, float]:
     """The TIMER values a listing may read (DELT, FINTIM, ...); FINTIM as the listing
     gave it (an end time after FST's STTIME)."""
     out = {k: timer[k] for k in ("FINTIM", "DELT", "PRDEL", "OUTDEL", "DELMIN", "DELMAX")}
-    out["FINTIM"] += timer.get(START_KEY, 0.0)
+    out[START_KEY] = timer.get(START_KEY, 0.0)
+    out["FINTIM"] += out[START_KEY]
     return out
 
 

@@ -148,8 +148,8 @@ class StepPoint(RunLoop):
 
     # one step point -------------------------------------------------------------------
     def due(self, t: float, cur: Cursor) -> None:
-        """The events due at t (DISCRETE sections, SCHEDULE): the hook the event queue
-        fills; none yet."""
+        """The events due at t, before anything else there (FST's time events: the run
+        sets this hook when it has some)."""
 
     def _point(self, t: float, cur: Cursor, rec: Recorder | None, last: bool) -> bool:
         """Everything at step point t; True if FINISH or TERMT stops the run here."""

@@ -145,3 +145,35 @@ def test_lintul2_matches_the_published_fst_output():
             within_unit += int(np.sum(np.abs(got - printed) <= units * (1 + 1e-9)))
             total += len(printed)
     assert total == 15519 and within_unit / total > 0.985, within_unit / total
+
+
+SUCROS1 = {"sucros1.fst": "8bea4a1fe8dda1523e0394721a98b9fde511ec5b36f21cfe30e2bf7a10502fee",
+           "NLD1.990": "9b547a5c1d44a2b6d19966cd0d1e0a23217b2a9f62707bf07b0f14561e377225"}
+
+
+def test_sucros1_runs_as_written_and_is_the_euler_recurrence():
+    """SUCROS1 (Goudriaan & van Laar, SOURCES.md F3) as published: CALL TOTASS runs the
+    Gaussian integration over the day (a DO loop calling ASTRO and ASSIM), whose ASTRO
+    stops the program on a latitude past 67 degrees (Fortran's STOP 'text'), LAT read
+    from the weather file's station line, three FINISH conditions. Against a hand
+    translation into plain Python written without amilpy (references/sucros1.py):
+    FINISH DVS > 2 ends both on day 240, every printed value to 1e-13 of its column
+    (CHKDIF, a balance that is zero to round-off, to 1e-12 of CHKIN)."""
+    for name, sha in SUCROS1.items():
+        published_copy(HERE, name, sha)
+    from listings.references import sucros1
+
+    rows, names = sucros1.run(str(HERE))
+    ref = {n: np.array([r[k] for r in rows]) for k, n in enumerate(names)}
+    run, = amilpy.load(HERE / "sucros1.fst").run(outputs=names[1:], advice=False)
+    assert run.status == "stopped" and "FINISH DVS > 2." in run.message
+    assert run.t_end == ref["TIME"][-1] == 240.0
+    at = np.searchsorted(ref["TIME"], run.t)
+    assert np.array_equal(ref["TIME"][at], run.t)
+    for name in names[1:]:
+        want = ref[name][at]
+        if name == "CHKDIF":
+            assert np.max(np.abs(run[name] - want)) <= 1e-12 * np.max(ref["CHKIN"])
+            continue
+        scale = np.max(np.abs(want)) or 1.0
+        assert np.max(np.abs(run[name] - want)) <= 1e-13 * scale, name

@@ -14,3 +14,11 @@ def days(path: Path) -> dict[int, list[float]]:
         if len(f) >= 9 and not f[0].startswith("*"):
             rows[int(f[2])] = [float(x) for x in f[3:9]]
     return rows
+
+
+def station(path: Path) -> list[float]:
+    """The station line: [longitude, latitude, elevation, A, B]."""
+    for line in Path(path).read_text().splitlines():
+        if line.strip() and not line.startswith("*"):
+            return [float(x) for x in line.split()]
+    raise ValueError(f"{path}: no station line")

@@ -1,0 +1,451 @@
+"""Independent numerical reference for s97-1.fst (SUCROS1, spring wheat,
+potential production; Goudriaan & van Laar 1994, version September 1997).
+
+Plain Python, math module only, double precision throughout; written by a session
+that read only the listing and its weather file, never amilpy.
+
+FSE semantics (DRIVER='EUDRIV', rectangular/Euler integration):
+  time points t = STTIME + i*DELT (i = 0, 1, ...) up to FINTIM;
+  at each time point all variables are computed from the states at t and the
+  weather of day int(t); the output row is written; the FINISH conditions are
+  tested (the run stops at the first time point where one holds, that row
+  being the last); then the Euler step state(t+DELT) = state(t) + DELT*rate(t).
+
+Weather: WEATHER CNTR='NLD'; ISTN=1; IYEAR=1990  ->  file NLD1.990 (CABO
+format).  RDD = irradiation (kJ m-2 d-1) * 1000 -> J m-2 d-1.  LAT is the
+latitude in the header line of the weather file (the listing's
+`PARAMETER LATT = 52.` is commented out and LAT is documented as read from
+the weather file).
+
+Usage:  python3 sucros1_ref.py [folder]   (folder holding NLD1.990; default:
+the folder of this script).  Writes sucros1_ref.csv next to this script.
+"""
+import math
+import os
+
+# ----------------------------------------------------------------------------
+# TTUTIL-style helper functions
+# ----------------------------------------------------------------------------
+
+
+def INSW(x, a, b):
+    """Input switch: a if x < 0 else b."""
+    return a if x < 0.0 else b
+
+
+def LIMIT(xmin, xmax, x):
+    """Clamp x into [xmin, xmax]."""
+    if x < xmin:
+        return xmin
+    if x > xmax:
+        return xmax
+    return x
+
+
+def NOTNUL(x):
+    """1 if x == 0 else x."""
+    return 1.0 if x == 0.0 else x
+
+
+def AFGEN(table, x):
+    """Linear interpolation in the flat list of (x, y) pairs of a FUNCTION
+    table; the end values are returned outside the x range."""
+    xs = table[0::2]
+    ys = table[1::2]
+    if x <= xs[0]:
+        return ys[0]
+    if x >= xs[-1]:
+        return ys[-1]
+    for i in range(1, len(xs)):
+        if x <= xs[i]:
+            slope = (ys[i] - ys[i - 1]) / (xs[i] - xs[i - 1])
+            return ys[i - 1] + (x - xs[i - 1]) * slope
+    return ys[-1]  # not reached
+
+
+# ----------------------------------------------------------------------------
+# Parameters, initial conditions, function tables, timer (from the listing)
+# ----------------------------------------------------------------------------
+
+# INITIAL
+DOYEM = 90.0
+WLVI = 0.5
+WSTI = 0.3
+WRTI = 0.8
+WLVDI = 0.0
+WSOI = 0.0
+ILAI = 0.012
+IDVS = 0.0
+IEAI = 0.0
+
+# 1.3 crop development
+DVRVT = [-10.0, 0.0, 0.0, 0.0, 30.0, 0.027]
+DVRRT = [-10.0, 0.0, 0.0, 0.0, 30.0, 0.031]
+
+# 1.4 leaf CO2 assimilation
+AMX = 1.11e-3
+AMDVST = [0.0, 1.0, 1.0, 1.0, 2.0, 0.5, 2.5, 0.0]
+AMTMPT = [-10.0, 0.0, 0.0, 0.0, 10.0, 1.0, 25.0, 1.0, 35.0, 0.0, 50.0, 0.0]
+
+# 1.5 daily gross CO2 assimilation
+EFF = 12.5e-6
+KDF = 0.60
+SCP = 0.20
+
+# 1.7 maintenance respiration
+Q10 = 2.0
+TREF = 25.0
+MAINLV = 0.03
+MAINST = 0.015
+MAINRT = 0.015
+MAINSO = 0.01
+
+# 1.8 dry matter partitioning
+FSHTB = [0.00, 0.50, 0.10, 0.50, 0.20, 0.60, 0.35, 0.78,
+         0.40, 0.83, 0.50, 0.87, 0.60, 0.90, 0.70, 0.93,
+         0.80, 0.95, 0.90, 0.97, 1.00, 0.98, 1.10, 0.99,
+         1.20, 1.00, 2.50, 1.00]
+FLVTB = [0.00, 0.65, 0.10, 0.65, 0.25, 0.70, 0.50, 0.50,
+         0.70, 0.15, 0.95, 0.00, 2.50, 0.00]
+FSTTB = [0.00, 0.35, 0.10, 0.35, 0.25, 0.30, 0.50, 0.50,
+         0.70, 0.85, 0.95, 1.00, 1.05, 0.00, 2.50, 0.00]
+FSOTB = [0.00, 0.00, 0.95, 0.00, 1.05, 1.00, 2.50, 1.00]
+
+# 1.9 growth of plant organs and translocation
+ASRQRT = 1.444
+ASRQLV = 1.463
+ASRQST = 1.513
+ASRQSO = 1.415
+FRTRL = 0.20
+CONVL = 0.947
+
+# 1.10 leaf and ear development
+RGRL = 0.009
+SLA = 0.022
+EAR = 0.63e-3
+LAICR = 4.0
+FRDR = 1.0
+
+# 1.12 weather
+TBASE = 0.0
+CNTR = 'NLD'
+ISTN = 1
+IYEAR = 1990
+
+# 1.13 carbon balance
+CFLV = 0.459
+CFST = 0.494
+CFRT = 0.467
+CFSO = 0.471
+
+# 1.14 run control
+STTIME = 80.0
+FINTIM = 300.0
+DELT = 1.0
+PRDEL = 5.0  # output interval in FSE; this reference writes every time point
+
+# Gauss points/weights exactly as in the DATA statements of TOTASS and ASSIM
+XGAUSS3 = (0.112702, 0.500000, 0.887298)
+WGAUSS3 = (0.277778, 0.444444, 0.277778)
+XGAUSS5 = (0.0469101, 0.2307534, 0.5, 0.7692465, 0.9530899)
+WGAUSS5 = (0.1184635, 0.2393144, 0.2844444, 0.2393144, 0.1184635)
+
+# ----------------------------------------------------------------------------
+# Fortran subroutines after STOP, translated line by line
+# ----------------------------------------------------------------------------
+
+
+def ASTRO(DOY, LAT):
+    """Returns SC, DS0, SINLD, COSLD, DAYL, DSINB, DSINBE."""
+    PI = 3.141592654
+    RAD = PI / 180.0
+    if LAT > 67.0:
+        raise SystemExit('ERROR IN ASTRO: LAT> 67')
+    if LAT < -67.0:
+        raise SystemExit('ERROR IN ASTRO: LAT>-67')
+    DEC = -math.asin(math.sin(23.45 * RAD) * math.cos(2.0 * PI * (DOY + 10.0) / 365.0))
+    SINLD = math.sin(RAD * LAT) * math.sin(DEC)
+    COSLD = math.cos(RAD * LAT) * math.cos(DEC)
+    AOB = SINLD / COSLD
+    DAYL = 12.0 * (1.0 + 2.0 * math.asin(AOB) / PI)
+    DSINB = 3600.0 * (DAYL * SINLD + 24.0 * COSLD * math.sqrt(1.0 - AOB * AOB) / PI)
+    DSINBE = 3600.0 * (DAYL * (SINLD + 0.4 * (SINLD * SINLD + COSLD * COSLD * 0.5))
+                       + 12.0 * COSLD * (2.0 + 3.0 * 0.4 * SINLD) * math.sqrt(1.0 - AOB * AOB) / PI)
+    SC = 1370.0 * (1.0 + 0.033 * math.cos(2.0 * PI * DOY / 365.0))
+    DS0 = SC * DSINB
+    return SC, DS0, SINLD, COSLD, DAYL, DSINB, DSINBE
+
+
+def ASSIM(SCP, AMAX, EFF, KDF, LAI, SINB, PARDR, PARDF):
+    """Returns FGROS (g CO2 m-2 soil s-1)."""
+    SQV = math.sqrt(1.0 - SCP)
+    REFH = (1.0 - SQV) / (1.0 + SQV)
+    REFS = REFH * 2.0 / (1.0 + 2.0 * SINB)
+    CLUSTF = KDF / (0.8 * SQV)
+    KBL = (0.5 / SINB) * CLUSTF
+    KDRT = KBL * SQV
+    FGROS = 0.0
+    for I1 in range(5):
+        LAIC = LAI * XGAUSS5[I1]
+        VISDF = (1.0 - REFH) * PARDF * KDF * math.exp(-KDF * LAIC)
+        VIST = (1.0 - REFS) * PARDR * KDRT * math.exp(-KDRT * LAIC)
+        VISD = (1.0 - SCP) * PARDR * KBL * math.exp(-KBL * LAIC)
+        VISSHD = VISDF + VIST - VISD
+        if AMAX > 0.0:
+            FGRSH = AMAX * (1.0 - math.exp(-VISSHD * EFF / AMAX))
+        else:
+            FGRSH = 0.0
+        VISPP = (1.0 - SCP) * PARDR / SINB
+        FGRSUN = 0.0
+        for I2 in range(5):
+            VISSUN = VISSHD + VISPP * XGAUSS5[I2]
+            if AMAX > 0.0:
+                FGRS = AMAX * (1.0 - math.exp(-VISSUN * EFF / AMAX))
+            else:
+                FGRS = 0.0
+            FGRSUN = FGRSUN + FGRS * WGAUSS5[I2]
+        FSLLA = CLUSTF * math.exp(-KBL * LAIC)
+        FGL = FSLLA * FGRSUN + (1.0 - FSLLA) * FGRSH
+        FGROS = FGROS + FGL * WGAUSS5[I1]
+    FGROS = FGROS * LAI
+    return FGROS
+
+
+def TOTASS(DOY, LAT, DTR, SCP, AMAX, EFF, KDF, LAI):
+    """Returns DAYL, DTGA, DS0."""
+    PI = 3.141592654
+    SC, DS0, SINLD, COSLD, DAYL, DSINB, DSINBE = ASTRO(DOY, LAT)
+    DTGAS = 0.0
+    for I1 in range(3):
+        HOUR = 12.0 + DAYL * 0.5 * XGAUSS3[I1]
+        SINB = max(0.0, SINLD + COSLD * math.cos(2.0 * PI * (HOUR + 12.0) / 24.0))
+        PAR = 0.5 * DTR * SINB * (1.0 + 0.4 * SINB) / DSINBE
+        ATMTR = PAR / (0.5 * SC * SINB)
+        if ATMTR <= 0.22:
+            FRDF = 1.0
+        elif ATMTR > 0.22 and ATMTR <= 0.35:
+            FRDF = 1.0 - 6.4 * (ATMTR - 0.22) ** 2
+        else:
+            FRDF = 1.47 - 1.66 * ATMTR
+        FRDF = max(FRDF, 0.15 + 0.85 * (1.0 - math.exp(-0.1 / SINB)))
+        PARDF = PAR * FRDF
+        PARDR = PAR - PARDF
+        FGROS = ASSIM(SCP, AMAX, EFF, KDF, LAI, SINB, PARDR, PARDF)
+        DTGAS = DTGAS + FGROS * WGAUSS3[I1]
+    DTGA = DTGAS * DAYL * 3600.0
+    return DAYL, DTGA, DS0
+
+
+def GLA(TIME, DOYEM, DTEFF, DVS, RGRL, DELT, SLA, LAI, GLV):
+    """Returns GLAI (m2 m-2 d-1)."""
+    GLAI = SLA * GLV
+    if (DVS < 0.3) and (LAI < 0.75):
+        GLAI = (LAI * (math.exp(RGRL * DTEFF * DELT) - 1.0)) / DELT
+    if TIME <= DOYEM:
+        GLAI = 0.0
+    return GLAI
+
+
+def SUBEAI(DELT, DVS, EAR, TADRW, RDRDV, EAI):
+    """Returns REAI (m2 m-2 d-1)."""
+    if DVS < 0.8:
+        REAI = 0.0
+    if DVS >= 0.8 and EAI == 0.0:
+        REAI = (EAR * TADRW) / DELT
+    else:
+        REAI = 0.0
+    if DVS >= 1.3:
+        REAI = -RDRDV * EAI
+    return REAI
+
+
+# ----------------------------------------------------------------------------
+# Weather (CABO format)
+# ----------------------------------------------------------------------------
+
+
+def read_weather(folder):
+    """Returns (lon, lat, elev, A, B) and {day: (RDD, TMMN, TMMX, VP, WN, RAIN)}.
+
+    Comment lines start with '*'; the first non-comment line is the header
+    (longitude, latitude, elevation, A, B).  Data rows whose station number is
+    not ISTN (the file has two '-999' rows for days 1 and 2) are skipped."""
+    fname = f'{CNTR}{ISTN}.{str(IYEAR)[1:]}'
+    path = os.path.join(folder, fname)
+    header = None
+    days = {}
+    with open(path) as f:
+        for line in f:
+            s = line.strip()
+            if not s or s.startswith('*'):
+                continue
+            fields = s.split()
+            if header is None:
+                header = tuple(float(v) for v in fields[:5])
+                continue
+            stn, year, day = int(fields[0]), int(fields[1]), int(fields[2])
+            if stn != ISTN or year != IYEAR:
+                continue
+            irr, tmn, tmx, vp, wn, rain = (float(v) for v in fields[3:9])
+            days[day] = (irr * 1000.0, tmn, tmx, vp, wn, rain)
+    return header, days
+
+
+# ----------------------------------------------------------------------------
+# Model: rates and auxiliary variables from the states at time t
+# ----------------------------------------------------------------------------
+
+STATE_NAMES = ['DVS', 'LAI', 'EAI', 'WRT', 'WLVG', 'WLVD', 'WST', 'WSO', 'TNASS']
+PRINT_NAMES = ['DOY', 'DTR', 'DVS', 'TDRW', 'TADRW', 'WLVG', 'WLVD', 'WLV', 'WST',
+               'WSO', 'WRT', 'LAI', 'EAI', 'HI', 'GPHOT', 'DAYL',
+               'DS0', 'TRANSL', 'CHKIN', 'CHKFL', 'CHKDIF', 'ERRSH', 'MAINT']
+
+
+def model(TIME, s, LAT, weather):
+    """All variables at time TIME from the states s (dict); returns
+    (v, rates): v a dict of every variable, rates a dict keyed by state."""
+    DVS, LAI, EAI = s['DVS'], s['LAI'], s['EAI']
+    WRT, WLVG, WLVD, WST, WSO, TNASS = (s['WRT'], s['WLVG'], s['WLVD'],
+                                        s['WST'], s['WSO'], s['TNASS'])
+
+    # 1.12 weather of day int(TIME)
+    DOY = float(int(TIME))
+    RDD, TMMN, TMMX, VP, WN, RAIN = weather[int(TIME)]
+    DTR = RDD
+    DAVTMP = 0.5 * (TMMX + TMMN)
+    DDTMP = TMMX - 0.25 * (TMMX - TMMN)
+    DTEFF = max(0.0, DAVTMP - TBASE)
+
+    # 1.3 development
+    EMERG = INSW(TIME - DOYEM, 0.0, 1.0)
+    DVR = INSW(DVS - 1.0, AFGEN(DVRVT, DAVTMP), AFGEN(DVRRT, DAVTMP)) * EMERG
+
+    # 1.11 weights derived from states
+    WLV = WLVG + WLVD
+    TADRW = WLV + WST + WSO
+    TDRW = TADRW + WRT
+    HI = WSO / NOTNUL(TADRW)
+
+    # 1.4 leaf CO2 assimilation
+    AMDVS = AFGEN(AMDVST, DVS)
+    AMTMP = AFGEN(AMTMPT, DDTMP)
+    AMAX = AMX * AMDVS * AMTMP * EMERG
+
+    # 1.10 (part) photosynthetically active area
+    TAI = 0.5 * EAI + LAI
+
+    # 1.5 daily gross CO2 assimilation
+    DAYL, DTGA, DS0 = TOTASS(DOY, LAT, DTR, SCP, AMAX, EFF, KDF, TAI)
+
+    # 1.6 carbohydrate production
+    GPHOT = DTGA * 30.0 / 44.0
+
+    # 1.7 maintenance respiration
+    MNDVS = WLVG / NOTNUL(WLV)
+    TEFF = Q10 ** ((DAVTMP - TREF) / 10.0)
+    MAINTS = MAINLV * WLVG + MAINST * WST + MAINRT * WRT + MAINSO * WSO
+    MAINT = MAINTS * TEFF * MNDVS * EMERG
+
+    # 1.8 partitioning
+    FSH = AFGEN(FSHTB, DVS)
+    FRT = 1.0 - FSH
+    FLV = AFGEN(FLVTB, DVS)
+    FST = AFGEN(FSTTB, DVS)
+    FSO = AFGEN(FSOTB, DVS)
+    ERRSH = abs(FLV + FST + FSO - 1.0)
+
+    # 1.9 growth of organs and translocation
+    ASRQ = FSH * (ASRQLV * FLV + ASRQST * FST + ASRQSO * FSO) + ASRQRT * FRT
+    TRANSL = INSW(DVS - 1.0, 0.0, WST * DVR * FRTRL)
+    GTW = (GPHOT - MAINT + CONVL * TRANSL * CFST * 30.0 / 12.0) / ASRQ
+    GRT = FRT * GTW
+    GLV = FLV * FSH * GTW
+    GST = FST * FSH * GTW - TRANSL
+    GSO = FSO * FSH * GTW
+
+    # 1.10 leaf and ear development
+    GLAI = GLA(TIME, DOYEM, DTEFF, DVS, RGRL, DELT, SLA, LAI, GLV)
+    RDRDV = INSW(DVS - 1.0, 0.0, DVR / (max(0.1, 2.0 - DVS)) * FRDR)
+    RDRSH = LIMIT(0.0, 0.03, 0.03 * (LAI - LAICR) / LAICR)
+    RDR = max(RDRDV, RDRSH)
+    DLAI = LAI * RDR
+    RLAI = GLAI - DLAI
+    REAI = SUBEAI(DELT, DVS, EAR, TADRW, RDRDV, EAI)
+    DLV = WLVG * DLAI / NOTNUL(LAI)
+    RWLVG = GLV - DLV
+
+    # 1.13 carbon balance check
+    CO2RT = 44.0 / 12.0 * (ASRQRT * 12.0 / 30.0 - CFRT)
+    CO2LV = 44.0 / 12.0 * (ASRQLV * 12.0 / 30.0 - CFLV)
+    CO2ST = 44.0 / 12.0 * (ASRQST * 12.0 / 30.0 - CFST)
+    CO2SO = 44.0 / 12.0 * (ASRQSO * 12.0 / 30.0 - CFSO)
+    RTNASS = (((GPHOT - MAINT) * 44.0 / 30.0)
+              - (GRT * CO2RT + GLV * CO2LV + (GST + TRANSL) * CO2ST + GSO * CO2SO
+                 + (1.0 - CONVL) * TRANSL * CFST * 44.0 / 12.0))
+    CHKIN = WLV * CFLV + WST * CFST + WRT * CFRT + WSO * CFSO
+    CHKFL = TNASS * (12.0 / 44.0)
+    CHKDIF = (CHKIN - CHKFL) / NOTNUL(CHKIN)
+
+    v = dict(locals())
+    v.pop('s'), v.pop('weather')
+    rates = {'DVS': DVR, 'LAI': RLAI, 'EAI': REAI, 'WRT': GRT, 'WLVG': RWLVG,
+             'WLVD': DLV, 'WST': GST, 'WSO': GSO, 'TNASS': RTNASS}
+    return v, rates
+
+
+def finish_conditions(v):
+    """FINISH statements of the listing, in listing order."""
+    hits = []
+    if v['ERRSH'] > 1.0e-6:
+        hits.append('ERRSH > 1.E-6')
+    if v['CHKDIF'] > 0.001:
+        hits.append('CHKDIF > 0.001')
+    if v['DVS'] > 2.0:
+        hits.append('DVS > 2.')
+    return hits
+
+
+def run(folder=None):
+    """Runs the model; returns (rows, column names).  Also sets
+    run.finished_by (list of FINISH conditions that held at the last row, or
+    ['FINTIM'])."""
+    if folder is None:
+        folder = os.path.dirname(os.path.abspath(__file__))
+    header, weather = read_weather(folder)
+    LAT = header[1]
+
+    # self-checks: Gauss weights sum to 1 (to the 7 digits of the DATA values)
+    assert abs(sum(WGAUSS3) - 1.0) < 1e-5
+    assert abs(sum(WGAUSS5) - 1.0) < 1e-6
+
+    # INITIAL
+    TNASSI = (WLVI * CFLV + WSTI * CFST + WRTI * CFRT) * 44.0 / 12.0
+    s = {'DVS': IDVS, 'LAI': ILAI, 'EAI': IEAI, 'WRT': WRTI, 'WLVG': WLVI,
+         'WLVD': WLVDI, 'WST': WSTI, 'WSO': WSOI, 'TNASS': TNASSI}
+
+    names = ['TIME'] + PRINT_NAMES + [n for n in STATE_NAMES if n not in PRINT_NAMES]
+    rows = []
+    run.finished_by = ['FINTIM']
+    i = 0
+    while True:
+        TIME = STTIME + i * DELT
+        if TIME > FINTIM + 1e-9 * DELT:
+            break
+        v, rates = model(TIME, s, LAT, weather)
+
+        # self-checks: dry-matter balance and partitioning
+        organs = v['WLVG'] + v['WLVD'] + v['WST'] + v['WSO'] + v['WRT']
+        assert abs(organs - v['TDRW']) <= 1e-12 * max(1.0, v['TDRW'])
+        assert abs(v['GRT'] + v['GLV'] + v['GST'] + v['TRANSL'] + v['GSO']
+                   - v['GTW']) <= 1e-12 * max(1.0, abs(v['GTW']))
+
+        rows.append([TIME] + [v[n] for n in names[1:]])
+        hits = finish_conditions(v)
+        if hits:
+            run.finished_by = hits
+            break
+        # Euler step
+        for n in STATE_NAMES:
+            s[n] = s[n] + DELT * rates[n]
+        i += 1
+    return rows, names
