@@ -140,6 +140,7 @@ STATEMENT_KEYWORDS: tuple[str, ...] = (
     *REPORT_KEYWORDS, *ACSL_HEADS, "SCHEDULE", "INTERVAL", "CINTERVAL", "VARIABLE",
     *CONTROL_KEYWORDS, *(k for k in TYPE_KEYWORDS if k != "DOUBLEPRECISION"), "DOUBLE",
     "PRECISION", "WEATHER", "TRANSLATION_GENERAL", "TRANSLATION_FSE", "DEFINE_CALL",
+    "DEFINE_FUNCTION",
     "ZEROCONDITION", "FIRSTTIME", "NEXTTIME", "NEWVALUE", "SET", *BLOCK_KEYWORDS)
 
 # What amilpy does not run (section 14): the construct as a reader knows it, and what

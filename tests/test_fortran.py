@@ -432,6 +432,14 @@ def test_function_subprograms_run_where_the_listing_refers_to_them():
         assert run["X"][k] == x and run["Y"][k] == 2 * x * x + x ** 3
 
 
+def test_define_function_declares_a_function_subprogram_as_define_call_a_routine():
+    """LINTUL-banana declares its FUNCTIONs after STOP as DEFINE_CALL declares
+    routines: DEFINE_FUNCTION RATE(INPUT, INPUT). It said "this statement needs '='"."""
+    text = "DEFINE_FUNCTION RATE(INPUT, INPUT)\n" + FUNCTIONS
+    run, = amilpy.loads(text, name="fn.fst").run(advice=False)
+    assert list(run["X"]) == [0.5 ** t for t in run.times]
+
+
 def test_a_function_in_a_subroutine_an_if_condition_and_a_loop_bound():
     # SQ(A) in the IF's condition and its branch, TWO(A) in a DO loop's bound: the
     # references are written out before the IF and the loop, in the routine's order;

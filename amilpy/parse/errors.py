@@ -44,6 +44,11 @@ EXAMPLES: dict[str, tuple[str, list[str]]] = {
         "an assignment is NAME = expression",
         ["X\n", "X Y\n", "X + 1\n"],
     ),
+    "an FST array's elements in a data statement (FST's ARRAY): not supported": (
+        "write one scalar per element (X1, X2, ...); a table for AFGEN is FUNCTION "
+        "T = x1,y1, x2,y2, ...",
+        ["PARAM X(1:3) = 1., 2., 3.\n", "PARAM X(1) = 1.\n", "PARAM A = 1.; X(2:N) = 0.\n"],
+    ),
     "a data statement takes NAME = number": (
         "PARAM, CONST and INCON take numbers only (in their lines `;` separates items "
         "like `,`); derived values belong in INITIAL",
