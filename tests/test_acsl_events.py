@@ -366,10 +366,15 @@ JUMP = """PROGRAM a schedule on a condition that jumps to zero
     F = RSW(X > X1, 1.0, 0.0)
     Y = INTEG(K, 0.0)
     SCHEDULE ON .XN. 1.0 - F
+    SCHEDULE UP .XP. F - 1.0
+    Z = INTEG(K2, 0.0)
     TERMT(T >= TSTOP)
   END
   DISCRETE ON
     K = 1.0
+  END
+  DISCRETE UP
+    K2 = 2.0
   END
 END
 """
@@ -381,9 +386,10 @@ def test_a_schedule_whose_condition_jumps_to_zero_runs_its_section(method):
     by a jump, at the restart of the RSW's own crossing. It was listed as crossed but
     its DISCRETE never ran (Y stayed 0); now K = 1 from t = X1, and Y = t - X1."""
     run, = amilpy.loads(JUMP, "jump.csl").run(method=method, advice=False)
-    assert [e.time for e in run.events if e.kind == "discrete"] == pytest.approx([1.3],
-                                                                                 abs=1e-12)
+    assert [e.time for e in run.events if e.kind == "discrete"] == pytest.approx(
+        [1.3, 1.3], abs=1e-12)  # (both sections: only one of two ran when they coincided)
     assert run["Y"] == pytest.approx(np.maximum(run.t - 1.3, 0.0), abs=1e-10)
+    assert run["Z"] == pytest.approx(2.0 * np.maximum(run.t - 1.3, 0.0), abs=1e-10)
 
 
 def test_in_step_point_mode_a_schedule_crossing_runs_its_section_at_the_point():
@@ -395,6 +401,19 @@ def test_in_step_point_mode_a_schedule_crossing_runs_its_section_at_the_point():
         "CINTERVAL CINT = 0.25", "CINTERVAL CINT = 0.25\n  ALGORITHM IALG = 3\n"
         "  NSTEPS NSTP = 1")
     run, = amilpy.loads(text, "jump.csl").run(advice=False)
-    assert run.method == "RECT"
-    assert [e.time for e in run.events if e.kind == "discrete"] == [1.0]
+    assert run.method == "RECT"  # (UP: where F - 1 reaches zero, the point X > 1.3)
+    assert [e.time for e in run.events if e.kind == "discrete"] == [1.0, 1.5]
     assert run["Y"] == pytest.approx(np.maximum(run.t - 1.0, 0.0), abs=1e-14)
+
+
+@pytest.mark.parametrize("ialg", ["", "  ALGORITHM IALG = 3\n"])
+def test_a_termt_a_discrete_section_makes_true_stops_the_run_there(ialg):
+    """TERMT(N >= 2.0) with N counted by a DISCRETE every second: the section that
+    makes N 2 (at t = 2) ends the run there (it went on to t = 3: N - 2 = 0 was not
+    taken as holding, though >= holds at zero)."""
+    text = ("PROGRAM P\n  CONSTANT TSTOP = 5.0\n  CINTERVAL CINT = 0.5\n" + ialg +
+            "  DERIVATIVE\n    X = INTEG(1.0, 0.0)\n    TERMT(N >= 2.0)\n"
+            "    SCHEDULE TICK .XP. X - 1.0\n    TERMT(T >= TSTOP)\n  END\n"
+            "  DISCRETE TICK\n    N = N + 1.0\n    X = 0.0\n  END\nEND\n")
+    run, = amilpy.loads(text, "termt.csl").run(advice=False)
+    assert run.t_end == pytest.approx(2.0, abs=1e-9) and "N >= 2.0" in run.message

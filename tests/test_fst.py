@@ -397,7 +397,7 @@ def test_a_zero_condition_that_jumps_to_zero_fires_once(method):
 @pytest.mark.parametrize("text, line, message, hint", [
     (EMERGENCE.replace("NEWVALUE W = W + W0", "NEWVALUE FAVOURABLE = 0."), 12,
      "NEWVALUE FAVOURABLE: FAVOURABLE is neither a state nor a SET variable",
-     "SET FAVOURABLE = value in INITIAL"),
+     "FAVOURABLE is computed at line 8; an EVENT changes states"),
     (EMERGENCE.replace("SET EMERG = 0.\nDYNAMIC", "DYNAMIC\nSET EMERG = 0."), 4,
      "SET cannot stand in DYNAMIC", "write it in INITIAL"),
     (EMERGENCE.replace("   ZEROCONDITION 1. - FAVOURABLE\n", ""), 9,
@@ -512,3 +512,62 @@ def test_a_nexttime_that_is_not_later_stops_the_run_saying_so():
     text = PRUNING.replace("NEXTTIME TIME + GAP", "NEXTTIME TIME")
     run, = amilpy.loads(text, "prune.fst").run(advice=False)
     assert run.status == "failed" and "NEXTTIME = 12 is not after TIME = 12" in run.message
+
+
+COINCIDENT = """TITLE EVENTS AT ONE INSTANT, AND ONE AT FINTIM
+INITIAL
+SET KA = 0.
+SET KB = 0.
+SET KC = 0.
+DYNAMIC
+X = INTGRL(0., 1.)
+Y = INTGRL(0., 1.)
+EVENT
+   ZEROCONDITION X - 1.5
+   NEWVALUE KA = KA + 1.
+ENDEVENT
+EVENT
+   ZEROCONDITION X - 1.5
+   NEWVALUE KB = KB + 1.
+ENDEVENT
+EVENT
+   ZEROCONDITION TIME - 1.5
+   NEWVALUE KC = KC + 1.
+ENDEVENT
+EVENT
+   ZEROCONDITION Y - 1.
+   NEWVALUE Y = 0.
+ENDEVENT
+TIMER STTIME = 0.; FINTIM = 4.; DELT = 0.25; PRDEL = 0.5
+PRINT KA, KB, KC, Y
+END
+STOP
+"""
+
+
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "DOP853", "STIFF", "RECT"])
+def test_events_at_one_instant_all_run_and_one_at_fintim_runs_before_the_last_row(method):
+    """Two EVENTs on one condition and a third on TIME reach zero at t = 1.5: all three
+    run (only one did on the located routes, the others listed as crossed). Y = TIME
+    reaches 1 at t = 1, 2, 3 and 4 = FINTIM, each a float from an output instant: each
+    row there shows Y after its reset (Y = 0), the last one too (FINTIM's event ran on
+    some routes and not others, by the last bit of Y)."""
+    run, = amilpy.loads(COINCIDENT, "coincident.fst").run(method=method, advice=False)
+    ran = sorted(e.time for e in run.events if e.kind == "discrete")
+    assert ran == pytest.approx([1.0, 1.5, 1.5, 1.5, 2.0, 3.0, 4.0], abs=1e-12)
+    assert (run["KA"][-1], run["KB"][-1], run["KC"][-1]) == (1.0, 1.0, 1.0)
+    assert list(run["Y"]) == pytest.approx([t % 1.0 for t in run.t], abs=1e-12)
+
+
+@pytest.mark.parametrize("method, end", [("AUTO", 3 * 2.5 / 0.7), ("RKS", 3 * 2.5 / 0.7),
+                                         ("RECT", 12.0)])
+def test_a_finish_the_new_values_reach_stops_the_run_there(method, end):
+    """FINISH K = 2.5 on the SET variable the sawtooth's EVENT counts: the third event
+    reaches it, and the run stops at that instant (it was listed as reached and the
+    run went on to FINTIM), its last row the values after the event."""
+    text = SAWTOOTH.replace("TIMER", "FINISH K = 2.5\nTIMER").replace("FINTIM = 10.",
+                                                                       "FINTIM = 20.")
+    run, = amilpy.loads(text, "saw.fst").run(method=method, advice=False)
+    assert run.status == "stopped" and "FINISH K=2.5" in run.message
+    assert run.t_end == pytest.approx(end, abs=1e-9)
+    assert run["K"][-1] == 3.0 and run["X"][-1] == pytest.approx(0.0, abs=1e-9)

@@ -17,6 +17,7 @@ from dataclasses import replace
 
 from .. import ir
 from ..diagnostics import AmilError, Reporter
+from ..language import RESERVED
 from ..library.surfaces import classify
 from ..parse import syntax as ast
 from ..parse.syntax import deep_enough, no_collection
@@ -111,11 +112,15 @@ def _fst_events(blocks: list[ast.Event], sets: set[str], low: Lowering, code: Co
         for nv in ev.values:
             if nv.target not in states and nv.target not in sets:
                 ok = False
+                what = ("is time, which no EVENT can set" if nv.target in RESERVED else
+                        "is a data value (PARAM, INCON)" if nv.target in names.data_names
+                        else f"is computed at line {names.defined[nv.target].line}"
+                        if nv.target in names.defined else "is never defined")
                 rep.error(f"NEWVALUE {nv.target}: {nv.target} is neither a state nor a SET "
                           "variable", nv.target_span,
-                          "an EVENT changes states (X = INTGRL(...)) and SET variables: "
-                          f"give {nv.target} its first value with SET {nv.target} = value "
-                          "in INITIAL, and read it in DYNAMIC")
+                          f"{nv.target} {what}; an EVENT changes states (X = INTGRL(...)) "
+                          "and SET variables (SET X = value in INITIAL, X then read in "
+                          "DYNAMIC)")
         own = {h.targets[0]: ast.Name(f"EVENT#{k}.{h.targets[0]}", h.span) for h in ev.helpers}
         for h in ev.helpers:
             if h.targets[0] in names.defined or h.targets[0] in names.data_names:

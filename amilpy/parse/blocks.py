@@ -73,6 +73,11 @@ def _describe(kind: str) -> str:
     return _NAMES.get(kind, kind)
 
 
+def _a(kind: str) -> str:
+    """'a MACRO', 'an EVENT'."""
+    return f"{'an' if kind[:1] in 'AEIOU' else 'a'} {kind}"
+
+
 class Nester:
     """Builds the nested statements; faults go to `errors`."""
 
@@ -131,15 +136,16 @@ class Nester:
                                else "write ACSL's MACRO NAME(O, P) ... MACRO END")
                     continue
                 elif acsl and item.kind == "EVENT":
+                    # (opened all the same, so that its ENDEVENT closes it: one fault)
                     self.error("FST's EVENT ... ENDEVENT belongs to the CSMP (FST) form",
                                item.span, "in ACSL form write SCHEDULE name .XZ. condition "
                                "and DISCRETE name ... END")
-                    continue
+                    item.data = "refused"
                 elif stack and item.kind == "EVENT":
                     self.error(f"an EVENT cannot stand inside the {_describe(stack[-1].head.kind)} "
                                f"of line {stack[-1].head.span.line}", item.span,
                                "write EVENT ... ENDEVENT among the listing's statements")
-                    continue
+                    item.data = "refused"
                 elif not acsl and item.kind in ACSL_ONLY:
                     self.error(f"{_describe(item.kind)} belongs to the ACSL form", item.span,
                                "start the file with PROGRAM or MODEL (ACSL form)"
@@ -213,14 +219,16 @@ class Nester:
     def close(self, stack: list[_Open], item: Close, acsl: bool) -> _Open | None:
         said = "MACRO END" if acsl and item.kind == "ENDMAC" else item.kind
         if not stack:
+            opens = {v: k for k, v in CLOSERS.items()}.get(item.kind)
             self.error(f"{said} with no open block", item.span,
-                       "every END closes a block opened before it")
+                       f"{said} closes {_a(opens)}: write {opens} ... {said}" if opens
+                       else "every END closes a block opened before it")
             return None
         kind = stack[-1].head.kind
         line = stack[-1].head.span.line
         opens = {v: k for k, v in CLOSERS.items()}
         if item.kind in opens and kind != opens[item.kind]:
-            self.error(f"{said} closes a {opens[item.kind]}, but the innermost open "
+            self.error(f"{said} closes {_a(opens[item.kind])}, but the innermost open "
                        f"block is the {_describe(kind)} of line {line}", item.span,
                        f"close that {_describe(kind)} first with {self.closer(kind, acsl)}")
             return None
@@ -287,6 +295,8 @@ class Nester:
     def event(self, head: Head, body: tuple) -> ast.Event | None:
         """EVENT ... ENDEVENT: its condition (ZEROCONDITION, or FIRSTTIME and maybe
         NEXTTIME), NEWVALUEs, assignments of its own and PARAMETERs."""
+        if head.data == "refused":  # (where it stands is said)
+            return None
         conditions: dict[str, ast.ZeroCondition] = {}
         for st in body:
             if isinstance(st, ast.ZeroCondition):

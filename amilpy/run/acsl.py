@@ -357,7 +357,9 @@ class AcslRun(_Run):
             return
         e = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z)
         for k in ks:
-            if e[k] > 0 or (e[k] == 0 and plan.watched[k].breakpoint_only):
+            # (TERMT(N >= 2) holds at zero: a DISCRETE that makes N 2 stops the run)
+            if e[k] > 0 or (e[k] == 0 and (plan.watched[k].breakpoint_only
+                                           or plan.watched[k].surface in self.model.closed)):
                 self.stopped = plan.watched[k].description
                 return
 
@@ -440,13 +442,17 @@ class AcslRun(_Run):
                 # does not restart the integrator)
                 integ.integrate(cur, t_next, rec, pause=acts)
             rec.hold = None
-            reason = integ.stop_reason
+            reason, fired = integ.stop_reason, integ.fired
+            integ.fired = []
+            for k in fired:  # (their sections run now, as the next instant)
+                self.schedule(cur.t, self.acsl.crossings[plan.watched[k].surface][0], cur.t)
             if reason is not None:
                 w = plan.watched[reason]
                 if w.purpose is not Purpose.SCHEDULE:
+                    if fired:  # (the instant's sections run before the run stops)
+                        self.run_due(cur)
                     return w.description
-                integ.stop_reason = None  # runs now, as the next instant
-                self.schedule(cur.t, self.acsl.crossings[w.surface][0], cur.t)
+                integ.stop_reason = None
                 continue
             if cur.t >= plan.fintim:
                 if self.prepared.unbounded:

@@ -233,23 +233,54 @@ class _Run:
                 rec.hold = t_end if timed else None
                 integ.integrate(cur, t_end, rec, pause=timed)
                 rec.hold = None
-            reason = integ.stop_reason
-            if reason is not None and plan.watched[reason].purpose is not Purpose.SCHEDULE:
+            reason, fired = integ.stop_reason, integ.fired
+            stops = reason is not None and plan.watched[reason].purpose is not Purpose.SCHEDULE
+            if not fired and stops:
                 return plan.watched[reason].description
-            if reason is not None:
-                integ.stop_reason = None
-                self.crossed(cur, [reason])
+            integ.stop_reason, integ.fired = None, []
+            reached = None
+            if fired:
+                reached = self.crossed(cur, fired)
             elif timed and cur.t >= t_end:
                 self.time_events(cur.t, cur)
-                self.restart(cur)
+                reached, _ = self.restart(cur)
             elif cur.t >= plan.fintim:
-                return None
-            if rec.out_i < len(plan.grid.times) and \
-                    same_instant(cur.t, plan.grid.times[rec.out_i]):
+                ahead = self.crossing_at_end(cur)
+                if not ahead:
+                    return None
+                reached = self.crossed(cur, ahead)
+            on_grid = rec.out_i < len(plan.grid.times) and \
+                same_instant(cur.t, plan.grid.times[rec.out_i])
+            if on_grid:
                 rec.grid_row(cur.t, cur.y, cur.m, cur.z,
                              shown=rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
+            else:  # (the instant's row taken a float before the crossing: after it)
+                rec.retake(cur.t, cur.y, cur.m, cur.z)
+            if stops or reached is not None:
+                # (a FINISH or TERMT at the instant, or one the new values reach: the
+                # run stops there, its last row the values after the code)
+                k = reason if stops else reached
+                if not on_grid:
+                    rec.row(cur.t, cur.y, cur.m, cur.z)
+                integ.stop_reason = k
+                return plan.watched[k].description
             if cur.t >= plan.fintim:
                 return None
+
+    def crossing_at_end(self, cur: Cursor) -> list[int]:
+        """The crossings that run code which the motion takes across zero at FINTIM,
+        to rounding (X = TIME reaching FINTIM a float after it): they are FINTIM's,
+        as in step-point mode, where the last point's events run before its row."""
+        ks = self.integ.scheduling
+        if not ks or self.plan.step_point:
+            return []
+        e = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z)
+        scale = 1e-12 * max(1.0, float(np.max(np.abs(cur.y))) if len(cur.y) else 1.0)
+        near = {k for k in ks if abs(e[k]) <= scale}
+        if not near:
+            return []
+        new = self.watch.choose_modes(cur.t, cur.y, cur.z, cur.m, near)
+        return [k for k in sorted(near) if self.plan.watched[k].fires(cur.m[k], new[k])]
 
     def time_events(self, t: float, cur: Cursor) -> None:
         """The time events due at t (at or before it, to rounding), in the order of
@@ -266,12 +297,22 @@ class _Run:
                         "again at once, for ever"))
                 heapq.heappush(self.timed, (after, next(self.order), k))
 
-    def crossed(self, cur: Cursor, ks: list[int]) -> None:
+    def crossed(self, cur: Cursor, ks: list[int]) -> int | None:
         """The code the crossings of watched surfaces `ks` run, at cur.t, in the order
-        the listing writes it; then the branches in force after it."""
-        for k in sorted(ks, key=lambda k: self.plan.watched[k].surface):
-            self.run_crossing(cur, self.plan.watched[k].surface)
-        self.restart(cur)
+        the listing writes it; then the branches in force after it, and the code of
+        crossings the motion takes here too (each runs once at an instant). The FINISH
+        or TERMT the new values reach, if any."""
+        done: set[int] = set()
+        reached = None
+        while ks:
+            before = None if self.plan.step_point or not self.plan.watch_idx else \
+                self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z)
+            for k in sorted(ks, key=lambda k: self.plan.watched[k].surface):
+                self.run_crossing(cur, self.plan.watched[k].surface)
+            done.update(ks)
+            reached, more = self.restart(cur, before)
+            ks = [k for k in more if k not in done]
+        return reached
 
     def run_crossing(self, cur: Cursor, surface: int) -> None:
         """The EVENTs whose ZEROCONDITION is `surface`, in written order."""
@@ -299,27 +340,48 @@ class _Run:
             return None
         return float(values[event.code.assigned.index(event.next)])
 
-    def restart(self, cur: Cursor) -> None:
+    def restart(self, cur: Cursor, before: list[float] | None = None
+                ) -> tuple[int | None, list[int]]:
         """The branches in force after code changed states or kept names. A surface
         at zero to rounding (a crossing just located) goes the way the motion takes
-        it, not by the sign of its rounding error. (A crossing's own surface, moved
-        by its code, 1 - FLAG back to 1, is no event: its crossing was.)"""
-        quiet = set(self.integ.scheduling)
-        if self.plan.step_point:  # the branches as they read here, nothing located
-            new = literal_modes(self.c, self.plan, cur.t, cur.y.tolist(), cur.m, cur.z)
-            self.integ.record_changes(cur.t, cur.y, cur.m, new, cur.z, set(), quiet)
-            cur.m[:] = new
-            return
-        near: set[int] = set()
-        if self.plan.watch_idx:
-            e = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z)
-            scale = 1e-12 * max(1.0, float(np.max(np.abs(cur.y))) if len(cur.y) else 1.0)
-            near = {k for k in self.plan.watch_idx if abs(e[k]) <= scale
-                    and self.plan.watched[k].kind is SurfaceKind.SIGN}
-        new = self.watch.choose_modes(cur.t, cur.y, cur.z, cur.m, near)
-        self.integ.record_changes(cur.t, cur.y, cur.m, new, cur.z, set(), quiet)
+        it, not by the sign of its rounding error. Returns the FINISH or TERMT the new
+        values reach, if any, and the crossings that run code which the motion takes
+        across here too, their values the same as `before` the code (X - 1.5 a float
+        short of zero where TIME - 1.5 is a breakpoint); one the code itself moved
+        (1 - FLAG back to 1) is no event: its crossing was."""
+        c, plan = self.c, self.plan
+        if plan.step_point:  # the branches as they read here, nothing located
+            new = literal_modes(c, plan, cur.t, cur.y.tolist(), cur.m, cur.z)
+            after = None
+        else:
+            near: set[int] = set()
+            after = c.surf(cur.t, cur.y.tolist(), cur.m, cur.z) if plan.watch_idx else None
+            if after is not None:
+                scale = 1e-12 * max(1.0, float(np.max(np.abs(cur.y))) if len(cur.y) else 1.0)
+                near = {k for k in plan.watch_idx if abs(after[k]) <= scale
+                        and plan.watched[k].kind is SurfaceKind.SIGN}
+            new = self.watch.choose_modes(cur.t, cur.y, cur.z, cur.m, near)
+        more = [k for k in self.integ.scheduling if before is not None and after is not None
+                and after[k] == before[k] and plan.watched[k].fires(cur.m[k], new[k])]
+        self.integ.record_changes(cur.t, cur.y, cur.m, new, cur.z, set(),
+                                  set(self.integ.scheduling) - set(more))
+        reached = self.reached(cur.m, new)
         cur.m[:] = new
-        cur.y = self.watch.apply_resets(cur.y, cur.m)
+        if not plan.step_point:
+            cur.y = self.watch.apply_resets(cur.y, cur.m)
+        return reached, more
+
+    def reached(self, old: list[float], new: list[float]) -> int | None:
+        """The FINISH or TERMT surface that new values given at an instant reach (FINISH
+        K = 2.5, K a SET variable an EVENT counts up), if any."""
+        for k, w in enumerate(self.plan.watched):
+            if old[k] == new[k]:
+                continue
+            if (w.purpose is Purpose.TERMT and (new[k] > 0 or (
+                    new[k] == 0 and w.surface in self.model.closed))) or \
+                    (w.purpose is Purpose.FINISH and (new[k] == 0 or new[k] * old[k] < 0)):
+                return k
+        return None
 
     def terminal(self, run: Run, cur: Cursor) -> dict[str, float]:
         """TERMINAL's values, in written order."""

@@ -93,6 +93,10 @@ class FastPaths:
             wrong = stepper.first_wrong()  # the stepper's own look at the surfaces
             if wrong is None:
                 wrong = self._wrong_at(cur)(T[:n], Y[:n])[0]
+            if wrong < n and self.scheduling:
+                # (the instant before a crossing may be the crossing's own, to rounding,
+                # where code runs before the row: the step-by-step path takes that row)
+                wrong = max(wrong - 1, 0)
             n = min(n, wrong)
         if n == 0:
             return e_prev

@@ -66,6 +66,8 @@ class RunLoop:
         # restart another surface made (1 - RSW(X > 1, 1, 0) reaches zero with X - 1)
         self.scheduling = tuple(k for k, w in enumerate(plan.watched)
                                 if w.purpose is Purpose.SCHEDULE)
+        # those that crossed where the loop stopped: their code is the caller's to run
+        self.fired: list[int] = []
 
 
 class Integrator(RunLoop, SegmentStart, StepWatch, Restarts, FastPaths):

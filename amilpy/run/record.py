@@ -117,6 +117,26 @@ class Rows:
         self._block(t, g, values)
         self.last_t = float(t[-1])
 
+    def replace_last(self, values: list[float]) -> bool:
+        """The last row's values replaced, if it is a grid row still held here (not
+        yet handed to a stream); whether it was."""
+        if self.t:
+            if self.g[-1] < 0:
+                return False
+            self.v[-1] = values
+            return True
+        if self.blocks:
+            t, g, v = self.blocks[-1]
+            if g[-1] < 0:
+                return False
+            v[-1] = values
+            return True
+        if self.on_part is None and self.n and self.kept_g[self.n - 1] >= 0:
+            for column, value in zip(self.kept, values, strict=True):
+                column[self.n - 1] = value
+            return True
+        return False
+
     def take(self) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
         """TIME, the grid indices and each column, as arrays cut to their length;
         the rows are given away."""
@@ -511,6 +531,14 @@ class Recorder:
             if len(self.restarts) >= self._forget_at:  # (a long run restarts 10^5 times)
                 self.restarts.keep(*self.extrema.wanted())
                 self._forget_at = max(FORGET_FROM, 2 * len(self.restarts))
+
+    def retake(self, t: float, y: np.ndarray, m, z) -> None:
+        """The row just taken at a grid instant a float from t, again in the values at
+        t (code ran there after it: a crossing located a float past the instant)."""
+        last = self.last_t
+        if last is not None and self.out_i > 0 and close_to(t, self.times[self.out_i - 1]) \
+                and close_to(last, self.times[self.out_i - 1]):
+            self.rows.replace_last(self.outputs(last, y, m, z))
 
     def grid_row(self, t: float, y: np.ndarray, m, z, shown=None) -> None:
         """The row of the next grid instant (none at the instant held for the caller)."""

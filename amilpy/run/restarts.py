@@ -32,12 +32,16 @@ class Restarts:
             memory = c.mem(tb, yb.tolist(), m, new_m, z)
             new_m = watch.after_memory(tb, yb, new_m, z, memory)
             z[:] = memory
+        stop = None
         for k in (*step.triggered, *self._jumped(tb, yb, m, new_m, z, step.triggered)):
             w = self.plan.watched[k]
             if (w.purpose is Purpose.TERMT and new_m[k] > 0) or \
-                    (w.purpose is Purpose.FINISH and new_m[k] != m[k]) or \
-                    (w.purpose is Purpose.SCHEDULE and w.fires(m[k], new_m[k])):
-                self.stop_reason = k  # a SCHEDULE: the caller runs its DISCRETE, goes on
+                    (w.purpose is Purpose.FINISH and new_m[k] != m[k]):
+                stop = k if stop is None else stop
+            elif w.purpose is Purpose.SCHEDULE and w.fires(m[k], new_m[k]):
+                self.fired.append(k)  # (the caller runs their code, then goes on or stops)
+        if stop is not None or self.fired:
+            self.stop_reason = stop if stop is not None else self.fired[0]
         n_events = len(self.events)
         self.record_changes(tb, yb, m, new_m, z, step.triggered, step.quiet)
         changed = new_m != m
@@ -50,8 +54,7 @@ class Restarts:
             rec.restarted(tb, y, m, z)
             if changed or not np.array_equal(y, yb):
                 rec.sample(tb, y, m, z)
-        scheduled = self.stop_reason is not None and \
-            self.plan.watched[self.stop_reason].purpose is Purpose.SCHEDULE
+        scheduled = bool(self.fired)
         if at_output and not scheduled:  # (the code a crossing runs comes before its row)
             rec.grid_row(tb, y, m, z, shown=rec.shown_modes(tb, y, m, z))
         if self.stop_reason is not None:
@@ -81,13 +84,15 @@ class Restarts:
     def _jumped(self, tb: float, yb: np.ndarray, m, new_m, z, triggered) -> list[int]:
         """The crossings that run code (SCHEDULE, EVENT) whose value jumped over zero
         at this restart because other surfaces changed branch (1 - RSW(X > 1, 1, 0)
-        reaches zero where X - 1 does): in the old branches still on their side, in
-        the new ones not. (One the motion took across unseen is no such jump.)"""
+        reaches zero where X - 1 does), or that stand on zero at a restart another
+        made (X - 1.5 where TIME - 1.5 is a breakpoint): in the old branches still on
+        their side or at zero, in the new ones not. (One the motion took across
+        unseen is no such jump.)"""
         ks = [k for k in self.scheduling if new_m[k] != m[k] and k not in triggered]
         if not ks:
             return []
         e = self.c.surf(tb, yb.tolist(), m, z)
-        return [k for k in ks if (m[k] > 0 and e[k] > 0) or (m[k] < 0 and e[k] < 0)]
+        return [k for k in ks if (m[k] > 0 and e[k] >= 0) or (m[k] < 0 and e[k] <= 0)]
 
     def record_changes(self, t: float, y: np.ndarray, m, new_m, z, at_zero: set[int],
                        quiet: set[int] = frozenset()) -> None:

@@ -103,8 +103,8 @@ class StepPoint(RunLoop):
         self._points = 0  # step points processed (the first one has no events)
         # the run's code for crossings (SCHEDULE's DISCRETE, an EVENT's NEWVALUEs):
         # called with the cursor at the point and the surfaces that crossed there
-        self.crossed: Callable[[Cursor, list[int]], None] | None = None
-        self._fired: list[int] = []
+        # (it returns the FINISH or TERMT surface the new values reach, if any)
+        self.crossed: Callable[[Cursor, list[int]], int | None] | None = None
 
     # the members of loop.Integrator that callers use ------------------------------
     def window(self, t0: float, t1: float) -> None:
@@ -168,13 +168,18 @@ class StepPoint(RunLoop):
             stop = self._changes(t, cur.m, m)
             cur.m[:] = m
         cur.t, cur.y = t, y
-        if self._fired:
+        if self.fired:
             # (the code runs before the point's row, and the step from it takes the
-            # rates of the new values)
-            fired, self._fired = self._fired, []
+            # rates of the new values; a FINISH or TERMT they reach stops the run here)
+            fired, self.fired = self.fired, []
             if self.crossed is not None:
-                self.crossed(cur, fired)
+                reached = self.crossed(cur, fired)
                 y, m = cur.y, list(cur.m)
+                if reached is not None and not stop:
+                    stop, self.stop_reason = True, reached
+                    w = self.plan.watched[reached]
+                    self.events.append(Event(t, w.description, w.surface, 0.0, 1.0,
+                                             EventKind(w.purpose.value), w.text))
         self.last_good = (t, y, m)  # m is not changed in place later
         self._points += 1
         if rec is not None:
@@ -209,7 +214,7 @@ class StepPoint(RunLoop):
                     self._event(Event(t, w.description, w.surface, was, now,
                                       w.event_kind(now), w.text))
                     if fires:
-                        self._fired.append(k)
+                        self.fired.append(k)
                 continue
             if hit and stop is None:
                 stop = k

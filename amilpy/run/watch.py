@@ -296,11 +296,16 @@ class SurfaceWatch:
 
     # -------------------------------------------------------------- along a step
     def crossed(self, k: int, mode: float, e_b: float) -> bool:
-        """Whether surface k, in `mode`, is on the wrong side at the step's end."""
-        if self.watched[k].kind is SurfaceKind.LEVEL or mode > 0:
+        """Whether surface k, in `mode`, is on the wrong side at the step's end (a
+        crossing that runs code, SCHEDULE's or an EVENT's, has when it reaches zero:
+        X - 2 reaching 0 exactly at an output instant runs its code before that row)."""
+        w = self.watched[k]
+        if w.kind is SurfaceKind.LEVEL:
             return e_b < 0.0
+        if mode > 0:
+            return e_b < 0.0 or (e_b == 0.0 and w.purpose is Purpose.SCHEDULE)
         if mode < 0:
-            return e_b > 0.0
+            return e_b > 0.0 or (e_b == 0.0 and w.purpose is Purpose.SCHEDULE)
         return False
 
     def locate(self, k: int, m, z, interp, ta: float, tb: float, segment_start: float,
@@ -405,12 +410,15 @@ def crossings(plan: RunPlan, surfaces: list[np.ndarray], m) -> dict[int, np.ndar
     out = {}
     for k in plan.watch_idx:
         e = surfaces[k]
-        if plan.watched[k].kind is SurfaceKind.LEVEL or m[k] > 0:
+        w = plan.watched[k]
+        if w.kind is SurfaceKind.LEVEL:
             bad = e < 0.0
-        elif m[k] < 0:
-            bad = e > 0.0
-        else:
+        elif m[k] == 0:
             bad = e != 0.0
+        elif w.purpose is Purpose.SCHEDULE:  # (reaching zero is crossing: `crossed`)
+            bad = e <= 0.0 if m[k] > 0 else e >= 0.0
+        else:
+            bad = e < 0.0 if m[k] > 0 else e > 0.0
         if bad.any():
             out[k] = bad
     return out

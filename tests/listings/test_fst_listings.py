@@ -177,3 +177,24 @@ def test_sucros1_runs_as_written_and_is_the_euler_recurrence():
             continue
         scale = np.max(np.abs(want)) or 1.0
         assert np.max(np.abs(run[name] - want)) <= 1e-13 * scale, name
+
+
+def test_sucros2_runs_as_written_and_is_the_euler_recurrence():
+    """SUCROS2 (s97-2.fst, SUCROS1's repository: the water-limited crop with a
+    four-layer soil water balance, seven routines) as published, on NLD1.990: FINISH
+    DVS > 2 on day 240, every printed value of its 49 PRINT variables equal to the
+    last bit to a hand translation written without amilpy (references/sucros2.py)."""
+    sucros2_sha = "bc24a11599abffc323f4848f58a41d36fd922f18aea0861b2b8b0ec5387384ef"
+    for name, sha in {**SUCROS1, "sucros2.fst": sucros2_sha}.items():
+        published_copy(HERE, name, sha)
+    from listings.references import sucros2
+
+    rows, names = sucros2.run(str(HERE))
+    ref = {n: np.array([r[k] for r in rows]) for k, n in enumerate(names)}
+    run, = amilpy.load(HERE / "sucros2.fst").run(outputs=names[1:], advice=False)
+    assert run.status == "stopped" and "FINISH DVS > 2." in run.message
+    assert run.t_end == ref["TIME"][-1] == 240.0
+    at = np.searchsorted(ref["TIME"], run.t)
+    assert np.array_equal(ref["TIME"][at], run.t)
+    for name in names[1:]:
+        assert np.array_equal(run[name], ref[name][at]), name
