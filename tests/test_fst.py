@@ -195,6 +195,11 @@ def test_a_missing_weather_file_names_where_it_looked_and_the_lines(tmp_path):
     assert "the weather file TZ2.018 (station TZ 2, 2018) is not in /DATA/NOWHERE/" in text
     assert str(tmp_path / "weather") in text and "line(s) 8, 9" in text
     assert "--weather-dir" in text
+    # a blank WTRDIR (Rlintul's LINTUL1 writes WTRDIR = ' ') is no folder to name
+    blank = _listing(tmp_path, CROP.replace("'C:\\DATA\\NOWHERE\\'", "' '"), "b.fst")
+    with pytest.raises(AmilError) as err:
+        amilpy.load(blank).run(advice=False)
+    assert f"is not in {tmp_path}," in err.value.render()
 
 
 def test_a_missing_value_that_is_read_stops_the_run_naming_file_day_and_variable(tmp_path):

@@ -80,8 +80,8 @@ def search_dirs(spec: WeatherSpec, listing_dir: str, extra: list[str] | None = N
                 ) -> list[str]:
     """Where the files are looked for, in order (§13)."""
     dirs = []
-    if spec.wtrdir:
-        d = spec.wtrdir.replace("\\", "/")
+    if spec.wtrdir and spec.wtrdir.strip():  # (Rlintul's LINTUL1 gives WTRDIR = ' ')
+        d = spec.wtrdir.strip().replace("\\", "/")
         if len(d) >= 2 and d[1] == ":":  # a Windows drive letter means nothing here
             d = d[2:]
         dirs.append(d)
