@@ -113,7 +113,8 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
     ("FST", "`CALL GLA(TIME, ..., GLAI)` with `SUBROUTINE GLA(...)` ... `END` after STOP",
      "the subroutine run as a PROCEDURAL at the CALL: the arguments its body assigns are "
      "outputs (the CALL gives names there), the others inputs; its other names are its own. "
-     "A subset of Fortran 77: fixed form, IMPLICIT REAL (A-Z) or NONE, REAL, INTEGER and "
+     "A subset of Fortran 77: fixed form, IMPLICIT REAL (A-Z) or NONE, REAL, INTEGER, "
+     "LOGICAL and "
      "DIMENSION declarations, the routine's own arrays of one subscript with DATA, "
      "PARAMETER, assignments, logical and block IFs, DO loops (labelled, with CONTINUE, or "
      "DO ... END DO), CALLs of the other routines after STOP, FUNCTION subprograms "
@@ -123,7 +124,7 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
      "ACSL form's), RETURN at the end, STOP or STOP 'text' (the run stops there, as at a "
      "TERMT, saying the text: SUCROS's ASTRO checks its latitude so). Refused at their "
      "line: a GO TO back or computed, COMMON, array arguments, "
-     "LOGICAL and CHARACTER, an INTEGER given a value that is no whole number or divided "
+     "LOGICAL arrays and CHARACTER, an INTEGER given a value that is no whole number or divided "
      "by one (Fortran cuts both), a DATA value the routine changes (memory between CALLs), "
      "recursion; and a name given both as a value it reads and as an argument it assigns, "
      "and an argument it assigns on some paths only. The rest of the text after STOP is "

@@ -550,3 +550,29 @@ def test_a_stop_in_a_routine_ends_the_run_there_with_its_words(method):
         run.message, run.message
     assert run.t_end == pytest.approx(2.0 if method == "RECT" else 1.5, abs=1e-9)
     assert list(run["Y"][:4]) == pytest.approx([0.0, 1.0, 2.0, 3.0])
+
+
+def test_a_logical_flag_set_in_a_loop_over_a_routines_own_dates():
+    """LINGRA's MOWING sets a LOGICAL flag in a loop over its mowing dates, then tests
+    it with .AND.: here Y = 1 on the listed days (A = 1 + t = 2, 4 or 5) after A > 3,
+    else 0. LOGICAL variables were refused in routines."""
+    run = _run_f("""      SUBROUTINE F(A, B)
+      IMPLICIT NONE
+      REAL A, B, D(3)
+      INTEGER I
+      LOGICAL DAY
+      DATA D /2., 4., 5./
+      DAY = .FALSE.
+      DO 10 I = 1, 3
+         IF (A .EQ. D(I)) DAY = .TRUE.
+   10 CONTINUE
+      IF (DAY .AND. A .GT. 3.) THEN
+         B = 1.
+      ELSE
+         B = 0.
+      END IF
+      RETURN
+      END
+""", fintim=6.0)
+    assert [(t, y) for t, y in zip(run.times, run["Y"], strict=True)] == [
+        (0.0, 0.0), (1.0, 0.0), (2.0, 0.0), (3.0, 1.0), (4.0, 1.0), (5.0, 0.0), (6.0, 0.0)]

@@ -10,7 +10,8 @@ and never handed to a compiler or to Python as text.
 
 The subset: fixed-form source (a `C`, `c`, `*` or `!` in column 1 comments a line, a
 mark in column 6 continues one), `SUBROUTINE NAME(A1, ...)` ... `END`, `IMPLICIT REAL
-(A-Z)` or `IMPLICIT NONE`, `REAL`, `INTEGER` and `DIMENSION` declarations, the
+(A-Z)` or `IMPLICIT NONE`, `REAL`, `INTEGER`, `LOGICAL` (.TRUE. is 1, .FALSE. 0) and
+`DIMENSION` declarations, the
 routine's own arrays of one subscript (`REAL XG(3)`) and `DATA` for them, `PARAMETER`
 (named constants), `SAVE` (a routine that reads nothing before assigning it keeps
 nothing from CALL to CALL: SAVE then changes no number), assignments,
@@ -34,7 +35,7 @@ typing I to N) give the same numbers while they hold whole numbers and are not d
 by one another: an INTEGER given any other value, or a division of two, is refused, as
 is a DATA value the routine changes (Fortran keeps it from one CALL to the next). Also
 refused at its line and column, by name: a GO TO back or computed, a PARAMETER
-assigned, COMMON, array arguments, LOGICAL and CHARACTER, recursion, a
+assigned, COMMON, array arguments, LOGICAL arrays and CHARACTER, recursion, a
 RETURN before the end; and the CALLs whose Fortran meaning a PROCEDURAL cannot have: a
 name given both as a value the routine reads and as an argument it assigns, one given
 to two assigned arguments, an assigned argument some path leaves as it was.
@@ -51,7 +52,8 @@ from .jumps import lower_jumps
 from .lexical import code_end
 
 # statements of the subset read here (the rest are read by the listing's grammar)
-_TYPE = r"REAL(?:\*\d+)?|DOUBLE\s*PRECISION|INTEGER(?:\*\d+)?"  # a declaration's, a FUNCTION's
+# a declaration's type, a FUNCTION's
+_TYPE = r"REAL(?:\*\d+)?|DOUBLE\s*PRECISION|INTEGER(?:\*\d+)?|LOGICAL(?:\*\d+)?"
 _SUBROUTINE = re.compile(r"SUBROUTINE\s+([A-Za-z]\w*)\s*(?:\(\s*([^)]*)\))?\s*$", re.I)
 # a FUNCTION subprogram: its type (REAL, INTEGER, ... or none: Fortran's implicit
 # typing of its name), its name and its arguments
@@ -74,7 +76,7 @@ _STOP = re.compile(r"((?:IF\s*\(.*\)\s*)?)STOP\b\s*('(?:[^']|'')*'|\d+)?\s*$", r
 _SEQUENCE = re.compile(r"[ \t]*(?:[A-Za-z]{0,6}[0-9]{1,8}[ \t]*)?")
 # refused by name: (pattern, the construct as a reader knows it)
 _REFUSED = [
-    (re.compile(r"(LOGICAL|CHARACTER)\b", re.I), "{0} variables in a subroutine"),
+    (re.compile(r"(CHARACTER)\b", re.I), "{0} variables in a subroutine"),
     (re.compile(r"GO\s*TO\s*\(", re.I), "a computed GO TO"),
     (re.compile(r"(COMMON|EQUIVALENCE|EXTERNAL|"
                 r"FUNCTION|ENTRY|READ|WRITE|FORMAT|OPEN|CLOSE)\b", re.I),
@@ -343,9 +345,11 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
                 if dims is None:
                     (integers if integer else declared).add(n)
                     continue
-                if n in params or integer or not re.fullmatch(r"\s*\d+\s*", dims):
+                if n in params or integer or word == "LOGICAL" or \
+                        not re.fullmatch(r"\s*\d+\s*", dims):
                     what = "an array argument" if n in params else \
                         "an INTEGER array" if integer else \
+                        "a LOGICAL array" if word == "LOGICAL" else \
                         "an array of more than one subscript, or of a size not a number"
                     refuse(f"{n}({dims}) in {routine}: {what} is not supported",
                            where, "the subset's arrays are the routine's own REAL X(n)")
