@@ -274,9 +274,7 @@ class _Run:
         ks = self.integ.scheduling
         if not ks or self.plan.step_point:
             return []
-        e = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z)
-        scale = 1e-12 * max(1.0, float(np.max(np.abs(cur.y))) if len(cur.y) else 1.0)
-        near = {k for k in ks if abs(e[k]) <= scale}
+        _, near = self.near_zero(cur, ks)
         if not near:
             return []
         new = self.watch.choose_modes(cur.t, cur.y, cur.z, cur.m, near)
@@ -354,12 +352,7 @@ class _Run:
             new = literal_modes(c, plan, cur.t, cur.y.tolist(), cur.m, cur.z)
             after = None
         else:
-            near: set[int] = set()
-            after = c.surf(cur.t, cur.y.tolist(), cur.m, cur.z) if plan.watch_idx else None
-            if after is not None:
-                scale = 1e-12 * max(1.0, float(np.max(np.abs(cur.y))) if len(cur.y) else 1.0)
-                near = {k for k in plan.watch_idx if abs(after[k]) <= scale
-                        and plan.watched[k].kind is SurfaceKind.SIGN}
+            after, near = self.near_zero(cur, plan.watch_idx)
             new = self.watch.choose_modes(cur.t, cur.y, cur.z, cur.m, near)
         more = [k for k in self.integ.scheduling if before is not None and after is not None
                 and after[k] == before[k] and plan.watched[k].fires(cur.m[k], new[k])]
@@ -370,6 +363,16 @@ class _Run:
         if not plan.step_point:
             cur.y = self.watch.apply_resets(cur.y, cur.m)
         return reached, more
+
+    def near_zero(self, cur: Cursor, ks) -> tuple[list[float] | None, set[int]]:
+        """The surfaces at cur, and which of the sign surfaces `ks` stand on zero to
+        rounding there (a crossing just located, or a float away)."""
+        if not ks:
+            return None, set()
+        e = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z)
+        scale = 1e-12 * max(1.0, float(np.max(np.abs(cur.y))) if len(cur.y) else 1.0)
+        return e, {k for k in ks if abs(e[k]) <= scale
+                   and self.plan.watched[k].kind is SurfaceKind.SIGN}
 
     def reached(self, old: list[float], new: list[float]) -> int | None:
         """The FINISH or TERMT surface that new values given at an instant reach (FINISH
