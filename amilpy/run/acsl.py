@@ -359,7 +359,7 @@ class AcslRun(_Run):
         for k in ks:
             # (TERMT(N >= 2) holds at zero: a DISCRETE that makes N 2 stops the run)
             if e[k] > 0 or (e[k] == 0 and (plan.watched[k].breakpoint_only
-                                           or plan.watched[k].surface in self.model.closed)):
+                                           or plan.watched[k].closed)):
                 self.stopped = plan.watched[k].description
                 return
 

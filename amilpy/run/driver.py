@@ -284,7 +284,7 @@ class _Run:
         """The time events due at t (at or before it, to rounding), in the order of
         their instants; each gives its next instant (NEXTTIME), which must be later."""
         while self.timed and self.timed[0][0] <= t + within(t):
-            at, _, k = heapq.heappop(self.timed)
+            _, _, k = heapq.heappop(self.timed)
             cur.t = t
             after = self.run_event(cur, k)
             if after is not None:
@@ -377,14 +377,8 @@ class _Run:
     def reached(self, old: list[float], new: list[float]) -> int | None:
         """The FINISH or TERMT surface that new values given at an instant reach (FINISH
         K = 2.5, K a SET variable an EVENT counts up), if any."""
-        for k, w in enumerate(self.plan.watched):
-            if old[k] == new[k]:
-                continue
-            if (w.purpose is Purpose.TERMT and (new[k] > 0 or (
-                    new[k] == 0 and w.surface in self.model.closed))) or \
-                    (w.purpose is Purpose.FINISH and (new[k] == 0 or new[k] * old[k] < 0)):
-                return k
-        return None
+        return next((k for k, w in enumerate(self.plan.watched)
+                     if old[k] != new[k] and w.stops(old[k], new[k])), None)
 
     def terminal(self, run: Run, cur: Cursor) -> dict[str, float]:
         """TERMINAL's values, in written order."""

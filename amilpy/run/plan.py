@@ -105,6 +105,17 @@ class Watched:
     breakpoint_only: bool  # affine in TIME: handled as breakpoints
     direction: int = 0  # SCHEDULE: +1 .XP., -1 .XN., 0 .XZ. (either way)
     guarded: bool = False  # read by the program on some branches only (`ir.Surface.guard`)
+    # a TERMT whose condition holds at zero too (T >= TSTOP: `ir.Model.closed`)
+    closed: bool = False
+
+    def stops(self, old: float, new: float) -> bool:
+        """Whether entering `new` from `old` ends the run: a TERMT's condition holds
+        (at zero too where it is closed), a FINISH is reached or passed."""
+        if self.purpose is Purpose.TERMT:
+            return new > 0 or (new == 0 and self.closed)
+        if self.purpose is Purpose.FINISH:
+            return new != old and (new == 0 or new * old < 0)
+        return False
 
     def fires(self, old: float, new: float) -> bool:
         """Whether entering `new` from `old` is a crossing this SCHEDULE runs on:
@@ -621,7 +632,8 @@ def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: ModelCode,
                                # root is located, not worked out from t0 and FINTIM)
                                (i in c.affine_time and s.guard is None)
                                or i in c.train_surfaces,
-                               crossing[1] if crossing else 0, s.guard is not None))
+                               crossing[1] if crossing else 0, s.guard is not None,
+                               i in model.closed))
     roots, breakpoints = time_breakpoints(c, watched, t0, fintim)
     pos = {i: k for k, i in enumerate(c.watched)}
     resets = []

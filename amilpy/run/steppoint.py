@@ -204,9 +204,9 @@ class StepPoint(RunLoop):
             was, now = old[k], new[k]
             if purpose is Purpose.TERMT:
                 # T >= TSTOP holds at zero: a step point exactly there stops the run
-                hit = now > 0 or (now == 0 and w.surface in self.model.closed)
+                hit = w.stops(was, now)
             elif purpose is Purpose.FINISH:
-                hit = not first and now != was and (now == 0.0 or now * was < 0)
+                hit = not first and w.stops(was, now)
             else:
                 fires = purpose is Purpose.SCHEDULE and w.fires(was, now)
                 if not first and now != was and (fires or purpose is not Purpose.SCHEDULE):
