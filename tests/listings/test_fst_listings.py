@@ -151,6 +151,20 @@ SUCROS1 = {"sucros1.fst": "8bea4a1fe8dda1523e0394721a98b9fde511ec5b36f21cfe30e2b
            "NLD1.990": "9b547a5c1d44a2b6d19966cd0d1e0a23217b2a9f62707bf07b0f14561e377225"}
 
 
+def sucros_against(listing: str, reference) -> tuple:
+    """A SUCROS listing's run as written, which ends on day 240 at FINISH DVS > 2 as
+    its reference's rows do, the reference's columns at the run's rows, and their
+    names (the run records the same columns)."""
+    rows, names = reference.run(str(HERE))
+    ref = {n: np.array([r[k] for r in rows]) for k, n in enumerate(names)}
+    run, = amilpy.load(HERE / listing).run(outputs=names[1:], advice=False)
+    assert run.status == "stopped" and "FINISH DVS > 2." in run.message
+    assert run.t_end == ref["TIME"][-1] == 240.0
+    at = np.searchsorted(ref["TIME"], run.t)
+    assert np.array_equal(ref["TIME"][at], run.t)
+    return run, {n: v[at] for n, v in ref.items()}, names[1:]
+
+
 def test_sucros1_runs_as_written_and_is_the_euler_recurrence():
     """SUCROS1 (Goudriaan & van Laar, SOURCES.md F3) as published: CALL TOTASS runs the
     Gaussian integration over the day (a DO loop calling ASTRO and ASSIM), whose ASTRO
@@ -163,20 +177,13 @@ def test_sucros1_runs_as_written_and_is_the_euler_recurrence():
         published_copy(HERE, name, sha)
     from listings.references import sucros1
 
-    rows, names = sucros1.run(str(HERE))
-    ref = {n: np.array([r[k] for r in rows]) for k, n in enumerate(names)}
-    run, = amilpy.load(HERE / "sucros1.fst").run(outputs=names[1:], advice=False)
-    assert run.status == "stopped" and "FINISH DVS > 2." in run.message
-    assert run.t_end == ref["TIME"][-1] == 240.0
-    at = np.searchsorted(ref["TIME"], run.t)
-    assert np.array_equal(ref["TIME"][at], run.t)
-    for name in names[1:]:
-        want = ref[name][at]
+    run, ref, names = sucros_against("sucros1.fst", sucros1)
+    for name in names:
         if name == "CHKDIF":
-            assert np.max(np.abs(run[name] - want)) <= 1e-12 * np.max(ref["CHKIN"])
+            assert np.max(np.abs(run[name] - ref[name])) <= 1e-12 * np.max(ref["CHKIN"])
             continue
-        scale = np.max(np.abs(want)) or 1.0
-        assert np.max(np.abs(run[name] - want)) <= 1e-13 * scale, name
+        scale = np.max(np.abs(ref[name])) or 1.0
+        assert np.max(np.abs(run[name] - ref[name])) <= 1e-13 * scale, name
 
 
 def test_sucros2_runs_as_written_and_is_the_euler_recurrence():
@@ -189,12 +196,6 @@ def test_sucros2_runs_as_written_and_is_the_euler_recurrence():
         published_copy(HERE, name, sha)
     from listings.references import sucros2
 
-    rows, names = sucros2.run(str(HERE))
-    ref = {n: np.array([r[k] for r in rows]) for k, n in enumerate(names)}
-    run, = amilpy.load(HERE / "sucros2.fst").run(outputs=names[1:], advice=False)
-    assert run.status == "stopped" and "FINISH DVS > 2." in run.message
-    assert run.t_end == ref["TIME"][-1] == 240.0
-    at = np.searchsorted(ref["TIME"], run.t)
-    assert np.array_equal(ref["TIME"][at], run.t)
-    for name in names[1:]:
-        assert np.array_equal(run[name], ref[name][at]), name
+    run, ref, names = sucros_against("sucros2.fst", sucros2)
+    for name in names:
+        assert np.array_equal(run[name], ref[name]), name

@@ -13,49 +13,7 @@ recomputed. The row is written, FINISH is checked, then the Euler step is taken.
 import math
 import os
 
-
-# ----------------------------------------------------------------------------
-# TTUTIL functions
-# ----------------------------------------------------------------------------
-def INSW(x, a, b):
-    return a if x < 0.0 else b
-
-
-def REAAND(x1, x2):
-    return 1.0 if (x1 > 0.0 and x2 > 0.0) else 0.0
-
-
-def REANOR(x1, x2):
-    return 1.0 if (x1 <= 0.0 and x2 <= 0.0) else 0.0
-
-
-def NOTNUL(x):
-    return 1.0 if x == 0.0 else x
-
-
-def LIMIT(xmin, xmax, x):
-    if x < xmin:
-        return xmin
-    if x > xmax:
-        return xmax
-    return x
-
-
-def AFGEN(table, x):
-    """Linear interpolation in flat list (x1,y1,x2,y2,...); constant outside."""
-    xs = table[0::2]
-    ys = table[1::2]
-    if x <= xs[0]:
-        return ys[0]
-    if x >= xs[-1]:
-        return ys[-1]
-    for i in range(1, len(xs)):
-        if x <= xs[i]:
-            x0, x1 = xs[i - 1], xs[i]
-            y0, y1 = ys[i - 1], ys[i]
-            return y0 + (x - x0) * (y1 - y0) / (x1 - x0)
-    return ys[-1]
-
+from .ttutil import AFGEN, INSW, LIMIT, NOTNUL, REAAND, REANOR
 
 # ----------------------------------------------------------------------------
 # Parameters and tables (PARAM / FUNCTION lines)

@@ -17,51 +17,14 @@ latitude in the header line of the weather file (the listing's
 `PARAMETER LATT = 52.` is commented out and LAT is documented as read from
 the weather file).
 
-Usage:  python3 sucros1_ref.py [folder]   (folder holding NLD1.990; default:
-the folder of this script).  Writes sucros1_ref.csv next to this script.
+`run(folder)`: the rows and their column names, the weather read from NLD1.990 in
+`folder`. The routines after STOP are `sucros_routines`, which SUCROS2's reference
+shares (the two files have the same Fortran).
 """
-import math
 import os
 
-# ----------------------------------------------------------------------------
-# TTUTIL-style helper functions
-# ----------------------------------------------------------------------------
-
-
-def INSW(x, a, b):
-    """Input switch: a if x < 0 else b."""
-    return a if x < 0.0 else b
-
-
-def LIMIT(xmin, xmax, x):
-    """Clamp x into [xmin, xmax]."""
-    if x < xmin:
-        return xmin
-    if x > xmax:
-        return xmax
-    return x
-
-
-def NOTNUL(x):
-    """1 if x == 0 else x."""
-    return 1.0 if x == 0.0 else x
-
-
-def AFGEN(table, x):
-    """Linear interpolation in the flat list of (x, y) pairs of a FUNCTION
-    table; the end values are returned outside the x range."""
-    xs = table[0::2]
-    ys = table[1::2]
-    if x <= xs[0]:
-        return ys[0]
-    if x >= xs[-1]:
-        return ys[-1]
-    for i in range(1, len(xs)):
-        if x <= xs[i]:
-            slope = (ys[i] - ys[i - 1]) / (xs[i] - xs[i - 1])
-            return ys[i - 1] + (x - xs[i - 1]) * slope
-    return ys[-1]  # not reached
-
+from .sucros_routines import GLA, SUBEAI, TOTASS, WGAUSS3, WGAUSS5
+from .ttutil import AFGEN, INSW, LIMIT, NOTNUL
 
 # ----------------------------------------------------------------------------
 # Parameters, initial conditions, function tables, timer (from the listing)
@@ -143,121 +106,6 @@ STTIME = 80.0
 FINTIM = 300.0
 DELT = 1.0
 PRDEL = 5.0  # output interval in FSE; this reference writes every time point
-
-# Gauss points/weights exactly as in the DATA statements of TOTASS and ASSIM
-XGAUSS3 = (0.112702, 0.500000, 0.887298)
-WGAUSS3 = (0.277778, 0.444444, 0.277778)
-XGAUSS5 = (0.0469101, 0.2307534, 0.5, 0.7692465, 0.9530899)
-WGAUSS5 = (0.1184635, 0.2393144, 0.2844444, 0.2393144, 0.1184635)
-
-# ----------------------------------------------------------------------------
-# Fortran subroutines after STOP, translated line by line
-# ----------------------------------------------------------------------------
-
-
-def ASTRO(DOY, LAT):
-    """Returns SC, DS0, SINLD, COSLD, DAYL, DSINB, DSINBE."""
-    PI = 3.141592654
-    RAD = PI / 180.0
-    if LAT > 67.0:
-        raise SystemExit('ERROR IN ASTRO: LAT> 67')
-    if LAT < -67.0:
-        raise SystemExit('ERROR IN ASTRO: LAT>-67')
-    DEC = -math.asin(math.sin(23.45 * RAD) * math.cos(2.0 * PI * (DOY + 10.0) / 365.0))
-    SINLD = math.sin(RAD * LAT) * math.sin(DEC)
-    COSLD = math.cos(RAD * LAT) * math.cos(DEC)
-    AOB = SINLD / COSLD
-    DAYL = 12.0 * (1.0 + 2.0 * math.asin(AOB) / PI)
-    DSINB = 3600.0 * (DAYL * SINLD + 24.0 * COSLD * math.sqrt(1.0 - AOB * AOB) / PI)
-    DSINBE = 3600.0 * (DAYL * (SINLD + 0.4 * (SINLD * SINLD + COSLD * COSLD * 0.5))
-                       + 12.0 * COSLD * (2.0 + 3.0 * 0.4 * SINLD) * math.sqrt(1.0 - AOB * AOB) / PI)
-    SC = 1370.0 * (1.0 + 0.033 * math.cos(2.0 * PI * DOY / 365.0))
-    DS0 = SC * DSINB
-    return SC, DS0, SINLD, COSLD, DAYL, DSINB, DSINBE
-
-
-def ASSIM(SCP, AMAX, EFF, KDF, LAI, SINB, PARDR, PARDF):
-    """Returns FGROS (g CO2 m-2 soil s-1)."""
-    SQV = math.sqrt(1.0 - SCP)
-    REFH = (1.0 - SQV) / (1.0 + SQV)
-    REFS = REFH * 2.0 / (1.0 + 2.0 * SINB)
-    CLUSTF = KDF / (0.8 * SQV)
-    KBL = (0.5 / SINB) * CLUSTF
-    KDRT = KBL * SQV
-    FGROS = 0.0
-    for I1 in range(5):
-        LAIC = LAI * XGAUSS5[I1]
-        VISDF = (1.0 - REFH) * PARDF * KDF * math.exp(-KDF * LAIC)
-        VIST = (1.0 - REFS) * PARDR * KDRT * math.exp(-KDRT * LAIC)
-        VISD = (1.0 - SCP) * PARDR * KBL * math.exp(-KBL * LAIC)
-        VISSHD = VISDF + VIST - VISD
-        if AMAX > 0.0:
-            FGRSH = AMAX * (1.0 - math.exp(-VISSHD * EFF / AMAX))
-        else:
-            FGRSH = 0.0
-        VISPP = (1.0 - SCP) * PARDR / SINB
-        FGRSUN = 0.0
-        for I2 in range(5):
-            VISSUN = VISSHD + VISPP * XGAUSS5[I2]
-            if AMAX > 0.0:
-                FGRS = AMAX * (1.0 - math.exp(-VISSUN * EFF / AMAX))
-            else:
-                FGRS = 0.0
-            FGRSUN = FGRSUN + FGRS * WGAUSS5[I2]
-        FSLLA = CLUSTF * math.exp(-KBL * LAIC)
-        FGL = FSLLA * FGRSUN + (1.0 - FSLLA) * FGRSH
-        FGROS = FGROS + FGL * WGAUSS5[I1]
-    FGROS = FGROS * LAI
-    return FGROS
-
-
-def TOTASS(DOY, LAT, DTR, SCP, AMAX, EFF, KDF, LAI):
-    """Returns DAYL, DTGA, DS0."""
-    PI = 3.141592654
-    SC, DS0, SINLD, COSLD, DAYL, DSINB, DSINBE = ASTRO(DOY, LAT)
-    DTGAS = 0.0
-    for I1 in range(3):
-        HOUR = 12.0 + DAYL * 0.5 * XGAUSS3[I1]
-        SINB = max(0.0, SINLD + COSLD * math.cos(2.0 * PI * (HOUR + 12.0) / 24.0))
-        PAR = 0.5 * DTR * SINB * (1.0 + 0.4 * SINB) / DSINBE
-        ATMTR = PAR / (0.5 * SC * SINB)
-        if ATMTR <= 0.22:
-            FRDF = 1.0
-        elif ATMTR > 0.22 and ATMTR <= 0.35:
-            FRDF = 1.0 - 6.4 * (ATMTR - 0.22) ** 2
-        else:
-            FRDF = 1.47 - 1.66 * ATMTR
-        FRDF = max(FRDF, 0.15 + 0.85 * (1.0 - math.exp(-0.1 / SINB)))
-        PARDF = PAR * FRDF
-        PARDR = PAR - PARDF
-        FGROS = ASSIM(SCP, AMAX, EFF, KDF, LAI, SINB, PARDR, PARDF)
-        DTGAS = DTGAS + FGROS * WGAUSS3[I1]
-    DTGA = DTGAS * DAYL * 3600.0
-    return DAYL, DTGA, DS0
-
-
-def GLA(TIME, DOYEM, DTEFF, DVS, RGRL, DELT, SLA, LAI, GLV):
-    """Returns GLAI (m2 m-2 d-1)."""
-    GLAI = SLA * GLV
-    if (DVS < 0.3) and (LAI < 0.75):
-        GLAI = (LAI * (math.exp(RGRL * DTEFF * DELT) - 1.0)) / DELT
-    if TIME <= DOYEM:
-        GLAI = 0.0
-    return GLAI
-
-
-def SUBEAI(DELT, DVS, EAR, TADRW, RDRDV, EAI):
-    """Returns REAI (m2 m-2 d-1)."""
-    if DVS < 0.8:
-        REAI = 0.0
-    if DVS >= 0.8 and EAI == 0.0:
-        REAI = (EAR * TADRW) / DELT
-    else:
-        REAI = 0.0
-    if DVS >= 1.3:
-        REAI = -RDRDV * EAI
-    return REAI
-
 
 # ----------------------------------------------------------------------------
 # Weather (CABO format)

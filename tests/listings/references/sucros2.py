@@ -14,45 +14,8 @@ state(t+DELT) = state(t) + DELT*rate(t) is taken.
 import math
 import os
 
-# ---------------------------------------------------------------------------
-# TTUTIL helper functions
-# ---------------------------------------------------------------------------
-
-
-def INSW(x, a, b):
-    return a if x < 0.0 else b
-
-
-def LIMIT(xmin, xmax, x):
-    if xmax < xmin:
-        raise ValueError('LIMIT: MAX < MIN')
-    return min(max(x, xmin), xmax)
-
-
-def NOTNUL(x):
-    return 1.0 if x == 0.0 else x
-
-
-def AFGEN(table, x):
-    """Linear interpolation in a flat (x1,y1,x2,y2,...) table; end values
-    are returned outside the x range."""
-    xs = table[0::2]
-    ys = table[1::2]
-    if x <= xs[0]:
-        return ys[0]
-    if x >= xs[-1]:
-        return ys[-1]
-    for i in range(1, len(xs)):
-        if x <= xs[i]:
-            x0, x1 = xs[i - 1], xs[i]
-            y0, y1 = ys[i - 1], ys[i]
-            return y0 + (x - x0) * (y1 - y0) / (x1 - x0)
-    return ys[-1]
-
-
-class FortranStop(Exception):
-    """A Fortran STOP 'text' inside a subroutine: ends the program."""
-
+from .sucros_routines import GLA, SUBEAI, TOTASS, FortranStop
+from .ttutil import AFGEN, INSW, LIMIT, NOTNUL
 
 # ---------------------------------------------------------------------------
 # Parameters, INCONs and FUNCTION tables (as in the listing)
@@ -131,110 +94,6 @@ TNASSI = (WLVI * CFLV + WSTI * CFST + WRTI * CFRT) * 44. / 12.
 # ---------------------------------------------------------------------------
 # Fortran subroutines (translated)
 # ---------------------------------------------------------------------------
-
-
-def GLA(TIME, DOYEM, DTEFF, DVS, RGRL, DELT, SLA, LAI, GLV):
-    GLAI = SLA * GLV                                    # maturation stage
-    if (DVS < 0.3) and (LAI < 0.75):                    # juvenile stage
-        GLAI = (LAI * (math.exp(RGRL * DTEFF * DELT) - 1.)) / DELT
-    if TIME <= DOYEM:                                   # before emergence
-        GLAI = 0.
-    return GLAI
-
-
-def SUBEAI(DELT, DVS, EAR, TADRW, RDRDV, EAI):
-    if DVS < 0.8:
-        REAI = 0.
-    if DVS >= 0.8 and EAI == 0.:
-        REAI = (EAR * TADRW) / DELT
-    else:
-        REAI = 0.
-    if DVS >= 1.3:
-        REAI = -RDRDV * EAI
-    return REAI
-
-
-def ASTRO(DOY, LAT):
-    PI = 3.141592654
-    RAD = PI / 180.
-    if LAT > 67.:
-        raise FortranStop('ERROR IN ASTRO: LAT> 67')
-    if LAT < -67.:
-        raise FortranStop('ERROR IN ASTRO: LAT>-67')
-    DEC = -math.asin(math.sin(23.45 * RAD) * math.cos(2. * PI * (DOY + 10.) / 365.))
-    SINLD = math.sin(RAD * LAT) * math.sin(DEC)
-    COSLD = math.cos(RAD * LAT) * math.cos(DEC)
-    AOB = SINLD / COSLD
-    DAYL = 12.0 * (1. + 2. * math.asin(AOB) / PI)
-    DSINB = 3600. * (DAYL * SINLD + 24. * COSLD * math.sqrt(1. - AOB * AOB) / PI)
-    DSINBE = 3600. * (DAYL * (SINLD + 0.4 * (SINLD * SINLD + COSLD * COSLD * 0.5))
-                      + 12.0 * COSLD * (2.0 + 3.0 * 0.4 * SINLD)
-                      * math.sqrt(1. - AOB * AOB) / PI)
-    SC = 1370. * (1. + 0.033 * math.cos(2. * PI * DOY / 365.))
-    DS0 = SC * DSINB
-    return SC, DS0, SINLD, COSLD, DAYL, DSINB, DSINBE
-
-
-def ASSIM(SCP, AMAX, EFF, KDF, LAI, SINB, PARDR, PARDF):
-    XGAUSS = (0.0469101, 0.2307534, 0.5, 0.7692465, 0.9530899)
-    WGAUSS = (0.1184635, 0.2393144, 0.2844444, 0.2393144, 0.1184635)
-    SQV = math.sqrt(1. - SCP)
-    REFH = (1. - SQV) / (1. + SQV)
-    REFS = REFH * 2. / (1. + 2. * SINB)
-    CLUSTF = KDF / (0.8 * SQV)
-    KBL = (0.5 / SINB) * CLUSTF
-    KDRT = KBL * SQV
-    FGROS = 0.
-    for I1 in range(5):
-        LAIC = LAI * XGAUSS[I1]
-        VISDF = (1. - REFH) * PARDF * KDF * math.exp(-KDF * LAIC)
-        VIST = (1. - REFS) * PARDR * KDRT * math.exp(-KDRT * LAIC)
-        VISD = (1. - SCP) * PARDR * KBL * math.exp(-KBL * LAIC)
-        VISSHD = VISDF + VIST - VISD
-        if AMAX > 0.:
-            FGRSH = AMAX * (1. - math.exp(-VISSHD * EFF / AMAX))
-        else:
-            FGRSH = 0.
-        VISPP = (1. - SCP) * PARDR / SINB
-        FGRSUN = 0.
-        for I2 in range(5):
-            VISSUN = VISSHD + VISPP * XGAUSS[I2]
-            if AMAX > 0.:
-                FGRS = AMAX * (1. - math.exp(-VISSUN * EFF / AMAX))
-            else:
-                FGRS = 0.
-            FGRSUN = FGRSUN + FGRS * WGAUSS[I2]
-        FSLLA = CLUSTF * math.exp(-KBL * LAIC)
-        FGL = FSLLA * FGRSUN + (1. - FSLLA) * FGRSH
-        FGROS = FGROS + FGL * WGAUSS[I1]
-    FGROS = FGROS * LAI
-    return FGROS
-
-
-def TOTASS(DOY, LAT, DTR, SCP, AMAX, EFF, KDF, LAI):
-    XGAUSS = (0.112702, 0.500000, 0.887298)
-    WGAUSS = (0.277778, 0.444444, 0.277778)
-    PI = 3.141592654
-    SC, DS0, SINLD, COSLD, DAYL, DSINB, DSINBE = ASTRO(DOY, LAT)
-    DTGAS = 0.
-    for I1 in range(3):
-        HOUR = 12.0 + DAYL * 0.5 * XGAUSS[I1]
-        SINB = max(0., SINLD + COSLD * math.cos(2. * PI * (HOUR + 12.) / 24.))
-        PAR = 0.5 * DTR * SINB * (1. + 0.4 * SINB) / DSINBE
-        ATMTR = PAR / (0.5 * SC * SINB)
-        if ATMTR <= 0.22:
-            FRDF = 1.
-        elif ATMTR > 0.22 and ATMTR <= 0.35:
-            FRDF = 1. - 6.4 * (ATMTR - 0.22) ** 2
-        else:
-            FRDF = 1.47 - 1.66 * ATMTR
-        FRDF = max(FRDF, 0.15 + 0.85 * (1. - math.exp(-0.1 / SINB)))
-        PARDF = PAR * FRDF
-        PARDR = PAR - PARDF
-        FGROS = ASSIM(SCP, AMAX, EFF, KDF, LAI, SINB, PARDR, PARDF)
-        DTGAS = DTGAS + FGROS * WGAUSS[I1]
-    DTGA = DTGAS * DAYL * 3600.
-    return DAYL, DTGA, DS0
 
 
 def SUBGRT(ZRT, ZRTM, DVS, TKL1, TKL2, TKL3, TKL4, WCL1, WCL2,
