@@ -25,6 +25,7 @@ _NAMES = {"IF": "IF", "FOR": "FOR loop", "DO": "DO loop", "PROCEDURAL": "PROCEDU
 # CSMP III's and FST's blocks and the closer each needs (END ends a run group in CSMP
 # form)
 CLOSERS = {"MACRO": "ENDMAC", "PROCEDURE": "ENDPRO", "EVENT": "ENDEVENT"}
+OPENERS = {closer: kind for kind, closer in CLOSERS.items()}
 ACSL_ONLY = ("FOR", "PROCEDURAL", "FUNCTION", "DISCRETE", "INCLUDED")
 
 
@@ -219,22 +220,21 @@ class Nester:
     def close(self, stack: list[_Open], item: Close, acsl: bool) -> _Open | None:
         said = "MACRO END" if acsl and item.kind == "ENDMAC" else item.kind
         if not stack:
-            opens = {v: k for k, v in CLOSERS.items()}.get(item.kind)
+            opens = OPENERS.get(item.kind)
             self.error(f"{said} with no open block", item.span,
                        f"{said} closes {_a(opens)}: write {opens} ... {said}" if opens
                        else "every END closes a block opened before it")
             return None
         kind = stack[-1].head.kind
         line = stack[-1].head.span.line
-        opens = {v: k for k, v in CLOSERS.items()}
-        if item.kind in opens and kind != opens[item.kind]:
-            self.error(f"{said} closes {_a(opens[item.kind])}, but the innermost open "
+        if item.kind in OPENERS and kind != OPENERS[item.kind]:
+            self.error(f"{said} closes {_a(OPENERS[item.kind])}, but the innermost open "
                        f"block is the {_describe(kind)} of line {line}", item.span,
                        f"close that {_describe(kind)} first with {self.closer(kind, acsl)}")
             return None
         if kind in CLOSERS and item.kind != CLOSERS[kind]:
             self.error(f"{'END' if item.kind == 'END' else item.kind} inside the {kind} of "
-                       f"line {line}", item.span, f"a {kind} ends with "
+                       f"line {line}", item.span, f"{_a(kind)} ends with "
                        f"{self.closer(kind, acsl)}")
             return None
         if item.label is not None and stack[-1].head.label != item.label:
@@ -332,8 +332,8 @@ class Nester:
                 self.error(f"NEWVALUE {st.target} twice in one EVENT", st.target_span,
                            f"line {seen[st.target].span.line} gives its new value already")
             seen.setdefault(st.target, st)
-        if (zero is None and first is None) or not values or \
-                (zero is not None and (first or nxt) is not None) or (nxt and not first):
+        # (one of ZEROCONDITION and FIRSTTIME, NEXTTIME only with FIRSTTIME, a NEWVALUE)
+        if (zero is None) == (first is None) or (nxt and not first) or not values:
             return None
         return ast.Event(zero, first, nxt, tuple(st for st in body if isinstance(st, ast.Assign)),
                          values, head.span,
