@@ -108,7 +108,8 @@ def split_lines(text: str) -> list[str]:
 
 # Statements whose items `;` separates like `,` (section 8); TRANSLATION_* too.
 ITEM_KEYWORDS: frozenset[str] = frozenset({"PARAM", "PARAMETER", "CONST", "CONSTANT", "INCON",
-                                           "TIMER", "FINISH", "WEATHER"})
+                                           "TIMER", "FINISH", "WEATHER", "ARRAY",
+                                           "ARRAY_SIZE"})
 # A file whose first statement is one of these is in ACSL form (section 9).
 ACSL_HEADS: tuple[str, ...] = ("PROGRAM", "MODEL")
 ACSL_TIME = "T"  # time in ACSL form (TIME too, unless the listing assigns it)
@@ -148,8 +149,10 @@ STATEMENT_KEYWORDS: tuple[str, ...] = (
 REFUSED: dict[str, tuple[str, str]] = {
     "GOTO": ("GO TO outside the ACSL form", "write IF (c) THEN ... ELSE ... END IF"),
     "CONTINUE": ("CONTINUE (the end of a labelled DO)", "write DO i = a, b ... END DO"),
-    "ARRAY": ("FST's ARRAY (arrays)", "write one scalar per element (X1, X2, ...)"),
-    "ARRAY_SIZE": ("FST's ARRAY_SIZE (arrays)", "write one scalar per element (X1, X2, ...)"),
+    "ARRAY": ("an ARRAY statement not of FST's form X(1:N) (or, in ACSL form, X(N))",
+              "write ARRAY X(1:N), Y(1:3) with ARRAY_SIZE N = 10"),
+    "ARRAY_SIZE": ("an ARRAY_SIZE statement not of the form N = 10, M = 3",
+                   "write ARRAY_SIZE N = 10"),
     "STORAGE": ("CSMP's STORAGE (arrays)", "write one scalar per element (X1, X2, ...)"),
     "TABLE": ("the TABLE statement", "write a table as FUNCTION F = x1,y1, x2,y2, ... and "
               "read it with AFGEN(F, X)"),

@@ -122,13 +122,27 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
      "routine, runs it first, as a CALL with F's value its last argument), SAVE (where it "
      "keeps nothing the routine reads), GO TO forward to a labelled statement (as the "
      "ACSL form's), RETURN at the end, STOP or STOP 'text' (the run stops there, as at a "
-     "TERMT, saying the text: SUCROS's ASTRO checks its latitude so). Refused at their "
-     "line: a GO TO back or computed, COMMON, array arguments, "
+     "TERMT, saying the text: SUCROS's ASTRO checks its latitude so), array arguments "
+     "(`REAL MNDAT(NH)`: the CALL gives an ARRAY's name). A variable the routine changes "
+     "from the value it had (`INCUT = INCUT + 1.`, or one it sets on some paths only) is "
+     "Fortran's by reference, as FSE runs the generated code: after the CALL the listing "
+     "reads the new value; before it, the value is the one the routine left at the last "
+     "step point (a PARAM's own at first; once per step point, so step-point mode only), "
+     "or a weather variable's of the day (PENMAN's `VP = MIN(VP, SVP)`). Refused at "
+     "their line: a GO TO back or computed, COMMON, "
      "LOGICAL arrays and CHARACTER, an INTEGER given a value that is no whole number or divided "
      "by one (Fortran cuts both), a DATA value the routine changes (memory between CALLs), "
-     "recursion; and a name given both as a value it reads and as an argument it assigns, "
-     "and an argument it assigns on some paths only. The rest of the text after STOP is "
-     "not read"),
+     "recursion, a PARAM changed by a routine and read elsewhere in the listing; and a "
+     "name given both as a value it reads and as an argument it assigns. The rest of the "
+     "text after STOP is not read"),
+    ("FST", "`ARRAY MNDAT(1:NH)`, `ARRAY_SIZE NH = 10`, `PARAM MNDAT(1) = 135.; "
+     "MNDAT(6:NH) = 999.`", "an array of NH elements, each a variable of its own "
+     "(`MNDAT(1)` ...; the sizes are fixed when the listing is read); a range of elements "
+     "is given one value for all or one each (`X(1:3) = 1., 2., 3.`); the whole array "
+     "passed to a routine by its name"),
+    ("FST", "`PI = 3.1416` in a listing with FST's statements (WEATHER, "
+     "TRANSLATION_GENERAL, DEFINE_CALL, EVENT, SET)", "the listing's own PI (FST has "
+     "none): read wherever the listing reads PI. Elsewhere PI is reserved"),
     ("FST", "`EVENT` / `ZEROCONDITION E` / `NEWVALUE X = e` ... / `ENDEVENT`",
      "a state event: where E reaches zero from either side (located; in step-point mode "
      "at the first step point where it has, before that point's row) the NEWVALUEs are "

@@ -17,8 +17,11 @@ CSMP = "{line}\nX = INTGRL(0.0, 1.0)\nTIMER FINTIM = 1.0\nEND\n"
 CASES = [
     (DERIV, "Y = X(2)", 4, "X is a variable, not a function or an array",
      "DIMENSION X(n)"),
-    (CSMP, "ARRAY MNDAT (1:NH)", 1, "FST's ARRAY (arrays)", "one scalar per element"),
-    (CSMP, "ARRAY_SIZE NH=10", 1, "FST's ARRAY_SIZE (arrays)", "one scalar per element"),
+    # (FST's ARRAY X(1:N) and ARRAY_SIZE N = 10 run: tests/test_fst_arrays.py)
+    (CSMP, "ARRAY MNDAT (NH)", 1, "an ARRAY statement not of FST's form X(1:N)",
+     "ARRAY X(1:N), Y(1:3) with ARRAY_SIZE N = 10"),
+    (CSMP, "ARRAY_SIZE NH=N2", 1, "an ARRAY_SIZE statement not of the form N = 10",
+     "ARRAY_SIZE N = 10"),
     (CSMP, "STORAGE IC(5)", 1, "CSMP's STORAGE (arrays)", "one scalar per element"),
     (CSMP, "TABLE IC(1-5) = 1., 2., 3., 4., 5.", 1, "the TABLE statement", "FUNCTION F ="),
     (PROGRAM, "TABLE F, 4, 2, 2, 2, 2 / 0., 1., 0., 1., 0., 1., 0., 1., 16*0. /", 2,

@@ -51,7 +51,9 @@ def _dynamic_in_initial(statements: list, rep: Reporter) -> list:
         for n in ast.walk(st.expr):
             if isinstance(n, ast.Call):
                 f = lookup(n.func)
-                if f is not None and f.kind not in PURE:
+                # (a name with a dot is the reader's own: a routine's value before its
+                # CALL, whose fault is the CALL's, said there)
+                if f is not None and f.kind not in PURE and not n.func.startswith("."):
                     return n
         return None
 
@@ -177,6 +179,7 @@ def _check_csmp(program: ast.Program, name: str | None) -> ir.Model:
         own = set(data.names) | set(assigned_names([st for section in parts.values()
                                                     for st in section]))
         low.weather = frozenset(names.weather_names - own)
+        low.weather_all = frozenset(names.weather_names)
 
     # INITIAL: plain assignments, evaluated once, sorted
     stores = declared_stores(program.statements)  # INTEGER (FIXED), LOGICAL names

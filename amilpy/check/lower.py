@@ -16,6 +16,7 @@ from .. import ir
 from ..diagnostics import Diagnostic, Reporter, Span
 from ..language import TIME
 from ..library import (
+    BEFORE,
     RELATIONS,
     WEATHER_FUNC,
     WEATHER_HOLD,
@@ -136,6 +137,7 @@ class Lowering:
         self.warnings: list[Diagnostic] = []
         # FST's weather names the listing does not define itself, and those read
         self.weather: frozenset[str] = frozenset()
+        self.weather_all: frozenset[str] = frozenset()  # (the listing's own too)
         self.weather_used: dict[str, list[Span]] = {}
         self.weather_memory: dict[str, int] = {}  # the memory holding each name's value
         self.closed: set[int] = set()  # TERMT surfaces true at zero (>=, <=)
@@ -430,6 +432,9 @@ class _Lowerer(Visitor):
 
     def visit_Call(self, expr: ast.Call) -> ast.Node:
         low, target = self.lowering, self.target
+        if expr.func == BEFORE and expr.args[0].name in low.weather_all:
+            # (a weather variable a routine after STOP changes: the day's before the CALL)
+            return low.weather_value(expr.args[0].name, expr.args[0].span)
         func = lookup(expr.func, len(expr.args))
         if func is None:
             return expr

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from .. import ir
 from ..diagnostics import Reporter
+from ..library import lookup
 from ..parse import syntax as ast
 from ..parse.syntax import Visitor
 
@@ -34,7 +35,9 @@ class _Reads(Visitor):
     def visit_MemoryValue(self, node: ir.MemoryValue) -> None:
         if ("m", node.memory) not in self.seen:
             self.seen.add(("m", node.memory))
-            self.pending.extend(self.memories[node.memory].args)
+            mem = self.memories[node.memory]
+            if not lookup(mem.func, len(mem.args)).memory.delayed:
+                self.pending.extend(mem.args)
 
     def visit_UnitValue(self, node: ir.UnitValue) -> None:
         if ("u", node.unit) not in self.seen:

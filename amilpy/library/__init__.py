@@ -111,6 +111,9 @@ class MemorySpec:
     # where it is known before the run and the derivatives read the value, no step is
     # longer (each stage then reads a past the store holds)
     horizon: str = ""
+    # the value reads the slots alone, never the arguments as they are now: a name
+    # the arguments read may itself read the value without making a loop (.KEPT)
+    delayed: bool = False
 
 
 @dataclass(frozen=True)
@@ -627,6 +630,22 @@ register(Func(WEATHER_FUNC, Kind.TABLE, ".WEATHER(F, X)", "the day's weather val
 IMPL_LAST = ".IMPL_LAST"
 register(Func(IMPL_LAST, Kind.MEMORY, ".IMPL_LAST(IC, Y)", "Y at the last accepted step",
               memory=MemorySpec("1", ("A",), "Z0", ("B",)), constant_args=(0,)))
+# A Fortran routine after STOP that changes a variable it is given (FST's generated code
+# keeps every variable from one rate calculation to the next) reads the value the
+# routine left at the last step point (IC before the first): Z1 that value, Z0 the one
+# before it and Z2 the point where Z1 was taken, so that the rates taken again at that
+# point read what they read the first time (Z0): one change per step point, as FSE's
+# Euler loop makes it. Not callable from a listing; .BEFORE(X) is X's value before the
+# CALL: the day's for a weather name, else .KEPT(0, X) (check/lower.py).
+KEPT, BEFORE = ".KEPT", ".BEFORE"
+_KEPT_VALUE = "(Z0 if TIME == Z2 else Z1)"
+register(Func(KEPT, Kind.MEMORY, ".KEPT(IC, X)", "X as the routine left it at the last step",
+              memory=MemorySpec("3", ("A", "A", "-INF"), _KEPT_VALUE, ("VALUE", "B", "TIME"),
+                                delayed=True),
+              constant_args=(0,)))
+register(Func(BEFORE, Kind.MEMORY, ".BEFORE(X)", "X before a routine's CALL changes it",
+              memory=MemorySpec("3", ("0.0", "0.0", "-INF"), _KEPT_VALUE,
+                                ("VALUE", "A", "TIME"), delayed=True)))
 register(Func(WEATHER_HOLD, Kind.MEMORY, ".WEATHER_HOLD(X)", "X as at the last restart",
               memory=MemorySpec("1", ("0.0",), "Z0", ("A",), every_step=False)))
 register(Func("LINT", Kind.TABLE, "LINT(F, X)",

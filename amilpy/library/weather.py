@@ -219,8 +219,12 @@ class Weather:
                               f"of {year} (TIME = {t:g})")
         return row[k] * SCALE.get(name, 1.0), None
 
-    def tables(self, names: list[str], t0: float, t1: float) -> dict[str, object]:
-        """A `runtime.DayTable` per name over the days of [t0, t1], and one more."""
+    def tables(self, names: list[str], t0: float, t1: float, sure: float | None = None
+               ) -> dict[str, object]:
+        """A `runtime.DayTable` per name over the days of [t0, t1], and one more. The
+        days after `sure` may not be read (a step-point run's last step may pass
+        FINTIM, or not): a file missing for them is said only if one is read (LINGRA
+        runs to day 365 of 1989 and has no file for 1990)."""
         from .runtime import DayTable
 
         first, last = math.floor(t0), math.floor(t1) + 1
@@ -228,7 +232,12 @@ class Weather:
         for name in names:
             values, missing = [], {}
             for day in range(first, last + 1):
-                value, problem = self.lookup(name, float(day))
+                try:
+                    value, problem = self.lookup(name, float(day))
+                except AmilError as exc:
+                    if sure is None or day <= math.floor(sure):
+                        raise
+                    value, problem = math.nan, exc.diagnostics[0].message
                 values.append(value)
                 if problem:
                     missing[day] = problem

@@ -9,6 +9,7 @@ file is reported at once (up to `MAX_ERRORS`).
 
 from __future__ import annotations
 
+import dataclasses
 from functools import lru_cache
 from importlib import resources
 
@@ -89,6 +90,7 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     items = builder.statements(tree)
     nester = Nester(builder.errors)
     form, name, statements = nester.nest(items)
+    statements = _fst_own_pi(statements)
     statements, macros = expand(statements, builder.errors, form == "ACSL")
     statements = lower_jumps(statements, builder.errors, sorted_top=form == "ACSL")
     statements = _subroutines_called(statements, text, path, builder.errors)
@@ -99,6 +101,44 @@ def parse(text: str, path: str | None = None) -> ast.Program:
         raise AmilError(in_macros(sorted(builder.errors, key=_where), macros), path, text)
     return ast.Program(tuple(statements), path, text, form, name, macros, fixed,
                        tuple(nester.notes))
+
+
+# the fields of a node that hold words of the language, not names of the listing
+_NOT_NAMES = frozenset({"func", "kind", "keyword", "text", "written", "op", "form"})
+_FST_STATEMENTS = (ast.Translation, ast.Weather, ast.DefineCall, ast.Event, ast.SetValue)
+FST_PI = "PI#FST"  # (FST has no PI of its own: a listing's PI is its own variable)
+
+
+def _fst_own_pi(statements: list) -> list:
+    """An FST listing (one with FST's own statements: TRANSLATION_GENERAL, WEATHER,
+    DEFINE_CALL, EVENT, SET) that assigns PI computes with its own PI (LINGRA's PI =
+    3.1416, not pi): there PI is renamed, everywhere, to a name of the listing's."""
+    everything = ast.every_statement(statements)
+    if not any(isinstance(st, _FST_STATEMENTS) for st in everything) or not any(
+            (isinstance(st, ast.Assign) and "PI" in st.targets) or
+            (isinstance(st, ast.Data) and any(it.name == "PI" for it in st.items))
+            for st in everything):
+        return statements
+    return [_renamed(st, "PI", FST_PI) for st in statements]
+
+
+def _renamed(node, old: str, new: str):
+    """node with every name `old` of the listing `new` (every field, at any depth)."""
+    if isinstance(node, str):
+        return new if node == old else node
+    if isinstance(node, tuple):
+        return tuple(_renamed(x, old, new) for x in node)
+    if not (isinstance(node, ast.Node) and dataclasses.is_dataclass(node)):
+        return node
+    changes = {}
+    for f in dataclasses.fields(node):
+        if f.name in _NOT_NAMES or f.name == "span":
+            continue
+        value = getattr(node, f.name)
+        fixed = _renamed(value, old, new)
+        if fixed is not value and fixed != value:
+            changes[f.name] = fixed
+    return dataclasses.replace(node, **changes) if changes else node
 
 
 def _subroutines_called(statements: list, text: str, path: str | None,

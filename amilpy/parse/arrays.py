@@ -403,6 +403,9 @@ class _Arrays:
     def data(self, st: ast.Data) -> ast.Data:
         items = []
         for it in st.items:
+            if it.element:
+                items.extend(self.elements_given(it))
+                continue
             if it.pieces:
                 values = self.pieces(it)
                 if values is None:
@@ -441,6 +444,46 @@ class _Arrays:
             items.extend(ast.DataItem(e, (v,), it.span)
                          for e, v in zip(a.elements(), values, strict=True))
         return replace(st, items=tuple(items))
+
+    def elements_given(self, it: ast.DataItem) -> list[ast.DataItem]:
+        """FST's X(k) = v and X(i:j) = v1, v2, ...: the elements' items; one value
+        for a range gives every element of it that value (FST's MNDAT(6:NH) = 999.)."""
+        a = self.arrays.get(it.name)
+        if a is None or len(a.sizes) != 1:
+            self.error(f"{it.name}(...) = ...: {it.name} is not an array of one subscript",
+                       it.span, f"declare it, e.g. ARRAY {it.name}(1:N) with ARRAY_SIZE "
+                       "N = 10")
+            return []
+        values = self.pieces(it)
+        first, last = it.element
+        bounds = []
+        for b in (first, first if last is None else last):
+            k = self.whole(b if isinstance(b, ast.Node) else
+                           ast.Name(b, it.span) if isinstance(b, str) else
+                           ast.Num(b, it.span, f"{b:g}"), {}, f"a subscript of {it.name}")
+            if k is None:
+                if not any(d.span == it.span for d in self.errors):
+                    self.error(f"a subscript of {it.name} is not known when the listing is "
+                               "read", it.span, "write a number, or an ARRAY_SIZE name")
+                return []
+            bounds.append(k)
+        lo, hi = bounds
+        n = a.sizes[0]
+        if not 1 <= lo <= hi <= n:
+            self.error(f"{it.name}({lo}:{hi}) is not a range of {it.name}(1:{n})", it.span,
+                       f"{it.name} is declared with {n} element(s) (line {a.span.line})")
+            return []
+        if values is None:
+            return []
+        count = hi - lo + 1
+        if len(values) == 1:
+            values = values * count
+        if len(values) != count:
+            self.error(f"{it.name}({lo}:{hi}) is given {len(values)} values for {count} "
+                       "elements", it.span, "give one value for each, or one for all")
+            return []
+        return [ast.DataItem(a.element((k,)), (v,), it.span)
+                for k, v in zip(range(lo, hi + 1), values, strict=True)]
 
     def pieces(self, it: ast.DataItem) -> tuple[float, ...] | None:
         """The values of a data item whose counts or values name constants (ACSL's

@@ -36,6 +36,12 @@ _ACSL_TABLE = re.compile(r"^\s*([A-Za-z][A-Za-z0-9_]*)\s*,\s*([0-9]+(?:\s*,\s*[0
 _ACSL_ARRAY = re.compile(r"([A-Za-z][A-Za-z0-9_]*)\s*\(\s*((?:[0-9]+|[A-Za-z][A-Za-z0-9_]*)"
                          r"(?:\s*,\s*(?:[0-9]+|[A-Za-z][A-Za-z0-9_]*))*)\s*\)")
 _ACSL_ARRAYS = re.compile(rf"{_ACSL_ARRAY.pattern}(?:\s*,\s*{_ACSL_ARRAY.pattern})*")
+# FST's ARRAY X(1:N), Y(1:3) and ARRAY_SIZE N = 10
+_FST_ARRAY = re.compile(r"([A-Za-z][A-Za-z0-9_]*)\s*\(\s*([0-9]+)\s*:\s*([0-9]+|[A-Za-z]"
+                        r"[A-Za-z0-9_]*)\s*\)")
+_FST_ARRAYS = re.compile(rf"{_FST_ARRAY.pattern}(?:\s*,\s*{_FST_ARRAY.pattern})*")
+_FST_SIZE = re.compile(r"([A-Za-z][A-Za-z0-9_]*)\s*=\s*([0-9]+)")
+_FST_SIZES = re.compile(rf"{_FST_SIZE.pattern}(?:\s*,\s*{_FST_SIZE.pattern})*")
 MAX_RUNS = 10_000  # value-list runs in one group: beyond this, a typo or a sweep
 
 
@@ -253,10 +259,15 @@ class Builder:
             table = self.acsl_table(node)
             if table is not None:
                 return table
-        if word == "ARRAY" and self.acsl and len(node.children) > 1 and node.children[1]:
-            declared = self.acsl_array(node)
+        if word == "ARRAY" and len(node.children) > 1 and node.children[1]:
+            declared = self.acsl_array(node) if self.acsl else self.fst_array(node)
             if declared is not None:
                 return declared
+        if word == "ARRAY_SIZE" and not self.acsl and len(node.children) > 1 and \
+                node.children[1]:
+            sizes = self.fst_array_size(node)
+            if sizes is not None:
+                return sizes
         what, hint = REFUSED[word.replace(" ", "")]
         self.refuse(what, self.span(node), hint)
         return None
@@ -275,6 +286,38 @@ class Builder:
                 ast.Num(float(d), span, d) if d.isdigit() else ast.Name(d.upper(), span)
                 for d in (k.strip() for k in m.group(2).split(","))))
         return ast.Declare("REAL", tuple(names), (span,) * len(names), span, tuple(sizes))
+
+    def fst_array(self, node) -> ast.Declare | None:
+        """FST's ARRAY X(1:N), Y(1:3): arrays of one subscript from 1 (N an ARRAY_SIZE
+        name or a number). None if the text is not of that form (said by the caller)."""
+        span = self.span(node)
+        code = _rest_code(node)
+        if _FST_ARRAYS.fullmatch(code) is None:
+            return None
+        names, sizes = [], []
+        for m in _FST_ARRAY.finditer(code):
+            first, last = m.group(2), m.group(3)
+            if first != "1" and first.lstrip("0") != "1":
+                self.errors.append(Diagnostic(
+                    f"ARRAY {m.group(1).upper()}({first}:{last}): an array whose first "
+                    "subscript is not 1 is not supported", span,
+                    f"number its elements from 1: ARRAY {m.group(1).upper()}(1:N)"))
+                return ast.Declare("REAL", (), (), span, ())
+            names.append(m.group(1).upper())
+            sizes.append((ast.Num(float(last), span, last) if last.isdigit()
+                          else ast.Name(last.upper(), span),))
+        return ast.Declare("REAL", tuple(names), (span,) * len(names), span, tuple(sizes))
+
+    def fst_array_size(self, node) -> ast.Data | None:
+        """FST's ARRAY_SIZE N = 10, M = 3: the sizes the ARRAYs are declared with,
+        constants of the listing (a rerun may not change them)."""
+        span = self.span(node)
+        code = _rest_code(node)
+        if _FST_SIZES.fullmatch(code) is None:
+            return None
+        return ast.Data("CONST", tuple(
+            ast.DataItem(m.group(1).upper(), (float(m.group(2)),), span)
+            for m in _FST_SIZE.finditer(code)), span)
 
     def acsl_table(self, node) -> ast.Table | None:
         """ACSL's TABLE NAME, n, N1[, N2, N3] / breakpoints of each variable, then the
@@ -440,8 +483,9 @@ class Builder:
             whole, children = kind == "INTEGER", children[1:]
         for item in children:
             if item.data in ("more_value", "more_repeat"):
-                # ACSL's CONSTANT X = 1, 2, 3: the value belongs to the name before it
-                if not self.acsl:
+                # ACSL's CONSTANT X = 1, 2, 3 (FST's X(1:3) = 1, 2, 3): the value belongs
+                # to the name before it
+                if not self.acsl and not (items and items[-1].element):
                     self.errors.append(Diagnostic(
                         "a decimal comma in a data statement", self.span(item),
                         "the decimal separator is a point: write 1.5, not 1,5"))
@@ -472,6 +516,14 @@ class Builder:
                 items.append(ast.DataItem(name, (), self.span(item), text=string_value(
                     str(item.children[-1].children[0]))))
                 continue
+            if item.data in ("data_element", "data_element_repeat"):
+                element = tuple(self.bound(b) for b in item.children[1:3])
+                piece = self.piece(item, item.children[3] if len(item.children) > 4
+                                   else None, item.children[-1])
+                if piece is not None:
+                    items.append(ast.DataItem(name, (), self.span(item), pieces=(piece,),
+                                              element=element))
+                continue
             if item.data in ("data_item", "data_repeat"):
                 piece = self.piece(item, item.children[1] if item.data == "data_repeat"
                                    else None, item.children[-1])
@@ -501,6 +553,13 @@ class Builder:
                 items[-1] = replace(items[-1], values=tuple(
                     float(math.trunc(v)) if math.isfinite(v) else v for v in items[-1].values))
         return ast.Data(keyword, tuple(items), self.span(node))
+
+    def bound(self, token) -> float | str | None:
+        """A subscript of FST's X(k) = v or X(i:j) = ...: a number or a name (None: no
+        second one)."""
+        if token is None:
+            return None
+        return str(token).upper() if token.type == "NAME" else fortran_float(str(token))
 
     def piece(self, item, count, datum) -> tuple | None:
         """(n, v, span) of a data value `n*v` (n = 1 without a count): a number, or in

@@ -23,22 +23,33 @@ the listing or in a routine is written out as a CALL of F before the statement t
 holds it, with F's value its last argument: `expand_functions`), GO TO forward with
 its labels (written out as IF blocks, as the ACSL form's: parse/jumps.py), intrinsics
 as the listing has them, `RETURN` as the last statement, and `STOP` or `STOP 'text'`
-(read as a TERMT: the run stops where it is reached, saying the text). An argument the
-body assigns is an output (the call must give a name there); one it only reads is an
-input and stands for the call's expression; every other name is the subroutine's own
-(each call's, `NAME#k.X`), and must be given a value before it is read. Only the
-subroutines a CALL names, and those they call, are read: notes, data and other
-routines after STOP are left as they are.
+(read as a TERMT: the run stops where it is reached, saying the text), and array
+arguments (`REAL MNDAT(NH)`: the CALL gives the name of one of the listing's ARRAYs,
+whose elements the body reads). An argument the body assigns is an output (the call
+must give a name there); one it only reads is an input and stands for the call's
+expression; every other name is the subroutine's own (each call's, `NAME#k.X`), and
+must be given a value before it is read. Only the subroutines a CALL names, and those
+they call, are read: notes, data and other routines after STOP are left as they are.
+
+Fortran passes a variable itself: an argument the routine reads before it assigns it
+(LINGRA's `INCUT = INCUT + 1.`), or assigns on some paths only, starts from the
+variable's value before the CALL and gives it the new one. FSE's generated code keeps
+every variable from one rate calculation to the next, so that value is the one the
+routine left at the last step point (`library.KEPT`; a PARAM's own at first, and the
+PARAM is then the call's variable `NAME#k.P`), or, for a weather variable, the day's
+(PENMAN's `VP = MIN(VP, SVP)`: `library.BEFORE`); the listing reads the new value.
 
 The listing computes in real numbers. Fortran's INTEGERs (declared, or by its implicit
 typing I to N) give the same numbers while they hold whole numbers and are not divided
 by one another: an INTEGER given any other value, or a division of two, is refused, as
 is a DATA value the routine changes (Fortran keeps it from one CALL to the next). Also
 refused at its line and column, by name: a GO TO back or computed, a PARAMETER
-assigned, COMMON, array arguments, LOGICAL arrays and CHARACTER, recursion, a
-RETURN before the end; and the CALLs whose Fortran meaning a PROCEDURAL cannot have: a
-name given both as a value the routine reads and as an argument it assigns, one given
-to two assigned arguments, an assigned argument some path leaves as it was.
+assigned, COMMON, an array argument assigned, LOGICAL arrays and CHARACTER,
+recursion, a RETURN before the end; and the CALLs whose Fortran meaning a PROCEDURAL
+cannot have: a name given both as a value the routine reads and as an argument it
+assigns, one given to two assigned arguments, a PARAM a routine changes that the
+listing reads elsewhere too, and an argument changed from its value before in a
+routine's CALL of another (where nothing keeps it).
 """
 
 from __future__ import annotations
@@ -47,6 +58,7 @@ import re
 from dataclasses import dataclass, replace
 
 from ..diagnostics import Diagnostic, Span
+from ..library import BEFORE, KEPT
 from . import syntax as ast
 from .jumps import lower_jumps
 from .lexical import code_end
@@ -100,6 +112,8 @@ class Subroutine:
     body: tuple  # the listing's statements (Assign, If, Loop, Declare, SubroutineCall)
     span: Span
     kind: str = "SUBROUTINE"  # or "FUNCTION"
+    # the arguments that are arrays (REAL X(N), X(*)): a CALL gives an array's name
+    arrays: frozenset[str] = frozenset()
 
     @property
     def label(self) -> str:
@@ -287,6 +301,7 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
     data: dict[str, tuple[int, str]] = {}  # names DATA or PARAMETER give: (line, which)
     executable: list = []
     stops: set[int] = set()  # the lines of STOPs (read as TERMTs)
+    array_params: set[str] = set()  # the arguments that are arrays
 
     def refuse(what: str, where: Span, instead: str) -> None:
         nonlocal bad
@@ -344,6 +359,14 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
             for n, dims in names:
                 if dims is None:
                     (integers if integer else declared).add(n)
+                    continue
+                if n in params and not integer and word != "LOGICAL" and \
+                        re.fullmatch(r"\s*(?:\d+|[A-Za-z]\w*|\*)\s*", dims) and \
+                        (not dims.strip()[:1].isalpha() or dims.strip().upper() in params):
+                    # (an array argument: the CALL's array stands for it, its elements
+                    # read where the body reads X(I); its size is the caller's)
+                    array_params.add(n)
+                    declared.add(n)
                     continue
                 if n in params or integer or word == "LOGICAL" or \
                         not re.fullmatch(r"\s*\d+\s*", dims):
@@ -484,7 +507,7 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
     if fault is not None:
         errors.append(fault)
         return None
-    return Subroutine(name, params, body_nodes, span, kind)
+    return Subroutine(name, params, body_nodes, span, kind, frozenset(array_params))
 
 
 def _typing(body, declared: set[str], integers: set[str], real_all: bool, none: bool,
@@ -644,6 +667,17 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
 
     counts: dict[str, int] = {}
     bodies: dict[str, tuple | None] = {}  # each routine's body, its own CALLs written out
+    arrays = {n for st in ast.every_statement(statements) if isinstance(st, ast.Declare)
+              for n, sizes in zip(st.names, st.sizes or (), strict=False) if sizes}
+    data_names = {it.name for st in ast.every_statement(statements)
+                  if isinstance(st, ast.Data) for it in st.items}
+    read_count: dict[str, int] = {}  # how many times the listing reads each name
+    for n in (n for st in statements for n in ast.walk(st)):
+        if isinstance(n, ast.Name):
+            read_count[n.name] = read_count.get(n.name, 0) + 1
+        elif isinstance(n, ast.Report):
+            for name in n.names:
+                read_count[name] = read_count.get(name, 0) + 1
     functions = {n for n, sub in subroutines.items() if sub is not None and
                  sub.kind == "FUNCTION"}
     references: dict[str, int] = {}
@@ -693,17 +727,39 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
         values: dict[str, ast.Node] = {}
         outputs: list[str] = []
         inputs: list[str] = []
+        kept: list[tuple[str, str, ast.Node]] = []  # (argument, variable, value before)
         for p, actual in zip(sub.params, st.args, strict=True):
+            if p in sub.arrays:
+                fault = None
+                if p in assigned:
+                    fault = (f"the array argument {p} of {sub.label} is assigned in it: "
+                             "not supported", "pass the elements it computes as "
+                             "arguments of their own")
+                elif not (isinstance(actual, ast.Name) and actual.name in arrays):
+                    fault = (f"argument {p} of {sub.label} is an array: the CALL must give "
+                             "the name of an array", f"declare one, e.g. ARRAY {p}(1:N) "
+                             f"with ARRAY_SIZE N = 10, and pass it as {p}")
+                if fault is not None:
+                    errors.append(Diagnostic(fault[0], st.span, fault[1]))
+                    return []
+                values[p] = actual
+                inputs.append(actual.name)
+                continue
             if p in assigned:
+                # (read before the body assigns it, or left as it was on some path: the
+                # routine reads the variable's value before the CALL, `kept`)
+                changes = p in reads or p not in everywhere
                 fault = None
                 if not isinstance(actual, ast.Name):
                     fault = (f"argument {p} of {sub.label} is assigned in it: the "
                              "CALL must give a name there", f"pass a variable as {p}")
-                elif p in reads:
+                elif changes and (stack or sub.kind == "FUNCTION") and p in reads:
+                    # (kept values are the listing's CALLs': a routine's or a
+                    # FUNCTION's argument has none)
                     fault = (f"argument {p} of {sub.label} is read before it is "
                              "assigned (an input and an output at once): not supported",
                              "pass its value in an argument of its own")
-                elif p not in everywhere:
+                elif changes and (stack or sub.kind == "FUNCTION"):
                     fault = (f"argument {p} of {sub.label} is not assigned on every "
                              "path through it (where it is not, Fortran keeps its value "
                              "from before the CALL): not supported",
@@ -711,11 +767,26 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
                 elif actual.name in outputs:
                     fault = (f"the CALL gives {actual.name} to two arguments SUBROUTINE "
                              f"{st.name} assigns", "give each its own variable")
+                elif changes and actual.name in data_names and read_count[actual.name] > 1:
+                    fault = (f"SUBROUTINE {st.name} changes {actual.name}, a PARAM the "
+                             "listing reads elsewhere too: not supported (FST would give "
+                             "those the changed value)", f"give {st.name} a variable of "
+                             f"its own for {p}, set from {actual.name} in INITIAL")
                 if fault is not None:
                     errors.append(Diagnostic(fault[0], st.span, fault[1]))
                     return []
-                names[p] = actual.name
-                outputs.append(actual.name)
+                out = actual.name
+                if changes:
+                    # a PARAM changed: the call's own variable, from the PARAM's value
+                    if actual.name in data_names:
+                        out = f"{st.name}#{k}.{p}"
+                        before = ast.Call(KEPT, (actual, ast.Name(out, actual.span)),
+                                          actual.span)
+                    else:
+                        before = ast.Call(BEFORE, (actual,), actual.span)
+                    kept.append((p, out, before))
+                names[p] = out
+                outputs.append(out)
             else:
                 values[p] = actual
                 inputs.extend(n.name for n in ast.walk(actual) if isinstance(n, ast.Name))
@@ -737,6 +808,15 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
         local = {n: f"{st.name}#{k}.{n}" for n in assigned - params}
         names |= local
         body = tuple(_rename(s, names, values) for s in sub_body)
+        # (each changed variable starts from its value before the CALL, computed
+        # outside the PROCEDURAL: library's BEFORE and KEPT)
+        before_calls = []
+        for p, out, before in kept:
+            given = f"{st.name}#{k}.{p}.BEFORE"
+            before_calls.append(ast.Assign((given,), (st.span,), before, st.span))
+            body = (ast.Assign((out,), (st.span,), ast.Name(given, st.span), st.span),
+                    *body)
+            inputs.append(given)
         # (the routine's arrays are declared where the listing declares its own: no
         # declaration stands in a PROCEDURAL)
         declared: list = []
@@ -747,7 +827,7 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
                     if not isinstance(s, ast.Declare)]
         body = tuple(hoist(body))
         # (the routine's own names are outputs too: each call's, shown as NAME#k.X)
-        return declared + [ast.Procedural(
+        return declared + before_calls + [ast.Procedural(
             tuple(dict.fromkeys(outputs + sorted(local.values()))),
             tuple(dict.fromkeys(inputs)), body, st.span)]
 

@@ -121,6 +121,7 @@ class _Scanner:
         self.items = False  # inside an item-list statement
         self.start = True  # at the start of a statement
         self.depth = 0  # parentheses open in this statement
+        self.quoted = False  # a string goes on from the line before
 
     def end_statement(self) -> None:
         self.items, self.start, self.depth = False, True, 0
@@ -128,10 +129,14 @@ class _Scanner:
     def line(self, line: str, continued: bool) -> str:
         chars = list(line)
         i, n = 0, len(chars)
+        quoted, self.quoted = self.quoted, False
         while i < n:
             ch = chars[i]
-            if ch == "'":
-                j = i + 1
+            if ch == "'" or quoted:
+                # (a string the line before continued with `...` goes on here: FST's
+                # WTRDIR = 'D:\MODELS\...' / 'LINGRA\')
+                j = i if quoted else i + 1
+                quoted = False
                 while j < n:
                     if chars[j] == "'":
                         if j + 1 < n and chars[j + 1] == "'":
@@ -139,6 +144,8 @@ class _Scanner:
                             continue
                         break
                     j += 1
+                if j >= n and continued:
+                    self.quoted = True
                 i, self.start = j + 1, False
                 continue
             if ch == "!":

@@ -278,6 +278,9 @@ class DataItem(Node):
     # each, n an int or a name, v a float or a name (`arrays` reads them; values is ())
     pieces: tuple = ()
     text: str | None = None  # a text in quotes (ACSL form), for a CHARACTER name
+    # FST's X(2) = v or X(1:N) = v1, v2, ...: the first and last subscript, each a
+    # number or a name (`arrays` gives the elements their values)
+    element: tuple = ()
 
 
 @dataclass(frozen=True)

@@ -131,10 +131,27 @@ def with_weather(model: ir.Model, spec: ir.RunSpec, timer: dict[str, float], opt
     def read() -> dict[str, object]:
         weather = Weather(spec.weather, folder, list(opts.weather_dirs), model.weather_lines)
         with in_file(model.path, model.source):
-            days = weather.tables(model.weather, t0, t1)
+            days = weather.tables(model.weather, t0, t1, t0 + timer["FINTIM"])
         return {WEATHER_TABLE + name: table for name, table in days.items()}
 
     return replace(spec, tables={**spec.tables, **cache.get("weather", key, read)})
+
+
+def _kept_needs_step_points(model: ir.Model, method: str) -> None:
+    """A routine after STOP that changes a variable it is given (library's KEPT) changes
+    it once per step point, as FSE's Euler loop does; a variable-step route has no
+    such instants of the model (its steps are its own): refused there, by the CALL."""
+    from ..library import BEFORE, KEPT
+
+    mem = next((m for m in model.memories if m.func in (KEPT, BEFORE)), None)
+    if mem is not None:
+        name = getattr(mem.args[0 if mem.func == KEPT else -1], "name", mem.target)
+        raise AmilError([Diagnostic(
+            f"a routine after STOP changes {name} from the value it left "
+            f"before (a count, or a value kept where no branch sets it): that happens once "
+            f"per step point, and METHOD {method} has none", mem.span,
+            "run it in step-point mode: TRANSLATION_GENERAL DRIVER = 'EUDRIV', or "
+            "--method RECT")], model.path, model.source)
 
 
 @no_collection()
@@ -145,6 +162,8 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
     step_point = resolve_step_point(spec, opts)
     if step_point:
         timer = steppoint.timer(model, spec, timer, method)
+    else:
+        _kept_needs_step_points(model, method)
     if model.weather and spec.weather is not None:
         spec = with_weather(model, spec, timer, opts, cache)
     reserved = reserved_values(timer)
