@@ -188,3 +188,19 @@ def test_a_streamed_run_may_have_more_rows_than_a_run_may_keep(tmp_path):
     assert header.strip() == "TIME,X" and n == 2_500_001
     t, x = (float(v) for v in last.split(","))
     assert t == 2.5 and x == pytest.approx(2.5, rel=1e-12)  # (X = TIME: exact)
+
+
+def test_a_listings_own_run_param_keeps_its_name_and_the_run_number_is_run_hash(tmp_path):
+    """FST listings count their runs in a PARAM RUN (LINGRA's RUN = 0., then 1. after
+    END): its column keeps the name, and the column of run numbers is RUN# (two columns
+    named RUN read badly in every spreadsheet and data frame), written after the runs
+    and streamed alike."""
+    text = ("TITLE R\nY = INTGRL(0.0, RUN)\nPARAM RUN = 0.\nTIMER FINTIM = 1.0, OUTDEL = 0.5\n"
+            "PRINT Y\nEND\nPARAM RUN = 1.\nEND\n")
+    model = amilpy.loads(text, "r.amil")
+    runs = model.run(advice=False)
+    sheets.write_csv(str(tmp_path / "after.csv"), runs)
+    model.run(advice=False, stream_csv=str(tmp_path / "s.csv"))
+    for name in ("after.csv", "s.csv"):
+        lines = (tmp_path / name).read_text().splitlines()
+        assert lines[0] == "RUN#,RUN,TIME,Y" and lines[-1] == "2,1.0,1.0,1.0", lines

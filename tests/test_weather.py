@@ -104,6 +104,20 @@ def test_a_missing_file_says_where_it_looked_and_which_lines_use_weather(tmp_pat
     assert d.span.line == 12 and "line(s) 30, 41" in d.hint and "--weather-dir" in d.hint
 
 
+def test_lines_of_codes_station_minus_999_are_not_days(tmp_path):
+    # (NL1.989, LINGRA's weather, has a line of how-obtained codes, station -999,
+    # before some days: here one before day 1 and one after it, which must not
+    # replace the day's values, and one for a day with no line of its own)
+    codes = "-999  1990    {day}      1     1     1       3     1     3\n"
+    text = CABO.replace("  1  1990    1 ", codes.format(day=1) + "  1  1990    1 ", 1)
+    text = text.replace("  1  1990    2 ", codes.format(day=1) + "  1  1990    2 ", 1)
+    (tmp_path / "NLD1.990").write_text(text + codes.format(day=3))
+    w = Weather(WeatherSpec("NLD", 1, 1990), str(tmp_path))
+    assert [w.value(n, 1.0) for n in ("RDD", "TMMN", "RAIN")] == [2.8e6, -2.1, 0.4]
+    with pytest.raises(AmilError, match="has no line for RAIN on day 3 of 1990"):
+        w.value("RAIN", 3.0)
+
+
 def test_a_malformed_line_is_named(tmp_path):
     (tmp_path / "NLD1.990").write_text(CABO.replace("0.65", "O.65"))
     with pytest.raises(AmilError, match=r"NLD1\.990:4: not a CABO weather line"):

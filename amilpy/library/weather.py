@@ -138,6 +138,10 @@ def read_cabo(path: str) -> WeatherYear:
                                 f"(A B), found {len(values)} numbers")
             year = WeatherYear(path, values[0], values[1], values[2])
             continue
+        if values[0] == -999.0:
+            # (a line of codes, station -999: how each value of the day was obtained,
+            # measured or estimated; NL1.989 has one before its day 43 and others)
+            continue
         if len(values) < 3 + len(DAILY):
             raise AmilError(f"{path}:{number}: a day needs station, year, day and "
                             f"{len(DAILY)} values, found {len(values)} numbers")

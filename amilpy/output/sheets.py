@@ -86,7 +86,7 @@ def run_rows(runs: Sequence[Run], names: Sequence[str]) -> tuple[list[str], Iter
     column and one column per data value that differs between them come first, so
     each row says which run it belongs to by number and by value."""
     changed = W.changed_names(runs) if len(runs) > 1 else []
-    lead = ["RUN", *changed] if len(runs) > 1 else []
+    lead = [W.run_column([*changed, *names]), *changed] if len(runs) > 1 else []
 
     def rows() -> Iterator[list]:
         for k, run in enumerate(runs, start=1):

@@ -27,6 +27,7 @@ from ..run.plan import nearest_instants
 from .files import atomic_open
 from .options import DIALECTS
 from .sheets import export_names_from
+from .words import run_column
 
 KEEP = 20_000  # OUTDEL rows a streamed run keeps in memory at most (for its figures)
 
@@ -126,10 +127,11 @@ class CsvStream:
         RUN and changed-value columns are then those of the runs made, as the CSV
         written after them has)."""
         self._body.close()
-        lead = ["RUN", *self.changed] if len(self._params) > 1 else []
+        index = run_column([*self.changed, *(self.names or [])])
+        lead = [index, *self.changed] if len(self._params) > 1 else []
         changed = [n for n in dict.fromkeys(k for p in made for k in p)
                    if len(made) > 1 and any(p.get(n) != made[0].get(n) for p in made)]
-        wanted = ["RUN", *changed] if len(made) > 1 else []
+        wanted = [index, *changed] if len(made) > 1 else []
         keep = [k for k, name in enumerate(lead) if name in wanted]
         sep = DIALECTS[self.dialect].delimiter
         try:

@@ -208,6 +208,13 @@ def changed_names(runs: Sequence[Run]) -> list[str]:
     return names
 
 
+def run_column(names: Sequence[str]) -> str:
+    """The name of a table's column of run numbers: RUN, or RUN# where one of the
+    table's own columns is a listing's RUN (FST listings count their runs in a PARAM
+    RUN: LINGRA's)."""
+    return "RUN#" if "RUN" in names else "RUN"
+
+
 def run_labels(runs: Sequence[Run]) -> list[str]:
     """What tells each run from the others: the data values that differ between
     them, run 1's included ("B = 6e-05", "B = 0.0002"); the run's own label when

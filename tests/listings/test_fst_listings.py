@@ -199,3 +199,64 @@ def test_sucros2_runs_as_written_and_is_the_euler_recurrence():
     run, ref, names = sucros_against("sucros2.fst", sucros2)
     for name in names:
         assert np.array_equal(run[name], ref[name]), name
+
+
+LINGRA = {"lingra.fst": "cfa0e7d420dd228b2c0b9ba576674e102e37ffcef2020128e4ab10c7c0038edb",
+          "NL1.989": "11c67704dc15039c12f0541076101f999ee9e29d6346a328684e57ffdf952b82",
+          "lingra_fse_res.dat":
+          "78f46d88706c33468287bc2b87379fc565862f0260af8a6cdcbc4dd6477a14fd"}
+
+
+def test_lingra_matches_the_published_fst_output():
+    """LINGRA-new-JRC (SOURCES.md F7) as written: its mowing dates an FST ARRAY given
+    element by element and by a range, passed whole to MOWING, which counts the cuts in
+    the PARAM INCUT and keeps HARV where no branch sets it; PENMAN's VP = MIN(VP, SVP) on
+    the weather variable; the listing's own PI = 3.1416. Both runs (irrigated, then
+    rain-fed) against FSE's own output of them (res.dat, 39 columns, 365 days, five
+    significant digits; FSE computes in REAL*4): 99.8 % of the 28,470 printed values
+    agree to one unit of their last digit and every one to 1e-4 of its column's scale
+    (the largest: NEWBIO, a difference of sums near 1,244 that is near 0.01 early on);
+    the cuts fall on the five dates in both runs."""
+    for name, sha in LINGRA.items():
+        published_copy(HERE, name, sha)
+    published = fse_output(HERE / "lingra_fse_res.dat")
+    # (SLA, a PARAM, is printed once, at TIME 1 before the first row of rates)
+    names = [n for n in published[0] if n not in ("TIME", "SLA")]
+    runs = amilpy.load(HERE / "lingra.fst").run(outputs=[*names, "HARV"], advice=False)
+    assert [(r.ok, r.method) for r in runs] == [(True, "RECT")] * 2
+    total = within_unit = 0
+    for run, fse in zip(runs, published, strict=True):
+        rows = [k for k, year in enumerate(fse["YEAR"]) if year != "-"]
+        assert list(run.t) == [float(fse["TIME"][k]) for k in rows] == list(range(1, 366))
+        for name in names:
+            got = np.asarray(run[name])
+            printed = np.array([float(fse[name][k]) for k in rows])
+            units = np.array([unit(fse[name][k]) for k in rows])
+            scale = np.maximum(np.abs(printed), 1e-3 * np.max(np.abs(printed)))
+            assert np.all(np.abs(got - printed) <= 1e-4 * scale + units), name
+            within_unit += int(np.sum(np.abs(got - printed) <= units * (1 + 1e-9)))
+            total += len(printed)
+        assert [t for t, h in zip(run.t, run["HARV"], strict=True) if h > 0] == \
+            [135.0, 165.0, 200.0, 240.0, 280.0]
+    assert total == 28470 and within_unit / total > 0.998, within_unit / total
+    # the rain-fed run transpires less than the irrigated one
+    assert runs[1]["TRACU"][-1] < runs[0]["TRACU"][-1]
+
+
+def test_lingra_is_its_euler_recurrence_to_the_last_bit():
+    """LINGRA against a hand translation into plain Python (references/lingra.py),
+    written by a session that read only the listing, its weather file and FSE's
+    generated Fortran, never amilpy: every printed variable of both runs, and the
+    mowing's HARV and days since the cut DAHA, equal to the last bit, every day."""
+    for name, sha in LINGRA.items():
+        published_copy(HERE, name, sha)
+    from listings.references import lingra
+
+    names = [n for n in fse_output(HERE / "lingra_fse_res.dat")[0] if n not in ("TIME", "SLA")]
+    names += ["HARV", "DAHA"]
+    runs = amilpy.load(HERE / "lingra.fst").run(outputs=names, advice=False)
+    for k, run in enumerate(runs):
+        rows = lingra.run(k, str(HERE))
+        assert list(run.t) == [r["TIME"] for r in rows]
+        for name in names:
+            assert np.array_equal(run[name], [r[name] for r in rows]), name

@@ -8,6 +8,15 @@ def INSW(x, a, b):
     return a if x < 0.0 else b
 
 
+def FCNSW(x, a, b, c):
+    """Function switch: a if x < 0, b if x == 0, c if x > 0."""
+    if x < 0.0:
+        return a
+    if x == 0.0:
+        return b
+    return c
+
+
 def LIMIT(xmin, xmax, x):
     """x clamped into [xmin, xmax] (TTUTIL stops the program where MAX < MIN)."""
     if xmax < xmin:
