@@ -163,6 +163,10 @@ def test_calls_that_cannot_be_run_say_what_to_write():
     assert "CALL F gives 1 argument(s); SUBROUTINE F (line 9) takes 2" in count
     expression = _fault(SUB.format(body="      B = A\n"), call="CALL F(X, 2.*Y)")
     assert "argument B of SUBROUTINE F is assigned in it" in expression
+    # (LINTUL-banana's CALL INTERPOL('PCOTB', ...): FST's STRING arguments)
+    text = _fault(SUB.format(body="      B = A\n"), call="CALL F('PCOTB', Y)")
+    assert "f.fst:3:8: error: CALL F gives the string 'PCOTB': a string argument (FST's " \
+           "STRING) is not supported" in text and text.count("error:") == 1, text
     # (an implicit INTEGER read as a value is the same number in real arithmetic; here it
     # has none)
     integer = _fault(SUB.format(body="      B = A\n").replace(

@@ -741,8 +741,18 @@ class Builder:
     def st_endmac(self, node) -> Close:
         return Close("ENDMAC", self.span(node))
 
-    def st_call_sub(self, node) -> ast.SubroutineCall:
+    def st_call_sub(self, node) -> ast.SubroutineCall | None:
         name, *args = node.children
+        text = next((a for a in args if getattr(a, "data", None) == "string"), None)
+        if text is not None:
+            # (LINTUL-banana's CALL INTERPOL('PCOTB', ..., PCOTB, ...): FST's STRING
+            # argument, a table's name a routine hands on to LINT2)
+            self.errors.append(Diagnostic(
+                f"CALL {str(name).upper()} gives the string {text.children[0]}: a string "
+                "argument (FST's STRING) is not supported", self.span(text),
+                "a routine after STOP takes numbers and arrays; read a table in the "
+                "listing with LINT2('F', F, N, X) or AFGEN(F, X)"))
+            return None
         return ast.SubroutineCall(str(name).upper(),
                                   tuple(self.expr(a) for a in args if a is not None),
                                   self.span(node))
