@@ -586,3 +586,22 @@ def test_a_logical_flag_set_in_a_loop_over_a_routines_own_dates():
 """, fintim=6.0)
     assert [(t, y) for t, y in zip(run.times, run["Y"], strict=True)] == [
         (0.0, 0.0), (1.0, 0.0), (2.0, 0.0), (3.0, 1.0), (4.0, 1.0), (5.0, 0.0), (6.0, 0.0)]
+
+
+def test_an_arithmetic_if_jumps_by_the_sign_of_its_expression():
+    # IF (e) l1, l2, l3: to l1 where e < 0, l2 where e = 0, l3 where e > 0 (X = 1 + t:
+    # A - 2 is -1, 0, 1, 2); the switches it makes are named by their condition
+    run = _run_f("""      SUBROUTINE F(A, B)
+      IMPLICIT REAL (A-Z)
+      IF (A - 2.) 10, 20, 30
+   10 B = -1.
+      GO TO 40
+   20 B = 0.
+      GO TO 40
+   30 B = 1.
+   40 CONTINUE
+      RETURN
+      END
+""", fintim=3.0)
+    assert list(run["Y"]) == [-1.0, 0.0, 1.0, 1.0]
+    assert run.events[0].switch.startswith("X - 2. < 0. at line 11")

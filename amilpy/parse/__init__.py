@@ -9,7 +9,6 @@ file is reported at once (up to `MAX_ERRORS`).
 
 from __future__ import annotations
 
-import dataclasses
 from functools import lru_cache
 from importlib import resources
 
@@ -104,7 +103,8 @@ def parse(text: str, path: str | None = None) -> ast.Program:
 
 
 # the fields of a node that hold words of the language, not names of the listing
-_NOT_NAMES = frozenset({"func", "kind", "keyword", "text", "written", "op", "form"})
+_NOT_NAMES = frozenset({"func", "kind", "keyword", "text", "written", "op", "form",
+                        "span"})
 _FST_STATEMENTS = (ast.Translation, ast.Weather, ast.DefineCall, ast.Event, ast.SetValue)
 FST_PI = "PI#FST"  # (FST has no PI of its own: a listing's PI is its own variable)
 
@@ -119,26 +119,8 @@ def _fst_own_pi(statements: list) -> list:
             (isinstance(st, ast.Data) and any(it.name == "PI" for it in st.items))
             for st in everything):
         return statements
-    return [_renamed(st, "PI", FST_PI) for st in statements]
-
-
-def _renamed(node, old: str, new: str):
-    """node with every name `old` of the listing `new` (every field, at any depth)."""
-    if isinstance(node, str):
-        return new if node == old else node
-    if isinstance(node, tuple):
-        return tuple(_renamed(x, old, new) for x in node)
-    if not (isinstance(node, ast.Node) and dataclasses.is_dataclass(node)):
-        return node
-    changes = {}
-    for f in dataclasses.fields(node):
-        if f.name in _NOT_NAMES or f.name == "span":
-            continue
-        value = getattr(node, f.name)
-        fixed = _renamed(value, old, new)
-        if fixed is not value and fixed != value:
-            changes[f.name] = fixed
-    return dataclasses.replace(node, **changes) if changes else node
+    return [ast.rebuilt(st, lambda v: FST_PI if v == "PI" else v, _NOT_NAMES)
+            for st in statements]
 
 
 def _subroutines_called(statements: list, text: str, path: str | None,

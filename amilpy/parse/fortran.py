@@ -15,7 +15,8 @@ mark in column 6 continues one), `SUBROUTINE NAME(A1, ...)` ... `END`, `IMPLICIT
 routine's own arrays of one subscript (`REAL XG(3)`) and `DATA` for them, `PARAMETER`
 (named constants), `SAVE` (a routine that reads nothing before assigning it keeps
 nothing from CALL to CALL: SAVE then changes no number), assignments,
-the logical IF `IF (c) statement`, block IFs with ELSE IF and ELSE, DO loops (`DO 10 I
+the logical IF `IF (c) statement`, the arithmetic IF `IF (e) 10, 20, 30` (forward, as
+GO TO's), block IFs with ELSE IF and ELSE, DO loops (`DO 10 I
 = 1, 3` ... `10 CONTINUE`, or `DO I = 1, 3` ... `END DO`: the listing's own, written
 out pass by pass), CALLs of the other routines after STOP (each written out in place),
 FUNCTION subprograms (`REAL FUNCTION F(X)` ... `F = ...` ... `END`; a reference F(X) in
@@ -87,6 +88,8 @@ _STOP = re.compile(r"((?:IF\s*\(.*\)\s*)?)STOP\b\s*('(?:[^']|'')*'|\d+)?\s*$", r
 # columns 73-80 of a punched card: blank, or a sequence number (letters, then digits)
 _SEQUENCE = re.compile(r"[ \t]*(?:[A-Za-z]{0,6}[0-9]{1,8}[ \t]*)?")
 # refused by name: (pattern, the construct as a reader knows it)
+# Fortran's arithmetic IF: IF (e) l1, l2, l3
+_ARITHMETIC_IF = re.compile(r"IF\s*\((.*)\)\s*(\d+)\s*,\s*(\d+)\s*,\s*(\d+)\s*$", re.I)
 _REFUSED = [
     (re.compile(r"(CHARACTER)\b", re.I), "{0} variables in a subroutine"),
     (re.compile(r"GO\s*TO\s*\(", re.I), "a computed GO TO"),
@@ -216,7 +219,7 @@ def read_subroutines(lines: list[str], first: int, path: str | None,
         name = wanted.pop()
         if name in units or name not in written:
             continue
-        units[name] = sub = _read_unit(written[name], len(lines), path, errors, parser,
+        units[name] = sub = _read_unit(written[name], lines, path, errors, parser,
                                        functions)
         if sub is not None:
             wanted += [n.name for st in sub.body for n in ast.walk(st)
@@ -278,10 +281,11 @@ def _units(statements, errors: list[Diagnostic]):
                                  "end it with END"))
 
 
-def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], parser,
-               functions: set[str] = frozenset()) -> Subroutine | None:
-    """One routine read (None: its faults are said); `functions`: the FUNCTIONs
-    written after STOP, whose references it may hold."""
+def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagnostic],
+               parser, functions: set[str] = frozenset()) -> Subroutine | None:
+    """One routine read (None: its faults are said); `file_lines`: the file's;
+    `functions`: the FUNCTIONs written after STOP, whose references it may hold."""
+    n_lines = len(file_lines)
     from .blocks import Nester
     from .build import Builder
 
@@ -312,6 +316,8 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
     starts = {m.group(1).lstrip("0") for _, _, code, _ in body if (m := _DO_LABEL.match(code))}
     jumped_to = {m.group(1).lstrip("0") for _, _, code, _ in body
                  for m in re.finditer(r"GO\s*TO\s*(\d+)", code, re.I)}
+    jumped_to |= {n.lstrip("0") for _, _, code, _ in body
+                  if (m := _ARITHMETIC_IF.match(code)) for n in m.groups()[1:]}
     for i, (k, col, code, label) in enumerate(body):
         where = Span(k + 1, col + 1, k + 1, col + 1 + len(code))
         do = _DO_LABEL.match(code)
@@ -436,6 +442,13 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
                    where, "the subroutines after STOP run assignments, IFs, DO loops, "
                    "the routine's own arrays with DATA, and CALLs of the others")
             continue
+        arithmetic = _ARITHMETIC_IF.match(code)
+        if arithmetic:
+            # Fortran's arithmetic IF (e) l1, l2, l3: to l1 where e < 0, l2 where e = 0,
+            # l3 where e > 0; forward jumps, as GO TO's (parse/jumps.py)
+            e, below, zero, above = arithmetic.groups()
+            code = (f"IF (({e}) .LT. 0.) GO TO {below}; IF (({e}) .EQ. 0.) GO TO {zero}; "
+                    f"GO TO {above}")
         # (DO 10, I = 1, N: the comma a blank, the columns as they are)
         code = re.sub(r"^(DO\s+\d+\s*),", r"\1 ", code, flags=re.I)
         if label:  # (a place a GO TO jumps to: `10: X = 1.0`, the code where it was)
@@ -494,6 +507,16 @@ def _read_unit(unit, n_lines: int, path: str | None, errors: list[Diagnostic], p
         return ast.with_bodies(st, lambda body: [named(b) for b in body])
 
     statements = [named(st) for st in statements]
+    # (a line read in other words than written -- a statement continued onto it joined,
+    # DATA and PARAMETER as assignments, an arithmetic IF as GO TOs, a label -- has no
+    # text of its own for the messages to quote: its spans keep line and column only)
+    rewritten = {k + 1 for k, line in enumerate(text)
+                 if line.strip() and not (k < n_lines and
+                                          file_lines[k].startswith(line.rstrip()))}
+    if rewritten:
+        statements = [ast.rebuilt(st, lambda v: Span(v.line, v.column)
+                                  if isinstance(v, Span) and v.line in rewritten else v)
+                      for st in statements]
     for st in (n for top in statements for n in ast.walk(top)):
         if isinstance(st, ast.STATEMENTS) and not isinstance(st, allowed):
             errors.append(Diagnostic(

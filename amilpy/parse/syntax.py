@@ -14,6 +14,7 @@ family, so adding a node fails at import wherever it is not handled.
 
 from __future__ import annotations
 
+import dataclasses
 import gc
 import sys
 from collections.abc import Iterator
@@ -729,6 +730,28 @@ def with_bodies(st, fix):
     if isinstance(st, (Block, Procedural, Loop, FunctionDef)):
         return replace(st, body=tuple(fix(st.body)))
     return st
+
+
+def rebuilt(node, leaf, skip: frozenset[str] = frozenset()):
+    """node with `leaf(value)` in place of every value of its fields that is neither a
+    node nor a tuple (names, numbers, spans: a dataclass is entered, a Span too), at
+    any depth; the fields named in `skip` are kept as they are. Unchanged parts are
+    the same objects."""
+    if isinstance(node, tuple):
+        out = tuple(rebuilt(x, leaf, skip) for x in node)
+        return node if all(a is b for a, b in zip(out, node, strict=True)) else out
+    if isinstance(node, Span) or not dataclasses.is_dataclass(node) or \
+            isinstance(node, type):
+        return leaf(node)
+    changes = {}
+    for f in dataclasses.fields(node):
+        if f.name in skip:
+            continue
+        value = getattr(node, f.name)
+        new = rebuilt(value, leaf, skip)
+        if new is not value:
+            changes[f.name] = new
+    return replace(node, **changes) if changes else node
 
 
 def every_statement(statements) -> list:
