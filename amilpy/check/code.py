@@ -233,7 +233,7 @@ class _Unit:
                     opaque.discard(target)
             elif isinstance(st, ast.If):
                 branches, after = [], []
-                inner: set[str] = set()
+                inner: dict[str, None] = {}  # (in written order: one order every run)
                 # the program reads a branch's test only where the tests before it are
                 # false, and its code only where its own is true: the surfaces made
                 # there are guarded so (`Lowering.guarded_surfaces`)
@@ -247,7 +247,7 @@ class _Unit:
                     benv, bopaque = dict(env), set(opaque)
                     branches.append((cond, tuple(self.block(b.body, benv, bopaque, here))))
                     after.append((b.cond, benv, bopaque))
-                    inner.update(assigned_names(b.body))
+                    inner.update(dict.fromkeys(assigned_names(b.body)))
                     if cond is not None:
                         passed.append(ast.Not(cond, cond.span))
                 low.guard = outer
@@ -255,8 +255,12 @@ class _Unit:
                 # (where the IF starts: a surface over it reads as RSW(...), not as
                 # the IF's first line)
                 at = Span(st.span.line, st.span.column)
-                for n in inner:
-                    value = _selected(n, env, opaque, after, at)
+                # (each from the values before the IF, where its tests were read: a
+                # name the IF assigns and one of its tests reads, FIRST in IF (FIRST)
+                # THEN ... FIRST = .FALSE., is selected by the test's value before)
+                before, hidden = dict(env), set(opaque)
+                selected = {n: _selected(n, before, hidden, after, at) for n in inner}
+                for n, value in selected.items():
                     if value is None:
                         env.pop(n, None)
                         opaque.add(n)
