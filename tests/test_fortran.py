@@ -124,9 +124,10 @@ SUB = "      SUBROUTINE F(A, B)\n      IMPLICIT REAL (A-Z)\n{body}      RETURN\n
      "a division of whole numbers (SUBROUTINE F): Fortran's integer division"),
     ("      INTEGER N\n      N = 2.5*A\n      B = N\n", "12:7",
      "N is an INTEGER (SUBROUTINE F): Fortran would cut this value"),
-    # a DATA value the routine changes is memory from one CALL to the next (SAVE)
-    ("      DATA Q /1./\n      Q = Q + A\n      B = Q\n", "12:7",
-     "Q has its value from DATA and is assigned in SUBROUTINE F"),
+    # an array's DATA values the routine changes are memory from one CALL to the next
+    # (a scalar's are kept: tests/test_fst_arrays.py)
+    ("      REAL Q(2)\n      DATA Q /1., 2./\n      Q(1) = Q(1) + A\n      B = Q(1)\n",
+     "13:7", "Q has its value from DATA and is assigned in SUBROUTINE F"),
     ("      INTEGER A(3)\n      B = 1.\n", "11:7", "A(3) in SUBROUTINE F: an array argument"),
     # (a review's cases: each ran with other numbers than Fortran's before)
     ("      INTEGER I\n      I = 4\n      B = MOD(I, 3)/2\n", "13:11",

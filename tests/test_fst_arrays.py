@@ -188,3 +188,55 @@ def test_an_fst_listing_that_sets_pi_computes_with_its_own():
         amilpy.loads(text.replace("TRANSLATION_GENERAL DRIVER='EUDRIV'\n", ""),
                      name="pi.amil")
     assert "PI is a reserved name and cannot be assigned" in err.value.render()
+
+
+# a routine's own names kept from one CALL to the next: a running total under SAVE, and
+# a FIRST flag and a start value under DATA, which the routine changes
+SAVED = """TITLE SAVED
+X = INTGRL(1., 1.)
+CALL F(X, Y)
+CALL G(X, Z)
+TIMER FINTIM = 4., DELT = 1.
+TRANSLATION_GENERAL DRIVER='EUDRIV'
+PRINT Y, Z
+END
+STOP
+      SUBROUTINE F(A, B)
+      IMPLICIT REAL (A-Z)
+      SAVE
+      TOTAL = TOTAL + A
+      B = TOTAL
+      RETURN
+      END
+      SUBROUTINE G(A, B)
+      IMPLICIT REAL (A-Z)
+      LOGICAL FIRST
+      DATA FIRST /.TRUE./, START /0./
+      IF (FIRST) THEN
+         START = A
+         FIRST = .FALSE.
+      END IF
+      B = A - START
+      RETURN
+      END
+"""
+
+
+def test_save_and_data_keep_a_routines_own_names_from_one_step_point_to_the_next():
+    # X = 1 + t: F's total is 1, 3, 6, 10, 15 (SAVE'd, 0 at first, as static storage
+    # is); G takes X's first value as its start (DATA FIRST /.TRUE./ given once, not at
+    # every CALL), then B = X - 1
+    run, = amilpy.loads(SAVED, name="saved.fst").run(advice=False)
+    assert list(run["Y"]) == [1.0, 3.0, 6.0, 10.0, 15.0]
+    assert list(run["Z"]) == [0.0, 1.0, 2.0, 3.0, 4.0]
+
+
+def test_save_in_a_routine_another_calls_is_refused_with_why():
+    text = SAVED.replace("CALL F(X, Y)\n", "CALL H(X, Y)\n").replace(
+        "      SUBROUTINE G(A, B)", "      SUBROUTINE H(A, B)\n      CALL F(A, B)\n"
+        "      RETURN\n      END\n      SUBROUTINE G(A, B)")
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text, name="saved.fst")
+    said = err.value.render()
+    assert "saved.fst:13:15: error: TOTAL is read in SUBROUTINE F before it has a value" \
+        in said and "SAVE keeps TOTAL only where the listing CALLs F" in said, said

@@ -13,8 +13,7 @@ mark in column 6 continues one), `SUBROUTINE NAME(A1, ...)` ... `END`, `IMPLICIT
 (A-Z)` or `IMPLICIT NONE`, `REAL`, `INTEGER`, `LOGICAL` (.TRUE. is 1, .FALSE. 0) and
 `DIMENSION` declarations, the
 routine's own arrays of one subscript (`REAL XG(3)`) and `DATA` for them, `PARAMETER`
-(named constants), `SAVE` (a routine that reads nothing before assigning it keeps
-nothing from CALL to CALL: SAVE then changes no number), assignments,
+(named constants), `SAVE` (below), assignments,
 the logical IF `IF (c) statement`, the arithmetic IF `IF (e) 10, 20, 30` (forward, as
 GO TO's), block IFs with ELSE IF and ELSE, DO loops (`DO 10 I
 = 1, 3` ... `10 CONTINUE`, or `DO I = 1, 3` ... `END DO`: the listing's own, written
@@ -39,11 +38,16 @@ every variable from one rate calculation to the next, so that value is the one t
 routine left at the last step point (`library.KEPT`; a PARAM's own at first, and the
 PARAM is then the call's variable `NAME#k.P`), or, for a weather variable, the day's
 (PENMAN's `VP = MIN(VP, SVP)`: `library.BEFORE`); the listing reads the new value.
+A routine's own name that SAVE lists (or every one, under SAVE alone), or that DATA
+gives a value the routine changes (a FIRST flag), is kept so too: read before the
+routine assigns it, it is what this CALL left at the last step point (DATA's value at
+first, else 0, as static storage starts).
 
 The listing computes in real numbers. Fortran's INTEGERs (declared, or by its implicit
 typing I to N) give the same numbers while they hold whole numbers and are not divided
 by one another: an INTEGER given any other value, or a division of two, is refused, as
-is a DATA value the routine changes (Fortran keeps it from one CALL to the next). Also
+are an array's DATA values the routine changes (Fortran keeps them from one CALL to the
+next), and a name kept so in a routine another routine CALLs. Also
 refused at its line and column, by name: a GO TO back or computed, a PARAMETER
 assigned, COMMON, an array argument assigned, LOGICAL arrays and CHARACTER,
 recursion, a RETURN before the end; and the CALLs whose Fortran meaning a PROCEDURAL
@@ -57,6 +61,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, replace
+from dataclasses import field as dataclass_field
 
 from ..diagnostics import Diagnostic, Span
 from ..library import BEFORE, KEPT
@@ -117,6 +122,9 @@ class Subroutine:
     kind: str = "SUBROUTINE"  # or "FUNCTION"
     # the arguments that are arrays (REAL X(N), X(*)): a CALL gives an array's name
     arrays: frozenset[str] = frozenset()
+    # the routine's own names it keeps from CALL to CALL (SAVE, or DATA of a value it
+    # changes), with their first values (DATA's, else 0)
+    kept: dict[str, float] = dataclass_field(default_factory=dict)
 
     @property
     def label(self) -> str:
@@ -183,6 +191,9 @@ def _data(text: str, sizes: dict[str, int]) -> list[str]:
                 targets.append(name if sub is None else f"{name}({sub})")
         got = []
         for v in _split(values):
+            # (.TRUE. and .FALSE. are 1 and 0, as LOGICAL variables are read)
+            v = re.sub(r"\.TRUE\.", "1.", re.sub(r"\.FALSE\.", "0.", v, flags=re.I),
+                       flags=re.I)
             m = re.fullmatch(rf"(?:(\d+)\s*\*\s*)?({_NUMBER})", v.replace(" ", ""))
             if m is None:
                 raise ValueError(v)
@@ -306,6 +317,8 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
     executable: list = []
     stops: set[int] = set()  # the lines of STOPs (read as TERMTs)
     array_params: set[str] = set()  # the arguments that are arrays
+    saved: set[str] = set()  # the names SAVE lists ("*": every one)
+    data_values: dict[str, float] = {}  # the values DATA gives to scalars
 
     def refuse(what: str, where: Span, instead: str) -> None:
         nonlocal bad
@@ -400,8 +413,11 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
                        "declared before")
                 continue
             for line in lines:
-                data.setdefault(line.split("=")[0].split("(")[0].strip().upper(),
-                                (k + 1, "DATA"))
+                target, value = (x.strip() for x in line.split("="))
+                data.setdefault(target.split("(")[0].upper(), (k + 1, "DATA"))
+                if "(" not in target:  # (a scalar's first value, if the routine keeps it)
+                    data_values[target.upper()] = float(value.replace("D", "E")
+                                                        .replace("d", "e"))
             executable.append((k, col, "; ".join(lines)))
             continue
         constants = _PARAMETER.match(code)
@@ -416,10 +432,12 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
                 data.setdefault(c.split("=")[0].strip().upper(), (k + 1, "PARAMETER"))
             executable.append((k, col, "; ".join(items)))
             continue
-        if _SAVE.match(code):
+        saves = _SAVE.match(code)
+        if saves:
             # (what SAVE keeps matters only for a name read before the routine assigns
-            # it, which is refused as read before it has a value; or a DATA value the
-            # routine changes, refused too: SAVE changes nothing the subset runs)
+            # it: `Subroutine.kept`)
+            listed = saves.group(1).strip()
+            saved |= {n for n, _ in _declared(listed)} if listed else {"*"}
             continue
         if _RETURN.match(code):
             if any(not _RETURN.match(c) for _, _, c, _ in body[i + 1:]):
@@ -526,11 +544,33 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
     body_nodes = tuple(statements)
     fault = _typing(body_nodes, declared, integers, real_all, none, routine,
                     functions) or \
-        _data_kept(body_nodes, data, routine)
+        _data_kept(body_nodes, data, routine, data_values)
     if fault is not None:
         errors.append(fault)
         return None
-    return Subroutine(name, params, body_nodes, span, kind, frozenset(array_params))
+    # the names the routine keeps from one CALL to the next: those SAVE names, and a
+    # scalar DATA gives a value the routine changes (Fortran keeps it so); such a DATA
+    # value is then the first, not one given at every CALL
+    changed = {n.targets[0] for st in body_nodes for n in ast.walk(st)
+               if isinstance(n, ast.Assign) and n.targets[0] in data_values
+               and n.span.line != data[n.targets[0]][0]}
+    if changed:
+        body_nodes = tuple(_without_data(body_nodes, {n: data[n][0] for n in changed}))
+    kept = {n: data_values.get(n, 0.0) for n in _locals(body_nodes, params)
+            if "*" in saved or n in saved or n in changed}
+    return Subroutine(name, params, body_nodes, span, kind, frozenset(array_params), kept)
+
+
+def _locals(body, params) -> set[str]:
+    """The names a routine's body assigns that are not its arguments."""
+    return {n for st in body for node in ast.walk(st) if isinstance(node, ast.Assign)
+            for n in node.targets} - set(params)
+
+
+def _without_data(body, lines: dict[str, int]) -> list:
+    """The body without the assignments DATA made of these names (at these lines)."""
+    return [ast.with_bodies(st, lambda b: _without_data(b, lines)) for st in body
+            if not (isinstance(st, ast.Assign) and lines.get(st.targets[0]) == st.span.line)]
 
 
 def _typing(body, declared: set[str], integers: set[str], real_all: bool, none: bool,
@@ -602,12 +642,14 @@ def _typing(body, declared: set[str], integers: set[str], real_all: bool, none: 
     return None
 
 
-def _data_kept(body, data: dict[str, tuple[int, str]], routine: str) -> Diagnostic | None:
-    """A name DATA gives a value that the routine also assigns keeps its last value
-    from call to call in Fortran (as SAVE would): refused; a PARAMETER assigned is no
-    Fortran."""
+def _data_kept(body, data: dict[str, tuple[int, str]], routine: str,
+               scalars: dict[str, float]) -> Diagnostic | None:
+    """An array DATA gives values that the routine also assigns keeps its last values
+    from call to call in Fortran (as SAVE would): refused (a scalar is kept:
+    `Subroutine.kept`); a PARAMETER assigned is no Fortran."""
     for node in (n for st in body for n in ast.walk(st)):
-        if not (isinstance(node, ast.Assign) and node.targets[0] in data):
+        if not (isinstance(node, ast.Assign) and node.targets[0] in data) or \
+                node.targets[0] in scalars:
             continue
         line, which = data[node.targets[0]]
         if node.span.line == line:
@@ -821,15 +863,26 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
                 "pass the value in a variable of its own"))
             return []
         params = set(sub.params)
-        unknown = sorted((n, span) for n, span in reads.items() if n not in params)
+        # (a name the routine keeps, SAVE or DATA, read before the routine assigns it:
+        # the value this CALL left at the last step point; a routine's CALL of another
+        # has no step points of its own, so there it is refused as any other)
+        saved = {n for n in reads if n in sub.kept and not stack}
+        unknown = sorted((n, span) for n, span in reads.items()
+                         if n not in params and n not in saved)
         if unknown:
             n, span = unknown[0]
             errors.append(Diagnostic(
                 f"{n} is read in {sub.label} before it has a value (its names are "
-                "its own)", span, f"pass {n} as an argument, or give it a value before"))
+                "its own)", span, f"pass {n} as an argument, or give it a value before"
+                + (f" (SAVE keeps {n} only where the listing CALLs {sub.name})"
+                   if n in sub.kept else "")))
             return []
         local = {n: f"{st.name}#{k}.{n}" for n in assigned - params}
         names |= local
+        for n in sorted(saved):
+            kept.append((n, local[n], ast.Call(KEPT, (
+                ast.Num(sub.kept[n], st.span, repr(sub.kept[n])),
+                ast.Name(local[n], st.span)), st.span)))
         body = tuple(_rename(s, names, values) for s in sub_body)
         # (each changed variable starts from its value before the CALL, computed
         # outside the PROCEDURAL: library's BEFORE and KEPT)
