@@ -606,3 +606,33 @@ def test_an_arithmetic_if_jumps_by_the_sign_of_its_expression():
 """, fintim=3.0)
     assert list(run["Y"]) == [-1.0, 0.0, 1.0, 1.0]
     assert run.events[0].switch.startswith("X - 2. < 0. at line 11")
+
+
+def test_fatalerr_stops_the_run_saying_its_module_and_message():
+    # TTUTIL's FATALERR(MODULE, MESSAGE) says both and stops the program: here where
+    # X = TIME passes 1.2 (the step point 1.5, DELT 0.5), the text from a CHARACTER name
+    # given once and a literal with a doubled quote; the rows before it are kept
+    sub = SUB.format(body="      CHARACTER*20 MODULE\n      MODULE = 'F'\n"
+                          "      IF (A .GT. 1.2) CALL FATALERR (MODULE, 'A > 1.2: it''s "
+                          "too large')\n      B = 2.*A\n")
+    text = ("TITLE T\nX = INTGRL(0., 1.)\nCALL F(X, Y)\nTIMER FINTIM = 3., DELT = 0.5\n"
+            "TRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT Y\nEND\nSTOP\n" + sub)
+    run, = amilpy.loads(text, name="f.fst").run(advice=False)
+    assert run.status == "stopped" and "FATALERR in F: A > 1.2: it's too large (CALL " \
+        "FATALERR in SUBROUTINE F at line 13)" in run.message, run.message
+    assert list(run.t) == [0.0, 0.5, 1.0, 1.5] and list(run["Y"]) == [0.0, 1.0, 2.0, 3.0]
+
+
+@pytest.mark.parametrize("body, where, words", [
+    ("      CHARACTER*8 A\n      B = 1.\n", "11:7",
+     "A in SUBROUTINE F: a CHARACTER argument is not supported"),
+    ("      CHARACTER(LEN=*) :: M\n      B = A\n", "11:7",
+     "a CHARACTER declaration of Fortran 90's form"),
+    ("      CHARACTER M*8\n      M = 'X'\n      Q = M\n      B = A\n", "13:11",
+     "M is CHARACTER (a text) in SUBROUTINE F"),
+    ("      CALL FATALERR('F', M)\n      B = A\n", "11:7",
+     "FATALERR's M (in SUBROUTINE F): not a text given before"),
+])
+def test_texts_other_than_fatalerrs_messages_are_refused(body, where, words):
+    message = _fault(SUB.format(body=body))
+    assert f"f.fst:{where}: error: " in message and words in message, message

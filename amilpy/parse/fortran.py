@@ -23,7 +23,9 @@ the listing or in a routine is written out as a CALL of F before the statement t
 holds it, with F's value its last argument: `expand_functions`), GO TO forward with
 its labels (written out as IF blocks, as the ACSL form's: parse/jumps.py), intrinsics
 as the listing has them, `RETURN` as the last statement, and `STOP` or `STOP 'text'`
-(read as a TERMT: the run stops where it is reached, saying the text), and array
+(read as a TERMT: the run stops where it is reached, saying the text), TTUTIL's `CALL
+FATALERR(MODULE, MESSAGE)` (likewise, saying both) with `CHARACTER*20 M` texts given
+once in quotes for it, and array
 arguments (`REAL MNDAT(NH)`: the CALL gives the name of one of the listing's ARRAYs,
 whose elements the body reads). An argument the body assigns is an output (the call
 must give a name there); one it only reads is an input and stands for the call's
@@ -49,7 +51,8 @@ by one another: an INTEGER given any other value, or a division of two, is refus
 are an array's DATA values the routine changes (Fortran keeps them from one CALL to the
 next), and a name kept so in a routine another routine CALLs. Also
 refused at its line and column, by name: a GO TO back or computed, a PARAMETER
-assigned, COMMON, an array argument assigned, LOGICAL arrays and CHARACTER,
+assigned, COMMON, an array argument assigned, LOGICAL arrays, CHARACTER other than
+FATALERR's texts,
 recursion, a RETURN before the end; and the CALLs whose Fortran meaning a PROCEDURAL
 cannot have: a name given both as a value the routine reads and as an argument it
 assigns, one given to two assigned arguments, a PARAM a routine changes that the
@@ -89,6 +92,15 @@ _CONTINUE = re.compile(r"CONTINUE\s*$", re.I)
 _DO_LABEL = re.compile(r"DO\s+(\d+)", re.I)  # a labelled DO's label
 _RETURN = re.compile(r"RETURN\s*$", re.I)
 # STOP, STOP 'text' or STOP 123, alone or as a logical IF's statement
+# CHARACTER*20 A, B*8, C*(*) and CHARACTER A*80: texts (for TTUTIL's FATALERR)
+_CHARACTER = re.compile(r"CHARACTER\s*(?:\*\s*(?:\d+|\(\s*\*\s*\)))?\s+([A-Za-z].*)$",
+                        re.I)
+_TEXT_ITEM = re.compile(r"([A-Za-z]\w*)\s*(?:\*\s*(?:\d+|\(\s*\*\s*\)))?")
+_QUOTED = r"'(?:[^']|'')*'"
+_TEXT_ASSIGN = re.compile(rf"([A-Za-z]\w*)\s*=\s*({_QUOTED})$")
+# TTUTIL's FATALERR(MODULE, MESSAGE): says both and stops the program
+_FATALERR = re.compile(rf"((?:IF\s*\(.*\)\s*)?)CALL\s+FATALERR\s*\(\s*({_QUOTED}|[A-Za-z]\w*)"
+                       rf"\s*,\s*({_QUOTED}|[A-Za-z]\w*)\s*\)$", re.I)
 _STOP = re.compile(r"((?:IF\s*\(.*\)\s*)?)STOP\b\s*('(?:[^']|'')*'|\d+)?\s*$", re.I)
 # columns 73-80 of a punched card: blank, or a sequence number (letters, then digits)
 _SEQUENCE = re.compile(r"[ \t]*(?:[A-Za-z]{0,6}[0-9]{1,8}[ \t]*)?")
@@ -96,7 +108,7 @@ _SEQUENCE = re.compile(r"[ \t]*(?:[A-Za-z]{0,6}[0-9]{1,8}[ \t]*)?")
 # Fortran's arithmetic IF: IF (e) l1, l2, l3
 _ARITHMETIC_IF = re.compile(r"IF\s*\((.*)\)\s*(\d+)\s*,\s*(\d+)\s*,\s*(\d+)\s*$", re.I)
 _REFUSED = [
-    (re.compile(r"(CHARACTER)\b", re.I), "{0} variables in a subroutine"),
+    (re.compile(r"(CHARACTER)\b", re.I), "a {0} declaration of Fortran 90's form"),
     (re.compile(r"GO\s*TO\s*\(", re.I), "a computed GO TO"),
     (re.compile(r"(COMMON|EQUIVALENCE|EXTERNAL|"
                 r"FUNCTION|ENTRY|READ|WRITE|FORMAT|OPEN|CLOSE)\b", re.I),
@@ -318,6 +330,8 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
     stops: set[int] = set()  # the lines of STOPs (read as TERMTs)
     array_params: set[str] = set()  # the arguments that are arrays
     saved: set[str] = set()  # the names SAVE lists ("*": every one)
+    texts: dict[str, str | None] = {}  # CHARACTER names and their texts
+    fatals: set[int] = set()  # the lines of FATALERR's CALLs (read as TERMTs)
     data_values: dict[str, float] = {}  # the values DATA gives to scalars
 
     def refuse(what: str, where: Span, instead: str) -> None:
@@ -444,6 +458,48 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
                 refuse(f"RETURN before the end of {routine}: not supported", where,
                        "write the statements after it in the ELSE of an IF")
             continue
+        chars = _CHARACTER.match(code)
+        if chars:
+            # (texts: the messages TTUTIL's FATALERR says; never a number)
+            items = _split(chars.group(1))
+            if not all(_TEXT_ITEM.fullmatch(it) for it in items):
+                refuse(f"CHARACTER {chars.group(1)}: not a declaration the subset reads",
+                       where, "write CHARACTER*20 NAME or CHARACTER NAME*20")
+                continue
+            for it in items:
+                n = _TEXT_ITEM.fullmatch(it).group(1).upper()
+                if n in params:
+                    refuse(f"{n} in {routine}: a CHARACTER argument is not supported",
+                           where, "give the text in the routine: NAME = 'text'")
+                texts.setdefault(n, None)
+            continue
+        given_text = _TEXT_ASSIGN.match(code)
+        if given_text and given_text.group(1).upper() in texts:
+            n = given_text.group(1).upper()
+            if texts[n] is not None or label:
+                refuse(f"{n} = {given_text.group(2)} (in {routine}): a text given twice, "
+                       "or at a label, is not supported", where,
+                       "give each text its own CHARACTER name, once")
+                continue
+            texts[n] = given_text.group(2)[1:-1].replace("''", "'")
+            continue
+        fatal = _FATALERR.match(code)
+        if fatal is not None:
+            said = []
+            for arg in fatal.group(2, 3):
+                if arg.startswith("'"):
+                    said.append(arg[1:-1].replace("''", "'"))
+                elif texts.get(arg.upper()) is not None:
+                    said.append(texts[arg.upper()])
+                else:
+                    refuse(f"FATALERR's {arg} (in {routine}): not a text given before",
+                           where, "give FATALERR a text in quotes, or a CHARACTER name "
+                           "given one before the CALL")
+                    break
+            else:
+                text = f"FATALERR in {said[0]}: {said[1]}".replace("'", "''")
+                code = fatal.group(1) + f"TERMT(1.0, '{text}')"
+                fatals.add(k + 1)
         stop = _STOP.match(code)
         if stop is not None:
             # (Fortran's STOP ends the program: the run ends there, saying the
@@ -519,12 +575,24 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
     allowed = (ast.Assign, ast.If, ast.Loop, ast.Declare, ast.SubroutineCall,
                ast.Termt)  # (a STOP's)
 
-    def named(st):  # (a STOP's TERMT says it is the routine's STOP)
+    def named(st):  # (a STOP's TERMT says it is the routine's STOP, or FATALERR)
         if isinstance(st, ast.Termt) and st.span.line in stops:
             return replace(st, written=f"STOP in {routine}")
+        if isinstance(st, ast.Termt) and st.span.line in fatals:
+            return replace(st, written=f"CALL FATALERR in {routine}")
         return ast.with_bodies(st, lambda body: [named(b) for b in body])
 
     statements = [named(st) for st in statements]
+    text_read = next((n for st in statements for n in ast.walk(st)
+                      if (isinstance(n, ast.Name) and n.name in texts) or
+                      (isinstance(n, ast.Assign) and n.targets[0] in texts)), None)
+    if text_read is not None:
+        n = text_read.name if isinstance(text_read, ast.Name) else text_read.targets[0]
+        errors.append(Diagnostic(
+            f"{n} is CHARACTER (a text) in {routine}: the subset's texts are FATALERR's "
+            "messages, given once in quotes", text_read.span,
+            f"compute with numbers; give {n} its text once, NAME = 'text'"))
+        return None
     # (a line read in other words than written -- a statement continued onto it joined,
     # DATA and PARAMETER as assignments, an arithmetic IF as GO TOs, a label -- has no
     # text of its own for the messages to quote: its spans keep line and column only)
