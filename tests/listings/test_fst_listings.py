@@ -260,3 +260,27 @@ def test_lingra_is_its_euler_recurrence_to_the_last_bit():
         assert list(run.t) == [r["TIME"] for r in rows]
         for name in names:
             assert np.array_equal(run[name], [r[name] for r in rows]), name
+
+
+def test_water_stress_intercrops_listing_is_the_euler_recurrence():
+    """Water-Stress_Intercrops.fst (SOURCES.md F8: F1's repository; maize and pigeonpea
+    in two canopy layers and a two-layer tipping-bucket soil) as written, on the
+    synthetic TZ2.018: every row of twelve columns to 1e-12 of its column's scale
+    against a hand translation written without amilpy (references/
+    water_stress_intercrops.py); its water balance closes; both crops meet stress."""
+    published_copy(HERE, "intercrops_water_stress.fst",
+                   "7c2047bc6fa78d32207ebfcf680d7f9eeec879ab5f298d1e1d0b43076cbf0a39")
+    from listings.references import water_stress_intercrops
+
+    columns = ["WTOTM", "WTOTL", "WSOILL1", "WSOILL2", "WTRANSP", "WPERC", "WRAIN", "IABSM",
+               "IABSL", "RATIOACTPOTM", "RATIOACTPOTL", "BALANCE"]
+    run, = amilpy.load(HERE / "intercrops_water_stress.fst").run(outputs=columns,
+                                                                 advice=False)
+    rows = water_stress_intercrops.run(str(HERE.parent / "weather"))
+    assert run.ok and run.method == "RECT" and list(run.t) == [r["TIME"] for r in rows]
+    for column in columns:
+        ref = np.array([r[column] for r in rows])
+        scale = np.max(np.abs(ref)) or 1.0
+        assert np.max(np.abs(run[column] - ref)) <= 1e-12 * scale, column
+    assert np.max(np.abs(run["BALANCE"])) < 1e-9
+    assert run["RATIOACTPOTM"].min() < 0.01 and run["RATIOACTPOTL"][1:].min() < 1.0
