@@ -32,7 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .pytree import clone, const_value, fold, function, locate, namespace, nodes, place
+from ..library.templates import clone
+from .pytree import const_value, fold, function, locate, namespace, nodes, place
 
 _ONE = py.Constant(1.0)
 

@@ -265,25 +265,6 @@ def locate(tree: py.AST) -> py.AST:
     return tree
 
 
-def clone(node):
-    """A copy of a syntax tree, its nodes' fields only (no positions, no notes): far
-    cheaper than copy.deepcopy, which would also copy the IR each node remembers
-    (`amil_src`). An operator or a context (Add, Load: no fields, no position) is
-    the same node in both, as the parser shares them (half the nodes of the 1000-mass
-    chain's rhs)."""
-    if isinstance(node, py.AST):
-        kind = type(node)
-        if not kind._fields and not kind._attributes:
-            return node
-        new = kind()
-        for name in node._fields:
-            setattr(new, name, clone(getattr(node, name, None)))
-        return new
-    if isinstance(node, list):
-        return [clone(x) for x in node]
-    return node
-
-
 def function(name: str, args: tuple[str, ...], body: list[py.stmt]) -> py.FunctionDef:
     return py.FunctionDef(
         name=name,

@@ -26,7 +26,8 @@ from types import FunctionType
 
 import numpy as np
 
-from .pytree import clone, function, place, vector_namespace
+from ..library.templates import clone
+from .pytree import function, place, vector_namespace
 
 MIN_STATEMENTS = 400  # below this the scalar code is as fast (measured on the chain)
 MIN_PER_GROUP = 12  # statements per group on average, else nothing repeats enough

@@ -12,7 +12,6 @@ gives a fresh copy of the parsed Python tree for the compiler to fill in.
 from __future__ import annotations
 
 import ast as py
-import copy
 from functools import cache
 
 from ..diagnostics import Span
@@ -41,8 +40,29 @@ def _parsed(text: str) -> py.expr:
 
 
 def tree(text: str) -> py.expr:
-    """A fresh copy of the template's Python tree (the caller may change it)."""
-    return copy.deepcopy(_parsed(text))
+    """A fresh copy of the template's Python tree (the caller may change it), with no
+    positions of its own: the generated code's are those of the statement it stands
+    in (`codegen.pytree.place`)."""
+    return clone(_parsed(text))
+
+
+def clone(node):
+    """A copy of a syntax tree, its nodes' fields only (no positions, no notes): far
+    cheaper than copy.deepcopy, which would also copy the IR each node remembers
+    (`amil_src`). An operator or a context (Add, Load: no fields, no position) is
+    the same node in both, as the parser shares them (half the nodes of the 1000-mass
+    chain's rhs)."""
+    if isinstance(node, py.AST):
+        kind = type(node)
+        if not kind._fields and not kind._attributes:
+            return node
+        new = kind()
+        for name in node._fields:
+            setattr(new, name, clone(getattr(node, name, None)))
+        return new
+    if isinstance(node, list):
+        return [clone(x) for x in node]
+    return node
 
 
 def _index(name: str, prefix: str) -> int | None:
