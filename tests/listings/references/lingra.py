@@ -37,6 +37,7 @@ model, the printed ones among them (and TIME, HARV, DAHA, INCUT).
 import math
 import os
 
+from .cabo import read_cabo
 from .ttutil import AFGEN, FCNSW, INSW, LIMIT, NOTNUL, REAAND
 
 # ----------------------------------------------------------------------------
@@ -82,23 +83,9 @@ IYEAR = 1989
 
 def read_weather(folder):
     """Returns the header (lon, lat, elev, A, B) and {day: (RDD, TMMN, TMMX, VP, WN, RAIN)}."""
-    header = None
-    days = {}
-    with open(os.path.join(folder, 'NL1.989')) as f:
-        for line in f:
-            s = line.strip()
-            if not s or s.startswith('*'):
-                continue
-            fields = s.split()
-            if header is None:
-                header = tuple(float(v) for v in fields[:5])
-                continue
-            stn, year, day = int(fields[0]), int(fields[1]), int(fields[2])
-            if stn != 1 or year != IYEAR:
-                continue  # the -999 rows hold quality codes, not weather
-            irr, tmn, tmx, vp, wn, rain = (float(v) for v in fields[3:9])
-            days[day] = (irr * 1000.0, tmn, tmx, vp, wn, rain)
-    return header, days
+    header, days = read_cabo(os.path.join(folder, 'NL1.989'))
+    return header, {d: tuple(v[k] for k in ('RDD', 'TMMN', 'TMMX', 'VP', 'WN', 'RAIN'))
+                    for d, v in days.items()}
 
 
 # ----------------------------------------------------------------------------

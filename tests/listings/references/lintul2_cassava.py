@@ -13,6 +13,7 @@ recomputed. The row is written, FINISH is checked, then the Euler step is taken.
 import math
 import os
 
+from .cabo import read_cabo
 from .ttutil import AFGEN, INSW, LIMIT, NOTNUL, REAAND, REANOR
 
 # ----------------------------------------------------------------------------
@@ -58,32 +59,13 @@ ZERO = 0.0
 # ----------------------------------------------------------------------------
 # Weather (CABO format)
 # ----------------------------------------------------------------------------
-def read_cabo(path):
-    rows = {}
-    header_seen = False
-    with open(path) as f:
-        for line in f:
-            s = line.strip()
-            if not s or s.startswith("*"):
-                continue
-            parts = s.split()
-            if not header_seen:
-                header_seen = True  # lon, lat, elev, A, B
-                continue
-            day = int(parts[2])
-            irr, tmin, tmax, vp, wn, rain = (float(v) for v in parts[3:9])
-            rows[day] = dict(RDD=irr * 1000.0, TMMN=tmin, TMMX=tmax, VP=vp,
-                             WN=wn, RAIN=rain)
-    return rows
-
-
 YEARS: dict[str, tuple[dict, dict]] = {}  # folder -> (2013, 2014) days
 
 
 def read_years(folder):
     if folder not in YEARS:
-        YEARS[folder] = (read_cabo(os.path.join(folder, "SVK6.013")),
-                         read_cabo(os.path.join(folder, "SVK6.014")))
+        YEARS[folder] = (read_cabo(os.path.join(folder, "SVK6.013"))[1],
+                         read_cabo(os.path.join(folder, "SVK6.014"))[1])
     return YEARS[folder]
 
 

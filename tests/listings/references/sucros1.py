@@ -23,6 +23,7 @@ shares (the two files have the same Fortran).
 """
 import os
 
+from .cabo import read_cabo
 from .sucros_routines import GLA, SUBEAI, TOTASS, WGAUSS3, WGAUSS5
 from .ttutil import AFGEN, INSW, LIMIT, NOTNUL
 
@@ -113,30 +114,11 @@ PRDEL = 5.0  # output interval in FSE; this reference writes every time point
 
 
 def read_weather(folder):
-    """Returns (lon, lat, elev, A, B) and {day: (RDD, TMMN, TMMX, VP, WN, RAIN)}.
-
-    Comment lines start with '*'; the first non-comment line is the header
-    (longitude, latitude, elevation, A, B).  Data rows whose station number is
-    not ISTN (the file has two '-999' rows for days 1 and 2) are skipped."""
-    fname = f'{CNTR}{ISTN}.{str(IYEAR)[1:]}'
-    path = os.path.join(folder, fname)
-    header = None
-    days = {}
-    with open(path) as f:
-        for line in f:
-            s = line.strip()
-            if not s or s.startswith('*'):
-                continue
-            fields = s.split()
-            if header is None:
-                header = tuple(float(v) for v in fields[:5])
-                continue
-            stn, year, day = int(fields[0]), int(fields[1]), int(fields[2])
-            if stn != ISTN or year != IYEAR:
-                continue
-            irr, tmn, tmx, vp, wn, rain = (float(v) for v in fields[3:9])
-            days[day] = (irr * 1000.0, tmn, tmx, vp, wn, rain)
-    return header, days
+    """Returns (lon, lat, elev, A, B) and {day: (RDD, TMMN, TMMX, VP, WN, RAIN)} of
+    NLD1.990 (its two '-999' rows, for days 1 and 2, are codes, no days)."""
+    header, days = read_cabo(os.path.join(folder, f'{CNTR}{ISTN}.{str(IYEAR)[1:]}'))
+    return header, {d: tuple(v[k] for k in ('RDD', 'TMMN', 'TMMX', 'VP', 'WN', 'RAIN'))
+                    for d, v in days.items()}
 
 
 # ----------------------------------------------------------------------------

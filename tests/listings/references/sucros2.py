@@ -14,6 +14,7 @@ state(t+DELT) = state(t) + DELT*rate(t) is taken.
 import math
 import os
 
+from .cabo import read_cabo
 from .sucros_routines import GLA, SUBEAI, TOTASS, FortranStop
 from .ttutil import AFGEN, INSW, LIMIT, NOTNUL
 
@@ -136,25 +137,8 @@ IYEAR = 1990
 
 
 def read_weather(folder):
-    path = os.path.join(folder, f'NLD{ISTN}.{str(IYEAR)[1:]}')
-    header = None
-    days = {}
-    with open(path) as f:
-        for line in f:
-            if not line.strip() or line.lstrip().startswith('*'):
-                continue
-            parts = line.split()
-            if header is None:
-                header = [float(v) for v in parts[:5]]
-                continue
-            if int(float(parts[0])) != ISTN:
-                continue
-            doy = int(float(parts[2]))
-            irr, tmn, tmx, vp, wn, rain = (float(v) for v in parts[3:9])
-            days[doy] = dict(RDD=irr * 1000., TMMN=tmn, TMMX=tmx, VP=vp,
-                             WN=wn, RAIN=rain)
-    LONG, LAT, ELEV = header[0], header[1], header[2]
-    return dict(LONG=LONG, LAT=LAT, ELEV=ELEV, days=days)
+    header, days = read_cabo(os.path.join(folder, f'NLD{ISTN}.{str(IYEAR)[1:]}'))
+    return dict(LONG=header[0], LAT=header[1], ELEV=header[2], days=days)
 
 
 # ---------------------------------------------------------------------------

@@ -8,24 +8,10 @@ at each day all rates from the states, the row, then state += rate*DELT; the wea
 import math
 import os
 
+from .cabo import read_cabo
 from .ttutil import AFGEN as afgen
 from .ttutil import INSW as insw
 from .ttutil import NOTNUL as notnul
-
-
-def read_cabo(path):
-    rows, hdr = {}, False
-    for line in open(path):
-        s = line.strip()
-        if not s or s.startswith("*"):
-            continue
-        if not hdr:  # station line: lon lat elev A B
-            hdr = True
-            continue
-        f = s.split()
-        rows[int(f[2])] = dict(RDD=float(f[3]) * 1000.0, RAIN=float(f[8]))
-    return rows
-
 
 # ---- parameters (active, uncommented lines of the listing) ----
 RUEM = 1.435
@@ -56,7 +42,7 @@ WSOILL1I, WSOILL2I = 126., 294.
 
 
 def run(folder):
-    W = read_cabo(os.path.join(folder, "TZ2.018"))
+    W = read_cabo(os.path.join(folder, "TZ2.018"))[1]
     SOILvolrootL1 = 10. * 10. * RdepthM
     WSOILminL1, WSOILmaxL1 = SOILvolrootL1 * WiltingP, SOILvolrootL1 * FieldCap
     SOILvolrootL2 = 10. * 10. * (RdepthL - RdepthM)
