@@ -329,8 +329,17 @@ class Run:
         return self.status != Status.FAILED
 
     def sample(self, name: str) -> tuple[np.ndarray, np.ndarray]:
-        """All recorded instants and values of one variable."""
-        return self.times, self.values[name.upper()]
+        """Every recorded instant and one variable's values there: the OUTDEL grid and
+        the rows between (a crossing's instant, a PRDEL row, an observation's), as a
+        figure draws them."""
+        key = name.upper()
+        if key == "TIME":
+            return self.times, self.times
+        if key in self.values:
+            return self.times, self.values[key]
+        if key in self.constants:
+            return self.times, np.full(self.times.shape, self.constants[key])
+        raise KeyError(f"{name} is not a variable of this run")
 
     def __repr__(self) -> str:
         return (f"<Run {self.label!r}: {self.status}, {len(self.times)} rows, "

@@ -231,3 +231,31 @@ def test_the_time_axis_says_the_form_s_unit(tmp_path):
         spec = figure_specs(model.run(advice=False)[0])[0]
         labels.append(_x_label(spec, name_notes(model.ir)))
     assert labels == ["TIME [s]", "TIME", "TIME [d]"]
+
+
+BALL = """TITLE A BOUNCING BALL
+V = INTGRL(0.0, -9.81)
+H = INTGRL(1.0, V)
+EVENT
+ZEROCONDITION H
+NEWVALUE V = -0.8*V
+NEWVALUE H = 0.0
+ENDEVENT
+TIMER FINTIM = 1.0, OUTDEL = 0.1
+OUTPUT H
+END
+"""
+
+
+def test_a_figure_draws_the_instants_between_grid_rows_where_the_ball_lands():
+    # the impact at t = sqrt(2/9.81) = 0.4515 s lies between the OUTDEL rows 0.4 and 0.5:
+    # the line touches the floor there, as the located event says, not at 0.16 m (the
+    # grid's lowest row), which the figure drew before
+    run, = amilpy.loads(BALL, "ball.fst").run(advice=False)
+    line, = draw([run], figure_specs(run)[0]).axes[0].get_lines()
+    t, h = line.get_xdata(), line.get_ydata()
+    impact = np.sqrt(2.0 / 9.81)
+    k = int(np.argmin(np.abs(t - impact)))
+    assert t[k] == pytest.approx(impact, abs=1e-9) and abs(h[k]) < 1e-9
+    assert min(run["H"]) > 0.15  # (the grid alone never comes near the floor)
+    assert set(run.t) <= set(t)

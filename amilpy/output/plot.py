@@ -166,11 +166,14 @@ def draw(runs: Sequence[Run], spec: FigureSpec, labels: Sequence[str] | None = N
     for k, run in enumerate(runs):
         if spec.x is not None and spec.x not in run:
             continue  # (another listing's run, overlaid, without the X variable)
-        xs = run.t if spec.x is None else run[spec.x]
-        part = _window_index(run.t, spec.window)
+        # (every recorded row, not the OUTDEL grid's alone: a crossing's instant is one,
+        # where a bouncing ball touches the floor between two grid rows)
+        xs = run.times if spec.x is None else run.sample(spec.x)[1]
+        part = _window_index(run.times, spec.window)
         for n in names:
             if n in run:
-                data[k, n] = (np.asarray(xs[part], float), np.asarray(run[n][part], float))
+                data[k, n] = (np.asarray(xs[part], float),
+                              np.asarray(run.sample(n)[1][part], float))
     scales = {n: _scale([v for (k, m), (_, v) in data.items() if m == n]) for n in names}
     groups = _axis_groups(names, scales, subplots)
     fig = into if into is not None else _figure(show, figsize=figure_size(len(groups), height))
@@ -468,7 +471,7 @@ def plot_run(run: Run, names: Sequence[str], ax=None, label: str | None = None):
     if label is None and not (run.label.startswith("RUN ") and run.label[4:].isdigit()):
         label = run.label
     for name in names or [n for n in run.values if "#" not in n]:
-        ax.plot(run.t, run[name], label=name.upper() + (f" ({label})" if label else ""))
+        ax.plot(*run.sample(name), label=name.upper() + (f" ({label})" if label else ""))
     ax.set_xlabel("TIME [s]")
     # (the caller's axes made their title's text before: it is told too)
     ax.set_title(W.shorten(run.titles[0] if run.titles else run.label, TITLE_CHARS),
