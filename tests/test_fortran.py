@@ -636,3 +636,33 @@ def test_fatalerr_stops_the_run_saying_its_module_and_message():
 def test_texts_other_than_fatalerrs_messages_are_refused(body, where, words):
     message = _fault(SUB.format(body=body))
     assert f"f.fst:{where}: error: " in message and words in message, message
+
+
+@pytest.mark.parametrize("method", ["RECT", "RKS"])
+@pytest.mark.parametrize("body, stop_at", [
+    # an ELSE's FATALERR: where the test before it is false (A = 1 + t > 3.5 first at
+    # t = 2.5: the step point 3 on RECT, located on RKS)
+    ("      IF (A .LT. 3.5) THEN\n         B = A\n      ELSE\n         B = 0.\n"
+     "         CALL FATALERR ('F', 'A too large')\n      END IF\n", {"RECT": 3.0, "RKS": 2.5}),
+    # an ELSE IF's: never, the test before it holds wherever its own does
+    ("      IF (A .GT. 0.) THEN\n         B = A\n      ELSE IF (A .GT. 2.5) THEN\n"
+     "         B = 0.\n         STOP 'never'\n      ELSE\n         B = -A\n      END IF\n",
+     {"RECT": None, "RKS": None}),
+    # a STOP on a value known from the start (a PARAM checked): at t0, on every route
+    ("      B = A\n      IF (Q .GT. 0.5) STOP 'Q too large'\n", {"RECT": 0.0, "RKS": 0.0}),
+])
+def test_a_stop_is_reached_where_its_branch_is_taken(body, stop_at, method):
+    """A STOP or FATALERR in an IF's branch stops the run where that branch is taken:
+    its own test true and those before it false (an ELSE's FATALERR never stopped the
+    run, and an ELSE IF's ignored the tests before it); one that holds from the start
+    stops it at t0 on the located routes too."""
+    sub = SUB.format(body=body).replace("(A, B)", "(A, B, Q)")
+    text = ("TITLE T\nX = INTGRL(1., 1.)\nCALL F(X, Y, Q)\nPARAM Q = 1.\n"
+            "TIMER FINTIM = 4., DELT = 1., OUTDEL = 1.\nPRINT Y\nEND\nSTOP\n" + sub)
+    run, = amilpy.loads(text, name="f.fst").run(method=method, advice=False)
+    want = stop_at[method]
+    if want is None:
+        assert run.status == "finished" and run.t_end == 4.0
+    else:
+        assert run.status == "stopped" and run.t_end == pytest.approx(want, abs=1e-9), \
+            (run.status, run.t_end, run.message)

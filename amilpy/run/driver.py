@@ -223,6 +223,18 @@ class _Run:
         located EVENT crossing ends the integration there: its NEWVALUEs run, and the
         run goes on from the new values (the row of that instant after them)."""
         plan, integ, rec = self.plan, self.integ, self.rec
+        if not plan.step_point:
+            # a TERMT that holds where the run starts (a routine's STOP on a PARAM's
+            # value checked, `IF (SLA .LE. 0.) STOP`) stops it there, as in step-point
+            # mode: the condition halts the run wherever it holds
+            held = next((k for k, w in enumerate(plan.watched)
+                         if w.purpose is Purpose.TERMT and w.stops(0.0, cur.m[k])), None)
+            if held is not None:
+                w = plan.watched[held]
+                integ.events.append(Event(cur.t, w.description, w.surface, 0.0,
+                                          cur.m[held], EventKind.TERMT, w.text))
+                integ.stop_reason = held
+                return w.description
         while True:
             # (a time event's instant: the loop pauses there, its row held for after it)
             timed = not plan.step_point and bool(self.timed) and self.timed[0][0] < plan.fintim

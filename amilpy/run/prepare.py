@@ -108,7 +108,9 @@ def constant_modes(model: ir.Model, constants: dict[str, float], tables,
     for s in model.surfaces:
         if s.depends == "impulse" and not step_point:
             const_modes[s.index] = 0.0
-        if s.depends == "const":
+        if s.depends == "const" and s.purpose not in (ir.Purpose.TERMT, ir.Purpose.FINISH):
+            # (a TERMT or FINISH stays watched: one true from the start, a routine's
+            # STOP, stops the run there)
             value = evaluate_constant(model, s.expr, constants, tables, s.span)
             const_modes[s.index] = level(value) if s.kind == "level" else sign(value)
     return const_modes
