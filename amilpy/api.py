@@ -73,7 +73,7 @@ class Model:
 
         # (the code is the same however many rows a run then keeps or streams)
         opts = Options(weather_dirs=_folders(weather_dir), max_rows=DEFAULTS["max_streamed_rows"])
-        return prepare(self.ir, spec, opts, cache=self.cache).code.source
+        return prepare(self.ir, spec, opts, cache=self.cache, code_only=True).code.source
 
     def flow(self, method: str | None = None, rtol: float | None = None,
              atol: float | None = None, run: int = 0, **params: float) -> Flow:

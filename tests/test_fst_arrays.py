@@ -240,3 +240,19 @@ def test_save_in_a_routine_another_calls_is_refused_with_why():
     said = err.value.render()
     assert "saved.fst:13:15: error: TOTAL is read in SUBROUTINE F before it has a value" \
         in said and "SAVE keeps TOTAL only where the listing CALLs F" in said, said
+
+
+def test_the_command_runs_a_count_in_step_point_mode_asked_for_and_refuses_others(
+        tmp_path, capsys):
+    # (a listing with no DRIVER: `--method RECT` is what the refusal tells to write; the
+    # command compiled the listing for its default route first and refused there)
+    from amilpy.cli import main
+
+    listing = tmp_path / "count.fst"
+    listing.write_text(COUNT.replace("TRANSLATION_GENERAL DRIVER='EUDRIV'\n", ""))
+    assert main(["run", str(listing), "--method", "RECT", "--quiet", "--csv",
+                 str(tmp_path / "c.csv")]) == 0
+    rows = (tmp_path / "c.csv").read_text().splitlines()
+    assert rows[0].startswith("RUN,N,TIME,B,H") and len(rows) == 1 + 2 * 8
+    assert main(["run", str(listing), "--method", "RKS", "--quiet"]) != 0
+    assert "and METHOD RKS has none" in capsys.readouterr().err

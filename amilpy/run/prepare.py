@@ -78,13 +78,14 @@ class Prepared:
 
 
 def prepare(model: ir.Model, spec: ir.RunSpec, opts: Options | None = None,
-            cache: Cache | None = None) -> Prepared:
+            cache: Cache | None = None, code_only: bool = False) -> Prepared:
     """Constants, generated functions and plan of one run. A fault while evaluating
     the constant parts (INITIAL, fixed branches, breakpoint instants) is an
-    AmilError at the listing's line."""
+    AmilError at the listing's line. `code_only`: for the code alone (what the run
+    would refuse on its route is said when it runs)."""
     opts = opts or Options()
     cache = cache or Cache()
-    return before_run(model, lambda: _prepare(model, spec, opts, cache))
+    return before_run(model, lambda: _prepare(model, spec, opts, cache, code_only))
 
 
 def before_run(model: ir.Model, make: Callable[[], T], what=str) -> T:
@@ -157,14 +158,15 @@ def _kept_needs_step_points(model: ir.Model, method: str) -> None:
 
 
 @no_collection()
-def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> Prepared:
+def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache,
+             code_only: bool = False) -> Prepared:
     with in_file(model.path, model.source):
         timer = timer_values(spec, opts.fintim, opts.max_rows, opts.row_sink is not None)
     route, method = resolve_route(spec, opts)
     step_point = resolve_step_point(spec, opts)
     if step_point:
         timer = steppoint.timer(model, spec, timer, method)
-    else:
+    elif not code_only:
         _kept_needs_step_points(model, method)
     if model.weather and spec.weather is not None:
         spec = with_weather(model, spec, timer, opts, cache)
