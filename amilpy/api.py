@@ -94,10 +94,14 @@ class Model:
                             "integrator's steps", self.ir.path)
 
     def _specs(self, params: dict[str, float]) -> list[ir.RunSpec]:
+        from .parse.fortran import PARAMETER_OF
+
         known = set(self.ir.data_names)
         overrides = {}
         for key, value in params.items():
             name = key.upper()
+            if name not in known and PARAMETER_OF(name) in known:
+                name = PARAMETER_OF(name)  # (a PARAM a routine changes: its first value)
             if name not in known:
                 raise UsageError([Diagnostic(
                     f"{name} is not a PARAM/CONST/INCON value of this model",

@@ -128,15 +128,21 @@ def test_a_param_a_routine_counts_in_and_a_value_it_keeps_where_no_branch_sets_i
         assert list(zip(run["B"], run["H"], strict=True)) == fse_count(n0)
 
 
-def test_kept_values_need_step_points_and_a_param_read_elsewhere_is_refused():
+def test_kept_values_need_step_points_and_a_changed_param_is_read_changed_everywhere():
     for run in amilpy.loads(COUNT, name="count.fst").run(method="RKS", advice=False):
         assert not run.ok and "a routine after STOP changes N from the value it left " \
             "before" in run.message and "DRIVER = 'EUDRIV', or --method RECT" in \
             run.message, run.message
-    with pytest.raises(AmilError) as err:
-        amilpy.loads(COUNT.replace("PRINT B, H", "PRINT B, H\nZ = 2.*N"), name="count.fst")
-    assert "SUBROUTINE F changes N, a PARAM the listing reads elsewhere too" in \
-        err.value.render()
+    # (as FSE's generated code has it: the listing's N is the count from then on, in
+    # an equation, a FINISH and the rows; the PARAM its first value, set as N)
+    text = COUNT.replace("PRINT B, H", "PRINT B, H, N\nZ = 2.*N\nFINISH N > 11.5")
+    first, second = amilpy.loads(text, name="count.fst").run(advice=False)
+    assert list(first["N"]) == list(first["B"]) == [n for n, _ in fse_count(0.0)]
+    assert list(first["Z"]) == [2.0 * b for b in first["B"]]
+    assert second.status == "stopped" and list(second["N"]) == [10.0, 10.0, 11.0, 12.0]
+    # the PARAM is set from outside by its own name
+    run, _ = amilpy.loads(text, name="count.fst").run(advice=False, N=5.0)
+    assert list(run["N"])[:3] == [5.0, 5.0, 6.0]
 
 
 # PENMAN's VP = MIN(VP, SVP): a weather variable the routine changes; after the CALL the
@@ -253,6 +259,7 @@ def test_the_command_runs_a_count_in_step_point_mode_asked_for_and_refuses_other
     assert main(["run", str(listing), "--method", "RECT", "--quiet", "--csv",
                  str(tmp_path / "c.csv")]) == 0
     rows = (tmp_path / "c.csv").read_text().splitlines()
-    assert rows[0].startswith("RUN,N,TIME,B,H") and len(rows) == 1 + 2 * 8
+    # (N#PARAM: the PARAM's value, which the runs change; N is the count)
+    assert rows[0].startswith("RUN,N#PARAM,TIME,B,H") and len(rows) == 1 + 2 * 8
     assert main(["run", str(listing), "--method", "RKS", "--quiet"]) != 0
     assert "and METHOD RKS has none" in capsys.readouterr().err

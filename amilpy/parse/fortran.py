@@ -37,8 +37,9 @@ Fortran passes a variable itself: an argument the routine reads before it assign
 (LINGRA's `INCUT = INCUT + 1.`), or assigns on some paths only, starts from the
 variable's value before the CALL and gives it the new one. FSE's generated code keeps
 every variable from one rate calculation to the next, so that value is the one the
-routine left at the last step point (`library.KEPT`; a PARAM's own at first, and the
-PARAM is then the call's variable `NAME#k.P`), or, for a weather variable, the day's
+routine left at the last step point (`library.KEPT`; a PARAM's own at first: the
+listing's name is then the changed value everywhere, the PARAM `NAME#PARAM`, set from
+outside as NAME), or, for a weather variable, the day's
 (PENMAN's `VP = MIN(VP, SVP)`: `library.BEFORE`); the listing reads the new value.
 A routine's own name that SAVE lists (or every one, under SAVE alone), or that DATA
 gives a value the routine changes (a FIRST flag), is kept so too: read before the
@@ -55,8 +56,8 @@ assigned, COMMON, an array argument assigned, LOGICAL arrays, CHARACTER other th
 FATALERR's texts,
 recursion, a RETURN before the end; and the CALLs whose Fortran meaning a PROCEDURAL
 cannot have: a name given both as a value the routine reads and as an argument it
-assigns, one given to two assigned arguments, a PARAM a routine changes that the
-listing reads elsewhere too, and an argument changed from its value before in a
+assigns, one given to two assigned arguments, and an argument changed from its value
+before in a
 routine's CALL of another (where nothing keeps it).
 """
 
@@ -804,13 +805,7 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
               for n, sizes in zip(st.names, st.sizes or (), strict=False) if sizes}
     data_names = {it.name for st in ast.every_statement(statements)
                   if isinstance(st, ast.Data) for it in st.items}
-    read_count: dict[str, int] = {}  # how many times the listing reads each name
-    for n in (n for st in statements for n in ast.walk(st)):
-        if isinstance(n, ast.Name):
-            read_count[n.name] = read_count.get(n.name, 0) + 1
-        elif isinstance(n, ast.Report):
-            for name in n.names:
-                read_count[name] = read_count.get(name, 0) + 1
+    changed_data: set[str] = set()  # the PARAMs routines change
     functions = {n for n, sub in subroutines.items() if sub is not None and
                  sub.kind == "FUNCTION"}
     references: dict[str, int] = {}
@@ -900,20 +895,18 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
                 elif actual.name in outputs:
                     fault = (f"the CALL gives {actual.name} to two arguments SUBROUTINE "
                              f"{st.name} assigns", "give each its own variable")
-                elif changes and actual.name in data_names and read_count[actual.name] > 1:
-                    fault = (f"SUBROUTINE {st.name} changes {actual.name}, a PARAM the "
-                             "listing reads elsewhere too: not supported (FST would give "
-                             "those the changed value)", f"give {st.name} a variable of "
-                             f"its own for {p}, set from {actual.name} in INITIAL")
                 if fault is not None:
                     errors.append(Diagnostic(fault[0], st.span, fault[1]))
                     return []
                 out = actual.name
                 if changes:
-                    # a PARAM changed: the call's own variable, from the PARAM's value
+                    # a PARAM changed: the listing's name is the changed value from now
+                    # on (read anywhere, printed, FINISH), the PARAM its first value,
+                    # under a name of its own (`PARAMETER_OF`)
                     if actual.name in data_names:
-                        out = f"{st.name}#{k}.{p}"
-                        before = ast.Call(KEPT, (actual, ast.Name(out, actual.span)),
+                        first = ast.Name(PARAMETER_OF(actual.name), actual.span)
+                        changed_data.add(actual.name)
+                        before = ast.Call(KEPT, (first, ast.Name(out, actual.span)),
                                           actual.span)
                     else:
                         before = ast.Call(BEFORE, (actual,), actual.span)
@@ -975,8 +968,21 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
             tuple(dict.fromkeys(outputs + sorted(local.values()))),
             tuple(dict.fromkeys(inputs)), body, st.span)]
 
-    return [x for st in expand_functions(statements, functions, references)
-            for x in one(st)]
+    out = [x for st in expand_functions(statements, functions, references)
+           for x in one(st)]
+    def renamed(st):
+        if isinstance(st, ast.Data):
+            return replace(st, items=tuple(
+                replace(it, name=PARAMETER_OF(it.name)) if it.name in changed_data else it
+                for it in st.items))
+        return ast.with_bodies(st, lambda body: [renamed(b) for b in body])
+    return [renamed(st) for st in out] if changed_data else out
+
+
+def PARAMETER_OF(name: str) -> str:
+    """The name of the PARAM a routine changes, its first value (LINGRA's INCUT: the
+    listing's INCUT is the count from then on, `INCUT#PARAM` the PARAM)."""
+    return f"{name}#PARAM"
 
 
 def _flow(body) -> tuple[dict[str, object], set[str]]:

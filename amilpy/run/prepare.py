@@ -148,7 +148,7 @@ def _kept_needs_step_points(model: ir.Model, method: str) -> None:
 
     mem = next((m for m in model.memories if m.func in (KEPT, BEFORE)), None)
     if mem is not None:
-        name = getattr(mem.args[0 if mem.func == KEPT else -1], "name", mem.target)
+        name = getattr(mem.args[-1], "name", mem.target)
         raise AmilError([Diagnostic(
             f"a routine after STOP changes {name} from the value it left "
             f"before (a count, or a value kept where no branch sets it): that happens once "
