@@ -263,3 +263,22 @@ def test_the_command_runs_a_count_in_step_point_mode_asked_for_and_refuses_other
     assert rows[0].startswith("RUN,N#PARAM,TIME,B,H") and len(rows) == 1 + 2 * 8
     assert main(["run", str(listing), "--method", "RKS", "--quiet"]) != 0
     assert "and METHOD RKS has none" in capsys.readouterr().err
+
+
+def test_a_kept_name_in_a_routine_called_twice_and_a_routines_array_read_first_are_refused():
+    # Fortran keeps one TOTAL for both CALLs (which one runs first would decide the
+    # numbers); a routine's own array read before any element of it is given a value
+    # is read before it has one (it read as its own new value, twice A, before)
+    twice = SAVED.replace("CALL G(X, Z)", "CALL F(2.*X, Z)")
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(twice, name="saved.fst")
+    assert "saved.fst:4:1: error: SUBROUTINE F keeps TOTAL from CALL to CALL (SAVE or " \
+        "DATA) and is CALLed 2 times" in err.value.render()
+    array = SAVED.replace("      SAVE\n      TOTAL = TOTAL + A\n      B = TOTAL\n",
+                          "      REAL H(3)\n      SAVE H\n      H(1) = H(1) + A\n"
+                          "      B = H(1)\n")
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(array, name="saved.fst")
+    said = err.value.render()
+    assert "saved.fst:14:14: error: H is read in SUBROUTINE F before it has a value" in \
+        said and "SAVE keeps no array here" in said, said

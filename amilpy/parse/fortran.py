@@ -849,7 +849,10 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
         if sub_body is None:
             return []
         assigned = _assigned(sub_body)
-        reads, everywhere = _flow(sub_body)
+        own_arrays = frozenset(n for s_ in sub_body if isinstance(s_, ast.Declare)
+                               for n, sizes in zip(s_.names, s_.sizes or (), strict=False)
+                               if sizes)
+        reads, everywhere = _flow(sub_body, own_arrays)
         counts[st.name] = k = counts.get(st.name, 0) + 1
         names: dict[str, str] = {}
         values: dict[str, ast.Node] = {}
@@ -927,7 +930,17 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
         # (a name the routine keeps, SAVE or DATA, read before the routine assigns it:
         # the value this CALL left at the last step point; a routine's CALL of another
         # has no step points of its own, so there it is refused as any other)
-        saved = {n for n in reads if n in sub.kept and not stack}
+        saved = {n for n in reads if n in sub.kept and not stack and n not in own_arrays}
+        if saved and k > 1:
+            # (Fortran keeps one copy of them, whichever CALL runs: the two CALLs'
+            # order in the rates would decide the numbers)
+            name = sorted(saved)[0]
+            errors.append(Diagnostic(
+                f"{sub.label} keeps {name} from CALL to CALL (SAVE or DATA) and is "
+                f"CALLed {k} times: Fortran keeps one {name} for all of them, which is "
+                "not supported", st.span,
+                f"CALL {sub.name} once, or give each CALL a routine of its own"))
+            return []
         unknown = sorted((n, span) for n, span in reads.items()
                          if n not in params and n not in saved)
         if unknown:
@@ -935,7 +948,8 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
             errors.append(Diagnostic(
                 f"{n} is read in {sub.label} before it has a value (its names are "
                 "its own)", span, f"pass {n} as an argument, or give it a value before"
-                + (f" (SAVE keeps {n} only where the listing CALLs {sub.name})"
+                + (" (SAVE keeps no array here)" if n in sub.kept and n in own_arrays
+                   else f" (SAVE keeps {n} only where the listing CALLs {sub.name})"
                    if n in sub.kept else "")))
             return []
         local = {n: f"{st.name}#{k}.{n}" for n in assigned - params}
@@ -985,16 +999,23 @@ def PARAMETER_OF(name: str) -> str:
     return f"{name}#PARAM"
 
 
-def _flow(body) -> tuple[dict[str, object], set[str]]:
+def _flow(body, arrays: frozenset[str] = frozenset()) -> tuple[dict[str, object], set[str]]:
     """The names read where no assignment before them (in written order, on every
     path) has given them a value, with where the first such read is; and the names
-    every path through the body assigns."""
+    every path through the body assigns. An element of the routine's own `arrays` is
+    read before it has a value where no element of that array was assigned before,
+    on any path (element by element is not followed: a loop fills an array)."""
     reads: dict[str, object] = {}
+    filled: set[str] = set()  # the arrays some element of which was assigned
 
     def read(expr, given: set[str]) -> None:
         for n in ast.walk(expr):
             if isinstance(n, ast.Name) and n.name not in given:
                 reads.setdefault(n.name, n.span)
+            elif isinstance(n, (ast.Call, ast.Index)):
+                name = n.func if isinstance(n, ast.Call) else n.name
+                if name in arrays and name not in filled:
+                    reads.setdefault(name, n.span)
 
     def walk(statements, given: set[str]) -> set[str]:
         given = set(given)
@@ -1003,6 +1024,7 @@ def _flow(body) -> tuple[dict[str, object], set[str]]:
                 for e in (st.expr, *st.subscripts):
                     read(e, given)
                 given.update(st.targets)
+                filled.update(t for t in st.targets if t in arrays)
             elif isinstance(st, ast.If):
                 branch_given = []
                 for b in st.branches:
