@@ -666,3 +666,30 @@ def test_a_stop_is_reached_where_its_branch_is_taken(body, stop_at, method):
     else:
         assert run.status == "stopped" and run.t_end == pytest.approx(want, abs=1e-9), \
             (run.status, run.t_end, run.message)
+
+
+@pytest.mark.parametrize("body, where, words", [
+    ("      IF (A .GT. 3.) 10, 20, 20\n   10 B = 1.\n   20 B = A\n", "11:7",
+     "an arithmetic IF takes a number, not a test"),
+    ("      CALL FATALERR ('F', 'A', 'B')\n      B = A\n", "11:7",
+     "CALL FATALERR takes two texts"),
+    ("      PARAMETER (M = 'F')\n      B = A\n", "11:7",
+     "a text for a name not declared CHARACTER"),
+    # (a line read in other words: its column is the statement's, not one past its end)
+    ("      IF (A - 2.) 10, 20, 30\n   10 B = -1.\n   20 B = 0.\n", "11:7",
+     "GO TO 30: no label 30"),
+])
+def test_what_the_reader_rewrites_is_refused_at_the_statement(body, where, words):
+    message = _fault(SUB.format(body=body))
+    assert f"f.fst:{where}: error: " in message and words in message, message
+
+
+def test_a_fatalerr_text_from_parameter():
+    sub = SUB.format(body="      CHARACTER*8 M\n      PARAMETER (M = 'F')\n"
+                          "      IF (A .GT. 1.5) CALL FATALERR (M, 'too large')\n"
+                          "      B = A\n")
+    text = ("TITLE T\nX = INTGRL(0., 1.)\nCALL F(X, Y)\nTIMER FINTIM = 3., DELT = 1.\n"
+            "TRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT Y\nEND\nSTOP\n" + sub)
+    run, = amilpy.loads(text, name="f.fst").run(advice=False)
+    assert run.status == "stopped" and run.t_end == 2.0 and "FATALERR in F: too large" in \
+        run.message

@@ -51,10 +51,13 @@ STOP
 """
 
 
-def test_an_array_of_dates_from_element_data_passed_to_a_routine():
+@pytest.mark.parametrize("argument", ["DATES(NDATES)", "DATES(*)", "DATES(1)"])
+def test_an_array_of_dates_from_element_data_passed_to_a_routine(argument):
     # Y = X = 1 + t on the listed days, 0 elsewhere; the rerun moves the second date to
-    # 7 (one element of the data changed); the other elements keep 99: never a cut
-    first, second = amilpy.loads(DATES, name="dates.fst").run(advice=False)
+    # 7 (one element of the data changed); the other elements keep 99: never a cut.
+    # The argument's declared size is the caller's business (Fortran's X(*), X(1))
+    text = DATES.replace("DATES(NDATES)", argument)
+    first, second = amilpy.loads(text, name="dates.fst").run(advice=False)
     for run, days in ((first, (2.0, 4.0)), (second, (2.0, 7.0))):
         assert list(run.times) == [float(k) for k in range(9)]
         assert list(run["Y"]) == [1.0 + t if t in days else 0.0 for t in run.times]
@@ -67,6 +70,7 @@ def test_an_array_of_dates_from_element_data_passed_to_a_routine():
     ("W(1:3) = 10., 20., 30.", "W(1:3) = 10., 20."),
     ("PARAM D(1) = 2.;", "PARAM Q(1) = 2.;"),
     ("CALL CUTS(TIME, D, N, X, Y)", "CALL CUTS(TIME, X, N, X, Y)"),
+    ("ARRAY_SIZE N=6\n", "ARRAY_SIZE N=6\nPARAM N = 4.\n"),
 ])
 def test_array_faults_are_said_where_they_are(change, words):
     cases = {
@@ -77,6 +81,8 @@ def test_array_faults_are_said_where_they_are(change, words):
         "PARAM Q(1) = 2.;": "Q(...) = ...: Q is not an array of one subscript",
         "CALL CUTS(TIME, X, N, X, Y)": ("argument DATES of SUBROUTINE CUTS is an array: the "
                                         "CALL must give the name of an array"),
+        "ARRAY_SIZE N=6\nPARAM N = 4.\n": ("dates.fst:4:7: error: N, a size of D, is given "
+                                          "another value here (line 3 gave it one)"),
     }
     with pytest.raises(AmilError) as err:
         amilpy.loads(DATES.replace(change, words), name="dates.fst")

@@ -204,3 +204,15 @@ def test_a_listings_own_run_param_keeps_its_name_and_the_run_number_is_run_hash(
     for name in ("after.csv", "s.csv"):
         lines = (tmp_path / name).read_text().splitlines()
         assert lines[0] == "RUN#,RUN,TIME,Y" and lines[-1] == "2,1.0,1.0,1.0", lines
+
+
+def test_a_data_value_changed_between_runs_and_printed_is_one_column(tmp_path):
+    # (it was both the lead column and a printed one: RUN,K,TIME,Y,K)
+    text = ("TITLE K\nY = INTGRL(0.0, K)\nPARAM K = (1., 2.)\nTIMER FINTIM = 1.0, "
+            "OUTDEL = 0.5\nPRINT Y, K\nEND\n")
+    model = amilpy.loads(text, "k.amil")
+    sheets.write_csv(str(tmp_path / "after.csv"), model.run(advice=False))
+    model.run(advice=False, stream_csv=str(tmp_path / "s.csv"))
+    for name in ("after.csv", "s.csv"):
+        lines = (tmp_path / name).read_text().splitlines()
+        assert lines[0] == "RUN,K,TIME,Y" and lines[-1] == "2,2.0,1.0,2.0", lines

@@ -87,6 +87,8 @@ def run_rows(runs: Sequence[Run], names: Sequence[str]) -> tuple[list[str], Iter
     each row says which run it belongs to by number and by value."""
     changed = W.changed_names(runs) if len(runs) > 1 else []
     lead = [W.run_column([*changed, *names]), *changed] if len(runs) > 1 else []
+    # (a data value both changed between the runs and asked for is its lead column)
+    names = [n for n in names if n not in changed]
 
     def rows() -> Iterator[list]:
         for k, run in enumerate(runs, start=1):

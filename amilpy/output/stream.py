@@ -132,21 +132,25 @@ class CsvStream:
         changed = [n for n in dict.fromkeys(k for p in made for k in p)
                    if len(made) > 1 and any(p.get(n) != made[0].get(n) for p in made)]
         wanted = [index, *changed] if len(made) > 1 else []
-        keep = [k for k, name in enumerate(lead) if name in wanted]
+        # (a data value both changed between the runs and asked for is its lead column
+        # alone, as the CSV written after the runs has it)
+        columns = ["TIME", *(self.names or [])]
+        keep = [k for k, name in enumerate(lead) if name in wanted] + \
+            [len(lead) + k for k, name in enumerate(columns) if name not in changed]
         sep = DIALECTS[self.dialect].delimiter
         try:
             with atomic_open(self.path, text=True, encoding=self._encoding, newline="") as fh:
                 for line in notes:
                     fh.write(f"# {line}{self._newline}")
                 csv.writer(fh, delimiter=sep, lineterminator=self._newline).writerow(
-                    wanted + ["TIME", *(self.names or [])])
+                    wanted + [n for n in columns if n not in changed])
                 with open(self._tmp, encoding=self._encoding, newline="") as body:
-                    if keep == list(range(len(lead))):
+                    if keep == list(range(len(lead) + len(columns))):
                         shutil.copyfileobj(body, fh, 1 << 20)
                     else:  # (numbers only: no field is quoted)
                         for row in body:
-                            cells = row.split(sep)
-                            fh.write(sep.join([cells[k] for k in keep] + cells[len(lead):]))
+                            cells = row.rstrip("\r\n").split(sep)
+                            fh.write(sep.join(cells[k] for k in keep) + self._newline)
         finally:
             self.discard()
 

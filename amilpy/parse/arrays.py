@@ -98,11 +98,16 @@ class _Arrays:
         self.written_out = 0  # statements the loops were written out into
         # constants: a name given one value, once (or always the same)
         values: dict[str, float | None] = {}
+        first: dict[str, Span] = {}
+        self.twice: dict[str, tuple[Span, Span]] = {}  # names given two values
         for st in everything:
             if isinstance(st, ast.Data) and st.keyword != "INCON":
                 for it in st.items:
                     v = it.values[0] if len(it.values) == 1 and not (
                         it.is_list or it.is_array) else None
+                    if it.name in values and values[it.name] != v:
+                        self.twice.setdefault(it.name, (first[it.name], it.span))
+                    first.setdefault(it.name, it.span)
                     values[it.name] = v if values.get(it.name, v) == v else None
         self.constants = {n: v for n, v in values.items() if v is not None}
         # function tables (ACSL's TABLE F, n, ... / ... /, FUNCTION F = ...), read as
@@ -114,6 +119,7 @@ class _Arrays:
         self.table_statements = {st.name: self.written_out_table(st) for st in everything
                                  if isinstance(st, ast.Table) and st.grid}
         self.arrays: dict[str, Array] = {}
+        self.unsized: set[str] = set()
         total = 0
         from ..library import callable_names
 
@@ -131,6 +137,7 @@ class _Arrays:
                     continue
                 dims = tuple(self.size(e, name) for e in sizes)
                 if not all(dims):
+                    self.unsized.add(name)  # (said at its size: its uses say no more)
                     continue
                 if name in self.arrays and self.arrays[name].sizes != dims:
                     self.error(f"{name} is declared twice with other sizes", span,
@@ -189,6 +196,13 @@ class _Arrays:
 
     def size(self, e: ast.Node, name: str) -> int:
         n = self.whole(e, {}, f"a size of {name}")
+        if n is None and isinstance(e, ast.Name) and e.name in self.twice:
+            was, again = self.twice[e.name]
+            self.error(f"{e.name}, a size of {name}, is given another value here (line "
+                       f"{was.line} gave it one): a size is fixed when the listing is read",
+                       again, f"give {e.name} one value (ARRAY_SIZE {e.name} = n), and no "
+                       "other in a later run")
+            return 0
         if n is None:
             if not any(d.span == e.span for d in self.errors):
                 self.error(f"the size of {name} is not known when the listing is read", e.span,
@@ -449,6 +463,8 @@ class _Arrays:
         """FST's X(k) = v and X(i:j) = v1, v2, ...: the elements' items; one value
         for a range gives every element of it that value (FST's MNDAT(6:NH) = 999.)."""
         a = self.arrays.get(it.name)
+        if it.name in self.unsized:
+            return []
         if a is None or len(a.sizes) != 1:
             self.error(f"{it.name}(...) = ...: {it.name} is not an array of one subscript",
                        it.span, f"declare it, e.g. ARRAY {it.name}(1:N) with ARRAY_SIZE "

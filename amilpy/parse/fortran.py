@@ -394,9 +394,7 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
                 if dims is None:
                     (integers if integer else declared).add(n)
                     continue
-                if n in params and not integer and word != "LOGICAL" and \
-                        re.fullmatch(r"\s*(?:\d+|[A-Za-z]\w*|\*)\s*", dims) and \
-                        (not dims.strip()[:1].isalpha() or dims.strip().upper() in params):
+                if n in params and not integer and word != "LOGICAL" and "," not in dims:
                     # (an array argument: the CALL's array stands for it, its elements
                     # read where the body reads X(I); its size is the caller's)
                     array_params.add(n)
@@ -443,9 +441,21 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
                 refuse(f"PARAMETER ({constants.group(1)}): not read", where,
                        "write PARAMETER (NAME = value, ...)")
                 continue
+            numbers = []
             for c in items:
-                data.setdefault(c.split("=")[0].strip().upper(), (k + 1, "PARAMETER"))
-            executable.append((k, col, "; ".join(items)))
+                name, _, value = (x.strip() for x in c.partition("="))
+                if value.startswith("'"):  # (a text, for FATALERR: as NAME = 'text')
+                    if name.upper() not in texts or texts[name.upper()] is not None:
+                        refuse(f"PARAMETER ({c}) in {routine}: a text for a name not "
+                               "declared CHARACTER, or given twice", where,
+                               f"declare CHARACTER*20 {name} before it")
+                    else:
+                        texts[name.upper()] = value[1:-1].replace("''", "'")
+                    continue
+                data.setdefault(name.upper(), (k + 1, "PARAMETER"))
+                numbers.append(c)
+            if numbers:
+                executable.append((k, col, "; ".join(numbers)))
             continue
         saves = _SAVE.match(code)
         if saves:
@@ -485,6 +495,11 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
             texts[n] = given_text.group(2)[1:-1].replace("''", "'")
             continue
         fatal = _FATALERR.match(code)
+        if fatal is None and re.search(r"\bCALL\s+FATALERR\b", code, re.I):
+            refuse(f"{code.strip()} (in {routine}): CALL FATALERR takes two texts, the "
+                   "module's name and the message", where,
+                   "write CALL FATALERR ('MODULE', 'message')")
+            continue
         if fatal is not None:
             said = []
             for arg in fatal.group(2, 3):
@@ -522,6 +537,12 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
             # Fortran's arithmetic IF (e) l1, l2, l3: to l1 where e < 0, l2 where e = 0,
             # l3 where e > 0; forward jumps, as GO TO's (parse/jumps.py)
             e, below, zero, above = arithmetic.groups()
+            if re.search(r"\.(?:GT|GE|LT|LE|EQ|NE|AND|OR|NOT|EQV|NEQV)\.|[<>]|==|/=", e,
+                         re.I):
+                refuse(f"IF ({e}) {below}, {zero}, {above} (in {routine}): an arithmetic "
+                       "IF takes a number, not a test", where,
+                       f"write IF ({e}) GO TO {above}, or IF ({e}) THEN ... END IF")
+                continue
             code = (f"IF (({e}) .LT. 0.) GO TO {below}; IF (({e}) .EQ. 0.) GO TO {zero}; "
                     f"GO TO {above}")
         # (DO 10, I = 1, N: the comma a blank, the columns as they are)
@@ -555,6 +576,20 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
         text += [""] * max(0, end_k + 1 - len(text))
     text[end_k] = "END"
     source = "\n".join(text) + "\n"
+    # (a line read in other words than written -- a statement continued onto it joined,
+    # DATA and PARAMETER as assignments, an arithmetic IF as GO TOs, a label -- has no
+    # text of its own for the messages to quote: a span on it keeps its line and the
+    # statement's first column, where a column of the text read may lie past the
+    # line's end, or belong to another line of a statement continued)
+    rewritten = {k + 1 for k, line in enumerate(text)
+                 if line.strip() and not (k < n_lines and
+                                          file_lines[k].startswith(line.rstrip()))}
+    starts = {k: len(file_lines[k - 1]) - len(file_lines[k - 1].lstrip()) + 1
+              if k <= n_lines else 1 for k in rewritten}
+
+    def at_statement(span: Span | None) -> Span | None:
+        return Span(span.line, starts[span.line]) if span is not None and \
+            span.line in rewritten else span
     from lark.exceptions import UnexpectedInput
 
     from .errors import syntax_diagnostic
@@ -563,14 +598,15 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
     try:
         tree = parser.parse(prepare(source))
     except UnexpectedInput as exc:
-        errors.append(syntax_diagnostic(exc, prepare(source), parser))
+        said = syntax_diagnostic(exc, prepare(source), parser)
+        errors.append(replace(said, span=at_statement(said.span)))
         return None
     builder = Builder(source, path, parser)
     builder.acsl = True
     items = builder.statements(tree)
     _, _, statements = Nester(builder.errors).nest(items)
     statements = lower_jumps(statements, builder.errors)
-    errors.extend(builder.errors)
+    errors.extend(replace(d, span=at_statement(d.span)) for d in builder.errors)
     if builder.errors:
         return None
     allowed = (ast.Assign, ast.If, ast.Loop, ast.Declare, ast.SubroutineCall,
@@ -594,16 +630,9 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
             "messages, given once in quotes", text_read.span,
             f"compute with numbers; give {n} its text once, NAME = 'text'"))
         return None
-    # (a line read in other words than written -- a statement continued onto it joined,
-    # DATA and PARAMETER as assignments, an arithmetic IF as GO TOs, a label -- has no
-    # text of its own for the messages to quote: its spans keep line and column only)
-    rewritten = {k + 1 for k, line in enumerate(text)
-                 if line.strip() and not (k < n_lines and
-                                          file_lines[k].startswith(line.rstrip()))}
     if rewritten:
-        statements = [ast.rebuilt(st, lambda v: Span(v.line, v.column)
-                                  if isinstance(v, Span) and v.line in rewritten else v)
-                      for st in statements]
+        statements = [ast.rebuilt(st, lambda v: at_statement(v) if isinstance(v, Span)
+                                  else v) for st in statements]
     for st in (n for top in statements for n in ast.walk(top)):
         if isinstance(st, ast.STATEMENTS) and not isinstance(st, allowed):
             errors.append(Diagnostic(
