@@ -449,6 +449,7 @@ class Model:
     # FST's EVENT blocks, and its SET variables (kept between events, like states)
     events: list[FstEvent] = field(default_factory=list)
     sets: list[str] = field(default_factory=list)
+    own_pi: bool = False  # an FST listing's own PI (`syntax.Program.own_pi`): no pi given
     # notes for the listing (read before any value, == tested pointwise, ...)
     warnings: list = field(default_factory=list)
     # names -> where defined, for reports and hints

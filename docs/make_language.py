@@ -150,7 +150,8 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
      "passed to a routine by its name"),
     ("FST", "`PI = 3.1416` in a listing with FST's statements (WEATHER, "
      "TRANSLATION_GENERAL, DEFINE_CALL, EVENT, SET)", "the listing's own PI (FST has "
-     "none): read wherever the listing reads PI. Elsewhere PI is reserved"),
+     "none): a variable of the listing (or a PARAM), read, printed and set as any. "
+     "Elsewhere PI is reserved"),
     ("FST", "`EVENT` / `ZEROCONDITION E` / `NEWVALUE X = e` ... / `ENDEVENT`",
      "a state event: where E reaches zero from either side (located; in step-point mode "
      "at the first step point where it has, before that point's row) the NEWVALUEs are "

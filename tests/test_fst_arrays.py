@@ -193,9 +193,16 @@ def test_an_fst_listing_that_sets_pi_computes_with_its_own():
     # LINGRA writes PI = 3.1416 and reads it in its day length: FST has no PI of its
     # own; an AMIL listing may not assign PI (the contract's reserved names)
     text = ("TITLE PI\nPI = 3.1416\nY = PI*TIME\nTIMER FINTIM = 1., DELT = 1.\n"
-            "TRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT Y\nEND\n")
+            "TRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT Y, PI\nEND\n")
     run, = amilpy.loads(text, name="pi.fst").run(advice=False)
-    assert list(run["Y"]) == [0.0, 3.1416]
+    assert list(run["Y"]) == [0.0, 3.1416] and list(run["PI"]) == [3.1416, 3.1416]
+    from amilpy.output.printout import format_runs
+
+    assert "  PI\n" in format_runs([run])  # (its column, by its own name)
+    # a PARAM PI is the listing's, set from outside as any other
+    given = text.replace("PI = 3.1416", "PARAM PI = 3.1416")
+    run, = amilpy.loads(given, name="pi.fst").run(advice=False, PI=3.0)
+    assert list(run["Y"]) == [0.0, 3.0]
     with pytest.raises(AmilError) as err:
         amilpy.loads(text.replace("TRANSLATION_GENERAL DRIVER='EUDRIV'\n", ""),
                      name="pi.amil")

@@ -26,7 +26,7 @@ from . import order
 from .code import CodeLowering, assigned_names, substitute
 from .groups import RunGroups, reject_late_equations, sections, split_groups
 from .lower import TEXT_LIMIT, Lowering
-from .names import PURE, Names
+from .names import PURE, Names, reserved_names
 from .units import (
     ImplGroup,
     declared_stores,
@@ -171,7 +171,7 @@ def _check_csmp(program: ast.Program, name: str | None) -> ir.Model:
         # TERMINAL runs in written order anyway: NOSORT/SORT change nothing there
         parts[section] = [s for s in parts[section] if not isinstance(s, ast.Nosort)]
     reject_late_equations(groups, rep)
-    data = RunGroups(rep).read(groups)
+    data = RunGroups(rep, reserved_names(program)).read(groups)
     names = Names(rep, program, data)
     low = Lowering(rep)
     if data.weather is not None:
@@ -263,7 +263,7 @@ def _check_csmp(program: ast.Program, name: str | None) -> ir.Model:
         runs=data.runs,
         data_names=data.names, spans={**data.spans, **names.defined}, data_kinds=data.kinds,
         units=units, warnings=low.warnings, terminal_code=terminal_code,
-        events=events, sets=sorted(sets),
+        events=events, sets=sorted(sets), own_pi=program.own_pi,
         weather=sorted(low.weather_used), closed=low.closed,
         weather_lines=sorted({s for spans in low.weather_used.values() for s in spans},
                              key=lambda s: (s.line, s.column)),

@@ -170,7 +170,7 @@ class CodeLowering:
     def declared(self, st: ast.Procedural, outputs: list[str], reads: list[str]) -> None:
         missing_out = [n for n in outputs if n not in st.outputs]
         # constants and time need no listing: they do not move the unit in the sort
-        fixed = self.names.data_names | {"TIME", "PI"}
+        fixed = self.names.data_names | {"TIME"} | set(self.names.reserved) & {"PI"}
         missing_in = [n for n in reads if n not in st.inputs and n not in outputs
                       and n not in fixed]
         if st.outputs or st.inputs:

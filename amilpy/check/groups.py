@@ -145,7 +145,7 @@ def reject_late_equations(groups: list[list[ast.Node]], rep: Reporter) -> None:
 def check_assignable(name: str, span: Span, what: str, rep: Reporter,
                      reserved: tuple[str, ...] = RESERVED) -> bool:
     if name in reserved:
-        if reserved != RESERVED:
+        if reserved == (TIME,):  # (the ACSL form's, where only time is reserved)
             rep.error(f"{name} is time and cannot be {what}", span,
                       "time is T (its name may be changed with VARIABLE)")
             return False
@@ -177,8 +177,9 @@ class RunGroups(Visitor):
 
     complete = DATA_STATEMENTS
 
-    def __init__(self, rep: Reporter) -> None:
+    def __init__(self, rep: Reporter, reserved: tuple[str, ...] = RESERVED) -> None:
         self.rep = rep
+        self.reserved = reserved  # (an FST listing's own PI is no reserved name)
         self.data: dict[str, float] = {}
         self.spans: dict[str, Span] = {}
         self.kinds: dict[str, str] = {}
@@ -295,7 +296,7 @@ class RunGroups(Visitor):
     # statements ----------------------------------------------------------------
     def visit_Data(self, st: ast.Data) -> None:
         for item in st.items:
-            check_assignable(item.name, item.span, "a data value", self.rep)
+            check_assignable(item.name, item.span, "a data value", self.rep, self.reserved)
             again = item.name in self.spans and self.kinds.get(item.name)
             if again and st.keyword == "CONST" == self.kinds[item.name] and \
                     not item.is_list and item.name not in self.group.lists and \

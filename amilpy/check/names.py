@@ -28,6 +28,12 @@ MAX_STORE = 100_000
 PURE = (Kind.MATH, Kind.TABLE, Kind.SWITCH, Kind.TIME)  # INITIAL, TERMINAL: evaluated once
 
 
+def reserved_names(program: ast.Program) -> tuple[str, ...]:
+    """The names the listing may not assign: an FST listing's own PI is a variable of
+    it (`Program.own_pi`)."""
+    return tuple(n for n in RESERVED if n != "PI") if program.own_pi else RESERVED
+
+
 class Names:
     """Definitions and references of one listing."""
 
@@ -41,7 +47,8 @@ class Names:
         self.defined: dict[str, Span] = {}
         self.where: dict[str, str] = {}  # name -> the section that computes it
         self.form = program.form
-        self.reserved: tuple[str, ...] = RESERVED
+        self.reserved: tuple[str, ...] = reserved_names(program)
+        self.own_pi = program.own_pi
         self.functions: dict[str, int] = {}  # FUNCTIONs the listing defines -> arity
 
     # definitions -----------------------------------------------------------------
@@ -236,7 +243,8 @@ class Names:
 
     def check_named(self, known: set[str], states: set[str]) -> None:
         """Reports and FINISH name known quantities; RELERR/ABSERR X=... name states."""
-        report_known = known - SETTINGS
+        # (an FST listing's own PI is a quantity of it)
+        report_known = known - (SETTINGS - ({"PI"} if self.own_pi else set()))
         for st in self.data.reports:
             named = list(zip(st.names, st.name_spans, strict=True))
             if st.x is not None:

@@ -131,7 +131,8 @@ def initial_values(model: ir.Model, data: dict[str, float], tables,
     """Data values, TIMER values and the INITIAL section, evaluated in sorted order."""
     constants = dict(reserved)
     constants.update(data)
-    constants["PI"] = math.pi
+    if not model.own_pi:
+        constants["PI"] = math.pi
     for eq in model.initial:
         constants[eq.target] = evaluate_constant(model, eq.expr, constants, tables, eq.span)
     return constants

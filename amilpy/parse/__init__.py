@@ -89,7 +89,7 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     items = builder.statements(tree)
     nester = Nester(builder.errors)
     form, name, statements = nester.nest(items)
-    statements = _fst_own_pi(statements)
+    own_pi = _fst_own_pi(statements)
     statements, macros = expand(statements, builder.errors, form == "ACSL")
     statements = lower_jumps(statements, builder.errors, sorted_top=form == "ACSL")
     statements = _subroutines_called(statements, text, path, builder.errors)
@@ -99,28 +99,21 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     if builder.errors:
         raise AmilError(in_macros(sorted(builder.errors, key=_where), macros), path, text)
     return ast.Program(tuple(statements), path, text, form, name, macros, fixed,
-                       tuple(nester.notes))
+                       tuple(nester.notes), own_pi)
 
 
-# the fields of a node that hold words of the language, not names of the listing
-_NOT_NAMES = frozenset({"func", "kind", "keyword", "text", "written", "op", "form",
-                        "span"})
 _FST_STATEMENTS = (ast.Translation, ast.Weather, ast.DefineCall, ast.Event, ast.SetValue)
-FST_PI = "PI#FST"  # (FST has no PI of its own: a listing's PI is its own variable)
 
 
-def _fst_own_pi(statements: list) -> list:
-    """An FST listing (one with FST's own statements: TRANSLATION_GENERAL, WEATHER,
-    DEFINE_CALL, EVENT, SET) that assigns PI computes with its own PI (LINGRA's PI =
-    3.1416, not pi): there PI is renamed, everywhere, to a name of the listing's."""
+def _fst_own_pi(statements: list) -> bool:
+    """Whether an FST listing (one with FST's own statements: TRANSLATION_GENERAL,
+    WEATHER, DEFINE_CALL, EVENT, SET) assigns PI: FST has no PI of its own, and LINGRA
+    computes with its PI = 3.1416, not pi."""
     everything = ast.every_statement(statements)
-    if not any(isinstance(st, _FST_STATEMENTS) for st in everything) or not any(
-            (isinstance(st, ast.Assign) and "PI" in st.targets) or
-            (isinstance(st, ast.Data) and any(it.name == "PI" for it in st.items))
-            for st in everything):
-        return statements
-    return [ast.rebuilt(st, lambda v: FST_PI if v == "PI" else v, _NOT_NAMES)
-            for st in statements]
+    return any(isinstance(st, _FST_STATEMENTS) for st in everything) and any(
+        (isinstance(st, ast.Assign) and "PI" in st.targets) or
+        (isinstance(st, ast.Data) and any(it.name == "PI" for it in st.items))
+        for st in everything)
 
 
 def _subroutines_called(statements: list, text: str, path: str | None,

@@ -719,6 +719,8 @@ class Program:
     # the listing is read (a run may not change them)
     fixed: frozenset[str] = frozenset()
     notes: tuple = ()  # the reader's warnings (diagnostics.Diagnostic), kept with the model
+    # an FST listing that assigns PI: FST has none, PI is the listing's own variable
+    own_pi: bool = False
 
 
 def with_bodies(st, fix):
