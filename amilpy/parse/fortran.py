@@ -44,7 +44,9 @@ outside as NAME), or, for a weather variable, the day's
 A routine's own name that SAVE lists (or every one, under SAVE alone), or that DATA
 gives a value the routine changes (a FIRST flag), is kept so too: read before the
 routine assigns it, it is what this CALL left at the last step point (DATA's value at
-first, else 0, as static storage starts).
+first, else 0, as static storage starts). Each run (a rerun after END) starts them
+afresh, as it starts its states; FSE reads its PARAMs again for a rerun but keeps
+what a routine SAVEs from the run before (no published listing depends on that).
 
 The listing computes in real numbers. Fortran's INTEGERs (declared, or by its implicit
 typing I to N) give the same numbers while they hold whole numbers and are not divided
