@@ -650,6 +650,18 @@ def test_texts_other_than_fatalerrs_messages_are_refused(body, where, words):
      {"RECT": None, "RKS": None}),
     # a STOP on a value known from the start (a PARAM checked): at t0, on every route
     ("      B = A\n      IF (Q .GT. 0.5) STOP 'Q too large'\n", {"RECT": 0.0, "RKS": 0.0}),
+    # (a second review's cases) the test read where the IF stands, not after the
+    # branch changes what it reads
+    ("      C = A\n      B = A\n      IF (C .LT. 2.5) THEN\n         B = 1.\n      ELSE\n"
+     "         C = 100.\n         STOP 'big'\n      END IF\n", {"RECT": 2.0, "RKS": 1.5}),
+    # in a DO loop, at the pass that reaches it (I = 1: A < 3 fails at A = 3)
+    ("      B = 0.\n      DO 10 I = 1, 3\n         IF (A .LT. I + 2.) THEN\n"
+     "            B = B + 1.\n         ELSE\n            CALL FATALERR ('F', 'loop')\n"
+     "         END IF\n   10 CONTINUE\n", {"RECT": 2.0, "RKS": 2.0}),
+    # .GE. at equality (A = 4 at t = 3), and after a GO TO that jumps past it
+    ("      B = A\n      IF (A .GE. 4.) STOP 'ge'\n", {"RECT": 3.0, "RKS": 3.0}),
+    ("      B = A\n      IF (A .LT. 3.5) GO TO 20\n      STOP 'after goto'\n"
+     "   20 CONTINUE\n", {"RECT": 3.0, "RKS": 2.5}),
 ])
 def test_a_stop_is_reached_where_its_branch_is_taken(body, stop_at, method):
     """A STOP or FATALERR in an IF's branch stops the run where that branch is taken:

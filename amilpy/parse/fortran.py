@@ -140,6 +140,8 @@ class Subroutine:
     # the routine's own names it keeps from CALL to CALL (SAVE, or DATA of a value it
     # changes), with their first values (DATA's, else 0)
     kept: dict[str, float] = dataclass_field(default_factory=dict)
+    # its STOPs and FATALERRs: the flag each sets (STOP#line) and the TERMT it stands for
+    stops: tuple[tuple[str, ast.Termt], ...] = ()
 
     @property
     def label(self) -> str:
@@ -171,9 +173,13 @@ def function_names(lines: list[str], first: int) -> set[str]:
 
 
 def _split(text: str) -> list[str]:
-    """text split at the commas outside parentheses."""
-    out, depth, start = [], 0, 0
+    """text split at the commas outside parentheses and quotes."""
+    out, depth, start, quoted = [], 0, 0, False
     for i, ch in enumerate(text):
+        if ch == "'":
+            quoted = not quoted  # ('' inside a text toggles twice: still inside)
+        if quoted:
+            continue
         depth += (ch == "(") - (ch == ")")
         if ch == "," and depth == 0:
             out.append(text[start:i])
@@ -622,6 +628,21 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
         return ast.with_bodies(st, lambda body: [named(b) for b in body])
 
     statements = [named(st) for st in statements]
+    # (a STOP sets a flag where it is reached, in written order, and the listing's CALL
+    # stops the run where the flag is set: a STOP in an ELSE, after a GO TO or in a DO
+    # loop is reached as Fortran reaches it; the flag starts at 0 at every CALL)
+    flags: list[tuple[str, ast.Termt]] = []
+
+    def flagged(st):
+        if isinstance(st, ast.Termt) and st.span.line in stops | fatals:
+            flag = f"STOP#{st.span.line}"
+            if all(f != flag for f, _ in flags):
+                flags.append((flag, st))
+            return ast.Assign((flag,), (st.span,), ast.Num(1.0, st.span, "1"), st.span)
+        return ast.with_bodies(st, lambda body: [flagged(b) for b in body])
+    statements = [flagged(st) for st in statements]
+    statements = [ast.Assign((f,), (t.span,), ast.Num(0.0, t.span, "0"), t.span)
+                  for f, t in flags] + statements
     text_read = next((n for st in statements for n in ast.walk(st)
                       if (isinstance(n, ast.Name) and n.name in texts) or
                       (isinstance(n, ast.Assign) and n.targets[0] in texts)), None)
@@ -642,6 +663,7 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
                 "the subroutines after STOP run assignments, IFs, DO loops and CALLs"))
             return None
     body_nodes = tuple(statements)
+    declared |= {f for f, _ in flags}  # (the STOPs' flags: the reader's own REALs)
     fault = _typing(body_nodes, declared, integers, real_all, none, routine,
                     functions) or \
         _data_kept(body_nodes, data, routine, data_values)
@@ -658,7 +680,8 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
         body_nodes = tuple(_without_data(body_nodes, {n: data[n][0] for n in changed}))
     kept = {n: data_values.get(n, 0.0) for n in _locals(body_nodes, params)
             if "*" in saved or n in saved or n in changed}
-    return Subroutine(name, params, body_nodes, span, kind, frozenset(array_params), kept)
+    return Subroutine(name, params, body_nodes, span, kind, frozenset(array_params), kept,
+                      tuple(flags))
 
 
 def _locals(body, params) -> set[str]:
@@ -837,6 +860,8 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
     data_names = {it.name for st in ast.every_statement(statements)
                   if isinstance(st, ast.Data) for it in st.items}
     changed_data: set[str] = set()  # the PARAMs routines change
+    stop_termts = {f: t for sub in subroutines.values() if sub is not None
+                   for f, t in sub.stops}
     functions = {n for n, sub in subroutines.items() if sub is not None and
                  sub.kind == "FUNCTION"}
     references: dict[str, int] = {}
@@ -1009,9 +1034,15 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
                     if not isinstance(s, ast.Declare)]
         body = tuple(hoist(body))
         # (the routine's own names are outputs too: each call's, shown as NAME#k.X)
+        # (the listing's CALL stops the run where a STOP's flag is set, in this
+        # routine or one it CALLs: a TERMT of the listing, said as the STOP)
+        stopping = [] if stack else [
+            ast.Termt(ast.BinOp(">", ast.Name(local[n], t.span), ast.Num(0.5, t.span, "0.5"),
+                                t.span), t.span, t.message, t.written)
+            for n in sorted(local) if (t := stop_termts.get(n.rsplit(".", 1)[-1]))]
         return declared + before_calls + [ast.Procedural(
             tuple(dict.fromkeys(outputs + sorted(local.values()))),
-            tuple(dict.fromkeys(inputs)), body, st.span)]
+            tuple(dict.fromkeys(inputs)), body, st.span)] + stopping
 
     out = [x for st in expand_functions(statements, functions, references)
            for x in one(st)]

@@ -33,7 +33,13 @@ class Restarts:
             new_m = watch.after_memory(tb, yb, new_m, z, memory)
             z[:] = memory
         stop = None
-        for k in (*step.triggered, *self._jumped(tb, yb, m, new_m, z, step.triggered)):
+        # (a TERMT that turns true at a restart another surface made, one over a value
+        # a branch selects -- a routine's STOP flag set in an IF -- stops the run here)
+        turned = [k for k, w in enumerate(self.plan.watched)
+                  if w.purpose is Purpose.TERMT and k not in step.triggered
+                  and new_m[k] > 0 >= m[k]]
+        for k in (*step.triggered, *self._jumped(tb, yb, m, new_m, z, step.triggered),
+                  *turned):
             w = self.plan.watched[k]
             if (w.purpose is Purpose.TERMT and new_m[k] > 0) or \
                     (w.purpose is Purpose.FINISH and new_m[k] != m[k]):
