@@ -128,7 +128,9 @@ SUB = "      SUBROUTINE F(A, B)\n      IMPLICIT REAL (A-Z)\n{body}      RETURN\n
     # (a scalar's are kept: tests/test_fst_arrays.py)
     ("      REAL Q(2)\n      DATA Q /1., 2./\n      Q(1) = Q(1) + A\n      B = Q(1)\n",
      "13:7", "Q has its value from DATA and is assigned in SUBROUTINE F"),
-    ("      INTEGER A(3)\n      B = 1.\n", "11:7", "A(3) in SUBROUTINE F: an array argument"),
+    ("      INTEGER A(3)\n      B = 1.\n", "11:7", "A(3) in SUBROUTINE F: an INTEGER array"),
+    ("      REAL A(2:5)\n      B = 1.\n", "11:7", "A(2:5) in SUBROUTINE F: an array argument "
+     "of more than one subscript, or numbered from other than 1"),
     # (a review's cases: each ran with other numbers than Fortran's before)
     ("      INTEGER I\n      I = 4\n      B = MOD(I, 3)/2\n", "13:11",
      "a division of whole numbers"),
@@ -705,3 +707,14 @@ def test_a_fatalerr_text_from_parameter():
     run, = amilpy.loads(text, name="f.fst").run(advice=False)
     assert run.status == "stopped" and run.t_end == 2.0 and "FATALERR in F: too large" in \
         run.message
+
+
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "RECT"])
+def test_a_termt_that_holds_where_the_run_starts_stops_it_there(method):
+    # X starts at 1 and falls: TERMT(X .GE. 1.) holds at t0 (at zero, closed) though the
+    # motion leaves it at once; TERMT(Y .GT. 0.5) with Y = 1 holds outright
+    for termt in ("TERMT(X .GE. 1.)", "TERMT(Y .GT. 0.5)"):
+        text = (f"TITLE T0\nX = INTGRL(1., -1.)\nY = 1.0 + 0.*X\n{termt}\n"
+                "TIMER FINTIM = 2., DELT = 0.5\nPRINT X\nEND\n")
+        run, = amilpy.loads(text, name="t0.amil").run(method=method, advice=False)
+        assert run.status == "stopped" and run.t_end == 0.0, (termt, run.message)

@@ -199,6 +199,11 @@ def test_an_fst_listing_that_sets_pi_computes_with_its_own():
     from amilpy.output.printout import format_runs
 
     assert "  PI\n" in format_runs([run])  # (its column, by its own name)
+    # a routine's output PI too
+    by_call = text.replace("PI = 3.1416", "CALL F(2., PI)") + \
+        "STOP\n      SUBROUTINE F(A, B)\n      B = 1.5*A\n      END\n"
+    run, = amilpy.loads(by_call, name="pi.fst").run(advice=False)
+    assert list(run["Y"]) == [0.0, 3.0]
     # a PARAM PI is the listing's, set from outside as any other
     given = text.replace("PI = 3.1416", "PARAM PI = 3.1416")
     run, = amilpy.loads(given, name="pi.fst").run(advice=False, PI=3.0)
@@ -287,6 +292,12 @@ def test_a_kept_name_in_a_routine_called_twice_and_a_routines_array_read_first_a
         amilpy.loads(twice, name="saved.fst")
     assert "saved.fst:4:1: error: SUBROUTINE F keeps TOTAL from CALL to CALL (SAVE or " \
         "DATA) and is CALLed 2 times" in err.value.render()
+    branch = SAVED.replace("      SAVE\n      TOTAL = TOTAL + A\n      B = TOTAL\n",
+                           "      REAL H(3)\n      SAVE H\n      H(1) = 0.\n"
+                           "      IF (A .GT. 2.5) H(2) = A\n      B = H(1)\n")
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(branch, name="saved.fst")
+    assert "H, an array SAVE keeps, is set in an IF in SUBROUTINE F" in err.value.render()
     array = SAVED.replace("      SAVE\n      TOTAL = TOTAL + A\n      B = TOTAL\n",
                           "      REAL H(3)\n      SAVE H\n      H(1) = H(1) + A\n"
                           "      B = H(1)\n")

@@ -89,10 +89,10 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     items = builder.statements(tree)
     nester = Nester(builder.errors)
     form, name, statements = nester.nest(items)
-    own_pi = _fst_own_pi(statements)
     statements, macros = expand(statements, builder.errors, form == "ACSL")
     statements = lower_jumps(statements, builder.errors, sorted_top=form == "ACSL")
     statements = _subroutines_called(statements, text, path, builder.errors)
+    own_pi = _fst_own_pi(statements)
     statements = texts.set_aside(statements, builder.errors)
     statements, fixed = arrays.expand(statements, builder.errors, form == "ACSL",
                                       nester.notes)
@@ -112,6 +112,7 @@ def _fst_own_pi(statements: list) -> bool:
     everything = ast.every_statement(statements)
     return any(isinstance(st, _FST_STATEMENTS) for st in everything) and any(
         (isinstance(st, ast.Assign) and "PI" in st.targets) or
+        (isinstance(st, ast.Procedural) and "PI" in st.outputs) or  # (a CALL's)
         (isinstance(st, ast.Data) and any(it.name == "PI" for it in st.items))
         for st in everything)
 

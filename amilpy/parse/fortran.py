@@ -402,7 +402,11 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
                 if dims is None:
                     (integers if integer else declared).add(n)
                     continue
-                if n in params and not integer and word != "LOGICAL" and "," not in dims:
+                # (an array argument's size is the caller's: any of one subscript, from 1;
+                # Fortran's X(2:5) numbers its elements otherwise, refused below)
+                if n in params and not integer and word != "LOGICAL" and "," not in dims \
+                        and re.fullmatch(r"\s*(?:1\s*:\s*)?(?:[1-9]\d*|[A-Za-z]\w*|\*)\s*",
+                                         dims):
                     # (an array argument: the CALL's array stands for it, its elements
                     # read where the body reads X(I); its size is the caller's)
                     array_params.add(n)
@@ -410,12 +414,15 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
                     continue
                 if n in params or integer or word == "LOGICAL" or \
                         not re.fullmatch(r"\s*\d+\s*", dims):
-                    what = "an array argument" if n in params else \
-                        "an INTEGER array" if integer else \
+                    what = "an INTEGER array" if integer else \
                         "a LOGICAL array" if word == "LOGICAL" else \
+                        "an array argument of more than one subscript, or numbered from " \
+                        "other than 1" if n in params else \
                         "an array of more than one subscript, or of a size not a number"
                     refuse(f"{n}({dims}) in {routine}: {what} is not supported",
-                           where, "the subset's arrays are the routine's own REAL X(n)")
+                           where, f"declare it REAL {n}(N) or {n}(*), numbered from 1"
+                           if n in params else "the subset's arrays are the routine's own "
+                           "REAL X(n)")
                     continue
                 sizes[n] = int(dims)
                 if word == "DIMENSION":
@@ -909,6 +916,21 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
                                for n, sizes in zip(s_.names, s_.sizes or (), strict=False)
                                if sizes)
         reads, everywhere = _flow(sub_body, own_arrays)
+        # (an array SAVE keeps, set in an IF: where the IF does not set it, Fortran
+        # keeps the last CALL's values, which no array here keeps)
+        branch_set = next((n for top in sub_body for node in ast.walk(top)
+                           if isinstance(node, ast.If) for b in node.branches
+                           for inner in b.body for n in ast.walk(inner)
+                           if isinstance(n, ast.Assign) and n.subscripts
+                           and n.targets[0] in own_arrays and n.targets[0] in sub.kept),
+                          None)
+        if branch_set is not None:
+            errors.append(Diagnostic(
+                f"{branch_set.targets[0]}, an array SAVE keeps, is set in an IF in "
+                f"{sub.label}: where the IF does not set it, Fortran keeps the last CALL's "
+                "values, which the subset does not (SAVE keeps no array)", branch_set.span,
+                "set every element on every path, first thing in the routine"))
+            return []
         counts[st.name] = k = counts.get(st.name, 0) + 1
         names: dict[str, str] = {}
         values: dict[str, ast.Node] = {}

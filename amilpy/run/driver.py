@@ -227,8 +227,12 @@ class _Run:
             # a TERMT that holds where the run starts (a routine's STOP on a PARAM's
             # value checked, `IF (SLA .LE. 0.) STOP`) stops it there, as in step-point
             # mode: the condition halts the run wherever it holds
-            held = next((k for k, w in enumerate(plan.watched)
-                         if w.purpose is Purpose.TERMT and w.stops(0.0, cur.m[k])), None)
+            # (from the surface's value: one exactly at zero that the motion leaves has
+            # the mode of the side it goes to, and T >= TSTOP holds at zero)
+            termts = [k for k, w in enumerate(plan.watched) if w.purpose is Purpose.TERMT]
+            e = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z) if termts else ()
+            held = next((k for k in termts if plan.watched[k].stops(0.0, cur.m[k]) or
+                         (e[k] == 0.0 and plan.watched[k].closed)), None)
             if held is not None:
                 w = plan.watched[held]
                 integ.events.append(Event(cur.t, w.description, w.surface, 0.0,
