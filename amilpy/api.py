@@ -218,9 +218,22 @@ class Model:
             runs.append(run)
             if was_interrupted(run.message):
                 break  # Ctrl-C: keep what was computed, start nothing new
+            if self._ends_job(run) and k + 1 < len(specs):
+                left = len(specs) - k - 1
+                run.warnings.append(
+                    f"a routine's STOP ended the program here, as Fortran's does: the "
+                    f"{left} later run{'s are' if left > 1 else ' is'} not made")
+                break
             if not farmed:
                 report(progress, "runs", k + 1, len(specs), index=k)
         return runs
+
+    def _ends_job(self, run: Run) -> bool:
+        """Whether a routine's STOP or FATALERR stopped the run (`ir.Model.ending`)."""
+        from .result import EventKind, Status
+
+        return run.status == Status.STOPPED and bool(run.events) and \
+            run.events[-1].kind == EventKind.TERMT and run.events[-1].surface in self.ir.ending
 
     def _observations(self, data, runs: int):
         """`data` read and checked (None: none)."""

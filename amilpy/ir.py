@@ -450,6 +450,9 @@ class Model:
     events: list[FstEvent] = field(default_factory=list)
     sets: list[str] = field(default_factory=list)
     own_pi: bool = False  # an FST listing's own PI (`syntax.Program.own_pi`): no pi given
+    # the TERMT surfaces of a routine's STOP or FATALERR: a run they stop ends the job
+    # (Fortran's STOP ends the program: no later run is made)
+    ending: frozenset[int] = frozenset()
     # notes for the listing (read before any value, == tested pointwise, ...)
     warnings: list = field(default_factory=list)
     # names -> where defined, for reports and hints

@@ -718,3 +718,19 @@ def test_a_termt_that_holds_where_the_run_starts_stops_it_there(method):
                 "TIMER FINTIM = 2., DELT = 0.5\nPRINT X\nEND\n")
         run, = amilpy.loads(text, name="t0.amil").run(method=method, advice=False)
         assert run.status == "stopped" and run.t_end == 0.0, (termt, run.message)
+
+
+def test_a_routines_stop_ends_the_job_and_a_termt_only_its_run():
+    # Fortran's STOP ends the program: the rerun after the run it stopped is not made
+    # (said on that run); a TERMT of the listing ends its own run, and the next is made
+    sub = SUB.format(body="      B = A\n      IF (A .GT. Q) STOP 'A passed Q'\n").replace(
+        "(A, B)", "(A, Q, B)")
+    text = ("TITLE T\nX = INTGRL(1., 1.)\nCALL F(X, Q, Y)\nPARAM Q = 2.5\n"
+            "TIMER FINTIM = 4., DELT = 1.\nTRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT Y\n"
+            "END\nPARAM Q = 10.\nEND\nSTOP\n" + sub)
+    runs = amilpy.loads(text, name="f.fst").run(advice=False)
+    assert len(runs) == 1 and runs[0].t_end == 2.0
+    assert "the 1 later run is not made" in runs[0].warnings[-1]
+    termt = text.replace("CALL F(X, Q, Y)", "Y = X\nTERMT(X .GT. Q)")
+    assert [r.t_end for r in amilpy.loads(termt, name="f.fst").run(advice=False)] == \
+        [2.0, 4.0]

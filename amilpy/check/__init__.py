@@ -264,6 +264,7 @@ def _check_csmp(program: ast.Program, name: str | None) -> ir.Model:
         data_names=data.names, spans={**data.spans, **names.defined}, data_kinds=data.kinds,
         units=units, warnings=low.warnings, terminal_code=terminal_code,
         events=events, sets=sorted(sets), own_pi=program.own_pi,
+        ending=frozenset(low.ending),
         weather=sorted(low.weather_used), closed=low.closed,
         weather_lines=sorted({s for spans in low.weather_used.values() for s in spans},
                              key=lambda s: (s.line, s.column)),

@@ -141,6 +141,7 @@ class Lowering:
         self.weather_used: dict[str, list[Span]] = {}
         self.weather_memory: dict[str, int] = {}  # the memory holding each name's value
         self.closed: set[int] = set()  # TERMT surfaces true at zero (>=, <=)
+        self.ending: set[int] = set()  # TERMT surfaces of a routine's STOP (`Model.ending`)
         # the condition of the IF branches whose code is being lowered (None: none),
         # and each surface's so far: the branches it is read on (`guarded_surfaces`)
         self.guard: ast.Node | None = None
@@ -364,6 +365,8 @@ class Lowering:
                              description, text)
         if isinstance(cond, ast.BinOp) and cond.op in (">=", "<="):
             self.closed.add(index)
+        if st.ends_job:
+            self.ending.add(index)
         return index
 
 

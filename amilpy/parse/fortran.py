@@ -23,7 +23,9 @@ the listing or in a routine is written out as a CALL of F before the statement t
 holds it, with F's value its last argument: `expand_functions`), GO TO forward with
 its labels (written out as IF blocks, as the ACSL form's: parse/jumps.py), intrinsics
 as the listing has them, `RETURN` as the last statement, and `STOP` or `STOP 'text'`
-(read as a TERMT: the run stops where it is reached, saying the text), TTUTIL's `CALL
+(the routine sets a flag where Fortran reaches it, and the listing's CALL stops the
+run where the flag is set, saying the text; as Fortran's STOP ends the program, no
+later run is made: `syntax.Termt.ends_job`), TTUTIL's `CALL
 FATALERR(MODULE, MESSAGE)` (likewise, saying both) with `CHARACTER*20 M` texts given
 once in quotes for it, and array
 arguments (`REAL MNDAT(NH)`: the CALL gives the name of one of the listing's ARRAYs,
@@ -1060,7 +1062,7 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
         # routine or one it CALLs: a TERMT of the listing, said as the STOP)
         stopping = [] if stack else [
             ast.Termt(ast.BinOp(">", ast.Name(local[n], t.span), ast.Num(0.5, t.span, "0.5"),
-                                t.span), t.span, t.message, t.written)
+                                t.span), t.span, t.message, t.written, ends_job=True)
             for n in sorted(local) if (t := stop_termts.get(n.rsplit(".", 1)[-1]))]
         return declared + before_calls + [ast.Procedural(
             tuple(dict.fromkeys(outputs + sorted(local.values()))),

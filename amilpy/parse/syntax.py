@@ -345,6 +345,8 @@ class Termt(Node):
     message: str | None = None  # TERMT(c, 'message'): said with the time when it stops
     # what the listing wrote, where that is no TERMT: "STOP in SUBROUTINE ASTRO"
     written: str = ""
+    # a routine's STOP or FATALERR: Fortran's STOP ends the program, the later runs too
+    ends_job: bool = False
     child_fields = ("expr",)
 
 
