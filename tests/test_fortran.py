@@ -99,11 +99,11 @@ def _fault(subroutine: str, call: str = "CALL F(X, Y)") -> str:
     return err.value.render()
 
 
-def _run_f(after_stop: str, fintim: float = 2.0):
-    """The run of a listing that calls F(X, Y), X = 1 + t, a day a step (EUDRIV), with
-    `after_stop` after its STOP."""
-    text = ("TITLE T\nX = INTGRL(1., 1.)\nCALL F(X, Y)\n"
-            f"TIMER FINTIM = {fintim!r}, DELT = 1.\n"
+def _run_f(after_stop: str, fintim: float = 2.0, start: float = 1.0, delt: float = 1.0):
+    """The run of a listing that calls F(X, Y), X = start + t, a step of `delt` (a day by
+    default; EUDRIV), with `after_stop` after its STOP."""
+    text = (f"TITLE T\nX = INTGRL({start!r}, 1.)\nCALL F(X, Y)\n"
+            f"TIMER FINTIM = {fintim!r}, DELT = {delt!r}\n"
             "TRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT Y\nEND\nSTOP\n" + after_stop)
     run, = amilpy.loads(text, name="f.fst").run(advice=False)
     return run
@@ -617,9 +617,7 @@ def test_fatalerr_stops_the_run_saying_its_module_and_message():
     sub = SUB.format(body="      CHARACTER*20 MODULE\n      MODULE = 'F'\n"
                           "      IF (A .GT. 1.2) CALL FATALERR (MODULE, 'A > 1.2: it''s "
                           "too large')\n      B = 2.*A\n")
-    text = ("TITLE T\nX = INTGRL(0., 1.)\nCALL F(X, Y)\nTIMER FINTIM = 3., DELT = 0.5\n"
-            "TRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT Y\nEND\nSTOP\n" + sub)
-    run, = amilpy.loads(text, name="f.fst").run(advice=False)
+    run = _run_f(sub, fintim=3.0, start=0.0, delt=0.5)
     assert run.status == "stopped" and "FATALERR in F: A > 1.2: it's too large (CALL " \
         "FATALERR in SUBROUTINE F at line 13)" in run.message, run.message
     assert list(run.t) == [0.0, 0.5, 1.0, 1.5] and list(run["Y"]) == [0.0, 1.0, 2.0, 3.0]
@@ -702,9 +700,7 @@ def test_a_fatalerr_text_from_parameter():
     sub = SUB.format(body="      CHARACTER*8 M\n      PARAMETER (M = 'F')\n"
                           "      IF (A .GT. 1.5) CALL FATALERR (M, 'too large')\n"
                           "      B = A\n")
-    text = ("TITLE T\nX = INTGRL(0., 1.)\nCALL F(X, Y)\nTIMER FINTIM = 3., DELT = 1.\n"
-            "TRANSLATION_GENERAL DRIVER='EUDRIV'\nPRINT Y\nEND\nSTOP\n" + sub)
-    run, = amilpy.loads(text, name="f.fst").run(advice=False)
+    run = _run_f(sub, fintim=3.0, start=0.0)
     assert run.status == "stopped" and run.t_end == 2.0 and "FATALERR in F: too large" in \
         run.message
 

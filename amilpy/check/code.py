@@ -238,7 +238,7 @@ class _Unit:
                 # false, and its code only where its own is true: the surfaces made
                 # there are guarded so (`Lowering.guarded_surfaces`)
                 low, outer, passed = self.code.low, self.code.low.guard, []
-                before: list = []  # (the tests of the branches before, as written)
+                earlier: list = []  # (the tests of the branches before, as written)
                 for b in st.branches:
                     low.guard = _all_of(outer, passed)
                     cond = None if b.cond is None else \
@@ -246,10 +246,10 @@ class _Unit:
                     low.guard = _all_of(outer, passed + ([cond] if cond is not None else []))
                     # (a TERMT in this branch: where the tests before are false and its
                     # own is true; an ELSE's where all before are false)
-                    here = path + tuple(ast.Not(c, c.span) for c in before) + \
+                    here = path + tuple(ast.Not(c, c.span) for c in earlier) + \
                         ((b.cond,) if b.cond is not None else ())
                     if b.cond is not None:
-                        before.append(b.cond)
+                        earlier.append(b.cond)
                     benv, bopaque = dict(env), set(opaque)
                     branches.append((cond, tuple(self.block(b.body, benv, bopaque, here))))
                     after.append((b.cond, benv, bopaque))

@@ -96,7 +96,6 @@ _SAVE = re.compile(r"SAVE\b\s*(.*)$", re.I)
 _CONTINUE = re.compile(r"CONTINUE\s*$", re.I)
 _DO_LABEL = re.compile(r"DO\s+(\d+)", re.I)  # a labelled DO's label
 _RETURN = re.compile(r"RETURN\s*$", re.I)
-# STOP, STOP 'text' or STOP 123, alone or as a logical IF's statement
 # CHARACTER*20 A, B*8, C*(*) and CHARACTER A*80: texts (for TTUTIL's FATALERR)
 _CHARACTER = re.compile(r"CHARACTER\s*(?:\*\s*(?:\d+|\(\s*\*\s*\)))?\s+([A-Za-z].*)$",
                         re.I)
@@ -106,12 +105,13 @@ _TEXT_ASSIGN = re.compile(rf"([A-Za-z]\w*)\s*=\s*({_QUOTED})$")
 # TTUTIL's FATALERR(MODULE, MESSAGE): says both and stops the program
 _FATALERR = re.compile(rf"((?:IF\s*\(.*\)\s*)?)CALL\s+FATALERR\s*\(\s*({_QUOTED}|[A-Za-z]\w*)"
                        rf"\s*,\s*({_QUOTED}|[A-Za-z]\w*)\s*\)$", re.I)
+# STOP, STOP 'text' or STOP 123, alone or as a logical IF's statement
 _STOP = re.compile(r"((?:IF\s*\(.*\)\s*)?)STOP\b\s*('(?:[^']|'')*'|\d+)?\s*$", re.I)
 # columns 73-80 of a punched card: blank, or a sequence number (letters, then digits)
 _SEQUENCE = re.compile(r"[ \t]*(?:[A-Za-z]{0,6}[0-9]{1,8}[ \t]*)?")
-# refused by name: (pattern, the construct as a reader knows it)
 # Fortran's arithmetic IF: IF (e) l1, l2, l3
 _ARITHMETIC_IF = re.compile(r"IF\s*\((.*)\)\s*(\d+)\s*,\s*(\d+)\s*,\s*(\d+)\s*$", re.I)
+# refused by name: (pattern, the construct as a reader knows it)
 _REFUSED = [
     (re.compile(r"(CHARACTER)\b", re.I), "a {0} declaration of Fortran 90's form"),
     (re.compile(r"GO\s*TO\s*\(", re.I), "a computed GO TO"),
@@ -404,13 +404,12 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
                 if dims is None:
                     (integers if integer else declared).add(n)
                     continue
-                # (an array argument's size is the caller's: any of one subscript, from 1;
-                # Fortran's X(2:5) numbers its elements otherwise, refused below)
+                # (an array argument: the CALL's array stands for it, its elements read
+                # where the body reads X(I); its size is the caller's, of one subscript
+                # numbered from 1: Fortran's X(2:5) numbers it otherwise, refused below)
                 if n in params and not integer and word != "LOGICAL" and "," not in dims \
                         and re.fullmatch(r"\s*(?:1\s*:\s*)?(?:[1-9]\d*|[A-Za-z]\w*|\*)\s*",
                                          dims):
-                    # (an array argument: the CALL's array stands for it, its elements
-                    # read where the body reads X(I); its size is the caller's)
                     array_params.add(n)
                     declared.add(n)
                     continue
@@ -626,27 +625,20 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
     errors.extend(replace(d, span=at_statement(d.span)) for d in builder.errors)
     if builder.errors:
         return None
-    allowed = (ast.Assign, ast.If, ast.Loop, ast.Declare, ast.SubroutineCall,
-               ast.Termt)  # (a STOP's)
+    allowed = (ast.Assign, ast.If, ast.Loop, ast.Declare, ast.SubroutineCall)
 
-    def named(st):  # (a STOP's TERMT says it is the routine's STOP, or FATALERR)
-        if isinstance(st, ast.Termt) and st.span.line in stops:
-            return replace(st, written=f"STOP in {routine}")
-        if isinstance(st, ast.Termt) and st.span.line in fatals:
-            return replace(st, written=f"CALL FATALERR in {routine}")
-        return ast.with_bodies(st, lambda body: [named(b) for b in body])
-
-    statements = [named(st) for st in statements]
     # (a STOP sets a flag where it is reached, in written order, and the listing's CALL
-    # stops the run where the flag is set: a STOP in an ELSE, after a GO TO or in a DO
-    # loop is reached as Fortran reaches it; the flag starts at 0 at every CALL)
+    # stops the run where the flag is set, saying it is the routine's STOP or FATALERR:
+    # a STOP in an ELSE, after a GO TO or in a DO loop is reached as Fortran reaches
+    # it; the flag starts at 0 at every CALL)
     flags: list[tuple[str, ast.Termt]] = []
 
     def flagged(st):
         if isinstance(st, ast.Termt) and st.span.line in stops | fatals:
             flag = f"STOP#{st.span.line}"
             if all(f != flag for f, _ in flags):
-                flags.append((flag, st))
+                flags.append((flag, replace(st, written=(
+                    "STOP in " if st.span.line in stops else "CALL FATALERR in ") + routine)))
             return ast.Assign((flag,), (st.span,), ast.Num(1.0, st.span, "1"), st.span)
         return ast.with_bodies(st, lambda body: [flagged(b) for b in body])
     statements = [flagged(st) for st in statements]
@@ -864,8 +856,7 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
 
     counts: dict[str, int] = {}
     bodies: dict[str, tuple | None] = {}  # each routine's body, its own CALLs written out
-    arrays = {n for st in ast.every_statement(statements) if isinstance(st, ast.Declare)
-              for n, sizes in zip(st.names, st.sizes or (), strict=False) if sizes}
+    arrays = _declared_arrays(statements)
     data_names = {it.name for st in ast.every_statement(statements)
                   if isinstance(st, ast.Data) for it in st.items}
     changed_data: set[str] = set()  # the PARAMs routines change
@@ -914,9 +905,7 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
         if sub_body is None:
             return []
         assigned = _assigned(sub_body)
-        own_arrays = frozenset(n for s_ in sub_body if isinstance(s_, ast.Declare)
-                               for n, sizes in zip(s_.names, s_.sizes or (), strict=False)
-                               if sizes)
+        own_arrays = _declared_arrays(sub_body)
         reads, everywhere = _flow(sub_body, own_arrays)
         # (an array SAVE keeps, set in an IF: where the IF does not set it, Fortran
         # keeps the last CALL's values, which no array here keeps)
@@ -1077,6 +1066,13 @@ def expand_calls(statements: list, subroutines: dict[str, Subroutine | None],
                 for it in st.items))
         return ast.with_bodies(st, lambda body: [renamed(b) for b in body])
     return [renamed(st) for st in out] if changed_data else out
+
+
+def _declared_arrays(statements) -> frozenset[str]:
+    """The names declared arrays (with sizes) anywhere in the statements."""
+    return frozenset(n for st in ast.every_statement(statements)
+                     if isinstance(st, ast.Declare)
+                     for n, sizes in zip(st.names, st.sizes or (), strict=False) if sizes)
 
 
 def PARAMETER_OF(name: str) -> str:

@@ -229,7 +229,7 @@ class _Run:
             # mode: the condition halts the run wherever it holds
             # (from the surface's value: one exactly at zero that the motion leaves has
             # the mode of the side it goes to, and T >= TSTOP holds at zero)
-            termts = [k for k, w in enumerate(plan.watched) if w.purpose is Purpose.TERMT]
+            termts = integ.terminating
             e = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z) if termts else ()
             held = next((k for k in termts if plan.watched[k].stops(0.0, cur.m[k]) or
                          (e[k] == 0.0 and plan.watched[k].closed)), None)

@@ -66,6 +66,10 @@ class RunLoop:
         # restart another surface made (1 - RSW(X > 1, 1, 0) reaches zero with X - 1)
         self.scheduling = tuple(k for k, w in enumerate(plan.watched)
                                 if w.purpose is Purpose.SCHEDULE)
+        # the TERMTs: one may turn true at a restart another surface made, or hold
+        # where the run starts
+        self.terminating = tuple(k for k, w in enumerate(plan.watched)
+                                 if w.purpose is Purpose.TERMT)
         # those that crossed where the loop stopped: their code is the caller's to run
         self.fired: list[int] = []
 

@@ -35,9 +35,8 @@ class Restarts:
         stop = None
         # (a TERMT that turns true at a restart another surface made, one over a value
         # a branch selects -- a routine's STOP flag set in an IF -- stops the run here)
-        turned = [k for k, w in enumerate(self.plan.watched)
-                  if w.purpose is Purpose.TERMT and k not in step.triggered
-                  and new_m[k] > 0 >= m[k]]
+        turned = [k for k in self.terminating
+                  if k not in step.triggered and new_m[k] > 0 >= m[k]]
         for k in (*step.triggered, *self._jumped(tb, yb, m, new_m, z, step.triggered),
                   *turned):
             w = self.plan.watched[k]
