@@ -7,11 +7,12 @@ Cases: the decay of tests/test_fit.py (X0 and K, smooth), the ball on a
 spring-dashpot floor (C and K, two switches a contact, data from the SciPy
 version of the test), the sliding block (MU; a surface slides, so the variational
 equations do not apply and the sensitivities fall back to differences) and the
-shipped oral_dosing.csl (KA and KE on a log scale; the ACSL form has no flow map:
-likewise). Each fit starts from the same values; CPU time, the minimum of
-`--repeats`, in one process. Printed: seconds, runs of the listing, Jacobians
-from the variational equations, the largest relative error of the estimates
-against the values the data were made with, and how the Jacobian was had.
+shipped oral_dosing.csl (KA and KE on a log scale; the program's tangent is carried
+through its DISCRETE doses, `analysis.program`). Each fit starts from the same
+values; CPU time, the minimum of `--repeats`, in one process. Printed: seconds,
+runs of the listing, Jacobians from the variational equations, the largest relative
+error of the estimates against the values the data were made with, and how the
+Jacobian was had.
 """
 
 from __future__ import annotations

@@ -72,10 +72,12 @@ def test_a_value_that_moves_a_switching_instant_is_recovered(tmp_path):
     assert fit.estimates[0] == pytest.approx(mu, rel=1e-6)
 
 
-def test_a_dosing_program_fitted_on_a_log_scale(tmp_path):
+@pytest.mark.parametrize("gradients", ["differences", "sensitivities"])
+def test_a_dosing_program_fitted_on_a_log_scale(tmp_path, gradients):
     """The shipped oral-dosing ACSL program (DISCRETE doses every 12 h): KA and KE
     from plasma concentrations made by superposing one Bateman curve per dose, KA
-    = 0.9 and KE = 0.21 /h, fitted on a log scale from the listing's 1.2 and 0.173."""
+    = 0.9 and KE = 0.21 /h, fitted on a log scale from the listing's 1.2 and 0.173;
+    by differences of runs, and by the program's tangent through its doses."""
     ka, ke, dose, vd = 0.9, 0.21, 500.0, 42.0
     t = np.array([1.0, 2.0, 4.0, 8.0, 11.5, 13.0, 18.0, 25.0, 36.5, 49.0, 60.0, 70.0])
     cp = sum(np.where(t >= d, dose * ka / (vd * (ka - ke)) *
@@ -83,10 +85,14 @@ def test_a_dosing_program_fitted_on_a_log_scale(tmp_path):
              for d in (0.0, 12.0, 24.0, 36.0, 48.0, 60.0))
     data = _csv(tmp_path, "T,CP", zip(t, cp, strict=True))
     model = amilpy.load(f"{ROOT}/models/examples/oral_dosing.csl")
-    fit = model.fit(data, ["KA=0.01:10", "KE=0.01:10"], log=["KA", "KE"], weights="relative")
+    fit = model.fit(data, ["KA=0.01:10", "KE=0.01:10"], log=["KA", "KE"], weights="relative",
+                    gradients=gradients)
     assert fit.success
     assert fit.estimates == pytest.approx([ka, ke], rel=1e-6)
     assert abs(fit.correlation[0, 1]) < 1.0
+    if gradients == "sensitivities":
+        assert fit.gradients == "variational equations (sensitivities through the " \
+            "switches and the program's DISCRETE and DYNAMIC code)" and fit.jacobians >= 1
 
 
 @pytest.mark.slow  # (100 seeded fits: 6 s; CI runs it in its slow step)
@@ -278,6 +284,33 @@ def test_sensitivities_through_switches_agree_with_differences(tmp_path):
     assert np.max(np.abs(exact - diff) / np.max(np.abs(diff), axis=0)) < 1e-6
 
 
+def test_a_programs_sensitivities_agree_with_differences(tmp_path):
+    """The dosing program's d CP/d (KA, KE, DOSE) and d AG/d (...) at observed CINT
+    rows, at a dosing instant (12: after its dose) and at the last (72, where a
+    dose is given before the TERMT ends the run): the tangent through the
+    DISCRETE code equal to central differences of whole runs at RELERR 1e-12 (steps
+    of 1e-4 of each value) to 1e-6 of each column's largest."""
+    from amilpy.analysis.sensitivity import observed_jacobian
+    from amilpy.observed import read
+
+    t = np.array([0.5, 5.5, 12.0, 12.5, 30.5, 47.5, 72.0])
+    path = _csv(tmp_path, "T,CP,AG", [(x, 0.0, 0.0) for x in t])
+    model = amilpy.load(f"{ROOT}/models/examples/oral_dosing.csl")
+    obs = read(path, model.ir.variables, 1)
+    p = {"KA": 1.2, "KE": 0.173, "DOSE": 500.0}
+    exact, why = observed_jacobian(model, obs, list(p), p, {}, {})
+    assert why == "" and exact.shape == (14, 3)
+
+    def simulated(**kw):
+        run = model.run(advice=False, data=obs, rtol=1e-12, atol=1e-15, **kw)[0]
+        return np.concatenate([c.simulated for c in run.observed])
+
+    diff = np.column_stack([(simulated(**{n: v * (1 + 1e-4)}) -
+                             simulated(**{n: v * (1 - 1e-4)})) / (2e-4 * v)
+                            for n, v in p.items()])
+    assert np.max(np.abs(exact - diff) / np.max(np.abs(diff), axis=0)) < 1e-6
+
+
 def test_a_fit_with_sensitivities_recovers_the_ball_written_again_with_scipy(tmp_path):
     """C = 3 and K = 300 from X at 12 instants made by the SciPy version of the ball:
     recovered to 1e-6 with the variational equations' Jacobian, and said so."""
@@ -287,10 +320,81 @@ def test_a_fit_with_sensitivities_recovers_the_ball_written_again_with_scipy(tmp
                                  gradients="sensitivities")
     assert fit.estimates == pytest.approx([3.0, 300.0], rel=1e-6)
     assert fit.gradients.startswith("variational equations") and fit.jacobians >= 1
-    slides = amilpy.loads(FRICTION).fit(
-        _csv(tmp_path, "TIME,X", [(0.5, 0.8), (1.4, 1.0)], "f.csv"), ["MU=0.05:1"],
-        weights="none", gradients="sensitivities")
-    assert "finite differences of whole runs (run 1: a surface slides)" == slides.gradients
+
+
+STICK = """TITLE BLOCK STOPPED BY DRY FRICTION, THEN PUSHED OFF AGAIN
+PARAM MU = 0.3, AR = 1.0
+CONST G = 9.81
+A = AR*TIME + FSW(V, MU*G, 0.0, -MU*G)
+V = INTGRL(2.0, A)
+X = INTGRL(0.0, V)
+TIMER FINTIM = 4.0, OUTDEL = 0.1
+OUTPUT X
+END
+"""
+
+
+def _stick(t: float, mu, ar, g: float = 9.81):
+    """The block's X: it slows (V = 2 + AR t^2/2 - MU G t) until V = 0 at t1, sticks
+    while the push AR t is below MU G, and slides off at t2 = MU G/AR."""
+    t1 = (mu * g - np.sqrt(mu * mu * g * g - 4 * ar)) / ar
+    t2 = mu * g / ar
+    x1 = 2 * t1 + ar * t1 ** 3 / 6 - mu * g * t1 ** 2 / 2
+    if t < np.real(t1):
+        return 2 * t + ar * t ** 3 / 6 - mu * g * t ** 2 / 2
+    if t < np.real(t2):
+        return x1
+    return x1 + ar / 2 * ((t ** 3 - t2 ** 3) / 3 - t2 ** 2 * (t - t2)) - mu * g * (t - t2) ** 2 / 2
+
+
+def test_sensitivities_through_sticking_are_the_closed_forms():
+    """Dry friction holds the block from t1 = 0.784 s to t2 = 2.943 s (Filippov's
+    sliding on V = 0, both ends moved by MU and AR): d X/d MU and d X/d AR in each
+    phase equal the complex-step derivative of the closed form to 1e-8 relative;
+    d A/d MU is 0 while it sticks (A = 0 whatever MU) and -G before. The tangent
+    jumps onto the surface where it sticks and is continuous where it slides off;
+    before sliding was followed the fit differenced whole runs here."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    times = [0.5, 1.5, 2.5, 3.0, 3.5, 4.0]
+    track = trajectory(amilpy.loads(STICK), 0, ["MU", "AR"], {"MU": 0.3, "AR": 1.0}, {},
+                       times)
+    assert not isinstance(track, str), track
+    for t in times:
+        exact = [_stick(t, 0.3 + 1e-30j, 1.0).imag / 1e-30,
+                 _stick(t, 0.3, 1.0 + 1e-30j).imag / 1e-30]
+        assert track.row("X", t) == pytest.approx(exact, rel=1e-8), t
+    assert track.row("A", 1.5) == pytest.approx([0.0, 0.0], abs=1e-9)
+    assert track.row("A", 0.5) == pytest.approx([-9.81, 0.5], rel=1e-9)
+    # the flow map's too (the monodromy of `periodic`): from (V0, X0) = (2, 0) to
+    # TIME 4, d V/d V0 = 0 (it slides off at t2 = MU G/AR, whatever V0) and d X/d V0 =
+    # t1 (X(t1) = V0 t1 + AR t1^3/6 - MU G t1^2/2 with V(t1) = 0)
+    flow = amilpy.loads(STICK).flow()
+    _, _, phi = flow.advance(flow.initial_state(), 0.0, 4.0, sensitivity=True)
+    assert flow.last_sensitivity == "variational equations"
+    v, x = flow.state_names.index("V"), flow.state_names.index("X")
+    t1 = (0.3 * 9.81 - np.sqrt((0.3 * 9.81) ** 2 - 4.0)) / 1.0
+    assert [phi[v, v], phi[x, v], phi[x, x]] == pytest.approx([0.0, t1, 1.0], abs=1e-8)
+
+
+def test_a_fit_through_sticking_uses_the_sensitivities_and_two_at_once_do_not(tmp_path):
+    """MU = 0.2 from the sliding block's X before and after it stops: recovered with
+    the variational equations (the tangent through the stop). Two blocks stuck at
+    once (two surfaces sliding) are left to differences of whole runs, and said."""
+    mu, g = 0.2, 9.81
+    stop = 2.0 / (mu * g)
+    t = np.arange(0.125, 1.5, 0.125)
+    x = np.where(t < stop, 2.0 * t - 0.5 * mu * g * t ** 2, 2.0 * stop - 0.5 * mu * g * stop ** 2)
+    fit = amilpy.loads(FRICTION).fit(_csv(tmp_path, "TIME,X", zip(t, x, strict=True)),
+                                     ["MU=0.05:1"], weights="none", gradients="sensitivities")
+    assert fit.estimates[0] == pytest.approx(mu, rel=1e-6)
+    assert fit.gradients.startswith("variational equations") and fit.jacobians >= 1
+    two = FRICTION.replace("OUTPUT X", "A2 = FSW(V2, MU*G, 0.0, -MU*G)\n"
+                           "V2 = INTGRL(1.0, A2)\nOUTPUT X")
+    both = amilpy.loads(two).fit(_csv(tmp_path, "TIME,X", [(0.5, 0.8), (1.4, 1.0)], "f.csv"),
+                                 ["MU=0.05:1"], weights="none", gradients="sensitivities")
+    assert both.gradients == "finite differences of whole runs (run 1: several surfaces " \
+        "slide at once)"
 
 
 @pytest.mark.parametrize("text, names, values, why", [

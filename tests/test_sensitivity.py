@@ -85,13 +85,155 @@ def test_local_sensitivity_through_a_switching_instant(tmp_path):
                                                   abs=1e-12)
 
 
-def test_an_acsl_program_is_differenced_and_says_so():
-    # CP = AB/VD: (VD/CP) dCP/dVD = -1 exactly; central differences of whole runs
-    # with h = cbrt(RELERR) |VD| are off by about h^2 = 1e-4.
-    loc = amilpy.load(EXAMPLES / "oral_dosing.csl").sensitivity(["VD"], outputs=["CP"])
-    assert loc.how.startswith("differences of whole runs")
-    s = loc.normalised[1:, 0, 0]  # (CP = 0 at the start)
-    assert s == pytest.approx(np.full(len(s), -1.0), abs=2e-4)
+def test_an_output_a_memory_holds_is_differenced_and_says_why():
+    """XH = ZHOLD(0.5 - TIME, X) holds X(0.5) = exp(-0.35) from TIME = 0.5 on: d XH/d K
+    is then -0.5 exp(-0.35). The tangent does not carry the memory, so it cannot give
+    it (it gave 0 until 2026-11-30): the run is differenced, said, and right to the
+    differences, to 1e-6 here."""
+    model = amilpy.loads("TITLE HOLD\nPARAM K = 0.7\nX = INTGRL(1.0, -K*X)\n"
+                         "XH = ZHOLD(0.5 - TIME, X)\nTIMER FINTIM = 1.0, OUTDEL = 0.1\n"
+                         "PRINT X, XH\nEND\n")
+    loc = model.sensitivity(["K"], outputs=["XH"])
+    assert loc.how == "differences of whole runs (a memory value an output reads changes " \
+        "(ZHOLD's held value))"
+    assert loc.raw[8, 0, 0] == pytest.approx(-0.5 * np.exp(-0.35), rel=1e-6)
+
+
+def _bateman(t, dose, ka, ke, vd, tau=12.0, doses=7):
+    """The oral-dosing program's closed form: one Bateman curve per dose (a dose at d
+    counts from T = d on: the row of a dosing instant is after the dose, and the
+    dose due at TSTOP = 72 is given before the TERMT ends the run)."""
+    cp = ag = 0.0
+    for k in range(doses):
+        s = t - k * tau
+        on = s >= -1e-9
+        cp = cp + np.where(on, dose * ka / (vd * (ka - ke)) * (np.exp(-ke * s) -
+                                                            np.exp(-ka * s)), 0.0)
+        ag = ag + np.where(on, dose * np.exp(-ka * s), 0.0)
+    return cp, ag
+
+
+def test_an_acsl_program_is_differentiated_through_its_doses():
+    """The DISCRETE dosing program's tangent: d CP/d p and d AG/d p for KA, KE, DOSE
+    and VD on its whole CINT grid, dosing instants included (AG jumps by DOSE there:
+    d AG/d DOSE jumps by 1), against the complex-step derivative of the closed form
+    (exact to rounding, independent of amilpy). The run's RELERR 1e-10 leaves the
+    tangent good to about 1e-9 of each column's largest; 1e-7 is the bound."""
+    model = amilpy.load(EXAMPLES / "oral_dosing.csl")
+    names = ["KA", "KE", "DOSE", "VD"]
+    loc = model.sensitivity(names, outputs=["CP", "AG"])
+    assert loc.how == "sensitivity equations"
+    assert 12.0 in loc.times.tolist() and 36.0 in loc.times.tolist()
+    p = {"DOSE": 500.0, "KA": 1.2, "KE": 0.173, "VD": 42.0}
+    for j, name in enumerate(names):
+        moved = {**p, name: p[name] + 1e-30j}
+        cp, ag = _bateman(loc.times.astype(complex), moved["DOSE"], moved["KA"],
+                          moved["KE"], moved["VD"])
+        for k, exact in enumerate((cp.imag / 1e-30, ag.imag / 1e-30)):
+            scale = max(np.max(np.abs(exact)), 1.0)  # (d AG/d KE = 0: its noise)
+            assert np.max(np.abs(loc.raw[:, k, j] - exact)) <= 1e-7 * scale, (name, k)
+    # (VD/CP) dCP/dVD = -1 exactly (CP = AB/VD)
+    s = loc.normalised[1:, 0, 3]
+    assert s == pytest.approx(np.full(len(s), -1.0), abs=1e-9)
+
+
+SAMPLED = """PROGRAM sampled proportional control
+! X' = U, U = -KP X held between the CINT instants where DYNAMIC samples it:
+! X(k H) = X0 (1 - KP H)^k, and in between X grows linearly
+  CONSTANT KP = 0.8, X0 = 2.0
+  CINTERVAL CINT = 0.25
+  INITIAL
+    U = -KP*X0
+  END
+  DYNAMIC
+    DERIVATIVE
+      X = INTEG(U, X0)
+    END
+    U = -KP*X
+    TERMT(T >= 3.0)
+  END
+END
+"""
+
+
+def test_a_value_the_dynamic_code_holds_carries_its_dependence():
+    """U = -KP X, sampled by DYNAMIC every CINT and held (a memory value the
+    derivatives read): X(t) = X0 (1 - KP H)^k (1 - KP (t - k H)), k = floor(t/H).
+    d X/d KP and d X/d X0 from the closed form's derivative, at the grid and
+    between (observations at 0.1, 0.6, 1.35): to 1e-9, the tangent being exact on
+    this linear stretch (one exp per stretch) and the code's differences exact
+    for code linear in its inputs."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    model = amilpy.loads(SAMPLED, "sampled.csl")
+    times = [0.1, 0.25, 0.6, 1.0, 1.35, 2.5]
+    track = trajectory(model, 0, ["KP", "X0"], {"KP": 0.8, "X0": 2.0}, {}, times)
+    assert not isinstance(track, str), track
+    h = 0.25
+    for t in times:
+        k = np.floor(t / h + 1e-9)
+        s = t - k * h
+        for j, (kp, x0) in enumerate(((0.8 + 1e-30j, 2.0), (0.8, 2.0 + 1e-30j))):
+            x = x0 * (1 - kp * h) ** k * (1 - kp * s)
+            assert track.row("X", t)[j] == pytest.approx(x.imag / 1e-30, abs=1e-9), (t, j)
+            assert track.row("U", t)[j] == pytest.approx(
+                (-kp * x0 * (1 - kp * h) ** k).imag / 1e-30, abs=1e-9), (t, j)
+
+
+PULSED = """PROGRAM pulsed input
+! X' = A PULSE(0, 10, W) - K X: on for W, then off (W = 1 ends at a CINT instant,
+! where DYNAMIC's own statement runs)
+  CONSTANT A = 2.0, W = 1.0, K = 0.5
+  CINTERVAL CINT = 0.5
+  DYNAMIC
+    DERIVATIVE
+      X = INTEG(A*PULSE(0.0, 10.0, W) - K*X, 0.0)
+      TERMT(T >= 3.0)
+    END
+    XS = X
+  END
+END
+"""
+
+
+def test_a_pulse_that_ends_at_a_cint_instant_is_the_flows_switch():
+    """The PULSE's end at T = W = 1.0 falls on a CINT instant, where the program's
+    branches are chosen again: it is still the flow's switch, so d X/d W (which
+    moves it) is not followed -- differenced, and said -- while d X/d A is exact:
+    X(t) = (A/K)(1 - e^{-K W}) e^{-K (t - W)} after the pulse."""
+    model = amilpy.loads(PULSED, "pulsed.csl")
+    loc = model.sensitivity(["A", "W"], outputs=["X"])
+    assert loc.how == "differences of whole runs (a switch on TIME whose instant " \
+        "depends on a data value)"
+    from amilpy.analysis.sensitivity import trajectory
+
+    track = trajectory(model, 0, ["A"], {"A": 2.0, "W": 1.0, "K": 0.5}, {}, [0.5, 1.0, 2.5])
+    for t in (0.5, 1.0, 2.5):
+        exact = (1 - np.exp(-0.5 * min(t, 1.0))) / 0.5 * np.exp(-0.5 * max(t - 1.0, 0.0))
+        assert track.row("X", t)[0] == pytest.approx(exact, abs=1e-9), t
+
+
+@pytest.mark.parametrize("schedule, interval, why", [
+    # the section runs where a surface crosses: its instant moves with K
+    ("    SCHEDULE HIT .XN. X - 1.0\n", "", "a SCHEDULE on a crossing"),
+    # a kick every TAU: the instants move with TAU
+    ("", "    INTERVAL DT = TAU\n", "an INTERVAL depends on TAU"),
+])
+def test_an_instant_that_moves_is_differenced_and_says_why(schedule, interval, why):
+    text = f"""PROGRAM moving instants
+  CONSTANT K = 0.5, TAU = 1.0
+  CINTERVAL CINT = 0.5
+  DERIVATIVE
+    X = INTEG(-K*X, 2.0)
+{schedule}    TERMT(T >= 3.0)
+  END
+  DISCRETE HIT
+{interval}    X = X + 1.0
+  END
+END
+"""
+    loc = amilpy.loads(text, "moving.csl").sensitivity(["K", "TAU"], outputs=["X"])
+    assert loc.how.startswith("differences of whole runs") and why in loc.how, loc.how
 
 
 def test_sobol_indices_of_a_sum_are_its_variance_shares(rates):

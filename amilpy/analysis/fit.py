@@ -228,7 +228,8 @@ def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = 
     if probe is None:
         sens["how"] = _by_differences(why)
     else:
-        sens["how"] = "variational equations (sensitivities through the switches)"
+        sens["how"] = "variational equations (sensitivities through the switches" + \
+            (" and the program's DISCRETE and DYNAMIC code)" if model.ir.acsl else ")")
         known[tuple(to_x(start))] = (probe, why)
     result = least_squares(residuals, to_x(start), bounds=(lo, hi), method="trf",
                            jac=jacobian if probe is not None else "3-point",

@@ -12,20 +12,26 @@ of the generated functions at one TIME and state (the run's code bound to p +- h
 no integration); h = cbrt(eps) |p| (1e-8 for p = 0: `step_for`). Where the
 variational equations do not follow the flow (a surface that slides, a state reset,
 a memory value the derivatives read changing, a flow tangent to a surface, a memory
-function's initial value that depends on p, the ACSL form's written-order code) the
-caller differences whole runs instead, and is told why."""
+function's initial value that depends on p; in a program of the ACSL form, an
+instant its code runs at that moves with p: `analysis.program`) the caller
+differences whole runs instead, and is told why."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..observed import Observations
 from ..run.flow import FlowFailed
 from ..run.jacobian import STEP  # (cbrt(machine epsilon): the one differencing step)
-from ..run.plan import SAME_INSTANT
+from ..run.plan import SAME_INSTANT, SLIDE
 from ..run.variational import ParameterTangent
+from .tangents import Sampler, output_row, step_for
+
+if TYPE_CHECKING:
+    from .program import ProgramTrajectory
 
 
 def observed_jacobian(model, obs: Observations, names: list[str], values: dict[str, float],
@@ -36,9 +42,6 @@ def observed_jacobian(model, obs: Observations, names: list[str], values: dict[s
     why not)."""
     from ..diagnostics import AmilError
 
-    if model.ir.acsl is not None:
-        return None, "an ACSL program has no flow map (its DYNAMIC and DISCRETE code " \
-                     "runs between the integrator's steps)"
     rows = []
     for k in range(len(model.ir.runs)):
         try:
@@ -60,33 +63,6 @@ def _run_jacobian(model, obs: Observations, k: int, names, values, params, optio
     return (np.array(rows).reshape(len(rows), len(names))), ""
 
 
-class _Sampler:
-    """An observer of the flow's steps that cuts each at the instants asked for and
-    keeps the state and the tangent there (`Trajectory.at`)."""
-
-    def __init__(self, tangent: ParameterTangent, times: np.ndarray, n: int) -> None:
-        self.tangent, self.times, self.n = tangent, times, n
-        self.at: dict[float, tuple] = {}
-
-    def __call__(self, ta: float, tb: float, interp, m, z) -> None:
-        from ..run import State
-
-        lo = int(np.searchsorted(self.times, ta, side="right"))
-        hi = int(np.searchsorted(self.times, tb, side="right"))
-        t = ta
-        for tk in self.times[lo:hi].tolist():
-            if tk in self.at:
-                continue
-            self.tangent(t, tk, interp, m, z)
-            if self.tangent.failed is not None:
-                return
-            y = np.asarray(interp(tk), dtype=float)
-            self.at[tk] = (State(y, tuple(m), tuple(z), tk), self.tangent.phi[:self.n].copy())
-            t = tk
-        if tb > t:
-            self.tangent(t, tb, interp, m, z)
-
-
 class Trajectory:
     """d y(t)/d p along one run at given instants (`trajectory`), and of any output."""
 
@@ -104,10 +80,12 @@ class Trajectory:
             return sens[self.states[name]]
         if t not in self._rows:
             # the branches at t chosen afresh, as the run's row there has them: a switch
-            # on TIME due exactly at t is taken (the step that ends at t has the old one)
-            self._rows[t] = self.flow.state(state.y, None, state.memory, t)
-        return _output_row(self.code, self.variants, self.outputs[name], t, self._rows[t],
-                           sens, self.floor)
+            # on TIME due exactly at t is taken (the step that ends at t has the old one);
+            # a surface sliding stays so (its state, a rounding off it, would pick a side)
+            self._rows[t] = state if SLIDE in state.modes else \
+                self.flow.state(state.y, None, state.memory, t)
+        return output_row(self.code, self.variants, self.outputs[name], t, self._rows[t],
+                           sens, self.floor, self.flow.watch)
 
 
 def moved_flows(flow_at, code, name: str, value: float):
@@ -124,9 +102,15 @@ def moved_flows(flow_at, code, name: str, value: float):
 
 
 def trajectory(model, k: int, names: list[str], data: dict[str, float], options: dict,
-               times) -> Trajectory | str:
+               times) -> Trajectory | ProgramTrajectory | str:
     """Run `k`'s tangent with respect to the data values `names` at `times` (sorted;
-    `data` the values), or why the variational equations cannot follow it."""
+    `data` the values), or why the variational equations cannot follow it. A program
+    in ACSL form: through its instants' code (`analysis.program`)."""
+    if model.ir.acsl is not None:
+        from .program import program_trajectory
+
+        return program_trajectory(model, k, names, data, options, times)
+
     def flow_at(**changed):
         return model.flow(options.get("method"), options.get("rtol"), options.get("atol"),
                           run=k, **{**data, **changed})
@@ -152,7 +136,7 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
                             (n,))
     tangent = ParameterTangent(c, flow.watch, floor, dy0, variants)
     times = np.asarray(times, dtype=float)
-    sampler = _Sampler(tangent, times, n)
+    sampler = Sampler(tangent, times, n)
     at: dict[float, tuple] = sampler.at
     if len(times) and times[0] <= start.t + SAME_INSTANT * max(1.0, abs(start.t)):
         at[float(times[0])] = (start, tangent.phi[:n].copy())
@@ -170,21 +154,6 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
     return Trajectory(flow, variants, floor, at)
 
 
-def _output_row(c, variants, i: int, t: float, state, sens: np.ndarray, floor: np.ndarray
-                ) -> np.ndarray:
-    """d out_i / d p = d out_i/d y . S + d out_i/d p at (t, state)."""
-    y = np.asarray(state.y, dtype=float)
-    m, z = list(state.modes), list(state.memory)
-    grad = np.zeros(len(y))
-    for j in range(len(y)):
-        h = STEP * max(abs(y[j]), float(floor[j]))
-        up, down = y.copy(), y.copy()
-        up[j] += h
-        down[j] -= h
-        grad[j] = (c.out(t, up.tolist(), m, z)[i] - c.out(t, down.tolist(), m, z)[i]) / (2 * h)
-    direct = np.array([(plus.out(t, y.tolist(), m, z)[i] - minus.out(t, y.tolist(), m, z)[i])
-                       / (2.0 * h) for plus, minus, h in variants])
-    return grad @ sens + direct
 
 
 
@@ -259,9 +228,8 @@ def local(model, names: list[str] | None = None, variables: list[str] | None = N
     run = _one_run(model, options, variables, params)
     base = member_of(tuple(variables), run)
     flow_options = {"method": options.method, "rtol": options.rtol, "atol": options.atol}
-    track = trajectory(model, 0, names, data, flow_options, base.times) \
-        if model.ir.acsl is None else "an ACSL program has no flow map"
-    if isinstance(track, Trajectory):
+    track = trajectory(model, 0, names, data, flow_options, base.times)
+    if not isinstance(track, str):
         raw = np.array([[track.row(v, t) for v in variables] for t in base.times.tolist()])
         how = "sensitivity equations"
     else:
@@ -283,12 +251,6 @@ def _one_run(model, options, variables, params):
     if not run.ok:
         raise FlowFailed(f"the run failed: {run.message}")
     return run
-
-
-def step_for(value: float, relative: float) -> float:
-    """A central difference's step for a data value: relative to it (a value of 1E-12
-    is moved by a fraction of itself, never by more than itself); 1e-8 for 0."""
-    return relative * abs(value) if value else 1e-8
 
 
 def _differences(model, names, data, variables, options, params, base, rtol: float

@@ -254,6 +254,8 @@ def _timer(model: ir.Model, spec: ir.RunSpec, opts: Options, constants, cint: fl
 class AcslRun(_Run):
     """simulate's run with the ACSL form's order of one run (see the module's doc)."""
 
+    observer = None  # (of every accepted step: the program's tangent, `analysis.program`)
+
     def __init__(self, model, spec, opts, prepared: AcslPrepared, started) -> None:
         super().__init__(model, spec, opts, prepared, started)
         self.acsl = model.acsl
@@ -440,7 +442,7 @@ class AcslRun(_Run):
             else:
                 # (a CINT instant or an event that changes nothing the derivatives read
                 # does not restart the integrator)
-                integ.integrate(cur, t_next, rec, pause=acts)
+                integ.integrate(cur, t_next, rec, pause=acts, observer=self.observer)
             rec.hold = None
             reason, fired = integ.stop_reason, integ.fired
             integ.fired = []

@@ -17,14 +17,22 @@ switches, so it lies in one branch) and carries Phi = d y(t)/d y(t0):
   surface written twice, like the hoist's |Y| = DH and Y = DH). A switch on
   TIME alone (n = 0) has no saltation.
 
+- while one surface slides, A is the Jacobian of Filippov's field (the
+  combination of its branches that keeps it at zero, as the run integrates it);
+  entering the surface is a switch whose f+ is that field (the saltation keeps
+  the tangent on the surface: n . Phi = 0 after it), and leaving it is none: the
+  field is continuous there, its weight having reached 0 or 1 (Dieci and Lopez
+  2011, "Sliding motion on discontinuity surfaces of high co-dimension").
+
 What it does not handle it says (`Tangent.failed`), and the flow map then
-takes central differences of whole flows instead: a sliding motion, a state
-reset (MODINT), a memory value the field reads changing along the way, a
-crossing where the flow is tangent to the surface (n . f- ~ 0).
+takes central differences of whole flows instead: several surfaces sliding at
+once, a state reset (MODINT), a memory value the field reads changing along
+the way, a crossing where the flow is tangent to the surface (n . f- ~ 0).
 """
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -57,6 +65,7 @@ class Tangent:
     """Observer of a flow: Phi = d y(t)/d y(t0)[:, columns] (see the module)."""
 
     fractions = np.concatenate([[0.0], _C, [1.0]])  # of each step, where it samples
+    outputs_read = False  # (the flow map's: the states only)
 
     def __init__(self, c, watch, floor: np.ndarray, n: int, columns) -> None:
         self.c, self.watch, self.floor = c, watch, floor
@@ -78,15 +87,26 @@ class Tangent:
             self._pending = None
             self._phi = expm(h * a) @ self._phi
 
+    def value(self, fn: str, code, t: float, y, m, z):
+        """`fn` ("rhs" or "surf") of the generated functions `code` at (t, y): while a
+        surface slides, "rhs" is Filippov's field of that code (`filippov`)."""
+        if fn == "rhs" and SLIDE in m:
+            alpha, mp, mm = filippov(self.watch, code, t, y, m, z)
+            yl = [float(v) for v in y]
+            return alpha * np.asarray(code.rhs(t, yl, mp, z), dtype=float) + \
+                (1.0 - alpha) * np.asarray(code.rhs(t, yl, mm, z), dtype=float)
+        return getattr(code, fn)(t, [float(v) for v in y], m, z)
+
     def jacobian(self, t: float, y: np.ndarray, m, z) -> np.ndarray:
-        rhs = self.c.rhs
-        return jacobian_at(self.c, lambda v: rhs(t, v, m, z), t, y, m, z, self.floor)[0]
+        c, value = self.c, self.value
+        return jacobian_at(c, lambda v: value("rhs", c, t, v, m, z), t, y, m, z,
+                           self.floor)[0]
 
     def __call__(self, ta: float, tb: float, interp, m, z) -> None:
         if self.failed is not None:
             return
-        if SLIDE in m:
-            self.failed = "a surface slides"
+        if sum(v == SLIDE for v in m) > 1:
+            self.failed = "several surfaces slide at once"
             return
         ya = np.asarray(interp(ta), dtype=float)
         if self.prev is not None:
@@ -142,9 +162,18 @@ class Tangent:
                 self.c.rhs(t, y.tolist(), m, z) != self.c.rhs(t, y.tolist(), m, z_prev):
             self.failed = "a memory value the derivatives read changes"
             return
+        if z != z_prev and self.outputs_read and \
+                self.c.out(t, y.tolist(), m, z) != self.c.out(t, y.tolist(), m, z_prev):
+            # (its tangent is not carried: an output it gives would read d/dp = 0)
+            self.failed = "a memory value an output reads changes (ZHOLD's held value)"
+            return
         current, mem = list(m_prev), z_prev
         for k in range(len(m)):
             if m[k] == m_prev[k]:
+                continue
+            if m_prev[k] == SLIDE:
+                # leaving the surface: the field is continuous there (no jump)
+                current[k] = m[k]
                 continue
             after = list(current)
             after[k] = m[k]
@@ -180,8 +209,8 @@ class Tangent:
                 g[j] = (c.surf(t, up.tolist(), before, z_before)[k] -
                         c.surf(t, down.tolist(), before, z_before)[k]) / (up[j] - down[j])
         g = np.asarray(g, dtype=float)
-        f_minus = np.asarray(c.rhs(t, yl, before, z_before), dtype=float)
-        f_plus = np.asarray(c.rhs(t, yl, after, z_after), dtype=float)
+        f_minus = np.asarray(self.value("rhs", c, t, yl, before, z_before), dtype=float)
+        f_plus = np.asarray(self.value("rhs", c, t, yl, after, z_after), dtype=float)
         if not np.any(g):
             return g, f_plus - f_minus, None
         ht = STEP * max(abs(t), 1.0)
@@ -196,6 +225,33 @@ class Tangent:
 
 def scale_of(y: np.ndarray, floor: np.ndarray) -> np.ndarray:
     return np.maximum(np.abs(y), floor)
+
+
+def filippov(watch, code, t: float, y, m, z) -> tuple[float, list, list]:
+    """The weight alpha of the + branch of the one surface sliding in m, and both
+    branches' modes, under the generated functions `code`: alpha = d- / (d- - d+),
+    d+- the surface's rates along the branches (`SurfaceWatch.surface_rate`, the
+    run's own). Not held to [0, 1] as the run holds it: the tangent differentiates
+    the field, and a difference that steps past where the weight reaches its bound
+    (the surface's exit, which a moved data value moves) would put a kink in it."""
+    k = m.index(SLIDE)
+    mp, mm = list(m), list(m)
+    mp[k], mm[k] = 1.0, -1.0
+    w, yv = watch_of(watch, code), np.asarray(y, dtype=float)
+    yl = yv.tolist()
+    dp = w.surface_rate(k, t, yv, np.asarray(code.rhs(t, yl, mp, z), dtype=float), mp, z)
+    dm = w.surface_rate(k, t, yv, np.asarray(code.rhs(t, yl, mm, z), dtype=float), mm, z)
+    return (0.5 if dm == dp else dm / (dm - dp)), mp, mm
+
+
+def watch_of(watch, code):
+    """The run's surface watch over other generated functions of the same model (a
+    data value moved: `ParameterTangent`'s variants), for their sliding field."""
+    if watch.c is code:
+        return watch
+    other = copy.copy(watch)
+    other.c, other.y0 = code, code.y0
+    return other
 
 
 class ParameterTangent(Tangent):
@@ -213,13 +269,14 @@ class ParameterTangent(Tangent):
         super().__init__(c, watch, floor, n + q, range(n, n + q))
         self._phi = np.vstack([start, np.eye(q)])
         self.n, self.variants = n, variants
+        self.outputs_read = True  # (observed outputs: their memory too)
 
     def _by_p(self, fn: str, t: float, yl: list, m, z) -> np.ndarray:
         """d fn(t, y, m, z) / d p, a column per value (fn: "rhs" or "surf")."""
         cols = []
         for plus, minus, h in self.variants:
-            hi = np.asarray(getattr(plus, fn)(t, yl, m, z), dtype=float)
-            lo = np.asarray(getattr(minus, fn)(t, yl, m, z), dtype=float)
+            hi = np.asarray(self.value(fn, plus, t, yl, m, z), dtype=float)
+            lo = np.asarray(self.value(fn, minus, t, yl, m, z), dtype=float)
             cols.append((hi - lo) / (2.0 * h))
         return np.array(cols).T
 
@@ -248,3 +305,65 @@ class ParameterTangent(Tangent):
         out[:n, :n] += np.outer(diff, g) / rate
         out[:n, n:] = np.outer(diff, sp) / rate
         return out
+
+
+class ProgramTangent(ParameterTangent):
+    """`ParameterTangent` of a program in ACSL form: the states y (n) augmented by the
+    r memory values z its DISCRETE and DYNAMIC code keep (constant between the
+    program's instants, z' = 0) and by the q data values p: the matrix is
+    [[A, F_z, F_p], [0, 0, 0], [0, 0, 0]], F_z = d f/d z by central differences
+    (h = STEP max(|z|, 1)); a switch's jump takes the surface's dependence on z in;
+    the code an instant runs is a map of (y, z) whose Jacobian `jump` applies
+    (`analysis.program` takes it). `start` = d (y, z)(t0) / d p."""
+
+    def __init__(self, c, watch, floor: np.ndarray, start: np.ndarray,
+                 variants: list[tuple[object, object, float]], memory: int) -> None:
+        super().__init__(c, watch, floor, start, variants)
+        self.n, self.r = start.shape[0] - memory, memory
+
+    def _by_z(self, fn: str, t: float, y: np.ndarray, m, z) -> np.ndarray:
+        """d fn(t, y, m, z) / d z, a column per memory value."""
+        yl, cols = np.asarray(y, dtype=float).tolist(), []
+        for j in range(self.r):
+            h = STEP * max(abs(z[j]), 1.0)
+            up, down = list(z), list(z)
+            up[j] += h
+            down[j] -= h
+            hi = np.asarray(self.value(fn, self.c, t, yl, m, up), dtype=float)
+            lo = np.asarray(self.value(fn, self.c, t, yl, m, down), dtype=float)
+            cols.append((hi - lo) / (up[j] - down[j]))
+        return np.array(cols).T if cols else np.zeros((self.n if fn == "rhs" else 0, 0))
+
+    def jacobian(self, t: float, y: np.ndarray, m, z) -> np.ndarray:
+        n, r, q = self.n, self.r, len(self.variants)
+        out = np.zeros((n + r + q, n + r + q))
+        out[:n, :n] = Tangent.jacobian(self, t, y, m, z)
+        if r:
+            out[:n, n:n + r] = self._by_z("rhs", t, y, m, z)
+        out[:n, n + r:] = self._by_p("rhs", t, np.asarray(y, dtype=float).tolist(), m, z)
+        return out
+
+    def _saltation(self, k: int, t: float, y: np.ndarray, before, after, z_before, z_after
+                   ) -> np.ndarray | None:
+        n, r, q = self.n, self.r, len(self.variants)
+        jump = self._jump(k, t, y, before, after, z_before, z_after)
+        if jump is None:
+            return None
+        g, diff, rate = jump
+        sp = self._by_p("surf", t, y.tolist(), before, z_before)[k]
+        sz = self._by_z("surf", t, y, before, z_before)[k] if r else np.zeros(0)
+        out = np.eye(n + r + q)
+        if rate is None:
+            if np.any(sp) or np.any(sz):
+                self.failed = "a switch on TIME whose instant depends on a data value"
+                return None
+            return out
+        # I + (f+ - f-, 0, 0) (ds/dy, ds/dz, ds/dp)^T / rate
+        out[:n, :] += np.outer(diff, np.concatenate([g, sz, sp])) / rate
+        return out
+
+    def jump(self, matrix: np.ndarray, t: float, y: np.ndarray, m, z) -> None:
+        """The code of an instant at t ran: its Jacobian (of (y, z, p), identity rows
+        for p) applies, and the next step starts from what it left."""
+        self._phi = matrix @ self.phi
+        self.prev = (t, np.asarray(y, dtype=float).copy(), list(m), list(z))

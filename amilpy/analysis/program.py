@@ -1,0 +1,233 @@
+"""Sensitivities of a program in ACSL form to data values: d (states, memory)(t)/d p
+along one run, through its DISCRETE sections and DYNAMIC statements.
+
+Between the program's instants the run is a flow whose derivatives also read the
+memory values z the code keeps (a dose count, a rate the code sets): the tangent
+`ProgramTangent` carries (y, z, p) with z' = 0 through the steps and the located
+switches, as `ParameterTangent` does for a model. At an instant the code is a map
+(y, z) -> (y', z') at a fixed TIME; the tangent takes its Jacobian, by central
+differences of the generated section at that TIME (d/dy, d/dz) and of the same
+section bound to p +- h (d/dp: no integration, the code only). A DOSE of AG = AG +
+DOSE then gives d AG/d DOSE a jump of 1, exactly as the run does.
+
+What it does not follow it says, and the caller differences whole runs instead: an
+instant that moves with the data values (a SCHEDULE on a crossing, .XN./.XP./.XZ.;
+a SCHEDULE, an INTERVAL or INITIAL's schedule whose time depends on them), besides
+what `ParameterTangent` does not follow (sliding, a flow tangent to a surface)."""
+
+from __future__ import annotations
+
+import time as _clock
+
+import numpy as np
+
+from ..run import Options
+from ..run.acsl import AcslRun, prepare_acsl
+from ..run.code import Calls
+from ..run.flow import State
+from ..run.jacobian import STEP
+from ..run.plan import SAME_INSTANT, Purpose, same_instant
+from ..run.variational import ProgramTangent
+from .tangents import Sampler, output_row, step_for
+
+
+class _Jumped(Exception):
+    """The tangent cannot follow an instant's code (why)."""
+
+
+def program_trajectory(model, k: int, names: list[str], data: dict[str, float],
+                       options: dict, times):
+    """Run `k`'s tangent with respect to `names` at `times` (sorted), or why the
+    tangent cannot follow it: a `ProgramTrajectory` or a str."""
+    from ..diagnostics import AmilError
+
+    def prepared_at(**changed):
+        spec = model._specs({**data, **changed})[k]
+        opts = Options(method=options.get("method"), rtol=options.get("rtol"),
+                       atol=options.get("atol"))
+        return spec, opts, prepare_acsl(model.ir, spec, opts, model.cache)
+
+    spec, opts, base = prepared_at()
+    plan, c = base.plan, base.code
+    if plan.step_point or not plan.route.uses_tolerances:
+        return "a fixed-step route has no dense output for the sensitivity equations"
+    if any(w.purpose is Purpose.SCHEDULE for w in plan.watched):
+        return "a SCHEDULE on a crossing runs its section at an instant the data values move"
+    n, r = len(c.y0), len(c.z0)
+    variants, start = [], np.zeros((n + r, len(names)))
+    for j, name in enumerate(names):
+        h = step_for(data[name], STEP)
+        try:
+            plus, minus = prepared_at(**{name: data[name] + h})[2], \
+                prepared_at(**{name: data[name] - h})[2]
+        except AmilError as exc:
+            return f"{name} moved by {h:.3g}: {exc}"
+        if any((v.code.watched, v.code.state_names, v.code.out_names, v.code.kept,
+                len(v.code.z0)) != (c.watched, c.state_names, c.out_names, c.kept, r)
+               for v in (plus, minus)):
+            return f"{name} changes which switches the run watches"
+        if plus.schedules != minus.schedules:
+            return f"INITIAL schedules a section at an instant {name} moves"
+        intervals = [d.interval for d in model.ir.acsl.discretes.values()
+                     if d.interval is not None]
+        if any(plus.constants.get(i) != minus.constants.get(i) for i in intervals):
+            return f"an INTERVAL depends on {name}"
+        variants.append((plus.code, minus.code, h))
+        start[:, j] = (np.concatenate([plus.code.y0, plus.code.z0]) -
+                       np.concatenate([minus.code.y0, minus.code.z0])) / (2.0 * h)
+    floor = np.broadcast_to(np.asarray(plan.tol.atol / plan.tol.rtol, dtype=float), (n,))
+    tangent = ProgramTangent(c, None, floor, start, variants, r)
+    times = np.asarray(times, dtype=float)
+    sampler = Sampler(tangent, times, n + r)
+    run = _TangentRun(model.ir, spec, opts, base, _clock.perf_counter(), sampler, variants)
+    tangent.watch = run.watch
+    result = run.run()
+    if run.why is not None:
+        return run.why
+    if tangent.failed is not None:
+        return tangent.failed
+    if not result.ok:
+        return f"the run failed: {result.message}"
+    missing = [t for t in times.tolist() if t not in sampler.at]
+    if missing:
+        return f"the run's steps did not reach TIME = {missing[0]:.9g}"
+    return ProgramTrajectory(c, variants, floor, sampler.at, run.watch)
+
+
+class _TangentRun(AcslRun):
+    """An ACSL run whose accepted steps the tangent follows (`observer`), and whose
+    instants' code it takes the Jacobian of before the code runs."""
+
+    def __init__(self, model, spec, opts, prepared, started, sampler, variants) -> None:
+        super().__init__(model, spec, opts, prepared, started)
+        self.observer, self.sampler, self.variants = sampler, sampler, variants
+        self.keys = {id(fn): key for key, (_, fn) in self.c.code.items()}
+        self.why: str | None = None
+
+    @property
+    def tangent(self) -> ProgramTangent:
+        return self.sampler.tangent
+
+    def run_code(self, cur, fn, what: str) -> Calls:
+        matrix = None
+        if self.why is None and self.tangent.failed is None:
+            try:
+                matrix = self._code_jacobian(cur, fn)
+            except _Jumped as exc:
+                self.why = f"{what} at TIME = {cur.t:.9g}: {exc}"
+        calls = super().run_code(cur, fn, what)
+        if matrix is not None:
+            self.tangent.jump(matrix, cur.t, cur.y, cur.m, cur.z)
+        return calls
+
+    def instant(self, cur) -> None:
+        t = self.tangent
+        if t.prev is not None and t.failed is None:
+            # a switch of the flow at this very instant (a breakpoint: a PULSE ends
+            # at a CINT instant) jumps the tangent before the code runs
+            t._join(cur.t, np.asarray(cur.y, dtype=float), list(cur.m), list(cur.z))
+        t.prev = (cur.t, cur.y.copy(), list(cur.m), list(cur.z))
+        modes = list(cur.m)
+        super().instant(cur)
+        self._branches_chosen_again(cur, modes)
+        # the instant's row is after its code, and so is the tangent read there
+        t.prev = (cur.t, cur.y.copy(), list(cur.m), list(cur.z))
+        times = self.sampler.times
+        i = int(np.searchsorted(times, cur.t - SAME_INSTANT * max(1.0, abs(cur.t))))
+        if i < len(times) and same_instant(cur.t, float(times[i])):
+            self.sampler.at[float(times[i])] = (
+                State(cur.y.copy(), tuple(cur.m), tuple(cur.z), cur.t),
+                t.phi[:t.n + t.r].copy())
+
+    def _branches_chosen_again(self, cur, modes: list) -> None:
+        """The branches the run chose again after the instant's code: a switch on
+        TIME due now (a breakpoint, whose sign is already the new one: a PULSE that
+        ends at a CINT instant) is the flow's, with its jump (none, unless a data
+        value moves its instant: then the tangent says so); one on the states is
+        the code's doing, at an instant fixed in time: none."""
+        t = self.tangent
+        y, z = np.asarray(cur.y, dtype=float), list(cur.z)
+        for k in range(len(modes)):
+            if t.failed is not None or cur.m[k] == modes[k] or self._on_states(k, cur, modes):
+                continue
+            after = list(modes)
+            after[k] = cur.m[k]
+            jump = t._saltation(k, cur.t, y, modes, after, z, z)
+            if jump is None:
+                return
+            t._phi = jump @ t.phi
+            modes = after
+
+    def _on_states(self, k: int, cur, modes) -> bool:
+        """Whether watched surface k depends on the states at the cursor."""
+        g = self.watch.watched[k].gradient
+        if g is not None:
+            return bool(np.any(g))
+        y, floor = np.asarray(cur.y, dtype=float), self.tangent.floor
+        for j in range(len(y)):
+            h = STEP * max(abs(y[j]), float(floor[j]))
+            up, down = y.copy(), y.copy()
+            up[j] += h
+            down[j] -= h
+            if self.c.surf(cur.t, up.tolist(), modes, cur.z)[k] != \
+                    self.c.surf(cur.t, down.tolist(), modes, cur.z)[k]:
+                return True
+        return False
+
+    def _code_jacobian(self, cur, fn) -> np.ndarray:
+        """d (y', z') / d (y, z, p) of the section `fn` at the cursor."""
+        tangent = self.tangent
+        n, r, q = tangent.n, tangent.r, len(self.variants)
+        t, m, y, z = cur.t, list(cur.m), np.asarray(cur.y, dtype=float), list(cur.z)
+
+        def run(f, yv, zv):
+            calls = Calls()
+            try:
+                y1, z1, _ = f(t, list(yv), m, list(zv), calls)
+            except (ArithmeticError, ValueError) as exc:
+                raise _Jumped(f"its code has no value near the run's ({exc})") from None
+            return np.concatenate([np.asarray(y1, dtype=float),
+                                   np.asarray(z1, dtype=float)]), calls.schedules
+
+        _, schedules = run(fn, y.tolist(), z)
+        v = np.concatenate([y, np.asarray(z, dtype=float)])
+        scale = np.concatenate([np.maximum(np.abs(y), tangent.floor),
+                                np.maximum(np.abs(v[n:]), 1.0)])
+        out = np.eye(n + r + q)
+        for j in range(n + r):
+            h = STEP * scale[j]
+            up, down = v.copy(), v.copy()
+            up[j] += h
+            down[j] -= h
+            hi, s_hi = run(fn, up[:n].tolist(), up[n:].tolist())
+            lo, s_lo = run(fn, down[:n].tolist(), down[n:].tolist())
+            if s_hi != schedules or s_lo != schedules:
+                raise _Jumped("the time it schedules depends on the states or memory")
+            out[:n + r, j] = (hi - lo) / (up[j] - down[j])
+        key = self.keys[id(fn)]
+        for j, (plus, minus, h) in enumerate(self.variants):
+            hi, s_hi = run(plus.code[key][1], y.tolist(), z)
+            lo, s_lo = run(minus.code[key][1], y.tolist(), z)
+            if s_hi != schedules or s_lo != schedules:
+                raise _Jumped("the time it schedules depends on a data value")
+            out[:n + r, n + r + j] = (hi - lo) / (2.0 * h)
+        return out
+
+
+class ProgramTrajectory:
+    """d (state or output)(t)/d p at the instants asked for (`program_trajectory`)."""
+
+    def __init__(self, code, variants, floor: np.ndarray, at: dict[float, tuple],
+                 watch) -> None:
+        self.code, self.variants, self.floor, self.at = code, variants, floor, at
+        self.watch = watch
+        self.states = {name: i for i, name in enumerate(code.state_names)}
+        self.outputs = {name: i for i, name in enumerate(code.out_names)}
+
+    def row(self, name: str, t: float) -> np.ndarray:
+        """d name(t) / d p, a value per data value."""
+        state, sens = self.at[t]
+        if name in self.states:
+            return sens[self.states[name]]
+        return output_row(self.code, self.variants, self.outputs[name], t, state, sens,
+                           self.floor, self.watch)

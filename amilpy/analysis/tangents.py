@@ -1,0 +1,80 @@
+"""The pieces the tangents of a flow (`analysis.sensitivity`) and of a program in
+ACSL form (`analysis.program`) share: the observer that reads the tangent at the
+instants asked for, an output's row from the states' tangent, a difference's
+step."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..run.jacobian import STEP
+from ..run.plan import SLIDE
+from ..run.variational import ParameterTangent, filippov
+
+
+class Sampler:
+    """An observer of the flow's steps that cuts each at the instants asked for and
+    keeps the state and the tangent there (`Trajectory.at`; a
+    program's: `analysis.program`)."""
+
+    def __init__(self, tangent: ParameterTangent, times: np.ndarray, n: int) -> None:
+        self.tangent, self.times, self.n = tangent, times, n
+        self.at: dict[float, tuple] = {}
+
+    def __call__(self, ta: float, tb: float, interp, m, z) -> None:
+        from ..run import State
+
+        lo = int(np.searchsorted(self.times, ta, side="right"))
+        hi = int(np.searchsorted(self.times, tb, side="right"))
+        t = ta
+        for tk in self.times[lo:hi].tolist():
+            if tk in self.at:
+                continue
+            self.tangent(t, tk, interp, m, z)
+            if self.tangent.failed is not None:
+                return
+            y = np.asarray(interp(tk), dtype=float)
+            self.at[tk] = (State(y, tuple(m), tuple(z), tk), self.tangent.phi[:self.n].copy())
+            t = tk
+        if tb > t:
+            self.tangent(t, tb, interp, m, z)
+
+
+def output_row(c, variants, i: int, t: float, state, sens: np.ndarray, floor: np.ndarray,
+                watch) -> np.ndarray:
+    """d out_i / d p = d out_i/d y . S + d out_i/d p at (t, state); where S has rows
+    for the memory values too (a program's: `analysis.program`), + d out_i/d z . S_z.
+    While a surface slides the outputs are weighted as its field (`filippov`)."""
+    y = np.asarray(state.y, dtype=float)
+    m, z = list(state.modes), list(state.memory)
+    sliding = SLIDE in m
+
+    def out(code, yv: np.ndarray, zv: list) -> float:
+        if sliding:
+            alpha, mp, mm = filippov(watch, code, t, yv, m, zv)
+            return alpha * code.out(t, yv.tolist(), mp, zv)[i] + \
+                (1.0 - alpha) * code.out(t, yv.tolist(), mm, zv)[i]
+        return code.out(t, yv.tolist(), m, zv)[i]
+
+    grad = np.zeros(len(sens))
+    for j in range(len(y)):
+        h = STEP * max(abs(y[j]), float(floor[j]))
+        up, down = y.copy(), y.copy()
+        up[j] += h
+        down[j] -= h
+        grad[j] = (out(c, up, z) - out(c, down, z)) / (2 * h)
+    for j in range(len(sens) - len(y)):
+        h = STEP * max(abs(z[j]), 1.0)  # (as the program's tangent moves them)
+        up, down = list(z), list(z)
+        up[j] += h
+        down[j] -= h
+        grad[len(y) + j] = (out(c, y, up) - out(c, y, down)) / (up[j] - down[j])
+    direct = np.array([(out(plus, y, z) - out(minus, y, z)) / (2.0 * h)
+                       for plus, minus, h in variants])
+    return grad @ sens + direct
+
+
+def step_for(value: float, relative: float) -> float:
+    """A central difference's step for a data value: relative to it (a value of 1E-12
+    is moved by a fraction of itself, never by more than itself); 1e-8 for 0."""
+    return relative * abs(value) if value else 1e-8
