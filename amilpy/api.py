@@ -248,8 +248,9 @@ class Model:
     def _why_no_row(self) -> str:
         """What to change when a run cannot have a row at an observed instant."""
         if self.ir.acsl is not None:
-            return (f"an ACSL program has rows at its communication instants only: make "
-                    f"{self.ir.acsl.cint_name} divide the observations' instants")
+            return (f"step-point mode (IALG 3, Euler) has rows at its steps only: make "
+                    f"{self.ir.acsl.cint_name} divide the observations' instants, or run "
+                    "without step-point mode")
         return ("step-point mode has rows at its steps only: make DELT divide the "
                 "observations' instants, or run without step-point mode")
 

@@ -103,18 +103,49 @@ def test_a_bad_data_file_is_an_error_at_its_line_and_column(tmp_path, capsys, te
     assert "Traceback" not in err
 
 
-def test_an_acsl_program_has_rows_at_its_communication_instants_only(tmp_path):
-    """The ACSL form runs DYNAMIC at every communication instant, so an observation
-    cannot be a row of its own there: on the CINT grid it is compared, between
-    two instants it is refused with what to change."""
+SAMPLED = """PROGRAM sampled proportional control
+  CONSTANT KP = 0.8, X0 = 2.0
+  CINTERVAL CINT = 0.25
+  INITIAL
+    U = -KP*X0
+  END
+  DYNAMIC
+    DERIVATIVE
+      X = INTEG(U, X0)
+    END
+    U = -KP*X
+    TERMT(T >= 3.0)
+  END
+END
+"""
+
+
+def test_an_acsl_program_has_a_row_at_every_observation(tmp_path):
+    """An observation between two communication instants is a row of its own: the
+    states there and what the code last left, no code run at it. U = -KP X is sampled
+    by DYNAMIC every CINT = 0.25 and held, so X(k H + s) = X(k H) (1 - KP s) with
+    X(k H) = X0 (1 - KP H)^k; at 0.6, U is still -KP X(0.5). On the CINT grid the
+    run is the run without observations."""
+    model = amilpy.loads(SAMPLED, "sampled.csl")
+    run = model.run(advice=False, data=_write(tmp_path, "T,X,U\n0.6,1.0,1.0\n1.0,1.0,1.0\n"))[0]
+    x, u = run.observed
+    xk = 2.0 * (1 - 0.8 * 0.25) ** 2  # X(0.5)
+    assert list(x.t) == [0.6, 1.0]
+    assert x.simulated[0] == pytest.approx(xk * (1 - 0.8 * 0.1), rel=1e-12)
+    assert u.simulated[0] == pytest.approx(-0.8 * xk, rel=1e-12)
+    assert x.simulated[1] == pytest.approx(2.0 * (1 - 0.8 * 0.25) ** 4, rel=1e-12)
+    plain = model.run(advice=False)[0]
+    assert len(run.times) == len(plain.times) + 1  # (1.0 is a CINT instant already)
+    assert run.values["U"][run.outdel_mask] == pytest.approx(plain.values["U"], rel=1e-12)
+
+
+def test_an_euler_program_has_rows_at_its_steps_only(tmp_path):
+    """IALG 3 (Euler, step-point mode) has no state between its steps: an observation
+    there is refused, saying what to change."""
     model = amilpy.load(f"{ROOT}/models/examples/oral_dosing.csl")
     name = model.ir.states[0].name
-    run = model.run(data=_write(tmp_path, f"T,{name}\n1.5,1.0\n3.0,2.0\n"))[0]
-    assert list(run.observed[0].t) == [1.5, 3.0]
-    at = np.searchsorted(run.t, [1.5, 3.0])
-    assert list(run.observed[0].simulated) == list(run[name][at])
     with pytest.raises(AmilError, match="no row at TIME 1.25") as err:
-        model.run(data=_write(tmp_path, f"T,{name}\n1.25,1.0\n", "between.csv"))
+        model.run(method="RECT", data=_write(tmp_path, f"T,{name}\n1.25,1.0\n", "between.csv"))
     assert "make CINT divide" in err.value.diagnostics[0].hint
 
 

@@ -203,7 +203,10 @@ def _prepare(model: ir.Model, spec: ir.RunSpec, opts: Options, cache: Cache) -> 
                         f"({DEFAULTS['max_values']:.0e} values at most): make "
                         f"{acsl.cint_name} longer", model.path)
     timer["FINTIM"] = fintim
-    grid = steppoint.grid(t0, timer) if step_point else make_grid(t0, t0 + fintim, cint, cint)
+    # (an observation's instant between the CINT ones is a row too, the states there
+    # and what the code last left: no code runs at it)
+    grid = steppoint.grid(t0, timer) if step_point else \
+        make_grid(t0, t0 + fintim, cint, cint, opts.extra_times)
     plan = make_plan(model, spec, opts, code, timer, grid, step_point, t0=t0)
     if unbounded:  # (a hundredth of a run of 100 output intervals: the length is unknown)
         plan = replace(plan, max_step=min(plan.max_step, cint))
@@ -290,8 +293,10 @@ class AcslRun(_Run):
         if self.queue and self.queue[0][0] < nxt:
             nxt, acts = self.queue[0][0], True
         if self.dynamic is not None:
-            times = self.plan.grid.times
+            times, cint = self.plan.grid.times, self.plan.grid.outdel
             k = bisect_right(times, t * (1 + 1e-15) + 1e-300)
+            while k < len(times) and not cint[k]:
+                k += 1  # (an observation's row: the loop takes it as it passes)
             if k < len(times) and times[k] <= nxt:
                 nxt, acts = float(times[k]), True
         return nxt, acts
@@ -372,7 +377,9 @@ class AcslRun(_Run):
         times = self.plan.grid.times
         on_grid = self.rec.out_i < len(times) and \
             same_instant(cur.t, times[self.rec.out_i])
-        if on_grid and self.dynamic is not None and self.stopped is None:
+        # (DYNAMIC runs at the CINT instants, not at an observation's)
+        if on_grid and self.plan.grid.outdel[self.rec.out_i] and self.dynamic is not None \
+                and self.stopped is None:
             self.run_code(cur, self.dynamic, "DYNAMIC")
             changed = True
         if changed:
