@@ -99,6 +99,27 @@ def test_an_output_a_memory_holds_is_differenced_and_says_why():
     assert loc.raw[8, 0, 0] == pytest.approx(-0.5 * np.exp(-0.35), rel=1e-6)
 
 
+def test_a_switch_on_time_that_a_value_moves_jumps_the_tangent():
+    """X' = STEP(T1) - K X, X(0) = 0: X = (1 - exp(-K (t - T1)))/K after T1. d X/d T1 =
+    -exp(-K (t - T1)) there, 0 before: the tangent jumps by f- - f+ = -1 at T1 (the
+    switch's instant moves by dT1), which it left out until 2026-11-30 (differenced).
+    To 1e-9 (the tangent is exact on these linear stretches)."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    model = amilpy.loads("TITLE STEP\nPARAM K = 0.5, T1 = 0.7\n"
+                         "X = INTGRL(0.0, STEP(T1) - K*X)\nTIMER FINTIM = 2.0, OUTDEL = 0.1\n"
+                         "PRINT X\nEND\n")
+    times = [0.5, 0.75, 1.3, 2.0]
+    track = trajectory(model, 0, ["T1", "K"], {"K": 0.5, "T1": 0.7}, {}, times)
+    assert not isinstance(track, str), track
+    for t in times:
+        k, t1 = 0.5, 0.7
+        s = max(t - t1, 0.0)
+        dx_dt1 = -np.exp(-k * s) if t > t1 else 0.0
+        dx_dk = (np.exp(-k * s) * (1 + k * s) - 1) / k ** 2 if t > t1 else 0.0
+        assert track.row("X", t) == pytest.approx([dx_dt1, dx_dk], abs=1e-9), t
+
+
 def _bateman(t, dose, ka, ke, vd, tau=12.0, doses=7):
     """The oral-dosing program's closed form: one Bateman curve per dose (a dose at d
     counts from T = d on: the row of a dosing instant is after the dose, and the
@@ -203,8 +224,8 @@ def test_a_pulse_that_ends_at_a_cint_instant_is_the_flows_switch():
     X(t) = (A/K)(1 - e^{-K W}) e^{-K (t - W)} after the pulse."""
     model = amilpy.loads(PULSED, "pulsed.csl")
     loc = model.sensitivity(["A", "W"], outputs=["X"])
-    assert loc.how == "differences of whole runs (a switch on TIME whose instant " \
-        "depends on a data value)"
+    assert loc.how == "differences of whole runs (a PULSE train whose instants " \
+        "depend on a data value)"
     from amilpy.analysis.sensitivity import trajectory
 
     track = trajectory(model, 0, ["A"], {"A": 2.0, "W": 1.0, "K": 0.5}, {}, [0.5, 1.0, 2.5])

@@ -28,7 +28,7 @@ from ..run.flow import State
 from ..run.jacobian import STEP
 from ..run.plan import SAME_INSTANT, Purpose, same_instant
 from ..run.variational import ProgramTangent
-from .tangents import Sampler, output_row, step_for
+from .tangents import Sampler, output_row, outputs_asked, step_for
 
 
 class _Jumped(Exception):
@@ -36,9 +36,10 @@ class _Jumped(Exception):
 
 
 def program_trajectory(model, k: int, names: list[str], data: dict[str, float],
-                       options: dict, times):
+                       options: dict, times, variables: list[str] | None = None):
     """Run `k`'s tangent with respect to `names` at `times` (sorted), or why the
-    tangent cannot follow it: a `ProgramTrajectory` or a str."""
+    tangent cannot follow it: a `ProgramTrajectory` or a str. `variables`: the outputs
+    it will be asked for (default every one)."""
     from ..diagnostics import AmilError
 
     def prepared_at(**changed):
@@ -76,7 +77,7 @@ def program_trajectory(model, k: int, names: list[str], data: dict[str, float],
         start[:, j] = (np.concatenate([plus.code.y0, plus.code.z0]) -
                        np.concatenate([minus.code.y0, minus.code.z0])) / (2.0 * h)
     floor = np.broadcast_to(np.asarray(plan.tol.atol / plan.tol.rtol, dtype=float), (n,))
-    tangent = ProgramTangent(c, None, floor, start, variants, r)
+    tangent = ProgramTangent(c, None, floor, start, variants, r, outputs_asked(c, variables))
     times = np.asarray(times, dtype=float)
     sampler = Sampler(tangent, times, n + r)
     run = _TangentRun(model.ir, spec, opts, base, _clock.perf_counter(), sampler, variants)

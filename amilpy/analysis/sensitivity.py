@@ -28,7 +28,7 @@ from ..run.flow import FlowFailed
 from ..run.jacobian import STEP  # (cbrt(machine epsilon): the one differencing step)
 from ..run.plan import SAME_INSTANT, SLIDE
 from ..run.variational import ParameterTangent
-from .tangents import Sampler, output_row, step_for
+from .tangents import Sampler, output_row, outputs_asked, step_for
 
 if TYPE_CHECKING:
     from .program import ProgramTrajectory
@@ -55,7 +55,8 @@ def observed_jacobian(model, obs: Observations, names: list[str], values: dict[s
 
 
 def _run_jacobian(model, obs: Observations, k: int, names, values, params, options):
-    track = trajectory(model, k, names, {**params, **values}, options, obs.times(k + 1))
+    track = trajectory(model, k, names, {**params, **values}, options, obs.times(k + 1),
+                       sorted({s.name for s in obs.for_run(k + 1)}))
     if isinstance(track, str):
         return None, track
     series = [s for s in obs.for_run(k + 1) if s.name in track.code.out_names]
@@ -102,14 +103,16 @@ def moved_flows(flow_at, code, name: str, value: float):
 
 
 def trajectory(model, k: int, names: list[str], data: dict[str, float], options: dict,
-               times) -> Trajectory | ProgramTrajectory | str:
+               times, variables: list[str] | None = None
+               ) -> Trajectory | ProgramTrajectory | str:
     """Run `k`'s tangent with respect to the data values `names` at `times` (sorted;
-    `data` the values), or why the variational equations cannot follow it. A program
-    in ACSL form: through its instants' code (`analysis.program`)."""
+    `data` the values), or why the variational equations cannot follow it; `variables`:
+    the outputs it will be asked for (default every one). A program in ACSL form:
+    through its instants' code (`analysis.program`)."""
     if model.ir.acsl is not None:
         from .program import program_trajectory
 
-        return program_trajectory(model, k, names, data, options, times)
+        return program_trajectory(model, k, names, data, options, times, variables)
 
     def flow_at(**changed):
         return model.flow(options.get("method"), options.get("rtol"), options.get("atol"),
@@ -134,7 +137,8 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
         dy0[:, j] = (np.asarray(up.y) - np.asarray(down.y)) / (2.0 * h)
     floor = np.broadcast_to(np.asarray(flow.plan.tol.atol / flow.plan.tol.rtol, dtype=float),
                             (n,))
-    tangent = ParameterTangent(c, flow.watch, floor, dy0, variants)
+    tangent = ParameterTangent(c, flow.watch, floor, dy0, variants,
+                               outputs_asked(c, variables))
     times = np.asarray(times, dtype=float)
     sampler = Sampler(tangent, times, n)
     at: dict[float, tuple] = sampler.at
@@ -152,8 +156,6 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
     if missing:
         return f"the flow's steps did not reach TIME = {missing[0]:.9g}"
     return Trajectory(flow, variants, floor, at)
-
-
 
 
 
@@ -228,7 +230,7 @@ def local(model, names: list[str] | None = None, variables: list[str] | None = N
     run = _one_run(model, options, variables, params)
     base = member_of(tuple(variables), run)
     flow_options = {"method": options.method, "rtol": options.rtol, "atol": options.atol}
-    track = trajectory(model, 0, names, data, flow_options, base.times)
+    track = trajectory(model, 0, names, data, flow_options, base.times, variables)
     if not isinstance(track, str):
         raw = np.array([[track.row(v, t) for v in variables] for t in base.times.tolist()])
         how = "sensitivity equations"

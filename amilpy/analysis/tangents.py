@@ -78,3 +78,12 @@ def step_for(value: float, relative: float) -> float:
     """A central difference's step for a data value: relative to it (a value of 1E-12
     is moved by a fraction of itself, never by more than itself); 1e-8 for 0."""
     return relative * abs(value) if value else 1e-8
+
+
+def outputs_asked(code, variables: list[str] | None) -> list[int] | None:
+    """The positions in `code.out_names` of the outputs a tangent will be asked for
+    (None: every one): a memory only other outputs read may change (ZHOLD's held
+    value of a variable nobody observed)."""
+    if variables is None:
+        return None
+    return [i for i, name in enumerate(code.out_names) if name in set(variables)]

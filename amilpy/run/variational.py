@@ -65,7 +65,16 @@ class Tangent:
     """Observer of a flow: Phi = d y(t)/d y(t0)[:, columns] (see the module)."""
 
     fractions = np.concatenate([[0.0], _C, [1.0]])  # of each step, where it samples
-    outputs_read = False  # (the flow map's: the states only)
+    # the outputs it is read for, besides the states: positions, or "all" (the flow
+    # map's: None, the states only)
+    outputs: list[int] | str | None = None
+
+    def _outputs_read(self, t: float, y: np.ndarray, m, z, z_prev) -> bool:
+        """Whether one of `outputs` reads memory that changed from z_prev to z."""
+        yl = y.tolist()
+        now, before = self.c.out(t, yl, m, z), self.c.out(t, yl, m, z_prev)
+        idx = range(len(now)) if self.outputs == "all" else self.outputs
+        return any(now[i] != before[i] for i in idx)
 
     def __init__(self, c, watch, floor: np.ndarray, n: int, columns) -> None:
         self.c, self.watch, self.floor = c, watch, floor
@@ -162,8 +171,7 @@ class Tangent:
                 self.c.rhs(t, y.tolist(), m, z) != self.c.rhs(t, y.tolist(), m, z_prev):
             self.failed = "a memory value the derivatives read changes"
             return
-        if z != z_prev and self.outputs_read and \
-                self.c.out(t, y.tolist(), m, z) != self.c.out(t, y.tolist(), m, z_prev):
+        if z != z_prev and self.outputs is not None and self._outputs_read(t, y, m, z, z_prev):
             # (its tangent is not carried: an output it gives would read d/dp = 0)
             self.failed = "a memory value an output reads changes (ZHOLD's held value)"
             return
@@ -195,7 +203,8 @@ class Tangent:
 
     def _jump(self, k: int, t: float, y: np.ndarray, before, after, z_before, z_after):
         """(n = ds/dy, f+ - f-, n . f- + ds/dt) of switch k at (t, y); rate None for a
-        switch on TIME alone; None (and `failed` said) where the flow is tangent."""
+        switch on TIME alone that has no rate (a PULSE train's); None (and `failed`
+        said) where the flow is tangent."""
         c = self.c
         g = self.watch.watched[k].gradient
         yl = y.tolist()
@@ -211,11 +220,16 @@ class Tangent:
         g = np.asarray(g, dtype=float)
         f_minus = np.asarray(self.value("rhs", c, t, yl, before, z_before), dtype=float)
         f_plus = np.asarray(self.value("rhs", c, t, yl, after, z_after), dtype=float)
-        if not np.any(g):
+        if not np.any(g) and self.watch.watched[k].surface in c.train_surfaces:
+            # (PULSE's train: its surface jumps where it turns, no rate to be had there)
             return g, f_plus - f_minus, None
         ht = STEP * max(abs(t), 1.0)
         st = (c.surf(t + ht, yl, before, z_before)[k] -
               c.surf(t - ht, yl, before, z_before)[k]) / (2 * ht)
+        if not np.any(g):
+            # a switch on TIME alone (STEP(T1), FSW(TIME - T1, ...)): its instant moves
+            # by -(ds/dp)/(ds/dt) with a data value, the states not at all
+            return g, f_plus - f_minus, (st if st != 0 else None)
         rate = float(g @ f_minus) + st
         if abs(rate) <= 1e-9 * (float(np.abs(g) @ np.abs(f_minus)) + abs(st)) or rate == 0:
             self.failed = "the flow is tangent to a switching surface"
@@ -264,12 +278,13 @@ class ParameterTangent(Tangent):
     the same TIME, states, branches and memory; `start` = d y(t0)/d p."""
 
     def __init__(self, c, watch, floor: np.ndarray, start: np.ndarray,
-                 variants: list[tuple[object, object, float]]) -> None:
+                 variants: list[tuple[object, object, float]],
+                 outputs: list[int] | None = None) -> None:
         n, q = start.shape
         super().__init__(c, watch, floor, n + q, range(n, n + q))
         self._phi = np.vstack([start, np.eye(q)])
         self.n, self.variants = n, variants
-        self.outputs_read = True  # (observed outputs: their memory too)
+        self.outputs = "all" if outputs is None else outputs  # (observed: their memory too)
 
     def _by_p(self, fn: str, t: float, yl: list, m, z) -> np.ndarray:
         """d fn(t, y, m, z) / d p, a column per value (fn: "rhs" or "surf")."""
@@ -298,7 +313,7 @@ class ParameterTangent(Tangent):
         out = np.eye(n + q)
         if rate is None:
             if np.any(sp):  # (a switch on TIME whose instant a data value moves)
-                self.failed = "a switch on TIME whose instant depends on a data value"
+                self.failed = "a PULSE train whose instants depend on a data value"
                 return None
             return out
         # the augmented states' jump: I + (f+ - f-, 0) (ds/dy, ds/dp)^T / rate
@@ -317,8 +332,9 @@ class ProgramTangent(ParameterTangent):
     (`analysis.program` takes it). `start` = d (y, z)(t0) / d p."""
 
     def __init__(self, c, watch, floor: np.ndarray, start: np.ndarray,
-                 variants: list[tuple[object, object, float]], memory: int) -> None:
-        super().__init__(c, watch, floor, start, variants)
+                 variants: list[tuple[object, object, float]], memory: int,
+                 outputs: list[int] | None = None) -> None:
+        super().__init__(c, watch, floor, start, variants, outputs)
         self.n, self.r = start.shape[0] - memory, memory
 
     def _by_z(self, fn: str, t: float, y: np.ndarray, m, z) -> np.ndarray:
@@ -355,7 +371,7 @@ class ProgramTangent(ParameterTangent):
         out = np.eye(n + r + q)
         if rate is None:
             if np.any(sp) or np.any(sz):
-                self.failed = "a switch on TIME whose instant depends on a data value"
+                self.failed = "a PULSE train whose instants depend on a data value"
                 return None
             return out
         # I + (f+ - f-, 0, 0) (ds/dy, ds/dz, ds/dp)^T / rate
