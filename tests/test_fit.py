@@ -377,10 +377,9 @@ def test_sensitivities_through_sticking_are_the_closed_forms():
     assert [phi[v, v], phi[x, v], phi[x, x]] == pytest.approx([0.0, t1, 1.0], abs=1e-8)
 
 
-def test_a_fit_through_sticking_uses_the_sensitivities_and_two_at_once_do_not(tmp_path):
+def test_a_fit_through_sticking_uses_the_sensitivities(tmp_path):
     """MU = 0.2 from the sliding block's X before and after it stops: recovered with
-    the variational equations (the tangent through the stop). Two blocks stuck at
-    once (two surfaces sliding) are left to differences of whole runs, and said."""
+    the variational equations (the tangent through the stop)."""
     mu, g = 0.2, 9.81
     stop = 2.0 / (mu * g)
     t = np.arange(0.125, 1.5, 0.125)
@@ -389,12 +388,57 @@ def test_a_fit_through_sticking_uses_the_sensitivities_and_two_at_once_do_not(tm
                                      ["MU=0.05:1"], weights="none", gradients="sensitivities")
     assert fit.estimates[0] == pytest.approx(mu, rel=1e-6)
     assert fit.gradients.startswith("variational equations") and fit.jacobians >= 1
+
+
+def test_sensitivities_with_several_surfaces_sliding_are_the_closed_forms():
+    """Two blocks stopping by dry friction (0.34 s and 0.68 s: then two surfaces slide
+    at once) give X = V0^2/(2 MU G) each; two relays stuck together at the origin
+    (tests/test_sliding.py: X = 0 from X0/1.5, then Y' = -1.25 until both slide) give
+    d Y/d X0 = 0.75/1.5 in between; a block stuck on a belt (two friction terms on
+    one surface, sliding from the start) is pushed off at K X = F1 + F2, then X =
+    (F1 + F2)/K + VB sin(t - ts): its d X/d VB (which moves the surface it starts
+    on: the tangent is brought back onto it) and d X/d F1, d X/d K, against the
+    complex-step derivative of that closed form. All to 1e-8."""
+    from test_sliding import TWO_FRICTIONS
+
+    from amilpy.analysis.sensitivity import trajectory
+
     two = FRICTION.replace("OUTPUT X", "A2 = FSW(V2, MU*G, 0.0, -MU*G)\n"
-                           "V2 = INTGRL(1.0, A2)\nOUTPUT X")
-    both = amilpy.loads(two).fit(_csv(tmp_path, "TIME,X", [(0.5, 0.8), (1.4, 1.0)], "f.csv"),
-                                 ["MU=0.05:1"], weights="none", gradients="sensitivities")
-    assert both.gradients == "finite differences of whole runs (run 1: several surfaces " \
-        "slide at once)"
+                           "V2 = INTGRL(1.0, A2)\nX2 = INTGRL(0.0, V2)\nOUTPUT X")
+    track = trajectory(amilpy.loads(two), 0, ["MU"], {"MU": 0.3}, {}, [0.5, 1.4])
+    assert not isinstance(track, str), track
+    mu, g = 0.3, 9.81
+    assert track.row("X2", 0.5)[0] == pytest.approx(-0.5 / (mu * mu * g), rel=1e-8)
+    assert [track.row("X", 1.4)[0], track.row("X2", 1.4)[0]] == pytest.approx(
+        [-2.0 / (mu * mu * g), -0.5 / (mu * mu * g)], rel=1e-8)
+    relays = """PARAM X0 = 1.0, Y0 = 1.0
+SX = FSW(X, -1.0, 0.0, 1.0)
+SY = FSW(Y, -1.0, 0.0, 1.0)
+X = INTGRL(X0, -SX - 0.5*SY)
+Y = INTGRL(Y0, -SY + 0.5*SX)
+TIMER FINTIM = 2.0, OUTDEL = 0.1
+END
+"""
+    track = trajectory(amilpy.loads(relays), 0, ["X0", "Y0"], {"X0": 1.0, "Y0": 1.0}, {},
+                       [0.5, 0.9, 1.5])
+    assert np.concatenate([track.row("Y", 0.9), track.row("X", 0.9)]) == pytest.approx(
+        [0.5, 1.0, 0.0, 0.0], abs=1e-8)
+    assert np.concatenate([track.row("X", 1.5), track.row("Y", 1.5)]) == pytest.approx(
+        [0.0, 0.0, 0.0, 0.0], abs=1e-8)
+
+    def belt(t, f1, k, vb, f2=0.2):
+        ts = (f1 + f2) / (k * vb)
+        w = np.sqrt(k)
+        return vb * t if t < np.real(ts) else (f1 + f2) / k + vb / w * np.sin(w * (t - ts))
+
+    values = {"K": 1.0, "F1": 0.3, "F2": 0.2, "VB": 1.0, "M": 1.0}
+    track = trajectory(amilpy.loads(TWO_FRICTIONS), 0, ["F1", "K", "VB"], values, {},
+                       [0.3, 0.6, 1.0, 1.5])
+    for t in (0.3, 0.6, 1.0, 1.5):
+        exact = [belt(t, 0.3 + 1e-30j, 1.0, 1.0).imag / 1e-30,
+                 belt(t, 0.3, 1.0 + 1e-30j, 1.0).imag / 1e-30,
+                 belt(t, 0.3, 1.0, 1.0 + 1e-30j).imag / 1e-30]
+        assert track.row("X", t) == pytest.approx(exact, abs=1e-8), t
 
 
 @pytest.mark.parametrize("text, names, values, why", [

@@ -51,9 +51,8 @@ def output_row(c, variants, i: int, t: float, state, sens: np.ndarray, floor: np
 
     def out(code, yv: np.ndarray, zv: list) -> float:
         if sliding:
-            alpha, mp, mm = filippov(watch, code, t, yv, m, zv)
-            return alpha * code.out(t, yv.tolist(), mp, zv)[i] + \
-                (1.0 - alpha) * code.out(t, yv.tolist(), mm, zv)[i]
+            weights, modes = filippov(watch, code, t, yv, m, zv)
+            return float(weights @ [code.out(t, yv.tolist(), mc, zv)[i] for mc in modes])
         return code.out(t, yv.tolist(), m, zv)[i]
 
     grad = np.zeros(len(sens))

@@ -65,23 +65,27 @@ def combine(weights: np.ndarray, values: list[np.ndarray]) -> np.ndarray:
     return total
 
 
-def slide_weights(rates: np.ndarray) -> np.ndarray:
+def slide_weights(rates: np.ndarray, bounded: bool = True) -> np.ndarray:
     """The corner weights that keep the sliding surfaces at zero.
 
     `rates[c, j]` is surface j's rate along corner c's field (order of
-    `corner_modes`)."""
+    `corner_modes`). `bounded=False`: the weights not held to [0, 1] (the field's
+    smooth continuation past where one reaches its bound, which the variational
+    equations differentiate: `run.variational.filippov`)."""
     p = rates.shape[1]
     if p == 1:
         dp, dm = float(rates[0, 0]), float(rates[1, 0])
         denom = dm - dp
-        alpha = 0.5 if denom == 0 else min(1.0, max(0.0, dm / denom))
+        alpha = 0.5 if denom == 0 else dm / denom
+        if bounded:
+            alpha = min(1.0, max(0.0, alpha))
         return np.array([alpha, 1.0 - alpha])
-    return corner_weights(_solve(rates))
+    return corner_weights(_solve(rates, bounded))
 
 
-def _solve(rates: np.ndarray) -> np.ndarray:
+def _solve(rates: np.ndarray, bounded: bool = True) -> np.ndarray:
     """Projected Newton on the multilinear equations g(alpha) = 0 (see the module
-    docstring), from alpha = 1/2."""
+    docstring), from alpha = 1/2 (projected onto [0, 1] when `bounded`)."""
     p = rates.shape[1]
     alpha = np.full(p, 0.5)
     free = np.ones(p, bool)
@@ -100,6 +104,11 @@ def _solve(rates: np.ndarray) -> np.ndarray:
         step = np.linalg.lstsq(jac[:, free], -g, rcond=1e-10)[0]
         new = alpha.copy()
         new[free] += step
+        if not bounded:
+            alpha = new
+            if not np.any(step):
+                break
+            continue
         out = (new < 0.0) | (new > 1.0)
         alpha = np.clip(new, 0.0, 1.0)
         free &= ~out

@@ -17,17 +17,20 @@ switches, so it lies in one branch) and carries Phi = d y(t)/d y(t0):
   surface written twice, like the hoist's |Y| = DH and Y = DH). A switch on
   TIME alone (n = 0) has no saltation.
 
-- while one surface slides, A is the Jacobian of Filippov's field (the
-  combination of its branches that keeps it at zero, as the run integrates it);
-  entering the surface is a switch whose f+ is that field (the saltation keeps
-  the tangent on the surface: n . Phi = 0 after it), and leaving it is none: the
-  field is continuous there, its weight having reached 0 or 1 (Dieci and Lopez
-  2011, "Sliding motion on discontinuity surfaces of high co-dimension").
+- while surfaces slide, A is the Jacobian of Filippov's field (the combination
+  of their branches that keeps them at zero, as the run integrates it, its
+  weights not held to [0, 1]: `filippov`); entering a surface is a switch whose
+  f+ is that field (the saltation keeps the tangent on it: n . Phi = 0 after),
+  and leaving it is none: the field is continuous there, a weight having reached
+  0 or 1 (Dieci and Lopez 2011, "Sliding motion on discontinuity surfaces of high
+  co-dimension"); a start on a sliding surface is an entry for the columns that
+  move the start off it (`_onto_surfaces`).
 
 What it does not handle it says (`Tangent.failed`), and the flow map then
-takes central differences of whole flows instead: several surfaces sliding at
-once, a state reset (MODINT), a memory value the field reads changing along
-the way, a crossing where the flow is tangent to the surface (n . f- ~ 0).
+takes central differences of whole flows instead: a state reset (MODINT), a
+memory value the field (or an output asked for) reads changing along the way,
+a crossing where the flow is tangent to the surface (n . f- ~ 0), a PULSE
+train whose instants a data value moves.
 """
 
 from __future__ import annotations
@@ -41,6 +44,7 @@ from scipy.linalg import expm
 from .dense import sample, sample_step
 from .jacobian import STEP, jacobian_at
 from .plan import SLIDE
+from .slide import combine, corner_modes, slide_weights
 
 _C = np.array([0.5 - math.sqrt(15) / 10, 0.5, 0.5 + math.sqrt(15) / 10])
 VARIATION = 0.5  # h |A(c3) - A(c1)| above this: the step is halved
@@ -100,10 +104,10 @@ class Tangent:
         """`fn` ("rhs" or "surf") of the generated functions `code` at (t, y): while a
         surface slides, "rhs" is Filippov's field of that code (`filippov`)."""
         if fn == "rhs" and SLIDE in m:
-            alpha, mp, mm = filippov(self.watch, code, t, y, m, z)
+            weights, modes = filippov(self.watch, code, t, y, m, z)
             yl = [float(v) for v in y]
-            return alpha * np.asarray(code.rhs(t, yl, mp, z), dtype=float) + \
-                (1.0 - alpha) * np.asarray(code.rhs(t, yl, mm, z), dtype=float)
+            return combine(weights, [np.asarray(code.rhs(t, yl, mc, z), dtype=float)
+                                     for mc in modes])
         return getattr(code, fn)(t, [float(v) for v in y], m, z)
 
     def jacobian(self, t: float, y: np.ndarray, m, z) -> np.ndarray:
@@ -114,12 +118,13 @@ class Tangent:
     def __call__(self, ta: float, tb: float, interp, m, z) -> None:
         if self.failed is not None:
             return
-        if sum(v == SLIDE for v in m) > 1:
-            self.failed = "several surfaces slide at once"
-            return
         ya = np.asarray(interp(ta), dtype=float)
         if self.prev is not None:
             self._join(ta, ya, m, z)
+            if self.failed is not None:
+                return
+        elif SLIDE in m:
+            self._onto_surfaces(ta, ya, m, z)
             if self.failed is not None:
                 return
         if tb > ta:
@@ -201,13 +206,43 @@ class Tangent:
             return np.eye(len(y))  # a switch on TIME alone: the instant does not move
         return np.eye(len(y)) + np.outer(diff, g) / rate
 
-    def _jump(self, k: int, t: float, y: np.ndarray, before, after, z_before, z_after):
-        """(n = ds/dy, f+ - f-, n . f- + ds/dt) of switch k at (t, y); rate None for a
-        switch on TIME alone that has no rate (a PULSE train's); None (and `failed`
-        said) where the flow is tangent."""
-        c = self.c
+    def _onto_surfaces(self, t: float, y: np.ndarray, m, z) -> None:
+        """The flow starts on surfaces that slide: a column of the tangent that moves
+        the start off one (n . Phi + ds/dp != 0, the belt's speed VB of a block
+        stuck on it) comes back to it as the flow would, on the branch it is then
+        on (+ where the move is to s > 0), and takes that entry's jump."""
+        n = len(y)
+        for k in [k for k, v in enumerate(m) if v == SLIDE]:
+            normal = self._normal(k, t, y, m, z)
+            moves = normal @ self.phi
+            if not np.any(moves):
+                continue
+            field = np.asarray(self.value("rhs", self.c, t, y, m, z), dtype=float)
+            ht = STEP * max(abs(t), 1.0)
+            for sign in (1.0, -1.0):
+                cols = np.flatnonzero(moves * sign > 0)
+                if not len(cols):
+                    continue
+                side = list(m)
+                side[k] = sign
+                f = np.asarray(self.value("rhs", self.c, t, y, side, z), dtype=float)
+                st = (self.c.surf(t + ht, y.tolist(), side, z)[k] -
+                      self.c.surf(t - ht, y.tolist(), side, z)[k]) / (2 * ht)
+                rate = float(normal[:n] @ f) + st
+                if rate * sign >= 0:  # (that branch does not lead back to the surface)
+                    self.failed = "a sliding start that a data value moves off its surface"
+                    return
+                self._flush()
+                self._phi[:n, cols] += np.outer(field - f, moves[cols]) / rate
+
+    def _normal(self, k: int, t: float, y: np.ndarray, m, z) -> np.ndarray:
+        """d s_k / d (the tangent's variables): the states' gradient (`_gradient`)."""
+        return self._gradient(k, t, y, m, z)
+
+    def _gradient(self, k: int, t: float, y: np.ndarray, m, z) -> np.ndarray:
+        """d s_k / d y at (t, y): the surface's own when it is linear in the states,
+        else central differences."""
         g = self.watch.watched[k].gradient
-        yl = y.tolist()
         if g is None:
             h = STEP * scale_of(y, self.floor)
             g = np.empty(len(y))
@@ -215,9 +250,17 @@ class Tangent:
                 up, down = y.copy(), y.copy()
                 up[j] += h[j]
                 down[j] -= h[j]
-                g[j] = (c.surf(t, up.tolist(), before, z_before)[k] -
-                        c.surf(t, down.tolist(), before, z_before)[k]) / (up[j] - down[j])
-        g = np.asarray(g, dtype=float)
+                g[j] = (self.c.surf(t, up.tolist(), m, z)[k] -
+                        self.c.surf(t, down.tolist(), m, z)[k]) / (up[j] - down[j])
+        return np.asarray(g, dtype=float)
+
+    def _jump(self, k: int, t: float, y: np.ndarray, before, after, z_before, z_after):
+        """(n = ds/dy, f+ - f-, n . f- + ds/dt) of switch k at (t, y); rate None for a
+        switch on TIME alone that has no rate (a PULSE train's); None (and `failed`
+        said) where the flow is tangent."""
+        c = self.c
+        g = self._gradient(k, t, y, before, z_before)
+        yl = y.tolist()
         f_minus = np.asarray(self.value("rhs", c, t, yl, before, z_before), dtype=float)
         f_plus = np.asarray(self.value("rhs", c, t, yl, after, z_after), dtype=float)
         if not np.any(g) and self.watch.watched[k].surface in c.train_surfaces:
@@ -241,21 +284,23 @@ def scale_of(y: np.ndarray, floor: np.ndarray) -> np.ndarray:
     return np.maximum(np.abs(y), floor)
 
 
-def filippov(watch, code, t: float, y, m, z) -> tuple[float, list, list]:
-    """The weight alpha of the + branch of the one surface sliding in m, and both
-    branches' modes, under the generated functions `code`: alpha = d- / (d- - d+),
-    d+- the surface's rates along the branches (`SurfaceWatch.surface_rate`, the
-    run's own). Not held to [0, 1] as the run holds it: the tangent differentiates
-    the field, and a difference that steps past where the weight reaches its bound
-    (the surface's exit, which a moved data value moves) would put a kink in it."""
-    k = m.index(SLIDE)
-    mp, mm = list(m), list(m)
-    mp[k], mm[k] = 1.0, -1.0
+def filippov(watch, code, t: float, y, m, z) -> tuple[np.ndarray, list[list[float]]]:
+    """The weights of the corners of the surfaces sliding in m (every one in its +
+    or - branch: `slide.corner_modes`) and the corners' modes, under the generated
+    functions `code`: the weights that keep the sliding surfaces at zero, from their
+    rates along each corner (`SurfaceWatch.surface_rate`, the run's own); with one
+    surface, alpha = d- / (d- - d+) for the + branch. Not held to [0, 1] as the run
+    holds them: the tangent differentiates the field, and a difference that steps
+    past where a weight reaches its bound (the surface's exit, which a moved data
+    value moves) would put a kink in it."""
+    slides = [k for k, v in enumerate(m) if v == SLIDE]
+    modes = corner_modes(m, slides)
     w, yv = watch_of(watch, code), np.asarray(y, dtype=float)
     yl = yv.tolist()
-    dp = w.surface_rate(k, t, yv, np.asarray(code.rhs(t, yl, mp, z), dtype=float), mp, z)
-    dm = w.surface_rate(k, t, yv, np.asarray(code.rhs(t, yl, mm, z), dtype=float), mm, z)
-    return (0.5 if dm == dp else dm / (dm - dp)), mp, mm
+    rates = np.array([[w.surface_rate(k, t, yv, np.asarray(code.rhs(t, yl, mc, z),
+                                                               dtype=float), mc, z)
+                       for k in slides] for mc in modes])
+    return slide_weights(rates, bounded=False), modes
 
 
 def watch_of(watch, code):
@@ -301,6 +346,10 @@ class ParameterTangent(Tangent):
         out[:n, :n] = super().jacobian(t, y, m, z)
         out[:n, n:] = self._by_p("rhs", t, np.asarray(y, dtype=float).tolist(), m, z)
         return out
+
+    def _normal(self, k: int, t: float, y: np.ndarray, m, z) -> np.ndarray:
+        return np.concatenate([self._gradient(k, t, y, m, z),
+                               self._by_p("surf", t, y.tolist(), m, z)[k]])
 
     def _saltation(self, k: int, t: float, y: np.ndarray, before, after, z_before, z_after
                    ) -> np.ndarray | None:
@@ -377,6 +426,11 @@ class ProgramTangent(ParameterTangent):
         # I + (f+ - f-, 0, 0) (ds/dy, ds/dz, ds/dp)^T / rate
         out[:n, :] += np.outer(diff, np.concatenate([g, sz, sp])) / rate
         return out
+
+    def _normal(self, k: int, t: float, y: np.ndarray, m, z) -> np.ndarray:
+        sz = self._by_z("surf", t, y, m, z)[k] if self.r else np.zeros(0)
+        return np.concatenate([self._gradient(k, t, y, m, z), sz,
+                               self._by_p("surf", t, y.tolist(), m, z)[k]])
 
     def jump(self, matrix: np.ndarray, t: float, y: np.ndarray, m, z) -> None:
         """The code of an instant at t ran: its Jacobian (of (y, z, p), identity rows
