@@ -417,3 +417,30 @@ def test_a_termt_a_discrete_section_makes_true_stops_the_run_there(ialg):
             "  DISCRETE TICK\n    N = N + 1.0\n    X = 0.0\n  END\nEND\n")
     run, = amilpy.loads(text, "termt.csl").run(advice=False)
     assert run.t_end == pytest.approx(2.0, abs=1e-9) and "N >= 2.0" in run.message
+
+
+def test_a_set_point_the_code_moves_ends_the_slide_on_it():
+    """X slides on X = XSET (X' = 3 - 0.6 X below it, -1.5 - 0.6 X above); a DISCRETE
+    section moves XSET to 1 + 0.3 sin(X) at 0.7 s: X leaves the old set point, rises
+    (about 0.1 s) and slides on the new one. Until 2026-11-30 the run kept sliding
+    at X = 1.0, off the surface, for the rest of the run."""
+    text = """PROGRAM set point moved by code
+  CONSTANT K = 0.6, Q = 3.0, XS0 = 1.0, A = 0.3
+  CINTERVAL CINT = 0.5
+  INITIAL
+    XSET = XS0
+  END
+  DERIVATIVE
+    X = INTEG(Q*FSW(X - XSET, 1.0, 0.0, -0.5) - K*X, 0.0)
+    TERMT(T >= 1.5)
+  END
+  DISCRETE SAMPLE
+    INTERVAL DT = 0.7
+    XSET = XS0 + A*SIN(X)
+  END
+END
+"""
+    run, = amilpy.loads(text, "p.csl").run(advice=False)
+    at = {round(t, 9): x for t, x in zip(run.t, run.values["X"], strict=True)}
+    assert at[0.5] == pytest.approx(1.0, abs=1e-9)
+    assert at[1.0] == pytest.approx(1.0 + 0.3 * math.sin(1.0), abs=1e-9)

@@ -377,6 +377,55 @@ def test_sensitivities_through_sticking_are_the_closed_forms():
     assert [phi[v, v], phi[x, v], phi[x, x]] == pytest.approx([0.0, t1, 1.0], abs=1e-8)
 
 
+def test_sensitivities_where_a_push_ends_the_slide_and_on_a_moving_surface():
+    """A block stuck by dry friction (from 0.68 s) is pushed off at T1 by P STEP(T1)
+    (P > MU G): V = (P - MU G)(t - T1) after, so d X/d T1 = -(P - MU G)(t - T1) and
+    d X/d P = (t - T1)^2/2 -- the push's switch at T1 ends the slide at once (its
+    weight jumps past 1), and its jump is to the branch the block leaves on (it was
+    0, on the sliding field, until review 48). A block on a belt that accelerates
+    (surface V - AB TIME, no constant gradient) sticks at t1 (Newton on the free
+    motion) and is carried: F = A + K X = AB + K X; d F/d MU and d F/d AB against
+    the complex-step derivative of that closed form, to 1e-6 (the surface's slopes
+    by differences: about 1e-3 with the run's look-ahead, before review 48)."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    push = STICK.replace("PARAM MU = 0.3, AR = 1.0", "PARAM MU = 0.3, P = 4.0, T1 = 1.5") \
+        .replace("A = AR*TIME + FSW(V, MU*G, 0.0, -MU*G)",
+                 "A = FSW(V, MU*G, 0.0, -MU*G) + P*STEP(T1)").replace("4.0, OUTDEL", "3.0, OUTDEL")
+    track = trajectory(amilpy.loads(push), 0, ["T1", "P"], {"MU": 0.3, "P": 4.0, "T1": 1.5},
+                       {}, [1.4, 2.0, 3.0])
+    for t in (1.4, 2.0, 3.0):
+        s = max(t - 1.5, 0.0)
+        assert track.row("X", t) == pytest.approx([-(4.0 - 0.3 * 9.81) * s, s * s / 2],
+                                                  abs=1e-8), t
+    belt = """TITLE BLOCK ON AN ACCELERATING BELT
+PARAM MU = 0.4, AB = 1.0, K = 4.0
+CONST G = 9.81
+A = -K*X + FSW(V - AB*TIME, MU*G, 0.0, -MU*G)
+V = INTGRL(0.5, A)
+X = INTGRL(0.0, V)
+F = A + K*X
+TIMER FINTIM = 1.0, OUTDEL = 0.05
+OUTPUT X, F
+END
+"""
+
+    def carried(mu, ab, t, g=9.81, k=4.0, w=2.0):
+        x = lambda s: -mu * g / k * (1 - np.cos(w * s)) + 0.5 / w * np.sin(w * s)  # noqa: E731
+        v = lambda s: -mu * g / w * np.sin(w * s) + 0.5 * np.cos(w * s)  # noqa: E731
+        t1 = 0.2 + 0j
+        for _ in range(60):  # V(t1) = AB t1: Newton (A = -K X - MU G before it)
+            t1 = t1 - (v(t1) - ab * t1) / (-k * x(t1) - mu * g - ab)
+        return ab + k * (x(t1) + ab * (t * t - t1 * t1) / 2)
+
+    track = trajectory(amilpy.loads(belt), 0, ["MU", "AB"], {"MU": 0.4, "AB": 1.0, "K": 4.0},
+                       {}, [0.5, 0.8])
+    for t in (0.5, 0.8):
+        exact = [carried(0.4 + 1e-30j, 1.0, t).imag / 1e-30,
+                 carried(0.4, 1.0 + 1e-30j, t).imag / 1e-30]
+        assert track.row("F", t) == pytest.approx(exact, rel=1e-6), t
+
+
 def test_a_fit_through_sticking_uses_the_sensitivities(tmp_path):
     """MU = 0.2 from the sliding block's X before and after it stops: recovered with
     the variational equations (the tangent through the stop)."""

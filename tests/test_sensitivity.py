@@ -120,6 +120,59 @@ def test_a_switch_on_time_that_a_value_moves_jumps_the_tangent():
         assert track.row("X", t) == pytest.approx([dx_dt1, dx_dk], abs=1e-9), t
 
 
+def test_a_memory_the_derivatives_read_is_differenced_and_says_why():
+    """Y' = XH - Y with XH = ZHOLD(0.5 - TIME, X): the hold is itself a switch, and
+    the tangent does not carry the held value, so d Y/d K would come out without
+    its part after 0.5 (it did, -0.062 for -0.153 at 0.8, until review 48): the run
+    is differenced and says why."""
+    model = amilpy.loads("TITLE HOLD READ\nPARAM K = 0.7\nX = INTGRL(1.0, -K*X)\n"
+                         "XH = ZHOLD(0.5 - TIME, X)\nY = INTGRL(0.0, XH - Y)\n"
+                         "TIMER FINTIM = 1.5, OUTDEL = 0.1\nPRINT X, Y\nEND\n")
+    loc = model.sensitivity(["K"], outputs=["Y"])
+    assert loc.how == "differences of whole runs (a memory value the derivatives read changes)"
+
+
+DUE = """PROGRAM dose when due
+  CONSTANT KA = 1.2, DOSE = 100.0, TAU = 2.0
+  CINTERVAL CINT = 0.5
+  INITIAL
+    TD = 0.0
+  END
+  DERIVATIVE
+    AG = INTEG(-KA*AG, 0.0)
+    TERMT(T >= 5.0)
+  END
+  DISCRETE CHECK
+    INTERVAL DT = 1.0
+    IF (T >= TD) THEN
+      AG = AG + DOSE
+      TD = TD + TAU
+    END IF
+  END
+END
+"""
+
+
+def test_an_if_in_discrete_code_that_a_value_turns_has_no_derivative():
+    """A dose given when T >= TD, TD = TD + TAU: at T = 2 the test stands at equality
+    and TAU turns it (AG jumps by DOSE with TAU: no derivative), said and differenced
+    (it gave -2.3e6, review 48). KA and DOSE do not move TD: at T = 0 its test is at
+    equality too, but nothing of theirs goes through it, and their tangent is exact:
+    AG = DOSE (e^{-KA t} + e^{-KA (t - 2)} + e^{-KA (t - 4)}) for t >= 4."""
+    model = amilpy.loads(DUE, "due.csl")
+    loc = model.sensitivity(["TAU"], outputs=["AG"])
+    assert loc.how == "differences of whole runs (DISCRETE CHECK at TIME = 2: its code " \
+        "jumps there (an IF whose test turns with the value))"
+    from amilpy.analysis.sensitivity import trajectory
+
+    track = trajectory(model, 0, ["KA", "DOSE"], {"KA": 1.2, "DOSE": 100.0, "TAU": 2.0}, {},
+                       [4.5])
+    ka, t = 1.2, 4.5
+    e = sum(np.exp(-ka * (t - d)) for d in (0.0, 2.0, 4.0))
+    de = sum(-(t - d) * np.exp(-ka * (t - d)) for d in (0.0, 2.0, 4.0))
+    assert track.row("AG", t) == pytest.approx([100.0 * de, e], rel=1e-8)
+
+
 def _bateman(t, dose, ka, ke, vd, tau=12.0, doses=7):
     """The oral-dosing program's closed form: one Bateman curve per dose (a dose at d
     counts from T = d on: the row of a dosing instant is after the dose, and the

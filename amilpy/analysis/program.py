@@ -190,7 +190,21 @@ class _TangentRun(AcslRun):
             return np.concatenate([np.asarray(y1, dtype=float),
                                    np.asarray(z1, dtype=float)]), calls.schedules
 
-        _, schedules = run(fn, y.tolist(), z)
+        center, schedules = run(fn, y.tolist(), z)
+
+        moving = np.any(tangent.phi[:n + r] != 0.0, axis=1)  # (what the values move)
+
+        def column(hi, lo, width: float, moved: bool) -> np.ndarray:
+            # an IF whose test turns between the two: the code jumps, no derivative --
+            # which matters only along a variable the data values move (a counter
+            # T >= TD at TD = T as the run starts does not)
+            ahead, behind = (hi - center) / (0.5 * width), (center - lo) / (0.5 * width)
+            if moved and np.any(np.abs(ahead - behind) >
+                                1e-3 * (np.abs(ahead) + np.abs(behind)) +
+                                1e-7 * (np.abs(center) + 1.0) / width):
+                raise _Jumped("its code jumps there (an IF whose test turns with the value)")
+            return (hi - lo) / width
+
         v = np.concatenate([y, np.asarray(z, dtype=float)])
         scale = np.concatenate([np.maximum(np.abs(y), tangent.floor),
                                 np.maximum(np.abs(v[n:]), 1.0)])
@@ -204,14 +218,14 @@ class _TangentRun(AcslRun):
             lo, s_lo = run(fn, down[:n].tolist(), down[n:].tolist())
             if s_hi != schedules or s_lo != schedules:
                 raise _Jumped("the time it schedules depends on the states or memory")
-            out[:n + r, j] = (hi - lo) / (up[j] - down[j])
+            out[:n + r, j] = column(hi, lo, up[j] - down[j], bool(moving[j]))
         key = self.keys[id(fn)]
         for j, (plus, minus, h) in enumerate(self.variants):
             hi, s_hi = run(plus.code[key][1], y.tolist(), z)
             lo, s_lo = run(minus.code[key][1], y.tolist(), z)
             if s_hi != schedules or s_lo != schedules:
                 raise _Jumped("the time it schedules depends on a data value")
-            out[:n + r, n + r + j] = (hi - lo) / (2.0 * h)
+            out[:n + r, n + r + j] = column(hi, lo, 2.0 * h, True)
         return out
 
 

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..run.jacobian import STEP
 from ..run.plan import SLIDE
-from ..run.variational import ParameterTangent, filippov
+from ..run.variational import ParameterTangent, filippov, held
 
 
 class Sampler:
@@ -47,11 +47,13 @@ def output_row(c, variants, i: int, t: float, state, sens: np.ndarray, floor: np
     While a surface slides the outputs are weighted as its field (`filippov`)."""
     y = np.asarray(state.y, dtype=float)
     m, z = list(state.modes), list(state.memory)
+    if SLIDE in m:  # (a weight past its bound: the run's motion is on that branch)
+        m = held(watch, c, t, y, m, z, floor)
     sliding = SLIDE in m
 
     def out(code, yv: np.ndarray, zv: list) -> float:
         if sliding:
-            weights, modes = filippov(watch, code, t, yv, m, zv)
+            weights, modes = filippov(watch, code, t, yv, m, zv, floor)
             return float(weights @ [code.out(t, yv.tolist(), mc, zv)[i] for mc in modes])
         return code.out(t, yv.tolist(), m, zv)[i]
 

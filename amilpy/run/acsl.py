@@ -38,6 +38,7 @@ from .driver import _Run
 from .loop import Cursor, Stop
 from .plan import (
     DEFAULTS,
+    SLIDE,
     Grid,
     Options,
     Purpose,
@@ -373,6 +374,8 @@ class AcslRun(_Run):
     def instant(self, cur: Cursor) -> None:
         """Events due now, then (at a CINT instant) DYNAMIC's own statements, the
         TERMT tests and the row."""
+        sliding = [k for k, v in enumerate(cur.m) if v == SLIDE]
+        surfaces = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z) if sliding else None
         changed = self.run_due(cur)
         times = self.plan.grid.times
         on_grid = self.rec.out_i < len(times) and \
@@ -382,6 +385,8 @@ class AcslRun(_Run):
                 and self.stopped is None:
             self.run_code(cur, self.dynamic, "DYNAMIC")
             changed = True
+        if changed and sliding:
+            self.off_surfaces(cur, sliding, surfaces)
         if changed:
             self.restart(cur)
         self.termt_now(cur)
@@ -398,6 +403,16 @@ class AcslRun(_Run):
                          shown=self.rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
         if changed and self.acsl.cint_name in self.c.kept:
             self.regrid(cur.t, self.value(cur, self.acsl.cint_name))
+
+    def off_surfaces(self, cur: Cursor, sliding: list[int], before: list[float]) -> None:
+        """A surface the motion slid on that the code moved off zero (a set point a
+        DISCRETE section changes) is slid on no longer: its branch is the side it is
+        on now, and the restart goes on from there (it kept sliding, off the surface,
+        until 2026-11-30)."""
+        now = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z)
+        for k in sliding:
+            if now[k] != before[k] and abs(now[k]) > 1e3 * abs(before[k]):
+                cur.m[k] = 1.0 if now[k] > 0 else -1.0
 
     def regrid(self, t: float, cint: float) -> None:
         """CINT assigned during the run: rows every new CINT from this instant on."""

@@ -72,15 +72,17 @@ def slide_weights(rates: np.ndarray, bounded: bool = True) -> np.ndarray:
     `corner_modes`). `bounded=False`: the weights not held to [0, 1] (the field's
     smooth continuation past where one reaches its bound, which the variational
     equations differentiate: `run.variational.filippov`)."""
-    p = rates.shape[1]
-    if p == 1:
+    return corner_weights(slide_alphas(rates, bounded))
+
+
+def slide_alphas(rates: np.ndarray, bounded: bool = True) -> np.ndarray:
+    """The weight of each sliding surface's + branch (`slide_weights`)."""
+    if rates.shape[1] == 1:
         dp, dm = float(rates[0, 0]), float(rates[1, 0])
         denom = dm - dp
         alpha = 0.5 if denom == 0 else dm / denom
-        if bounded:
-            alpha = min(1.0, max(0.0, alpha))
-        return np.array([alpha, 1.0 - alpha])
-    return corner_weights(_solve(rates, bounded))
+        return np.array([min(1.0, max(0.0, alpha)) if bounded else alpha])
+    return _solve(rates, bounded)
 
 
 def _solve(rates: np.ndarray, bounded: bool = True) -> np.ndarray:
@@ -118,4 +120,4 @@ def _solve(rates: np.ndarray, bounded: bool = True) -> np.ndarray:
 
 
 __all__ = ["MAX_SLIDING", "SLIDE", "combine", "corner_modes", "corner_weights",
-           "slide_weights"]
+           "slide_alphas", "slide_weights"]

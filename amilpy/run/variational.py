@@ -44,10 +44,11 @@ from scipy.linalg import expm
 from .dense import sample, sample_step
 from .jacobian import STEP, jacobian_at
 from .plan import SLIDE
-from .slide import combine, corner_modes, slide_weights
+from .slide import combine, corner_modes, corner_weights, slide_alphas
 
 _C = np.array([0.5 - math.sqrt(15) / 10, 0.5, 0.5 + math.sqrt(15) / 10])
 VARIATION = 0.5  # h |A(c3) - A(c1)| above this: the step is halved
+HELD = 1e-9  # a sliding weight past [0, 1] by more: the motion is on that branch
 MAX_DEPTH = 6
 
 
@@ -104,7 +105,7 @@ class Tangent:
         """`fn` ("rhs" or "surf") of the generated functions `code` at (t, y): while a
         surface slides, "rhs" is Filippov's field of that code (`filippov`)."""
         if fn == "rhs" and SLIDE in m:
-            weights, modes = filippov(self.watch, code, t, y, m, z)
+            weights, modes = filippov(self.watch, code, t, y, m, z, self.floor)
             yl = [float(v) for v in y]
             return combine(weights, [np.asarray(code.rhs(t, yl, mc, z), dtype=float)
                                      for mc in modes])
@@ -119,6 +120,8 @@ class Tangent:
         if self.failed is not None:
             return
         ya = np.asarray(interp(ta), dtype=float)
+        if SLIDE in m:
+            m = held(self.watch, self.c, ta, ya, m, z, self.floor)
         if self.prev is not None:
             self._join(ta, ya, m, z)
             if self.failed is not None:
@@ -172,7 +175,9 @@ class Tangent:
                 np.any(np.abs(y - y_prev) > 1e-6 * scale_of(y, self.floor)):
             self.failed = "a state is reset"
             return
-        if z != z_prev and m == m_prev and \
+        # (a memory's tangent is not carried: one that changed gives d/dp = 0 where it
+        # is read, at a switch too -- ZHOLD's hold is one)
+        if z != z_prev and \
                 self.c.rhs(t, y.tolist(), m, z) != self.c.rhs(t, y.tolist(), m, z_prev):
             self.failed = "a memory value the derivatives read changes"
             return
@@ -181,15 +186,17 @@ class Tangent:
             self.failed = "a memory value an output reads changes (ZHOLD's held value)"
             return
         current, mem = list(m_prev), z_prev
+        # leaving a sliding surface is no jump where the field is continuous there (a
+        # weight having reached 0 or 1); where another switch at the instant ends the
+        # slide (a push on TIME), that switch's jump is to the branch left on
+        exits = [k for k in range(len(m)) if m_prev[k] == SLIDE and m[k] != SLIDE]
         for k in range(len(m)):
-            if m[k] == m_prev[k]:
-                continue
-            if m_prev[k] == SLIDE:
-                # leaving the surface: the field is continuous there (no jump)
-                current[k] = m[k]
+            if m[k] == m_prev[k] or k in exits:
                 continue
             after = list(current)
             after[k] = m[k]
+            for e in exits:
+                after[e] = m[e]
             s = self._saltation(k, t, y, current, after, mem, z)
             if s is None:
                 return
@@ -284,23 +291,71 @@ def scale_of(y: np.ndarray, floor: np.ndarray) -> np.ndarray:
     return np.maximum(np.abs(y), floor)
 
 
-def filippov(watch, code, t: float, y, m, z) -> tuple[np.ndarray, list[list[float]]]:
+def filippov(watch, code, t: float, y, m, z, floor) -> tuple[np.ndarray, list[list[float]]]:
     """The weights of the corners of the surfaces sliding in m (every one in its +
     or - branch: `slide.corner_modes`) and the corners' modes, under the generated
     functions `code`: the weights that keep the sliding surfaces at zero, from their
-    rates along each corner (`SurfaceWatch.surface_rate`, the run's own); with one
-    surface, alpha = d- / (d- - d+) for the + branch. Not held to [0, 1] as the run
-    holds them: the tangent differentiates the field, and a difference that steps
-    past where a weight reaches its bound (the surface's exit, which a moved data
-    value moves) would put a kink in it."""
+    rates along each corner; with one surface, alpha = d- / (d- - d+) for the +
+    branch. Not held to [0, 1] as the run holds them: the tangent differentiates
+    the field, and a difference that steps past where a weight reaches its bound
+    (the surface's exit, which a moved data value moves) would put a kink in it.
+    A rate is the surface's gradient (its own when it is linear in the states, as
+    the run's) times the field, plus its rate in TIME, by central differences
+    otherwise (steps STEP max(|y|, floor)): the run's one-sided look-ahead has a
+    rounding noise of about 1e-8, which the tangent's own differences would make
+    1e-3 of the weight's."""
+    alphas, modes = _alphas(watch, code, t, y, m, z, floor)
+    return corner_weights(alphas), modes
+
+
+def _alphas(watch, code, t: float, y, m, z, floor) -> tuple[np.ndarray, list[list[float]]]:
+    """`filippov`'s weight of each sliding surface's + branch, and the corners."""
     slides = [k for k, v in enumerate(m) if v == SLIDE]
     modes = corner_modes(m, slides)
-    w, yv = watch_of(watch, code), np.asarray(y, dtype=float)
+    yv = np.asarray(y, dtype=float)
     yl = yv.tolist()
-    rates = np.array([[w.surface_rate(k, t, yv, np.asarray(code.rhs(t, yl, mc, z),
-                                                               dtype=float), mc, z)
-                       for k in slides] for mc in modes])
-    return slide_weights(rates, bounded=False), modes
+    slopes = [_surface_slope(watch, code, k, t, yv, m, z, floor) for k in slides]
+    rates = np.array([[float(g @ f) + st for g, st in slopes]
+                      for f in (np.asarray(code.rhs(t, yl, mc, z), dtype=float)
+                                for mc in modes)])
+    return slide_alphas(rates, bounded=False), modes
+
+
+def held(watch, code, t: float, y, m, z, floor) -> list[float]:
+    """The branches the run's field is in at (t, y): m, except that a surface still
+    marked sliding whose weight is past its bound (a push on TIME at a breakpoint
+    ends the slide at once; the run, holding the weight there, moves on the branch
+    before it marks the exit a step later) is on that branch."""
+    if SLIDE not in m:
+        return list(m)
+    alphas, _ = _alphas(watch, code, t, y, m, z, floor)
+    out = list(m)
+    for k, a in zip([k for k, v in enumerate(m) if v == SLIDE], alphas, strict=True):
+        if a > 1.0 + HELD:
+            out[k] = 1.0
+        elif a < -HELD:
+            out[k] = -1.0
+    return out
+
+
+def _surface_slope(watch, code, k: int, t: float, y: np.ndarray, m, z, floor
+                   ) -> tuple[np.ndarray, float]:
+    """(d s_k/d y, d s_k/d TIME) at (t, y) under `code` (see `filippov`)."""
+    g = watch.watched[k].gradient
+    if g is not None:
+        return np.asarray(g, dtype=float), 0.0
+    h = STEP * scale_of(y, floor)
+    grad = np.empty(len(y))
+    for j in range(len(y)):
+        up, down = y.copy(), y.copy()
+        up[j] += h[j]
+        down[j] -= h[j]
+        grad[j] = (code.surf(t, up.tolist(), m, z)[k] -
+                   code.surf(t, down.tolist(), m, z)[k]) / (up[j] - down[j])
+    ht = STEP * max(abs(t), 1.0)
+    yl = y.tolist()
+    st = (code.surf(t + ht, yl, m, z)[k] - code.surf(t - ht, yl, m, z)[k]) / (2.0 * ht)
+    return grad, st
 
 
 def watch_of(watch, code):
