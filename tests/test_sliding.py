@@ -129,3 +129,29 @@ def test_more_surfaces_sliding_at_the_start_than_allowed_is_a_failed_run():
     assert r.status == "failed" and "switching surfaces slide at once (at most 6)" in r.message
     with pytest.raises(amilpy.AmilError, match="slide at once"):
         amilpy.loads(text, name="s.amil").flow().initial_state()
+
+
+PUSHED_OFF = """PARAM MU = 0.3, P = 4.0, T1 = 1.5
+CONST G = 9.81
+A = FSW(V, MU*G, 0.0, -MU*G) + P*STEP(T1)
+V = INTGRL(2.0, A)
+X = INTGRL(0.0, V)
+TIMER FINTIM = 3.0, OUTDEL = 0.1
+END
+"""
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_a_push_on_time_ends_the_slide_at_its_instant(method):
+    # Stuck by dry friction from 2/(MU G) = 0.68 s, the block is pushed at T1 = 1.5 by
+    # P > MU G: it leaves at once, V = (P - MU G)(t - T1). The exit is an event at
+    # 1.5 (it was put one step later, 1.5000095 on AUTO and 1.526 on RKS, while the
+    # motion itself moved on the right branch from 1.5).
+    r = run1(PUSHED_OFF, method=method, **LOCATED)
+    leave = [e.time for e in r.events if e.old == 0.5]
+    assert leave == pytest.approx([1.5], abs=1e-12)
+    t = r.t
+    v = np.where(t < 2 / (0.3 * 9.81), 2.0 - 0.3 * 9.81 * t,
+                 np.maximum(t - 1.5, 0.0) * (4.0 - 0.3 * 9.81))
+    tol = {"EULER": 5e-3}.get(method, 1e-8)
+    assert np.max(np.abs(r["V"] - v)) <= tol

@@ -383,7 +383,12 @@ class SurfaceWatch:
             return (dp if side > 0 else -dm) - noise
 
         ga, gb = g(ta), g(tb)
-        if ga > 0 or gb <= 0:
+        if ga > 0:
+            # leaving already where the step starts: a switch there (a push on TIME at
+            # a breakpoint) ended the slide at once; the exit is that instant (it was
+            # put at the step's end, one step late)
+            return ta
+        if gb <= 0:
             return tb
         return brentq(g, ta, tb, xtol=_XTOL * max(abs(tb), 1e-300), maxiter=200)
 
