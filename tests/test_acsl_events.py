@@ -444,3 +444,33 @@ END
     at = {round(t, 9): x for t, x in zip(run.t, run.values["X"], strict=True)}
     assert at[0.5] == pytest.approx(1.0, abs=1e-9)
     assert at[1.0] == pytest.approx(1.0 + 0.3 * math.sin(1.0), abs=1e-9)
+
+
+def test_a_crossing_at_a_discrete_instant_runs_its_section():
+    """The ball (G = 2, H0 = 1) lands exactly at T = 1, where an unrelated INTERVAL
+    section is due: BOUNCE still runs there (bounces at 1, 2, 2.5, ...). Until
+    review 48 the restart after COUNT's code read H = 0 as already crossed, and the
+    ball fell through the floor (H(1.9) = -2.61 for 0.09)."""
+    text = """PROGRAM ball
+  CONSTANT G = 2.0, E = 0.5
+  CINTERVAL CINT = 0.1
+  DERIVATIVE
+    V = INTEG(-G, 0.0)
+    H = INTEG(V, 1.0)
+    SCHEDULE BOUNCE .XN. H
+    TERMT(T >= 1.9)
+  END
+  DISCRETE BOUNCE
+    V = -E*V
+  END
+  DISCRETE COUNT
+    INTERVAL DK = 1.0
+    N = N + 1.0
+  END
+END
+"""
+    for method in ("AUTO", "RKS"):
+        run, = amilpy.loads(text, "ball.csl").run(advice=False, method=method)
+        assert run.values["H"][-1] == pytest.approx(0.09, abs=1e-9), method
+        bounces = [e.time for e in run.events if e.switch == "DISCRETE BOUNCE"]
+        assert bounces[:1] == pytest.approx([1.0], abs=1e-12), method

@@ -155,3 +155,24 @@ def test_a_push_on_time_ends_the_slide_at_its_instant(method):
                  np.maximum(t - 1.5, 0.0) * (4.0 - 0.3 * 9.81))
     tol = {"EULER": 5e-3}.get(method, 1e-8)
     assert np.max(np.abs(r["V"] - v)) <= tol
+
+
+SET_POINT_STEPPED = """R = 0.2 + 2.0*STEP(3.0)
+X = INTGRL(1.0, -FSW(X - R, -1.0, 0.0, 1.0))
+TIMER FINTIM = 8.0, OUTDEL = 0.1
+END
+"""
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_a_switch_that_moves_the_sliding_surface_ends_the_slide(method):
+    # A relay holds X on R = 0.2 from 0.8 s; at 3 s a STEP moves R to 2.2, the surface
+    # X - R jumps to -2 and X rises at 1 until it reaches 2.2 at 5 s, then slides
+    # again. Until review 48 every route kept sliding at 0.2 for the rest of the run.
+    r = run1(SET_POINT_STEPPED, method=method, **LOCATED)
+    t = r.t
+    x = np.where(t < 0.8, 1.0 - t, np.where(t < 3.0, 0.2, np.minimum(0.2 + (t - 3.0), 2.2)))
+    tol = {"EULER": 5e-3}.get(method, 1e-8)
+    assert np.max(np.abs(r["X"] - x)) <= tol
+    slides = [e.time for e in r.events if e.kind == "slide"]
+    assert slides == pytest.approx([0.8, 5.0], abs=1e-6)

@@ -49,6 +49,7 @@ from .plan import (
     within,
 )
 from .prepare import Cache, Prepared, before_run, constant_modes, random_seed
+from .watch import left_surfaces
 
 MIN_INTERVAL = 1e-100  # the least CINT a run takes
 
@@ -375,7 +376,10 @@ class AcslRun(_Run):
         """Events due now, then (at a CINT instant) DYNAMIC's own statements, the
         TERMT tests and the row."""
         sliding = [k for k, v in enumerate(cur.m) if v == SLIDE]
-        surfaces = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z) if sliding else None
+        # (the surfaces before the code: a sliding one it moves is left; a SCHEDULE's
+        # that the motion crosses right here, and the code leaves as it was, fires)
+        surfaces = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z) \
+            if sliding or self.integ.scheduling else None
         changed = self.run_due(cur)
         times = self.plan.grid.times
         on_grid = self.rec.out_i < len(times) and \
@@ -388,7 +392,7 @@ class AcslRun(_Run):
         if changed and sliding:
             self.off_surfaces(cur, sliding, surfaces)
         if changed:
-            self.restart(cur)
+            self.restart_firing(cur, surfaces)
         self.termt_now(cur)
         self.rec.hold = None
         if on_grid:
@@ -404,15 +408,28 @@ class AcslRun(_Run):
         if changed and self.acsl.cint_name in self.c.kept:
             self.regrid(cur.t, self.value(cur, self.acsl.cint_name))
 
+    def restart_firing(self, cur: Cursor, before: list[float] | None) -> None:
+        """The branches chosen again after the instant's code; a SCHEDULE surface the
+        motion crosses at this very instant (a ball landing as an INTERVAL section is
+        due), which the code left as it was, runs its section now: it was taken as
+        already crossed, and the ball fell through the floor."""
+        for _ in range(self.opts.max_events):
+            _, more = self.restart(cur, before)
+            plan = self.plan
+            for k in more:
+                self.schedule(cur.t, self.acsl.crossings[plan.watched[k].surface][0], cur.t)
+            if not more or not self.run_due(cur):
+                return
+            before = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z)
+
     def off_surfaces(self, cur: Cursor, sliding: list[int], before: list[float]) -> None:
         """A surface the motion slid on that the code moved off zero (a set point a
         DISCRETE section changes) is slid on no longer: its branch is the side it is
         on now, and the restart goes on from there (it kept sliding, off the surface,
         until 2026-11-30)."""
         now = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z)
-        for k in sliding:
-            if now[k] != before[k] and abs(now[k]) > 1e3 * abs(before[k]):
-                cur.m[k] = 1.0 if now[k] > 0 else -1.0
+        for k, side in left_surfaces(before, now, sliding).items():
+            cur.m[k] = side
 
     def regrid(self, t: float, cint: float) -> None:
         """CINT assigned during the run: rows every new CINT from this instant on."""

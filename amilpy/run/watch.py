@@ -110,11 +110,21 @@ class SurfaceWatch:
         decided: set[int] = set(forced or ())
         for k, mode in (forced or {}).items():
             new[k] = mode
+        # a sliding surface that another switch here moves off zero (a set point
+        # stepped at a breakpoint, an INSW on a state) is slid on no longer: the values
+        # it had before the switches, to tell that jump from the slide's own drift
+        slid = self.c.surf(t, y.tolist(), m, z) if SLIDE in m else None
         # A surface may depend on another switch's value (MODINT on STEP, say):
         # settle the signs again with the new branches until nothing moves.
         for _ in range(len(new) + 1):
             before = list(new)
             lit = self.literal_here(t, y, new, z)
+            if slid is not None and SLIDE in new:
+                off = left_surfaces(slid, self.c.surf(t, y.tolist(), new, z),
+                                    [k for k in self.sliding(new)
+                                     if k not in at_zero and k not in decided])
+                for k, side in off.items():
+                    new[k] = side
             for k in range(len(new)):
                 if self.watched[k].kind is SurfaceKind.LEVEL:
                     if k not in decided and (k in at_zero or first or lit[k] != new[k]):
@@ -391,6 +401,14 @@ class SurfaceWatch:
         if gb <= 0:
             return tb
         return brentq(g, ta, tb, xtol=_XTOL * max(abs(tb), 1e-300), maxiter=200)
+
+
+def left_surfaces(before, now, sliding: list[int]) -> dict[int, float]:
+    """The sliding surfaces (of `sliding`) that a switch or code moved off zero, and to
+    which side: a value now a thousand times the one before, which sliding keeps at
+    the integration's drift."""
+    return {k: (1.0 if now[k] > 0 else -1.0) for k in sliding
+            if now[k] != before[k] and abs(now[k]) > 1e3 * abs(before[k])}
 
 
 def literal_modes(c, plan: RunPlan, t: float, y: list[float], m, z) -> list[float]:
