@@ -474,3 +474,30 @@ END
         assert run.values["H"][-1] == pytest.approx(0.09, abs=1e-9), method
         bounces = [e.time for e in run.events if e.switch == "DISCRETE BOUNCE"]
         assert bounces[:1] == pytest.approx([1.0], abs=1e-12), method
+
+
+def test_a_zeno_point_at_an_interval_instant_fails_there_in_words():
+    """The bouncing ball's bounces accumulate at T = 3, where an INTERVAL section is
+    due too: the run ends there, saying so in words (it said "cannot reshape array of
+    size 0 into shape (0,newaxis)", numpy's words for an empty evaluation log)."""
+    text = """PROGRAM ball
+  CONSTANT G = 2.0, E = 0.5, TSTOP = 4.0
+  CINTERVAL CINT = 0.25
+  DERIVATIVE
+    V = INTEG(-G, 0.0)
+    H = INTEG(V, 1.0)
+    SCHEDULE BOUNCE .XN. H
+    TERMT(T >= TSTOP)
+  END
+  DISCRETE BOUNCE
+    V = -E*V
+  END
+  DISCRETE KICK
+    INTERVAL DK = 1.0
+    N = N + 1.0
+  END
+END
+"""
+    run, = amilpy.loads(text, "ball.csl").run(advice=False)
+    assert run.status == "failed" and "TIME = 3" in run.message
+    assert "reshape" not in run.message and "array" not in run.message

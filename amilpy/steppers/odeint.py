@@ -74,6 +74,9 @@ class Evaluations:
 
     def _states(self, keep: np.ndarray) -> np.ndarray:
         y = self.y
+        if not len(keep):  # (none: a call that failed at its start, say)
+            width = len(y[0]) if y else self._done_y[0].shape[1] if self._done_y else 0
+            return np.empty((0, width))
         return np.array([y[k] for k in keep.tolist()], dtype=float).reshape(len(keep), -1)
 
     def compact(self) -> None:
