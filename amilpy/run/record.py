@@ -540,12 +540,14 @@ class Recorder:
                 and close_to(last, self.times[self.out_i - 1]):
             self.rows.replace_last(self.outputs(last, y, m, z))
 
-    def grid_row(self, t: float, y: np.ndarray, m, z, shown=None) -> None:
-        """The row of the next grid instant (none at the instant held for the caller)."""
+    def grid_row(self, t: float, y: np.ndarray, m, z, shown=None) -> bool:
+        """The row of the next grid instant (none at the instant held for the caller:
+        False)."""
         if self.hold is not None and close_to(t, self.hold):
-            return
+            return False
         self.row(t, y, m, z, self.out_i, shown)
         self.out_i += 1
+        return True
 
     def block(self, T: np.ndarray, Y: np.ndarray, table: np.ndarray, m, z,
               samples: tuple[np.ndarray, np.ndarray] | None = None) -> None:

@@ -178,7 +178,11 @@ class StepWatch:
                 m = list(cur.m)
                 for k in silent:
                     m[k] = lit[k]
-            rec.grid_row(to, yo, m, cur.z)
+            if not rec.grid_row(to, yo, m, cur.z):
+                # (the instant held for the caller, inside a step that went past it --
+                # a Zeno point an INTERVAL instant shares: the caller takes that row;
+                # looping on it never ended)
+                break
 
     def sample_memory(self, stepper: Stepper, cur: Cursor, upto: float) -> None:
         """Memory that samples the trajectory (DELAY's store) gets every instant it asks

@@ -39,6 +39,12 @@ class SurfaceWatch:
         self.watch_idx = plan.watch_idx
         self.events = plan.events
         self.y0 = c.y0
+        # the surfaces a memory function switches on (ZHOLD's, RST's triggers): its
+        # memory changes as the motion crosses, so the branch the motion is pushed
+        # back from is not the field it meets on return (no sliding there)
+        triggers = {s for mem in (c.model.memories if c.model is not None else ())
+                    for s in mem.surfaces}
+        self.memory_triggers = {k for k, w in enumerate(plan.watched) if w.surface in triggers}
 
     # ------------------------------------------------------------ vector fields
     @staticmethod
@@ -224,6 +230,10 @@ class SurfaceWatch:
                 return -old
             return 1.0 if dp >= -dm else -1.0
         if way == SLIDES:
+            if k in self.memory_triggers and old in (1.0, -1.0):
+                # across: the memory takes the new branch's value, and the motion
+                # goes on from there (Z = ZHOLD(X - 1, 1) in X' = 1 - 2 Z turns X at 1)
+                return -old
             return SLIDE if self.events else 0.0
         return way if way in (UP, DOWN) else 0.0
 
