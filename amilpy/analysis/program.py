@@ -149,7 +149,8 @@ class _TangentRun(AcslRun):
         t = self.tangent
         y, z = np.asarray(cur.y, dtype=float), list(cur.z)
         for k in range(len(modes)):
-            if t.failed is not None or cur.m[k] == modes[k] or self._on_states(k, cur, modes):
+            if t.failed is not None or cur.m[k] == modes[k] or \
+                    np.any(t._gradient(k, cur.t, y, modes, z)):  # (a switch on the states)
                 continue
             after = list(modes)
             after[k] = cur.m[k]
@@ -158,22 +159,6 @@ class _TangentRun(AcslRun):
                 return
             t._phi = jump @ t.phi
             modes = after
-
-    def _on_states(self, k: int, cur, modes) -> bool:
-        """Whether watched surface k depends on the states at the cursor."""
-        g = self.watch.watched[k].gradient
-        if g is not None:
-            return bool(np.any(g))
-        y, floor = np.asarray(cur.y, dtype=float), self.tangent.floor
-        for j in range(len(y)):
-            h = STEP * max(abs(y[j]), float(floor[j]))
-            up, down = y.copy(), y.copy()
-            up[j] += h
-            down[j] -= h
-            if self.c.surf(cur.t, up.tolist(), modes, cur.z)[k] != \
-                    self.c.surf(cur.t, down.tolist(), modes, cur.z)[k]:
-                return True
-        return False
 
     def _code_jacobian(self, cur, fn) -> np.ndarray:
         """d (y', z') / d (y, z, p) of the section `fn` at the cursor."""

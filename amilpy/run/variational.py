@@ -225,7 +225,6 @@ class Tangent:
             if not np.any(moves):
                 continue
             field = np.asarray(self.value("rhs", self.c, t, y, m, z), dtype=float)
-            ht = STEP * max(abs(t), 1.0)
             for sign in (1.0, -1.0):
                 cols = np.flatnonzero(moves * sign > 0)
                 if not len(cols):
@@ -233,9 +232,7 @@ class Tangent:
                 side = list(m)
                 side[k] = sign
                 f = np.asarray(self.value("rhs", self.c, t, y, side, z), dtype=float)
-                st = (self.c.surf(t + ht, y.tolist(), side, z)[k] -
-                      self.c.surf(t - ht, y.tolist(), side, z)[k]) / (2 * ht)
-                rate = float(normal[:n] @ f) + st
+                rate = float(normal[:n] @ f) + surface_time_rate(self.c, k, t, y, side, z)
                 if rate * sign >= 0:  # (that branch does not lead back to the surface)
                     self.failed = "a sliding start that a data value moves off its surface"
                     return
@@ -247,19 +244,7 @@ class Tangent:
         return self._gradient(k, t, y, m, z)
 
     def _gradient(self, k: int, t: float, y: np.ndarray, m, z) -> np.ndarray:
-        """d s_k / d y at (t, y): the surface's own when it is linear in the states,
-        else central differences."""
-        g = self.watch.watched[k].gradient
-        if g is None:
-            h = STEP * scale_of(y, self.floor)
-            g = np.empty(len(y))
-            for j in range(len(y)):
-                up, down = y.copy(), y.copy()
-                up[j] += h[j]
-                down[j] -= h[j]
-                g[j] = (self.c.surf(t, up.tolist(), m, z)[k] -
-                        self.c.surf(t, down.tolist(), m, z)[k]) / (up[j] - down[j])
-        return np.asarray(g, dtype=float)
+        return surface_gradient(self.watch, self.c, k, t, y, m, z, self.floor)
 
     def _jump(self, k: int, t: float, y: np.ndarray, before, after, z_before, z_after):
         """(n = ds/dy, f+ - f-, n . f- + ds/dt) of switch k at (t, y); rate None for a
@@ -273,9 +258,7 @@ class Tangent:
         if not np.any(g) and self.watch.watched[k].surface in c.train_surfaces:
             # (PULSE's train: its surface jumps where it turns, no rate to be had there)
             return g, f_plus - f_minus, None
-        ht = STEP * max(abs(t), 1.0)
-        st = (c.surf(t + ht, yl, before, z_before)[k] -
-              c.surf(t - ht, yl, before, z_before)[k]) / (2 * ht)
+        st = surface_time_rate(c, k, t, y, before, z_before)
         if not np.any(g):
             # a switch on TIME alone (STEP(T1), FSW(TIME - T1, ...)): its instant moves
             # by -(ds/dp)/(ds/dt) with a data value, the states not at all
@@ -340,10 +323,22 @@ def held(watch, code, t: float, y, m, z, floor) -> list[float]:
 
 def _surface_slope(watch, code, k: int, t: float, y: np.ndarray, m, z, floor
                    ) -> tuple[np.ndarray, float]:
-    """(d s_k/d y, d s_k/d TIME) at (t, y) under `code` (see `filippov`)."""
+    """(d s_k/d y, d s_k/d TIME) at (t, y) under `code` (see `filippov`); a surface
+    linear in the states has no rate in TIME here, as in the run's own rates."""
+    if watch.watched[k].gradient is not None:
+        return np.asarray(watch.watched[k].gradient, dtype=float), 0.0
+    return surface_gradient(watch, code, k, t, y, m, z, floor), \
+        surface_time_rate(code, k, t, y, m, z)
+
+
+def surface_gradient(watch, code, k: int, t: float, y: np.ndarray, m, z, floor
+                     ) -> np.ndarray:
+    """d s_k / d y at (t, y) under `code`: the surface's own when it is linear in the
+    states, else central differences (steps STEP max(|y|, floor))."""
     g = watch.watched[k].gradient
     if g is not None:
-        return np.asarray(g, dtype=float), 0.0
+        return np.asarray(g, dtype=float)
+    y = np.asarray(y, dtype=float)
     h = STEP * scale_of(y, floor)
     grad = np.empty(len(y))
     for j in range(len(y)):
@@ -352,10 +347,14 @@ def _surface_slope(watch, code, k: int, t: float, y: np.ndarray, m, z, floor
         down[j] -= h[j]
         grad[j] = (code.surf(t, up.tolist(), m, z)[k] -
                    code.surf(t, down.tolist(), m, z)[k]) / (up[j] - down[j])
+    return grad
+
+
+def surface_time_rate(code, k: int, t: float, y, m, z) -> float:
+    """d s_k / d TIME at (t, y) under `code`, by a central difference."""
     ht = STEP * max(abs(t), 1.0)
-    yl = y.tolist()
-    st = (code.surf(t + ht, yl, m, z)[k] - code.surf(t - ht, yl, m, z)[k]) / (2.0 * ht)
-    return grad, st
+    yl = [float(v) for v in y]
+    return (code.surf(t + ht, yl, m, z)[k] - code.surf(t - ht, yl, m, z)[k]) / (2.0 * ht)
 
 
 def watch_of(watch, code):
@@ -395,34 +394,38 @@ class ParameterTangent(Tangent):
             cols.append((hi - lo) / (2.0 * h))
         return np.array(cols).T
 
+    def _by_data(self, fn: str, t: float, y: np.ndarray, m, z) -> np.ndarray:
+        """d fn / d (the tangent's variables past the states): the data values'."""
+        return self._by_p(fn, t, np.asarray(y, dtype=float).tolist(), m, z)
+
     def jacobian(self, t: float, y: np.ndarray, m, z) -> np.ndarray:
-        n, q = self.n, len(self.variants)
-        out = np.zeros((n + q, n + q))
-        out[:n, :n] = super().jacobian(t, y, m, z)
-        out[:n, n:] = self._by_p("rhs", t, np.asarray(y, dtype=float).tolist(), m, z)
+        n, size = self.n, len(self._phi)
+        out = np.zeros((size, size))
+        out[:n, :n] = Tangent.jacobian(self, t, y, m, z)
+        out[:n, n:] = self._by_data("rhs", t, y, m, z)
         return out
 
     def _normal(self, k: int, t: float, y: np.ndarray, m, z) -> np.ndarray:
         return np.concatenate([self._gradient(k, t, y, m, z),
-                               self._by_p("surf", t, y.tolist(), m, z)[k]])
+                               self._by_data("surf", t, y, m, z)[k]])
 
     def _saltation(self, k: int, t: float, y: np.ndarray, before, after, z_before, z_after
                    ) -> np.ndarray | None:
-        n, q = self.n, len(self.variants)
+        n = self.n
         jump = self._jump(k, t, y, before, after, z_before, z_after)
         if jump is None:
             return None
         g, diff, rate = jump
-        sp = self._by_p("surf", t, y.tolist(), before, z_before)[k]
-        out = np.eye(n + q)
+        rest = self._by_data("surf", t, y, before, z_before)[k]
+        out = np.eye(len(self._phi))
         if rate is None:
-            if np.any(sp):  # (a switch on TIME whose instant a data value moves)
+            if np.any(rest):  # (a switch on TIME whose instant a data value moves)
                 self.failed = "a PULSE train whose instants depend on a data value"
                 return None
             return out
-        # the augmented states' jump: I + (f+ - f-, 0) (ds/dy, ds/dp)^T / rate
+        # the augmented states' jump: I + (f+ - f-, 0) (ds/dy, ds/d(rest))^T / rate
         out[:n, :n] += np.outer(diff, g) / rate
-        out[:n, n:] = np.outer(diff, sp) / rate
+        out[:n, n:] = np.outer(diff, rest) / rate
         return out
 
 
@@ -454,38 +457,10 @@ class ProgramTangent(ParameterTangent):
             cols.append((hi - lo) / (up[j] - down[j]))
         return np.array(cols).T if cols else np.zeros((self.n if fn == "rhs" else 0, 0))
 
-    def jacobian(self, t: float, y: np.ndarray, m, z) -> np.ndarray:
-        n, r, q = self.n, self.r, len(self.variants)
-        out = np.zeros((n + r + q, n + r + q))
-        out[:n, :n] = Tangent.jacobian(self, t, y, m, z)
-        if r:
-            out[:n, n:n + r] = self._by_z("rhs", t, y, m, z)
-        out[:n, n + r:] = self._by_p("rhs", t, np.asarray(y, dtype=float).tolist(), m, z)
-        return out
-
-    def _saltation(self, k: int, t: float, y: np.ndarray, before, after, z_before, z_after
-                   ) -> np.ndarray | None:
-        n, r, q = self.n, self.r, len(self.variants)
-        jump = self._jump(k, t, y, before, after, z_before, z_after)
-        if jump is None:
-            return None
-        g, diff, rate = jump
-        sp = self._by_p("surf", t, y.tolist(), before, z_before)[k]
-        sz = self._by_z("surf", t, y, before, z_before)[k] if r else np.zeros(0)
-        out = np.eye(n + r + q)
-        if rate is None:
-            if np.any(sp) or np.any(sz):
-                self.failed = "a PULSE train whose instants depend on a data value"
-                return None
-            return out
-        # I + (f+ - f-, 0, 0) (ds/dy, ds/dz, ds/dp)^T / rate
-        out[:n, :] += np.outer(diff, np.concatenate([g, sz, sp])) / rate
-        return out
-
-    def _normal(self, k: int, t: float, y: np.ndarray, m, z) -> np.ndarray:
-        sz = self._by_z("surf", t, y, m, z)[k] if self.r else np.zeros(0)
-        return np.concatenate([self._gradient(k, t, y, m, z), sz,
-                               self._by_p("surf", t, y.tolist(), m, z)[k]])
+    def _by_data(self, fn: str, t: float, y: np.ndarray, m, z) -> np.ndarray:
+        """d fn / d (z, p): the memory values' columns, then the data values'."""
+        by_p = super()._by_data(fn, t, y, m, z)
+        return np.hstack([self._by_z(fn, t, y, m, z), by_p]) if self.r else by_p
 
     def jump(self, matrix: np.ndarray, t: float, y: np.ndarray, m, z) -> None:
         """The code of an instant at t ran: its Jacobian (of (y, z, p), identity rows
