@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 from conftest import ROOT
+from test_sensitivity import SAMPLED  # (the sampled P control: U held over each CINT)
 
 import amilpy
 from amilpy.cli import main
@@ -101,23 +102,6 @@ def test_a_bad_data_file_is_an_error_at_its_line_and_column(tmp_path, capsys, te
     err = capsys.readouterr().err
     assert f"{tmp_path}/{where}: error:" in err and words in err, err
     assert "Traceback" not in err
-
-
-SAMPLED = """PROGRAM sampled proportional control
-  CONSTANT KP = 0.8, X0 = 2.0
-  CINTERVAL CINT = 0.25
-  INITIAL
-    U = -KP*X0
-  END
-  DYNAMIC
-    DERIVATIVE
-      X = INTEG(U, X0)
-    END
-    U = -KP*X
-    TERMT(T >= 3.0)
-  END
-END
-"""
 
 
 def test_an_acsl_program_has_a_row_at_every_observation(tmp_path):
