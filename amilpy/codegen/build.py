@@ -705,6 +705,8 @@ class Compiler:
             impulses=binder.impulses(), tables=self.global_tables,
             surf_v=vector["surf_vec"], out_v=vector["out_vec"],
             memory_every_step=any(f.memory.every_step for f in self.entries),
+            play_slots=[mem.slot for mem, f in zip(model.memories, self.entries, strict=True)
+                        if f.memory.plays],
             memory_times=self.memory_times(),
             memory_trains=[(0.0, 1.0)] if model.weather else [],
             statements=self.statements, model=model,

@@ -37,6 +37,8 @@ class ModelCode:
     # some memory must be updated after every accepted step (HSTRSS, RST, DERIV,
     # DELAY); when False, memory changes only where a run restarts anyway (ZHOLD, PULSE)
     memory_every_step: bool = False
+    # the memory slots whose value is a play (HSTRSS, BCKLSH: `MemorySpec.plays`)
+    play_slots: list[int] = field(default_factory=list)
     # (z, t) -> instants after t at which memory makes the model switch (PULSE ends)
     memory_times: Callable | None = None
     # memory that samples the trajectory inside each accepted step (DELAY's store):

@@ -114,6 +114,11 @@ class MemorySpec:
     # the value reads the slots alone, never the arguments as they are now: a name
     # the arguments read may itself read the value without making a loop (.KEPT)
     delayed: bool = False
+    # the value is a play (HSTRSS): between two updates it moves one way only, so
+    # where the value the last update leaves would turn back inside a step (its
+    # input reversing while it pushes), the step is cut there and the memory updated
+    # at the turning point (`run.turns`), not at the step's end
+    plays: bool = False
 
 
 @dataclass(frozen=True)
@@ -520,7 +525,7 @@ register(Func("IMPULS", Kind.IMPULSE, "IMPULS(P1, P2)", "1 at t = P1 + k*P2"))
 _HSTRSS = "AMIN1(D - B, AMAX1(D - C, Z0))"
 register(Func("HSTRSS", Kind.MEMORY, "HSTRSS(IC, P1, P2, X)",
               "Y = min(X-P1, max(X-P2, prev)), Y(0)=IC", constant_args=(0,),
-              memory=MemorySpec("1", ("A",), _HSTRSS, ("VALUE",))))
+              memory=MemorySpec("1", ("A",), _HSTRSS, ("VALUE",), plays=True)))
 register(Func("ZHOLD", Kind.MEMORY, "ZHOLD(X1, X2)", "X2 while X1>0 else prev",
               surfaces=("A",),
               memory=MemorySpec("1", ("0.0",), "(B if M0 > 0.0 else Z0)", ("VALUE",),
@@ -549,7 +554,7 @@ register(Func("PULSE", Kind.MEMORY, "PULSE(P, X)", "Y=1 for at least P from X>0"
 _BACKLASH = "AMIN1(C + B, AMAX1(C - B, Z0))"
 register(Func("BCKLSH", Kind.MEMORY, "BCKLSH(IC, DL, X)",
               "backlash of total width 2*DL: HSTRSS(IC, -DL, DL, X)", constant_args=(0,),
-              memory=MemorySpec("1", ("A",), _BACKLASH, ("VALUE",))))
+              memory=MemorySpec("1", ("A",), _BACKLASH, ("VALUE",), plays=True)))
 register(Func("DERIV", Kind.MEMORY, "DERIV(IC, X)", "dX/dt, Y(0)=IC", ("DERIVT",),
               constant_args=(0,),
               # (x1, t1) the newest accepted point, (x2, t2) the one before, the value

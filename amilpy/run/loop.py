@@ -252,7 +252,8 @@ class Integrator(RunLoop, SegmentStart, StepWatch, Restarts, FastPaths):
             if at_boundary and tb < t_end:
                 # a breakpoint: the surfaces on TIME that reach zero here decide anew
                 step.triggered |= {k for k, root in self.roots.items() if root == tb}
-            restart = step.triggered or step.departed or (at_boundary and tb < t_end) or \
+            restart = step.triggered or step.departed or step.truncated or \
+                (at_boundary and tb < t_end) or \
                 any(e <= tb for e in self._pulse_ends(cur.z, cur.t))  # a memory's instant
             if restart:
                 # a breakpoint a few ulps ahead decides here too: the next segment would

@@ -13,6 +13,7 @@ from .cursor import Cursor, Stop, WatchedStep
 from .edges import locate_crossings
 from .plan import SLIDE, SurfaceKind
 from .record import Recorder
+from .turns import play_turn
 
 _EPS = float(np.finfo(float).eps)
 
@@ -96,7 +97,14 @@ class StepWatch:
                     yb: np.ndarray, e_prev, seg_start: float) -> WatchedStep:
         c, watch, m, z = self.c, self.watch, cur.m, cur.z
         step = WatchedStep(tb, yb, set(), set(), {}, False, e_prev)
+        # a play turning inside the step: the step ends there (its memory is updated
+        # at the turn), unless a crossing comes first
+        turn = play_turn(c, stepper.interpolant(), ta, tb, m, z) \
+            if c.play_slots and tb > ta and self.plan.route.uses_tolerances else None
         if not self.plan.watch_idx:
+            if turn is not None:
+                stepper.truncate(turn)
+                step.tb, step.yb, step.truncated = stepper.t, stepper.y, True
             return step
         e_b = c.surf(tb, yb.tolist(), m, z)
         hits, silent = [], []
@@ -116,14 +124,16 @@ class StepWatch:
             elif k in self._grazing and abs(e_b[k]) > self._grazing[k]:
                 del self._grazing[k]  # (clear of the surface: any crossing counts)
         slide_exit = watch.slide_exits(m, tb, yb, z)
-        if hits or slide_exit:
+        if hits or slide_exit or turn is not None:
             # departed: no crossing to bracket, sign at tb
             roots, step.departed = locate_crossings(watch, stepper, hits, m, z, ta, tb,
                                                     seg_start, (e_prev, e_b))
             interp = stepper.interpolant()
             for k, side in slide_exit:
                 roots[k] = watch.locate_slide_exit(k, side, m, z, interp, ta, tb)
-            t_star = min(roots.values(), default=tb)
+            t_star = min(roots.values(), default=tb if turn is None else turn)
+            if turn is not None and turn < t_star:
+                roots, step.departed, slide_exit, t_star = {}, set(), [], turn
             # a crossing a few ulps before a breakpoint is at the breakpoint: both decide
             # there, exactly where the row of that instant shows them
             t_star = next((r for r in sorted(self.roots.values())
