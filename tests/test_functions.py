@@ -167,6 +167,23 @@ def test_a_memory_switch_in_a_feedback_loop_turns_where_it_is_crossed(method):
 
 
 @pytest.mark.parametrize("method", ["AUTO", "RKS", "RADAU"])
+@pytest.mark.parametrize("outdel", [0.1, 1.5])
+def test_a_hold_the_motion_leaves_at_once_takes_its_input_at_the_crossing(method, outdel):
+    # X' = 1 - 2 Z, Z = ZHOLD(X - 1, TIME): at X = 1 (t = 1) the hold takes TIME = 1,
+    # X' turns to -1 at once and the trigger is back below zero, so Z keeps 1 and
+    # X = 2 - t. The run used to go on in the new branch to the next step's end (the
+    # next output instant on AUTO), Z following TIME there: X was off by 0.39 at
+    # OUTDEL 0.1 and 1.75 at OUTDEL 1.5, and the return's event was logged there.
+    # Now both crossings are events at t = 1, on every route and grid.
+    r = run1("X = INTGRL(0.0, 1.0 - 2.0*Z)\nZ = ZHOLD(X - 1.0, TIME)\n"
+             f"TIMER FINTIM = 3.0, OUTDEL = {outdel}\nEND\n", method=method, advice=False)
+    assert r["X"] == pytest.approx(np.where(r.t <= 1.0, r.t, 2.0 - r.t), abs=1e-9)
+    assert r["Z"][-1] == pytest.approx(1.0, abs=1e-12)
+    assert [(e.time, e.old, e.new) for e in r.events] == \
+        [(pytest.approx(1.0, abs=1e-12), -1.0, 1.0), (pytest.approx(1.0, abs=1e-12), 1.0, -1.0)]
+
+
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "RADAU"])
 def test_an_rst_thermostat_is_its_exact_relay_cycle(method):
     # H = RST(X - 3, 2 - X, 0): heating off above 3 (reset), on below 2 (set); X' =
     # -X + 10 H from X = 5. Each leg is an exponential towards 0 or 10, from one

@@ -28,10 +28,17 @@ class Restarts:
         new_m = watch.choose_modes(tb, yb, z, m, step.triggered, forced=step.exits)
         self._exited = set(step.exits)
         z_before = list(z)
+        crossed = new_m  # (the branches taken here before any the motion takes back)
         if c.z0:
             memory = c.mem(tb, yb.tolist(), m, new_m, z)
             new_m = watch.after_memory(tb, yb, new_m, z, memory)
             z[:] = memory
+            back = watch.returning(tb, yb, new_m, z, step.triggered)
+            if back:
+                crossed, new_m = new_m, list(new_m)
+                for k in back:
+                    new_m[k] = -new_m[k]
+                z[:] = c.mem(tb, yb.tolist(), crossed, new_m, z)
         stop = None
         # (a TERMT that turns true at a restart another surface made, one over a value
         # a branch selects -- a routine's STOP flag set in an IF -- stops the run here)
@@ -48,7 +55,12 @@ class Restarts:
         if stop is not None or self.fired:
             self.stop_reason = stop if stop is not None else self.fired[0]
         n_events = len(self.events)
-        self.record_changes(tb, yb, m, new_m, z, step.triggered, step.quiet)
+        if crossed is not new_m:  # (there and back: both crossings are events)
+            self.record_changes(tb, yb, m, crossed, z, step.triggered, step.quiet)
+            self.record_changes(tb, yb, crossed, new_m, z, step.triggered, step.quiet,
+                                returned=True)
+        else:
+            self.record_changes(tb, yb, m, new_m, z, step.triggered, step.quiet)
         changed = new_m != m
         if rec is not None and changed:
             rec.sample(tb, yb, m, z_before)  # (RANGE reads both sides of a jump)
@@ -100,7 +112,7 @@ class Restarts:
         return [k for k in ks if (m[k] > 0 and e[k] >= 0) or (m[k] < 0 and e[k] <= 0)]
 
     def record_changes(self, t: float, y: np.ndarray, m, new_m, z, at_zero: set[int],
-                       quiet: set[int] = frozenset()) -> None:
+                       quiet: set[int] = frozenset(), returned: bool = False) -> None:
         """An event for every watched surface whose branch changes at t (`quiet`:
         located, but changing no derivative: not an event). A crossing that runs code
         is an event where it runs it (1 - FLAG leaving zero is none)."""
@@ -117,13 +129,16 @@ class Restarts:
                 # feels: seen at whatever step end comes first, so not an event (the
                 # event list would otherwise depend on the output grid)
                 continue
-            self._event(t, k, m[k], new_m[k])
+            self._event(t, k, m[k], new_m[k], returned)
 
-    def _event(self, t: float, k: int, old: float, new: float) -> None:
-        """Surface k's branch changes from old to new at t (a located crossing)."""
+    def _event(self, t: float, k: int, old: float, new: float, returned: bool = False
+               ) -> None:
+        """Surface k's branch changes from old to new at t (a located crossing;
+        `returned`: a memory trigger the motion takes back at once, an event both
+        ways, since the memory took what the other branch gave)."""
         w = self.plan.watched[k]
         last = next((e for e in reversed(self.events) if e.surface == w.surface), None)
-        if last is not None and last.old == new and \
+        if not returned and last is not None and last.old == new and \
                 abs(last.time - t) <= 1e-12 * max(abs(t), 1e-300):
             # switched and switched back at one instant (noise at a tangential
             # crossing): nothing happened

@@ -206,6 +206,19 @@ class SurfaceWatch:
         new = self.choose_modes(t, y, z_after, m, set(), forced=kept)
         return [kept.get(k, mode) for k, mode in enumerate(new)]
 
+    def returning(self, t: float, y: np.ndarray, m, z, triggered) -> list[int]:
+        """The memory triggers just crossed (of `triggered`, modes m) that the motion
+        takes back at once: on the branch they crossed to, the surface's rate points
+        back to where it came from. Its memory holds what that branch gave at this
+        instant, and the trigger is back on its old side here too, not at the next
+        step's end (X' = 1 - 2 ZHOLD(X - 1, TIME) holds TIME = 1 at X = 1 and turns
+        X at once; going on in the new branch for a step held TIME = 1.03)."""
+        ks = [k for k in triggered if k in self.memory_triggers and m[k] in (1.0, -1.0)]
+        if not ks:
+            return []
+        f = np.asarray(self.field(t, y, m, z), dtype=float)
+        return [k for k in ks if sign(self.surface_rate(k, t, y, f, m, z)) == -m[k]]
+
     def direction(self, k: int, t: float, y: np.ndarray, m, z, old) -> float:
         """Which side of surface k the motion goes to from a point on it."""
         try:
