@@ -272,19 +272,59 @@ END
 
 def test_a_pulse_that_ends_at_a_cint_instant_is_the_flows_switch():
     """The PULSE's end at T = W = 1.0 falls on a CINT instant, where the program's
-    branches are chosen again: it is still the flow's switch, so d X/d W (which
-    moves it) is not followed -- differenced, and said -- while d X/d A is exact:
-    X(t) = (A/K)(1 - e^{-K W}) e^{-K (t - W)} after the pulse."""
+    branches are chosen again: it is still the flow's switch, and W moves it, so the
+    tangent jumps there by (f- - f+) dT/dW: X(t) = (A/K)(1 - e^{-K W}) e^{-K (t - W)}
+    after the pulse, d X/d W = A e^{-K (t - W)}, d X/d A = X/A."""
     model = amilpy.loads(PULSED, "pulsed.csl")
     loc = model.sensitivity(["A", "W"], outputs=["X"])
-    assert loc.how == "differences of whole runs (a PULSE train whose instants " \
-        "depend on a data value)"
+    assert loc.how == "sensitivity equations"
     from amilpy.analysis.sensitivity import trajectory
 
-    track = trajectory(model, 0, ["A"], {"A": 2.0, "W": 1.0, "K": 0.5}, {}, [0.5, 1.0, 2.5])
-    for t in (0.5, 1.0, 2.5):
+    times = [0.5, 0.99, 1.01, 2.5]
+    track = trajectory(model, 0, ["A", "W"], {"A": 2.0, "W": 1.0, "K": 0.5}, {}, times)
+    for t in times:
         exact = (1 - np.exp(-0.5 * min(t, 1.0))) / 0.5 * np.exp(-0.5 * max(t - 1.0, 0.0))
-        assert track.row("X", t)[0] == pytest.approx(exact, abs=1e-9), t
+        by_w = 2.0 * np.exp(-0.5 * (t - 1.0)) if t > 1.0 else 0.0
+        assert track.row("X", t) == pytest.approx([exact, by_w], abs=1e-9), t
+
+
+def pulsed_decay(t, a, k, tz, p, w):
+    """X' = A PULSE(TZ, P, W) - K X from 0: each pulse [s, s + W) adds
+    (A/K)(e^{-K (t - min(t, s + W))} - e^{-K (t - s)}); complex arguments for the
+    complex step (the instants compared by their real parts)."""
+    x, n = 0.0, 0
+    while (tz + n * p).real < t:
+        s = tz + n * p
+        e = s + w
+        x = x + a / k * (np.exp(-k * (t - (e if e.real < t else t))) - np.exp(-k * (t - s)))
+        n += 1
+    return x
+
+
+def test_a_pulse_train_whose_instants_move_jumps_the_tangent_at_each():
+    """X' = A PULSE(TZ, P, W) - K X: every start TZ + k P and end TZ + k P + W of the
+    train moves with TZ, P and W, the k-th by d/dTZ = 1, d/dP = k (and d/dW = 1 for
+    an end): the tangent jumps by (f- - f+) dT/dp at each, and agrees with the
+    complex step of the closed form (to 1e-9: the tangent's own tolerance) at
+    instants between and just after the edges. Before, every such value was
+    differenced ("a PULSE train whose instants depend on a data value")."""
+    model = amilpy.loads("PARAM A = 2.0, K = 0.7, TZ = 0.3, P = 1.1, W = 0.4\n"
+                         "X = INTGRL(0.0, A*PULSE(TZ, P, W) - K*X)\n"
+                         "TIMER FINTIM = 5.0, OUTDEL = 0.25\nEND\n", "train.amil")
+    names = ["A", "K", "TZ", "P", "W"]
+    values = {"A": 2.0, "K": 0.7, "TZ": 0.3, "P": 1.1, "W": 0.4}
+    from amilpy.analysis.sensitivity import trajectory
+
+    times = [0.2, 0.5, 0.71, 1.0, 1.45, 1.81, 2.6, 3.61, 4.95]
+    track = trajectory(model, 0, names, values, {"rtol": 1e-12, "atol": 1e-14}, times)
+    assert not isinstance(track, str), track
+    for t in times:
+        for j, name in enumerate(names):
+            moved = dict(values)
+            moved[name] = moved[name] + 1e-30j
+            exact = pulsed_decay(t, *(moved[n] for n in names)).imag / 1e-30
+            assert track.row("X", t)[j] == pytest.approx(exact, abs=1e-9), (t, name)
+    assert model.sensitivity(names, outputs=["X"]).how == "sensitivity equations"
 
 
 @pytest.mark.parametrize("schedule, interval, why", [

@@ -29,8 +29,10 @@ switches, so it lies in one branch) and carries Phi = d y(t)/d y(t0):
 What it does not handle it says (`Tangent.failed`), and the flow map then
 takes central differences of whole flows instead: a state reset (MODINT), a
 memory value the field (or an output asked for) reads changing along the way,
-a crossing where the flow is tangent to the surface (n . f- ~ 0), a PULSE
-train whose instants a data value moves.
+a crossing where the flow is tangent to the surface (n . f- ~ 0), two PULSE
+trains that share an instant and move it differently. A train instant a data
+value moves (PULSE(TZ, P, W): first + k period) jumps the tangent by
+(f- - f+) dt/dp, dt/dp from the same instant of the moved code's trains.
 """
 
 from __future__ import annotations
@@ -419,14 +421,36 @@ class ParameterTangent(Tangent):
         rest = self._by_data("surf", t, y, before, z_before)[k]
         out = np.eye(len(self._phi))
         if rate is None:
-            if np.any(rest):  # (a switch on TIME whose instant a data value moves)
-                self.failed = "a PULSE train whose instants depend on a data value"
-                return None
+            if np.any(rest):  # (a train's instant a data value moves)
+                shift = self._train_shift(t)
+                if shift is None:
+                    self.failed = "a PULSE train whose instants depend on a data value"
+                    return None
+                # the later the switch, the longer the old field runs: (f- - f+) dt/dp
+                out[:n, len(out) - len(shift):] = -np.outer(diff, shift)
             return out
         # the augmented states' jump: I + (f+ - f-, 0) (ds/dy, ds/d(rest))^T / rate
         out[:n, :n] += np.outer(diff, g) / rate
         out[:n, n:] = np.outer(diff, rest) / rate
         return out
+
+
+    def _train_shift(self, t: float) -> np.ndarray | None:
+        """d t/d p of the train instant at t (a PULSE train's start or end, first + k
+        period: `ModelCode.trains`), from the same instant of the variants' trains;
+        None if no train has an instant at t, or two that move differently do."""
+        found = None
+        for i, (first, period) in enumerate(self.c.trains):
+            k = round((t - first) / period) if period > 0 else 0
+            if k < 0 or abs(first + k * period - t) > 1e-12 * max(abs(t), 1.0):
+                continue
+            shift = np.array([((plus.trains[i][0] + k * plus.trains[i][1]) -
+                               (minus.trains[i][0] + k * minus.trains[i][1])) / (2.0 * h)
+                              for plus, minus, h in self.variants])
+            if found is not None and not np.allclose(found, shift, rtol=1e-9, atol=1e-12):
+                return None
+            found = shift
+        return found
 
 
 class ProgramTangent(ParameterTangent):
