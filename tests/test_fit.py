@@ -497,9 +497,14 @@ END
     # a value of 0 (its column was 0: moved by 0)
     ("PARAM K = 0.7, B = 0.0\nINCON X0 = 1.0\nX = INTGRL(X0, -K*X + B)\nY = K*X + 3.0*B\n",
      ["B", "X0"], {"B": 0.0, "X0": 1.0}, ""),
-    # a memory function's initial value (its sensitivity was 0: not followed)
+    # a memory function's initial value (its sensitivity was 0: not followed): a
+    # play's memory is not carried (its clamp sits on its kink after each update)
     ("PARAM K = 0.7, YIC = 1.0\nY = HSTRSS(YIC, -10.0, 10.0, X)\nX = INTGRL(0.0, -K*X + Y)\n",
      ["YIC"], {"YIC": 1.0}, "a memory function's initial value depends on YIC"),
+    # a hold of a state whose start is free, read after it holds (ZHOLD's memory is
+    # carried through its updates)
+    ("PARAM K = 0.7, YIC = 1.0\nY = YIC + ZHOLD(0.3 - TIME, X)\nX = INTGRL(YIC, -K*X)\n",
+     ["YIC", "K"], {"YIC": 1.0, "K": 0.7}, ""),
 ])
 def test_sensitivities_agree_with_differences_or_say_why_not(tmp_path, text, names, values,
                                                              why):

@@ -85,18 +85,46 @@ def test_local_sensitivity_through_a_switching_instant(tmp_path):
                                                   abs=1e-12)
 
 
-def test_an_output_a_memory_holds_is_differenced_and_says_why():
-    """XH = ZHOLD(0.5 - TIME, X) holds X(0.5) = exp(-0.35) from TIME = 0.5 on: d XH/d K
-    is then -0.5 exp(-0.35). The tangent does not carry the memory, so it cannot give
-    it (it gave 0 until 2026-11-30): the run is differenced, said, and right to the
-    differences, to 1e-6 here."""
+def test_an_output_a_memory_holds_carries_the_held_values_dependence():
+    """XH = ZHOLD(0.5 - TIME, X) follows X = exp(-K t) until TIME = 0.5 and holds
+    X(0.5) = exp(-0.35) from then on: d XH/d K = -t exp(-K t), then -0.5 exp(-0.35).
+    The tangent carries the memory through its updates (it gave 0 until 2026-11-30,
+    then differenced whole runs): to 1e-9."""
     model = amilpy.loads("TITLE HOLD\nPARAM K = 0.7\nX = INTGRL(1.0, -K*X)\n"
                          "XH = ZHOLD(0.5 - TIME, X)\nTIMER FINTIM = 1.0, OUTDEL = 0.1\n"
                          "PRINT X, XH\nEND\n")
     loc = model.sensitivity(["K"], outputs=["XH"])
-    assert loc.how == "differences of whole runs (a memory value an output reads changes " \
-        "(ZHOLD's held value))"
-    assert loc.raw[8, 0, 0] == pytest.approx(-0.5 * np.exp(-0.35), rel=1e-6)
+    assert loc.how == "sensitivity equations"
+    held = np.minimum(loc.times, 0.5)
+    assert loc.raw[:, 0, 0] == pytest.approx(-held * np.exp(-0.7 * held), abs=1e-9)
+
+
+def held_time_integral(t, k):
+    """Y = INTGRL(0, ZHOLD(X - 0.5, TIME)), X = exp(-K t): the hold follows TIME
+    until X reaches 0.5 at tc = ln 2 / K and keeps tc: Y = t^2/2, then tc^2/2 + tc
+    (t - tc)."""
+    tc = np.log(2.0) / k
+    return (t * t / 2 if t < tc.real else tc * tc / 2 + tc * (t - tc)), tc
+
+
+def test_a_hold_whose_instant_moves_takes_its_input_at_the_moved_instant():
+    """ZHOLD(X - 0.5, TIME) holds where X = exp(-K t) reaches 0.5, at tc = ln 2/K,
+    which K moves: the held value's dependence is dB/dt dtc/dK = -ln 2/K^2, the
+    update's rate in TIME times the instant's shift; Y, its integral, reads it.
+    Against the complex step of the closed form, to 1e-9."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    model = amilpy.loads("TITLE MOVING HOLD\nPARAM K = 0.7\nX = INTGRL(1.0, -K*X)\n"
+                         "XH = ZHOLD(X - 0.5, TIME)\nY = INTGRL(0.0, XH)\n"
+                         "TIMER FINTIM = 2.0, OUTDEL = 0.1\nPRINT X, XH, Y\nEND\n")
+    times = [0.5, 0.9, 1.2, 1.6, 2.0]
+    track = trajectory(model, 0, ["K"], {"K": 0.7}, {"rtol": 1e-12, "atol": 1e-14}, times)
+    assert not isinstance(track, str), track
+    for t in times:
+        y, tc = held_time_integral(t, 0.7 + 1e-30j)
+        assert track.row("Y", t)[0] == pytest.approx(y.imag / 1e-30, abs=1e-9), t
+        xh = tc.imag / 1e-30 if t > tc.real else 0.0
+        assert track.row("XH", t)[0] == pytest.approx(xh, abs=1e-9), t
 
 
 def test_a_switch_on_time_that_a_value_moves_jumps_the_tangent():
@@ -120,16 +148,28 @@ def test_a_switch_on_time_that_a_value_moves_jumps_the_tangent():
         assert track.row("X", t) == pytest.approx([dx_dt1, dx_dk], abs=1e-9), t
 
 
-def test_a_memory_the_derivatives_read_is_differenced_and_says_why():
+def hold_read(t, k):
+    """Y' = XH - Y, Y(0) = 0, XH = ZHOLD(0.5 - TIME, X), X = exp(-K t): Y = (e^{-K t}
+    - e^{-t})/(1 - K) to 0.5, then XH(0.5) + (Y(0.5) - XH(0.5)) e^{-(t - 0.5)}."""
+    y = (np.exp(-k * min(t, 0.5)) - np.exp(-min(t, 0.5))) / (1 - k)
+    if t <= 0.5:
+        return y
+    held = np.exp(-0.5 * k)
+    return held + (y - held) * np.exp(-(t - 0.5))
+
+
+def test_a_memory_the_derivatives_read_carries_its_dependence():
     """Y' = XH - Y with XH = ZHOLD(0.5 - TIME, X): the hold is itself a switch, and
-    the tangent does not carry the held value, so d Y/d K would come out without
-    its part after 0.5 (it did, -0.062 for -0.153 at 0.8, until review 48): the run
-    is differenced and says why."""
+    after it the derivatives read the held value; its tangent is carried (d Y/d K
+    came out without that part, -0.062 for -0.153 at 0.8, until review 48; then the
+    run was differenced). Against the complex step of the closed form, to 1e-9."""
     model = amilpy.loads("TITLE HOLD READ\nPARAM K = 0.7\nX = INTGRL(1.0, -K*X)\n"
                          "XH = ZHOLD(0.5 - TIME, X)\nY = INTGRL(0.0, XH - Y)\n"
                          "TIMER FINTIM = 1.5, OUTDEL = 0.1\nPRINT X, Y\nEND\n")
     loc = model.sensitivity(["K"], outputs=["Y"])
-    assert loc.how == "differences of whole runs (a memory value the derivatives read changes)"
+    assert loc.how == "sensitivity equations"
+    exact = [hold_read(t, 0.7 + 1e-30j).imag / 1e-30 for t in loc.times]
+    assert loc.raw[:, 0, 0] == pytest.approx(exact, abs=1e-9)
 
 
 DUE = """PROGRAM dose when due

@@ -4,21 +4,23 @@ observation of a `--data` file, from the variational equations of the flow
 (the model's own Jacobian d f/d y, exact to rounding), the data values' part F_p =
 d f/d p, and at every located switch the jump of the tangent, the surface's own
 dependence on p included -- so a value that moves a switching instant is
-differentiated through it. An observed output that is no state is d out/d y . S +
-d out/d p at its instant.
+differentiated through it. The memory functions' values (ZHOLD, RST, DERIV) are
+carried too, through their updates (`ProgramTangent`: the update's Jacobian, and its
+rate in TIME where a switch that moves holds it). An observed output that is no
+state is d out/d y . S + d out/d z . S_z + d out/d p at its instant.
 
 F_p, ds/dp, d out/dp and the start's dependence d y(t0)/dp are central differences
 of the generated functions at one TIME and state (the run's code bound to p +- h,
 no integration); h = cbrt(eps) |p| (1e-8 for p = 0: `step_for`). Where the
-variational equations do not follow the flow (a surface that slides, a state reset,
-a memory value the derivatives read changing, a flow tangent to a surface, a memory
-function's initial value that depends on p; in a program of the ACSL form, an
+variational equations do not follow the flow (a state reset, a flow tangent to a
+surface, a memory they cannot carry changing -- a play's, DELAY's store, CSMP's
+PULSE end: `variational.memory_unfollowed`; in a program of the ACSL form, an
 instant its code runs at that moves with p: `analysis.program`) the caller
 differences whole runs instead, and is told why."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -27,7 +29,7 @@ from ..observed import Observations
 from ..run.flow import FlowFailed
 from ..run.jacobian import STEP  # (cbrt(machine epsilon): the one differencing step)
 from ..run.plan import SAME_INSTANT, SLIDE
-from ..run.variational import ParameterTangent
+from ..run.variational import ParameterTangent, ProgramTangent, memory_unfollowed
 from .tangents import Sampler, output_row, outputs_asked, step_for
 
 if TYPE_CHECKING:
@@ -83,8 +85,10 @@ class Trajectory:
             # the branches at t chosen afresh, as the run's row there has them: a switch
             # on TIME due exactly at t is taken (the step that ends at t has the old one);
             # a surface sliding stays so (its state, a rounding off it, would pick a side)
+            # (with the memory the tangent was read with: the start's would update it
+            # here, putting a play's value on its own kink)
             self._rows[t] = state if SLIDE in state.modes else \
-                self.flow.state(state.y, None, state.memory, t)
+                replace(self.flow.state(state.y, None, state.memory, t), memory=state.memory)
         return output_row(self.code, self.variants, self.outputs[name], t, self._rows[t],
                            sens, self.floor, self.flow.watch)
 
@@ -124,7 +128,10 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
     c = flow.code
     start = flow.initial_state()
     n = len(start.y)
-    variants, dy0 = [], np.zeros((n, len(names)))
+    # the memory functions' values are carried too (their rows after the states's),
+    # unless the tangent cannot follow their updates (then a change it meets says so)
+    r = len(start.memory) if memory_unfollowed(c) is None else 0
+    variants, dy0 = [], np.zeros((n + r, len(names)))
     for j, name in enumerate(names):
         moved = moved_flows(flow_at, c, name, data[name])
         if moved is None:
@@ -132,18 +139,20 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
         plus, minus, h = moved
         variants.append((plus.code, minus.code, h))
         up, down = plus.initial_state(), minus.initial_state()
-        if up.memory != down.memory:  # (HSTRSS's, BCKLSH's initial value: not followed)
+        if up.memory != down.memory and not r:
             return f"a memory function's initial value depends on {name}"
-        dy0[:, j] = (np.asarray(up.y) - np.asarray(down.y)) / (2.0 * h)
+        dy0[:, j] = (np.concatenate([up.y, up.memory[:r]]) -
+                     np.concatenate([down.y, down.memory[:r]])) / (2.0 * h)
     floor = np.broadcast_to(np.asarray(flow.plan.tol.atol / flow.plan.tol.rtol, dtype=float),
                             (n,))
-    tangent = ParameterTangent(c, flow.watch, floor, dy0, variants,
-                               outputs_asked(c, variables))
+    asked = outputs_asked(c, variables)
+    tangent = ProgramTangent(c, flow.watch, floor, dy0, variants, r, asked) if r else \
+        ParameterTangent(c, flow.watch, floor, dy0, variants, asked)
     times = np.asarray(times, dtype=float)
-    sampler = Sampler(tangent, times, n)
+    sampler = Sampler(tangent, times, n + r)
     at: dict[float, tuple] = sampler.at
     if len(times) and times[0] <= start.t + SAME_INSTANT * max(1.0, abs(start.t)):
-        at[float(times[0])] = (start, tangent.phi[:n].copy())
+        at[float(times[0])] = (start, tangent.phi[:n + r].copy())
     if len(times) and times[-1] > start.t:
         # one integration over the whole span, as the run's: the tangent is read inside
         # the steps at the instants asked for (no restart at each of them)

@@ -20,10 +20,19 @@ class Sampler:
     def __init__(self, tangent: ParameterTangent, times: np.ndarray, n: int) -> None:
         self.tangent, self.times, self.n = tangent, times, n
         self.at: dict[float, tuple] = {}
+        # an instant asked for at a step's end: its row is the one after what happens
+        # there (the memory's update, a switch, as the run's row has them), taken as
+        # the next step starts; the one before stands if no step follows
+        self._due: float | None = None
 
     def __call__(self, ta: float, tb: float, interp, m, z) -> None:
-        from ..run import State
-
+        if self._due is not None:
+            due, self._due = self._due, None
+            if due == ta:
+                self.tangent(ta, ta, interp, m, z)  # (joins what happened at ta)
+                if self.tangent.failed is not None:
+                    return
+                self._keep(ta, interp, m, z)
         lo = int(np.searchsorted(self.times, ta, side="right"))
         hi = int(np.searchsorted(self.times, tb, side="right"))
         t = ta
@@ -33,11 +42,18 @@ class Sampler:
             self.tangent(t, tk, interp, m, z)
             if self.tangent.failed is not None:
                 return
-            y = np.asarray(interp(tk), dtype=float)
-            self.at[tk] = (State(y, tuple(m), tuple(z), tk), self.tangent.phi[:self.n].copy())
+            self._keep(tk, interp, m, z)
+            if tk == tb:
+                self._due = tk
             t = tk
         if tb > t:
             self.tangent(t, tb, interp, m, z)
+
+    def _keep(self, t: float, interp, m, z) -> None:
+        from ..run import State
+
+        y = np.asarray(interp(t), dtype=float)
+        self.at[t] = (State(y, tuple(m), tuple(z), t), self.tangent.phi[:self.n].copy())
 
 
 def output_row(c, variants, i: int, t: float, state, sens: np.ndarray, floor: np.ndarray,

@@ -26,9 +26,16 @@ switches, so it lies in one branch) and carries Phi = d y(t)/d y(t0):
   co-dimension"); a start on a sliding surface is an entry for the columns that
   move the start off it (`_onto_surfaces`).
 
+`ProgramTangent` also carries the memory values z (z' = 0 between updates): at an
+update z = mem(t, y, z) (a step's end, a located switch: ZHOLD holding where its
+trigger crosses) the update's Jacobian applies, with y's total derivative
+S + f dt/dp and the update's rate in TIME where the switch's instant moves.
+
 What it does not handle it says (`Tangent.failed`), and the flow map then
 takes central differences of whole flows instead: a state reset (MODINT), a
-memory value the field (or an output asked for) reads changing along the way,
+memory value the field (or an output asked for) reads changing along the way
+where the memory is not carried (the flow map's; a play, a DELAY store, CSMP's
+PULSE end: `memory_unfollowed`),
 a crossing where the flow is tangent to the surface (n . f- ~ 0), two PULSE
 trains that share an instant and move it differently. A train instant a data
 value moves (PULSE(TZ, P, W): first + k period) jumps the tangent by
@@ -91,6 +98,7 @@ class Tangent:
         self._pending: list | None = None  # [A, the steps' total length]
         self.prev: tuple | None = None  # (tb, y(tb), modes, memory) of the last step
         self.failed: str | None = None
+        self._shift: np.ndarray | None = None  # d t/d p of the instant being joined
 
     @property
     def phi(self) -> np.ndarray:
@@ -177,16 +185,10 @@ class Tangent:
                 np.any(np.abs(y - y_prev) > 1e-6 * scale_of(y, self.floor)):
             self.failed = "a state is reset"
             return
-        # (a memory's tangent is not carried: one that changed gives d/dp = 0 where it
-        # is read, at a switch too -- ZHOLD's hold is one)
-        if z != z_prev and \
-                self.c.rhs(t, y.tolist(), m, z) != self.c.rhs(t, y.tolist(), m, z_prev):
-            self.failed = "a memory value the derivatives read changes"
+        moved = z != z_prev and self._memory_moved(t, y, m_prev, m, z_prev, z)
+        if self.failed is not None:
             return
-        if z != z_prev and self.outputs is not None and self._outputs_read(t, y, m, z, z_prev):
-            # (its tangent is not carried: an output it gives would read d/dp = 0)
-            self.failed = "a memory value an output reads changes (ZHOLD's held value)"
-            return
+        self._shift = None
         current, mem = list(m_prev), z_prev
         # leaving a sliding surface is no jump where the field is continuous there (a
         # weight having reached 0 or 1); where another switch at the instant ends the
@@ -204,6 +206,21 @@ class Tangent:
                 return
             self._phi = s @ self.phi  # (the steps before the switch first)
             current, mem = after, z
+        if moved:
+            self._update_memory(t, y, m_prev, m, z_prev, z)
+
+    def _memory_moved(self, t: float, y: np.ndarray, m_prev, m, z_prev, z) -> bool:
+        """Whether the memory's change from z_prev to z is the tangent's to follow
+        (`ProgramTangent` carries the memory); here it is not: one the derivatives or
+        an output asked for read says so (`failed`), as d/dp = 0 would be read there."""
+        if self.c.rhs(t, y.tolist(), m, z) != self.c.rhs(t, y.tolist(), m, z_prev):
+            self.failed = "a memory value the derivatives read changes"
+        elif self.outputs is not None and self._outputs_read(t, y, m, z, z_prev):
+            self.failed = "a memory value an output reads changes (ZHOLD's held value)"
+        return False
+
+    def _update_memory(self, t: float, y: np.ndarray, m_prev, m, z_prev, z) -> None:
+        """The memory updated at t (`ProgramTangent`)."""
 
     def _saltation(self, k: int, t: float, y: np.ndarray, before, after, z_before, z_after
                    ) -> np.ndarray | None:
@@ -428,7 +445,12 @@ class ParameterTangent(Tangent):
                     return None
                 # the later the switch, the longer the old field runs: (f- - f+) dt/dp
                 out[:n, len(out) - len(shift):] = -np.outer(diff, shift)
+                if self._shift is None:
+                    self._shift = shift
             return out
+        if self._shift is None:  # (d t/d p of the instant: a memory updated there)
+            phi = self.phi
+            self._shift = -(g @ phi[:n] + rest @ phi[n:]) / rate
         # the augmented states' jump: I + (f+ - f-, 0) (ds/dy, ds/d(rest))^T / rate
         out[:n, :n] += np.outer(diff, g) / rate
         out[:n, n:] = np.outer(diff, rest) / rate
@@ -453,6 +475,26 @@ class ParameterTangent(Tangent):
         return found
 
 
+def memory_unfollowed(c) -> str | None:
+    """Why a tangent cannot carry the memory of `c`'s functions through their
+    updates (None: it can): a store that samples inside the steps (DELAY's), or a
+    memory that changes the model at an instant it holds (CSMP's PULSE end, a
+    random draw's next instant), which no switch marks."""
+    from ..library import lookup
+
+    for mem in (c.model.memories if c.model is not None else ()):
+        spec = lookup(mem.func, len(mem.args)).memory
+        if spec.samples is not None:
+            return f"{mem.func}'s store samples the states inside the steps"
+        if spec.plays:
+            # (its value is a clamp of the memory, on whose kink it sits after each
+            # update: the differences the tangent takes would straddle it)
+            return f"{mem.func}'s play clamps its memory"
+        if spec.wakes is not None:
+            return f"{mem.func} changes the model at an instant its memory holds"
+    return None
+
+
 class ProgramTangent(ParameterTangent):
     """`ParameterTangent` of a program in ACSL form: the states y (n) augmented by the
     r memory values z its DISCRETE and DYNAMIC code keep (constant between the
@@ -467,6 +509,64 @@ class ProgramTangent(ParameterTangent):
                  outputs: list[int] | None = None) -> None:
         super().__init__(c, watch, floor, start, variants, outputs)
         self.n, self.r = start.shape[0] - memory, memory
+        # memory whose changes it does not follow, and why (`memory_unfollowed`)
+        self.unfollowed = memory_unfollowed(c)
+
+    def _memory_moved(self, t: float, y: np.ndarray, m_prev, m, z_prev, z) -> bool:
+        if self.unfollowed is not None:
+            return super()._memory_moved(t, y, m_prev, m, z_prev, z)
+        return True
+
+    def _update_memory(self, t: float, y: np.ndarray, m_prev, m, z_prev, z) -> None:
+        """The memory functions' update at t, z = mem(t, y, m_prev, m, z_prev) (every
+        step's end, a located switch): its Jacobian in y, z, p and TIME (central
+        differences of the generated update) applies to the memory rows, with y's
+        total derivative S + f dt/dp where the instant moves (a ZHOLD that holds
+        where its trigger crosses: dZ/dp = dB/dp + dB/dt dt/dp)."""
+        n, r, c = self.n, self.r, self.c
+        yl, m_prev, m = np.asarray(y, dtype=float).tolist(), list(m_prev), list(m)
+
+        def update(code, tt: float, yv: list, zv: list) -> np.ndarray:
+            return np.asarray(code.mem(tt, yv, m_prev, m, list(zv)), dtype=float)
+
+        now = np.asarray(z, dtype=float)
+        again = update(c, t, yl, z_prev)
+        if not np.allclose(again, now, rtol=1e-9, atol=1e-12 * (1.0 + float(np.max(
+                np.abs(now), initial=0.0)))):
+            # (several updates at one instant: a trigger crossed and taken back)
+            self.failed = "the memory changes twice at one instant"
+            return
+        phi = self.phi
+        shift = self._shift
+        if shift is not None:  # (y's total derivative at a moving instant)
+            f = np.asarray(self.value("rhs", c, t, yl, m, z), dtype=float)
+            states = phi[:n] + np.outer(f, shift)
+        else:
+            states = phi[:n]
+        rows = np.zeros((r, phi.shape[1]))
+        for j in range(n):
+            h = STEP * max(abs(yl[j]), float(self.floor[j]))
+            up, down = list(yl), list(yl)
+            up[j] += h
+            down[j] -= h
+            rows += np.outer((update(c, t, up, z_prev) - update(c, t, down, z_prev)) /
+                             (up[j] - down[j]), states[j])
+        for j in range(r):
+            h = STEP * max(abs(z_prev[j]), 1.0)
+            up, down = list(z_prev), list(z_prev)
+            up[j] += h
+            down[j] -= h
+            rows += np.outer((update(c, t, yl, up) - update(c, t, yl, down)) /
+                             (up[j] - down[j]), phi[n + j])
+        q = len(self.variants)
+        for j, (plus, minus, h) in enumerate(self.variants):
+            rows[:, phi.shape[1] - q + j] += \
+                (update(plus, t, yl, z_prev) - update(minus, t, yl, z_prev)) / (2.0 * h)
+        if shift is not None and np.any(shift):
+            ht = STEP * max(abs(t), 1.0)
+            rows += np.outer((update(c, t + ht, yl, z_prev) - update(c, t - ht, yl, z_prev))
+                             / (2.0 * ht), shift)
+        self._phi[n:n + r] = rows
 
     def _by_z(self, fn: str, t: float, y: np.ndarray, m, z) -> np.ndarray:
         """d fn(t, y, m, z) / d z, a column per memory value."""
