@@ -529,3 +529,53 @@ def test_sobol_points_come_row_by_row():
         others = [j for j in range(3) if j != i]
         assert np.array_equal(u[:, 2 + i, others], u[:, 0, others])
         assert np.array_equal(u[:, 2 + i, i], u[:, 1, i])
+
+
+def thermostat(hi, lo, t_end=8.0):
+    """X' = -X + 10 H from X = 5, H = RST(X - HI, LO - X, 0): heating off above HI,
+    on below LO; each leg an exponential towards 0 or 10 from one threshold to the
+    other (complex HI, LO: the instants compared by their real parts)."""
+    t, y, heat = 0.0, 5.0 + 0j, 0
+    while True:
+        eq = 10.0 * heat
+        end = t + np.log((y - eq) / ((lo if heat == 0 else hi) - eq))
+        if end.real >= t_end:
+            return eq + (y - eq) * np.exp(-(t_end - t))
+        y, t, heat = (lo if heat == 0 else hi), end, 1 - heat
+
+
+def test_a_flip_flop_carries_its_thresholds_through_each_switch():
+    """RST's memory flips at each threshold's crossing, which HI and LO move: the
+    tangent jumps there (the flip is the field's change) and carries the memory
+    (its value's own derivative is 0). d X(8)/d HI and d X(8)/d LO against the
+    complex step of the legs summed by hand, to 1e-8."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    model = amilpy.loads("PARAM HI = 3.0, LO = 2.0\nX = INTGRL(5.0, -X + 10.0*H)\n"
+                         "H = RST(X - HI, LO - X, 0.0)\nTIMER FINTIM = 8.0, OUTDEL = 0.1\n"
+                         "END\n", "thermostat.amil")
+    track = trajectory(model, 0, ["HI", "LO"], {"HI": 3.0, "LO": 2.0},
+                       {"rtol": 1e-12, "atol": 1e-14}, [8.0])
+    assert not isinstance(track, str), track
+    exact = [thermostat(3.0 + 1e-30j, 2.0).imag / 1e-30,
+             thermostat(3.0, 2.0 + 1e-30j).imag / 1e-30]
+    assert track.row("X", 8.0) == pytest.approx(exact, abs=1e-8)
+
+
+def test_a_hold_that_starts_following_where_its_trigger_crosses():
+    """XH = ZHOLD(X - T1, SIN(TIME)), X = TIME: 0 until T1, then SIN(TIME) (its
+    trigger crossed upwards, where the update reads the trigger's sign at zero);
+    Y = INTGRL(0, XH) = COS(T1) - COS(TIME) after T1: d Y/d T1 = -SIN(T1) (the
+    field's jump at a crossing T1 moves), d XH/d T1 = 0. To 1e-9."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    model = amilpy.loads("PARAM T1 = 0.7\nX = INTGRL(0.0, 1.0)\n"
+                         "XH = ZHOLD(X - T1, SIN(TIME))\nY = INTGRL(0.0, XH)\n"
+                         "TIMER FINTIM = 2.0, OUTDEL = 0.1\nEND\n", "follow.amil")
+    times = [0.5, 0.9, 1.4, 2.0]
+    track = trajectory(model, 0, ["T1"], {"T1": 0.7}, {"rtol": 1e-12, "atol": 1e-14}, times)
+    assert not isinstance(track, str), track
+    for t in times:
+        assert track.row("Y", t)[0] == pytest.approx(-np.sin(0.7) if t > 0.7 else 0.0,
+                                                     abs=1e-9), t
+        assert track.row("XH", t)[0] == pytest.approx(0.0, abs=1e-9), t

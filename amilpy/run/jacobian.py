@@ -112,3 +112,30 @@ def refined(f, y: np.ndarray, floor) -> tuple[np.ndarray, np.ndarray]:
         out[:, j] = tries[best]
         error[j] = changes[best]
     return out, error
+
+
+def branch_difference(f: Callable[[list[float]], object], at: list[float], j: int,
+                      h: float) -> np.ndarray:
+    """d f / d at[j] (f vector-valued) by a central difference; where f jumps or
+    bends within h of the point -- the one-sided differences disagree: a memory
+    update that reads the sign of a trigger standing at zero, as it does where it
+    was just crossed -- by the second-order one-sided difference on the side where
+    f is straighter, the branch the point itself is on (exact for a piecewise
+    linear f, O(h^2) for a smooth one whose curvature alone parted the sides)."""
+    def at_step(d: float) -> np.ndarray:
+        v = list(at)
+        v[j] += d
+        return np.asarray(f(v), dtype=float)
+
+    mid, hi, lo = at_step(0.0), at_step(h), at_step(-h)
+    up, down = (hi - mid) / h, (mid - lo) / h
+    noise = 8.0 * np.finfo(float).eps * (np.abs(mid) + np.abs(hi) + np.abs(lo)) / h
+    bent = np.abs(up - down) > 1e-8 * (np.abs(up) + np.abs(down)) + noise
+    central = (hi - lo) / (2.0 * h)
+    if not np.any(bent):
+        return central
+    half_up, half_down = at_step(0.5 * h), at_step(-0.5 * h)
+    right = (-3.0 * mid + 4.0 * half_up - hi) / h
+    left = (3.0 * mid - 4.0 * half_down + lo) / h
+    straight_right = np.abs(half_up - 0.5 * (mid + hi)) <= np.abs(half_down - 0.5 * (mid + lo))
+    return np.where(bent, np.where(straight_right, right, left), central)

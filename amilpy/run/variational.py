@@ -46,12 +46,13 @@ from __future__ import annotations
 
 import copy
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import expm
 
 from .dense import sample, sample_step
-from .jacobian import STEP, jacobian_at
+from .jacobian import STEP, branch_difference, jacobian_at
 from .plan import SLIDE
 from .slide import combine, corner_modes, corner_weights, slide_alphas
 
@@ -475,6 +476,15 @@ class ParameterTangent(Tangent):
         return found
 
 
+@dataclass
+class _Path:
+    """The updates a restart made to the memory: (modes before, modes after) each,
+    and the memory triggers crossed and taken back at once."""
+
+    steps: list[tuple[list[float], list[float]]]
+    returned: list[int]
+
+
 def memory_unfollowed(c) -> str | None:
     """Why a tangent cannot carry the memory of `c`'s functions through their
     updates (None: it can): a store that samples inside the steps (DELAY's), or a
@@ -525,17 +535,24 @@ class ProgramTangent(ParameterTangent):
         where its trigger crosses: dZ/dp = dB/dp + dB/dt dt/dp)."""
         n, r, c = self.n, self.r, self.c
         yl, m_prev, m = np.asarray(y, dtype=float).tolist(), list(m_prev), list(m)
+        path = self._update_path(t, yl, m_prev, m, z_prev, z)
+        if path is None:
+            self.failed = "the memory changes at an instant the tangent cannot retrace"
+            return
+        for k in path.returned:
+            # a trigger crossed and taken back at once (the run's `returning`): the
+            # modes are as they were, the memory and so the field are not, at an
+            # instant the values move -- that switch's jump
+            s = self._saltation(k, t, y, m_prev, m, z_prev, z)
+            if s is None:
+                return
+            self._phi = s @ self.phi
 
         def update(code, tt: float, yv: list, zv: list) -> np.ndarray:
-            return np.asarray(code.mem(tt, yv, m_prev, m, list(zv)), dtype=float)
+            for before, after in path.steps:
+                zv = code.mem(tt, yv, before, after, list(zv))
+            return np.asarray(zv, dtype=float)
 
-        now = np.asarray(z, dtype=float)
-        again = update(c, t, yl, z_prev)
-        if not np.allclose(again, now, rtol=1e-9, atol=1e-12 * (1.0 + float(np.max(
-                np.abs(now), initial=0.0)))):
-            # (several updates at one instant: a trigger crossed and taken back)
-            self.failed = "the memory changes twice at one instant"
-            return
         phi = self.phi
         shift = self._shift
         if shift is not None:  # (y's total derivative at a moving instant)
@@ -543,30 +560,62 @@ class ProgramTangent(ParameterTangent):
             states = phi[:n] + np.outer(f, shift)
         else:
             states = phi[:n]
+        # (an update reads a trigger's sign where its mode is not positive, a sign
+        # that jumps at the crossing it may be taken at: `branch_difference` keeps to
+        # the branch the run's update took)
         rows = np.zeros((r, phi.shape[1]))
         for j in range(n):
             h = STEP * max(abs(yl[j]), float(self.floor[j]))
-            up, down = list(yl), list(yl)
-            up[j] += h
-            down[j] -= h
-            rows += np.outer((update(c, t, up, z_prev) - update(c, t, down, z_prev)) /
-                             (up[j] - down[j]), states[j])
+            rows += np.outer(branch_difference(lambda v: update(c, t, v, z_prev), yl, j, h),
+                             states[j])
         for j in range(r):
             h = STEP * max(abs(z_prev[j]), 1.0)
-            up, down = list(z_prev), list(z_prev)
-            up[j] += h
-            down[j] -= h
-            rows += np.outer((update(c, t, yl, up) - update(c, t, yl, down)) /
-                             (up[j] - down[j]), phi[n + j])
-        q = len(self.variants)
+            rows += np.outer(branch_difference(lambda v: update(c, t, yl, v), list(z_prev),
+                                               j, h), phi[n + j])
+        q, centre = len(self.variants), update(c, t, yl, z_prev)
         for j, (plus, minus, h) in enumerate(self.variants):
-            rows[:, phi.shape[1] - q + j] += \
-                (update(plus, t, yl, z_prev) - update(minus, t, yl, z_prev)) / (2.0 * h)
+            up = (update(plus, t, yl, z_prev) - centre) / h
+            down = (centre - update(minus, t, yl, z_prev)) / h
+            # (the same sign moved by the value: the side that does not jump, the
+            # smaller, where the two disagree)
+            apart = np.abs(up - down) > 1e-6 * (np.abs(up) + np.abs(down)) + 1e-12
+            rows[:, phi.shape[1] - q + j] += np.where(
+                apart, np.where(np.abs(up) <= np.abs(down), up, down), 0.5 * (up + down))
         if shift is not None and np.any(shift):
             ht = STEP * max(abs(t), 1.0)
             rows += np.outer((update(c, t + ht, yl, z_prev) - update(c, t - ht, yl, z_prev))
                              / (2.0 * ht), shift)
         self._phi[n:n + r] = rows
+
+    def _update_path(self, t: float, yl: list, m_prev, m, z_prev, z) -> _Path | None:
+        """How the run's restart took the memory from z_prev to z: one update (m_prev
+        to m), or, where a memory trigger at zero was crossed and taken back at once
+        (the modes as they were), the update to the crossed modes and back; None if
+        neither gives z."""
+        now = np.asarray(z, dtype=float)
+        close = 1e-12 * (1.0 + float(np.max(np.abs(now), initial=0.0)))
+
+        def gives(steps) -> bool:
+            zv = list(z_prev)
+            for before, after in steps:
+                zv = self.c.mem(t, yl, before, after, zv)
+            return bool(np.allclose(zv, now, rtol=1e-9, atol=close))
+
+        # (a trigger standing at zero with its mode as it was: crossed and taken back,
+        # the update the crossed mode decides -- before it, the update read the
+        # trigger's sign, which its rounding decides there)
+        e = self.c.surf(t, yl, m_prev, list(z_prev))
+        for k in self.watch.memory_triggers if self.watch is not None else ():
+            if m_prev[k] not in (1.0, -1.0) or m[k] != m_prev[k] or \
+                    abs(e[k]) > 1e-9 * (1.0 + abs(e[k])):
+                continue
+            crossed = list(m_prev)
+            crossed[k] = -m_prev[k]
+            if gives([(crossed, m)]):
+                return _Path([(crossed, m)], [k])
+        if gives([(m_prev, m)]):
+            return _Path([(m_prev, m)], [])
+        return None
 
     def _by_z(self, fn: str, t: float, y: np.ndarray, m, z) -> np.ndarray:
         """d fn(t, y, m, z) / d z, a column per memory value."""
