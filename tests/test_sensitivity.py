@@ -596,3 +596,27 @@ def test_a_numerical_derivative_carries_its_points():
     for t in times:
         assert track.row("DV", t)[0] == pytest.approx((0.7 * t - 1) * np.exp(-0.7 * t),
                                                       rel=1e-4), t
+
+
+def test_a_state_reset_where_a_value_moves_the_instant():
+    """Y = MODINT(YIC, TR - X, X - TR, K), X = TIME: Y = YIC + K t until TR, then
+    reset to YIC and held; Z = INTGRL(0, Y) = YIC t + K min(t, TR)^2/2 - ... :
+    after TR, Z = YIC t + K TR^2/2. The reset is y+ = IC at an instant TR moves:
+    d Z/d TR = K TR, d Z/d K = TR^2/2, d Z/d YIC = t, d Y/d YIC = 1 (the IC), d Y/d
+    TR = d Y/d K = 0. Differenced whole runs until 2026-11-30; to 1e-9."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    model = amilpy.loads("PARAM YIC = 0.5, TR = 0.8, K = 2.0\nX = INTGRL(0.0, 1.0)\n"
+                         "Y = MODINT(YIC, TR - X, X - TR, K)\nZ = INTGRL(0.0, Y)\n"
+                         "TIMER FINTIM = 2.0, OUTDEL = 0.1\nEND\n", "reset.amil")
+    names, values = ["YIC", "TR", "K"], {"YIC": 0.5, "TR": 0.8, "K": 2.0}
+    times = [0.5, 1.0, 2.0]
+    track = trajectory(model, 0, names, values, {"rtol": 1e-12, "atol": 1e-14}, times)
+    assert not isinstance(track, str), track
+    for t in times:
+        if t < 0.8:
+            z, y = [t, 0.0, t * t / 2], [1.0, 0.0, t]
+        else:
+            z, y = [t, 2.0 * 0.8, 0.8 ** 2 / 2], [1.0, 0.0, 0.0]
+        assert track.row("Z", t) == pytest.approx(z, abs=1e-9), t
+        assert track.row("Y", t) == pytest.approx(y, abs=1e-9), t

@@ -32,7 +32,8 @@ trigger crosses) the update's Jacobian applies, with y's total derivative
 S + f dt/dp and the update's rate in TIME where the switch's instant moves.
 
 What it does not handle it says (`Tangent.failed`), and the flow map then
-takes central differences of whole flows instead: a state reset (MODINT), a
+takes central differences of whole flows instead: a state reset (MODINT; a
+`ParameterTangent` follows one: `_reset`), a
 memory value the field (or an output asked for) reads changing along the way
 where the memory is not carried (the flow map's; a play, a DELAY store, CSMP's
 PULSE end: `memory_unfollowed`),
@@ -184,7 +185,7 @@ class Tangent:
         t_prev, y_prev, m_prev, z_prev = self.prev
         if self.watch.resets and m != m_prev and \
                 np.any(np.abs(y - y_prev) > 1e-6 * scale_of(y, self.floor)):
-            self.failed = "a state is reset"
+            self._reset(t, y_prev, y, m_prev, m, z_prev, z)
             return
         moved = z != z_prev and self._memory_moved(t, y, m_prev, m, z_prev, z)
         if self.failed is not None:
@@ -209,6 +210,12 @@ class Tangent:
             current, mem = after, z
         if moved:
             self._update_memory(t, y, m_prev, m, z_prev, z)
+
+    def _reset(self, t: float, y_prev: np.ndarray, y: np.ndarray, m_prev, m, z_prev, z
+               ) -> None:
+        """A state reset at t (MODINT) as the modes went from m_prev to m: the flow
+        map's tangent does not follow it (`ParameterTangent` does)."""
+        self.failed = "a state is reset"
 
     def _memory_moved(self, t: float, y: np.ndarray, m_prev, m, z_prev, z) -> bool:
         """Whether the memory's change from z_prev to z is the tangent's to follow
@@ -428,6 +435,55 @@ class ParameterTangent(Tangent):
     def _normal(self, k: int, t: float, y: np.ndarray, m, z) -> np.ndarray:
         return np.concatenate([self._gradient(k, t, y, m, z),
                                self._by_data("surf", t, y, m, z)[k]])
+
+    def _reset(self, t: float, y_prev: np.ndarray, y: np.ndarray, m_prev, m, z_prev, z
+               ) -> None:
+        """A switch that resets states (MODINT: y+ = R(y-, p), the IC): at an
+        instant t_e(p) the values move, y+ = R(y-(t_e), p), so the tangent after it
+        is S+ = R_y (S- + f- dt/dp) + R_p - f+ dt/dp, dt/dp = -(n . S- + ds/dp)/rate
+        (R_y and R_p by differences of the reset: the IC of a variant). The switches
+        at the instant crossing there together, the memory unchanged; else it says
+        so."""
+        n = self.n
+        changed = [k for k in range(len(m)) if m[k] != m_prev[k]]
+        # (several surfaces that cross here together are one instant: MODINT's X1 and
+        # X2 written as TR - X and X - TR; one apart from zero is another change)
+        e = self.c.surf(t, y_prev.tolist(), m_prev, z_prev)
+        if not changed or z != z_prev or SLIDE in m or SLIDE in m_prev or any(
+                abs(e[k]) > 1e-9 * (1.0 + float(np.abs(y_prev).max(initial=0.0)))
+                for k in changed):
+            self.failed = "a state is reset with other changes at the instant"
+            return
+        k = changed[0]
+        jump = self._jump(k, t, y_prev, m_prev, m, z_prev, z_prev)
+        if jump is None:
+            return
+        g, _, rate = jump
+        phi = self.phi
+        rest = self._by_data("surf", t, y_prev, m_prev, z_prev)[k]
+        shift = np.zeros(phi.shape[1]) if rate is None else \
+            -(g @ phi[:n] + rest @ phi[n:]) / rate
+        watch, yl = self.watch, y_prev.copy()
+
+        def reset(w, v: np.ndarray) -> np.ndarray:
+            return np.asarray(w.apply_resets(v, list(m)), dtype=float)
+
+        r_y = np.empty((n, n))
+        for j in range(n):
+            h = STEP * max(abs(yl[j]), float(self.floor[j]))
+            up, down = yl.copy(), yl.copy()
+            up[j] += h
+            down[j] -= h
+            r_y[:, j] = (reset(watch, up) - reset(watch, down)) / (2.0 * h)
+        r_p = np.column_stack([
+            (reset(watch_of(watch, plus), yl) - reset(watch_of(watch, minus), yl)) / (2.0 * h)
+            for plus, minus, h in self.variants]) if self.variants else np.zeros((n, 0))
+        f_minus = np.asarray(self.value("rhs", self.c, t, y_prev, m_prev, z_prev), dtype=float)
+        f_plus = np.asarray(self.value("rhs", self.c, t, y, m, z), dtype=float)
+        q = len(self.variants)
+        states = r_y @ (phi[:n] + np.outer(f_minus, shift)) - np.outer(f_plus, shift)
+        states[:, phi.shape[1] - q:] += r_p
+        self._phi[:n] = states
 
     def _saltation(self, k: int, t: float, y: np.ndarray, before, after, z_before, z_after
                    ) -> np.ndarray | None:
