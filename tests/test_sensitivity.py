@@ -620,3 +620,23 @@ def test_a_state_reset_where_a_value_moves_the_instant():
             z, y = [t, 2.0 * 0.8, 0.8 ** 2 / 2], [1.0, 0.0, 0.0]
         assert track.row("Z", t) == pytest.approx(z, abs=1e-9), t
         assert track.row("Y", t) == pytest.approx(y, abs=1e-9), t
+
+
+@pytest.mark.parametrize("method", ["EULER", "RK4"])
+def test_a_fixed_step_route_is_differenced_at_the_rounding_step(decay, method):
+    """A fixed-step route's run is a discrete map of the values, with no error
+    control's noise: its differences take the rounding step cbrt(eps) |K| and are
+    exact to about 1e-10. EULER with DELT = h: X_k = X0 (1 - K h)^k, d X_k/d K =
+    -X0 k h (1 - K h)^(k-1); RK4: its stage polynomial, complex-stepped."""
+    model = amilpy.load(decay)
+    loc = model.sensitivity(["K", "X0"], method_ode=method)
+    h = model.flow(method).plan.timer["DELT"]  # (taken from OUTDEL: none is given)
+    k = np.rint(loc.times / h)
+
+    def growth(kk):  # one step's factor
+        a = -kk * h
+        return 1 + a if method == "EULER" else 1 + a + a * a / 2 + a ** 3 / 6 + a ** 4 / 24
+
+    by_k = (2.0 * growth(0.7 + 1e-30j) ** k).imag / 1e-30
+    assert loc.raw[:, 0, 0] == pytest.approx(by_k, abs=1e-9)
+    assert loc.raw[:, 0, 1] == pytest.approx(growth(0.7) ** k, abs=1e-9)

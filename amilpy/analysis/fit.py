@@ -8,7 +8,9 @@ values there, not interpolated), weighted by `weights`: "sd" divides by the
 file's SD_<NAME> columns, "relative" by |observed|, "none" leaves them. The
 Jacobian is central differences of whole runs, each free value moved by
 cbrt(RELERR)-sized steps relative to it (the runs are accurate to about RELERR,
-so a difference over h is good to RELERR/h^2 + h^2: best near the cube root); or,
+so a difference over h is good to RELERR/h^2 + h^2: best near the cube root;
+cbrt(eps) on a fixed-step route, whose runs carry no error control's noise:
+`sensitivity.difference_step`); or,
 with `gradients="sensitivities"`, the variational equations of the flow with the
 jumps at the switches (`analysis.sensitivity`: exact to the integration's accuracy,
 through switching instants), central differences where they do not apply.
@@ -34,7 +36,7 @@ import numpy as np
 from ..diagnostics import AmilError, UsageError, with_hint
 from ..observed import Observations
 from ..progress import report
-from .sensitivity import observed_jacobian
+from .sensitivity import difference_step, observed_jacobian
 
 WEIGHTS = ("sd", "relative", "none")
 # the Jacobian: central differences of whole runs (the default: on the shipped
@@ -201,7 +203,7 @@ def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = 
     n, p = len(weighted(first, to_x(start))), len(names)
     if n < p:
         raise UsageError(f"{n} observation(s) cannot determine {p} values")
-    step = max(np.cbrt(model_rtol(model, rtol)), 1e-6)
+    step = difference_step(model, method, rtol)
     # the residuals' weights, for the Jacobian of the sensitivities
     scale = np.concatenate([_weight(c, weights) for r in first for c in r.observed]) \
         if n else np.empty(0)
@@ -293,17 +295,6 @@ def fit(model, data, free, *, log=(), weights: str = "sd", method: str | None = 
                sorted(logged), sens["count"], sens["how"], quantile,
                "the normal quantile (the SDs known)" if weights == "sd" else
                f"Student's t, {dof} degrees of freedom")
-
-
-def model_rtol(model, rtol: float | None) -> float:
-    """The RELERR the runs will have (the caller's, the listing's, else the default)."""
-    from ..run.plan import TOLERANCES
-
-    if rtol is not None:
-        return rtol
-    given = model.ir.runs[0].relerr
-    return given if given is not None else \
-        TOLERANCES["acsl" if model.ir.acsl is not None else "csmp"][0]
 
 
 def _values(values: dict[str, float]) -> str:

@@ -212,7 +212,7 @@ def local(model, names: list[str] | None = None, variables: list[str] | None = N
     """d y/d p of `variables` (default every PRINT/OUTPUT variable) to the data values
     `names` (default the PARAM values) on the first run's output grid: the
     variational equations (`trajectory`), else central differences of whole runs
-    (h = cbrt(RELERR) |p|), and why. `options`: a run.Options for the run."""
+    (`difference_step`), and why. `options`: a run.Options for the run."""
     from dataclasses import replace
 
     from ..batch.members import member_of
@@ -245,7 +245,7 @@ def local(model, names: list[str] | None = None, variables: list[str] | None = N
         raw = np.array([[track.row(v, t) for v in variables] for t in base.times.tolist()])
         how = "sensitivity equations"
     else:
-        raw = _differences(model, names, data, variables, options, params, base, run.rtol)
+        raw = _differences(model, names, data, variables, options, params, base)
         how = f"differences of whole runs ({track})"
     return Local(names, {n: data[n] for n in names}, variables, base.times, base.prdel,
                  base.values, raw.reshape(len(base.times), len(variables), len(names)), how)
@@ -265,14 +265,32 @@ def _one_run(model, options, variables, params):
     return run
 
 
-def _differences(model, names, data, variables, options, params, base, rtol: float
-                 ) -> np.ndarray:
-    """Central differences of whole runs, h = cbrt(RELERR) |p| (RELERR the run's own:
-    the truncation error h^2 and the runs' noise RELERR/h balance there)."""
+def difference_step(model, method: str | None, rtol: float | None) -> float:
+    """The relative step of central differences of whole runs: cbrt(RELERR) on a
+    route with error control, whose runs carry its noise (the truncation error h^2
+    and the noise RELERR/h balance there; at least 1e-6); cbrt(eps) on a fixed-step
+    route (step-point mode, EULER, RK4...), whose runs are a discrete map of the
+    values, smooth in them to rounding: differenced so, it is exact to about 1e-10,
+    as the tangent's own differences of the generated functions are."""
+    if model.ir.acsl is not None:
+        from ..run import Options
+        from ..run.acsl import prepare_acsl
+
+        plan = prepare_acsl(model.ir, model._specs({})[0], Options(method=method, rtol=rtol),
+                            model.cache).plan
+    else:
+        plan = model.flow(method, rtol, None).plan
+    if plan.step_point or not plan.route.uses_tolerances:
+        return STEP
+    return max(float(np.cbrt(plan.tol.relerr)), 1e-6)
+
+
+def _differences(model, names, data, variables, options, params, base) -> np.ndarray:
+    """Central differences of whole runs, h = `difference_step` |p|."""
     from ..batch.members import member_of
     from ..run.plan import nearest_instants
 
-    rel = float(np.cbrt(rtol if np.isfinite(rtol) and rtol > 0 else 1e-6))
+    rel = difference_step(model, options.method, options.rtol)
     out = np.full((len(base.times), len(variables), len(names)), np.nan)
     for j, name in enumerate(names):
         h = step_for(data[name], rel)
