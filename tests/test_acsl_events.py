@@ -58,6 +58,56 @@ def test_bouncing_ball_by_schedule_xn_impact_times_and_heights():
     assert run["N"][-1] == 3.0  # a name only the DISCRETE assigns, kept between events
 
 
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "RADAU"])
+@pytest.mark.parametrize("cint", [0.05, 1.5])
+def test_a_crossing_either_way_does_not_run_again_as_the_code_sends_it_back(method, cint):
+    """.XZ. runs its section where H goes from > 0 to <= 0 or from < 0 to >= 0. At an
+    impact the section reverses V and H leaves zero upwards: from 0, which is no
+    crossing. It was taken as one (the motion crossing as the code ran), the
+    section ran again on the spot, 3,109 times, and the ball fell through the floor
+    (H(6) = -102.5): now the .XN. ball's impacts and events, on every route and grid."""
+    text = BALL.replace(".XN. H ", ".XZ. H ").replace("CINT = 0.25", f"CINT = {cint}")
+    run, = amilpy.loads(text, "ball.csl").run(method=method, advice=False)
+    impacts, h = ball(run.t)
+    ran = [e.time for e in run.events if e.kind == "discrete"]
+    assert ran == pytest.approx(impacts[:3], abs=1e-8)
+    assert run["H"] == pytest.approx(h, abs=1e-7)
+    assert run["N"][-1] == 3.0
+    xn, = amilpy.loads(BALL.replace("CINT = 0.25", f"CINT = {cint}"), "ball.csl").run(
+        method=method, advice=False)
+    assert [(e.kind, e.old, e.new) for e in run.events] == \
+        [(e.kind, e.old, e.new) for e in xn.events]
+
+
+def test_a_toggle_on_a_crossing_either_way_flips_once():
+    """X' = -X + 10 H, H = 1 - H when X - 2.5 crosses either way (.XZ.): from X = 0 with
+    H = 1, X reaches 2.5 at ln(4/3), H = 0, and X decays from there, leaving the
+    surface downwards -- from zero, no crossing. The run used to flip H back and
+    forth at that instant until its event limit (it never returned by default)."""
+    text = """PROGRAM toggle
+  CONSTANT TSTOP = 3.0
+  CINTERVAL CINT = 0.1
+  INITIAL
+    H = 1.0
+  END
+  DERIVATIVE
+    X = INTEG(-X + 10.0*H, 0.0)
+    SCHEDULE FLIP .XZ. X - 2.5
+    TERMT(T >= TSTOP)
+  END
+  DISCRETE FLIP
+    H = 1.0 - H
+    N = N + 1.0
+  END
+END
+"""
+    for method in ("AUTO", "RKS", "RADAU"):
+        run, = amilpy.loads(text, "toggle.csl").run(method=method, advice=False)
+        assert run["N"][-1] == 1.0
+        t1 = math.log(4 / 3)
+        assert run["X"][-1] == pytest.approx(2.5 * math.exp(-(3.0 - t1)), abs=1e-8)
+
+
 def test_bouncing_ball_as_written_to_the_integration_tolerance():
     run, = amilpy.loads(BALL, "ball.csl").run()
     _, h = ball(run.t)

@@ -272,6 +272,9 @@ class AcslRun(_Run):
         self.queue: list[tuple[float, int, str]] = []
         self.order = count()
         self.stopped: str | None = prepared.stop
+        # the SCHEDULE surfaces whose crossing ran its section at this instant: the
+        # motion leaving their zero (a ball bouncing off the floor) crosses nothing
+        self.fired_at: tuple[float, set[int]] = (math.nan, set())
         for d in self.acsl.discretes.values():
             if d.interval is not None:
                 self.schedule(self.plan.t0, d.name)
@@ -413,8 +416,16 @@ class AcslRun(_Run):
         motion crosses at this very instant (a ball landing as an INTERVAL section is
         due), which the code left as it was, runs its section now: it was taken as
         already crossed, and the ball fell through the floor."""
+        at, fired = self.fired_at
+        if not same_instant(at, cur.t):
+            fired = set()
         for _ in range(self.opts.max_events):
-            _, more = self.restart(cur, before)
+            # (a surface whose crossing ran its section here is at zero: the motion
+            # leaving it either way, .XZ.'s ball going up again, is no crossing --
+            # taken as one, the ball bounced on the spot 3,000 times and fell through)
+            _, more = self.restart(cur, before, fired)
+            fired.update(more)
+            self.fired_at = (cur.t, fired)
             plan = self.plan
             for k in more:
                 self.schedule(cur.t, self.acsl.crossings[plan.watched[k].surface][0], cur.t)
@@ -485,6 +496,8 @@ class AcslRun(_Run):
             rec.hold = None
             reason, fired = integ.stop_reason, integ.fired
             integ.fired = []
+            if fired:
+                self.fired_at = (cur.t, set(fired))
             for k in fired:  # (their sections run now, as the next instant)
                 self.schedule(cur.t, self.acsl.crossings[plan.watched[k].surface][0], cur.t)
             if reason is not None:

@@ -354,7 +354,8 @@ class _Run:
             return None
         return float(values[event.code.assigned.index(event.next)])
 
-    def restart(self, cur: Cursor, before: list[float] | None = None
+    def restart(self, cur: Cursor, before: list[float] | None = None,
+                fired: frozenset[int] | set[int] = frozenset()
                 ) -> tuple[int | None, list[int]]:
         """The branches in force after code changed states or kept names. A surface
         at zero to rounding (a crossing just located) goes the way the motion takes
@@ -362,7 +363,8 @@ class _Run:
         values reach, if any, and the crossings that run code which the motion takes
         across here too, their values the same as `before` the code (X - 1.5 a float
         short of zero where TIME - 1.5 is a breakpoint); one the code itself moved
-        (1 - FLAG back to 1) is no event: its crossing was."""
+        (1 - FLAG back to 1) is no event: its crossing was; nor is one in `fired`,
+        whose crossing ran its code at this instant: the motion leaves its zero."""
         c, plan = self.c, self.plan
         if plan.step_point:  # the branches as they read here, nothing located
             new = literal_modes(c, plan, cur.t, cur.y.tolist(), cur.m, cur.z)
@@ -371,7 +373,8 @@ class _Run:
             after, near = self.near_zero(cur, plan.watch_idx)
             new = self.watch.choose_modes(cur.t, cur.y, cur.z, cur.m, near)
         more = [k for k in self.integ.scheduling if before is not None and after is not None
-                and after[k] == before[k] and plan.watched[k].fires(cur.m[k], new[k])]
+                and k not in fired and after[k] == before[k]
+                and plan.watched[k].fires(cur.m[k], new[k])]
         self.integ.record_changes(cur.t, cur.y, cur.m, new, cur.z, set(),
                                   set(self.integ.scheduling) - set(more))
         reached = self.reached(cur.m, new)
