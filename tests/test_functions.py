@@ -116,6 +116,39 @@ def test_modint_integrates_holds_and_resets():
     assert r["MI"] == pytest.approx(expect, abs=1e-9)
 
 
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "RADAU"])
+@pytest.mark.parametrize("outdel", [0.05, 1.5])
+def test_modint_resets_where_a_state_crosses_its_reset_input(method, outdel):
+    # Y = MODINT(1, 2 - Z, Z - 3, 1), Z = TIME: 1 + t to t = 2, held at 3 until Z = 3,
+    # then reset to 1. Held or reset, Y' = 0 either way, so the crossing of Z - 3 was
+    # taken as one that changes nothing and followed without a stop: the reset never
+    # happened (Y = 3 to the end; with TIME - 3 it did). Hunt 49.
+    r = run1("Z = INTGRL(0.0, 1.0)\nY = MODINT(1.0, 2.0 - Z, Z - 3.0, 1.0)\n"
+             f"TIMER FINTIM = 4.5, OUTDEL = {outdel}\nEND\n", method=method, advice=False)
+    exact = np.where(r.t < 2.0, 1.0 + r.t, np.where(r.t < 3.0, 3.0, 1.0))
+    off = np.abs(r.t - 3.0) > 1e-9  # (the row at the crossing: either side, by rounding)
+    assert r["Y"][off] == pytest.approx(exact[off], abs=1e-9)
+    assert [e.time for e in r.events] == pytest.approx([2.0, 3.0], abs=1e-9)
+
+
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "RADAU"])
+@pytest.mark.parametrize("outdel", [0.05, 1.5])
+def test_modint_integrates_again_at_once_from_its_reset(method, outdel):
+    # Y = MODINT(0, 1 - Y, TIME - 2.5, 1): up to 1 at t = 1, held there, reset at 2.5;
+    # from 0, 1 - Y = 1 > 0 and it integrates again at once: a sawtooth (t - 2.5) mod
+    # 1, reset at 3.5 and 4.5. The reset's new X1 waited for the next step's end or
+    # output instant (Y(3) was 0.45, 0 or 0.49 by route and OUTDEL). Hunt 49.
+    r = run1("Y = MODINT(0.0, 1.0 - Y, TIME - 2.5, 1.0)\n"
+             f"TIMER FINTIM = 5.0, OUTDEL = {outdel}\nEND\n", method=method, advice=False)
+    saw = np.mod(r.t - 2.5, 1.0)
+    saw = np.where(np.isclose(saw, 1.0, atol=1e-9), 0.0, saw)
+    exact = np.where(r.t < 1.0, r.t, np.where(r.t < 2.5, 1.0, saw))
+    off = np.min(np.abs(r.t[:, None] - np.array([2.5, 3.5, 4.5])), axis=1) > 1e-9
+    assert r["Y"][off] == pytest.approx(exact[off], abs=1e-9)  # (rows at resets: as above)
+    resets = sorted({round(e.time, 9) for e in r.events})
+    assert resets == pytest.approx([1.0, 2.5, 3.5, 4.5], abs=1e-9)
+
+
 def test_zhold_samples_on_impulses():
     r = probe("ZH = ZHOLD(IMPULS(0.0, 0.25), TIME)", outdel=0.1)
     assert r["ZH"] == pytest.approx([0, 0, 0, .25, .25, .5, .5, .5, .75, .75, 1.0])

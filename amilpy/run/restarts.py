@@ -66,6 +66,15 @@ class Restarts:
             rec.sample(tb, yb, m, z_before)  # (RANGE reads both sides of a jump)
         m[:] = new_m
         y = watch.apply_resets(yb, m, tb, z)
+        if self.watch.resets and not np.array_equal(y, yb):
+            # (the reset moved a surface the reset reads: its branch is taken anew here,
+            # not at the next step's end -- MODINT integrating again from its IC)
+            again = watch.after_reset(tb, yb, y, m, z)
+            if again != m:
+                self.record_changes(tb, y, m, again, z, set(), returned=True)
+                changed = True
+                m[:] = again
+                y = watch.apply_resets(y, m, tb, z)
         cur.t, cur.y = tb, y
         if rec is not None:
             rec.restarted(tb, y, m, z)
@@ -134,8 +143,9 @@ class Restarts:
     def _event(self, t: float, k: int, old: float, new: float, returned: bool = False
                ) -> None:
         """Surface k's branch changes from old to new at t (a located crossing;
-        `returned`: a memory trigger the motion takes back at once, an event both
-        ways, since the memory took what the other branch gave)."""
+        `returned`: a memory trigger the motion takes back at once, or a reset's
+        trigger the reset sends back: an event both ways, since the memory or the
+        state took what the other branch gave)."""
         w = self.plan.watched[k]
         last = next((e for e in reversed(self.events) if e.surface == w.surface), None)
         if not returned and last is not None and last.old == new and \

@@ -45,6 +45,10 @@ class SurfaceWatch:
         triggers = {s for mem in (c.model.memories if c.model is not None else ())
                     for s in mem.surfaces}
         self.memory_triggers = {k for k, w in enumerate(plan.watched) if w.surface in triggers}
+        # the surfaces a state reset reads (MODINT's X1, X2): held or reset, the
+        # derivative is 0 either way, but the state is put back where one flips
+        self.reset_surfaces = {k for r in self.resets for k in (r.first, r.second)
+                               if isinstance(k, int)}
 
     # ------------------------------------------------------------ vector fields
     @staticmethod
@@ -219,6 +223,25 @@ class SurfaceWatch:
         f = np.asarray(self.field(t, y, m, z), dtype=float)
         return [k for k in ks if sign(self.surface_rate(k, t, y, f, m, z)) == -m[k]]
 
+    def after_reset(self, t: float, y_before: np.ndarray, y: np.ndarray, m: list[float],
+                    z) -> list[float]:
+        """Modes m once a reset moved the states from y_before to y: a surface whose
+        sign the reset moved takes its new one (MODINT's X1 = 1 - Y from 0 to 1 as Y
+        is put back on its IC 0: it integrates again at once); the others keep theirs."""
+        before = self.c.modes_literal(t, y_before.tolist(), m, z)
+        after = self.c.modes_literal(t, y.tolist(), m, z)
+        # (a surface left at zero by the crossing whose reset this is reads the reset
+        # value already: off zero now, it takes its side)
+        e = self.c.surf(t, y.tolist(), m, z)
+        scale = 1e-12 * max(1.0, float(np.max(np.abs(y))) if len(y) else 1.0)
+        kept = {k: mode for k, mode in enumerate(m)
+                if (before[k] == after[k] and not (mode == 0.0 and abs(e[k]) > scale))
+                or self.watched[k].kind is not SurfaceKind.SIGN or mode == SLIDE}
+        if len(kept) == len(m):
+            return m
+        new = self.choose_modes(t, y, z, m, set(), forced=kept)
+        return [kept.get(k, mode) for k, mode in enumerate(new)]
+
     def direction(self, k: int, t: float, y: np.ndarray, m, z, old) -> float:
         """Which side of surface k the motion goes to from a point on it."""
         try:
@@ -273,7 +296,8 @@ class SurfaceWatch:
         w = self.watched[k]
         # (a memory's condition changes nothing the derivatives see now, but what the
         # memory keeps is taken where it flips: located, as every switch)
-        if w.purpose.stops or w.purpose is Purpose.MEMORY or w.kind is not SurfaceKind.SIGN:
+        if w.purpose.stops or w.purpose is Purpose.MEMORY or w.kind is not SurfaceKind.SIGN \
+                or k in self.reset_surfaces:
             return False
         mp, mm = list(m), list(m)
         mp[k], mm[k] = 1.0, -1.0
