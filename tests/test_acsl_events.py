@@ -551,3 +551,30 @@ END
     run, = amilpy.loads(text, "ball.csl").run(advice=False)
     assert run.status == "failed" and "TIME = 3" in run.message
     assert "reshape" not in run.message and "array" not in run.message
+
+
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "RADAU"])
+def test_cint_a_section_changes_gives_rows_on_the_new_grid_from_the_integration(method):
+    """CINT = 0.2 assigned at T = 1 (from 0.5): rows at 1.2, 1.4, ... of X = INTEG(COS(T))
+    = sin t. On AUTO the chunk integrated to the old 0.5 grid was resumed, and the new
+    rows read off its interpolant across an old interval: 1.5e-4 off at 1.8 (hunt 49).
+    Now every row to the tolerance."""
+    text = """PROGRAM cint change
+  CONSTANT TSTOP = 3.0
+  CINTERVAL CINT = 0.5
+  INITIAL
+    SCHEDULE FINE .AT. 1.0
+  END
+  DERIVATIVE
+    X = INTEG(COS(T), 0.0)
+    TERMT(T >= TSTOP)
+  END
+  DISCRETE FINE
+    CINT = 0.2
+  END
+END
+"""
+    run, = amilpy.loads(text, "cint.csl").run(method=method, advice=False)
+    assert run.t == pytest.approx([0.0, 0.5, 1.0, 1.2, 1.4, 1.6, 1.8, 2.0, 2.2, 2.4, 2.6,
+                                   2.8, 3.0], abs=1e-12)
+    assert run["X"] == pytest.approx(np.sin(run.t), abs=1e-9)

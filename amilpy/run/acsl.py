@@ -459,7 +459,8 @@ class AcslRun(_Run):
             timer["DELT"] = cint / max(1, math.ceil(cint / plan.timer["DELT"] - 1e-9))
         self.plan = replace(plan, grid=Grid(times, every, every), timer=timer)
         self.rec.plan = self.integ.plan = self.plan
-        self.rec.times = self.integ.check_times = times
+        self.rec.times = times
+        self.integ.new_grid(times)
 
     # ---------------------------------------------------------------- _Run hooks
     def first_row(self, cur: Cursor) -> None:

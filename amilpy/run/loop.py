@@ -165,6 +165,15 @@ class Integrator(RunLoop, SegmentStart, StepWatch, Restarts, FastPaths):
                     self._counted, self._counted_nfev = stepper.nstep, stepper.nfev
         return cur
 
+    def new_grid(self, times: np.ndarray) -> None:
+        """The output instants from now on are `times` (the ACSL form's CINT assigned
+        by its code): a segment paused on the old ones is not resumed (its chunk was
+        integrated to the old instants, and rows between them were read off the
+        interpolant across an old interval: 1.5e-4 off)."""
+        self.check_times = times
+        self._paused = None
+        self._counted = self._counted_nfev = 0
+
     def _resume(self, cur: Cursor, t_end: float, rec, observer) -> tuple | None:
         """The paused segment, if nothing it reads has changed since it paused at the
         instant where `cur` stands: (stepper, f, its end, its start)."""
