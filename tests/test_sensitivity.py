@@ -368,8 +368,6 @@ def test_a_pulse_train_whose_instants_move_jumps_the_tangent_at_each():
 
 
 @pytest.mark.parametrize("schedule, interval, why", [
-    # the section runs where a surface crosses: its instant moves with K
-    ("    SCHEDULE HIT .XN. X - 1.0\n", "", "a SCHEDULE on a crossing"),
     # a kick every TAU: the instants move with TAU
     ("", "    INTERVAL DT = TAU\n", "an INTERVAL depends on TAU"),
 ])
@@ -388,6 +386,65 @@ END
 """
     loc = amilpy.loads(text, "moving.csl").sensitivity(["K", "TAU"], outputs=["X"])
     assert loc.how.startswith("differences of whole runs") and why in loc.how, loc.how
+
+
+def test_a_section_a_crossing_runs_moves_with_the_values():
+    """X' = -K X from 2, SCHEDULE HIT .XN. X - 1, HIT: X = X + 1: X reaches 1 at
+    ln 2/K, back to 2, and again every ln 2/K: X = 2 exp(-K (t - k ln 2/K)). The
+    section's instant moves with K, and the tangent takes the code's map at the
+    moved instant (J (Phi + f- dt) - f+ dt) where it differenced whole runs; the
+    bouncing ball's impacts (G, E, H0) likewise. Against the complex step of the
+    closed forms, to 1e-8."""
+    from test_acsl_events import BALL
+
+    from amilpy.analysis.sensitivity import trajectory
+
+    text = """PROGRAM kicked decay
+  CONSTANT K = 0.5
+  CINTERVAL CINT = 0.5
+  DERIVATIVE
+    X = INTEG(-K*X, 2.0)
+    SCHEDULE HIT .XN. X - 1.0
+    TERMT(T >= 5.0)
+  END
+  DISCRETE HIT
+    X = X + 1.0
+  END
+END
+"""
+    times = [0.5, 1.5, 2.0, 3.1, 4.9]
+    track = trajectory(amilpy.loads(text, "kick.csl"), 0, ["K"], {"K": 0.5},
+                       {"rtol": 1e-12, "atol": 1e-14}, times)
+    assert not isinstance(track, str), track
+    for t in times:
+        k = 0.5 + 1e-30j
+        period = np.log(2.0) / k
+        x = 2.0 * np.exp(-k * (t - np.floor(t / period.real) * period))
+        assert track.row("X", t)[0] == pytest.approx(x.imag / 1e-30, abs=1e-8), t
+
+    def height(t, g, e, h0):
+        t1 = (2 * h0 / g) ** 0.5
+        if t < t1.real:
+            return h0 - g * t * t / 2
+        a, v = t1, g * t1
+        while True:
+            v = e * v
+            if t < (a + 2 * v / g).real:
+                return v * (t - a) - g * (t - a) ** 2 / 2
+            a = a + 2 * v / g
+
+    names, values = ["G", "E", "H0"], {"G": 9.81, "E": 0.8, "H0": 10.0}
+    times = [0.5, 2.0, 3.0, 4.0, 5.5]
+    track = trajectory(amilpy.loads(BALL, "ball.csl"), 0, names, values,
+                       {"rtol": 1e-12, "atol": 1e-14}, times)
+    assert not isinstance(track, str), track
+    for t in times:
+        exact = []
+        for name in names:
+            moved = dict(values)
+            moved[name] += 1e-30j
+            exact.append(height(t, *(moved[n] for n in names)).imag / 1e-30)
+        assert track.row("H", t) == pytest.approx(exact, abs=1e-8), t
 
 
 def test_sobol_indices_of_a_sum_are_its_variance_shares(rates):

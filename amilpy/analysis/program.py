@@ -8,12 +8,15 @@ switches, as `ParameterTangent` does for a model. At an instant the code is a ma
 (y, z) -> (y', z') at a fixed TIME; the tangent takes its Jacobian, by central
 differences of the generated section at that TIME (d/dy, d/dz) and of the same
 section bound to p +- h (d/dp: no integration, the code only). A DOSE of AG = AG +
-DOSE then gives d AG/d DOSE a jump of 1, exactly as the run does.
+DOSE then gives d AG/d DOSE a jump of 1, exactly as the run does. A section that a
+SCHEDULE crossing runs (.XN./.XP./.XZ.: a ball's impact) is at an instant the values
+move, dt/dp = -(n . Phi)/rate: the code's map applies to the states as the instant
+moves them, and the field after it runs the shift back, J (Phi + f- dt) - f+ dt.
 
 What it does not follow it says, and the caller differences whole runs instead: an
-instant that moves with the data values (a SCHEDULE on a crossing, .XN./.XP./.XZ.;
-a SCHEDULE, an INTERVAL or INITIAL's schedule whose time depends on them), besides
-what `ParameterTangent` does not follow (sliding, a flow tangent to a surface)."""
+instant the code sets that moves with the data values (a SCHEDULE, an INTERVAL or
+INITIAL's schedule whose time depends on them), a crossing the flow is tangent to,
+besides what `ParameterTangent` does not follow."""
 
 from __future__ import annotations
 
@@ -26,8 +29,8 @@ from ..run.acsl import AcslRun, prepare_acsl
 from ..run.code import Calls
 from ..run.flow import State
 from ..run.jacobian import STEP
-from ..run.plan import SAME_INSTANT, Purpose, same_instant
-from ..run.variational import ProgramTangent
+from ..run.plan import SAME_INSTANT, same_instant
+from ..run.variational import ProgramTangent, surface_time_rate
 from .tangents import Sampler, output_row, outputs_asked, step_for
 
 
@@ -52,8 +55,6 @@ def program_trajectory(model, k: int, names: list[str], data: dict[str, float],
     plan, c = base.plan, base.code
     if plan.step_point or not plan.route.uses_tolerances:
         return "a fixed-step route has no dense output for the sensitivity equations"
-    if any(w.purpose is Purpose.SCHEDULE for w in plan.watched):
-        return "a SCHEDULE on a crossing runs its section at an instant the data values move"
     n, r = len(c.y0), len(c.z0)
     variants, start = [], np.zeros((n + r, len(names)))
     for j, name in enumerate(names):
@@ -110,16 +111,55 @@ class _TangentRun(AcslRun):
         return self.sampler.tangent
 
     def run_code(self, cur, fn, what: str) -> Calls:
-        matrix = None
+        matrix, moving = None, None
         if self.why is None and self.tangent.failed is None:
             try:
                 matrix = self._code_jacobian(cur, fn)
+                moving = self._crossing_shift(cur, what)
             except _Jumped as exc:
                 self.why = f"{what} at TIME = {cur.t:.9g}: {exc}"
         calls = super().run_code(cur, fn, what)
         if matrix is not None:
-            self.tangent.jump(matrix, cur.t, cur.y, cur.m, cur.z)
+            if moving is not None:
+                # the section ran where a crossing the values move put it: the code's
+                # map applies to the states as the instant moves them, and the field
+                # after it runs the shift back: J (Phi + F- dt) - F+ dt
+                shift, before = moving
+                t = self.tangent
+                after = np.zeros(len(before))
+                after[:t.n] = t.value("rhs", t.c, cur.t, cur.y, list(cur.m), list(cur.z))
+                t._phi = t.phi + np.outer(before, shift)
+                t.jump(matrix, cur.t, cur.y, cur.m, cur.z)
+                t._phi = t._phi - np.outer(after, shift)
+            else:
+                self.tangent.jump(matrix, cur.t, cur.y, cur.m, cur.z)
         return calls
+
+    def _crossing_shift(self, cur, what: str) -> tuple[np.ndarray, np.ndarray] | None:
+        """(d t/d p of this instant, the field before the code in the tangent's rows)
+        where the section runs because a SCHEDULE crossing fired here (.XN. H: a
+        ball's impact, which G and H0 move), else None."""
+        at, fired = self.fired_at
+        if not fired or not same_instant(at, cur.t):
+            return None
+        plan, t = self.plan, self.tangent
+        section = what.removeprefix("DISCRETE ")
+        ks = [k for k in fired if self.acsl.crossings[plan.watched[k].surface][0] == section]
+        if not ks:
+            return None
+        k = ks[0]
+        y, m, z = np.asarray(cur.y, dtype=float), list(cur.m), list(cur.z)
+        f = np.asarray(t.value("rhs", t.c, cur.t, y, m, z), dtype=float)
+        g = t._gradient(k, cur.t, y, m, z)
+        rate = float(g @ f) + (0.0 if plan.watched[k].gradient is not None else
+                               surface_time_rate(t.c, k, cur.t, y, m, z))
+        if abs(rate) <= 1e-9 * (float(np.abs(g) @ np.abs(f)) + 1e-300):
+            raise _Jumped("the flow is tangent to the crossing that runs it")
+        phi = t.phi
+        normal = t._normal(k, cur.t, y, m, z)
+        before = np.zeros(phi.shape[0])
+        before[:t.n] = f
+        return -(normal @ phi) / rate, before
 
     def instant(self, cur) -> None:
         t = self.tangent
