@@ -501,6 +501,13 @@ END
     # play's memory is not carried (its clamp sits on its kink after each update)
     ("PARAM K = 0.7, YIC = 1.0\nY = HSTRSS(YIC, -10.0, 10.0, X)\nX = INTGRL(0.0, -K*X + Y)\n",
      ["YIC"], {"YIC": 1.0}, "a memory function's initial value depends on YIC"),
+    # a random draw read by the derivatives, its mean and spread free (the draws are
+    # the seeded stream's: the same numbers in every run), observed at draw instants
+    ("PARAM K = 0.7, MU = 1.0, SD = 0.3\nY = GAUSS(MU, SD)\nX = INTGRL(0.0, -K*X + Y)\n",
+     ["MU", "SD", "K"], {"MU": 1.0, "SD": 0.3, "K": 0.7}, ""),
+    # CSMP's PULSE(P, X), whose end P moves (a memory that holds an instant)
+    ("PARAM P = 0.3, K = 0.7\nY = PULSE(P, X - 0.4)\nX = INTGRL(0.0, 1.0 - K*X - 2.0*Y)\n",
+     ["P", "K"], {"P": 0.3, "K": 0.7}, ""),
     # a hold of a state whose start is free, read after it holds (ZHOLD's memory is
     # carried through its updates)
     ("PARAM K = 0.7, YIC = 1.0\nY = YIC + ZHOLD(0.3 - TIME, X)\nX = INTGRL(YIC, -K*X)\n",

@@ -697,3 +697,42 @@ def test_a_fixed_step_route_is_differenced_at_the_rounding_step(decay, method):
     by_k = (2.0 * growth(0.7 + 1e-30j) ** k).imag / 1e-30
     assert loc.raw[:, 0, 0] == pytest.approx(by_k, abs=1e-9)
     assert loc.raw[:, 0, 1] == pytest.approx(growth(0.7) ** k, abs=1e-9)
+
+
+def monostable(t, w, rate=1.0):
+    """X' = RATE - 3 P, P = PULSE(W, X - 1) from X = 0: X rises to 1 (t = 1/RATE), the
+    pulse holds 1 for W (X' = RATE - 3), then X rises again to 1, and so on; complex
+    W and RATE for the complex step (the instants compared by their real parts)."""
+    t0, x0, on = 0.0, 0.0, False
+    while True:
+        if on:
+            end = t0 + w
+            if t < end.real:
+                return x0 + (rate - 3.0) * (t - t0)
+            x0, t0, on = x0 + (rate - 3.0) * w, end, False
+        else:
+            hit = t0 + (1.0 - x0) / rate
+            if t < hit.real:
+                return x0 + rate * (t - t0)
+            x0, t0, on = 1.0 + 0.0 * x0, hit, True
+
+
+def test_a_pulse_whose_end_a_value_moves_jumps_the_tangent_there():
+    """CSMP's PULSE(W, X - 1) holds 1 for W from where X reaches 1, which RATE moves:
+    its end, the trigger's instant + W, is kept in the memory, whose tangent gives
+    the end's shift; the field drops there (X' from RATE - 3 to RATE), and the tangent
+    jumps by (f- - f+) dt/dp. Differenced whole runs until 2026-11-30; against the
+    complex step of the closed form, to 1e-9."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    model = amilpy.loads("PARAM W = 0.5, RATE = 1.0\nX = INTGRL(0.0, RATE - 3.0*P)\n"
+                         "P = PULSE(W, X - 1.0)\nTIMER FINTIM = 4.0, OUTDEL = 0.1\nEND\n",
+                         "mono.amil")
+    times = [0.5, 1.2, 1.7, 2.2, 2.7, 3.3, 3.9]
+    track = trajectory(model, 0, ["W", "RATE"], {"W": 0.5, "RATE": 1.0},
+                       {"rtol": 1e-12, "atol": 1e-14}, times)
+    assert not isinstance(track, str), track
+    for t in times:
+        exact = [monostable(t, 0.5 + 1e-30j).imag / 1e-30,
+                 monostable(t, 0.5, 1.0 + 1e-30j).imag / 1e-30]
+        assert track.row("X", t) == pytest.approx(exact, abs=1e-9), t

@@ -4,17 +4,18 @@ observation of a `--data` file, from the variational equations of the flow
 (the model's own Jacobian d f/d y, exact to rounding), the data values' part F_p =
 d f/d p, and at every located switch the jump of the tangent, the surface's own
 dependence on p included -- so a value that moves a switching instant is
-differentiated through it. The memory functions' values (ZHOLD, RST, DERIV) are
-carried too, through their updates (`ProgramTangent`: the update's Jacobian, and its
-rate in TIME where a switch that moves holds it). An observed output that is no
-state is d out/d y . S + d out/d z . S_z + d out/d p at its instant.
+differentiated through it. The memory functions' values (ZHOLD, RST, DERIV, CSMP's
+PULSE, the random draws) are carried too, through their updates (`ProgramTangent`:
+the update's Jacobian, and its rate in TIME where a switch that moves holds it). An
+observed output that is no state is d out/d y . S + d out/d z . S_z + d out/d p at
+its instant.
 
 F_p, ds/dp, d out/dp and the start's dependence d y(t0)/dp are central differences
 of the generated functions at one TIME and state (the run's code bound to p +- h,
 no integration); h = cbrt(eps) |p| (1e-8 for p = 0: `step_for`). Where the
 variational equations do not follow the flow (a state reset with another change at
 its instant, a flow tangent to a surface, a memory they cannot carry changing -- a
-play's, DELAY's store, CSMP's PULSE end: `variational.memory_unfollowed`; in a
+play's, DELAY's store: `variational.memory_unfollowed`; in a
 program of the ACSL form, an
 instant its code runs at that moves with p: `analysis.program`) the caller
 differences whole runs instead, and is told why."""
@@ -142,8 +143,10 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
         up, down = plus.initial_state(), minus.initial_state()
         if up.memory != down.memory and not r:
             return f"a memory function's initial value depends on {name}"
-        dy0[:, j] = (np.concatenate([up.y, up.memory[:r]]) -
-                     np.concatenate([down.y, down.memory[:r]])) / (2.0 * h)
+        hi = np.concatenate([up.y, up.memory[:r]])
+        lo = np.concatenate([down.y, down.memory[:r]])
+        with np.errstate(invalid="ignore"):  # (a slot at -INF in both: no dependence)
+            dy0[:, j] = np.where(hi == lo, 0.0, (hi - lo) / (2.0 * h))
     floor = np.broadcast_to(np.asarray(flow.plan.tol.atol / flow.plan.tol.rtol, dtype=float),
                             (n,))
     asked = outputs_asked(c, variables)
@@ -158,6 +161,7 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
         # one integration over the whole span, as the run's: the tangent is read inside
         # the steps at the instants asked for (no restart at each of them)
         end, _ = flow.advance(start, start.t, float(times[-1]), observer=sampler)
+        sampler.finish(end)
         if tangent.failed is not None:
             return tangent.failed
         if end.t < times[-1] * (1 - 1e-12) - 1e-300:

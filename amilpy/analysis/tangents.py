@@ -49,6 +49,13 @@ class Sampler:
         if tb > t:
             self.tangent(t, tb, interp, m, z)
 
+    def finish(self, end) -> None:
+        """The flow's end state `end` (a State, after what happened at its instant): an
+        instant asked for there is read after it too, as the run's last row is."""
+        if self._due is not None and self._due == end.t:
+            y = np.asarray(end.y, dtype=float)
+            self(end.t, end.t, lambda _: y, list(end.modes), list(end.memory))
+
     def _keep(self, t: float, interp, m, z) -> None:
         from ..run import State
 
@@ -81,6 +88,8 @@ def output_row(c, variants, i: int, t: float, state, sens: np.ndarray, floor: np
         down[j] -= h
         grad[j] = (out(c, up, z) - out(c, down, z)) / (2 * h)
     for j in range(len(sens) - len(y)):
+        if not np.isfinite(z[j]) or j in c.wake_slots:
+            continue  # (an instant the model switches at: a jump in time, no slope)
         h = STEP * max(abs(z[j]), 1.0)  # (as the program's tangent moves them)
         up, down = list(z), list(z)
         up[j] += h

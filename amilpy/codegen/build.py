@@ -707,6 +707,7 @@ class Compiler:
             memory_every_step=any(f.memory.every_step for f in self.entries),
             play_slots=[mem.slot for mem, f in zip(model.memories, self.entries, strict=True)
                         if f.memory.plays],
+            wake_slots=self.wake_slots(),
             memory_times=self.memory_times(),
             memory_trains=[(0.0, 1.0)] if model.weather else [],
             statements=self.statements, model=model,
@@ -758,13 +759,19 @@ class Compiler:
         return [(self.constant(node.start, node.span), self.constant(node.period, node.span))
                 for e in exprs for node in syn.walk(e) if isinstance(node, ir.Impulse)]
 
+    def wake_slots(self) -> list[int]:
+        """The memory slots holding an instant at which the model switches (PULSE
+        holds its output until the instant kept in its slot, a draw until the next is
+        due)."""
+        return [m.slot + f.memory.wakes for m, f in zip(self.model.memories, self.entries,
+                                                         strict=True)
+                if f.memory.wakes is not None]
+
     def memory_times(self) -> Callable[[list[float], float], list[float]]:
         """The next instants at which memory changes: those its slots hold (PULSE
         holds its output until the instant kept in its slot, a draw until the next is
         due), and FST's weather at every day's start (the day is floor(TIME))."""
-        slots = [m.slot + f.memory.wakes for m, f in zip(self.model.memories, self.entries,
-                                                        strict=True)
-                 if f.memory.wakes is not None]
+        slots = self.wake_slots()
         daily = bool(self.model.weather)
 
         def times(z: list[float], t: float) -> list[float]:

@@ -39,6 +39,9 @@ class ModelCode:
     memory_every_step: bool = False
     # the memory slots whose value is a play (HSTRSS, BCKLSH: `MemorySpec.plays`)
     play_slots: list[int] = field(default_factory=list)
+    # the memory slots holding an instant at which the model switches (PULSE's end, a
+    # draw's next instant: `MemorySpec.wakes`)
+    wake_slots: list[int] = field(default_factory=list)
     # (z, t) -> instants after t at which memory makes the model switch (PULSE ends)
     memory_times: Callable | None = None
     # memory that samples the trajectory inside each accepted step (DELAY's store):

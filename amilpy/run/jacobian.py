@@ -121,21 +121,28 @@ def branch_difference(f: Callable[[list[float]], object], at: list[float], j: in
     update that reads the sign of a trigger standing at zero, as it does where it
     was just crossed -- by the second-order one-sided difference on the side where
     f is straighter, the branch the point itself is on (exact for a piecewise
-    linear f, O(h^2) for a smooth one whose curvature alone parted the sides)."""
+    linear f, O(h^2) for a smooth one whose curvature alone parted the sides). A
+    component that is not finite at the point has no derivative: 0."""
     def at_step(d: float) -> np.ndarray:
         v = list(at)
         v[j] += d
         return np.asarray(f(v), dtype=float)
 
     mid, hi, lo = at_step(0.0), at_step(h), at_step(-h)
-    up, down = (hi - mid) / h, (mid - lo) / h
-    noise = 8.0 * np.finfo(float).eps * (np.abs(mid) + np.abs(hi) + np.abs(lo)) / h
-    bent = np.abs(up - down) > 1e-8 * (np.abs(up) + np.abs(down)) + noise
-    central = (hi - lo) / (2.0 * h)
-    if not np.any(bent):
-        return central
-    half_up, half_down = at_step(0.5 * h), at_step(-0.5 * h)
-    right = (-3.0 * mid + 4.0 * half_up - hi) / h
-    left = (3.0 * mid - 4.0 * half_down + lo) / h
-    straight_right = np.abs(half_up - 0.5 * (mid + hi)) <= np.abs(half_down - 0.5 * (mid + lo))
-    return np.where(bent, np.where(straight_right, right, left), central)
+    with np.errstate(invalid="ignore", over="ignore"):
+        up, down = (hi - mid) / h, (mid - lo) / h
+        noise = 8.0 * np.finfo(float).eps * (np.abs(mid) + np.abs(hi) + np.abs(lo)) / h
+        bent = ~(np.abs(up - down) <= 1e-8 * (np.abs(up) + np.abs(down)) + noise)
+        central = (hi - lo) / (2.0 * h)
+        if not np.any(bent & np.isfinite(mid)):
+            return np.where(np.isfinite(mid) & np.isfinite(central), central, 0.0)
+        half_up, half_down = at_step(0.5 * h), at_step(-0.5 * h)
+        right = (-3.0 * mid + 4.0 * half_up - hi) / h
+        left = (3.0 * mid - 4.0 * half_down + lo) / h
+        # (a side that is not finite -- a slot at -INF the step leaves there -- is the
+        # other branch; otherwise the straighter side)
+        straight_right = np.isfinite(right) & (
+            ~np.isfinite(left) |
+            (np.abs(half_up - 0.5 * (mid + hi)) <= np.abs(half_down - 0.5 * (mid + lo))))
+        out = np.where(bent, np.where(straight_right, right, left), central)
+    return np.where(np.isfinite(mid) & np.isfinite(out), out, 0.0)

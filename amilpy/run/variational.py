@@ -29,14 +29,16 @@ switches, so it lies in one branch) and carries Phi = d y(t)/d y(t0):
 `ProgramTangent` also carries the memory values z (z' = 0 between updates): at an
 update z = mem(t, y, z) (a step's end, a located switch: ZHOLD holding where its
 trigger crosses) the update's Jacobian applies, with y's total derivative
-S + f dt/dp and the update's rate in TIME where the switch's instant moves.
+S + f dt/dp and the update's rate in TIME where the switch's instant moves; an
+instant a slot holds (CSMP's PULSE end) jumps the tangent by (f- - f+) times that
+slot's row (`_wake`).
 
 What it does not handle it says (`Tangent.failed`), and the flow map then
 takes central differences of whole flows instead: a state reset (MODINT; a
 `ParameterTangent` follows one: `_reset`), a
 memory value the field (or an output asked for) reads changing along the way
-where the memory is not carried (the flow map's; a play, a DELAY store, CSMP's
-PULSE end: `memory_unfollowed`),
+where the memory is not carried (the flow map's; a play, a DELAY store:
+`memory_unfollowed`),
 a crossing where the flow is tangent to the surface (n . f- ~ 0), two PULSE
 trains that share an instant and move it differently. A train instant a data
 value moves (PULSE(TZ, P, W): first + k period) jumps the tangent by
@@ -210,6 +212,10 @@ class Tangent:
             current, mem = after, z
         if moved:
             self._update_memory(t, y, m_prev, m, z_prev, z)
+        self._wake(t, y, m, z)
+
+    def _wake(self, t: float, y: np.ndarray, m, z) -> None:
+        """An instant a memory slot holds, reached at t (`ProgramTangent`)."""
 
     def _reset(self, t: float, y_prev: np.ndarray, y: np.ndarray, m_prev, m, z_prev, z
                ) -> None:
@@ -544,8 +550,7 @@ class _Path:
 def memory_unfollowed(c) -> str | None:
     """Why a tangent cannot carry the memory of `c`'s functions through their
     updates (None: it can): a store that samples inside the steps (DELAY's), or a
-    memory that changes the model at an instant it holds (CSMP's PULSE end, a
-    random draw's next instant), which no switch marks."""
+    play's clamp."""
     from ..library import lookup
 
     for mem in (c.model.memories if c.model is not None else ()):
@@ -556,8 +561,6 @@ def memory_unfollowed(c) -> str | None:
             # (its value is a clamp of the memory, on whose kink it sits after each
             # update: the differences the tangent takes would straddle it)
             return f"{mem.func}'s play clamps its memory"
-        if spec.wakes is not None:
-            return f"{mem.func} changes the model at an instant its memory holds"
     return None
 
 
@@ -625,6 +628,8 @@ class ProgramTangent(ParameterTangent):
             rows += np.outer(branch_difference(lambda v: update(c, t, v, z_prev), yl, j, h),
                              states[j])
         for j in range(r):
+            if not math.isfinite(z_prev[j]):  # (PULSE's -INF before a first trigger)
+                continue
             h = STEP * max(abs(z_prev[j]), 1.0)
             rows += np.outer(branch_difference(lambda v: update(c, t, yl, v), list(z_prev),
                                                j, h), phi[n + j])
@@ -642,6 +647,25 @@ class ProgramTangent(ParameterTangent):
             rows += np.outer((update(c, t + ht, yl, z_prev) - update(c, t - ht, yl, z_prev))
                              / (2.0 * ht), shift)
         self._phi[n:n + r] = rows
+
+    def _wake(self, t: float, y: np.ndarray, m, z) -> None:
+        """An instant a memory slot holds reached at t (CSMP's PULSE(P, X) ending at
+        the trigger's instant + P): the field changes there with TIME alone, at an
+        instant that moves as the slot does, dt/dp = its row of the tangent: the jump
+        (f- - f+) dt/dp, f- the field a few ulps before t."""
+        due = [s for s in self.c.wake_slots
+               if abs(z[s] - t) <= 4 * np.finfo(float).eps * max(abs(t), 1.0)]
+        if not due:
+            return
+        n, yl = self.n, np.asarray(y, dtype=float).tolist()
+        before = float(np.nextafter(np.nextafter(t, -np.inf), -np.inf))
+        f_minus = np.asarray(self.value("rhs", self.c, before, yl, m, z), dtype=float)
+        f_plus = np.asarray(self.value("rhs", self.c, t, yl, m, z), dtype=float)
+        if np.array_equal(f_minus, f_plus):
+            return
+        phi = self.phi
+        shift = phi[n + due[0]]
+        self._phi[:n] += np.outer(f_minus - f_plus, shift)
 
     def _update_path(self, t: float, yl: list, m_prev, m, z_prev, z) -> _Path | None:
         """How the run's restart took the memory from z_prev to z: one update (m_prev
@@ -667,8 +691,11 @@ class ProgramTangent(ParameterTangent):
                 continue
             crossed = list(m_prev)
             crossed[k] = -m_prev[k]
-            if gives([(crossed, m)]):
-                return _Path([(crossed, m)], [k])
+            # (the update the crossed mode decides alone -- RST's, read from M -- or
+            # the two the run made -- PULSE's, read from the new modes N)
+            for steps in ([(crossed, m)], [(m_prev, crossed), (crossed, m)]):
+                if gives(steps):
+                    return _Path(steps, [k])
         if gives([(m_prev, m)]):
             return _Path([(m_prev, m)], [])
         return None
@@ -677,6 +704,11 @@ class ProgramTangent(ParameterTangent):
         """d fn(t, y, m, z) / d z, a column per memory value."""
         yl, cols = np.asarray(y, dtype=float).tolist(), []
         for j in range(self.r):
+            if not math.isfinite(z[j]) or j in self.c.wake_slots:
+                # (an instant not yet set, -INF; or an instant the model switches at,
+                # whose only effect is that switch's jump: `_wake`)
+                cols.append(np.zeros(len(self.value(fn, self.c, t, yl, m, z))))
+                continue
             h = STEP * max(abs(z[j]), 1.0)
             up, down = list(z), list(z)
             up[j] += h
