@@ -367,25 +367,53 @@ def test_a_pulse_train_whose_instants_move_jumps_the_tangent_at_each():
     assert model.sensitivity(names, outputs=["X"]).how == "sensitivity equations"
 
 
-@pytest.mark.parametrize("schedule, interval, why", [
-    # a kick every TAU: the instants move with TAU
-    ("", "    INTERVAL DT = TAU\n", "an INTERVAL depends on TAU"),
-])
-def test_an_instant_that_moves_is_differenced_and_says_why(schedule, interval, why):
-    text = f"""PROGRAM moving instants
-  CONSTANT K = 0.5, TAU = 1.0
+def test_instants_the_code_sets_move_with_the_values():
+    """A dose every TAU (INTERVAL DT = TAU) and one at TD (INITIAL's SCHEDULE .AT. TD):
+    AG = DOSE sum over the doses k of exp(-KA (t - t_k)), the k-th INTERVAL instant
+    moving by k dTAU and the .AT. one by dTD; the code's map applies where the
+    instant moved it, J (Phi + f- dt) - f+ dt. Differenced whole runs until
+    2026-11-30 ("an INTERVAL depends on TAU"); against the complex step of the
+    closed form, to 1e-8."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    text = """PROGRAM dosing every TAU
+  CONSTANT KA = 0.3, DOSE = 100.0, TAU = 4.0, TD = 2.5
   CINTERVAL CINT = 0.5
-  DERIVATIVE
-    X = INTEG(-K*X, 2.0)
-{schedule}    TERMT(T >= 3.0)
+  INITIAL
+    SCHEDULE EXTRA .AT. TD
   END
-  DISCRETE HIT
-{interval}    X = X + 1.0
+  DERIVATIVE
+    AG = INTEG(-KA*AG, 0.0)
+    TERMT(T >= 19.0)
+  END
+  DISCRETE DOSING
+    INTERVAL DT = TAU
+    AG = AG + DOSE
+  END
+  DISCRETE EXTRA
+    AG = AG + 0.5*DOSE
   END
 END
 """
-    loc = amilpy.loads(text, "moving.csl").sensitivity(["K", "TAU"], outputs=["X"])
-    assert loc.how.startswith("differences of whole runs") and why in loc.how, loc.how
+
+    def ag(t, tau, ka, td):
+        total, k = 0.0, 0
+        while (k * tau).real <= t:
+            total = total + 100.0 * np.exp(-ka * (t - k * tau))
+            k += 1
+        return total + (50.0 * np.exp(-ka * (t - td)) if t >= td.real else 0.0)
+
+    names, values = ["TAU", "KA", "TD"], {"TAU": 4.0, "KA": 0.3, "TD": 2.5}
+    times = [1.0, 3.0, 5.0, 9.5, 13.0, 18.7]
+    track = trajectory(amilpy.loads(text, "dosing.csl"), 0, names, values,
+                       {"rtol": 1e-12, "atol": 1e-14}, times)
+    assert not isinstance(track, str), track
+    for t in times:
+        exact = []
+        for name in names:
+            moved = {**values, name: values[name] + 1e-30j}
+            exact.append(ag(t, moved["TAU"], moved["KA"], moved["TD"]).imag / 1e-30)
+        assert track.row("AG", t) == pytest.approx(exact, abs=1e-8), t
 
 
 def test_a_section_a_crossing_runs_moves_with_the_values():

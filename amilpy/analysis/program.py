@@ -13,10 +13,13 @@ SCHEDULE crossing runs (.XN./.XP./.XZ.: a ball's impact) is at an instant the va
 move, dt/dp = -(n . Phi)/rate: the code's map applies to the states as the instant
 moves them, and the field after it runs the shift back, J (Phi + f- dt) - f+ dt.
 
-What it does not follow it says, and the caller differences whole runs instead: an
-instant the code sets that moves with the data values (a SCHEDULE, an INTERVAL or
-INITIAL's schedule whose time depends on them), a crossing the flow is tangent to,
-besides what `ParameterTangent` does not follow."""
+An instant the code sets that the values move -- an INTERVAL computed from them,
+INITIAL's SCHEDULE .AT. time -- is followed the same way, its shift carried from one
+instant to the next (the k-th dose every TAU moves by k dTAU).
+
+What it does not follow it says, and the caller differences whole runs instead: a
+SCHEDULE .AT. that DISCRETE code sets from the values or the states, a crossing the
+flow is tangent to, besides what `ParameterTangent` does not follow."""
 
 from __future__ import annotations
 
@@ -57,6 +60,9 @@ def program_trajectory(model, k: int, names: list[str], data: dict[str, float],
         return "a fixed-step route has no dense output for the sensitivity equations"
     n, r = len(c.y0), len(c.z0)
     variants, start = [], np.zeros((n + r, len(names)))
+    # the instants INITIAL schedules (.AT.) and the INTERVALs, as the values move them
+    moved_at = np.zeros((len(base.schedules), len(names)))
+    constants: list[tuple[dict, dict, float]] = []
     for j, name in enumerate(names):
         h = step_for(data[name], STEP)
         try:
@@ -68,12 +74,12 @@ def program_trajectory(model, k: int, names: list[str], data: dict[str, float],
                 len(v.code.z0)) != (c.watched, c.state_names, c.out_names, c.kept, r)
                for v in (plus, minus)):
             return f"{name} changes which switches the run watches"
-        if plus.schedules != minus.schedules:
-            return f"INITIAL schedules a section at an instant {name} moves"
-        intervals = [d.interval for d in model.ir.acsl.discretes.values()
-                     if d.interval is not None]
-        if any(plus.constants.get(i) != minus.constants.get(i) for i in intervals):
-            return f"an INTERVAL depends on {name}"
+        if [s for _, s in plus.schedules] != [s for _, s in base.schedules] or \
+                [s for _, s in minus.schedules] != [s for _, s in base.schedules]:
+            return f"INITIAL schedules other sections as {name} moves"
+        moved_at[:, j] = [(a - b) / (2.0 * h) for (a, _), (b, _) in
+                          zip(plus.schedules, minus.schedules, strict=True)]
+        constants.append((plus.constants, minus.constants, h))
         variants.append((plus.code, minus.code, h))
         start[:, j] = (np.concatenate([plus.code.y0, plus.code.z0]) -
                        np.concatenate([minus.code.y0, minus.code.z0])) / (2.0 * h)
@@ -81,7 +87,8 @@ def program_trajectory(model, k: int, names: list[str], data: dict[str, float],
     tangent = ProgramTangent(c, None, floor, start, variants, r, outputs_asked(c, variables))
     times = np.asarray(times, dtype=float)
     sampler = Sampler(tangent, times, n + r)
-    run = _TangentRun(model.ir, spec, opts, base, _clock.perf_counter(), sampler, variants)
+    run = _TangentRun(model.ir, spec, opts, base, _clock.perf_counter(), sampler, variants,
+                      constants, moved_at)
     tangent.watch = run.watch
     result = run.run()
     if run.why is not None:
@@ -100,11 +107,19 @@ class _TangentRun(AcslRun):
     """An ACSL run whose accepted steps the tangent follows (`observer`), and whose
     instants' code it takes the Jacobian of before the code runs."""
 
-    def __init__(self, model, spec, opts, prepared, started, sampler, variants) -> None:
+    def __init__(self, model, spec, opts, prepared, started, sampler, variants,
+                 constants, moved_at) -> None:
         super().__init__(model, spec, opts, prepared, started)
         self.observer, self.sampler, self.variants = sampler, sampler, variants
         self.keys = {id(fn): key for key, (_, fn) in self.c.code.items()}
         self.why: str | None = None
+        # d/dp of the instant each section is due at next, where the values move it
+        # (an INTERVAL computed from them, INITIAL's .AT. time), and the constants of
+        # the moved runs (an INTERVAL's value)
+        self.moved_constants = constants
+        self.due_moved: dict[str, np.ndarray] = {
+            section: moved_at[i] for i, (_, section) in enumerate(prepared.schedules)
+            if np.any(moved_at[i])}
 
     @property
     def tangent(self) -> ProgramTangent:
@@ -112,13 +127,24 @@ class _TangentRun(AcslRun):
 
     def run_code(self, cur, fn, what: str) -> Calls:
         matrix, moving = None, None
+        section = what.removeprefix("DISCRETE ")
+        shift = self.due_moved.pop(section, None)
         if self.why is None and self.tangent.failed is None:
             try:
                 matrix = self._code_jacobian(cur, fn)
                 moving = self._crossing_shift(cur, what)
+                if moving is None and shift is not None:
+                    moving = shift, self._field_rows(cur)
             except _Jumped as exc:
                 self.why = f"{what} at TIME = {cur.t:.9g}: {exc}"
         calls = super().run_code(cur, fn, what)
+        d = self.acsl.discretes.get(section) if what.startswith("DISCRETE ") else None
+        if d is not None and d.interval is not None and matrix is not None:
+            # (its next instant: this one's shift and the INTERVAL's own dependence)
+            gap = self._interval_moved(d.interval)
+            after = (moving[0] if moving is not None else 0.0) + gap
+            if np.any(after):
+                self.due_moved[section] = after
         if matrix is not None:
             if moving is not None:
                 # the section ran where a crossing the values move put it: the code's
@@ -134,6 +160,22 @@ class _TangentRun(AcslRun):
             else:
                 self.tangent.jump(matrix, cur.t, cur.y, cur.m, cur.z)
         return calls
+
+    def _field_rows(self, cur) -> np.ndarray:
+        """The field at the cursor in the tangent's rows (the states', zero past them)."""
+        t = self.tangent
+        out = np.zeros(t.phi.shape[0])
+        out[:t.n] = t.value("rhs", t.c, cur.t, cur.y, list(cur.m), list(cur.z))
+        return out
+
+    def _interval_moved(self, name: str) -> np.ndarray:
+        """d/dp of an INTERVAL's value: its tangent row where the code keeps it, else
+        the moved runs' constants."""
+        t, kept = self.tangent, self.c.kept
+        if name in kept:
+            return t.phi[t.n + t.r - len(kept) + kept.index(name)].copy()
+        return np.array([(plus.get(name, 0.0) - minus.get(name, 0.0)) / (2.0 * h)
+                         for plus, minus, h in self.moved_constants])
 
     def _crossing_shift(self, cur, what: str) -> tuple[np.ndarray, np.ndarray] | None:
         """(d t/d p of this instant, the field before the code in the tangent's rows)
