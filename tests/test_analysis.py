@@ -238,3 +238,25 @@ def test_monodromy_by_variational_equations_matches_the_closed_form():
         _, _, m = flow.advance(flow.initial_state(), 0.0, 2.3, sensitivity=True)
         assert np.max(np.abs(m[np.ix_(idx, idx)] - expm(2.3 * a))) <= tol
         assert flow.last_sensitivity.startswith("variational" if variational else "diff")
+
+
+HOPF = """TITLE HOPF CYCLE
+PARAM B = 0.5
+DYNAMIC
+   R2 = X*X + Y*Y
+   X = INTGRL(1.0, X - (2.0 + B*R2)*Y - X*R2)
+   Y = INTGRL(0.0, (2.0 + B*R2)*X + Y - Y*R2)
+TIMER FINTIM = 10.0, OUTDEL = 0.05
+END
+"""
+
+
+@pytest.mark.parametrize("method", [None, "RADAU"])
+def test_floquet_multipliers_of_a_limit_cycle_on_long_steps(method):
+    # r' = r (1 - r^2), theta' = 2 + B r^2: the cycle r = 1 has period 2 pi/2.5 and
+    # multipliers 1 and exp(-2 T) (the radial rate -2 there). DOP853's long steps
+    # left the monodromy 1e-4 off (0.999931, 0.00656187 for 0.00656142; hunt 49b):
+    # each step of the variational equations is now checked against its halves.
+    orbit = amilpy.loads(HOPF).periodic(period="2*PI/2.5", method=method)
+    mu = np.sort(np.abs(orbit.multipliers))[::-1]
+    assert mu == pytest.approx([1.0, math.exp(-4 * math.pi / 2.5)], rel=1e-7)
