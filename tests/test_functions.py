@@ -233,3 +233,16 @@ def test_an_rst_thermostat_is_its_exact_relay_cycle(method):
     r = run1("X = INTGRL(5.0, -X + 10.0*H)\nH = RST(X - 3.0, 2.0 - X, 0.0)\n"
              "TIMER FINTIM = 8.0, OUTDEL = 0.1\nEND\n", method=method, advice=False)
     assert r["X"][-1] == pytest.approx(x, abs=5e-8)
+
+
+@pytest.mark.parametrize("block", ["NOSORT\n   Z = W + 1.0\n   W = X*X\nSORT\n",
+                                   "PROCEDURE Z, W = P(X)\n   Z = W + 1.0\n   W = X*X\n"
+                                   "ENDPRO\n"])
+def test_a_block_reading_what_it_assigns_later_says_so(block):
+    # Z = W + 1 before W = X*X in written order: W is the block's own output, not there
+    # yet, and reads 0.0 at every evaluation (a translator's storage kept whatever the
+    # last evaluation left). It was silent (hunt 49b); it is said where W is read.
+    r = run1("DYNAMIC\n   X = INTGRL(1.0, -Z)\n" + block +
+             "TIMER FINTIM = 1.0, OUTDEL = 0.25\nEND\n", advice=False)
+    assert any("W is read at line" in w and "reads 0.0" in w for w in r.warnings), r.warnings
+    assert r["Z"] == pytest.approx(np.ones(len(r.t)))  # (as written: 0.0 + 1)

@@ -160,12 +160,37 @@ class CodeLowering:
             outputs = list(dict.fromkeys([*st.outputs, *outputs]))
             reads = list(dict.fromkeys([*st.inputs, *reads]))
             reads = [n for n in reads if n not in outputs]
+        self.read_before_assigned(body, outputs)
         before = self.rep.errors
         lowered = _Unit(self, section, st.span).block(body, {}, set(), ())
         if self.rep.errors > before:
             return None
         return ir.Unit(index, "PROCEDURAL" if isinstance(st, ast.Procedural) else "IF",
                        tuple(outputs), tuple(reads), tuple(lowered), st.span)
+
+    def read_before_assigned(self, body, outputs: list[str]) -> None:
+        """A name the block assigns, read (in written order) before the block first
+        assigns it: the block's own value is not there yet, and it reads 0.0 at every
+        evaluation (a CSMP or ACSL translator kept whatever the last evaluation left,
+        which depends on the integrator's stages): said, as INITIAL's are."""
+        later = set(outputs)
+        first = {}
+        for st in body:
+            for name in assigned_names([st]):
+                first.setdefault(name, st.span.line)
+        for st in body:
+            own = set() if isinstance(st, ast.Assign) else set(assigned_names([st]))
+            for node in ast.walk(st):
+                if isinstance(node, ast.Name) and node.name in later and \
+                        node.name not in own and first.get(node.name, 0) >= node.span.line:
+                    later.discard(node.name)
+                    self.low.warn(
+                        f"{node.name} is read at line {node.span.line} before the block "
+                        f"assigns it (line {first[node.name]}): it reads 0.0 there, at every "
+                        "evaluation", node.span,
+                        f"assign {node.name} before it is read, or compute it outside the "
+                        "block (the sort then puts it first)")
+            later -= set(assigned_names([st]))
 
     def declared(self, st: ast.Procedural, outputs: list[str], reads: list[str]) -> None:
         missing_out = [n for n in outputs if n not in st.outputs]
