@@ -273,3 +273,31 @@ def test_the_docs_hoist_sweep_and_response_axes_carry_units():
     result.measure = "Y"
     assert units(model, result) == ("rad/s", "RAD")
     assert analysis.units(model, "W", "Y") == ("rad/s", "RAD")
+
+
+def test_a_peak_narrower_than_the_step_is_not_called_a_jump():
+    # A linear oscillator (W0 = 3, ZETA = 0.05) swept in steps of 0.5: its resonance,
+    # 0.3 wide, stands out of every trend like a jump, and which step was called "the
+    # jump" depended on OUTDEL (hunt 49b). Swept one way, or as independent points, the
+    # sweep cannot tell: it says so. Carried both ways, a jump shows its hysteresis
+    # (the branch back differs) and is called one; the same values both ways are not.
+    from amilpy.output.sweeps import jump_lines
+
+    w = np.arange(1.0, 5.01, 0.25)
+    a = 2.0 / np.abs(9.0 - w ** 2 + 0.3j * w)
+    lines = [line for line in jump_lines(_sweep(list(w), list(a))) if "between" in line]
+    assert lines and all(line.startswith("steep step") and "narrower than the step" in line
+                         for line in lines)
+    both = _sweep([*w, *w[::-1]], [*a, *a[::-1]], ["up"] * len(w) + ["down"] * len(w),
+                  carry_state=True)
+    assert all("narrower than the step" in line for line in jump_lines(both)
+               if "between" in line)
+    # a Duffing-like characteristic: up along the high branch to 72, down at 72.5; back
+    # down along the low branch to 70.5, up at 70
+    up_w = np.arange(68.0, 75.01, 0.5)
+    high = np.where(up_w <= 72.0, 0.02 + 0.002 * (up_w - 68.0), 0.005 - 0.0005 * (up_w - 72.5))
+    low = np.where(up_w >= 70.5, 0.005 - 0.0005 * (up_w - 72.5), 0.02 + 0.002 * (up_w - 68.0))
+    hyst = _sweep([*up_w, *up_w[::-1]], [*high, *low[::-1]],
+                  ["up"] * len(up_w) + ["down"] * len(up_w), carry_state=True)
+    called = [line for line in jump_lines(hyst) if "between" in line]
+    assert called and all(line.startswith("jump ") for line in called)

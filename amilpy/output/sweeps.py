@@ -56,11 +56,38 @@ def jump_lines(result: Sweep) -> list[str]:
                        f"trend of the {SIDE} points on one side or the other (the first "
                        f"and last {SIDE - 1} steps are not judged)")
         for jump in jumps[direction]:
-            out.append(f"jump {'up' if jump.rise else 'down'} sweeping {direction}: between "
-                       f"{name} = {jump.start:g} and {jump.stop:g}, HALF P-P "
-                       f"{jump.before:.4g} -> {jump.after:.4g} ({jump.ratio:.3g} times what "
-                       "the trends on both sides miss by)")
+            what = f"{'up' if jump.rise else 'down'} sweeping {direction}: between " \
+                f"{name} = {jump.start:g} and {jump.stop:g}, HALF P-P {jump.before:.4g} -> " \
+                f"{jump.after:.4g} ({jump.ratio:.3g} times what the trends on both sides " \
+                "miss by)"
+            if hysteresis(result, jump):
+                out.append(f"jump {what}")
+            else:
+                # (a linear oscillator's resonance, sampled coarser than its width, looks
+                # the same: only the other way's branch, or a finer sweep, tells)
+                why = "the sweep back, carrying the state, does not differ there" \
+                    if result.carry_state and len(jumps) == 2 else \
+                    "a sweep of independent points, or one way, cannot tell"
+                out.append(f"steep step {what}: a jump, or a peak narrower than the step "
+                           f"({why}); sweep finer between {jump.start:g} and "
+                           f"{jump.stop:g}, or with --carry-state --both-ways, to tell")
     return out
+
+
+def hysteresis(result: Sweep, jump) -> bool:
+    """Whether the sweep the other way, carrying the state, stands on another branch at
+    either end of the step: a jump with its hysteresis. A sweep that does not carry the
+    state both ways cannot tell a jump from a peak narrower than the step."""
+    if not result.carry_state:
+        return False
+    other = {p.value: p.amplitude for p in
+             result.along("down" if jump.direction == "up" else "up")}
+    mine = {p.value: p.amplitude for p in result.along(jump.direction)}
+    for value in (jump.start, jump.stop):
+        if value in other and value in mine and \
+                abs(other[value] - mine[value]) > 1e-3 * max(abs(mine[value]), 1e-300):
+            return True
+    return False
 
 
 def format_sweep(result: Sweep) -> str:
