@@ -9,9 +9,10 @@ switches, so it lies in one branch) and carries Phi = d y(t)/d y(t0):
   dense output, by the sixth-order Magnus method on three Gauss-Legendre
   nodes (Blanes, Casas & Ros 2000): exp(Omega) Phi, exact for a branch linear
   in the states whatever the step (and an exponential, so stiff modes decay as
-  they should). A step over which h |A(c3) - A(c1)| > 1e-3 is checked against
+  they should). A step over which h |A(c3) - A(c1)| > 3e-3 is checked against
   its two halves, and halved while they disagree by more than 1e-8 (at most
-  256 pieces);
+  256 pieces); a step that passed makes those that vary as little trusted, one
+  that failed lowers that trust;
 - at a switch at t_e on surface s(t, y) = 0, from field f- to f+,
       Phi <- (I + (f+ - f-) n^T / (n . f- + ds/dt)) Phi,    n = ds/dy,
   surface after surface when several change at once (exact when they are one
@@ -61,7 +62,7 @@ from .plan import SLIDE
 from .slide import combine, corner_modes, corner_weights, slide_alphas
 
 _C = np.array([0.5 - math.sqrt(15) / 10, 0.5, 0.5 + math.sqrt(15) / 10])
-VARIATION = 1e-3  # h |A(c3) - A(c1)| above this: the step is checked against its halves
+VARIATION = 3e-3  # h |A(c3) - A(c1)| above this: the step is checked against its halves
 AGREE = 1e-8  # whole step and halves closer than this (relative): the halves are taken
 HELD = 1e-9  # a sliding weight past [0, 1] by more: the motion is on that branch
 MAX_DEPTH = 8
@@ -105,6 +106,8 @@ class Tangent:
         self.prev: tuple | None = None  # (tb, y(tb), modes, memory) of the last step
         self.failed: str | None = None
         self._shift: np.ndarray | None = None  # d t/d p of the instant being joined
+        # steps whose h |A(c3) - A(c1)| is at most this need no check against halves
+        self._trusted = VARIATION
 
     @property
     def phi(self) -> np.ndarray:
@@ -178,16 +181,19 @@ class Tangent:
             return None
         a2 = self.jacobian(t2, ys[:, 1], m, z)
         whole = magnus6(a1, a2, a3, h)
-        if h * change <= VARIATION or depth >= MAX_DEPTH:
+        if h * change <= self._trusted or depth >= MAX_DEPTH:
             return whole
         # the step against its two halves (Richardson): where they agree, the halves
-        # are taken; else each half is refined in turn (DOP853's long steps on a
-        # Hopf cycle left the monodromy 2e-5 off with a fixed bound on the variation)
+        # are taken, and steps that vary as little are trusted from then on; else each
+        # half is refined in turn, and the trust lowered (DOP853's long steps on a Hopf
+        # cycle left the monodromy 2e-5 off with a fixed bound on the variation)
         mid = 0.5 * (ta + tb)
         halves = [self._magnus_on(u, v, interp, m, z) for u, v in ((ta, mid), (mid, tb))]
         if np.max(np.abs(halves[1] @ halves[0] - whole)) <= \
                 AGREE * max(1.0, float(np.max(np.abs(whole)))):
+            self._trusted = max(self._trusted, 0.25 * h * change)
             return halves[1] @ halves[0]
+        self._trusted = max(VARIATION, min(self._trusted, 0.5 * h * change))
         return self._propagate(mid, tb, interp, m, z, depth + 1) @ \
             self._propagate(ta, mid, interp, m, z, depth + 1)
 
