@@ -34,6 +34,26 @@ END
 """
 
 
+def complex_step(f, values: dict[str, float], names: list[str]) -> list[float]:
+    """d f(values) / d each of `names` by the complex step (h = 1e-30: exact to
+    rounding for an f written in complex-safe arithmetic)."""
+    return [f({**values, n: values[n] + 1e-30j}).imag / 1e-30 for n in names]
+
+
+def assert_tangent_is(model, variable: str, values: dict[str, float], times, closed,
+                      tol: float) -> None:
+    """The tangent of `variable` (RELERR 1e-12) with respect to every one of `values`
+    at `times`, against the complex step of `closed(t, values)`, to `tol`."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    names = list(values)
+    track = trajectory(model, 0, names, values, {"rtol": 1e-12, "atol": 1e-14}, times)
+    assert not isinstance(track, str), track
+    for t in times:
+        exact = complex_step(lambda v, t=t: closed(t, v), values, names)
+        assert track.row(variable, t) == pytest.approx(exact, abs=tol), t
+
+
 @pytest.fixture
 def decay(tmp_path):
     path = tmp_path / "decay.amil"
@@ -374,7 +394,6 @@ def test_instants_the_code_sets_move_with_the_values():
     instant moved it, J (Phi + f- dt) - f+ dt. Differenced whole runs until
     2026-11-30 ("an INTERVAL depends on TAU"); against the complex step of the
     closed form, to 1e-8."""
-    from amilpy.analysis.sensitivity import trajectory
 
     text = """PROGRAM dosing every TAU
   CONSTANT KA = 0.3, DOSE = 100.0, TAU = 4.0, TD = 2.5
@@ -403,17 +422,9 @@ END
             k += 1
         return total + (50.0 * np.exp(-ka * (t - td)) if t >= td.real else 0.0)
 
-    names, values = ["TAU", "KA", "TD"], {"TAU": 4.0, "KA": 0.3, "TD": 2.5}
-    times = [1.0, 3.0, 5.0, 9.5, 13.0, 18.7]
-    track = trajectory(amilpy.loads(text, "dosing.csl"), 0, names, values,
-                       {"rtol": 1e-12, "atol": 1e-14}, times)
-    assert not isinstance(track, str), track
-    for t in times:
-        exact = []
-        for name in names:
-            moved = {**values, name: values[name] + 1e-30j}
-            exact.append(ag(t, moved["TAU"], moved["KA"], moved["TD"]).imag / 1e-30)
-        assert track.row("AG", t) == pytest.approx(exact, abs=1e-8), t
+    assert_tangent_is(amilpy.loads(text, "dosing.csl"), "AG",
+                      {"TAU": 4.0, "KA": 0.3, "TD": 2.5}, [1.0, 3.0, 5.0, 9.5, 13.0, 18.7],
+                      lambda t, v: ag(t, v["TAU"], v["KA"], v["TD"]), 1e-8)
 
 
 def test_a_section_a_crossing_runs_moves_with_the_values():
@@ -461,18 +472,9 @@ END
                 return v * (t - a) - g * (t - a) ** 2 / 2
             a = a + 2 * v / g
 
-    names, values = ["G", "E", "H0"], {"G": 9.81, "E": 0.8, "H0": 10.0}
-    times = [0.5, 2.0, 3.0, 4.0, 5.5]
-    track = trajectory(amilpy.loads(BALL, "ball.csl"), 0, names, values,
-                       {"rtol": 1e-12, "atol": 1e-14}, times)
-    assert not isinstance(track, str), track
-    for t in times:
-        exact = []
-        for name in names:
-            moved = dict(values)
-            moved[name] += 1e-30j
-            exact.append(height(t, *(moved[n] for n in names)).imag / 1e-30)
-        assert track.row("H", t) == pytest.approx(exact, abs=1e-8), t
+    assert_tangent_is(amilpy.loads(BALL, "ball.csl"), "H",
+                      {"G": 9.81, "E": 0.8, "H0": 10.0}, [0.5, 2.0, 3.0, 4.0, 5.5],
+                      lambda t, v: height(t, v["G"], v["E"], v["H0"]), 1e-8)
 
 
 def test_sobol_indices_of_a_sum_are_its_variance_shares(rates):
