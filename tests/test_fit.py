@@ -500,7 +500,7 @@ END
     # a memory function's initial value (its sensitivity was 0: not followed): a
     # play's memory is not carried (its clamp sits on its kink after each update)
     ("PARAM K = 0.7, YIC = 1.0\nY = HSTRSS(YIC, -10.0, 10.0, X)\nX = INTGRL(0.0, -K*X + Y)\n",
-     ["YIC"], {"YIC": 1.0}, "a memory function's initial value depends on YIC"),
+     ["YIC"], {"YIC": 1.0}, "HSTRSS's play clamps its memory, and its start depends on YIC"),
     # a random draw read by the derivatives, its mean and spread free (the draws are
     # the seeded stream's: the same numbers in every run), observed at draw instants
     ("PARAM K = 0.7, MU = 1.0, SD = 0.3\nY = GAUSS(MU, SD)\nX = INTGRL(0.0, -K*X + Y)\n",

@@ -132,7 +132,8 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
     n = len(start.y)
     # the memory functions' values are carried too (their rows after the states's),
     # unless the tangent cannot follow their updates (then a change it meets says so)
-    r = len(start.memory) if memory_unfollowed(c) is None else 0
+    unfollowed = memory_unfollowed(c)
+    r = len(start.memory) if unfollowed is None else 0
     variants, dy0 = [], np.zeros((n + r, len(names)))
     for j, name in enumerate(names):
         moved = moved_flows(flow_at, c, name, data[name])
@@ -142,7 +143,7 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
         variants.append((plus.code, minus.code, h))
         up, down = plus.initial_state(), minus.initial_state()
         if up.memory != down.memory and not r:
-            return f"a memory function's initial value depends on {name}"
+            return f"{unfollowed}, and its start depends on {name}"
         hi = np.concatenate([up.y, up.memory[:r]])
         lo = np.concatenate([down.y, down.memory[:r]])
         with np.errstate(invalid="ignore"):  # (a slot at -INF in both: no dependence)
