@@ -33,7 +33,7 @@ from ..run.code import Calls
 from ..run.flow import State
 from ..run.jacobian import STEP
 from ..run.plan import SAME_INSTANT, same_instant
-from ..run.variational import ProgramTangent, surface_time_rate
+from ..run.variational import ProgramTangent
 from .tangents import Sampler, output_row, outputs_asked, step_for
 
 
@@ -134,7 +134,8 @@ class _TangentRun(AcslRun):
                 matrix = self._code_jacobian(cur, fn)
                 moving = self._crossing_shift(cur, what)
                 if moving is None and shift is not None:
-                    moving = shift, self._field_rows(cur)
+                    moving = shift, self.tangent.field_rows(cur.t, cur.y, list(cur.m),
+                                                            list(cur.z))
             except _Jumped as exc:
                 self.why = f"{what} at TIME = {cur.t:.9g}: {exc}"
         calls = super().run_code(cur, fn, what)
@@ -146,27 +147,13 @@ class _TangentRun(AcslRun):
             if np.any(after):
                 self.due_moved[section] = after
         if matrix is not None:
-            if moving is not None:
-                # the section ran where a crossing the values move put it: the code's
-                # map applies to the states as the instant moves them, and the field
-                # after it runs the shift back: J (Phi + F- dt) - F+ dt
-                shift, before = moving
-                t = self.tangent
-                after = np.zeros(len(before))
-                after[:t.n] = t.value("rhs", t.c, cur.t, cur.y, list(cur.m), list(cur.z))
-                t._phi = t.phi + np.outer(before, shift)
-                t.jump(matrix, cur.t, cur.y, cur.m, cur.z)
-                t._phi = t._phi - np.outer(after, shift)
-            else:
-                self.tangent.jump(matrix, cur.t, cur.y, cur.m, cur.z)
+            # (where the section ran at an instant the values move: the code's map at
+            # the moved instant, `ParameterTangent.map_at`)
+            t = self.tangent
+            moved = None if moving is None else \
+                (*moving, t.field_rows(cur.t, cur.y, list(cur.m), list(cur.z)))
+            t.jump(matrix, cur.t, cur.y, cur.m, cur.z, moved)
         return calls
-
-    def _field_rows(self, cur) -> np.ndarray:
-        """The field at the cursor in the tangent's rows (the states', zero past them)."""
-        t = self.tangent
-        out = np.zeros(t.phi.shape[0])
-        out[:t.n] = t.value("rhs", t.c, cur.t, cur.y, list(cur.m), list(cur.z))
-        return out
 
     def _interval_moved(self, name: str) -> np.ndarray:
         """d/dp of an INTERVAL's value: its tangent row where the code keeps it, else
@@ -191,17 +178,13 @@ class _TangentRun(AcslRun):
             return None
         k = ks[0]
         y, m, z = np.asarray(cur.y, dtype=float), list(cur.m), list(cur.z)
-        f = np.asarray(t.value("rhs", t.c, cur.t, y, m, z), dtype=float)
-        g = t._gradient(k, cur.t, y, m, z)
-        rate = float(g @ f) + (0.0 if plan.watched[k].gradient is not None else
-                               surface_time_rate(t.c, k, cur.t, y, m, z))
-        if abs(rate) <= 1e-9 * (float(np.abs(g) @ np.abs(f)) + 1e-300):
-            raise _Jumped("the flow is tangent to the crossing that runs it")
-        phi = t.phi
-        normal = t._normal(k, cur.t, y, m, z)
-        before = np.zeros(phi.shape[0])
-        before[:t.n] = f
-        return -(normal @ phi) / rate, before
+        # (the crossing's rate as a switch's jump takes it: no field change here)
+        jump = t._jump(k, cur.t, y, m, m, z, z)
+        if jump is None or jump[2] is None:
+            raise _Jumped(t.failed or "the crossing that runs it has no rate")
+        g, _, rate = jump
+        return t.shift_of(g, t._by_data("surf", cur.t, y, m, z)[k], rate), \
+            t.field_rows(cur.t, y, m, z)
 
     def instant(self, cur) -> None:
         t = self.tangent

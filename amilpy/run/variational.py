@@ -465,6 +465,32 @@ class ParameterTangent(Tangent):
         return np.concatenate([self._gradient(k, t, y, m, z),
                                self._by_data("surf", t, y, m, z)[k]])
 
+    def shift_of(self, g: np.ndarray, rest: np.ndarray, rate: float) -> np.ndarray:
+        """d t/d p of a crossing at rate `rate` of a surface whose gradient is `g` in
+        the states and `rest` past them: -(n . Phi)/rate."""
+        phi, n = self.phi, self.n
+        return -(g @ phi[:n] + rest @ phi[n:]) / rate
+
+    def field_rows(self, t: float, y, m, z) -> np.ndarray:
+        """The field at (t, y) in the tangent's rows: the states', zero past them."""
+        out = np.zeros(len(self._phi))
+        out[:self.n] = self.value("rhs", self.c, t, y, m, z)
+        return out
+
+    def map_at(self, matrix: np.ndarray, moved=None) -> None:
+        """A map of the tangent's variables with Jacobian `matrix` applied at an
+        instant: Phi <- matrix Phi; at an instant the values move by dt/dp, `moved` =
+        (dt/dp, F-, F+) with the fields before and after it in the tangent's rows,
+        Phi <- matrix (Phi + F- dt/dp) - F+ dt/dp: the map applies to the state as
+        the instant moves it, and the field after it runs the shift back (a reset, a
+        section a crossing runs, a memory updated where a switch moves)."""
+        phi = self.phi
+        if moved is None:
+            self._phi = matrix @ phi
+            return
+        shift, before, after = moved
+        self._phi = matrix @ (phi + np.outer(before, shift)) - np.outer(after, shift)
+
     def _reset(self, t: float, y_prev: np.ndarray, y: np.ndarray, m_prev, m, z_prev, z
                ) -> None:
         """A switch that resets states (MODINT: y+ = R(y-, p), the IC): at an
@@ -488,10 +514,9 @@ class ParameterTangent(Tangent):
         if jump is None:
             return
         g, _, rate = jump
-        phi = self.phi
         rest = self._by_data("surf", t, y_prev, m_prev, z_prev)[k]
-        shift = np.zeros(phi.shape[1]) if rate is None else \
-            -(g @ phi[:n] + rest @ phi[n:]) / rate
+        shift = np.zeros(self.phi.shape[1]) if rate is None else \
+            self.shift_of(g, rest, rate)
         watch, yl = self.watch, y_prev.copy()
 
         def reset(w, v: np.ndarray) -> np.ndarray:
@@ -507,12 +532,12 @@ class ParameterTangent(Tangent):
         r_p = np.column_stack([
             (reset(watch_of(watch, plus), yl) - reset(watch_of(watch, minus), yl)) / (2.0 * h)
             for plus, minus, h in self.variants]) if self.variants else np.zeros((n, 0))
-        f_minus = np.asarray(self.value("rhs", self.c, t, y_prev, m_prev, z_prev), dtype=float)
-        f_plus = np.asarray(self.value("rhs", self.c, t, y, m, z), dtype=float)
-        q = len(self.variants)
-        states = r_y @ (phi[:n] + np.outer(f_minus, shift)) - np.outer(f_plus, shift)
-        states[:, phi.shape[1] - q:] += r_p
-        self._phi[:n] = states
+        size, q = len(self._phi), len(self.variants)
+        matrix = np.eye(size)
+        matrix[:n, :n] = r_y
+        matrix[:n, size - q:] = r_p
+        self.map_at(matrix, (shift, self.field_rows(t, y_prev, m_prev, z_prev),
+                             self.field_rows(t, y, m, z)))
 
     def _saltation(self, k: int, t: float, y: np.ndarray, before, after, z_before, z_after
                    ) -> np.ndarray | None:
@@ -535,13 +560,11 @@ class ParameterTangent(Tangent):
                     self._shift = shift
             return out
         if self._shift is None:  # (d t/d p of the instant: a memory updated there)
-            phi = self.phi
-            self._shift = -(g @ phi[:n] + rest @ phi[n:]) / rate
+            self._shift = self.shift_of(g, rest, rate)
         # the augmented states' jump: I + (f+ - f-, 0) (ds/dy, ds/d(rest))^T / rate
         out[:n, :n] += np.outer(diff, g) / rate
         out[:n, n:] = np.outer(diff, rest) / rate
         return out
-
 
     def _train_shift(self, t: float) -> np.ndarray | None:
         """d t/d p of the train instant at t (a PULSE train's start or end, first + k
@@ -680,15 +703,11 @@ class ProgramTangent(ParameterTangent):
                if abs(z[s] - t) <= 4 * np.finfo(float).eps * max(abs(t), 1.0)]
         if not due:
             return
-        n, yl = self.n, np.asarray(y, dtype=float).tolist()
         before = float(np.nextafter(np.nextafter(t, -np.inf), -np.inf))
-        f_minus = np.asarray(self.value("rhs", self.c, before, yl, m, z), dtype=float)
-        f_plus = np.asarray(self.value("rhs", self.c, t, yl, m, z), dtype=float)
+        f_minus, f_plus = self.field_rows(before, y, m, z), self.field_rows(t, y, m, z)
         if np.array_equal(f_minus, f_plus):
             return
-        phi = self.phi
-        shift = phi[n + due[0]]
-        self._phi[:n] += np.outer(f_minus - f_plus, shift)
+        self.map_at(np.eye(len(self._phi)), (self.phi[self.n + due[0]].copy(), f_minus, f_plus))
 
     def _update_path(self, t: float, yl: list, m_prev, m, z_prev, z) -> _Path | None:
         """How the run's restart took the memory from z_prev to z: one update (m_prev
@@ -746,8 +765,9 @@ class ProgramTangent(ParameterTangent):
         by_p = super()._by_data(fn, t, y, m, z)
         return np.hstack([self._by_z(fn, t, y, m, z), by_p]) if self.r else by_p
 
-    def jump(self, matrix: np.ndarray, t: float, y: np.ndarray, m, z) -> None:
+    def jump(self, matrix: np.ndarray, t: float, y: np.ndarray, m, z, moved=None) -> None:
         """The code of an instant at t ran: its Jacobian (of (y, z, p), identity rows
-        for p) applies, and the next step starts from what it left."""
-        self._phi = matrix @ self.phi
+        for p) applies (at an instant the values move: `moved`, as `map_at` takes it),
+        and the next step starts from what it left."""
+        self.map_at(matrix, moved)
         self.prev = (t, np.asarray(y, dtype=float).copy(), list(m), list(z))
