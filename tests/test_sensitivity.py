@@ -388,10 +388,12 @@ def test_a_pulse_train_whose_instants_move_jumps_the_tangent_at_each():
 
 
 def test_instants_the_code_sets_move_with_the_values():
-    """A dose every TAU (INTERVAL DT = TAU) and one at TD (INITIAL's SCHEDULE .AT. TD):
-    AG = DOSE sum over the doses k of exp(-KA (t - t_k)), the k-th INTERVAL instant
-    moving by k dTAU and the .AT. one by dTD; the code's map applies where the
-    instant moved it, J (Phi + f- dt) - f+ dt. Differenced whole runs until
+    """A dose every TAU (INTERVAL DT = TAU) and one at TD (INITIAL's SCHEDULE .AT. TD)
+    that grows with T: AG = DOSE sum over the doses k of exp(-KA (t - t_k)) + (DOSE/2 +
+    2 TD) exp(-KA (t - TD)), the k-th INTERVAL instant moving by k dTAU and the .AT.
+    one by dTD; the code's map applies where the instant moved it, at the moved TIME,
+    J (Phi + f- dt) + (M_t - f+) dt (M_t, the code's rate in T, was left out until the
+    re-read of 2026-11-30: d AG/d TD lacked 2 exp(-KA (t - TD))). Differenced whole runs until
     2026-11-30 ("an INTERVAL depends on TAU"); against the complex step of the
     closed form, to 1e-8."""
 
@@ -410,7 +412,7 @@ def test_instants_the_code_sets_move_with_the_values():
     AG = AG + DOSE
   END
   DISCRETE EXTRA
-    AG = AG + 0.5*DOSE
+    AG = AG + 0.5*DOSE + 2.0*T
   END
 END
 """
@@ -420,7 +422,7 @@ END
         while (k * tau).real <= t:
             total = total + 100.0 * np.exp(-ka * (t - k * tau))
             k += 1
-        return total + (50.0 * np.exp(-ka * (t - td)) if t >= td.real else 0.0)
+        return total + ((50.0 + 2.0 * td) * np.exp(-ka * (t - td)) if t >= td.real else 0.0)
 
     assert_tangent_is(amilpy.loads(text, "dosing.csl"), "AG",
                       {"TAU": 4.0, "KA": 0.3, "TD": 2.5}, [1.0, 3.0, 5.0, 9.5, 13.0, 18.7],

@@ -11,7 +11,8 @@ section bound to p +- h (d/dp: no integration, the code only). A DOSE of AG = AG
 DOSE then gives d AG/d DOSE a jump of 1, exactly as the run does. A section that a
 SCHEDULE crossing runs (.XN./.XP./.XZ.: a ball's impact) is at an instant the values
 move, dt/dp = -(n . Phi)/rate: the code's map applies to the states as the instant
-moves them, and the field after it runs the shift back, J (Phi + f- dt) - f+ dt.
+moves them, at the moved TIME (its code may read T: M_t, its rate in T), and the
+field after it runs the shift back, J (Phi + f- dt) + (M_t - f+) dt.
 
 An instant the code sets that the values move -- an INTERVAL computed from them,
 INITIAL's SCHEDULE .AT. time -- is followed the same way, its shift carried from one
@@ -126,7 +127,7 @@ class _TangentRun(AcslRun):
         return self.sampler.tangent
 
     def run_code(self, cur, fn, what: str) -> Calls:
-        matrix, moving = None, None
+        matrix, moving, rate = None, None, None
         section = what.removeprefix("DISCRETE ")
         shift = self.due_moved.pop(section, None)
         if self.why is None and self.tangent.failed is None:
@@ -136,6 +137,8 @@ class _TangentRun(AcslRun):
                 if moving is None and shift is not None:
                     moving = shift, self.tangent.field_rows(cur.t, cur.y, list(cur.m),
                                                             list(cur.z))
+                if moving is not None:  # (the code may read T: AG = AG + 20 T)
+                    rate = self._code_rate(cur, fn)
             except _Jumped as exc:
                 self.why = f"{what} at TIME = {cur.t:.9g}: {exc}"
         calls = super().run_code(cur, fn, what)
@@ -151,7 +154,7 @@ class _TangentRun(AcslRun):
             # the moved instant, `ParameterTangent.map_at`)
             t = self.tangent
             moved = None if moving is None else \
-                (*moving, t.field_rows(cur.t, cur.y, list(cur.m), list(cur.z)))
+                (*moving, t.field_rows(cur.t, cur.y, list(cur.m), list(cur.z)), rate)
             t.jump(matrix, cur.t, cur.y, cur.m, cur.z, moved)
         return calls
 
@@ -224,6 +227,23 @@ class _TangentRun(AcslRun):
                 return
             t._phi = jump @ t.phi
             modes = after
+
+    def _code_rate(self, cur, fn) -> np.ndarray:
+        """d (y', z') / d TIME of the section `fn` at the cursor, in the tangent's rows:
+        what it gives at an instant the values move beyond the states it is given."""
+        t = self.tangent
+        h = STEP * max(abs(cur.t), 1.0)
+        out = np.zeros(len(t.phi))
+        sides = []
+        for at in (cur.t + h, cur.t - h):
+            try:
+                y1, z1, _ = fn(at, cur.y.tolist(), list(cur.m), list(cur.z), Calls())
+            except (ArithmeticError, ValueError) as exc:
+                raise _Jumped(f"its code has no value near the run's ({exc})") from None
+            sides.append(np.concatenate([np.asarray(y1, dtype=float),
+                                         np.asarray(z1, dtype=float)]))
+        out[:t.n + t.r] = (sides[0] - sides[1]) / (2.0 * h)
+        return out
 
     def _code_jacobian(self, cur, fn) -> np.ndarray:
         """d (y', z') / d (y, z, p) of the section `fn` at the cursor."""

@@ -480,16 +480,18 @@ class ParameterTangent(Tangent):
     def map_at(self, matrix: np.ndarray, moved=None) -> None:
         """A map of the tangent's variables with Jacobian `matrix` applied at an
         instant: Phi <- matrix Phi; at an instant the values move by dt/dp, `moved` =
-        (dt/dp, F-, F+) with the fields before and after it in the tangent's rows,
-        Phi <- matrix (Phi + F- dt/dp) - F+ dt/dp: the map applies to the state as
-        the instant moves it, and the field after it runs the shift back (a reset, a
-        section a crossing runs, a memory updated where a switch moves)."""
+        (dt/dp, F-, F+[, M_t]) with the fields before and after it and the map's own
+        rate in TIME in the tangent's rows, Phi <- matrix (Phi + F- dt/dp) + (M_t -
+        F+) dt/dp: the map applies to the state as the instant moves it, at the moved
+        TIME, and the field after it runs the shift back (a reset, a section a
+        crossing runs, a memory updated where a switch moves)."""
         phi = self.phi
         if moved is None:
             self._phi = matrix @ phi
             return
-        shift, before, after = moved
-        self._phi = matrix @ (phi + np.outer(before, shift)) - np.outer(after, shift)
+        shift, before, after, *rate = moved
+        drift = after - rate[0] if rate else after
+        self._phi = matrix @ (phi + np.outer(before, shift)) - np.outer(drift, shift)
 
     def _reset(self, t: float, y_prev: np.ndarray, y: np.ndarray, m_prev, m, z_prev, z
                ) -> None:
