@@ -660,41 +660,42 @@ class ProgramTangent(ParameterTangent):
                 zv = code.mem(tt, yv, before, after, list(zv))
             return np.asarray(zv, dtype=float)
 
-        phi = self.phi
-        shift = self._shift
-        if shift is not None:  # (y's total derivative at a moving instant)
-            f = np.asarray(self.value("rhs", c, t, yl, m, z), dtype=float)
-            states = phi[:n] + np.outer(f, shift)
-        else:
-            states = phi[:n]
-        # (an update reads a trigger's sign where its mode is not positive, a sign
-        # that jumps at the crossing it may be taken at: `branch_difference` keeps to
-        # the branch the run's update took)
-        rows = np.zeros((r, phi.shape[1]))
+        # the update as a map of the tangent's variables: its rows for z; the states
+        # and the values are kept (an update reads a trigger's sign where its mode is
+        # not positive, a sign that jumps at the crossing it may be taken at:
+        # `branch_difference` keeps to the branch the run's update took)
+        size, q = len(self._phi), len(self.variants)
+        matrix = np.eye(size)
+        matrix[n:n + r, n:n + r] = 0.0
         for j in range(n):
             h = STEP * max(abs(yl[j]), float(self.floor[j]))
-            rows += np.outer(branch_difference(lambda v: update(c, t, v, z_prev), yl, j, h),
-                             states[j])
+            matrix[n:n + r, j] = branch_difference(lambda v: update(c, t, v, z_prev), yl, j, h)
         for j in range(r):
             if not math.isfinite(z_prev[j]):  # (PULSE's -INF before a first trigger)
                 continue
             h = STEP * max(abs(z_prev[j]), 1.0)
-            rows += np.outer(branch_difference(lambda v: update(c, t, yl, v), list(z_prev),
-                                               j, h), phi[n + j])
-        q, centre = len(self.variants), update(c, t, yl, z_prev)
+            matrix[n:n + r, n + j] = branch_difference(lambda v: update(c, t, yl, v),
+                                                       list(z_prev), j, h)
+        centre = update(c, t, yl, z_prev)
         for j, (plus, minus, h) in enumerate(self.variants):
             up = (update(plus, t, yl, z_prev) - centre) / h
             down = (centre - update(minus, t, yl, z_prev)) / h
             # (the same sign moved by the value: the side that does not jump, the
             # smaller, where the two disagree)
             apart = np.abs(up - down) > 1e-6 * (np.abs(up) + np.abs(down)) + 1e-12
-            rows[:, phi.shape[1] - q + j] += np.where(
+            matrix[n:n + r, size - q + j] = np.where(
                 apart, np.where(np.abs(up) <= np.abs(down), up, down), 0.5 * (up + down))
-        if shift is not None and np.any(shift):
-            ht = STEP * max(abs(t), 1.0)
-            rows += np.outer((update(c, t + ht, yl, z_prev) - update(c, t - ht, yl, z_prev))
-                             / (2.0 * ht), shift)
-        self._phi[n:n + r] = rows
+        shift = self._shift
+        if shift is None or not np.any(shift):
+            self.map_at(matrix)
+            return
+        # (y's total derivative where the instant moves, and the update's own rate)
+        ht = STEP * max(abs(t), 1.0)
+        rate = np.zeros(size)
+        rate[n:n + r] = (update(c, t + ht, yl, z_prev) - update(c, t - ht, yl, z_prev)) / \
+            (2.0 * ht)
+        field = self.field_rows(t, yl, m, z)
+        self.map_at(matrix, (shift, field, field, rate))
 
     def _wake(self, t: float, y: np.ndarray, m, z) -> None:
         """An instant a memory slot holds reached at t (CSMP's PULSE(P, X) ending at
