@@ -9,7 +9,7 @@ import numpy as np
 
 from ..run.jacobian import STEP
 from ..run.plan import SLIDE
-from ..run.variational import ParameterTangent, filippov, held
+from ..run.variational import ParameterTangent, filippov, has_slope, held
 
 
 class Sampler:
@@ -88,8 +88,8 @@ def output_row(c, variants, i: int, t: float, state, sens: np.ndarray, floor: np
         down[j] -= h
         grad[j] = (out(c, up, z) - out(c, down, z)) / (2 * h)
     for j in range(len(sens) - len(y)):
-        if not np.isfinite(z[j]) or j in c.wake_slots:
-            continue  # (an instant the model switches at: a jump in time, no slope)
+        if not has_slope(c, z, j):
+            continue
         h = STEP * max(abs(z[j]), 1.0)  # (as the program's tangent moves them)
         up, down = list(z), list(z)
         up[j] += h

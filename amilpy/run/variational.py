@@ -595,6 +595,13 @@ class _Path:
     returned: list[int]
 
 
+def has_slope(c, z, j: int) -> bool:
+    """Whether what reads memory slot j has a slope in it: not an instant not yet set
+    (-INF), nor an instant the model switches at, whose only effect is that switch's
+    jump (`ProgramTangent._wake`)."""
+    return math.isfinite(z[j]) and j not in c.wake_slots
+
+
 def memory_unfollowed(c) -> str | None:
     """Why a tangent cannot carry the memory of `c`'s functions through their
     updates (None: it can): a store that samples inside the steps (DELAY's), or a
@@ -749,9 +756,7 @@ class ProgramTangent(ParameterTangent):
         """d fn(t, y, m, z) / d z, a column per memory value."""
         yl, cols = np.asarray(y, dtype=float).tolist(), []
         for j in range(self.r):
-            if not math.isfinite(z[j]) or j in self.c.wake_slots:
-                # (an instant not yet set, -INF; or an instant the model switches at,
-                # whose only effect is that switch's jump: `_wake`)
+            if not has_slope(self.c, z, j):
                 cols.append(np.zeros(len(self.value(fn, self.c, t, yl, m, z))))
                 continue
             h = STEP * max(abs(z[j]), 1.0)

@@ -202,12 +202,18 @@ class SurfaceWatch:
         yl = y.tolist()
         before = self.c.modes_literal(t, yl, m, z_before)
         after = self.c.modes_literal(t, yl, m, z_after)
-        kept = {k: mode for k, mode in enumerate(m) if before[k] == after[k]}
+        return self._rechosen(t, y, z_after, m, {k: mode for k, mode in enumerate(m)
+                                                 if before[k] == after[k]})
+
+    def _rechosen(self, t: float, y: np.ndarray, z, m: list[float],
+                  kept: dict[int, float]) -> list[float]:
+        """m with the surfaces not in `kept` chosen anew at (t, y) (`after_memory`,
+        `after_reset`); choose_modes takes a surface that is not triggered where its
+        sign is, so the kept ones are forced (one just left by a slide, a few ulps on
+        the other side, would flip back)."""
         if len(kept) == len(m):
             return m
-        # (choose_modes takes a surface that is not triggered where its sign is: one
-        # just left by a slide, a few ulps on the other side, would flip back)
-        new = self.choose_modes(t, y, z_after, m, set(), forced=kept)
+        new = self.choose_modes(t, y, z, m, set(), forced=kept)
         return [kept.get(k, mode) for k, mode in enumerate(new)]
 
     def returning(self, t: float, y: np.ndarray, m, z, triggered) -> list[int]:
@@ -234,13 +240,10 @@ class SurfaceWatch:
         # value already: off zero now, it takes its side)
         e = self.c.surf(t, y.tolist(), m, z)
         scale = 1e-12 * max(1.0, float(np.max(np.abs(y))) if len(y) else 1.0)
-        kept = {k: mode for k, mode in enumerate(m)
-                if (before[k] == after[k] and not (mode == 0.0 and abs(e[k]) > scale))
-                or self.watched[k].kind is not SurfaceKind.SIGN or mode == SLIDE}
-        if len(kept) == len(m):
-            return m
-        new = self.choose_modes(t, y, z, m, set(), forced=kept)
-        return [kept.get(k, mode) for k, mode in enumerate(new)]
+        return self._rechosen(t, y, z, m, {
+            k: mode for k, mode in enumerate(m)
+            if (before[k] == after[k] and not (mode == 0.0 and abs(e[k]) > scale))
+            or self.watched[k].kind is not SurfaceKind.SIGN or mode == SLIDE})
 
     def direction(self, k: int, t: float, y: np.ndarray, m, z, old) -> float:
         """Which side of surface k the motion goes to from a point on it."""
