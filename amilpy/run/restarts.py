@@ -66,7 +66,7 @@ class Restarts:
             rec.sample(tb, yb, m, z_before)  # (RANGE reads both sides of a jump)
         m[:] = new_m
         y = watch.apply_resets(yb, m, tb, z)
-        if self.watch.resets and not np.array_equal(y, yb):
+        if watch.resets and not np.array_equal(y, yb):
             # (the reset moved a surface the reset reads: its branch is taken anew here,
             # not at the next step's end -- MODINT integrating again from its IC)
             again = watch.after_reset(tb, yb, y, m, z)
