@@ -59,7 +59,9 @@ class Event:
 
     `switch` describes the switch for a reader (function, where it stands);
     `text` is the surface's expression as the listing writes it (e.g. "W1",
-    "TIME - T1"), so a printout can say "W1 > 0 -> W1 < 0".
+    "TIME - T1"), so a printout can say "W1 > 0 -> W1 < 0"; `level`: the surface is
+    a level surface (QNTZR, NINT, AINT, AMOD), its branches levels k and a slide on it
+    the edge k + 1/2 between two.
     """
 
     time: float
@@ -69,6 +71,7 @@ class Event:
     new: float
     kind: EventKind = EventKind.SWITCH
     text: str = ""
+    level: bool = False
 
     def __post_init__(self) -> None:
         # (the branches are a few values: one float object each, not two an event)
@@ -77,7 +80,9 @@ class Event:
 
     def describe_branch(self, mode: float) -> str:
         """A branch in the listing's own terms: "W1 > 0", "W1 held at 0", "level 3"."""
-        if self.kind == EventKind.LEVEL:
+        if self.level or self.kind == EventKind.LEVEL:
+            if mode % 1.0 == 0.5:
+                return f"on the edge between levels {mode - 0.5:g} and {mode + 0.5:g}"
             return f"level {mode:g}"
         x = self.text or "argument"
         if mode in (-1.0, 0.0, 1.0):
@@ -87,6 +92,9 @@ class Event:
     def change(self) -> str:
         """What changed, for a reader: "W1 > 0 -> W1 < 0", "reached", "ran"."""
         if self.kind == EventKind.SLIDE:
+            if self.level:
+                return f"{self.text or 'its argument'} stays at {self.new:g}, " \
+                    f"{self.describe_branch(self.new)}: both push it back"
             return f"{self.text or 'its argument'} stays at 0: both sides push it back"
         if self.kind in (EventKind.FINISH, EventKind.TERMT):  # the condition that stops it
             return "reached"
@@ -112,13 +120,13 @@ class Events(MutableSequence):
 
     def __init__(self, events: Iterable[Event] = ()) -> None:
         self._t, self._k = array("d"), array("i")
-        self._kinds: list[tuple] = []  # (switch, surface, old, new, kind, text)
+        self._kinds: list[tuple] = []  # (switch, surface, old, new, kind, text, level)
         self._index: dict[tuple, int] = {}
         for e in events:
             self.append(e)
 
     def _kind(self, e: Event) -> int:
-        kind = (e.switch, e.surface, e.old, e.new, e.kind, e.text)
+        kind = (e.switch, e.surface, e.old, e.new, e.kind, e.text, e.level)
         # (-0.0 and 0.0 are two branches: the sign is part of the key)
         key = kind + (math.copysign(1.0, e.old), math.copysign(1.0, e.new))
         k = self._index.get(key)

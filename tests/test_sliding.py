@@ -176,3 +176,87 @@ def test_a_switch_that_moves_the_sliding_surface_ends_the_slide(method):
     assert np.max(np.abs(r["X"] - x)) <= tol
     slides = [e.time for e in r.events if e.kind == "slide"]
     assert slides == pytest.approx([0.8, 5.0], abs=1e-6)
+
+
+# --- level edges: a quantizer in a feedback loop ------------------------------------
+# X' = A - 0.3 Q with Q = QNTZR(0.5, X) (or 0.5 NINT(2 X): the same levels, NINT's
+# halves going up). Below the edge X = 3.25 the level is Q = 3 (X' = A - 0.9), above it
+# Q = 3.5 (X' = A - 1.05): with A = 1 both push X back to the edge, and it slides there
+# (Q between its levels, X' = 0). From TIME 12, A = 1 + 0.05 (TIME - 12): the upper
+# level's rate reaches 0 at TIME 13, where X leaves the edge upwards, X = 3.25 +
+# 0.025 (TIME - 13)^2, until the next edge 3.75 at t1 = 13 + sqrt(20), which it
+# crosses into Q = 4: X' = 0.05 TIME - 0.8.
+# Before, RKS and RADAU stopped with a step-size underflow at the edge and AUTO's X
+# depended on OUTDEL (2e-3 off at 0.05, 6e-2 at 1.5).
+QUANTIZED = {
+    "QNTZR": "Q = QNTZR(0.5, X)",
+    "NINT": "Q = 0.5*NINT(2.0*X)",
+}
+
+
+def _quantized_exact(t: np.ndarray) -> np.ndarray:
+    """X of the loop above: through the levels k = 0 ... 6 (X' = 1 - 0.15 k, edges at
+    0.25 + 0.5 (k - 1)), on the edge 3.25 from t_s to 13, then off it."""
+    edges = [0.0, 0.25] + [0.25 + 0.5 * k for k in range(1, 7)]
+    times = [0.0, 0.25]
+    for k in range(1, 7):
+        times.append(times[-1] + 0.5 / (1.0 - 0.15 * k))
+    out = np.empty_like(t)
+    for i, ti in enumerate(t):
+        t1 = 13.0 + 20 ** 0.5
+        if ti >= t1:
+            out[i] = 3.75 + 0.025 * (ti ** 2 - t1 ** 2) - 0.8 * (ti - t1)
+        elif ti >= 13.0:
+            out[i] = 3.25 + 0.025 * (ti - 13.0) ** 2
+        elif ti >= times[-1]:
+            out[i] = 3.25
+        else:
+            j = int(np.searchsorted(times, ti, side="right")) - 1
+            out[i] = edges[j] + (1.0 - 0.15 * j) * (ti - times[j])
+    return out
+
+
+@pytest.mark.parametrize("outdel", [0.05, 1.5])
+@pytest.mark.parametrize("form", sorted(QUANTIZED))
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "DOP853", "RADAU", "BDF"])
+def test_a_quantizer_in_a_loop_slides_on_the_edge_its_levels_push_back_to(
+        method, form, outdel):
+    listing = (f"X = INTGRL(0.0, A - 0.3*Q)\n{QUANTIZED[form]}\n"
+               "A = 1.0 + 0.05*RAMP(12.0)\n"
+               f"TIMER FINTIM = 18.0, OUTDEL = {outdel}\nRANGE X\nEND\n")
+    r = run1(listing, method=method, **LOCATED)
+    assert r.status == "finished", r.message
+    t = np.asarray(r.times)
+    # the slide's start is located to rounding and X is held at the edge to 1e-9; the
+    # exit, where the upper level's rate is 0 (a tangential departure), to 1e-8 in
+    # TIME, and the quadratic after it integrated to the default RELERR's order
+    assert np.max(np.abs(np.asarray(r["X"]) - _quantized_exact(t))) <= 3e-8
+    slides = [e for e in r.events if e.kind == "slide"]
+    t_slide = 10.711611917494004
+    assert len(slides) == 1 and slides[0].time == pytest.approx(t_slide, abs=1e-9)
+    # the motion leaves the edge where the upper level's rate turns (13), and crosses
+    # the next edge (13 + sqrt(20)) into level 8 (QNTZR's 4)
+    leave = [e for e in r.events if e.time > t_slide + 1e-6 and e.kind == "level"]
+    assert [e.time for e in leave] == pytest.approx([13.0, 13.0 + 20 ** 0.5], abs=1e-6)
+    assert str(slides[0]).endswith("stays at 6.5, on the edge between levels 6 and 7: "
+                                   "both push it back") if form == "QNTZR" else True
+    assert r.range["X"][2] == r["X"][-1]  # (rising to the end)
+
+
+def test_sensitivities_through_a_level_edge_slide_are_the_closed_form():
+    # The loop above with its gain G free: on the edge X = 3.25 whatever G (dX/dG = 0);
+    # the upper level Q = 3.5 lets go where A = 3.5 G, at t_e = 12 + (3.5 G - 1)/0.05
+    # (dt_e/dG = 70), so X = 3.25 + 0.025 (t - t_e)^2 gives dX/dG = -3.5 (t - 13). At
+    # TIME 1, in level 2 since t2 = 0.25 + 0.5/(1 - 0.5 G): dX/dG = -(t - t2) - (1 - G)
+    # dt2/dG. From the sensitivity equations, with the slide's entry and exit.
+    listing = ("PARAM G = 0.3\nX = INTGRL(0.0, A - G*Q)\nQ = QNTZR(0.5, X)\n"
+               "A = 1.0 + 0.05*RAMP(12.0)\nTIMER FINTIM = 16.0, OUTDEL = 1.0\nEND\n")
+    s = amilpy.loads(listing, "t.amil").sensitivity(["G"], outputs=["X"])
+    assert s.how == "sensitivity equations"
+    d = dict(zip(s.times.tolist(), s.raw[:, 0, 0].tolist(), strict=True))
+    t2 = 0.25 + 0.5 / 0.85
+    assert d[1.0] == pytest.approx(-(1.0 - t2) - 0.7 * 0.25 / 0.85 ** 2, abs=1e-7)
+    for t in (11.0, 12.0, 13.0):
+        assert abs(d[t]) <= 1e-9
+    for t in (14.0, 15.0, 16.0):
+        assert d[t] == pytest.approx(-3.5 * (t - 13.0), abs=1e-6)

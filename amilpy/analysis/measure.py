@@ -25,7 +25,7 @@ import numpy as np
 
 from ..run import Flow, State
 from ..run.dense import sample_step
-from ..run.plan import SLIDE
+from ..run.plan import sliding_in
 from ..run.record import column
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(4)
@@ -70,7 +70,7 @@ class Tracker:
         out = np.empty((len(self.names), len(t)))
         if self.out_idx:
             c, watch = self.flow.code, self.flow.watch
-            if SLIDE in m:
+            if sliding_in(m):
                 table = np.array([watch.outputs(float(ti), y[:, i], m, z)
                                   for i, ti in enumerate(t)]).T
             else:
@@ -80,7 +80,7 @@ class Tracker:
         for r, name in enumerate(self.names):
             if name in self.state_idx:
                 out[r] = y[self.state_idx[name]]
-            elif SLIDE in m:
+            elif sliding_in(m):
                 out[r] = table[self.out_idx[name]]
             else:
                 out[r] = column(cols[self.out_idx[name]], len(t))

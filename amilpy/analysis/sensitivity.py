@@ -30,7 +30,7 @@ import numpy as np
 from ..observed import Observations
 from ..run.flow import FlowFailed
 from ..run.jacobian import STEP  # (cbrt(machine epsilon): the one differencing step)
-from ..run.plan import SAME_INSTANT, SLIDE
+from ..run.plan import SAME_INSTANT, sliding_in
 from ..run.variational import ParameterTangent, ProgramTangent, memory_unfollowed
 from .tangents import Sampler, output_row, outputs_asked, step_for
 
@@ -89,7 +89,7 @@ class Trajectory:
             # a surface sliding stays so (its state, a rounding off it, would pick a side)
             # (with the memory the tangent was read with: the start's would update it
             # here, putting a play's value on its own kink)
-            self._rows[t] = state if SLIDE in state.modes else \
+            self._rows[t] = state if sliding_in(state.modes) else \
                 replace(self.flow.state(state.y, None, state.memory, t), memory=state.memory)
         return output_row(self.code, self.variants, self.outputs[name], t, self._rows[t],
                            sens, self.floor, self.flow.watch)

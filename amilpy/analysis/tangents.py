@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..run.jacobian import STEP
-from ..run.plan import SLIDE
+from ..run.plan import sliding_in
 from ..run.variational import ParameterTangent, filippov, has_slope, held
 
 
@@ -70,9 +70,9 @@ def output_row(c, variants, i: int, t: float, state, sens: np.ndarray, floor: np
     While a surface slides the outputs are weighted as its field (`filippov`)."""
     y = np.asarray(state.y, dtype=float)
     m, z = list(state.modes), list(state.memory)
-    if SLIDE in m:  # (a weight past its bound: the run's motion is on that branch)
+    if sliding_in(m):  # (a weight past its bound: the run's motion is on that branch)
         m = held(watch, c, t, y, m, z, floor)
-    sliding = SLIDE in m
+    sliding = sliding_in(m)
 
     def out(code, yv: np.ndarray, zv: list) -> float:
         if sliding:

@@ -283,10 +283,10 @@ class Compiler:
             s = model.surfaces[i]
             v = em.emit(s.expr)
             if s.kind == ir.SurfaceKind.LEVEL:
-                # distance to the edges of the current level's band, in units of P
+                # distance to the edges of the current level's band, in units of P (to
+                # the edge itself while sliding on it)
                 k = py.Name(self.mode_names[i], py.Load())
-                v = py.BinOp(py.Constant(0.5), py.Sub(),
-                             py.Call(py.Name("_ABS", py.Load()), [py.BinOp(v, py.Sub(), k)], []))
+                v = py.Call(py.Name("_LEDGE", py.Load()), [v, k], [])
             values.append(on_line(v, self.surface_line(i)))
         # a guarded surface is read where the tests before it, read here, take its
         # branch (the program's own reading of this point: a step's end past where the

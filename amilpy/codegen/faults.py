@@ -124,7 +124,7 @@ def _check_call(site, f, *args):
 
 
 _HELPERS = {"_CHECK_DIV": _check_div, "_CHECK_POW": _check_pow, "_CHECK_CALL": _check_call}
-_UNCHECKED = {"_WHERE", "_ALL", "_ANY", "_SGN", "_LEVEL"}
+_UNCHECKED = {"_WHERE", "_ALL", "_ANY", "_SGN", "_LEVEL", "_LEDGE"}
 
 
 @dataclass(frozen=True)

@@ -26,7 +26,7 @@ from ..codegen import ModelCode
 # RESPELLED are those whose Python form catches an exception numba cannot: numba's
 # plain operation gives the NaN or infinity they return.
 AS_WRITTEN = frozenset({"SQRT", "ALOG", "ALOG10", "AINT", "NINT", "DIM", "SIGN", "NOTNUL", "SGN",
-                        "LEVEL", "AMODAT"})
+                        "LEVEL", "LEDGE", "AMODAT"})
 _BUILTINS = {abs: "abs", max: "max", min: "min", float: "float"}
 RESPELLED: dict[str, str] = {
     "EXP": "math.exp", "SINH": "math.sinh", "COSH": "math.cosh",

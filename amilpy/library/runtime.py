@@ -16,7 +16,7 @@ import math
 from collections.abc import Callable
 from statistics import NormalDist
 
-from .surfaces import amod_at, level, sign
+from .surfaces import amod_at, level, level_edge, sign
 
 Table = tuple[tuple[float, ...], tuple[float, ...]]
 
@@ -554,7 +554,8 @@ HELPERS: dict[str, Callable] = {
     "AFGEN": afgen, "NLFGEN": nlfgen, "DERIV": deriv, "IMPULS": impulse_at, "POW": safe_pow,
     "DELAY": delay, "DELAY_STORE": delay_store, "DELAY_INIT": delay_init,
     "LINT": lint, "PULSE_ON": pulse_on, "IMPULS_STEP": impulse_step, "DRAW": draw,
-    "SGN": sign, "LEVEL": level, "AMODAT": amod_at, "WHERE": _where, "ALL": _all, "ANY": _any,
+    "SGN": sign, "LEVEL": level, "LEDGE": level_edge, "AMODAT": amod_at, "WHERE": _where,
+    "ALL": _all, "ANY": _any,
     "NITER": loop_count, "RANGE": loop_range,  # FOR/DO loops of procedural code
     "WDAY": weather_day, "IMPL_FAIL": impl_fail,
 }
@@ -589,6 +590,8 @@ def vector_helpers() -> dict[str, Callable]:
         "LINT": lambda table, x: each(lambda v: lint(table, v))(x),
         "WDAY": lambda table, x: each(lambda v: weather_day(table, v))(x),
         "PULSE_ON": each(pulse_on), "IMPULS_STEP": each(impulse_step),
-        "LEVEL": _vector_level(np), "SGN": np.sign, "AMODAT": each(amod_at),
+        "LEVEL": _vector_level(np), "SGN": np.sign,
+        "LEDGE": lambda v, k: v - k if k % 1.0 == 0.5 else 0.5 - np.abs(v - k),
+        "AMODAT": each(amod_at),
         "WHERE": np.where, "ALL": many(np.logical_and), "ANY": many(np.logical_or),
     }

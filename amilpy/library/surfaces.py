@@ -93,6 +93,16 @@ def level(v: float) -> float:
     return k
 
 
+def level_edge(v: float, k: float) -> float:
+    """A level surface's value in mode k. In level k (a whole number): how far v is
+    inside its band (k - 1/2, k + 1/2], the nearer edge's distance, negative once v has
+    left it. Sliding on the edge k (half a whole number, `run.plan.slides`): v - k,
+    negative below the edge, as a sign surface's value."""
+    if k % 1.0 == 0.5:
+        return v - k
+    return 0.5 - abs(v - k)
+
+
 def truth(x: float) -> bool:
     """A number used as a condition: true iff > 0 (TERMT, IF, the logic functions)."""
     return x > 0.0

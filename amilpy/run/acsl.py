@@ -38,7 +38,6 @@ from .driver import _Run
 from .loop import Cursor, Stop
 from .plan import (
     DEFAULTS,
-    SLIDE,
     Grid,
     Options,
     Purpose,
@@ -46,6 +45,7 @@ from .plan import (
     make_plan,
     resolve_step_point,
     same_instant,
+    slides,
     within,
 )
 from .prepare import Cache, Prepared, before_run, constant_modes, random_seed
@@ -378,7 +378,7 @@ class AcslRun(_Run):
     def instant(self, cur: Cursor) -> None:
         """Events due now, then (at a CINT instant) DYNAMIC's own statements, the
         TERMT tests and the row."""
-        sliding = [k for k, v in enumerate(cur.m) if v == SLIDE]
+        sliding = [k for k, v in enumerate(cur.m) if slides(v)]
         # (the surfaces before the code: a sliding one it moves is left; a SCHEDULE's
         # that the motion crosses right here, and the code leaves as it was, fires)
         surfaces = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z) \

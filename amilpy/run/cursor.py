@@ -62,7 +62,7 @@ class WatchedStep:
     yb: np.ndarray
     triggered: set[int]  # located at zero at tb
     departed: set[int]  # left a zero it sat on
-    exits: dict[int, float]  # sliding surfaces leaving, to which side
+    exits: dict[int, float]  # sliding surfaces leaving, to which branch (`slide_exits`)
     truncated: bool
     e_b: list[float]  # the watched surfaces at tb
     # hits whose branch changes no derivative (cut only for a surface that reads them)

@@ -27,7 +27,7 @@ from .code import Calls, code_fault, run_terminal
 from .faults import Fault, fault_text
 from .loop import Cursor, Integrator, Stop
 from .peaks import Context, locate_range
-from .plan import SLIDE, Options, Purpose, RunPlan, SurfaceKind, same_instant, within
+from .plan import Options, Purpose, RunPlan, SurfaceKind, same_instant, slides, within
 from .prepare import Prepared
 from .record import Recorder
 from .slide import MAX_SLIDING
@@ -135,9 +135,9 @@ class _Run:
         c, plan, integ, start = self.c, self.plan, self.integ, self.opts.start
         cur = start_cursor(c, plan, self.watch, self.opts, y, z, start and start.get("m"))
         for k, w in enumerate(plan.watched):
-            if cur.m[k] == SLIDE:  # sliding from the start is an event too
-                integ.events.append(Event(plan.t0, w.description, w.surface, 0.0, SLIDE,
-                                          EventKind.SLIDE, w.text))
+            if slides(cur.m[k]):  # sliding from the start is an event too
+                integ.events.append(w.event(plan.t0, 0.0, cur.m[k],
+                                                  EventKind.SLIDE))
         self.first_row(cur)
         return cur
 
@@ -235,8 +235,7 @@ class _Run:
                          (e[k] == 0.0 and plan.watched[k].closed)), None)
             if held is not None:
                 w = plan.watched[held]
-                integ.events.append(Event(cur.t, w.description, w.surface, 0.0,
-                                          cur.m[held], EventKind.TERMT, w.text))
+                integ.events.append(w.event(cur.t, 0.0, cur.m[held], EventKind.TERMT))
                 integ.stop_reason = held
                 return w.description
         while True:

@@ -24,7 +24,7 @@ from ..compiled.layout import LOOP, PLAIN, QUIET
 from ..outcome import Failure
 from ..steppers import Stepper
 from .cursor import Cursor, Stop
-from .plan import SLIDE, Purpose, RunPlan, SurfaceKind
+from .plan import Purpose, RunPlan, SurfaceKind, sliding_in
 from .record import Recorder, close_to, output_table
 
 
@@ -35,7 +35,7 @@ class FastPaths:
         """The fast path the stepper declares, where it can be taken now: a bound
         `take(stepper, cur, seg_end, rec, e_prev, seg_start) -> (e_prev, seg_start)`,
         or None."""
-        if stepper.fast_path == "batch" and SLIDE not in cur.m and rec is not None:
+        if stepper.fast_path == "batch" and not sliding_in(cur.m) and rec is not None:
             return self._take_batch
         if stepper.fast_path == "ahead":
             return self._take_ahead
@@ -47,7 +47,7 @@ class FastPaths:
         a surface slides, for an observer that wants every step, or when the model
         has no compiled form -- said once)."""
         plan, c = self.plan, self.c
-        if plan.route.stepper != "compiled" or SLIDE in cur.m or dense or not len(cur.y):
+        if plan.route.stepper != "compiled" or sliding_in(cur.m) or dense or not len(cur.y):
             return None
         if self._kernel is None:
             from ..compiled import kernel_for

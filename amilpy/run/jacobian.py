@@ -29,7 +29,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .plan import SLIDE
+from .plan import sliding_in
 
 MODEL = "the model's equations"
 DIFFERENCES = "central differences"
@@ -66,7 +66,7 @@ def jacobian_at(c, field: Callable[[list[float]], object], t: float, y, m, z, fl
     `field` (the field at t of a list of the states' values), refined with their
     error estimate when `refine` (one-off Jacobians), plain (error NaN) when not
     (the many along a step of the variational equations)."""
-    if SLIDE not in m:
+    if not sliding_in(m):
         jac = model_jacobian(c, t, y, m, z)
         if jac is not None:
             return jac, np.zeros(len(jac)), MODEL

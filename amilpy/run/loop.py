@@ -30,7 +30,7 @@ from ..steppers import Stepper, first_bad
 from .cursor import Cursor, Observer, Paused, Stop
 from .fastpaths import FastPaths
 from .faults import Fault
-from .plan import SLIDE, Options, Purpose, RunPlan, time_breakpoints
+from .plan import Options, Purpose, RunPlan, sliding_in, time_breakpoints
 from .record import Recorder
 from .restarts import Restarts
 from .segment import SegmentStart
@@ -191,7 +191,7 @@ class Integrator(RunLoop, SegmentStart, StepWatch, Restarts, FastPaths):
     # ---------------------------------------------------------------- segments
     def _pausing(self, cur: Cursor) -> bool:
         """Whether a segment from `cur` can stop at an instant and go on (chunked)."""
-        return self.plan.chunked and SLIDE not in cur.m and len(cur.y) > 0
+        return self.plan.chunked and not sliding_in(cur.m) and len(cur.y) > 0
 
     def _next_stop(self, cur: Cursor, t_end: float, pause: bool, observed: bool
                    ) -> tuple[float, bool]:

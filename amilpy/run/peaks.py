@@ -36,7 +36,7 @@ from ..codegen import ModelCode
 from ..steppers import solver_tolerance
 from .fastpaths import kernel_arguments
 from .loop import Cursor, Integrator, Stop
-from .plan import SLIDE, Options, RunPlan, SurfaceKind
+from .plan import Options, RunPlan, SurfaceKind, sliding_in
 from .record import Bracket, Extrema, RestartStates, column, vertices
 from .watch import SurfaceWatch, TooManySlides, crossings
 
@@ -130,7 +130,7 @@ def _sampled(ctx: Context, b: Bracket, columns: list[tuple[str, int, bool]], fou
     """AUTO and COMPILED, on an interval no switch can come into: the integrator's
     values at fine instants, zoomed once. False when this way does not apply."""
     c, plan, m, z = ctx.c, ctx.plan, list(b.m), list(b.z)
-    if SLIDE in m or any(b.ta < t < b.tb for t in plan.breakpoints) or \
+    if sliding_in(m) or any(b.ta < t < b.tb for t in plan.breakpoints) or \
             any(b.ta < t < b.tb for t in c.memory_times(z, b.ta)):
         return False
     integrate = _by_odeint(ctx, m, z) if plan.chunked else _by_kernel(ctx, m, z)

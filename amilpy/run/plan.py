@@ -21,7 +21,7 @@ from ..codegen import ModelCode
 from ..diagnostics import AmilError, Diagnostic
 from ..language import START_KEY
 from ..library.surfaces import linear_gradient, sign
-from ..result import EventKind
+from ..result import Event, EventKind
 from ..routes import DEFAULT, Route, StepPointError, route_for, step_point_mode
 
 # RELERR and ABSERR when a listing sets none (RELERR/ABSERR, ACSL's MERROR/XERROR):
@@ -52,7 +52,31 @@ DEFAULTS = {
     "max_values": 200_000_000,
 }
 
-SLIDE = 0.5  # the mode of a sliding surface: not a sign (-1, 0, 1) nor a QNTZR level
+# The mode of a sliding surface: not a sign (-1, 0, 1) nor a level (a whole number).
+# A sign surface slides in mode SLIDE; a level surface (QNTZR, NINT, AINT, AMOD) on the
+# edge between its levels k and k + 1 slides in mode k + 1/2, the edge itself, which
+# its generated surface reads (`library.surfaces.level_edge`): a mode half a whole
+# number is a slide, whatever the surface.
+SLIDE = 0.5
+
+
+def slides(mode: float) -> bool:
+    """Whether a surface in this mode slides."""
+    return mode % 1.0 == 0.5
+
+
+# (the same rule over a list of modes, written out: these run at every step)
+def sliding_in(m) -> bool:
+    """Whether any surface in the modes m slides."""
+    return 0.5 in map(_FRACTION, m)
+
+
+def sliding(m) -> list[int]:
+    """The surfaces that slide in the modes m."""
+    return [k for k, v in enumerate(m) if v % 1.0 == 0.5]
+
+
+_FRACTION = (1.0).__rmod__  # v -> v % 1.0
 
 
 @dataclass
@@ -120,9 +144,16 @@ class Watched:
     def fires(self, old: float, new: float) -> bool:
         """Whether entering `new` from `old` is a crossing this SCHEDULE runs on:
         from < 0 to >= 0 (XP), from > 0 to <= 0 (XN), or either (XZ)."""
-        up = old < 0 and new >= 0 and new != SLIDE
+        up = old < 0 and new >= 0 and not slides(new)
         down = old > 0 and new <= 0
         return up if self.direction > 0 else down if self.direction < 0 else up or down
+
+    def event(self, t: float, old: float, new: float, kind: EventKind | None = None) -> Event:
+        """The event of entering mode `new` from `old` at t (`kind`: as `event_kind`
+        says, unless given)."""
+        return Event(t, self.description, self.surface, old, new,
+                     self.event_kind(new) if kind is None else kind, self.text,
+                     self.kind is SurfaceKind.LEVEL)
 
     def event_kind(self, new_mode: float) -> EventKind:
         """What entering `new_mode` on this surface is, as an event."""
@@ -130,7 +161,7 @@ class Watched:
             return EventKind(self.purpose.value)
         if self.breakpoint_only:
             return EventKind.BREAKPOINT
-        if new_mode == SLIDE:
+        if slides(new_mode):
             return EventKind.SLIDE
         return EventKind.LEVEL if self.kind is SurfaceKind.LEVEL else EventKind.SWITCH
 

@@ -7,7 +7,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..outcome import Failure
-from ..result import Event
 from ..steppers import StepFailure, Stepper
 from .cursor import Cursor, Stop, WatchedStep
 from .faults import fault_text
@@ -154,8 +153,7 @@ class Restarts:
             # crossing): nothing happened
             self.events.remove(last)
             return
-        self.events.append(Event(t, w.description, w.surface, old, new, w.event_kind(new),
-                                 w.text))
+        self.events.append(w.event(t, old, new))
 
     def _check_chatter(self) -> None:
         recent = self._recent

@@ -19,7 +19,7 @@ from ..steppers.jacobian import SegmentJacobian
 from .cursor import Cursor, Stop
 from .edges import expected_event
 from .faults import Fault
-from .plan import SLIDE, train_instants
+from .plan import sliding_in, train_instants
 from .record import Recorder, column
 from .slide import MAX_SLIDING
 from .watch import TooManySlides, crossings
@@ -43,7 +43,7 @@ class SegmentStart:
         evaluations are kept while it is on (AUTO's chunks: `OdeintStepper`)."""
         m, z, faults, n = cur.m, cur.z, self.faults, len(cur.y)
         deadline, calls = self.deadline, [0]
-        rhs, sliding, field = self.c.rhs, SLIDE in m, self.watch.field
+        rhs, sliding, field = self.c.rhs, sliding_in(m), self.watch.field
         rolled = rolled_rhs(self.c)  # a large model's repeated equations on arrays
 
         def f(t, y):
@@ -107,7 +107,7 @@ class SegmentStart:
         output, which AUTO's LSODA class gives as it steps (odeint's chunks would
         integrate every interval again for it)."""
         plan = self.plan
-        chunked = plan.chunked and SLIDE not in cur.m and not dense
+        chunked = plan.chunked and not sliding_in(cur.m) and not dense
         # AUTO's chunks watch every step LSODA takes through the evaluations it makes
         # (and sample them for RANGE): a log when there is something to watch or find
         log = Evaluations(max(4096, LOG_BUDGET // max(len(cur.y), 1))) \
@@ -200,7 +200,7 @@ class SegmentStart:
         """The segment's Jacobian from the model's equations, for the routes that use
         one (built the first time a stepper asks for it); none while surfaces slide."""
         route = self.plan.route
-        if route.fixed or route.explicit or SLIDE in cur.m or not len(cur.y):
+        if route.fixed or route.explicit or sliding_in(cur.m) or not len(cur.y):
             return None
         c = self.c
         return SegmentJacobian(len(cur.y), lambda: jacobian_for(c), cur.m, cur.z, f,

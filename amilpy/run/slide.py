@@ -35,14 +35,22 @@ from .plan import SLIDE
 MAX_SLIDING = 6  # 64 evaluations of the derivatives per evaluation of the field
 
 
-def corner_modes(m, slides: list[int]) -> list[list[float]]:
+def side_mode(mode: float, side: float, level: bool) -> float:
+    """The mode of a sliding surface's branch on `side` (+1 or -1) of it: a sign
+    surface's sign; a level surface's level above or below the edge it slides on
+    (its mode, `plan.SLIDE`)."""
+    return mode + 0.5 * side if level else side
+
+
+def corner_modes(m, sliding: list[int], levels=frozenset()) -> list[list[float]]:
     """The modes of every corner, the all-plus corner first (corner c has surface
-    slides[i] in its + branch when bit i of (2**p - 1 - c) is set)."""
+    sliding[i] in its + branch when bit i of (2**p - 1 - c) is set); `levels`: which
+    surfaces are level surfaces (`side_mode`)."""
     out = []
-    for signs in itertools.product((1.0, -1.0), repeat=len(slides)):
+    for signs in itertools.product((1.0, -1.0), repeat=len(sliding)):
         mc = list(m)
-        for k, s in zip(slides, reversed(signs), strict=True):
-            mc[k] = s
+        for k, s in zip(sliding, reversed(signs), strict=True):
+            mc[k] = side_mode(m[k], s, k in levels)
         out.append(mc)
     return out
 
@@ -119,5 +127,5 @@ def _solve(rates: np.ndarray, bounded: bool = True) -> np.ndarray:
     return alpha
 
 
-__all__ = ["MAX_SLIDING", "SLIDE", "combine", "corner_modes", "corner_weights",
+__all__ = ["MAX_SLIDING", "SLIDE", "combine", "corner_modes", "corner_weights", "side_mode",
            "slide_alphas", "slide_weights"]

@@ -178,8 +178,7 @@ class StepPoint(RunLoop):
                 if reached is not None and not stop:
                     stop, self.stop_reason = True, reached
                     w = self.plan.watched[reached]
-                    self.events.append(Event(t, w.description, w.surface, 0.0, 1.0,
-                                             EventKind(w.purpose.value), w.text))
+                    self.events.append(w.event(t, 0.0, 1.0, EventKind(w.purpose.value)))
         self.last_good = (t, y, m)  # m is not changed in place later
         self._points += 1
         if rec is not None:
@@ -211,15 +210,13 @@ class StepPoint(RunLoop):
                 fires = purpose is Purpose.SCHEDULE and w.fires(was, now)
                 if not first and now != was and (fires or purpose is not Purpose.SCHEDULE):
                     # (a crossing that runs code is an event where it runs it)
-                    self._event(Event(t, w.description, w.surface, was, now,
-                                      w.event_kind(now), w.text))
+                    self._event(w.event(t, was, now))
                     if fires:
                         self.fired.append(k)
                 continue
             if hit and stop is None:
                 stop = k
-                self.events.append(Event(t, w.description, w.surface, was, now,
-                                         EventKind(purpose.value), w.text))
+                self.events.append(w.event(t, was, now, EventKind(purpose.value)))
         self.stop_reason = stop
         return stop is not None
 
@@ -230,8 +227,7 @@ class StepPoint(RunLoop):
         for k, (w, purpose) in enumerate(self._purposes):
             if new_m[k] != m[k] and purpose not in (Purpose.TERMT, Purpose.FINISH) and \
                     k not in quiet:
-                self._event(Event(t, w.description, w.surface, m[k], new_m[k],
-                                  w.event_kind(new_m[k]), w.text))
+                self._event(w.event(t, m[k], new_m[k]))
 
     def _event(self, event: Event) -> None:
         """A branch change; past the event limit they are counted, not kept (a

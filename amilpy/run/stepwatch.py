@@ -11,7 +11,7 @@ from ..outcome import Failure
 from ..steppers import Hermite, Stepper, first_bad
 from .cursor import Cursor, Stop, WatchedStep
 from .edges import locate_crossings
-from .plan import SLIDE, SurfaceKind
+from .plan import SurfaceKind, slides
 from .record import Recorder
 from .turns import play_turn
 
@@ -63,7 +63,7 @@ class StepWatch:
         if not exited or not plan.route.uses_tolerances:
             return {}
         scale = plan.tol.atol + plan.tol.rtol * np.abs(cur.y)
-        near = [k for k in exited if cur.m[k] != SLIDE and
+        near = [k for k in exited if not slides(cur.m[k]) and
                 abs(e0[k]) <= 1e3 * float(np.max(scale, initial=0.0))]
         out = {}
         for k in near:
@@ -109,7 +109,7 @@ class StepWatch:
         e_b = c.surf(tb, yb.tolist(), m, z)
         hits, silent = [], []
         for k in self.plan.watch_idx:
-            if m[k] != SLIDE and watch.crossed(k, m[k], e_b[k]):
+            if watch.crossed(k, m[k], e_b[k]) and not slides(m[k]):
                 band = self._grazing.get(k)
                 if band is not None and abs(e_b[k]) <= band:
                     continue  # a tangential departure's first steps: within their error
@@ -129,8 +129,8 @@ class StepWatch:
             roots, step.departed = locate_crossings(watch, stepper, hits, m, z, ta, tb,
                                                     seg_start, (e_prev, e_b))
             interp = stepper.interpolant()
-            for k, side in slide_exit:
-                roots[k] = watch.locate_slide_exit(k, side, m, z, interp, ta, tb)
+            for k, mode in slide_exit:
+                roots[k] = watch.locate_slide_exit(k, mode, m, z, interp, ta, tb)
             t_star = min(roots.values(), default=tb if turn is None else turn)
             if turn is not None and turn < t_star:
                 roots, step.departed, slide_exit, t_star = {}, set(), [], turn
@@ -146,7 +146,7 @@ class StepWatch:
             close = 8 * _EPS * max(abs(step.tb), 1e-300)
             step.triggered = {k for k, tk in roots.items() if tk - t_star <= close}
             # leaving a sliding motion: the side it leaves to is known
-            step.exits = {k: side for k, side in slide_exit if k in step.triggered}
+            step.exits = {k: mode for k, mode in slide_exit if k in step.triggered}
         if silent and not step.truncated:
             lit = c.modes_literal(step.tb, step.yb.tolist(), m, z)
             step.silent = silent

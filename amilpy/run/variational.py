@@ -58,8 +58,8 @@ from scipy.linalg import expm
 
 from .dense import sample, sample_step
 from .jacobian import STEP, branch_difference, jacobian_at
-from .plan import SLIDE
-from .slide import combine, corner_modes, corner_weights, slide_alphas
+from .plan import slides, sliding_in
+from .slide import combine, corner_modes, corner_weights, side_mode, slide_alphas
 
 _C = np.array([0.5 - math.sqrt(15) / 10, 0.5, 0.5 + math.sqrt(15) / 10])
 VARIATION = 3e-3  # h |A(c3) - A(c1)| above this: the step is checked against its halves
@@ -123,7 +123,7 @@ class Tangent:
     def value(self, fn: str, code, t: float, y, m, z):
         """`fn` ("rhs" or "surf") of the generated functions `code` at (t, y): while a
         surface slides, "rhs" is Filippov's field of that code (`filippov`)."""
-        if fn == "rhs" and SLIDE in m:
+        if fn == "rhs" and sliding_in(m):
             weights, modes = filippov(self.watch, code, t, y, m, z, self.floor)
             yl = [float(v) for v in y]
             return combine(weights, [np.asarray(code.rhs(t, yl, mc, z), dtype=float)
@@ -139,13 +139,13 @@ class Tangent:
         if self.failed is not None:
             return
         ya = np.asarray(interp(ta), dtype=float)
-        if SLIDE in m:
+        if sliding_in(m):
             m = held(self.watch, self.c, ta, ya, m, z, self.floor)
         if self.prev is not None:
             self._join(ta, ya, m, z)
             if self.failed is not None:
                 return
-        elif SLIDE in m:
+        elif sliding_in(m):
             self._onto_surfaces(ta, ya, m, z)
             if self.failed is not None:
                 return
@@ -220,7 +220,7 @@ class Tangent:
         # leaving a sliding surface is no jump where the field is continuous there (a
         # weight having reached 0 or 1); where another switch at the instant ends the
         # slide (a push on TIME), that switch's jump is to the branch left on
-        exits = [k for k in range(len(m)) if m_prev[k] == SLIDE and m[k] != SLIDE]
+        exits = [k for k in range(len(m)) if slides(m_prev[k]) and not slides(m[k])]
         for k in range(len(m)):
             if m[k] == m_prev[k] or k in exits:
                 continue
@@ -275,7 +275,7 @@ class Tangent:
         stuck on it) comes back to it as the flow would, on the branch it is then
         on (+ where the move is to s > 0), and takes that entry's jump."""
         n = len(y)
-        for k in [k for k, v in enumerate(m) if v == SLIDE]:
+        for k in [k for k, v in enumerate(m) if slides(v)]:
             normal = self._normal(k, t, y, m, z)
             moves = normal @ self.phi
             if not np.any(moves):
@@ -349,11 +349,12 @@ def filippov(watch, code, t: float, y, m, z, floor) -> tuple[np.ndarray, list[li
 
 def _alphas(watch, code, t: float, y, m, z, floor) -> tuple[np.ndarray, list[list[float]]]:
     """`filippov`'s weight of each sliding surface's + branch, and the corners."""
-    slides = [k for k, v in enumerate(m) if v == SLIDE]
-    modes = corner_modes(m, slides)
+    ks = watch.sliding(m)
+    modes = corner_modes(m, ks, watch.levels)
     yv = np.asarray(y, dtype=float)
     yl = yv.tolist()
-    slopes = [_surface_slope(watch, code, k, t, yv, m, z, floor) for k in slides]
+    # (a level surface's slope read on its edge, as the run's rates: `_rated`)
+    slopes = [_surface_slope(watch, code, k, t, yv, m, z, floor) for k in ks]
     rates = np.array([[float(g @ f) + st for g, st in slopes]
                       for f in (np.asarray(code.rhs(t, yl, mc, z), dtype=float)
                                 for mc in modes)])
@@ -365,15 +366,15 @@ def held(watch, code, t: float, y, m, z, floor) -> list[float]:
     marked sliding whose weight is past its bound (a push on TIME at a breakpoint
     ends the slide at once; the run, holding the weight there, moves on the branch
     before it marks the exit a step later) is on that branch."""
-    if SLIDE not in m:
+    if not sliding_in(m):
         return list(m)
     alphas, _ = _alphas(watch, code, t, y, m, z, floor)
     out = list(m)
-    for k, a in zip([k for k, v in enumerate(m) if v == SLIDE], alphas, strict=True):
+    for k, a in zip(watch.sliding(m), alphas, strict=True):
         if a > 1.0 + HELD:
-            out[k] = 1.0
+            out[k] = side_mode(m[k], 1.0, k in watch.levels)
         elif a < -HELD:
-            out[k] = -1.0
+            out[k] = side_mode(m[k], -1.0, k in watch.levels)
     return out
 
 
@@ -506,7 +507,7 @@ class ParameterTangent(Tangent):
         # (several surfaces that cross here together are one instant: MODINT's X1 and
         # X2 written as TR - X and X - TR; one apart from zero is another change)
         e = self.c.surf(t, y_prev.tolist(), m_prev, z_prev)
-        if not changed or z != z_prev or SLIDE in m or SLIDE in m_prev or any(
+        if not changed or z != z_prev or sliding_in(m) or sliding_in(m_prev) or any(
                 abs(e[k]) > 1e-9 * (1.0 + float(np.abs(y_prev).max(initial=0.0)))
                 for k in changed):
             self.failed = "a state is reset with other changes at the instant"

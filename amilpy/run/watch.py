@@ -24,8 +24,8 @@ import numpy as np
 
 from ..codegen import ModelCode
 from ..library.surfaces import DOWN, REPELS, SLIDES, STILL, UP, leaving, sign
-from .plan import SLIDE, Purpose, RunPlan, SurfaceKind
-from .slide import MAX_SLIDING, combine, corner_modes, slide_weights
+from .plan import SLIDE, Purpose, RunPlan, SurfaceKind, slides, sliding, sliding_in
+from .slide import MAX_SLIDING, combine, corner_modes, side_mode, slide_weights
 
 _XTOL = 4 * np.finfo(float).eps
 
@@ -38,6 +38,10 @@ class SurfaceWatch:
         self.lookahead_h = plan.lookahead_h
         self.watch_idx = plan.watch_idx
         self.events = plan.events
+        # the level surfaces (QNTZR, NINT, AINT, AMOD): a slide on one is on an edge
+        # between two levels (`slide.side_mode`)
+        self.levels = frozenset(k for k, w in enumerate(plan.watched)
+                                if w.kind is SurfaceKind.LEVEL)
         self.y0 = c.y0
         # the surfaces a memory function switches on (ZHOLD's, RST's triggers): its
         # memory changes as the motion crosses, so the branch the motion is pushed
@@ -51,35 +55,33 @@ class SurfaceWatch:
                                if isinstance(k, int)}
 
     # ------------------------------------------------------------ vector fields
-    @staticmethod
-    def sliding(m) -> list[int]:
-        return [k for k, v in enumerate(m) if v == SLIDE]
+    sliding = staticmethod(sliding)
 
     def field(self, t: float, y: np.ndarray, m, z) -> np.ndarray:
         """The derivatives under modes m; sliding surfaces take the Filippov
         combination of their branches that keeps them at zero."""
-        if SLIDE not in m:
+        if not sliding_in(m):
             return self.c.rhs(t, y.tolist(), m, z)
         modes, fields, weights = self._mix(t, y, m, z, self.sliding(m))
         return combine(weights, fields)
 
     def outputs(self, t: float, y: np.ndarray, m, z) -> list[float]:
         """The recorded variables, weighted like the field while surfaces slide."""
-        if SLIDE not in m:
+        if not sliding_in(m):
             return self.c.out(t, y.tolist(), m, z)
         modes, _, weights = self._mix(t, y, m, z, self.sliding(m))
         columns = [np.asarray(self.c.out(t, y.tolist(), mc, z), dtype=float) for mc in modes]
         return combine(weights, columns).tolist()
 
-    def _mix(self, t, y, m, z, slides, with_rates: bool = False):
-        """The corners (every sliding surface in either branch), their fields, and
-        the weight of each corner (and the sliding surfaces' rates at each)."""
-        if len(slides) > MAX_SLIDING:
-            raise TooManySlides(len(slides))
+    def _mix(self, t, y, m, z, ks, with_rates: bool = False):
+        """The corners (every sliding surface of `ks` in either branch), their fields,
+        and the weight of each corner (and the sliding surfaces' rates at each)."""
+        if len(ks) > MAX_SLIDING:
+            raise TooManySlides(len(ks))
         yl = y.tolist()
-        modes = corner_modes(m, slides)
+        modes = corner_modes(m, ks, self.levels)
         fields = [np.asarray(self.c.rhs(t, yl, mc, z), dtype=float) for mc in modes]
-        rates = np.array([[self.surface_rate(k, t, y, f, mc, z) for k in slides]
+        rates = np.array([[self.surface_rate(k, t, y, f, self._rated(k, mc, m), z) for k in ks]
                           for f, mc in zip(fields, modes, strict=True)])
         if with_rates:
             return modes, fields, slide_weights(rates), rates
@@ -87,13 +89,26 @@ class SurfaceWatch:
 
     def branch_rates(self, k: int, t: float, y: np.ndarray, m, z):
         """Both branches of surface k (other sliding surfaces resolved): their vector
-        fields f+ and f-, and the surface's rate along each (d+, d-)."""
+        fields f+ and f-, and the surface's rate along each (d+, d-). A level surface
+        in m is on the edge it slides on (its mode), its branches the levels either
+        side."""
+        level = k in self.levels
         mp, mm = list(m), list(m)
-        mp[k], mm[k] = 1.0, -1.0
+        mp[k], mm[k] = side_mode(m[k], 1.0, level), side_mode(m[k], -1.0, level)
         fp = np.asarray(self.field(t, y, mp, z), dtype=float)
         fm = np.asarray(self.field(t, y, mm, z), dtype=float)
-        return (fp, fm, self.surface_rate(k, t, y, fp, mp, z),
-                self.surface_rate(k, t, y, fm, mm, z))
+        return (fp, fm, self.surface_rate(k, t, y, fp, self._rated(k, mp, m), z),
+                self.surface_rate(k, t, y, fm, self._rated(k, mm, m), z))
+
+    def _rated(self, k: int, branch, m):
+        """The modes surface k's rate is read in along a branch's field: the branch's,
+        but a level surface's own is the edge in m (in a level, its value is the
+        distance to the nearer edge, which is the other way up on either side)."""
+        if k not in self.levels:
+            return branch
+        out = list(branch)
+        out[k] = m[k]
+        return out
 
     def surface_rate(self, k: int, t: float, y: np.ndarray, f: np.ndarray, m, z) -> float:
         """d e_k/dt along f: exact for surfaces linear in the states, else a difference."""
@@ -123,32 +138,34 @@ class SurfaceWatch:
         # a sliding surface that another switch here moves off zero (a set point
         # stepped at a breakpoint, an INSW on a state) is slid on no longer: the values
         # it had before the switches, to tell that jump from the slide's own drift
-        slid = self.c.surf(t, y.tolist(), m, z) if SLIDE in m else None
+        slid = self.c.surf(t, y.tolist(), m, z) if sliding_in(m) else None
         # A surface may depend on another switch's value (MODINT on STEP, say):
         # settle the signs again with the new branches until nothing moves.
         for _ in range(len(new) + 1):
             before = list(new)
             lit = self.literal_here(t, y, new, z)
-            if slid is not None and SLIDE in new:
+            if slid is not None and sliding_in(new):
                 off = left_surfaces(slid, self.c.surf(t, y.tolist(), new, z),
                                     [k for k in self.sliding(new)
                                      if k not in at_zero and k not in decided])
                 for k, side in off.items():
-                    new[k] = side
+                    new[k] = side_mode(new[k], side, k in self.levels)
             for k in range(len(new)):
-                if self.watched[k].kind is SurfaceKind.LEVEL:
-                    if k not in decided and (k in at_zero or first or lit[k] != new[k]):
-                        new[k] = self.level_ahead(k, t, y, new, z)
+                if k in self.levels:
+                    # (one sliding on an edge stays there unless located anew)
+                    if k not in decided and (k in at_zero or first or (
+                            lit[k] != new[k] and not slides(new[k]))):
+                        new[k] = self.level_ahead(k, t, y, new, z, located=k in at_zero)
                         decided.add(k)
                     continue
-                landed = lit[k] == 0.0 and new[k] not in (0.0, SLIDE)
+                landed = lit[k] == 0.0 and new[k] != 0.0 and not slides(new[k])
                 if k in at_zero or (first and lit[k] == 0.0) or landed:
                     # at zero: located there, started there, or jumped onto it with
                     # a switch it depends on
                     if k not in decided:
                         new[k] = self.direction(k, t, y, new, z, old=None if first else m[k])
                         decided.add(k)
-                elif lit[k] != 0.0 and new[k] != SLIDE and lit[k] != new[k]:
+                elif lit[k] != 0.0 and not slides(new[k]) and lit[k] != new[k]:
                     new[k] = lit[k]
             if new == before:
                 break
@@ -243,7 +260,7 @@ class SurfaceWatch:
         return self._rechosen(t, y, z, m, {
             k: mode for k, mode in enumerate(m)
             if (before[k] == after[k] and not (mode == 0.0 and abs(e[k]) > scale))
-            or self.watched[k].kind is not SurfaceKind.SIGN or mode == SLIDE})
+            or self.watched[k].kind is not SurfaceKind.SIGN or slides(mode)})
 
     def direction(self, k: int, t: float, y: np.ndarray, m, z, old) -> float:
         """Which side of surface k the motion goes to from a point on it."""
@@ -262,10 +279,10 @@ class SurfaceWatch:
             # With other surfaces sliding, that is their compensation (two friction
             # terms on one velocity): this one slides with them and the joint
             # weights decide; else it stays at zero.
-            others = any(v == SLIDE for j, v in enumerate(m) if j != k)
+            others = any(slides(v) for j, v in enumerate(m) if j != k)
             return SLIDE if others and self.events else 0.0
         if way == REPELS:  # keep going the way it was going
-            if old is not None and old != 0.0 and old != SLIDE:
+            if old is not None and old != 0.0 and not slides(old):
                 return -old
             return 1.0 if dp >= -dm else -1.0
         if way == SLIDES:
@@ -282,16 +299,45 @@ class SurfaceWatch:
         row at a switching instant shows, and what is evaluated on the surface
         when the branch in force has no value there."""
         lit = self.c.modes_literal(t, y.tolist(), m, z)
-        return [0.0 if lit[k] == 0.0 and w.kind is SurfaceKind.SIGN and m[k] != SLIDE
+        return [0.0 if lit[k] == 0.0 and w.kind is SurfaceKind.SIGN and not slides(m[k])
                 else m[k] for k, w in enumerate(self.watched)]
 
-    def level_ahead(self, k: int, t: float, y: np.ndarray, m, z) -> float:
-        """QNTZR: the level the argument is at just after t."""
+    def level_ahead(self, k: int, t: float, y: np.ndarray, m, z, located: bool = False
+                    ) -> float:
+        """QNTZR: the level the argument is at just after t; on an edge both levels
+        push the argument back to (a crossing just `located` there, or a start on it),
+        the edge itself: it slides there (QNTZR in a feedback loop)."""
         lit = self.c.modes_literal(t, y.tolist(), m, z)[k]
+        edge = self._edge(k, t, y, m, z, lit, located)
+        if edge is not None and self.events:
+            on = list(m)
+            on[k] = edge
+            try:
+                _, _, dp, dm = self.branch_rates(k, t, y, on, z)
+            except (ArithmeticError, ValueError):
+                dp = dm = 0.0
+            if leaving(dp, dm, exact=False) == SLIDES:
+                return edge
         f = np.asarray(self.c.rhs(t, y.tolist(), m, z), dtype=float)
         h = self.lookahead_h
         ahead = self.c.modes_literal(t + h, (y + h * f).tolist(), m, z)[k]
         return ahead if abs(ahead - lit) <= 1 else lit
+
+    def _edge(self, k: int, t: float, y: np.ndarray, m, z, lit: float, located: bool
+              ) -> float | None:
+        """The edge of level `lit`'s band that level surface k's argument stands on at
+        (t, y), if it does: the nearer one where a crossing was `located` here, else
+        one it is on to rounding."""
+        yl = y.tolist()
+        above, below = list(m), list(m)
+        above[k], below[k] = lit + 0.5, lit - 0.5
+        try:
+            up = self.c.surf(t, yl, above, z)[k]  # the argument less the upper edge
+            down = self.c.surf(t, yl, below, z)[k]
+        except (ArithmeticError, ValueError):
+            return None
+        off, edge = (up, lit + 0.5) if abs(up) <= abs(down) else (down, lit - 0.5)
+        return edge if located or abs(off) <= 1e-12 * max(1.0, abs(edge)) else None
 
     def quiet(self, k: int, t: float, y: np.ndarray, m, z) -> bool:
         """True if surface k's branch does not change the derivatives here: a change
@@ -328,7 +374,7 @@ class SurfaceWatch:
         except (ArithmeticError, ValueError):
             return False
         return all(self.side(j, ep[j]) == self.side(j, em[j])
-                   for j in self.watch_idx if j != k and m[j] != SLIDE)
+                   for j in self.watch_idx if j != k and not slides(m[j]))
 
     def side(self, k: int, e: float) -> float:
         """Where surface k's value e puts it: its sign, or for a level surface (its
@@ -408,7 +454,8 @@ class SurfaceWatch:
                       maxiter=200)
 
     def slide_exits(self, m, t: float, y: np.ndarray, z) -> list[tuple[int, float]]:
-        """The sliding surfaces whose motion leaves them here, and to which side.
+        """The sliding surfaces whose motion leaves them here, and the branch it
+        leaves to (a sign, or a level either side of the edge).
 
         With one surface sliding, the rates in its two branches are the surface's
         own and their signs are exact. With several, the others compensate, and a
@@ -419,9 +466,9 @@ class SurfaceWatch:
             _, _, dp, dm = self.branch_rates(k, t, y, m, z)
             noise = self._rate_noise(k, t, y, m, z)
             if dp > noise:
-                out.append((k, 1.0))
+                out.append((k, side_mode(m[k], 1.0, k in self.levels)))
             elif dm < -noise:
-                out.append((k, -1.0))
+                out.append((k, side_mode(m[k], -1.0, k in self.levels)))
         return out
 
     def _rate_noise(self, k: int, t: float, y: np.ndarray, m, z) -> float:
@@ -432,9 +479,13 @@ class SurfaceWatch:
         rates = self._mix(t, y, m, z, slides, with_rates=True)[3]
         return 1e-9 * float(np.max(np.abs(rates[:, slides.index(k)])))
 
-    def locate_slide_exit(self, k: int, side: float, m, z, interp, ta: float, tb: float
+    def locate_slide_exit(self, k: int, mode: float, m, z, interp, ta: float, tb: float
                           ) -> float:
+        """Where in [ta, tb] the motion leaves sliding surface k for the branch in
+        `mode` (`slide_exits`)."""
         from scipy.optimize import brentq
+
+        side = 1.0 if mode > m[k] else -1.0
 
         noise = self._rate_noise(k, tb, np.asarray(interp(tb), dtype=float), m, z)
 
@@ -482,6 +533,8 @@ def crossings(plan: RunPlan, surfaces: list[np.ndarray], m) -> dict[int, np.ndar
     NumPy columns. Only the surfaces that cross somewhere are listed."""
     out = {}
     for k in plan.watch_idx:
+        if slides(m[k]):  # (kept at zero by the motion, its exit watched apart)
+            continue
         e = surfaces[k]
         w = plan.watched[k]
         if w.kind is SurfaceKind.LEVEL:
