@@ -497,10 +497,10 @@ END
     # a value of 0 (its column was 0: moved by 0)
     ("PARAM K = 0.7, B = 0.0\nINCON X0 = 1.0\nX = INTGRL(X0, -K*X + B)\nY = K*X + 3.0*B\n",
      ["B", "X0"], {"B": 0.0, "X0": 1.0}, ""),
-    # a memory function's initial value (its sensitivity was 0: not followed): a
-    # play's memory is not carried (its clamp sits on its kink after each update)
+    # a memory function's initial value (its sensitivity was 0: not followed), a play's
+    # (its memory carried on the branch the motion takes: `ProgramTangent.leaned`)
     ("PARAM K = 0.7, YIC = 1.0\nY = HSTRSS(YIC, -10.0, 10.0, X)\nX = INTGRL(0.0, -K*X + Y)\n",
-     ["YIC"], {"YIC": 1.0}, "HSTRSS's play clamps its memory, and its start depends on YIC"),
+     ["YIC", "K"], {"YIC": 1.0, "K": 0.7}, ""),
     # a random draw read by the derivatives, its mean and spread free (the draws are
     # the seeded stream's: the same numbers in every run), observed at draw instants
     ("PARAM K = 0.7, MU = 1.0, SD = 0.3\nY = GAUSS(MU, SD)\nX = INTGRL(0.0, -K*X + Y)\n",

@@ -14,8 +14,8 @@ F_p, ds/dp, d out/dp and the start's dependence d y(t0)/dp are central differenc
 of the generated functions at one TIME and state (the run's code bound to p +- h,
 no integration); h = cbrt(eps) |p| (1e-8 for p = 0: `step_for`). Where the
 variational equations do not follow the flow (a state reset with another change at
-its instant, a flow tangent to a surface, a memory they cannot carry changing -- a
-play's, DELAY's store: `variational.memory_unfollowed`; in a
+its instant, a flow tangent to a surface, a memory they cannot carry changing --
+DELAY's store: `variational.memory_unfollowed`; in a
 program of the ACSL form, an
 instant its code runs at that moves with p: `analysis.program`) the caller
 differences whole runs instead, and is told why."""

@@ -60,6 +60,9 @@ class Sampler:
         from ..run import State
 
         y = np.asarray(interp(t), dtype=float)
+        # (the memory as the derivatives read it: a pushed play's leaning into its clamp,
+        # so that an output's row is on the branch the motion takes)
+        z = self.tangent.leaned(t, y, list(m), list(z))
         self.at[t] = (State(y, tuple(m), tuple(z), t), self.tangent.phi[:self.n].copy())
 
 

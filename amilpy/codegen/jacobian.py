@@ -36,6 +36,7 @@ from ..library.templates import clone
 from .pytree import const_value, fold, function, locate, namespace, nodes, place
 
 _ONE = py.Constant(1.0)
+_PICKS = {"_AMAX1": py.GtE, "_AMIN1": py.LtE}  # the first argument is taken where this holds
 
 
 def _diff(f: Callable, k: int, *args: float) -> float:
@@ -213,6 +214,16 @@ class _Deriv:
 
     def d_Call(self, e: py.Call, j: int):
         name = e.func.id if isinstance(e.func, py.Name) else ""
+        if name in _PICKS and len(e.args) == 2:
+            # the larger (smaller) of two: the derivative of the one it is, the first at
+            # a tie (a play's clamp, where a difference across the kink gave half)
+            a, b = e.args
+            da, db = self.d(a, j), self.d(b, j)
+            if da is None and db is None:
+                return None
+            zero = py.Constant(0.0)
+            return py.IfExp(py.Compare(clone(a), [_PICKS[name]()], [clone(b)]),
+                            da or zero, db or zero)
         if len(e.args) == 1:
             da = self.d(e.args[0], j)
             if da is None:

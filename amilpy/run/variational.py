@@ -33,13 +33,15 @@ update z = mem(t, y, z) (a step's end, a located switch: ZHOLD holding where its
 trigger crosses) the update's Jacobian applies, with y's total derivative
 S + f dt/dp and the update's rate in TIME where the switch's instant moves; an
 instant a slot holds (CSMP's PULSE end) jumps the tangent by (f- - f+) times that
-slot's row (`_wake`).
+slot's row (`_wake`). A play (HSTRSS, BCKLSH) is read on the branch the motion
+takes (`leaned`: following its input where the input pushes it, else holding),
+and a step in which one engages is split there (`engaged`).
 
 What it does not handle it says (`Tangent.failed`), and the flow map then
 takes central differences of whole flows instead: a state reset (MODINT; a
 `ParameterTangent` follows one: `_reset`), a
 memory value the field (or an output asked for) reads changing along the way
-where the memory is not carried (the flow map's; a play, a DELAY store:
+where the memory is not carried (the flow map's; a DELAY store:
 `memory_unfollowed`),
 a crossing where the flow is tangent to the surface (n . f- ~ 0), two PULSE
 trains that share an instant and move it differently. A train instant a data
@@ -66,6 +68,7 @@ VARIATION = 3e-3  # h |A(c3) - A(c1)| above this: the step is checked against it
 AGREE = 1e-8  # whole step and halves closer than this (relative): the halves are taken
 HELD = 1e-9  # a sliding weight past [0, 1] by more: the motion is on that branch
 MAX_DEPTH = 8
+LEAN = 1e3 * STEP  # how far a pushed play's memory is put into its clamp (`leaned`)
 
 
 def _comm(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -104,6 +107,7 @@ class Tangent:
         # as one: exp((h1 + h2 + ...) A), taken when A changes or Phi is read
         self._pending: list | None = None  # [A, the steps' total length]
         self.prev: tuple | None = None  # (tb, y(tb), modes, memory) of the last step
+        self._lean: tuple | None = None  # (its memory, that memory `leaned`)
         self.failed: str | None = None
         self._shift: np.ndarray | None = None  # d t/d p of the instant being joined
         # steps whose h |A(c3) - A(c1)| is at most this need no check against halves
@@ -141,20 +145,43 @@ class Tangent:
         ya = np.asarray(interp(ta), dtype=float)
         if sliding_in(m):
             m = held(self.watch, self.c, ta, ya, m, z, self.floor)
+        zl = self.leaned(ta, ya, m, z)
         if self.prev is not None:
-            self._join(ta, ya, m, z)
+            self._join(ta, ya, m, z, zl)
             if self.failed is not None:
                 return
         elif sliding_in(m):
-            self._onto_surfaces(ta, ya, m, z)
+            self._onto_surfaces(ta, ya, m, zl)
             if self.failed is not None:
                 return
+        pieces = []
         if tb > ta:
-            step = self._propagate(ta, tb, interp, m, z, 0)
+            # (a play that engages inside the step -- its input reaching the held value:
+            # the field's Jacobian changes there, with no switch to cut the step at)
+            te = self.engaged(ta, tb, interp, m, z, zl)
+            if te is None:
+                pieces.append((ta, tb, zl))
+            else:
+                after = self.leaned(te, np.asarray(interp(te), dtype=float), m, z)
+                pieces += [(ta, te, zl), (te, tb, after)]
+                zl = after
+        for u, v, zs in pieces:
+            step = self._propagate(u, v, interp, m, zs, 0)
             if step is not None:
                 self._flush()
                 self._phi = step @ self._phi
         self.prev = (tb, np.asarray(interp(tb), dtype=float), list(m), list(z))
+        self._lean = (list(z), zl)
+
+    def leaned(self, t: float, y: np.ndarray, m, z) -> list:
+        """The memory z as the derivatives read it from (t, y) on (`ProgramTangent`:
+        a play leaning on an edge of its clamp)."""
+        return z
+
+    def engaged(self, ta: float, tb: float, interp, m, z, zl) -> float | None:
+        """Where in (ta, tb) a play held at ta starts to follow its input
+        (`ProgramTangent`), or None."""
+        return None
 
     def _propagate(self, ta: float, tb: float, interp, m, z, depth: int) -> np.ndarray | None:
         """exp(Omega) over [ta, tb]; None when the step is on a linear branch and
@@ -204,9 +231,12 @@ class Tangent:
         return magnus6(*(self.jacobian(t, ys[:, i], m, z) for i, t in enumerate(times)),
                        tb - ta)
 
-    def _join(self, t: float, y: np.ndarray, m, z) -> None:
+    def _join(self, t: float, y: np.ndarray, m, z, zl=None) -> None:
         """What happened between the last step and this one: switches (saltation),
-        or something the variational equations do not follow."""
+        or something the variational equations do not follow. `zl`: z `leaned`, as
+        the derivatives read it (the last step's memory likewise)."""
+        if zl is None:
+            zl = self.leaned(t, y, m, z)
         t_prev, y_prev, m_prev, z_prev = self.prev
         if self.watch.resets and m != m_prev and \
                 np.any(np.abs(y - y_prev) > 1e-6 * scale_of(y, self.floor)):
@@ -215,6 +245,8 @@ class Tangent:
         moved = z != z_prev and self._memory_moved(t, y, m_prev, m, z_prev, z)
         if self.failed is not None:
             return
+        if self._lean is not None and self._lean[0] == list(z_prev):
+            z_prev = self._lean[1]
         self._shift = None
         current, mem = list(m_prev), z_prev
         # leaving a sliding surface is no jump where the field is continuous there (a
@@ -228,14 +260,14 @@ class Tangent:
             after[k] = m[k]
             for e in exits:
                 after[e] = m[e]
-            s = self._saltation(k, t, y, current, after, mem, z)
+            s = self._saltation(k, t, y, current, after, mem, zl)
             if s is None:
                 return
             self._phi = s @ self.phi  # (the steps before the switch first)
-            current, mem = after, z
+            current, mem = after, zl
         if moved:
             self._update_memory(t, y, m_prev, m, z_prev, z)
-        self._wake(t, y, m, z)
+        self._wake(t, y, m, zl)
 
     def _wake(self, t: float, y: np.ndarray, m, z) -> None:
         """An instant a memory slot holds, reached at t (`ProgramTangent`)."""
@@ -324,6 +356,18 @@ class Tangent:
             self.failed = "the flow is tangent to a switching surface"
             return None
         return g, f_plus - f_minus, rate
+
+
+def one_sided(up: np.ndarray, down: np.ndarray) -> np.ndarray:
+    """A derivative from the one-sided differences `up` and `down` of a value moved
+    by a data value: their mean where they agree; where they do not (a sign the value
+    moves across, a clamp's kink within the step), the smaller: the side that neither
+    jumps nor bends (a clamp's held side is flat). No half steps of the value are to
+    be had for `branch_difference`'s straighter side."""
+    # (a kink or a jump within the step leaves one side flat or the two far apart;
+    # curvature alone parts them by about STEP of their size)
+    apart = np.abs(up - down) > 1e-2 * (np.abs(up) + np.abs(down)) + 1e-12
+    return np.where(apart, np.where(np.abs(up) <= np.abs(down), up, down), 0.5 * (up + down))
 
 
 def scale_of(y: np.ndarray, floor: np.ndarray) -> np.ndarray:
@@ -443,12 +487,19 @@ class ParameterTangent(Tangent):
         self.outputs = "all" if outputs is None else outputs  # (observed: their memory too)
 
     def _by_p(self, fn: str, t: float, yl: list, m, z) -> np.ndarray:
-        """d fn(t, y, m, z) / d p, a column per value (fn: "rhs" or "surf")."""
+        """d fn(t, y, m, z) / d p, a column per value (fn: "rhs" or "surf"). The field's
+        where the one-sided differences disagree (a play's clamp that a value moves,
+        within h of its kink) is the side that does not bend (`one_sided`); a
+        surface's is central (a train's, which jumps where the value moves its
+        instant, says so by its size: `_saltation`)."""
         cols = []
+        centre = np.asarray(self.value(fn, self.c, t, yl, m, z), dtype=float) \
+            if fn == "rhs" and self.variants else None
         for plus, minus, h in self.variants:
             hi = np.asarray(self.value(fn, plus, t, yl, m, z), dtype=float)
             lo = np.asarray(self.value(fn, minus, t, yl, m, z), dtype=float)
-            cols.append((hi - lo) / (2.0 * h))
+            cols.append((hi - lo) / (2.0 * h) if centre is None else
+                        one_sided((hi - centre) / h, (centre - lo) / h))
         return np.array(cols).T
 
     def _by_data(self, fn: str, t: float, y: np.ndarray, m, z) -> np.ndarray:
@@ -605,18 +656,14 @@ def has_slope(c, z, j: int) -> bool:
 
 def memory_unfollowed(c) -> str | None:
     """Why a tangent cannot carry the memory of `c`'s functions through their
-    updates (None: it can): a store that samples inside the steps (DELAY's), or a
-    play's clamp."""
+    updates (None: it can): a store that samples inside the steps (DELAY's). (A
+    play's clamp is carried on the branch the motion takes: `ProgramTangent.leaned`.)"""
     from ..library import lookup
 
     for mem in (c.model.memories if c.model is not None else ()):
         spec = lookup(mem.func, len(mem.args)).memory
         if spec.samples is not None:
             return f"{mem.func}'s store samples the states inside the steps"
-        if spec.plays:
-            # (its value is a clamp of the memory, on whose kink it sits after each
-            # update: the differences the tangent takes would straddle it)
-            return f"{mem.func}'s play clamps its memory"
     return None
 
 
@@ -641,6 +688,50 @@ class ProgramTangent(ParameterTangent):
         if self.unfollowed is not None:
             return super()._memory_moved(t, y, m_prev, m, z_prev, z)
         return True
+
+    def leaned(self, t: float, y: np.ndarray, m, z) -> list:
+        """z with each play's memory (HSTRSS, BCKLSH) that the motion from (t, y) pushes
+        moved into the clamp, by far more than a difference's step (LEAN of it): the
+        play's value is the clamp's edge either way, and its derivatives are then the
+        branch the motion is on, following the input (d/dz 0, d/dX 1). At z itself --
+        the clamp's kink, where every update leaves a play that follows -- central
+        differences gave half of each. A play the motion does not push holds (z as
+        it is)."""
+        slots = self.c.play_slots
+        if not slots or self.unfollowed is not None:
+            return z
+        yl = [float(v) for v in y]
+        h = self.watch.lookahead_h
+        f = np.asarray(self.value("rhs", self.c, t, yl, m, z), dtype=float)
+        ahead = self.c.mem(t + h, (np.asarray(yl) + h * f).tolist(), m, m, list(z))
+        out = list(z)
+        for j in slots:
+            if ahead[j] != z[j] and math.isfinite(z[j]):
+                out[j] = z[j] - math.copysign(LEAN * max(abs(z[j]), 1.0), ahead[j] - z[j])
+        return out
+
+    def engaged(self, ta: float, tb: float, interp, m, z, zl) -> float | None:
+        """The first instant in (ta, tb) at which a play that holds at ta (z as it is in
+        `zl`) has started to move, to a few ulps (bisection on whether its value has
+        left z: before it, the clamp holds z exactly)."""
+        held = [j for j in self.c.play_slots if zl[j] == z[j] and math.isfinite(z[j])]
+        if not held:
+            return None
+
+        def moved(t: float) -> bool:
+            y = np.asarray(interp(t), dtype=float).tolist()
+            v = self.c.mem(t, y, m, m, list(z))
+            return any(v[j] != z[j] for j in held)
+
+        if not moved(tb):
+            return None
+        lo, hi = ta, tb
+        while hi - lo > 4 * np.finfo(float).eps * max(abs(hi), 1.0):
+            mid = 0.5 * (lo + hi)
+            if mid <= lo or mid >= hi:
+                break
+            lo, hi = (lo, mid) if moved(mid) else (mid, hi)
+        return hi if hi < tb else None
 
     def _update_memory(self, t: float, y: np.ndarray, m_prev, m, z_prev, z) -> None:
         """The memory functions' update at t, z = mem(t, y, m_prev, m, z_prev) (every
@@ -686,13 +777,10 @@ class ProgramTangent(ParameterTangent):
                                                        list(z_prev), j, h)
         centre = update(c, t, yl, z_prev)
         for j, (plus, minus, h) in enumerate(self.variants):
-            up = (update(plus, t, yl, z_prev) - centre) / h
-            down = (centre - update(minus, t, yl, z_prev)) / h
-            # (the same sign moved by the value: the side that does not jump, the
-            # smaller, where the two disagree)
-            apart = np.abs(up - down) > 1e-6 * (np.abs(up) + np.abs(down)) + 1e-12
-            matrix[n:n + r, size - q + j] = np.where(
-                apart, np.where(np.abs(up) <= np.abs(down), up, down), 0.5 * (up + down))
+            # (the same sign moved by the value: the side that does not jump)
+            matrix[n:n + r, size - q + j] = one_sided(
+                (update(plus, t, yl, z_prev) - centre) / h,
+                (centre - update(minus, t, yl, z_prev)) / h)
         shift = self._shift
         if shift is None or not np.any(shift):
             self.map_at(matrix)
@@ -760,13 +848,10 @@ class ProgramTangent(ParameterTangent):
             if not has_slope(self.c, z, j):
                 cols.append(np.zeros(len(self.value(fn, self.c, t, yl, m, z))))
                 continue
-            h = STEP * max(abs(z[j]), 1.0)
-            up, down = list(z), list(z)
-            up[j] += h
-            down[j] -= h
-            hi = np.asarray(self.value(fn, self.c, t, yl, m, up), dtype=float)
-            lo = np.asarray(self.value(fn, self.c, t, yl, m, down), dtype=float)
-            cols.append((hi - lo) / (up[j] - down[j]))
+            # (on the branch the point is on: a play held within a step of its clamp's
+            # kink, just after it turned, reads its memory whole)
+            cols.append(branch_difference(lambda v: self.value(fn, self.c, t, yl, m, v),
+                                          list(z), j, STEP * max(abs(z[j]), 1.0)))
         return np.array(cols).T if cols else np.zeros((self.n if fn == "rhs" else 0, 0))
 
     def _by_data(self, fn: str, t: float, y: np.ndarray, m, z) -> np.ndarray:
