@@ -429,6 +429,70 @@ END
                       lambda t, v: ag(t, v["TAU"], v["KA"], v["TD"]), 1e-8)
 
 
+INFUSIONS = """PROGRAM infusions every TAU, each TLEN long
+  CONSTANT R = 2.0, K = 0.7, TLEN = 0.4, TAU = 1.1, T0 = 0.3
+  CINTERVAL CINT = 0.25
+  INITIAL
+    RATE = 0.0
+    SCHEDULE ON .AT. T0
+  END
+  DYNAMIC
+    DERIVATIVE
+      X = INTEG(RATE - K*X, 0.0)
+    END
+    DISCRETE ON
+      RATE = R
+      SCHEDULE OFF .AT. T + TLEN
+      SCHEDULE ON .AT. T + TAU
+    END
+    DISCRETE OFF
+      RATE = 0.0
+    END
+    TERMT(T >= 5.0)
+  END
+END
+"""
+
+
+def test_instants_discrete_code_schedules_move_with_the_values():
+    """An infusion at rate R from T0 every TAU, each stopped TLEN later by a SCHEDULE
+    .AT. that the DISCRETE code computes (T + TLEN, T + TAU): the k-th start moves by
+    dT0 + k dTAU, its stop by that + dTLEN, and the tangent carries each scheduled
+    instant's shift to the section it runs (with d t_s/d T times the shift of the
+    instant that schedules it). The same X as PULSE(T0, TAU, TLEN): against the
+    complex step of that closed form, to 1e-9. Differenced whole runs before ("the
+    time it schedules depends on a data value")."""
+    model = amilpy.loads(INFUSIONS, "infusions.csl")
+    values = {"R": 2.0, "K": 0.7, "T0": 0.3, "TAU": 1.1, "TLEN": 0.4}
+    assert_tangent_is(model, "X", values, [0.2, 0.5, 0.71, 1.0, 1.45, 1.81, 2.6, 3.61, 4.95],
+                      lambda t, v: pulsed_decay(t, v["R"], v["K"], v["T0"], v["TAU"],
+                                                v["TLEN"]), 1e-9)
+    assert model.sensitivity(list(values), outputs=["X"]).how == "sensitivity equations"
+
+
+def test_an_instant_scheduled_from_a_state_moves_with_it():
+    """The infusion stopped when X would reach a level: OFF at T + X/R (X at the
+    start, so the stop moves with everything that moves X there). Against central
+    differences of whole runs at RELERR 1e-12 (h = 1e-5: about 1e-7)."""
+    text = INFUSIONS.replace("SCHEDULE OFF .AT. T + TLEN", "SCHEDULE OFF .AT. T + 0.3 + X/R")
+    model = amilpy.loads(text, "infusions.csl")
+    from amilpy.analysis.sensitivity import trajectory
+
+    values = {"R": 2.0, "K": 0.7, "TAU": 1.1}
+    times = [0.5, 1.5, 2.75, 4.75]  # (CINT instants: rows of the runs differenced)
+    track = trajectory(model, 0, list(values), values, {"rtol": 1e-12, "atol": 1e-14},
+                       times)
+    assert not isinstance(track, str), track
+    h = 1e-5
+    for j, name in enumerate(values):
+        def x_at(delta, name=name):
+            run = model.run(advice=False, rtol=1e-12, atol=1e-14,
+                            **{**values, name: values[name] + delta})[0]
+            return np.array([run["X"][list(run.times).index(t)] for t in times])
+        reference = (x_at(h) - x_at(-h)) / (2 * h)
+        assert [track.row("X", t)[j] for t in times] == pytest.approx(reference, abs=1e-6)
+
+
 def test_a_section_a_crossing_runs_moves_with_the_values():
     """X' = -K X from 2, SCHEDULE HIT .XN. X - 1, HIT: X = X + 1: X reaches 1 at
     ln 2/K, back to 2, and again every ln 2/K: X = 2 exp(-K (t - k ln 2/K)). The

@@ -15,12 +15,16 @@ moves them, at the moved TIME (its code may read T: M_t, its rate in T), and the
 field after it runs the shift back, J (Phi + f- dt) + (M_t - f+) dt.
 
 An instant the code sets that the values move -- an INTERVAL computed from them,
-INITIAL's SCHEDULE .AT. time -- is followed the same way, its shift carried from one
-instant to the next (the k-th dose every TAU moves by k dTAU).
+INITIAL's SCHEDULE .AT. time, a SCHEDULE .AT. that DISCRETE code computes from the
+values, the states or the memory (an infusion stopped at T + TLEN) -- is followed the
+same way, its shift carried from one instant to the next (the k-th dose every TAU
+moves by k dTAU): d t_s/d (y, z, p) along the tangent, and d t_s/d T times the
+shift of the instant that schedules it.
 
-What it does not follow it says, and the caller differences whole runs instead: a
-SCHEDULE .AT. that DISCRETE code sets from the values or the states, a crossing the
-flow is tangent to, besides what `ParameterTangent` does not follow."""
+What it does not follow it says, and the caller differences whole runs instead: the
+sections code schedules changing with the values, a section due twice at instants
+that move differently, a crossing the flow is tangent to, besides what
+`ParameterTangent` does not follow."""
 
 from __future__ import annotations
 
@@ -127,18 +131,19 @@ class _TangentRun(AcslRun):
         return self.sampler.tangent
 
     def run_code(self, cur, fn, what: str) -> Calls:
-        matrix, moving, rate = None, None, None
+        matrix, moving, rate, scheduled = None, None, None, None
         section = what.removeprefix("DISCRETE ")
         shift = self.due_moved.pop(section, None)
         if self.why is None and self.tangent.failed is None:
             try:
-                matrix = self._code_jacobian(cur, fn)
+                matrix, scheduled = self._code_jacobian(cur, fn)
                 moving = self._crossing_shift(cur, what)
                 if moving is None and shift is not None:
                     moving = shift, self.tangent.field_rows(cur.t, cur.y, list(cur.m),
                                                             list(cur.z))
                 if moving is not None:  # (the code may read T: AG = AG + 20 T)
                     rate = self._code_rate(cur, fn)
+                self._schedules_moved(cur, fn, scheduled, moving)
             except _Jumped as exc:
                 self.why = f"{what} at TIME = {cur.t:.9g}: {exc}"
         calls = super().run_code(cur, fn, what)
@@ -157,6 +162,50 @@ class _TangentRun(AcslRun):
                 (*moving, t.field_rows(cur.t, cur.y, list(cur.m), list(cur.z)), rate)
             t.jump(matrix, cur.t, cur.y, cur.m, cur.z, moved)
         return calls
+
+    def _schedules_moved(self, cur, fn, scheduled, moving) -> None:
+        """The instants the code schedules (SCHEDULE OFF .AT. T + TLEN), as the values
+        move them: d t_s/d (y, z, p) (`_code_jacobian`) along the tangent before the
+        code (the states' total derivative where this instant moves), and d t_s/d T
+        times this instant's own shift. Kept
+        for when that section runs (`due_moved`); two pending instants of one section
+        that move differently the tangent cannot tell apart."""
+        if not scheduled:
+            return
+        t = self.tangent
+        rows, sections = scheduled
+        size = t.n + t.r
+        # (where this instant moves, the states the code reads are the ones there, and
+        # its T too: Phi + f- dt, and d t_s/d T dt)
+        total = t.phi[:size] if moving is None else \
+            t.phi[:size] + np.outer(moving[1][:size], moving[0])
+        shifts = rows[:, :size] @ total + rows[:, size:]
+        if moving is not None:
+            shifts = shifts + np.outer(self._schedule_rate(cur, fn), moving[0])
+        for section, moved in zip(sections, shifts, strict=True):
+            if not np.any(moved):
+                continue
+            pending = self.due_moved.get(section)
+            if pending is not None and not np.allclose(pending, moved, rtol=1e-9,
+                                                       atol=1e-12):
+                raise _Jumped(f"DISCRETE {section} is due twice at instants that move "
+                              "differently")
+            self.due_moved[section] = moved
+
+    def _schedule_rate(self, cur, fn) -> np.ndarray:
+        """d t_s / d TIME of each instant the section `fn` schedules at the cursor."""
+        h = STEP * max(abs(cur.t), 1.0)
+        sides = []
+        for at in (cur.t + h, cur.t - h):
+            calls = Calls()
+            try:
+                fn(at, cur.y.tolist(), list(cur.m), list(cur.z), calls)
+            except (ArithmeticError, ValueError) as exc:
+                raise _Jumped(f"its code has no value near the run's ({exc})") from None
+            sides.append(np.array([when for when, _ in calls.schedules], dtype=float))
+        if sides[0].shape != sides[1].shape:
+            raise _Jumped("the sections it schedules change with TIME")
+        return (sides[0] - sides[1]) / (2.0 * h)
 
     def _interval_moved(self, name: str) -> np.ndarray:
         """d/dp of an INTERVAL's value: its tangent row where the code keeps it, else
@@ -245,8 +294,10 @@ class _TangentRun(AcslRun):
         out[:t.n + t.r] = (sides[0] - sides[1]) / (2.0 * h)
         return out
 
-    def _code_jacobian(self, cur, fn) -> np.ndarray:
-        """d (y', z') / d (y, z, p) of the section `fn` at the cursor."""
+    def _code_jacobian(self, cur, fn) -> tuple[np.ndarray, tuple | None]:
+        """d (y', z') / d (y, z, p) of the section `fn` at the cursor, and of the times
+        it schedules: (their rows d t_s / d (y, z, p), their sections), None if it
+        schedules none."""
         tangent = self.tangent
         n, r, q = tangent.n, tangent.r, len(self.variants)
         t, m, y, z = cur.t, list(cur.m), np.asarray(cur.y, dtype=float), list(cur.z)
@@ -261,6 +312,14 @@ class _TangentRun(AcslRun):
                                    np.asarray(z1, dtype=float)]), calls.schedules
 
         center, schedules = run(fn, y.tolist(), z)
+        sections = [what for _, what in schedules]
+        timing = np.zeros((len(schedules), n + r + q))
+
+        def times_of(got, what: str) -> np.ndarray:
+            # the same sections in the same order, at times the move may change
+            if [w for _, w in got] != sections:
+                raise _Jumped(f"the sections it schedules depend on {what}")
+            return np.array([t_s for t_s, _ in got], dtype=float)
 
         moving = np.any(tangent.phi[:n + r] != 0.0, axis=1)  # (what the values move)
 
@@ -286,17 +345,17 @@ class _TangentRun(AcslRun):
             down[j] -= h
             hi, s_hi = run(fn, up[:n].tolist(), up[n:].tolist())
             lo, s_lo = run(fn, down[:n].tolist(), down[n:].tolist())
-            if s_hi != schedules or s_lo != schedules:
-                raise _Jumped("the time it schedules depends on the states or memory")
+            timing[:, j] = (times_of(s_hi, "the states or memory") -
+                            times_of(s_lo, "the states or memory")) / (up[j] - down[j])
             out[:n + r, j] = column(hi, lo, up[j] - down[j], bool(moving[j]))
         key = self.keys[id(fn)]
         for j, (plus, minus, h) in enumerate(self.variants):
             hi, s_hi = run(plus.code[key][1], y.tolist(), z)
             lo, s_lo = run(minus.code[key][1], y.tolist(), z)
-            if s_hi != schedules or s_lo != schedules:
-                raise _Jumped("the time it schedules depends on a data value")
+            timing[:, n + r + j] = (times_of(s_hi, "a data value") -
+                                    times_of(s_lo, "a data value")) / (2.0 * h)
             out[:n + r, n + r + j] = column(hi, lo, 2.0 * h, True)
-        return out
+        return out, ((timing, sections) if sections else None)
 
 
 class ProgramTrajectory:
