@@ -14,8 +14,7 @@ F_p, ds/dp, d out/dp and the start's dependence d y(t0)/dp are central differenc
 of the generated functions at one TIME and state (the run's code bound to p +- h,
 no integration); h = cbrt(eps) |p| (1e-8 for p = 0: `step_for`). Where the
 variational equations do not follow the flow (a state reset with another change at
-its instant, a flow tangent to a surface, a memory they cannot carry changing --
-DELAY's store: `variational.memory_unfollowed`; in a
+its instant, a flow tangent to a surface, DELAY's sampling instants moved by p; in a
 program of the ACSL form, an
 instant its code runs at that moves with p: `analysis.program`) the caller
 differences whole runs instead, and is told why."""
@@ -31,7 +30,7 @@ from ..observed import Observations
 from ..run.flow import FlowFailed
 from ..run.jacobian import STEP  # (cbrt(machine epsilon): the one differencing step)
 from ..run.plan import SAME_INSTANT, sliding_in
-from ..run.variational import ParameterTangent, ProgramTangent, memory_unfollowed
+from ..run.variational import ParameterTangent, ProgramTangent
 from .tangents import Sampler, output_row, outputs_asked, step_for
 
 if TYPE_CHECKING:
@@ -130,10 +129,8 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
     c = flow.code
     start = flow.initial_state()
     n = len(start.y)
-    # the memory functions' values are carried too (their rows after the states's),
-    # unless the tangent cannot follow their updates (then a change it meets says so)
-    unfollowed = memory_unfollowed(c)
-    r = len(start.memory) if unfollowed is None else 0
+    # the memory functions' values are carried too (their rows after the states's)
+    r = len(start.memory)
     variants, dy0 = [], np.zeros((n + r, len(names)))
     for j, name in enumerate(names):
         moved = moved_flows(flow_at, c, name, data[name])
@@ -142,8 +139,6 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
         plus, minus, h = moved
         variants.append((plus.code, minus.code, h))
         up, down = plus.initial_state(), minus.initial_state()
-        if up.memory != down.memory and not r:
-            return f"{unfollowed}, and its start depends on {name}"
         hi = np.concatenate([up.y, up.memory[:r]])
         lo = np.concatenate([down.y, down.memory[:r]])
         with np.errstate(invalid="ignore"):  # (a slot at -INF in both: no dependence)

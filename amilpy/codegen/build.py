@@ -708,6 +708,10 @@ class Compiler:
             play_slots=[mem.slot for mem, f in zip(model.memories, self.entries, strict=True)
                         if f.memory.plays],
             wake_slots=self.wake_slots(),
+            clock_slots=frozenset(mem.slot + k for mem, f in zip(model.memories, self.entries,
+                                                                 strict=True)
+                                  if f.memory.clock is not None
+                                  for k in f.memory.clock(mem.nslots)),
             memory_times=self.memory_times(),
             memory_trains=[(0.0, 1.0)] if model.weather else [],
             statements=self.statements, model=model,

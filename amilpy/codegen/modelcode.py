@@ -42,6 +42,8 @@ class ModelCode:
     # the memory slots holding an instant at which the model switches (PULSE's end, a
     # draw's next instant: `MemorySpec.wakes`)
     wake_slots: list[int] = field(default_factory=list)
+    # the memory slots that keep instants and counts (DELAY's store: `MemorySpec.clock`)
+    clock_slots: frozenset[int] = frozenset()
     # (z, t) -> instants after t at which memory makes the model switch (PULSE ends)
     memory_times: Callable | None = None
     # memory that samples the trajectory inside each accepted step (DELAY's store):

@@ -119,6 +119,9 @@ class MemorySpec:
     # input reversing while it pushes), the step is cut there and the memory updated
     # at the turning point (`run.turns`), not at the step's end
     plays: bool = False
+    # the slots (offsets, given how many there are) that keep instants and counts, not
+    # values the arguments give: the sensitivity equations carry no slope in them
+    clock: Callable[[int], list[int]] | None = None
 
 
 @dataclass(frozen=True)
@@ -570,7 +573,7 @@ register(Func("DELAY", Kind.MEMORY, "DELAY(N, P, X)",
               memory=MemorySpec("2*A + 13", ("*DELAY_INIT(A + 2)",),
                                 "DELAY(TIME, B, C, C, 1.0, Z, OFFSET, A + 2)",
                                 ("*DELAY_STORE(TIME, B / A, B, C, Z, OFFSET, A + 2)",),
-                                samples=rt.DELAY_NEXT, horizon="B"),
+                                samples=rt.DELAY_NEXT, horizon="B", clock=rt.delay_clock),
               variants=(
                   # ACSL: IC until TIME - TDL reaches t0, then X(t - TDL(t)) from NMX
                   # points at least DMIN apart (and TDL/NMX: they span the delay);
@@ -585,7 +588,7 @@ register(Func("DELAY", Kind.MEMORY, "DELAY(N, P, X)",
                            "2*D + 13", ("*DELAY_INIT(D + 2)",),
                            "(DELAY(TIME, C, A, B, 0.0, Z, OFFSET, D + 2) if M0 >= 0 else B)",
                            ("*DELAY_STORE(TIME, AMAX1(E, C / D), C, A, Z, OFFSET, D + 2)",),
-                           samples=rt.DELAY_NEXT, horizon="C")),
+                           samples=rt.DELAY_NEXT, horizon="C", clock=rt.delay_clock)),
               )))
 
 # --- random: one stream per call site, a draw held for an output interval --------

@@ -391,6 +391,14 @@ _COUNT, _T0, _X0, _H, _ANCHOR_T, _ANCHOR_J, _NEXT, _TLAST, _XLAST, _RING = range
 DELAY_NEXT = _NEXT  # the slot the library names as the store's next sampling instant
 
 
+def delay_clock(nslots: int) -> list[int]:
+    """The slots of a store of `nslots` that hold instants and counts, not values of
+    X: a data value that moves X moves none of them (the sampling instants are fixed
+    by the spacing), so a tangent carries no row for them (`MemorySpec.clock`)."""
+    ring = range(_RING, nslots, 2)  # (each sample's t; its X follows)
+    return [_COUNT, _T0, _H, _ANCHOR_T, _ANCHOR_J, _NEXT, _TLAST, *ring]
+
+
 class HelperFault(ValueError):
     """A run-time helper's fault that says itself what is wrong (the fault report
     quotes it, with the statement, instead of the generated call)."""

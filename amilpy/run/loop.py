@@ -245,6 +245,9 @@ class Integrator(RunLoop, SegmentStart, StepWatch, Restarts, FastPaths):
                 raise self._stop_for(failure, stepper)
             ta, step = stepper.t_old, self._accepted(stepper, cur, e_prev, seg_start)
             e_prev = step.e_b
+            # (the memory the step began with: DELAY's store samples inside it, below,
+            # and the observer follows those samples itself)
+            z_step = list(cur.z) if observer is not None else None
             if rec is not None:
                 taken = stepper.samples(step.tb)
                 if taken is not None:
@@ -253,7 +256,7 @@ class Integrator(RunLoop, SegmentStart, StepWatch, Restarts, FastPaths):
                                   step.silent)
             self.sample_memory(stepper, cur, step.tb)
             if observer is not None:
-                observer(ta, step.tb, stepper.interpolant(), list(cur.m), list(cur.z))
+                observer(ta, step.tb, stepper.interpolant(), list(cur.m), z_step)
             tb, yb = step.tb, step.yb
             at_output = rec is not None and rec.out_i < len(plan.grid.times) and \
                 plan.grid.times[rec.out_i] <= tb * (1 + 4e-16)

@@ -35,14 +35,15 @@ S + f dt/dp and the update's rate in TIME where the switch's instant moves; an
 instant a slot holds (CSMP's PULSE end) jumps the tangent by (f- - f+) times that
 slot's row (`_wake`). A play (HSTRSS, BCKLSH) is read on the branch the motion
 takes (`leaned`: following its input where the input pushes it, else holding),
-and a step in which one engages is split there (`engaged`).
+and a step in which one engages is split there (`engaged`). DELAY's store is
+sampled inside the steps as the run samples it, the tangent cut at each instant.
 
 What it does not handle it says (`Tangent.failed`), and the flow map then
 takes central differences of whole flows instead: a state reset (MODINT; a
 `ParameterTangent` follows one: `_reset`), a
 memory value the field (or an output asked for) reads changing along the way
-where the memory is not carried (the flow map's; a DELAY store:
-`memory_unfollowed`),
+where the memory is not carried (the flow map's), DELAY's sampling instants that a
+data value moves (its delay),
 a crossing where the flow is tangent to the surface (n . f- ~ 0), two PULSE
 trains that share an instant and move it differently. A train instant a data
 value moves (PULSE(TZ, P, W): first + k period) jumps the tangent by
@@ -75,14 +76,35 @@ def _comm(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return a @ b - b @ a
 
 
-def magnus6(a1: np.ndarray, a2: np.ndarray, a3: np.ndarray, h: float) -> np.ndarray:
-    """exp(Omega) over a step h from A at the three Gauss-Legendre nodes."""
+def exp_moving(omega: np.ndarray, n: int) -> np.ndarray:
+    """expm(omega) for a matrix whose rows past the first n are zero (the tangent's
+    values and memory do not move between instants): [[e^X, phi1(X) B], [0, I]] with
+    X, B its first n rows, phi1 from the 2n-square [[X, I], [0, 0]] -- where that is
+    the smaller (a store of a hundred slots carried by one state)."""
+    size = len(omega)
+    if 2 * n >= size:
+        return expm(omega)
+    aug = np.zeros((2 * n, 2 * n))
+    aug[:n, :n] = omega[:n, :n]
+    aug[:n, n:] = np.eye(n)
+    e = expm(aug)
+    out = np.eye(size)
+    out[:n, :n] = e[:n, :n]
+    out[:n, n:] = e[:n, n:] @ omega[:n, n:]
+    return out
+
+
+def magnus6(a1: np.ndarray, a2: np.ndarray, a3: np.ndarray, h: float, n: int | None = None
+            ) -> np.ndarray:
+    """exp(Omega) over a step h from A at the three Gauss-Legendre nodes (A's rows past
+    the first n zero: `exp_moving`)."""
     b1 = h * a2
     b2 = math.sqrt(15) * h / 3 * (a3 - a1)
     b3 = 10 * h / 3 * (a3 - 2 * a2 + a1)
     c1 = _comm(b1, b2)
     c2 = -_comm(b1, 2 * b3 + c1) / 60
-    return expm(b1 + b3 / 12 + _comm(-20 * b1 - b3 + c1, b2 + c2) / 240)
+    omega = b1 + b3 / 12 + _comm(-20 * b1 - b3 + c1, b2 + c2) / 240
+    return expm(omega) if n is None else exp_moving(omega, n)
 
 
 class Tangent:
@@ -122,7 +144,14 @@ class Tangent:
         if self._pending is not None:
             a, h = self._pending
             self._pending = None
-            self._phi = expm(h * a) @ self._phi
+            self._phi = self._exp(h * a) @ self._phi
+
+    # the tangent's variables that move between instants: the first these many (None:
+    # all; `ParameterTangent`: the states, its values and memory held)
+    _moving: int | None = None
+
+    def _exp(self, omega: np.ndarray) -> np.ndarray:
+        return expm(omega) if self._moving is None else exp_moving(omega, self._moving)
 
     def value(self, fn: str, code, t: float, y, m, z):
         """`fn` ("rhs" or "surf") of the generated functions `code` at (t, y): while a
@@ -199,7 +228,7 @@ class Tangent:
         if change <= 1e-13 * float(np.max(np.abs(a1))):
             # the same Jacobian along the step: a linear branch
             if depth:
-                return expm(h * a1)
+                return self._exp(h * a1)
             if self._pending is not None and np.array_equal(self._pending[0], a1):
                 self._pending[1] += h
             else:
@@ -207,7 +236,7 @@ class Tangent:
                 self._pending = [a1, h]
             return None
         a2 = self.jacobian(t2, ys[:, 1], m, z)
-        whole = magnus6(a1, a2, a3, h)
+        whole = magnus6(a1, a2, a3, h, self._moving)
         if h * change <= self._trusted or depth >= MAX_DEPTH:
             return whole
         # the step against its two halves (Richardson): where they agree, the halves
@@ -229,7 +258,7 @@ class Tangent:
         times = ta + _C * (tb - ta)
         ys = sample(interp, times)
         return magnus6(*(self.jacobian(t, ys[:, i], m, z) for i, t in enumerate(times)),
-                       tb - ta)
+                       tb - ta, self._moving)
 
     def _join(self, t: float, y: np.ndarray, m, z, zl=None) -> None:
         """What happened between the last step and this one: switches (saltation),
@@ -484,6 +513,7 @@ class ParameterTangent(Tangent):
         super().__init__(c, watch, floor, n + q, range(n, n + q))
         self._phi = np.vstack([start, np.eye(q)])
         self.n, self.variants = n, variants
+        self._moving = n
         self.outputs = "all" if outputs is None else outputs  # (observed: their memory too)
 
     def _by_p(self, fn: str, t: float, yl: list, m, z) -> np.ndarray:
@@ -647,24 +677,51 @@ class _Path:
     returned: list[int]
 
 
+GROUP = 4  # slots tested one by one below this many (`read_slots`)
+
+
+def read_slots(f, centre: np.ndarray, z, slots: list[int]) -> list[int]:
+    """Which of `slots` f(z) moves with: sets of them moved together (each by its own
+    odd fraction of STEP, so that no two cancel), a set that moves nothing dropped
+    whole, the others halved (DELAY's store: its read takes two of a hundred samples;
+    a difference of each was most of a tangent's time)."""
+    if len(slots) <= GROUP:
+        return slots
+    moved = list(z)
+    for i, j in enumerate(slots):
+        moved[j] = z[j] + STEP * max(abs(z[j]), 1.0) * (1.0 + 0.618034 * (i % 7))
+    if np.array_equal(np.asarray(f(moved), dtype=float), centre):
+        return []
+    half = len(slots) // 2
+    return read_slots(f, centre, z, slots[:half]) + read_slots(f, centre, z, slots[half:])
+
+
+def copied_slots(f, centre: np.ndarray, z, slots: list[int]) -> list[int]:
+    """Which of `slots` the memory map f(z) copies as they are (its column e_j): sets
+    of them moved together (`read_slots`' way), a set whose moved values come out
+    unchanged, the rest as before, kept whole; the others halved."""
+    if not slots:
+        return []
+    moved = list(z)
+    for i, j in enumerate(slots):
+        moved[j] = z[j] + STEP * max(abs(z[j]), 1.0) * (1.0 + 0.618034 * (i % 7))
+    out = np.asarray(f(moved), dtype=float)
+    expect = centre.copy()
+    expect[slots] = [moved[j] for j in slots]
+    if np.array_equal(out, expect):
+        return slots
+    if len(slots) == 1:
+        return []
+    half = len(slots) // 2
+    return copied_slots(f, centre, z, slots[:half]) + copied_slots(f, centre, z, slots[half:])
+
+
 def has_slope(c, z, j: int) -> bool:
     """Whether what reads memory slot j has a slope in it: not an instant not yet set
     (-INF), nor an instant the model switches at, whose only effect is that switch's
-    jump (`ProgramTangent._wake`)."""
-    return math.isfinite(z[j]) and j not in c.wake_slots
-
-
-def memory_unfollowed(c) -> str | None:
-    """Why a tangent cannot carry the memory of `c`'s functions through their
-    updates (None: it can): a store that samples inside the steps (DELAY's). (A
-    play's clamp is carried on the branch the motion takes: `ProgramTangent.leaned`.)"""
-    from ..library import lookup
-
-    for mem in (c.model.memories if c.model is not None else ()):
-        spec = lookup(mem.func, len(mem.args)).memory
-        if spec.samples is not None:
-            return f"{mem.func}'s store samples the states inside the steps"
-    return None
+    jump (`ProgramTangent._wake`), nor an instant or count a store keeps
+    (`ModelCode.clock_slots`)."""
+    return math.isfinite(z[j]) and j not in c.wake_slots and j not in c.clock_slots
 
 
 class ProgramTangent(ParameterTangent):
@@ -681,13 +738,84 @@ class ProgramTangent(ParameterTangent):
                  outputs: list[int] | None = None) -> None:
         super().__init__(c, watch, floor, start, variants, outputs)
         self.n, self.r = start.shape[0] - memory, memory
-        # memory whose changes it does not follow, and why (`memory_unfollowed`)
-        self.unfollowed = memory_unfollowed(c)
+        self._moving = self.n
+        # (the memory a step was given, as its samples inside left it, up to when)
+        self._sampled: tuple[list, list, float] | None = None
+        # the slots that hold a sampling memory's next instant (DELAY's store)
+        from ..library import lookup
+
+        specs = [(mem.slot, lookup(mem.func, len(mem.args)).memory)
+                 for mem in (c.model.memories if c.model is not None else ())]
+        self._next_slots = [slot + spec.samples for slot, spec in specs
+                            if spec.samples is not None]
 
     def _memory_moved(self, t: float, y: np.ndarray, m_prev, m, z_prev, z) -> bool:
-        if self.unfollowed is not None:
-            return super()._memory_moved(t, y, m_prev, m, z_prev, z)
         return True
+
+    def __call__(self, ta: float, tb: float, interp, m, z) -> None:
+        """A step [ta, tb] given the memory it started with: where memory samples the
+        trajectory inside it (DELAY's store, at the instants it asks for), the tangent
+        is cut there and the sample's map applied, as the run's loop samples from the
+        dense output (a later piece of the same step goes on from the samples taken)."""
+        c = self.c
+        if c.next_sample is None:
+            return super().__call__(ta, tb, interp, m, z)
+        given = list(z)
+        if self._sampled is not None and self._sampled[0] == given and \
+                ta >= self._sampled[2]:
+            z = self._sampled[1]
+        t, g = ta, c.next_sample(z)
+        while g < tb and self.failed is None:
+            super().__call__(t, g, interp, m, z)
+            if self.failed is not None:
+                return
+            y = np.asarray(interp(g), dtype=float)
+            before = list(z)
+            self.map_at(self._memory_map(lambda code, tt, yv, zv: code.sample(tt, yv, m, zv),
+                                         g, y.tolist(), before))
+            z = list(c.sample(g, y.tolist(), m, before))
+            if any(np.any(self.phi[self.n + k]) for k in self._next_slots):
+                self.failed = "DELAY's sampling instants move with a data value (its delay)"
+                return
+            self.prev, self._lean = (g, y, list(m), list(z)), None
+            after = c.next_sample(z)
+            if not after > g:
+                break
+            t, g = g, after
+        super().__call__(t, tb, interp, m, z)
+        self._sampled = (given, list(z), tb)
+
+    def _memory_map(self, call, t: float, yl: list, z) -> np.ndarray:
+        """The Jacobian of a memory map z' = call(code, t, y, z) as a map of the
+        tangent's variables: its rows for z (d/dy and d/dz on the branch the point is
+        on, d/dp on the side that does not bend), the states and values kept."""
+        n, r, c = self.n, self.r, self.c
+        size, q = len(self._phi), len(self.variants)
+        matrix = np.eye(size)
+        matrix[n:n + r, n:n + r] = 0.0
+        for j in range(n):
+            h = STEP * max(abs(yl[j]), float(self.floor[j]))
+            matrix[n:n + r, j] = branch_difference(lambda v: call(c, t, v, z), yl, j, h)
+        centre = np.asarray(call(c, t, yl, z), dtype=float)
+
+        def by_z(v):
+            return call(c, t, yl, v)
+
+        # (PULSE's -INF before a first trigger; a store's instants and counts; the
+        # slots the map copies as they are, most of a store's)
+        slots = [j for j in range(r) if math.isfinite(z[j]) and j not in c.clock_slots]
+        copied = set(copied_slots(by_z, centre, z, slots))
+        for j in slots:
+            if j in copied:
+                matrix[n + j, n + j] = 1.0
+                continue
+            matrix[n:n + r, n + j] = branch_difference(by_z, list(z), j,
+                                                       STEP * max(abs(z[j]), 1.0))
+        for j, (plus, minus, h) in enumerate(self.variants):
+            matrix[n:n + r, size - q + j] = one_sided(
+                (np.asarray(call(plus, t, yl, z), dtype=float) - centre) / h,
+                (centre - np.asarray(call(minus, t, yl, z), dtype=float)) / h)
+        return matrix
 
     def leaned(self, t: float, y: np.ndarray, m, z) -> list:
         """z with each play's memory (HSTRSS, BCKLSH) that the motion from (t, y) pushes
@@ -697,8 +825,10 @@ class ProgramTangent(ParameterTangent):
         the clamp's kink, where every update leaves a play that follows -- central
         differences gave half of each. A play the motion does not push holds (z as
         it is)."""
+        if self._sampled is not None and list(z) == self._sampled[0]:
+            z = self._sampled[1]  # (a row inside a step the store sampled in)
         slots = self.c.play_slots
-        if not slots or self.unfollowed is not None:
+        if not slots:
             return z
         yl = [float(v) for v in y]
         h = self.watch.lookahead_h
@@ -759,28 +889,11 @@ class ProgramTangent(ParameterTangent):
                 zv = code.mem(tt, yv, before, after, list(zv))
             return np.asarray(zv, dtype=float)
 
-        # the update as a map of the tangent's variables: its rows for z; the states
-        # and the values are kept (an update reads a trigger's sign where its mode is
-        # not positive, a sign that jumps at the crossing it may be taken at:
-        # `branch_difference` keeps to the branch the run's update took)
-        size, q = len(self._phi), len(self.variants)
-        matrix = np.eye(size)
-        matrix[n:n + r, n:n + r] = 0.0
-        for j in range(n):
-            h = STEP * max(abs(yl[j]), float(self.floor[j]))
-            matrix[n:n + r, j] = branch_difference(lambda v: update(c, t, v, z_prev), yl, j, h)
-        for j in range(r):
-            if not math.isfinite(z_prev[j]):  # (PULSE's -INF before a first trigger)
-                continue
-            h = STEP * max(abs(z_prev[j]), 1.0)
-            matrix[n:n + r, n + j] = branch_difference(lambda v: update(c, t, yl, v),
-                                                       list(z_prev), j, h)
-        centre = update(c, t, yl, z_prev)
-        for j, (plus, minus, h) in enumerate(self.variants):
-            # (the same sign moved by the value: the side that does not jump)
-            matrix[n:n + r, size - q + j] = one_sided(
-                (update(plus, t, yl, z_prev) - centre) / h,
-                (centre - update(minus, t, yl, z_prev)) / h)
+        # (an update reads a trigger's sign where its mode is not positive, a sign that
+        # jumps at the crossing it may be taken at: `branch_difference` keeps to the
+        # branch the run's update took; the same sign moved by a value, `one_sided`)
+        matrix = self._memory_map(update, t, yl, z_prev)
+        size = len(self._phi)
         shift = self._shift
         if shift is None or not np.any(shift):
             self.map_at(matrix)
@@ -842,17 +955,21 @@ class ProgramTangent(ParameterTangent):
         return None
 
     def _by_z(self, fn: str, t: float, y: np.ndarray, m, z) -> np.ndarray:
-        """d fn(t, y, m, z) / d z, a column per memory value."""
-        yl, cols = np.asarray(y, dtype=float).tolist(), []
-        for j in range(self.r):
-            if not has_slope(self.c, z, j):
-                cols.append(np.zeros(len(self.value(fn, self.c, t, yl, m, z))))
-                continue
-            # (on the branch the point is on: a play held within a step of its clamp's
-            # kink, just after it turned, reads its memory whole)
-            cols.append(branch_difference(lambda v: self.value(fn, self.c, t, yl, m, v),
-                                          list(z), j, STEP * max(abs(z[j]), 1.0)))
-        return np.array(cols).T if cols else np.zeros((self.n if fn == "rhs" else 0, 0))
+        """d fn(t, y, m, z) / d z, a column per memory value: nonzero only for the
+        slots fn reads here (`read_slots`), each on the branch the point is on (a
+        play held within a step of its clamp's kink, just after it turned, reads its
+        memory whole)."""
+        yl = np.asarray(y, dtype=float).tolist()
+
+        def f(v):
+            return self.value(fn, self.c, t, yl, m, v)
+
+        centre = np.asarray(f(z), dtype=float)
+        out = np.zeros((len(centre), self.r))
+        for j in read_slots(f, centre, z, [j for j in range(self.r)
+                                           if has_slope(self.c, z, j)]):
+            out[:, j] = branch_difference(f, list(z), j, STEP * max(abs(z[j]), 1.0))
+        return out
 
     def _by_data(self, fn: str, t: float, y: np.ndarray, m, z) -> np.ndarray:
         """d fn / d (z, p): the memory values' columns, then the data values'."""
