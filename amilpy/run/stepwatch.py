@@ -71,9 +71,10 @@ class StepWatch:
             if g is None:
                 g = self._surface_gradient(cur, e0, k)
             if g is not None:
-                band = 10.0 * float(np.abs(g) @ scale)
-                if abs(e0[k]) <= band:
-                    out[k] = band
+                # (and twice where the slide left it: its drift, which a long slide at
+                # a tight tolerance takes past ten units)
+                band = max(10.0 * float(np.abs(g) @ scale), 2.0 * abs(e0[k]))
+                out[k] = band
         return out
 
     def _surface_gradient(self, cur: Cursor, e0, k: int) -> np.ndarray | None:
