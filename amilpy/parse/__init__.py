@@ -2,7 +2,9 @@
 
 The only package that sees lark: the grammar is `grammar/amil.lark` (shipped as
 `amilpy.grammar`), the parser is LALR with lark's cache so a start does not
-rebuild the tables. A syntax fault does not end the reading: the statement it
+rebuild the tables, and the tree is made by callbacks of our own as rules reduce
+(`tree.read`: lark's tree builder with its positions was half of the parsing). A
+syntax fault does not end the reading: the statement it
 stands in is skipped and the text after it is read on, so every fault of the
 file is reported at once (up to `MAX_ERRORS`).
 """
@@ -23,6 +25,7 @@ from .jumps import lower_jumps
 from .lexical import blank_comment_lines, code_end, continues, prepare
 from .macros import expand, in_macros
 from .syntax import MAX_DEPTH, no_collection
+from .tree import read
 
 __all__ = ["MAX_DEPTH", "MAX_ERRORS", "blank_comment_lines", "parse"]
 
@@ -38,7 +41,7 @@ def _parser():
         grammar,
         parser="lalr",
         lexer="contextual",
-        propagate_positions=True,
+        propagate_positions=False,
         maybe_placeholders=True,
         cache=True,
     )
@@ -69,7 +72,7 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     while True:
         part = prepared if offset == 0 else "\n".join(lines[offset:])
         try:
-            tree = parser.parse(part)
+            tree = read(parser, part)
         except UnexpectedInput as exc:
             errors.append(_diagnose(exc, part, lines, offset, parser))
             resume = _after_statement(lines, offset, getattr(exc, "line", None))
