@@ -1,5 +1,6 @@
 """lark's LALR parse without lark's tree builder: the parse tree `build.Builder` reads,
-made by callbacks of our own that the parser calls as each rule reduces.
+made by callbacks of our own as each rule reduces, in a loop of our own over lark's
+tables (the grammar's, from lark's cache) with lark's contextual lexer.
 
 lark's own tree building with `propagate_positions` was half of the parsing: every
 reduction, the nine precedence levels an operand climbs through included, went
@@ -222,6 +223,7 @@ def _plan(rule):
     lark filters out (anonymous strings, `_NAMES`) left out, `_rules` inlined, a
     None for each `[...]` not there. ((index, inline, Nones before), Nones after)"""
     expansion = rule.expansion
+    keep_all = bool(getattr(rule.options, "keep_all_tokens", False))  # (a `!rule`)
     flags = getattr(rule.options, "empty_indices", ()) or ()
     if flags:
         s = "".join(str(int(b)) for b in flags)
@@ -231,10 +233,14 @@ def _plan(rule):
     plan, nones = [], 0
     for i, sym in enumerate(expansion):
         nones += empty[i]
-        if not (sym.is_term and sym.filter_out):
+        if keep_all or not (sym.is_term and sym.filter_out):
             plan.append((i, not sym.is_term and sym.name.startswith("_"), nones))
             nones = 0
     return tuple(plan), nones + empty[len(expansion)]
+
+
+def _unit(raw):
+    return raw[0]
 
 
 def _callback(rule):
@@ -242,19 +248,13 @@ def _callback(rule):
     options = rule.options
     expand1 = bool(getattr(options, "expand1", False)) and not rule.alias
     name = rule.alias or rule.origin.name
-    keep_all = bool(getattr(options, "keep_all_tokens", False))
-    if keep_all:  # (none in the grammar; lark keeps every token of such a rule)
-        plan, tail = tuple((i, False, 0) for i in range(len(rule.expansion))), 0
     expression = name in _EXPRESSIONS
     size = len(rule.expansion)
     simple = not tail and all(not inline and not nones for _, inline, nones in plan)
     indices = tuple(i for i, _, _ in plan)
 
     if expand1 and size == 1 and simple and len(plan) == 1:
-        # ?sum: product -- the child, passed up as it is (its container is its own)
-        def unit(raw):
-            return raw[0]
-        return unit
+        return _unit  # ?sum: product -- the child, passed up as it is
 
     if simple and len(indices) == size:
         def children(raw):
@@ -293,32 +293,89 @@ def _callback(rule):
     return reduce
 
 
-_CONFS: dict = {}
+_TABLES: dict = {}
 
 
-def _conf(parser, conf):
-    """lark's parse configuration with our callbacks (one per parser)."""
-    from copy import copy
+class _Fault(Exception):
+    """No action for a token: a syntax fault, said by lark's own parse."""
+
+
+def _table(parser, conf) -> dict:
+    """lark's LALR table, each state's actions by symbol: the next state (a shift or
+    a goto), or a reduction (size, the rule's name, our callback; None: the rule
+    passes its one child up unchanged). One per parser."""
+    from lark.parsers.lalr_analysis import Shift
 
     key = id(parser)
-    if key not in _CONFS:
-        ours = copy(conf)
-        ours.callbacks = {rule: _callback(rule) if hasattr(rule, "expansion") else f
-                          for rule, f in conf.callbacks.items()}
-        _CONFS[key] = (parser, ours)
-    return _CONFS[key][1]
+    if key not in _TABLES:
+        made = {rule: _callback(rule) for rule in conf.callbacks if hasattr(rule, "expansion")}
+        reductions = {rule: (len(rule.expansion), rule.origin.name,
+                             None if made[rule] is _unit else made[rule]) for rule in made}
+        table = {state: {symbol: arg if action is Shift else reductions[arg]
+                         for symbol, (action, arg) in actions.items()}
+                 for state, actions in conf.states.items()}
+        _TABLES[key] = (parser, table)  # (the parser kept: its id stays its own)
+    return _TABLES[key][1]
 
 
 def read(parser, text: str) -> Node:
-    """The tree of `text` (lark's UnexpectedInput as lark's own parse raises it)."""
+    """The tree of `text` (lark's UnexpectedInput as lark's own parse raises it).
+
+    lark's LALR loop (`ParserState.feed_token`) written out over our table: a unit
+    reduction (44 of the 59 of a chain statement) only changes the top state, and no
+    rule is hashed to find its callback. The contextual lexer reads the top state
+    from lark's parser state, whose stack this is."""
     from lark.exceptions import UnexpectedInput
 
     interactive = parser.parse_interactive(text)
     state = interactive.parser_state
-    state.parse_conf = _conf(parser, state.parse_conf)
+    conf = state.parse_conf
+    table = _table(parser, conf)
+    end_state = conf.end_state
+    states = state.state_stack  # (the lexer reads its last item: kept in place)
+    values = state.value_stack
     try:
-        return interactive.resume_parse()
-    except UnexpectedInput:
+        for token in state.lexer.lex(state):
+            kind = token.type
+            while True:
+                action = table[states[-1]].get(kind)
+                if action.__class__ is int:
+                    states.append(action)
+                    values.append(token)
+                    break
+                if action is None:
+                    raise _Fault
+                size, origin, callback = action
+                if callback is None:
+                    del states[-1]
+                else:
+                    if size:
+                        raw = values[-size:]
+                        del states[-size:]
+                        del values[-size:]
+                    else:
+                        raw = []
+                    values.append(callback(raw))
+                states.append(table[states[-1]][origin])
+        while True:  # the end of the text: reduce to the start
+            action = table[states[-1]].get("$END")
+            if action is None or action.__class__ is int:
+                raise _Fault
+            size, origin, callback = action
+            if callback is None:
+                del states[-1]
+            else:
+                if size:
+                    raw = values[-size:]
+                    del states[-size:]
+                    del values[-size:]
+                else:
+                    raw = []
+                values.append(callback(raw))
+            states.append(table[states[-1]][origin])
+            if states[-1] == end_state:
+                return values[-1]
+    except (UnexpectedInput, _Fault):
         pass
     parser.parse(text)  # (raises the same fault, as the messages have always read it)
     raise AssertionError("lark's parse read what its tables did not")  # pragma: no cover
