@@ -300,10 +300,11 @@ class _Fault(Exception):
     """No action for a token: a syntax fault, said by lark's own parse."""
 
 
-def _table(parser, conf) -> dict:
+def _table(parser, conf) -> tuple[dict, dict]:
     """lark's LALR table, each state's actions by symbol: the next state (a shift or
     a goto), or a reduction (size, the rule's name, our callback; None: the rule
-    passes its one child up unchanged). One per parser."""
+    passes its one child up unchanged); and each state's lexing (`_scanning`), filled
+    as states are met. One per parser."""
     from lark.parsers.lalr_analysis import Shift
 
     key = id(parser)
@@ -314,29 +315,74 @@ def _table(parser, conf) -> dict:
         table = {state: {symbol: arg if action is Shift else reductions[arg]
                          for symbol, (action, arg) in actions.items()}
                  for state, actions in conf.states.items()}
-        _TABLES[key] = (parser, table)  # (the parser kept: its id stays its own)
-    return _TABLES[key][1]
+        _TABLES[key] = (parser, table, {})  # (the parser kept: its id stays its own)
+    return _TABLES[key][1:]
+
+
+def _scanning(lexer) -> tuple:
+    """What the lexing of one parser state needs from lark's lexer for it (a
+    `BasicLexer` of the terminals the state accepts): its scanner's match, the types
+    it ignores, those that may hold a line end, and its callbacks (a TEXT that is
+    exactly `(` is the token `(`, as lark's lexer retypes it)."""
+    match = lexer.scanner.match  # (built on first use; it makes `callback` too)
+    return match, lexer.ignore_types, lexer.newline_types, lexer.callback
 
 
 def read(parser, text: str) -> Node:
     """The tree of `text` (lark's UnexpectedInput as lark's own parse raises it).
 
-    lark's LALR loop (`ParserState.feed_token`) written out over our table: a unit
-    reduction (44 of the 59 of a chain statement) only changes the top state, and no
-    rule is hashed to find its callback. The contextual lexer reads the top state
-    from lark's parser state, whose stack this is."""
+    lark's contextual lexer and LALR loop (`ContextualLexer.lex`,
+    `ParserState.feed_token`) written out as one loop over our table: the lexer of
+    the top state matches with lark's scanner of that state and makes lark's
+    tokens; a unit reduction (44 of the 59 of a chain statement) only changes the top
+    state, and no rule is hashed to find its callback."""
     from lark.exceptions import UnexpectedInput
+    from lark.lexer import Token
 
     interactive = parser.parse_interactive(text)
     state = interactive.parser_state
     conf = state.parse_conf
-    table = _table(parser, conf)
+    table, scanners = _table(parser, conf)
+    lexers = state.lexer.lexer.lexers  # (the contextual lexer's, by parser state)
+    source = state.lexer.state.text  # (a TextSlice from lark 1.2 on, a str before)
+    end = getattr(source, "end", None)
+    if end is None:
+        end = len(source)
+    new_token = getattr(Token, "_future_new", Token)
     end_state = conf.end_state
-    states = state.state_stack  # (the lexer reads its last item: kept in place)
+    states = state.state_stack
     values = state.value_stack
+    pos, line, line_start = 0, 1, 0
     try:
-        for token in state.lexer.lex(state):
-            kind = token.type
+        while pos < end:
+            top = states[-1]
+            scanning = scanners.get(top)
+            if scanning is None:
+                scanning = scanners[top] = _scanning(lexers[top])
+            match, ignore, newline, retype = scanning
+            found = match(source, pos)
+            if not found:
+                raise _Fault
+            value, kind = found
+            start, pos = pos, pos + len(value)
+            if kind in ignore:
+                if kind in newline:
+                    lines = value.count("\n")
+                    if lines:
+                        line += lines
+                        line_start = start + value.rindex("\n") + 1
+                continue
+            first_line, column = line, start - line_start + 1
+            if kind in newline:
+                lines = value.count("\n")
+                if lines:
+                    line += lines
+                    line_start = start + value.rindex("\n") + 1
+            token = new_token(kind, value, start, first_line, column, line,
+                              pos - line_start + 1, pos)
+            if kind in retype:
+                token = retype[kind](token)
+                kind = token.type
             while True:
                 action = table[states[-1]].get(kind)
                 if action.__class__ is int:
