@@ -94,7 +94,7 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     form, name, statements = nester.nest(items)
     statements, macros = expand(statements, builder.errors, form == "ACSL")
     statements = lower_jumps(statements, builder.errors, sorted_top=form == "ACSL")
-    statements = _subroutines_called(statements, text, path, builder.errors)
+    statements = _subroutines_called(statements, text, path, builder.errors, builder.calls)
     own_pi = _fst_own_pi(statements)
     statements = texts.set_aside(statements, builder.errors)
     statements, fixed = arrays.expand(statements, builder.errors, form == "ACSL",
@@ -121,13 +121,17 @@ def _fst_own_pi(statements: list) -> bool:
 
 
 def _subroutines_called(statements: list, text: str, path: str | None,
-                        errors: list[Diagnostic]) -> list:
+                        errors: list[Diagnostic], calls: bool = True) -> list:
     """CALLs of the subroutines written after STOP, and references to the FUNCTIONs
     written there, written out (parse/fortran.py); the statements as they are when
-    there is neither."""
+    there is neither. `calls`: a CALL statement may be among them (False: the
+    builder made none, and without a STOP nothing else is looked for)."""
     from . import fortran
     from .lexical import stop_line
 
+    if not calls and stop_line(blank_comment_lines("\n".join(split_lines(text)))
+                               .split("\n")) is None:
+        return statements  # (the walk below, 5 % of reading a large listing, saved)
     called: set[str] = set()
     named: set[str] = set()  # (the functions called: a FUNCTION's references among them)
     for n in (n for st in statements for n in ast.walk(st)):

@@ -99,6 +99,7 @@ class Builder:
         self.errors: list[Diagnostic] = []  # refusals and misplaced strings
         self.acsl = False  # the ACSL form (where CONSTANT X = 1, 2 fills an array)
         self.parser = parser  # the listing's (a labelled statement's text is read again)
+        self.calls = False  # a CALL of a subroutine made (parse._subroutines_called)
 
     def refuse(self, construct: str, span: Span, hint: str) -> None:
         """A construct amilpy does not run (contract section 14)."""
@@ -753,6 +754,7 @@ class Builder:
                 "a routine after STOP takes numbers and arrays; read a table in the "
                 "listing with LINT2('F', F, N, X) or AFGEN(F, X)"))
             return None
+        self.calls = True
         return ast.SubroutineCall(str(name).upper(),
                                   tuple(self.expr(a) for a in args if a is not None),
                                   self.span(node))
