@@ -300,11 +300,11 @@ class _Fault(Exception):
     """No action for a token: a syntax fault, said by lark's own parse."""
 
 
-def _table(parser, conf) -> tuple[dict, dict]:
+def _table(parser, conf) -> tuple[dict, dict, dict]:
     """lark's LALR table, each state's actions by symbol: the next state (a shift or
     a goto), or a reduction (size, the rule's name, our callback; None: the rule
-    passes its one child up unchanged); and each state's lexing (`_scanning`), filled
-    as states are met. One per parser."""
+    passes its one child up unchanged); each state's lexing (`_scanning`) and where
+    a run of unit reductions ends (`_chain`), filled as they are met. One per parser."""
     from lark.parsers.lalr_analysis import Shift
 
     key = id(parser)
@@ -315,8 +315,20 @@ def _table(parser, conf) -> tuple[dict, dict]:
         table = {state: {symbol: arg if action is Shift else reductions[arg]
                          for symbol, (action, arg) in actions.items()}
                  for state, actions in conf.states.items()}
-        _TABLES[key] = (parser, table, {})  # (the parser kept: its id stays its own)
+        _TABLES[key] = (parser, table, {}, {})  # (the parser kept: its id stays its own)
     return _TABLES[key][1:]
+
+
+def _chain(table: dict, below: int, top: int, kind: str) -> int:
+    """The top state after the unit reductions a token sets off one after another
+    (an operand climbing `?sum: product`, `?relation: sum`, ...): they leave the
+    stack below as it is, so where they end depends on the state below, the top
+    state and the token only."""
+    while True:
+        action = table[top].get(kind)
+        if action.__class__ is not tuple or action[2] is not None:
+            return top
+        top = table[below][action[1]]
 
 
 def _scanning(lexer) -> tuple:
@@ -342,7 +354,7 @@ def read(parser, text: str) -> Node:
     interactive = parser.parse_interactive(text)
     state = interactive.parser_state
     conf = state.parse_conf
-    table, scanners = _table(parser, conf)
+    table, scanners, chains = _table(parser, conf)
     lexers = state.lexer.lexer.lexers  # (the contextual lexer's, by parser state)
     source = state.lexer.state.text  # (a TextSlice from lark 1.2 on, a str before)
     end = getattr(source, "end", None)
@@ -384,7 +396,8 @@ def read(parser, text: str) -> Node:
                 token = retype[kind](token)
                 kind = token.type
             while True:
-                action = table[states[-1]].get(kind)
+                top = states[-1]
+                action = table[top].get(kind)
                 if action.__class__ is int:
                     states.append(action)
                     values.append(token)
@@ -392,16 +405,21 @@ def read(parser, text: str) -> Node:
                 if action is None:
                     raise _Fault
                 size, origin, callback = action
-                if callback is None:
-                    del states[-1]
+                if callback is None:  # unit reductions, as many as follow: one look-up
+                    below = states[-2]
+                    key = (below, top, kind)
+                    after = chains.get(key)
+                    if after is None:
+                        after = chains[key] = _chain(table, below, top, kind)
+                    states[-1] = after
+                    continue
+                if size:
+                    raw = values[-size:]
+                    del states[-size:]
+                    del values[-size:]
                 else:
-                    if size:
-                        raw = values[-size:]
-                        del states[-size:]
-                        del values[-size:]
-                    else:
-                        raw = []
-                    values.append(callback(raw))
+                    raw = []
+                values.append(callback(raw))
                 states.append(table[states[-1]][origin])
         while True:  # the end of the text: reduce to the start
             action = table[states[-1]].get("$END")
