@@ -346,8 +346,8 @@ def read(parser, text: str) -> Node:
     lark's contextual lexer and LALR loop (`ContextualLexer.lex`,
     `ParserState.feed_token`) written out as one loop over our table: the lexer of
     the top state matches with lark's scanner of that state and makes lark's
-    tokens; a unit reduction (44 of the 59 of a chain statement) only changes the top
-    state, and no rule is hashed to find its callback."""
+    tokens; a run of unit reductions (44 of the 59 reductions of a chain statement)
+    is one look-up (`_chain`), and no rule is hashed to find its callback."""
     from lark.exceptions import UnexpectedInput
     from lark.lexer import Token
 
