@@ -98,7 +98,7 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     own_pi = _fst_own_pi(statements)
     statements = texts.set_aside(statements, builder.errors)
     statements, fixed = arrays.expand(statements, builder.errors, form == "ACSL",
-                                      nester.notes)
+                                      nester.notes, "[" in text)
     if builder.errors:
         raise AmilError(in_macros(sorted(builder.errors, key=_where), macros), path, text)
     return ast.Program(tuple(statements), path, text, form, name, macros, fixed,
