@@ -40,14 +40,17 @@ class Node:
     __slots__ = ("data", "children", "line", "column", "end_line", "end_column",
                  "cline", "ccolumn", "cend_line", "cend_column", "expr", "depth", "span")
 
-    def __init__(self, data: str, children: list) -> None:
+    def __init__(self, data: str, children: list, line=None, column=None, end_line=None,
+                 end_column=None) -> None:
         self.data = data
         self.children = children
         self.expr = None
         self.depth = 0
         self.span = None
-        self.line = self.column = self.end_line = self.end_column = None
-        self.cline = self.ccolumn = self.cend_line = self.cend_column = None
+        self.line = self.cline = line
+        self.column = self.ccolumn = column
+        self.end_line = self.cend_line = end_line
+        self.end_column = self.cend_column = end_column
 
     def __repr__(self) -> str:
         # (as lark's Tree reads: a message that shows a node -- a data statement's
@@ -75,16 +78,6 @@ def _last(raw):
         else:
             return c.end_line, c.end_column
     return None
-
-
-def _placed(node: Node, raw) -> None:
-    """A new node's span and container: from its first to its last child's."""
-    first = _first(raw)
-    if first is not None:
-        node.line, node.column = node.cline, node.ccolumn = first
-    last = _last(raw)
-    if last is not None:
-        node.end_line, node.end_column = node.cend_line, node.cend_column = last
 
 
 def _passed(node, raw) -> None:
@@ -203,9 +196,7 @@ def _expression(node: Node) -> None:
 
 def relation(node: Node) -> Node:
     """FINISH's `sum REL_OP sum` (a finish_relation node) as a `rel` expression."""
-    rel = Node("rel", node.children)
-    rel.line, rel.column, rel.end_line, rel.end_column = \
-        node.line, node.column, node.end_line, node.end_column
+    rel = Node("rel", node.children, node.line, node.column, node.end_line, node.end_column)
     rel.cline, rel.ccolumn, rel.cend_line, rel.cend_column = \
         node.cline, node.ccolumn, node.cend_line, node.cend_column
     _expression(rel)
@@ -279,14 +270,34 @@ def _callback(rule):
                 out += [None] * tail
             return out
 
+    whole = simple and len(indices) == size
+
     def reduce(raw):
-        kept = children(raw)
+        kept = raw if whole else children(raw)
         if expand1 and len(kept) == 1:
             node = kept[0]
             _passed(node, raw)
             return node
-        node = Node(name, kept)
-        _placed(node, raw)
+        # a new node's span: from its first child's container to its last one's
+        # (_first and _last, written out)
+        line = column = end_line = end_column = None
+        for c in raw:
+            if c.__class__ is Node:
+                if c.cline is not None:
+                    line, column = c.cline, c.ccolumn
+                    break
+            else:  # a token
+                line, column = c.line, c.column
+                break
+        for c in reversed(raw):
+            if c.__class__ is Node:
+                if c.cend_line is not None:
+                    end_line, end_column = c.cend_line, c.cend_column
+                    break
+            else:
+                end_line, end_column = c.end_line, c.end_column
+                break
+        node = Node(name, kept, line, column, end_line, end_column)
         if expression:
             _expression(node)
         return node
