@@ -45,9 +45,11 @@ SNIPPETS = [
 @lru_cache(maxsize=1)
 def _lark_positions():
     """lark's own tree builder with positions: what tree.read matches."""
+    from importlib import resources
+
     from lark import Lark
 
-    grammar = open(os.path.join(ROOT, "grammar", "amil.lark"), encoding="utf-8").read()
+    grammar = resources.files("amilpy.grammar").joinpath("amil.lark").read_text("utf-8")
     return Lark(grammar, parser="lalr", lexer="contextual", propagate_positions=True,
                 maybe_placeholders=True, cache=True)
 
