@@ -9,7 +9,9 @@ the garbage collector as a user's process has it; a two-mass chain read first, s
 lark's tables and the lazy imports are not counted), the checkouts taking turns
 round by round; the table gives the median over the rounds of each stage's CPU
 time divided by the number of statements. `--before` is a worktree of an older
-commit (`git worktree add /tmp/before COMMIT`); its amilpy runs from there.
+commit (`git worktree add /tmp/before COMMIT`) or an export of it (`git archive COMMIT
+| tar -x -C /tmp/before`); its amilpy runs from there (but with an editable install,
+`amilpy.grammar` comes from where the install points, for both checkouts).
 Writes `frontend.md` in `--out` (default `benchmarks/results`).
 """
 

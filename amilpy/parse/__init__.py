@@ -2,7 +2,9 @@
 
 The only package that sees lark: the grammar is `grammar/amil.lark` (shipped as
 `amilpy.grammar`), the parser is LALR with lark's cache so a start does not
-rebuild the tables. A syntax fault does not end the reading: the statement it
+rebuild the tables, and the tree is made by callbacks of our own as rules reduce
+(`tree.read`: lark's tree builder with its positions was half of the parsing). A
+syntax fault does not end the reading: the statement it
 stands in is skipped and the text after it is read on, so every fault of the
 file is reported at once (up to `MAX_ERRORS`).
 """
@@ -23,6 +25,7 @@ from .jumps import lower_jumps
 from .lexical import blank_comment_lines, code_end, continues, prepare
 from .macros import expand, in_macros
 from .syntax import MAX_DEPTH, no_collection
+from .tree import read
 
 __all__ = ["MAX_DEPTH", "MAX_ERRORS", "blank_comment_lines", "parse"]
 
@@ -38,7 +41,7 @@ def _parser():
         grammar,
         parser="lalr",
         lexer="contextual",
-        propagate_positions=True,
+        propagate_positions=False,
         maybe_placeholders=True,
         cache=True,
     )
@@ -69,7 +72,7 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     while True:
         part = prepared if offset == 0 else "\n".join(lines[offset:])
         try:
-            tree = parser.parse(part)
+            tree = read(parser, part)
         except UnexpectedInput as exc:
             errors.append(_diagnose(exc, part, lines, offset, parser))
             resume = _after_statement(lines, offset, getattr(exc, "line", None))
@@ -91,11 +94,11 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     form, name, statements = nester.nest(items)
     statements, macros = expand(statements, builder.errors, form == "ACSL")
     statements = lower_jumps(statements, builder.errors, sorted_top=form == "ACSL")
-    statements = _subroutines_called(statements, text, path, builder.errors)
+    statements = _subroutines_called(statements, text, path, builder.errors, builder.calls)
     own_pi = _fst_own_pi(statements)
     statements = texts.set_aside(statements, builder.errors)
     statements, fixed = arrays.expand(statements, builder.errors, form == "ACSL",
-                                      nester.notes)
+                                      nester.notes, "[" in text)
     if builder.errors:
         raise AmilError(in_macros(sorted(builder.errors, key=_where), macros), path, text)
     return ast.Program(tuple(statements), path, text, form, name, macros, fixed,
@@ -118,13 +121,17 @@ def _fst_own_pi(statements: list) -> bool:
 
 
 def _subroutines_called(statements: list, text: str, path: str | None,
-                        errors: list[Diagnostic]) -> list:
+                        errors: list[Diagnostic], calls: bool = True) -> list:
     """CALLs of the subroutines written after STOP, and references to the FUNCTIONs
     written there, written out (parse/fortran.py); the statements as they are when
-    there is neither."""
+    there is neither. `calls`: a CALL statement may be among them (False: the
+    builder made none, and without a STOP nothing else is looked for)."""
     from . import fortran
     from .lexical import stop_line
 
+    if not calls and stop_line(blank_comment_lines("\n".join(split_lines(text)))
+                               .split("\n")) is None:
+        return statements  # (the walk below, 5 % of reading a large listing, saved)
     called: set[str] = set()
     named: set[str] = set()  # (the functions called: a FUNCTION's references among them)
     for n in (n for st in statements for n in ast.walk(st)):

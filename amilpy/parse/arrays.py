@@ -68,18 +68,22 @@ class _Unknown(Exception):
 
 
 def expand(statements: list, errors: list[Diagnostic], acsl: bool,
-           notes: list[Diagnostic] | None = None) -> tuple[list, frozenset[str]]:
+           notes: list[Diagnostic] | None = None,
+           bracketed: bool = True) -> tuple[list, frozenset[str]]:
     """The statements with every array written out as its elements (see the module),
-    and the constants fixed by it. Faults go to `errors`, warnings to `notes`."""
+    and the constants fixed by it. Faults go to `errors`, warnings to `notes`.
+    `bracketed`: the listing may hold an `X[i]` (False: no `[` in its text, so no
+    expression holds an element, and without tables none is searched)."""
     everything = ast.every_statement(statements)
     tables = {st.name for st in everything if isinstance(st, ast.Table)}
+    walk = ast.walk if bracketed or tables else ast.walk_statements
     if not any((isinstance(st, ast.Declare) and st.sizes)
                or (isinstance(st, ast.Data) and any(it.is_array or it.pieces
                                                      for it in st.items))
                or (isinstance(st, ast.Table) and st.grid) for st in everything) and not any(
             isinstance(n, ast.Index) or (isinstance(n, ast.Assign) and n.subscripts)
             or (isinstance(n, ast.Call) and n.func in tables)
-            for st in statements for n in ast.walk(st)):
+            for st in statements for n in walk(st)):
         return statements, frozenset()
     pass_ = _Arrays(statements, everything, errors, acsl)
     if notes is not None:

@@ -98,7 +98,7 @@ class Nester:
         form = "ACSL" if acsl else "CSMP"
         # the labels a GO TO names (a `13 CONTINUE` no DO ends is its place)
         jumped_to = {n.label for s in items if isinstance(s, ast.Node)
-                     for n in ast.walk(s) if isinstance(n, ast.GoTo)}
+                     for n in ast.walk_statements(s) if isinstance(n, ast.GoTo)}
         stack: list[_Open] = []
         top: list = []
         name, closed = "", None

@@ -26,6 +26,7 @@ from . import syntax as ast
 from .blocks import Close, ElseHead, Head
 from .lexical import code_end
 from .syntax import MAX_DEPTH
+from .tree import Node, read, relation
 
 # -------------------------------------------------------------- tree -> syntax
 
@@ -98,6 +99,7 @@ class Builder:
         self.errors: list[Diagnostic] = []  # refusals and misplaced strings
         self.acsl = False  # the ACSL form (where CONSTANT X = 1, 2 fills an array)
         self.parser = parser  # the listing's (a labelled statement's text is read again)
+        self.calls = False  # a CALL of a subroutine made (parse._subroutines_called)
 
     def refuse(self, construct: str, span: Span, hint: str) -> None:
         """A construct amilpy does not run (contract section 14)."""
@@ -106,9 +108,10 @@ class Builder:
 
     @staticmethod
     def span(node) -> Span:
-        meta = getattr(node, "meta", None)
-        if meta is not None and not getattr(meta, "empty", True):
-            return Span(meta.line, meta.column, meta.end_line, meta.end_column)
+        """Where a node (`tree.Node`) or a token stands."""
+        span = getattr(node, "span", None)  # (an expression node's, made as it reduced)
+        if span is not None:
+            return span
         return Span(node.line, node.column, node.end_line, node.end_column)
 
     def statements(self, tree) -> list:
@@ -421,7 +424,7 @@ class Builder:
         source = "\n" * (token.line - 1) + " " * (token.column - 1 + colon) + \
             text[colon:] + "\n"
         try:
-            tree = self.parser.parse(prepare(source))
+            tree = read(self.parser, prepare(source))
         except UnexpectedInput as exc:
             self.errors.append(syntax_diagnostic(exc, prepare(source), self.parser))
             return []
@@ -621,11 +624,9 @@ class Builder:
         return ast.Tolerance(kind, None, self.settings(node.children[1:]), self.span(node))
 
     def st_finish(self, node) -> ast.Finish:
-        from lark import Tree
-
         settings = [c for c in node.children if c.data == "setting"]
         relations = tuple(
-            ast.Termt(self.expr(Tree("rel", c.children, c.meta)), self.span(c))
+            ast.Termt(self.expr(relation(c)), self.span(c))
             for c in node.children if c.data == "finish_relation")
         return ast.Finish(self.settings(settings), self.span(node), relations)
 
@@ -753,6 +754,7 @@ class Builder:
                 "a routine after STOP takes numbers and arrays; read a table in the "
                 "listing with LINT2('F', F, N, X) or AFGEN(F, X)"))
             return None
+        self.calls = True
         return ast.SubroutineCall(str(name).upper(),
                                   tuple(self.expr(a) for a in args if a is not None),
                                   self.span(node))
@@ -800,8 +802,10 @@ class Builder:
 
     # expressions -----------------------------------------------------------
     def expr(self, root) -> ast.Expr:
-        """The syntax of an expression tree, built bottom-up without recursion."""
-        from lark import Token, Tree
+        """The syntax of an expression tree: the one made as it reduced (`tree`), else
+        built bottom-up without recursion."""
+        if root.__class__ is Node and root.expr is not None:
+            return root.expr
 
         def parts(node) -> list:
             if node.data == "call":
@@ -839,8 +843,11 @@ class Builder:
         stack: list[tuple[object, bool]] = [(root, False)]
         while stack:
             node, ready = stack.pop()
-            if isinstance(node, Token):  # a bare NUMBER/NAME never reaches here
+            if node.__class__ is not Node:  # (a token: a bare NUMBER/NAME never reaches here)
                 done.append((ast.Name(str(node).upper(), self.span(node)), 1))
+                continue
+            if node.expr is not None:  # (a part made as it reduced)
+                done.append((node.expr, node.depth))
                 continue
             children = parts(node)
             if not ready and children:
@@ -855,7 +862,7 @@ class Builder:
                     self.span(node), "split it into several assignments")],
                     self.path, self.source)
             done.append((self.node(node, [b for b, _ in built]), depth))
-        assert isinstance(root, (Tree, Token)) and len(done) == 1
+        assert len(done) == 1
         return done[0][0]
 
     def node(self, node, args: list[ast.Expr]) -> ast.Expr:

@@ -610,9 +610,10 @@ def _read_unit(unit, file_lines: list[str], path: str | None, errors: list[Diagn
 
     from .errors import syntax_diagnostic
     from .lexical import prepare
+    from .tree import read
 
     try:
-        tree = parser.parse(prepare(source))
+        tree = read(parser, prepare(source))
     except UnexpectedInput as exc:
         said = syntax_diagnostic(exc, prepare(source), parser)
         errors.append(replace(said, span=at_statement(said.span)))

@@ -38,7 +38,7 @@ def lower_jumps(statements: list, errors: list[Diagnostic], sorted_top: bool = F
     any section are sorted code (an ACSL program's DERIVATIVE without its keyword),
     where no GO TO can stand."""
     if not any(isinstance(n, (ast.GoTo, ast.Target)) for st in statements
-               for n in ast.walk(st)):
+               for n in ast.walk_statements(st)):
         return statements
     places = count(1)
 

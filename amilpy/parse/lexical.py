@@ -26,12 +26,18 @@ import re
 from ..language import ITEM_KEYWORDS
 
 _WORD = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+_MARK = re.compile(r"['!()$;]")  # what `_Scanner.line` acts on inside a statement
 # (CSMP III's and FST's ENDJOB, the job's last statement, ends the reading as STOP does)
 _STOP = re.compile(r"^[ \t]*(?:STOP|ENDJOB)[ \t]*(?:[;$][ \t]*)?(?:!.*)?$", re.IGNORECASE)
 
 
 def code_end(line: str) -> int:
     """Where the code of a line ends: at its `!` comment (outside strings), or its end."""
+    bang = line.find("!")
+    if bang < 0:
+        return len(line)
+    if "'" not in line:
+        return bang
     quoted = False
     for i, ch in enumerate(line):
         if ch == "'":
@@ -180,6 +186,9 @@ class _Scanner:
                 else:
                     self.end_statement()
             i += 1
+            if not self.start:  # (on to the next character that matters)
+                mark = _MARK.search(line, i)
+                i = n if mark is None else mark.start()
         if not continued:
             self.end_statement()
         return "".join(chars)

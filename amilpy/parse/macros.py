@@ -451,7 +451,7 @@ def _any_acsl(statements) -> bool:
     are, not rebuilt)."""
     return any(isinstance(n, (ast.MacroCall, ast.MacroDirective)) or
                isinstance(n, ast.Macro) and n.acsl
-               for st in statements for n in ast.walk(st))
+               for st in statements for n in ast.walk_statements(st))
 
 
 def in_macros(diagnostics: list[Diagnostic], macros) -> list[Diagnostic]:
