@@ -2,6 +2,8 @@
 combination on the intersection of the sliding surfaces, on every method,
 against exact solutions."""
 
+import math
+
 import numpy as np
 import pytest
 from conftest import METHODS, run1
@@ -274,3 +276,36 @@ def test_a_tight_tolerance_leaves_the_edge_once(method):
     after = [e.time for e in r.events if e.time > 12.5]
     assert after == pytest.approx([13.0, 13.0 + 20 ** 0.5], abs=1e-6)
     assert r["X"][-1] == pytest.approx(_quantized_exact(np.array([18.0]))[0], abs=1e-9)
+
+
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "DOP853", "RADAU", "BDF"])
+@pytest.mark.parametrize("outdel", [0.01, 5.0])
+def test_a_start_on_an_edge_its_levels_push_back_to_slides_there(method, outdel):
+    # X = 0.5 from the start: below it NINT(X) = 0 (X' = 0.4), above it 1 (X' = -0.2).
+    # With a TIME switch in the listing (RAMP(20), 0 all run) the level was chosen
+    # before RAMP's branch, in its placeholder (RAMP read TIME - 20: both levels
+    # pushed X down), and AUTO's X went to 2.5 at OUTDEL 5. Hunt 50, F1.
+    r = run1("X = INTGRL(0.5, 0.4 - 0.6*NINT(X) + 0.05*RAMP(20.0))\n"
+             f"TIMER FINTIM = 10.0, OUTDEL = {outdel}\nEND\n", method=method, **LOCATED)
+    assert r.status == "finished", r.message
+    assert np.max(np.abs(np.asarray(r["X"]) - 0.5)) <= 1e-12
+    assert [e.kind for e in r.events] == ["slide"] and r.events[0].time == 0.0
+
+
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "RADAU", "BDF"])
+@pytest.mark.parametrize("form", ["AMOD(X, 1.0)", "X - AINT(X)"])
+def test_a_slide_whose_levels_rates_move_with_the_state_is_cheap_on_every_route(method,
+                                                                               form):
+    # X' = AMOD(X, 1) - 0.5 from 0.6: X = 0.5 + 0.1 e^t up to 1 at ln 5, then held there
+    # (below the edge AMOD -> 1, X' = 0.5; above, 0, X' = -0.5). The sliding weight
+    # read each level's rate by a look-ahead of 1e-8 of the run, whose rounding (5e-9)
+    # the Filippov field then carried: RADAU and BDF took steps of 1e-5 and did not
+    # finish in minutes. Hunt 50, F3.
+    r = run1(f"X = INTGRL(0.6, -0.5 + {form})\nTIMER FINTIM = 10.0, OUTDEL = 1.0\nEND\n",
+             method=method, **LOCATED)
+    assert r.status == "finished", r.message
+    assert [e.kind for e in r.events] == ["slide"]
+    # (the instant to the route's own error in X: BDF's is the largest, 8e-8 here)
+    assert r.events[0].time == pytest.approx(math.log(5.0), abs=3e-7)
+    assert np.max(np.abs(np.asarray(r["X"])[r.t > 2.0] - 1.0)) <= 1e-9
+    assert r.stats["nsteps"] < 2000  # (it took 10^5 and more)

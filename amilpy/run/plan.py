@@ -58,6 +58,7 @@ DEFAULTS = {
 # its generated surface reads (`library.surfaces.level_edge`): a mode half a whole
 # number is a slide, whatever the surface.
 SLIDE = 0.5
+LOOKAHEAD = 1e-8  # a look-ahead's step, of the run's length (`RunPlan.lookahead_h`)
 
 
 def slides(mode: float) -> bool:
@@ -693,7 +694,7 @@ def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: ModelCode,
         h_floor=timer["DELMIN"] if floor_given else 1e-12 * (fintim - t0),
         floor_origin="TIMER DELMIN" if floor_given else
         "the default floor FINTIM*1E-12; TIMER DELMIN lowers it",
-        lookahead_h=1e-8 * max(fintim - t0, abs(t0) * 1e-8),
+        lookahead_h=LOOKAHEAD * max(fintim - t0, abs(t0) * 1e-8),
         events=opts.events, step_point=step_point,
     )
 

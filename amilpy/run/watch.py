@@ -24,10 +24,12 @@ import numpy as np
 
 from ..codegen import ModelCode
 from ..library.surfaces import DOWN, REPELS, SLIDES, STILL, UP, leaving, sign
-from .plan import SLIDE, Purpose, RunPlan, SurfaceKind, slides, sliding, sliding_in
+from .jacobian import STEP
+from .plan import LOOKAHEAD, SLIDE, Purpose, RunPlan, SurfaceKind, slides, sliding, sliding_in
 from .slide import MAX_SLIDING, combine, corner_modes, side_mode, slide_weights
 
-_XTOL = 4 * np.finfo(float).eps
+_EPS = float(np.finfo(float).eps)
+_XTOL = 4 * _EPS
 
 
 class SurfaceWatch:
@@ -81,7 +83,7 @@ class SurfaceWatch:
         yl = y.tolist()
         modes = corner_modes(m, ks, self.levels)
         fields = [np.asarray(self.c.rhs(t, yl, mc, z), dtype=float) for mc in modes]
-        rates = np.array([[self.surface_rate(k, t, y, f, self._rated(k, mc, m), z) for k in ks]
+        rates = np.array([[self.slide_rate(k, t, y, f, self._rated(k, mc, m), z) for k in ks]
                           for f, mc in zip(fields, modes, strict=True)])
         if with_rates:
             return modes, fields, slide_weights(rates), rates
@@ -111,7 +113,8 @@ class SurfaceWatch:
         return out
 
     def surface_rate(self, k: int, t: float, y: np.ndarray, f: np.ndarray, m, z) -> float:
-        """d e_k/dt along f: exact for surfaces linear in the states, else a difference."""
+        """d e_k/dt along f: exact for surfaces linear in the states, else a difference
+        ahead along f (the way the motion goes from a point on it)."""
         g = self.watched[k].gradient
         if g is not None:
             return float(g @ f)
@@ -119,6 +122,27 @@ class SurfaceWatch:
         e0 = self.c.surf(t, y.tolist(), m, z)[k]
         e1 = self.c.surf(t + h, (y + h * f).tolist(), m, z)[k]
         return (e1 - e0) / h
+
+    def slide_rate(self, k: int, t: float, y: np.ndarray, f: np.ndarray, m, z) -> float:
+        """`surface_rate` of a sliding surface, for its weight in the slide's field: a
+        central difference along f, the states moved by about STEP of their size (the
+        look-ahead's step, 1e-8 of the run, left rounding noise of 5e-9 in the weight,
+        which the field then carried: an implicit method on AMOD's slide, X' =
+        AMOD(X, 1) - 0.5 held at 1, took steps of 1e-5). The surface is smooth there:
+        its branches are frozen, and a level's is read on its edge."""
+        if self.watched[k].gradient is not None:
+            return self.surface_rate(k, t, y, f, m, z)
+        # (and TIME by no more than STEP of the run -- a surface on TIME alone where
+        # the states stand still -- nor by less than a thousand ulps of it: states at 0)
+        span = self.lookahead_h / LOOKAHEAD
+        h = STEP * span
+        size = float(np.max(np.abs(f), initial=0.0))
+        if size > 0.0:
+            h = min(h, STEP * float(np.max(np.abs(y), initial=0.0)) / size)
+        h = max(h, 1e3 * _EPS * max(abs(t), span))
+        up = self.c.surf(t + h, (y + h * f).tolist(), m, z)[k]
+        down = self.c.surf(t - h, (y - h * f).tolist(), m, z)[k]
+        return (up - down) / (2.0 * h)
 
     # ------------------------------------------------------------------ restart
     def choose_modes(self, t: float, y: np.ndarray, z, m: list[float], at_zero: set[int],
@@ -141,8 +165,13 @@ class SurfaceWatch:
         slid = self.c.surf(t, y.tolist(), m, z) if sliding_in(m) else None
         # A surface may depend on another switch's value (MODINT on STEP, say):
         # settle the signs again with the new branches until nothing moves.
-        for _ in range(len(new) + 1):
+        # (at the start the levels wait for a round of the signs: a start on a level's
+        # edge reads the others' fields in their branches, not in the placeholder 0 --
+        # RAMP(20) read as TIME - 20 made both levels of NINT(X) push X the same way)
+        wait = first and bool(self.levels)
+        for rounds in range(len(new) + 1 + wait):
             before = list(new)
+            waiting = wait and rounds == 0
             lit = self.literal_here(t, y, new, z)
             if slid is not None and sliding_in(new):
                 off = left_surfaces(slid, self.c.surf(t, y.tolist(), new, z),
@@ -153,7 +182,7 @@ class SurfaceWatch:
             for k in range(len(new)):
                 if k in self.levels:
                     # (one sliding on an edge stays there unless located anew)
-                    if k not in decided and (k in at_zero or first or (
+                    if not waiting and k not in decided and (k in at_zero or first or (
                             lit[k] != new[k] and not slides(new[k]))):
                         new[k] = self.level_ahead(k, t, y, new, z, located=k in at_zero)
                         decided.add(k)
@@ -167,7 +196,7 @@ class SurfaceWatch:
                         decided.add(k)
                 elif lit[k] != 0.0 and not slides(new[k]) and lit[k] != new[k]:
                     new[k] = lit[k]
-            if new == before:
+            if new == before and not waiting:
                 break
         return new
 
