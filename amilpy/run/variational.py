@@ -387,6 +387,15 @@ class Tangent:
         return g, f_plus - f_minus, rate
 
 
+def central_difference(f, at: list[float], j: int, h: float) -> np.ndarray:
+    """d f / d at[j] by a central difference (`branch_difference`'s, where f is
+    smooth)."""
+    hi, lo = list(at), list(at)
+    hi[j] += h
+    lo[j] -= h
+    return (np.asarray(f(hi), dtype=float) - np.asarray(f(lo), dtype=float)) / (hi[j] - lo[j])
+
+
 def one_sided(up: np.ndarray, down: np.ndarray) -> np.ndarray:
     """A derivative from the one-sided differences `up` and `down` of a value moved
     by a data value: their mean where they agree; where they do not (a sign the value
@@ -523,8 +532,10 @@ class ParameterTangent(Tangent):
         surface's is central (a train's, which jumps where the value moves its
         instant, says so by its size: `_saltation`)."""
         cols = []
+        # (a play's clamp is the only kink the field has in p between instants, its
+        # branches frozen: without one, the central difference)
         centre = np.asarray(self.value(fn, self.c, t, yl, m, z), dtype=float) \
-            if fn == "rhs" and self.variants else None
+            if fn == "rhs" and self.variants and self.c.play_slots else None
         for plus, minus, h in self.variants:
             hi = np.asarray(self.value(fn, plus, t, yl, m, z), dtype=float)
             lo = np.asarray(self.value(fn, minus, t, yl, m, z), dtype=float)
@@ -966,9 +977,11 @@ class ProgramTangent(ParameterTangent):
 
         centre = np.asarray(f(z), dtype=float)
         out = np.zeros((len(centre), self.r))
+        # (the branch matters at a play's clamp only, the one kink in z between instants)
+        difference = branch_difference if self.c.play_slots else central_difference
         for j in read_slots(f, centre, z, [j for j in range(self.r)
                                            if has_slope(self.c, z, j)]):
-            out[:, j] = branch_difference(f, list(z), j, STEP * max(abs(z[j]), 1.0))
+            out[:, j] = difference(f, list(z), j, STEP * max(abs(z[j]), 1.0))
         return out
 
     def _by_data(self, fn: str, t: float, y: np.ndarray, m, z) -> np.ndarray:
