@@ -309,3 +309,41 @@ def test_a_slide_whose_levels_rates_move_with_the_state_is_cheap_on_every_route(
     assert r.events[0].time == pytest.approx(math.log(5.0), abs=3e-7)
     assert np.max(np.abs(np.asarray(r["X"])[r.t > 2.0] - 1.0)) <= 1e-9
     assert r.stats["nsteps"] < 2000  # (it took 10^5 and more)
+
+
+def _two_quantizers_exact(t: np.ndarray) -> np.ndarray:
+    """X' = A - 0.3 QNTZR(0.5, X) - 0.2 QNTZR(0.3, X), A = 0.4 + 0.05 RAMP(5) from 0:
+    through the edges 0.15, 0.25, 0.45 (rates 0.4, 0.34, 0.19, 0.13), on the edge 0.75
+    both jump at (0.27 below, 0.48 above) until A = 0.48 at 6.6, then 0.75 + 0.025
+    (t - 6.6)^2 up to the next edge, 1.05 at 6.6 + sqrt 12."""
+    edges = [0.0, 0.15, 0.25, 0.45, 0.75]
+    rates = [0.4, 0.34, 0.19, 0.13]
+    times = [0.0]
+    for k, rate in enumerate(rates):
+        times.append(times[-1] + (edges[k + 1] - edges[k]) / rate)
+    out = np.empty_like(t)
+    for i, ti in enumerate(t):
+        if ti >= 6.6:
+            out[i] = 0.75 + 0.025 * (ti - 6.6) ** 2
+        elif ti >= times[-1]:
+            out[i] = 0.75
+        else:
+            j = int(np.searchsorted(times, ti, side="right")) - 1
+            out[i] = edges[j] + rates[j] * (ti - times[j])
+    return out
+
+
+@pytest.mark.parametrize("outdel", [0.5, 2.5])
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "RADAU", "BDF"])
+def test_two_quantizers_that_jump_at_one_edge_slide_there_together(method, outdel):
+    # Alone, each sees the other's level as it is, and neither pushes back: the run
+    # chattered across 0.75 (200 restarts, a step-size underflow) or hung on DOP853,
+    # RADAU and LSODA. Both are chosen together now: all below push up, all above down.
+    # Hunt 50, F2.
+    r = run1("X = INTGRL(0.0, A - 0.3*QNTZR(0.5, X) - 0.2*QNTZR(0.3, X))\n"
+             "A = 0.4 + 0.05*RAMP(5.0)\n"
+             f"TIMER FINTIM = 10.0, OUTDEL = {outdel}\nEND\n", method=method, **LOCATED)
+    assert r.status == "finished", r.message
+    assert np.max(np.abs(np.asarray(r["X"]) - _two_quantizers_exact(r.t))) <= 3e-8
+    slides = {round(e.time, 6) for e in r.events if e.kind == "slide"}
+    assert slides == {4.029442}

@@ -179,6 +179,13 @@ class SurfaceWatch:
                                      if k not in at_zero and k not in decided])
                 for k, side in off.items():
                     new[k] = side_mode(new[k], side, k in self.levels)
+            if not waiting:
+                # (level surfaces located at one instant on one edge -- two quantizers
+                # that jump at the same X -- slide together where all their levels
+                # below push back up and all above push back down)
+                for k, edge in self._edges_together(t, y, new, z, at_zero, decided).items():
+                    new[k] = edge
+                    decided.add(k)
             for k in range(len(new)):
                 if k in self.levels:
                     # (one sliding on an edge stays there unless located anew)
@@ -351,6 +358,39 @@ class SurfaceWatch:
         h = self.lookahead_h
         ahead = self.c.modes_literal(t + h, (y + h * f).tolist(), m, z)[k]
         return ahead if abs(ahead - lit) <= 1 else lit
+
+    def _edges_together(self, t: float, y: np.ndarray, m, z, at_zero: set[int],
+                        decided: set[int]) -> dict[int, float]:
+        """The level surfaces of `at_zero` (two or more, not yet decided) standing on
+        their edges at (t, y) whose levels push back together -- the field with all of
+        them below their edges raises every one, with all above lowers every one --
+        and their edges: a slide on both at once. Each alone sees the other's level
+        as it is, and neither pushes back (two quantizers of one X with an edge in
+        common: the run chattered across it)."""
+        ks = [k for k in at_zero if k in self.levels and k not in decided
+              and not slides(m[k])]
+        if len(ks) < 2:
+            return {}
+        lit = self.c.modes_literal(t, y.tolist(), m, z)
+        edges = {}
+        for k in ks:
+            edge = self._edge(k, t, y, m, z, lit[k], True)
+            if edge is None:
+                return {}
+            edges[k] = edge
+        on, above, below = list(m), list(m), list(m)
+        for k, edge in edges.items():
+            on[k], above[k], below[k] = edge, edge + 0.5, edge - 0.5
+        try:
+            f_up = np.asarray(self.field(t, y, above, z), dtype=float)
+            f_down = np.asarray(self.field(t, y, below, z), dtype=float)
+            ups = [self.surface_rate(k, t, y, f_up, on, z) for k in ks]
+            downs = [self.surface_rate(k, t, y, f_down, on, z) for k in ks]
+        except (ArithmeticError, ValueError):
+            return {}
+        if all(leaving(u, d, exact=False) == SLIDES for u, d in zip(ups, downs, strict=True)):
+            return edges if self.events else {}
+        return {}
 
     def _edge(self, k: int, t: float, y: np.ndarray, m, z, lit: float, located: bool
               ) -> float | None:
