@@ -141,9 +141,10 @@ class _TangentRun(AcslRun):
                 if moving is None and shift is not None:
                     moving = shift, self.tangent.field_rows(cur.t, cur.y, list(cur.m),
                                                             list(cur.z))
+                schedule_rate = None
                 if moving is not None:  # (the code may read T: AG = AG + 20 T)
-                    rate = self._code_rate(cur, fn)
-                self._schedules_moved(cur, fn, scheduled, moving)
+                    rate, schedule_rate = self._code_rate(cur, fn)
+                self._schedules_moved(scheduled, moving, schedule_rate)
             except _Jumped as exc:
                 self.why = f"{what} at TIME = {cur.t:.9g}: {exc}"
         calls = super().run_code(cur, fn, what)
@@ -163,13 +164,13 @@ class _TangentRun(AcslRun):
             t.jump(matrix, cur.t, cur.y, cur.m, cur.z, moved)
         return calls
 
-    def _schedules_moved(self, cur, fn, scheduled, moving) -> None:
+    def _schedules_moved(self, scheduled, moving, schedule_rate) -> None:
         """The instants the code schedules (SCHEDULE OFF .AT. T + TLEN), as the values
         move them: d t_s/d (y, z, p) (`_code_jacobian`) along the tangent before the
         code (the states' total derivative where this instant moves), and d t_s/d T
-        times this instant's own shift. Kept
-        for when that section runs (`due_moved`); two pending instants of one section
-        that move differently the tangent cannot tell apart."""
+        (`schedule_rate`) times this instant's own shift. Kept for when that section
+        runs (`due_moved`); two pending instants of one section that move differently
+        the tangent cannot tell apart."""
         if not scheduled:
             return
         t = self.tangent
@@ -181,7 +182,7 @@ class _TangentRun(AcslRun):
             t.phi[:size] + np.outer(moving[1][:size], moving[0])
         shifts = rows[:, :size] @ total + rows[:, size:]
         if moving is not None:
-            shifts = shifts + np.outer(self._schedule_rate(cur, fn), moving[0])
+            shifts = shifts + np.outer(schedule_rate, moving[0])
         for section, moved in zip(sections, shifts, strict=True):
             if not np.any(moved):
                 continue
@@ -191,21 +192,6 @@ class _TangentRun(AcslRun):
                 raise _Jumped(f"DISCRETE {section} is due twice at instants that move "
                               "differently")
             self.due_moved[section] = moved
-
-    def _schedule_rate(self, cur, fn) -> np.ndarray:
-        """d t_s / d TIME of each instant the section `fn` schedules at the cursor."""
-        h = STEP * max(abs(cur.t), 1.0)
-        sides = []
-        for at in (cur.t + h, cur.t - h):
-            calls = Calls()
-            try:
-                fn(at, cur.y.tolist(), list(cur.m), list(cur.z), calls)
-            except (ArithmeticError, ValueError) as exc:
-                raise _Jumped(f"its code has no value near the run's ({exc})") from None
-            sides.append(np.array([when for when, _ in calls.schedules], dtype=float))
-        if sides[0].shape != sides[1].shape:
-            raise _Jumped("the sections it schedules change with TIME")
-        return (sides[0] - sides[1]) / (2.0 * h)
 
     def _interval_moved(self, name: str) -> np.ndarray:
         """d/dp of an INTERVAL's value: its tangent row where the code keeps it, else
@@ -277,22 +263,27 @@ class _TangentRun(AcslRun):
             t._phi = jump @ t.phi
             modes = after
 
-    def _code_rate(self, cur, fn) -> np.ndarray:
-        """d (y', z') / d TIME of the section `fn` at the cursor, in the tangent's rows:
-        what it gives at an instant the values move beyond the states it is given."""
+    def _code_rate(self, cur, fn) -> tuple[np.ndarray, np.ndarray]:
+        """d/d TIME of the section `fn` at the cursor: of (y', z'), in the tangent's rows
+        (what it gives at an instant the values move beyond the states it is given),
+        and of each instant it schedules."""
         t = self.tangent
         h = STEP * max(abs(cur.t), 1.0)
         out = np.zeros(len(t.phi))
-        sides = []
+        sides, times = [], []
         for at in (cur.t + h, cur.t - h):
+            calls = Calls()
             try:
-                y1, z1, _ = fn(at, cur.y.tolist(), list(cur.m), list(cur.z), Calls())
+                y1, z1, _ = fn(at, cur.y.tolist(), list(cur.m), list(cur.z), calls)
             except (ArithmeticError, ValueError) as exc:
                 raise _Jumped(f"its code has no value near the run's ({exc})") from None
             sides.append(np.concatenate([np.asarray(y1, dtype=float),
                                          np.asarray(z1, dtype=float)]))
+            times.append(np.array([when for when, _ in calls.schedules], dtype=float))
+        if times[0].shape != times[1].shape:
+            raise _Jumped("the sections it schedules change with TIME")
         out[:t.n + t.r] = (sides[0] - sides[1]) / (2.0 * h)
-        return out
+        return out, (times[0] - times[1]) / (2.0 * h)
 
     def _code_jacobian(self, cur, fn) -> tuple[np.ndarray, tuple | None]:
         """d (y', z') / d (y, z, p) of the section `fn` at the cursor, and of the times

@@ -691,6 +691,15 @@ class _Path:
 GROUP = 4  # slots tested one by one below this many (`read_slots`)
 
 
+def _moved_together(z, slots: list[int]) -> list:
+    """z with each of `slots` moved by its own odd fraction of STEP of its size (no two
+    moves cancel where a function reads several)."""
+    moved = list(z)
+    for i, j in enumerate(slots):
+        moved[j] = z[j] + STEP * max(abs(z[j]), 1.0) * (1.0 + 0.618034 * (i % 7))
+    return moved
+
+
 def read_slots(f, centre: np.ndarray, z, slots: list[int]) -> list[int]:
     """Which of `slots` f(z) moves with: sets of them moved together (each by its own
     odd fraction of STEP, so that no two cancel), a set that moves nothing dropped
@@ -698,10 +707,7 @@ def read_slots(f, centre: np.ndarray, z, slots: list[int]) -> list[int]:
     a difference of each was most of a tangent's time)."""
     if len(slots) <= GROUP:
         return slots
-    moved = list(z)
-    for i, j in enumerate(slots):
-        moved[j] = z[j] + STEP * max(abs(z[j]), 1.0) * (1.0 + 0.618034 * (i % 7))
-    if np.array_equal(np.asarray(f(moved), dtype=float), centre):
+    if np.array_equal(np.asarray(f(_moved_together(z, slots)), dtype=float), centre):
         return []
     half = len(slots) // 2
     return read_slots(f, centre, z, slots[:half]) + read_slots(f, centre, z, slots[half:])
@@ -713,9 +719,7 @@ def copied_slots(f, centre: np.ndarray, z, slots: list[int]) -> list[int]:
     unchanged, the rest as before, kept whole; the others halved."""
     if not slots:
         return []
-    moved = list(z)
-    for i, j in enumerate(slots):
-        moved[j] = z[j] + STEP * max(abs(z[j]), 1.0) * (1.0 + 0.618034 * (i % 7))
+    moved = _moved_together(z, slots)
     out = np.asarray(f(moved), dtype=float)
     expect = centre.copy()
     expect[slots] = [moved[j] for j in slots]
