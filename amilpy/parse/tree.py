@@ -377,43 +377,46 @@ def read(parser, text: str) -> Node:
     values = state.value_stack
     pos, line, line_start = 0, 1, 0
     try:
-        while pos < end:
-            top = states[-1]
-            scanning = scanners.get(top)
-            if scanning is None:
-                scanning = scanners[top] = _scanning(lexers[top])
-            match, ignore, newline, retype = scanning
-            found = match(source, pos)
-            if not found:
-                raise _Fault
-            value, kind = found
-            start, pos = pos, pos + len(value)
-            if kind in ignore:
+        while True:
+            if pos >= end:  # the end of the text: reduce to the start
+                token, kind = None, "$END"
+            else:
+                top = states[-1]
+                scanning = scanners.get(top)
+                if scanning is None:
+                    scanning = scanners[top] = _scanning(lexers[top])
+                match, ignore, newline, retype = scanning
+                found = match(source, pos)
+                if not found:
+                    raise _Fault
+                value, kind = found
+                start, pos = pos, pos + len(value)
+                if kind in ignore:
+                    if kind in newline:
+                        lines = value.count("\n")
+                        if lines:
+                            line += lines
+                            line_start = start + value.rindex("\n") + 1
+                    continue
+                first_line, column = line, start - line_start + 1
                 if kind in newline:
                     lines = value.count("\n")
                     if lines:
                         line += lines
                         line_start = start + value.rindex("\n") + 1
-                continue
-            first_line, column = line, start - line_start + 1
-            if kind in newline:
-                lines = value.count("\n")
-                if lines:
-                    line += lines
-                    line_start = start + value.rindex("\n") + 1
-            token = new_token(kind, value, start, first_line, column, line,
-                              pos - line_start + 1, pos)
-            if kind in retype:
-                token = retype[kind](token)
-                kind = token.type
+                token = new_token(kind, value, start, first_line, column, line,
+                                  pos - line_start + 1, pos)
+                if kind in retype:
+                    token = retype[kind](token)
+                    kind = token.type
             while True:
                 top = states[-1]
                 action = table[top].get(kind)
-                if action.__class__ is int:
+                if action.__class__ is int and token is not None:
                     states.append(action)
                     values.append(token)
                     break
-                if action is None:
+                if action is None or action.__class__ is int:
                     raise _Fault
                 size, origin, callback = action
                 if callback is None:  # unit reductions, as many as follow: one look-up
@@ -423,33 +426,17 @@ def read(parser, text: str) -> Node:
                     if after is None:
                         after = chains[key] = _chain(table, below, top, kind)
                     states[-1] = after
-                    continue
-                if size:
-                    raw = values[-size:]
-                    del states[-size:]
-                    del values[-size:]
                 else:
-                    raw = []
-                values.append(callback(raw))
-                states.append(table[states[-1]][origin])
-        while True:  # the end of the text: reduce to the start
-            action = table[states[-1]].get("$END")
-            if action is None or action.__class__ is int:
-                raise _Fault
-            size, origin, callback = action
-            if callback is None:
-                del states[-1]
-            else:
-                if size:
-                    raw = values[-size:]
-                    del states[-size:]
-                    del values[-size:]
-                else:
-                    raw = []
-                values.append(callback(raw))
-            states.append(table[states[-1]][origin])
-            if states[-1] == end_state:
-                return values[-1]
+                    if size:
+                        raw = values[-size:]
+                        del states[-size:]
+                        del values[-size:]
+                    else:
+                        raw = []
+                    values.append(callback(raw))
+                    states.append(table[states[-1]][origin])
+                if token is None and states[-1] == end_state:
+                    return values[-1]
     except (UnexpectedInput, _Fault):
         pass
     parser.parse(text)  # (raises the same fault, as the messages have always read it)
