@@ -196,26 +196,39 @@ QUANTIZED = {
 }
 
 
+def _through_levels(t: np.ndarray, edges: list[float], rates: list[float], then
+                    ) -> np.ndarray:
+    """X from edges[0] at TIME 0, at rates[k] between edges[k] and edges[k + 1], held
+    on the last edge from where it reaches it; `then(t)`, from a TIME on, the value
+    past that hold (None before it)."""
+    times = [0.0]
+    for k, rate in enumerate(rates):
+        times.append(times[-1] + (edges[k + 1] - edges[k]) / rate)
+    out = np.empty_like(t)
+    for i, ti in enumerate(t):
+        after = then(ti)
+        if after is not None:
+            out[i] = after
+        elif ti >= times[-1]:
+            out[i] = edges[-1]
+        else:
+            j = int(np.searchsorted(times, ti, side="right")) - 1
+            out[i] = edges[j] + rates[j] * (ti - times[j])
+    return out
+
+
 def _quantized_exact(t: np.ndarray) -> np.ndarray:
     """X of the loop above: through the levels k = 0 ... 6 (X' = 1 - 0.15 k, edges at
     0.25 + 0.5 (k - 1)), on the edge 3.25 from t_s to 13, then off it."""
-    edges = [0.0, 0.25] + [0.25 + 0.5 * k for k in range(1, 7)]
-    times = [0.0, 0.25]
-    for k in range(1, 7):
-        times.append(times[-1] + 0.5 / (1.0 - 0.15 * k))
-    out = np.empty_like(t)
-    for i, ti in enumerate(t):
-        t1 = 13.0 + 20 ** 0.5
+    t1 = 13.0 + 20 ** 0.5
+
+    def then(ti: float) -> float | None:
         if ti >= t1:
-            out[i] = 3.75 + 0.025 * (ti ** 2 - t1 ** 2) - 0.8 * (ti - t1)
-        elif ti >= 13.0:
-            out[i] = 3.25 + 0.025 * (ti - 13.0) ** 2
-        elif ti >= times[-1]:
-            out[i] = 3.25
-        else:
-            j = int(np.searchsorted(times, ti, side="right")) - 1
-            out[i] = edges[j] + (1.0 - 0.15 * j) * (ti - times[j])
-    return out
+            return 3.75 + 0.025 * (ti ** 2 - t1 ** 2) - 0.8 * (ti - t1)
+        return 3.25 + 0.025 * (ti - 13.0) ** 2 if ti >= 13.0 else None
+
+    return _through_levels(t, [0.0, 0.25] + [0.25 + 0.5 * k for k in range(1, 7)],
+                           [1.0 - 0.15 * k for k in range(7)], then)
 
 
 @pytest.mark.parametrize("outdel", [0.05, 1.5])
@@ -316,21 +329,8 @@ def _two_quantizers_exact(t: np.ndarray) -> np.ndarray:
     through the edges 0.15, 0.25, 0.45 (rates 0.4, 0.34, 0.19, 0.13), on the edge 0.75
     both jump at (0.27 below, 0.48 above) until A = 0.48 at 6.6, then 0.75 + 0.025
     (t - 6.6)^2 up to the next edge, 1.05 at 6.6 + sqrt 12."""
-    edges = [0.0, 0.15, 0.25, 0.45, 0.75]
-    rates = [0.4, 0.34, 0.19, 0.13]
-    times = [0.0]
-    for k, rate in enumerate(rates):
-        times.append(times[-1] + (edges[k + 1] - edges[k]) / rate)
-    out = np.empty_like(t)
-    for i, ti in enumerate(t):
-        if ti >= 6.6:
-            out[i] = 0.75 + 0.025 * (ti - 6.6) ** 2
-        elif ti >= times[-1]:
-            out[i] = 0.75
-        else:
-            j = int(np.searchsorted(times, ti, side="right")) - 1
-            out[i] = edges[j] + rates[j] * (ti - times[j])
-    return out
+    return _through_levels(t, [0.0, 0.15, 0.25, 0.45, 0.75], [0.4, 0.34, 0.19, 0.13],
+                           lambda ti: 0.75 + 0.025 * (ti - 6.6) ** 2 if ti >= 6.6 else None)
 
 
 @pytest.mark.parametrize("outdel", [0.5, 2.5])
