@@ -345,15 +345,8 @@ class SurfaceWatch:
         the edge itself: it slides there (QNTZR in a feedback loop)."""
         lit = self.c.modes_literal(t, y.tolist(), m, z)[k]
         edge = self._edge(k, t, y, m, z, lit, located)
-        if edge is not None and self.events:
-            on = list(m)
-            on[k] = edge
-            try:
-                _, _, dp, dm = self.branch_rates(k, t, y, on, z)
-            except (ArithmeticError, ValueError):
-                dp = dm = 0.0
-            if leaving(dp, dm, exact=False) == SLIDES:
-                return edge
+        if edge is not None and self._pushed_back({k: edge}, t, y, m, z):
+            return edge
         f = np.asarray(self.c.rhs(t, y.tolist(), m, z), dtype=float)
         h = self.lookahead_h
         ahead = self.c.modes_literal(t + h, (y + h * f).tolist(), m, z)[k]
@@ -378,19 +371,27 @@ class SurfaceWatch:
             if edge is None:
                 return {}
             edges[k] = edge
+        return edges if self._pushed_back(edges, t, y, m, z) else {}
+
+    def _pushed_back(self, edges: dict[int, float], t: float, y: np.ndarray, m, z) -> bool:
+        """Whether level surfaces standing on `edges` (surface -> its edge) slide there:
+        the field with all of them in the level below raises every one, with all above
+        lowers every one (each rate read on its edge: `_rated`). Not where a run takes
+        no events, nor where a level has no value here."""
+        if not self.events:
+            return False
         on, above, below = list(m), list(m), list(m)
         for k, edge in edges.items():
-            on[k], above[k], below[k] = edge, edge + 0.5, edge - 0.5
+            on[k], above[k], below[k] = edge, side_mode(edge, 1.0, True), \
+                side_mode(edge, -1.0, True)
         try:
             f_up = np.asarray(self.field(t, y, above, z), dtype=float)
             f_down = np.asarray(self.field(t, y, below, z), dtype=float)
-            ups = [self.surface_rate(k, t, y, f_up, on, z) for k in ks]
-            downs = [self.surface_rate(k, t, y, f_down, on, z) for k in ks]
+            return all(leaving(self.surface_rate(k, t, y, f_up, on, z),
+                               self.surface_rate(k, t, y, f_down, on, z), exact=False) == SLIDES
+                       for k in edges)
         except (ArithmeticError, ValueError):
-            return {}
-        if all(leaving(u, d, exact=False) == SLIDES for u, d in zip(ups, downs, strict=True)):
-            return edges if self.events else {}
-        return {}
+            return False
 
     def _edge(self, k: int, t: float, y: np.ndarray, m, z, lit: float, located: bool
               ) -> float | None:
