@@ -76,13 +76,14 @@ def _comm(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return a @ b - b @ a
 
 
-def exp_moving(omega: np.ndarray, n: int) -> np.ndarray:
+def exp_moving(omega: np.ndarray, n: int | None) -> np.ndarray:
     """expm(omega) for a matrix whose rows past the first n are zero (the tangent's
-    values and memory do not move between instants): [[e^X, phi1(X) B], [0, I]] with
-    X, B its first n rows, phi1 from the 2n-square [[X, I], [0, 0]] -- where that is
-    the smaller (a store of a hundred slots carried by one state)."""
+    values and memory do not move between instants; None: no such rows): [[e^X,
+    phi1(X) B], [0, I]] with X, B its first n rows, phi1 from the 2n-square [[X, I],
+    [0, 0]] -- where that is the smaller (a store of a hundred slots carried by one
+    state)."""
     size = len(omega)
-    if 2 * n >= size:
+    if n is None or 2 * n >= size:
         return expm(omega)
     aug = np.zeros((2 * n, 2 * n))
     aug[:n, :n] = omega[:n, :n]
@@ -104,7 +105,7 @@ def magnus6(a1: np.ndarray, a2: np.ndarray, a3: np.ndarray, h: float, n: int | N
     c1 = _comm(b1, b2)
     c2 = -_comm(b1, 2 * b3 + c1) / 60
     omega = b1 + b3 / 12 + _comm(-20 * b1 - b3 + c1, b2 + c2) / 240
-    return expm(omega) if n is None else exp_moving(omega, n)
+    return exp_moving(omega, n)
 
 
 class Tangent:
@@ -144,14 +145,11 @@ class Tangent:
         if self._pending is not None:
             a, h = self._pending
             self._pending = None
-            self._phi = self._exp(h * a) @ self._phi
+            self._phi = exp_moving(h * a, self._moving) @ self._phi
 
     # the tangent's variables that move between instants: the first these many (None:
     # all; `ParameterTangent`: the states, its values and memory held)
     _moving: int | None = None
-
-    def _exp(self, omega: np.ndarray) -> np.ndarray:
-        return expm(omega) if self._moving is None else exp_moving(omega, self._moving)
 
     def value(self, fn: str, code, t: float, y, m, z):
         """`fn` ("rhs" or "surf") of the generated functions `code` at (t, y): while a
@@ -228,7 +226,7 @@ class Tangent:
         if change <= 1e-13 * float(np.max(np.abs(a1))):
             # the same Jacobian along the step: a linear branch
             if depth:
-                return self._exp(h * a1)
+                return exp_moving(h * a1, self._moving)
             if self._pending is not None and np.array_equal(self._pending[0], a1):
                 self._pending[1] += h
             else:
