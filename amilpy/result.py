@@ -15,6 +15,8 @@ from enum import Enum
 
 import numpy as np
 
+from .library.surfaces import slides
+
 
 class Status(str, Enum):
     """How a run ended; the value is what a user reads."""
@@ -81,7 +83,7 @@ class Event:
     def describe_branch(self, mode: float) -> str:
         """A branch in the listing's own terms: "W1 > 0", "W1 held at 0", "level 3"."""
         if self.level or self.kind == EventKind.LEVEL:
-            if mode % 1.0 == 0.5:
+            if slides(mode):
                 return f"on the edge between levels {mode - 0.5:g} and {mode + 0.5:g}"
             return f"level {mode:g}"
         x = self.text or "argument"

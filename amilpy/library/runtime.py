@@ -16,7 +16,7 @@ import math
 from collections.abc import Callable
 from statistics import NormalDist
 
-from .surfaces import amod_at, level, level_edge, sign
+from .surfaces import amod_at, level, level_edge, sign, slides
 
 Table = tuple[tuple[float, ...], tuple[float, ...]]
 
@@ -599,7 +599,7 @@ def vector_helpers() -> dict[str, Callable]:
         "WDAY": lambda table, x: each(lambda v: weather_day(table, v))(x),
         "PULSE_ON": each(pulse_on), "IMPULS_STEP": each(impulse_step),
         "LEVEL": _vector_level(np), "SGN": np.sign,
-        "LEDGE": lambda v, k: v - k if k % 1.0 == 0.5 else 0.5 - np.abs(v - k),
+        "LEDGE": lambda v, k: v - k if slides(k) else 0.5 - np.abs(v - k),
         "AMODAT": each(amod_at),
         "WHERE": np.where, "ALL": many(np.logical_and), "ANY": many(np.logical_or),
     }

@@ -93,12 +93,18 @@ def level(v: float) -> float:
     return k
 
 
+def slides(mode: float) -> bool:
+    """Whether a surface in this mode slides: a mode half a whole number (a sign
+    surface's `run.plan.SLIDE`, a level surface's edge between two levels)."""
+    return mode % 1.0 == 0.5
+
+
 def level_edge(v: float, k: float) -> float:
     """A level surface's value in mode k. In level k (a whole number): how far v is
     inside its band (k - 1/2, k + 1/2], the nearer edge's distance, negative once v has
-    left it. Sliding on the edge k (half a whole number, `run.plan.slides`): v - k,
-    negative below the edge, as a sign surface's value."""
-    if k % 1.0 == 0.5:
+    left it. Sliding on the edge k (`slides`): v - k, negative below the edge, as a
+    sign surface's value."""
+    if slides(k):
         return v - k
     return 0.5 - abs(v - k)
 

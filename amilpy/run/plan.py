@@ -20,7 +20,7 @@ from .. import ir
 from ..codegen import ModelCode
 from ..diagnostics import AmilError, Diagnostic
 from ..language import START_KEY
-from ..library.surfaces import linear_gradient, sign
+from ..library.surfaces import linear_gradient, sign, slides
 from ..result import Event, EventKind
 from ..routes import DEFAULT, Route, StepPointError, route_for, step_point_mode
 
@@ -61,12 +61,7 @@ SLIDE = 0.5
 LOOKAHEAD = 1e-8  # a look-ahead's step, of the run's length (`RunPlan.lookahead_h`)
 
 
-def slides(mode: float) -> bool:
-    """Whether a surface in this mode slides."""
-    return mode % 1.0 == 0.5
-
-
-# (the same rule over a list of modes, written out: these run at every step)
+# (`slides`' rule over a list of modes, written out: these run at every step)
 def sliding_in(m) -> bool:
     """Whether any surface in the modes m slides."""
     return 0.5 in map(_FRACTION, m)
