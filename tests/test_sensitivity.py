@@ -889,3 +889,58 @@ def test_sensitivities_on_long_steps_are_the_integrations_accuracy():
     by_b, by_x0 = x(t, 0.5, 0.5 + 1e-30j).imag / 1e-30, x(t, 0.5 + 1e-30j, 0.5).imag / 1e-30
     assert loc.raw[:, 0, 0] == pytest.approx(by_b, abs=1e-8 * np.max(np.abs(by_b)))
     assert loc.raw[:, 0, 1] == pytest.approx(by_x0, abs=1e-8 * np.max(np.abs(by_x0)))
+
+
+def test_the_field_s_derivative_in_a_value_comes_from_its_equations():
+    """F_p = d f/d p is the generated field's derivative in the constants it reads,
+    times INITIAL's derivatives (KK = K^2 + A): exact to rounding, where the central
+    differences it replaced carried eps |f| / h, about 1e-11 of the field. f = -KK X
+    + 3 SIN(A TIME) + FSW(X - 1, 0, 0, A) at X = 1.7, TIME = 0.3 (above the switch):
+    d f/d K = -2 K X, d f/d A = -X + 3 TIME COS(A TIME) + 1, d f/d X0 = 0; the start
+    d X(0)/d (K, A, X0) = (0, 0, 1). To 4 ulps of the terms."""
+    from amilpy.analysis.sensitivity import exact_slopes
+    from amilpy.codegen.jacobian import for_parameters
+
+    model = amilpy.loads("TITLE DERIVED RATE\nPARAM K = 0.5, X0 = 2.0, A = 1.5\n"
+                         "INITIAL\nKK = K*K + A\nDYNAMIC\n"
+                         "X = INTGRL(X0, -KK*X + 3.0*SIN(A*TIME) + FSW(X - 1.0, 0.0, 0.0, A))\n"
+                         "TIMER FINTIM = 2.0, OUTDEL = 0.1\nPRINT X\nEND\n")
+    c = model.flow().code
+    by_name, start = exact_slopes(c, ["K", "A", "X0"])
+    f_p = for_parameters(c, "rhs").dense(0.3, [1.7], [1.0], []) @ by_name
+    k, a, x, t = 0.5, 1.5, 1.7, 0.3
+    assert f_p[0] == pytest.approx([-2 * k * x, -x + 3 * t * np.cos(a * t) + 1, 0.0],
+                                   rel=0, abs=4 * 2.2e-16 * (x + 3 * t + 1))
+    assert start.tolist() == [[0.0, 0.0, 1.0]]
+
+
+def test_a_small_term_beside_a_large_one_keeps_its_sensitivity():
+    """X' = -K X from 1e-9, Y' = 1 - K X: d Y/d K = -X0 t exp(-K t) (d/dt of t
+    e^{-Kt} is e^{-Kt}(1 - K t)), about 1e-9. Central differences of the field in K
+    carried the rounding of Y's 1, eps/h = 2e-11 an evaluation, and put d Y/d K 6e-4
+    off (until 2026-12-01); from the equations it is the integration's: 1e-7
+    relative at RELERR 1e-10 (measured 2e-9)."""
+    model = amilpy.loads("TITLE SMALL BESIDE LARGE\nPARAM K = 0.5, X0 = 1.0E-9\n"
+                         "X = INTGRL(X0, -K*X)\nY = INTGRL(0.0, 1.0 - K*X)\nMETHOD RKS\n"
+                         "TIMER FINTIM = 2.0, OUTDEL = 0.5\nPRINT X, Y\nEND\n")
+    loc = model.sensitivity(["K", "X0"], outputs=["Y"], rtol=1e-10, atol=1e-20)
+    assert loc.how == "sensitivity equations"
+    t = np.arange(0.0, 2.01, 0.5)
+    assert loc.raw[:, 0, 0] == pytest.approx(-1e-9 * t * np.exp(-0.5 * t), rel=1e-7,
+                                             abs=1e-25)
+    assert loc.raw[:, 0, 1] == pytest.approx(np.exp(-0.5 * t) - 1.0, rel=1e-7, abs=1e-12)
+
+
+def test_a_value_initial_code_assigns_again_is_initial_s():
+    """Magnolia lets INITIAL give a CONSTANT a new value: KE = 2 KE, A' = -KE A, A(0)
+    = 1, so d A/d KE = -2 t exp(-2 KE t), twice what the value itself would give.
+    To 1e-8 (the tangent is exact on this linear field; the bind's derivative is
+    INITIAL code's central difference, exact for a linear one)."""
+    model = amilpy.loads("PROGRAM reassigned\n  CONSTANT KE = 0.2\n  INITIAL\n"
+                         "    KE = 2.0*KE\n  END\n  DERIVATIVE\n    A = INTEG(-KE*A, 1.0)\n"
+                         "    TERMT(T >= 2.0)\n  END\n  CINTERVAL CINT = 0.5\nEND\n",
+                         "reassigned.csl")
+    loc = model.sensitivity(["KE"], outputs=["A"])
+    assert loc.how == "sensitivity equations"
+    t = np.arange(0.0, 2.01, 0.5)
+    assert loc.raw[:, 0, 0] == pytest.approx(-2 * t * np.exp(-0.4 * t), abs=1e-8)

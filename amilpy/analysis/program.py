@@ -42,6 +42,25 @@ from ..run.variational import ProgramTangent
 from .tangents import Sampler, output_row, outputs_asked, step_for
 
 
+def bind_slopes(c, names: list[str], constants: list[tuple[dict, dict, float]]
+                ) -> np.ndarray | None:
+    """d P/d names for the constants P the generated functions read by name
+    (`ParameterTangent.exact`): 1 for a value itself; what INITIAL's code computes
+    from the values (written-order code, with its IFs and loops) by the central
+    differences of the runs bound to each value moved (`constants`: their values, h).
+    None where a value is folded into the code."""
+    if c.binder is None or any(name not in c.binder.parameters for name in names):
+        return None
+    # (a value INITIAL assigns again -- Magnolia allows it -- is INITIAL's)
+    again = {n for code in c.model.acsl.initial for n in code.assigned}
+    out = np.zeros((len(c.binder.parameters), len(names)))
+    for i, p in enumerate(sorted(c.binder.parameters)):
+        for j, (plus, minus, h) in enumerate(constants):
+            out[i, j] = 1.0 if p == names[j] and p not in again else \
+                (plus[p] - minus[p]) / (2.0 * h)
+    return out
+
+
 class _Jumped(Exception):
     """The tangent cannot follow an instant's code (why)."""
 
@@ -89,7 +108,8 @@ def program_trajectory(model, k: int, names: list[str], data: dict[str, float],
         start[:, j] = (np.concatenate([plus.code.y0, plus.code.z0]) -
                        np.concatenate([minus.code.y0, minus.code.z0])) / (2.0 * h)
     floor = np.broadcast_to(np.asarray(plan.tol.atol / plan.tol.rtol, dtype=float), (n,))
-    tangent = ProgramTangent(c, None, floor, start, variants, r, outputs_asked(c, variables))
+    tangent = ProgramTangent(c, None, floor, start, variants, r, outputs_asked(c, variables),
+                             bind_slopes(c, names, constants))
     times = np.asarray(times, dtype=float)
     sampler = Sampler(tangent, times, n + r)
     run = _TangentRun(model.ir, spec, opts, base, _clock.perf_counter(), sampler, variants,

@@ -10,9 +10,17 @@ the update's Jacobian, and its rate in TIME where a switch that moves holds it).
 observed output that is no state is d out/d y . S + d out/d z . S_z + d out/d p at
 its instant.
 
-F_p, ds/dp, d out/dp and the start's dependence d y(t0)/dp are central differences
-of the generated functions at one TIME and state (the run's code bound to p +- h,
-no integration); h = cbrt(eps) |p| (1e-8 for p = 0: `step_for`). Where the
+F_p and ds/dp are the generated functions' own derivatives in the constants they
+read by name (`codegen.jacobian.for_parameters`, each switch in its branch) times
+d P/d p, the derivatives of those constants in the free values: INITIAL's and the
+initial values' equations differentiated in their sorted order
+(`codegen.consts.slopes`), exact to rounding; a program in ACSL form runs INITIAL
+as written-order code (IFs, loops), whose values are differenced
+(`analysis.program.bind_slopes`). While surfaces slide (the weights move with p
+too), on a PULSE train's surfaces, for a CONST (folded into the code) and for d
+out/dp and the memory's start, central differences of the generated functions at
+one TIME and state (the run's code bound to p +- h, no integration); h = cbrt(eps)
+|p| (1e-8 for p = 0: `step_for`). Where the
 variational equations do not follow the flow (a state reset with another change at
 its instant, a flow tangent to a surface, DELAY's sampling instants moved by p; in a
 program of the ACSL form, an
@@ -107,6 +115,24 @@ def moved_flows(flow_at, code, name: str, value: float):
     return plus, minus, h
 
 
+def exact_slopes(c, names: list[str]) -> tuple[np.ndarray, np.ndarray] | None:
+    """(d P/d names for the constants P `c`'s functions read by name, in
+    `ParameterJacobian.names`' order; d y0/d names), from the listing's INITIAL and
+    initial-value equations (`codegen.consts.slopes`), or None where they cannot be
+    had so (a CONST among `names`: folded into the code)."""
+    from ..codegen.consts import slopes
+
+    if c.binder is None or c.model is None:
+        return None
+    found = slopes(c.model, names, c.constants, c.binder.parameters, c.binder.tables)
+    if found is None:
+        return None
+    rows, start = found
+    zero = np.zeros(len(names))
+    return np.array([rows.get(p, zero) for p in sorted(c.binder.parameters)]
+                    ).reshape(-1, len(names)), start
+
+
 def trajectory(model, k: int, names: list[str], data: dict[str, float], options: dict,
                times, variables: list[str] | None = None
                ) -> Trajectory | ProgramTrajectory | str:
@@ -143,11 +169,15 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
         lo = np.concatenate([down.y, down.memory[:r]])
         with np.errstate(invalid="ignore"):  # (a slot at -INF in both: no dependence)
             dy0[:, j] = np.where(hi == lo, 0.0, (hi - lo) / (2.0 * h))
+    exact = exact_slopes(c, names)
+    if exact is not None:  # (the states' start from its equations; the memory's differenced)
+        dy0[:n] = exact[1]
     floor = np.broadcast_to(np.asarray(flow.plan.tol.atol / flow.plan.tol.rtol, dtype=float),
                             (n,))
     asked = outputs_asked(c, variables)
-    tangent = ProgramTangent(c, flow.watch, floor, dy0, variants, r, asked) if r else \
-        ParameterTangent(c, flow.watch, floor, dy0, variants, asked)
+    by_name = None if exact is None else exact[0]
+    tangent = ProgramTangent(c, flow.watch, floor, dy0, variants, r, asked, by_name) if r \
+        else ParameterTangent(c, flow.watch, floor, dy0, variants, asked, by_name)
     times = np.asarray(times, dtype=float)
     sampler = Sampler(tangent, times, n + r)
     at: dict[float, tuple] = sampler.at

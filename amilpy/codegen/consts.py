@@ -10,13 +10,16 @@ from __future__ import annotations
 import ast as py
 import math
 
+import numpy as np
+
 from .. import ir
 from ..diagnostics import AmilError, Diagnostic, Span
 from ..library import templates
 from ..library.runtime import Extending
 from ..parse.syntax import deep_enough
 from .emit import Emitter
-from .pytree import assert_closed, namespace
+from .jacobian import _Deriv, _diff, _ours, _sgn0
+from .pytree import assert_closed, namespace, parameter
 from .written import user_callable
 
 
@@ -36,7 +39,6 @@ def evaluate_constant(model: ir.Model, expr, constants: dict[str, float], tables
                       span: Span) -> float:
     """Evaluate an expression of constants (INITIAL, initial conditions)."""
     from ..parse import syntax as syn
-    from .pytree import parameter
 
     if type(expr) is syn.Num:  # (most initial conditions: no code to make)
         return float(expr.value)
@@ -151,3 +153,80 @@ def parameter_names(model: ir.Model) -> frozenset[str]:
         if any(isinstance(x, syn.Name) and x.name in names for x in syn.walk(eq.expr)):
             names.add(eq.target)
     return frozenset(names)
+
+
+# (expression, the constants it reads by name) -> its derivatives' code, a compiled
+# expression or None per name read (`slopes`)
+_SLOPES: dict[tuple, tuple] = {}
+
+
+def slopes(model: ir.Model, free: list[str], constants: dict[str, float],
+           parameters: frozenset[str], tables) -> tuple[dict[str, np.ndarray], np.ndarray] | None:
+    """d/d `free` of the constants a run's code reads by name (`parameter_names`: the
+    data values and what INITIAL computes from them, each a row) and of the states'
+    initial values (an array, a row per state), from the equations: INITIAL's
+    derivatives in its sorted order, each the sum over the constants it reads of its
+    derivative in that constant times that constant's row (a switch in its branch, a
+    function with no written rule by a difference in its own arguments, as the
+    field's Jacobian). None where a free value is folded into the code (a CONST) or
+    an equation cannot be differentiated so: the caller differences the bind."""
+    from ..parse import syntax as syn
+
+    q = len(free)
+    if any(name not in parameters for name in free):
+        return None
+    rows = {name: np.eye(q)[k] for k, name in enumerate(free)}
+
+    def row(expr) -> np.ndarray:
+        if type(expr) is syn.Num:
+            return np.zeros(q)
+        read = sorted({n.name for n in syn.walk(expr)
+                       if isinstance(n, syn.Name) and n.name in constants})
+        moved = [k for k, name in enumerate(read) if name in rows]
+        out = np.zeros(q)
+        if not moved:
+            return out
+        made = _slope_code(model, expr, read, constants, tables)
+        scope = {"__builtins__": {}, **namespace(), "_DIFF": _diff, "_SGN0": _sgn0,
+                 **{name: _table(tables, name) for name in made[1]},
+                 **{parameter(name): constants[name] for name in read}}
+        for k in moved:
+            if made[0][k] is not None:
+                out += float(eval(made[0][k], scope)) * rows[read[k]]  # noqa: S307
+        return out
+
+    try:
+        for eq in model.initial:
+            if eq.target in parameters and eq.target not in rows:
+                rows[eq.target] = row(eq.expr)
+        start = np.array([row(s.ic) for s in model.states]).reshape(len(model.states), q)
+    except (NotImplementedError, ArithmeticError, ValueError, TypeError, KeyError):
+        return None
+    return rows, start
+
+
+def _slope_code(model: ir.Model, expr, read: list[str], constants, tables) -> tuple:
+    """(d expr/d each of `read`, compiled or None where it is 0; the tables it reads)."""
+    key = (id(expr), tuple(read), tuple(sorted(tables)))
+    entry = _SLOPES.get(key)
+    if entry is None or entry[0] is not expr:
+        em = Emitter(model, constants, {}, "literal", {}, {}, tables,
+                     parameters=frozenset(read), define_function=user_callable)
+        tree = em.emit(expr)
+        deriv = _Deriv({parameter(name): k for k, name in enumerate(read)})
+        deriv.deps(tree)
+        made = []
+        for k in range(len(read)):
+            d = deriv.d(tree, k)
+            if d is None:
+                made.append(None)
+                continue
+            body = py.Expression(d)
+            py.fix_missing_locations(body)
+            assert_closed(py.Module(body=[py.Expr(body.body)], type_ignores=[]),
+                          also=_ours)
+            made.append(compile(body, model.path or model.name, "eval"))
+        if len(_SLOPES) > _CODE_LIMIT:
+            _SLOPES.clear()
+        entry = _SLOPES[key] = (expr, made, sorted(em.tables))
+    return entry[1], entry[2]

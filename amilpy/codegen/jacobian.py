@@ -405,9 +405,12 @@ def structure_for(c) -> tuple[np.ndarray, np.ndarray] | None:
     return None if c.binder is None else c.binder.shared.get("structure")
 
 
-def _tree(body: list[py.stmt]) -> tuple:
-    """`tree` of rhs's statements (changed: placed on line 1)."""
-    states: dict[str, int] = {}
+def _tree(body: list[py.stmt], seed: dict[str, int] | None = None,
+          wanted: range | None = None, called: str = "jac") -> tuple:
+    """`tree` of rhs's statements (changed: placed on line 1); `seed`: other names
+    differentiated in (a parameter's global -> its column), `wanted`: the columns
+    built (default every one)."""
+    states: dict[str, int] = dict(seed or {})
     deriv = _Deriv(states)
     out: list[py.stmt] = []
     entries: list[tuple[int, int, py.expr]] = []
@@ -422,6 +425,8 @@ def _tree(body: list[py.stmt]) -> tuple:
             dep = deriv.deps(stmt.value)
             deriv.local_deps[name] = dep
             for j in sorted(dep):
+                if wanted is not None and j not in wanted:
+                    continue
                 dv = deriv.d(stmt.value, j)
                 if dv is None:
                     deriv.known[f"d{j}_{name}"] = 0.0
@@ -437,6 +442,8 @@ def _tree(body: list[py.stmt]) -> tuple:
                     # its derivatives read the names it binds
                     out.append(py.Assign([py.Name(f"r{i}", py.Store())], value))
                 for j in sorted(deriv.deps(value)):
+                    if wanted is not None and j not in wanted:
+                        continue
                     dv = deriv.d(value, j)
                     if dv is not None:
                         entries.append((i, j, dv))
@@ -447,7 +454,7 @@ def _tree(body: list[py.stmt]) -> tuple:
                          for e in folded], dtype=float)
     varying = [e for e, c in zip(folded, constant, strict=True) if math.isnan(c)]
     out.append(py.Return(py.List(varying, py.Load())))
-    fn = function("jac", ("t", "y", "m", "z"), _live(out))
+    fn = function(called, ("t", "y", "m", "z"), _live(out))
     module = py.Module(body=[fn], type_ignores=[])
     # (every node a location, line 1: rhs's lines are not the Jacobian's; checked closed)
     place(module, closed=True, also=_ours, lines=False)
@@ -465,6 +472,60 @@ def for_compiled(c) -> ModelJacobian:
         values = {k: v for k, v in c.namespace.items() if k.startswith("p_")}
         c.derived["jacobian"] = bind(built, c.tables, values, lambda: _written(c))
     return c.derived["jacobian"]
+
+
+@dataclass
+class ParameterJacobian:
+    """d fn / d p of one of a run's generated functions ("rhs" or "surf") in the
+    parameters it reads by name (`names`, the globals p_NAME: PARAM and INCON values
+    and what INITIAL computes from them), from its equations: each switch in its
+    frozen branch, as `ModelJacobian`. `dense(t, y, m, z)`: a row per value the
+    function returns, a column per name."""
+
+    size: int
+    names: list[str]
+    rows: np.ndarray
+    cols: np.ndarray
+    constant: np.ndarray
+    variable: Callable
+
+    def dense(self, t: float, y, m, z) -> np.ndarray:
+        out = np.zeros((self.size, len(self.names)))
+        v = self.constant.copy()
+        varying = np.isnan(v)
+        if varying.any():
+            v[varying] = self.variable(t, y, m, z)
+        out[self.rows, self.cols] = v
+        return out
+
+
+def for_parameters(c, fn: str) -> ParameterJacobian:
+    """`ParameterJacobian` of a run's generated `fn` (`codegen.ModelCode`), its code
+    built once for every binding of the build, bound once per run. Raises
+    NotImplementedError where the function has statements the differentiation does
+    not take (a unit's IF)."""
+    key = ("parameters", fn)
+    if key not in c.derived:
+        from .pytree import parameter
+
+        if key not in c.shared:
+            names = sorted(c.binder.parameters)
+            n = len(c.state_names)
+            seed = {parameter(name): n + k for k, name in enumerate(names)}
+            source = c.binder.rhs_function() if fn == "rhs" else \
+                next(f for f in c.binder.tree().body if f.name == fn)
+            size = len(next(s for s in source.body if isinstance(s, py.Return)).value.elts)
+            module, rows, cols, constant = _tree([clone(s) for s in source.body], seed,
+                                                 range(n, n + len(names)), "jacp")
+            c.shared[key] = (compile(module, "<jacobian>", "exec"), size, names, rows,
+                             cols - n, constant)
+        compiled, size, names, rows, cols, constant = c.shared[key]
+        values = {k: v for k, v in c.namespace.items() if k.startswith("p_")}
+        scope: dict[str, object] = {"__builtins__": {}, **namespace(), "_DIFF": _diff,
+                                    "_SGN0": _sgn0, **(c.tables or {}), **values}
+        exec(compiled, scope)  # noqa: S102 - compiler-built tree, closed namespace
+        c.derived[key] = ParameterJacobian(size, names, rows, cols, constant, scope["jacp"])
+    return c.derived[key]
 
 
 def _written(c) -> py.Module:

@@ -59,6 +59,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import expm
 
+from ..codegen.jacobian import for_parameters
 from .dense import sample, sample_step
 from .jacobian import STEP, branch_difference, jacobian_at
 from .plan import slides, sliding_in
@@ -511,15 +512,22 @@ class ParameterTangent(Tangent):
     the surface's own dependence on p in (n = [ds/dy, ds/dp]). `variants[j]` are the
     run's generated functions with p_j moved by +h_j and -h_j (`ModelCode`, bound to
     other constants: no compilation), for F_p and ds/dp by central differences at
-    the same TIME, states, branches and memory; `start` = d y(t0)/d p."""
+    the same TIME, states, branches and memory; `start` = d y(t0)/d p.
+
+    `exact`, when given, is d P/d p for the constants P the generated functions read
+    by name (a row each, in the order of `codegen.jacobian.ParameterJacobian.names`):
+    F_p and ds/dp are then those functions' derivatives in P, from their equations
+    (`for_parameters`), times it -- exact to rounding -- except in a slide, whose
+    weights the values move too, and a PULSE train's surfaces (there, and for a
+    function the differentiation does not take, the variants' differences)."""
 
     def __init__(self, c, watch, floor: np.ndarray, start: np.ndarray,
                  variants: list[tuple[object, object, float]],
-                 outputs: list[int] | None = None) -> None:
+                 outputs: list[int] | None = None, exact: np.ndarray | None = None) -> None:
         n, q = start.shape
         super().__init__(c, watch, floor, n + q, range(n, n + q))
         self._phi = np.vstack([start, np.eye(q)])
-        self.n, self.variants = n, variants
+        self.n, self.variants, self.exact = n, variants, exact
         self._moving = n
         self.outputs = "all" if outputs is None else outputs  # (observed: their memory too)
 
@@ -529,6 +537,14 @@ class ParameterTangent(Tangent):
         within h of its kink) is the side that does not bend (`one_sided`); a
         surface's is central (a train's, which jumps where the value moves its
         instant, says so by its size: `_saltation`)."""
+        # (a train's surface jumps where a value moves its instant: only whether it
+        # moves counts, `_train_shift` says by how much, from the variants' trains)
+        if self.exact is not None and not (sliding_in(m) if fn == "rhs" else
+                                           self.c.train_surfaces):
+            try:
+                return for_parameters(self.c, fn).dense(t, yl, m, z) @ self.exact
+            except NotImplementedError:
+                self.exact = None
         cols = []
         # (a play's clamp is the only kink the field has in p between instants, its
         # branches frozen: without one, the central difference)
@@ -748,8 +764,8 @@ class ProgramTangent(ParameterTangent):
 
     def __init__(self, c, watch, floor: np.ndarray, start: np.ndarray,
                  variants: list[tuple[object, object, float]], memory: int,
-                 outputs: list[int] | None = None) -> None:
-        super().__init__(c, watch, floor, start, variants, outputs)
+                 outputs: list[int] | None = None, exact: np.ndarray | None = None) -> None:
+        super().__init__(c, watch, floor, start, variants, outputs, exact)
         self.n, self.r = start.shape[0] - memory, memory
         self._moving = self.n
         # (the memory a step was given, as its samples inside left it, up to when)
