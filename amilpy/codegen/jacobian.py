@@ -489,13 +489,16 @@ class ParameterJacobian:
     constant: np.ndarray
     variable: Callable
 
+    def __post_init__(self) -> None:
+        fixed = ~np.isnan(self.constant)
+        self._base = np.zeros((self.size, len(self.names)))
+        self._base[self.rows[fixed], self.cols[fixed]] = self.constant[fixed]
+        self._at = (self.rows[~fixed], self.cols[~fixed])
+
     def dense(self, t: float, y, m, z) -> np.ndarray:
-        out = np.zeros((self.size, len(self.names)))
-        v = self.constant.copy()
-        varying = np.isnan(v)
-        if varying.any():
-            v[varying] = self.variable(t, y, m, z)
-        out[self.rows, self.cols] = v
+        out = self._base.copy()
+        if len(self._at[0]):
+            out[self._at] = self.variable(t, y, m, z)
         return out
 
 
