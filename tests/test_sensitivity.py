@@ -387,6 +387,50 @@ def test_a_pulse_train_whose_instants_move_jumps_the_tangent_at_each():
     assert model.sensitivity(names, outputs=["X"]).how == "sensitivity equations"
 
 
+def test_two_pulse_trains_sharing_an_instant_each_move_theirs():
+    """X' = A PULSE(TZ1, P1, W1) + B PULSE(TZ2, P2, W2) - K X with both trains starting
+    at 0.3 (and meeting again at 2.5 = 0.3 + 2 P1 = 0.3 + P2): a value moves one
+    train's instants and not the other's, and the field is the sum of the two, so
+    each jumps the tangent by its own (f- - f+) dT/dp. Differenced whole runs until
+    2026-12-01 ("a PULSE train whose instants depend on a data value"); against the
+    complex step of the closed form (the sum of two pulsed decays), to 1e-9."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    model = amilpy.loads("PARAM A = 2.0, B = 0.5, K = 0.7, TZ1 = 0.3, P1 = 1.1, W1 = 0.4\n"
+                         "PARAM TZ2 = 0.3, P2 = 2.2, W2 = 0.9\n"
+                         "X = INTGRL(0.0, A*PULSE(TZ1, P1, W1) + B*PULSE(TZ2, P2, W2) - K*X)\n"
+                         "TIMER FINTIM = 4.0, OUTDEL = 0.25\nEND\n", "trains.amil")
+    values = {"A": 2.0, "B": 0.5, "K": 0.7, "TZ1": 0.3, "P1": 1.1, "W1": 0.4, "TZ2": 0.3,
+              "P2": 2.2, "W2": 0.9}
+    names = ["TZ1", "P1", "TZ2", "P2", "W2", "K"]
+    times = [0.2, 0.5, 1.0, 1.45, 2.6, 3.1, 4.0]
+    track = trajectory(model, 0, names, values, {"rtol": 1e-12, "atol": 1e-14}, times)
+    assert not isinstance(track, str), track
+
+    def x(t, v):
+        return pulsed_decay(t, v["A"], v["K"], v["TZ1"], v["P1"], v["W1"]) + \
+            pulsed_decay(t, v["B"], v["K"], v["TZ2"], v["P2"], v["W2"])
+
+    for t in times:
+        for j, name in enumerate(names):
+            exact = x(t, {**values, name: values[name] + 1e-30j}).imag / 1e-30
+            assert track.row("X", t)[j] == pytest.approx(exact, abs=1e-9), (t, name)
+
+
+def test_two_pulse_trains_whose_product_turns_at_one_instant_have_no_derivative():
+    """X' = PULSE(TZ1, 1, 0.4) PULSE(TZ2, 1, 0.6) - X with TZ1 = TZ2: moving TZ1 up
+    delays the product's start by dTZ1, moving it down does not advance it (TZ2 still
+    holds it off), so d X/d TZ1 differs from either side and the tangent says so;
+    the fit then differences whole runs."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    model = amilpy.loads("PARAM TZ1 = 0.3, TZ2 = 0.3\n"
+                         "X = INTGRL(0.0, PULSE(TZ1, 1.0, 0.4)*PULSE(TZ2, 1.0, 0.6) - X)\n"
+                         "TIMER FINTIM = 2.0, OUTDEL = 0.25\nEND\n", "product.amil")
+    said = trajectory(model, 0, ["TZ1"], {"TZ1": 0.3, "TZ2": 0.3}, {}, [1.0, 2.0])
+    assert isinstance(said, str) and "from either side" in said
+
+
 def test_instants_the_code_sets_move_with_the_values():
     """A dose every TAU (INTERVAL DT = TAU) and one at TD (INITIAL's SCHEDULE .AT. TD)
     that grows with T: AG = DOSE sum over the doses k of exp(-KA (t - t_k)) + (DOSE/2 +

@@ -686,7 +686,7 @@ class Compiler:
             exec(code, scalar)  # noqa: S102 - compiler-built tree, closed namespace
             exec(code, vector)  # noqa: S102 - the same code, elementwise functions
         _columns(vector)
-        trains, train_surfaces = binder.trains()
+        trains, train_owners = binder.trains()
         if model.units:
             # statements (IF, loops) cannot run on columns: one row at a time
             vector["surf_vec"], vector["out_vec"] = by_rows(scalar["surf"]), \
@@ -716,7 +716,8 @@ class Compiler:
             memory_trains=[(0.0, 1.0)] if model.weather else [],
             statements=self.statements, model=model,
             namespace=scalar, shared=self.shared, binder=self,
-            trains=trains, train_surfaces=train_surfaces,
+            trains=trains, train_owners=train_owners,
+            train_surfaces=set().union(*train_owners),
             settle=scalar["settle"] if self.settles else None, kept=list(self.kept),
             code={fname: (self.code_sections[fname], scalar[fname])
                   for fname in self.code_sections},
@@ -728,20 +729,21 @@ class Compiler:
             step_limit=binder.step_limit(constants),
         )
 
-    def trains(self) -> tuple[list[tuple[float, float]], set[int]]:
+    def trains(self) -> tuple[list[tuple[float, float]], list[frozenset[int]]]:
         """The (first instant, period) of the time switches that declare their
-        breakpoints (PULSE's train), and their watched surfaces."""
+        breakpoints (PULSE's train), and each one's watched surfaces."""
         if not self.events or self.setting.step is not None:
-            return [], set()
-        trains, surfaces = [], set()
+            return [], []
+        trains, owners = [], []
         for sw in self.model.switches:
             func = lookup(sw.func, len(sw.args))
-            watched = [i for i in sw.surfaces if i in self.watched]
+            watched = frozenset(i for i in sw.surfaces if i in self.watched)
             if func.breaks and watched:
-                surfaces.update(watched)
-                trains.extend(tuple(self.constant(instantiate(t, sw.args, sw.span), sw.span)
-                                    for t in pair) for pair in func.breaks)
-        return trains, surfaces
+                for pair in func.breaks:
+                    trains.append(tuple(self.constant(instantiate(t, sw.args, sw.span),
+                                                      sw.span) for t in pair))
+                    owners.append(watched)
+        return trains, owners
 
     def affine(self) -> set[int]:
         """Time surfaces affine in TIME: their roots are breakpoints found exactly."""

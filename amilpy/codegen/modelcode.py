@@ -62,6 +62,8 @@ class ModelCode:
     # train): those instants are breakpoints, and these surfaces are not located
     trains: list[tuple[float, float]] = field(default_factory=list)
     train_surfaces: set[int] = field(default_factory=set)
+    # the surfaces each of `trains` turns (its switch's)
+    train_owners: list[frozenset[int]] = field(default_factory=list)
     # ACSL form: the names written-order code keeps (z after the memory slots), and
     # that code by function name: (its IR, fn(t, y, m, z, ev) -> (y, z, values))
     kept: list[str] = field(default_factory=list)

@@ -45,9 +45,11 @@ memory value the field (or an output asked for) reads changing along the way
 where the memory is not carried (the flow map's), DELAY's sampling instants that a
 data value moves (its delay),
 a crossing where the flow is tangent to the surface (n . f- ~ 0), two PULSE
-trains that share an instant and move it differently. A train instant a data
-value moves (PULSE(TZ, P, W): first + k period) jumps the tangent by
-(f- - f+) dt/dp, dt/dp from the same instant of the moved code's trains.
+trains that turn at one instant a data value moves apart in a field that is not
+the sum of their effects (a product of pulses: the derivative differs from either
+side). A train instant a data value moves (PULSE(TZ, P, W): first + k period)
+jumps the tangent by (f- - f+) dt/dp, dt/dp from the same instant of that train in
+the moved code, each train its own where several turn at once.
 """
 
 from __future__ import annotations
@@ -281,6 +283,8 @@ class Tangent:
         # weight having reached 0 or 1); where another switch at the instant ends the
         # slide (a push on TIME), that switch's jump is to the branch left on
         exits = [k for k in range(len(m)) if slides(m_prev[k]) and not slides(m[k])]
+        if not self._trains_apart(t, y, m_prev, m, z_prev):
+            return
         for k in range(len(m)):
             if m[k] == m_prev[k] or k in exits:
                 continue
@@ -296,6 +300,11 @@ class Tangent:
         if moved:
             self._update_memory(t, y, m_prev, m, z_prev, z)
         self._wake(t, y, m, zl)
+
+    def _trains_apart(self, t: float, y: np.ndarray, m_prev, m, z) -> bool:
+        """Whether the PULSE trains that turn at t can be followed one by one
+        (`ParameterTangent`: their instants do not move here)."""
+        return True
 
     def _wake(self, t: float, y: np.ndarray, m, z) -> None:
         """An instant a memory slot holds, reached at t (`ProgramTangent`)."""
@@ -659,7 +668,7 @@ class ParameterTangent(Tangent):
         out = np.eye(len(self._phi))
         if rate is None:
             if np.any(rest):  # (a train's instant a data value moves)
-                shift = self._train_shift(t)
+                shift = self._train_shift(t, self.watch.watched[k].surface)
                 if shift is None:
                     self.failed = "a PULSE train whose instants depend on a data value"
                     return None
@@ -675,12 +684,48 @@ class ParameterTangent(Tangent):
         out[:n, n:] = np.outer(diff, rest) / rate
         return out
 
-    def _train_shift(self, t: float) -> np.ndarray | None:
-        """d t/d p of the train instant at t (a PULSE train's start or end, first + k
-        period: `ModelCode.trains`), from the same instant of the variants' trains;
-        None if no train has an instant at t, or two that move differently do."""
+    def _trains_apart(self, t: float, y: np.ndarray, m_prev, m, z) -> bool:
+        """Whether the PULSE trains that turn at t together can be followed one by one
+        (each jumps the tangent by its own (f- - f+) dT/dp, `_saltation`): where a
+        data value moves their instants apart, the field must be the sum of their
+        effects -- else the order they turn in, and so the derivative, differs from
+        either side of the value (a product of two pulses), which `failed` says."""
+        turned = [k for k in range(len(m)) if m[k] != m_prev[k]
+                  and self.watch.watched[k].surface in self.c.train_surfaces]
+        if len(turned) < 2:
+            return True
+        shifts = [self._train_shift(t, self.watch.watched[k].surface) for k in turned]
+        if any(s is None for s in shifts) or all(np.allclose(s, shifts[0], rtol=1e-9,
+                                                             atol=1e-12) for s in shifts):
+            return True
+        yl = y.tolist()
+
+        def field(ks) -> np.ndarray:
+            modes = list(m_prev)
+            for k in ks:
+                modes[k] = m[k]
+            return np.asarray(self.value("rhs", self.c, t, yl, modes, z), dtype=float)
+
+        start = field(())
+        alone = sum(field((k,)) - start for k in turned)
+        together = field(turned) - start
+        if np.allclose(together, alone, rtol=1e-12,
+                       atol=1e-12 * float(np.abs(start).max(initial=0.0))):
+            return True
+        self.failed = ("two PULSE trains turn at one instant that a data value moves apart, "
+                       "and the field is not the sum of their effects: its derivative "
+                       "differs from either side")
+        return False
+
+    def _train_shift(self, t: float, surface: int) -> np.ndarray | None:
+        """d t/d p of the instant at t of the trains that turn `surface` (a PULSE
+        train's start or end, first + k period: `ModelCode.trains`), from the same
+        instant of the variants' trains; None if none has an instant at t, or two
+        that move differently do."""
         found = None
         for i, (first, period) in enumerate(self.c.trains):
+            if surface not in self.c.train_owners[i]:
+                continue
             k = round((t - first) / period) if period > 0 else 0
             if k < 0 or abs(first + k * period - t) > 1e-12 * max(abs(t), 1.0):
                 continue
