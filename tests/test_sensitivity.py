@@ -853,6 +853,39 @@ def test_a_state_reset_where_a_value_moves_the_instant():
         assert track.row("Y", t) == pytest.approx(y, abs=1e-9), t
 
 
+def test_a_reset_carries_a_switch_on_the_state_across_at_its_instant():
+    """Y = MODINT(YIC, TR - X, X - TR, K) climbs from YIC at K to TR, where it is reset
+    to YIC: S = FSW(Y - A, 0, 0, 1) turns on at t_c = (A - YIC)/K and off at TR, where
+    the reset carries Y back below A (its surface apart from zero either side: no
+    crossing of its own). Z = INTEGRAL(S) = TR - t_c after TR: d Z/d (YIC, TR, K, A) =
+    (1/K, 1, (A - YIC)/K^2, -1/K), and before TR (t - t_c) the same but 0 for TR.
+    Differenced whole runs until 2026-12-01 ("a state is reset with other changes at
+    the instant"); to 1e-9."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    model = amilpy.loads("PARAM YIC = 0.5, TR = 0.8, K = 2.0, A = 1.2\nX = INTGRL(0.0, 1.0)\n"
+                         "Y = MODINT(YIC, TR - X, X - TR, K)\nS = FSW(Y - A, 0.0, 0.0, 1.0)\n"
+                         "Z = INTGRL(0.0, S)\nTIMER FINTIM = 2.0, OUTDEL = 0.1\nEND\n",
+                         "carried.amil")
+    values = {"YIC": 0.5, "TR": 0.8, "K": 2.0, "A": 1.2}
+    times = [0.5, 1.0, 2.0]
+    track = trajectory(model, 0, list(values), values, {"rtol": 1e-12, "atol": 1e-14}, times)
+    assert not isinstance(track, str), track
+    for t in times:
+        expect = [0.5, 1.0 if t > 0.8 else 0.0, 0.7 / 4.0, -0.5]
+        assert track.row("Z", t) == pytest.approx(expect, abs=1e-9), t
+    # a switch that crosses at the reset's instant by itself, which TR moves apart from
+    # it (T1 = TR by the data): the order of the two, and so the derivative, differs
+    # from either side
+    other = amilpy.loads("PARAM YIC = 0.5, TR = 0.8, K = 2.0, T1 = 0.8\nX = INTGRL(0.0, 1.0)\n"
+                         "Y = MODINT(YIC, TR - X, X - TR, K)\nS = FSW(TIME - T1, 0.0, 0.0, Y)\n"
+                         "Z = INTGRL(0.0, S)\nTIMER FINTIM = 2.0, OUTDEL = 0.1\nEND\n",
+                         "apart.amil")
+    said = trajectory(other, 0, ["TR"], {"YIC": 0.5, "TR": 0.8, "K": 2.0, "T1": 0.8}, {},
+                      times)
+    assert said == "a state is reset where two switches cross that a data value moves apart"
+
+
 @pytest.mark.parametrize("method", ["EULER", "RK4"])
 def test_a_fixed_step_route_is_differenced_at_the_rounding_step(decay, method):
     """A fixed-step route's run is a discrete map of the values, with no error

@@ -614,27 +614,38 @@ class ParameterTangent(Tangent):
         """A switch that resets states (MODINT: y+ = R(y-, p), the IC): at an
         instant t_e(p) the values move, y+ = R(y-(t_e), p), so the tangent after it
         is S+ = R_y (S- + f- dt/dp) + R_p - f+ dt/dp, dt/dp = -(n . S- + ds/dp)/rate
-        (R_y and R_p by differences of the reset: the IC of a variant). The switches
-        at the instant crossing there together, the memory unchanged; else it says
-        so."""
+        (R_y and R_p by differences of the reset: the IC of a variant), f+ the field
+        in every branch changed at the instant. The switches whose surfaces are at
+        zero there cross together (MODINT's X1 and X2 written as TR - X and X - TR:
+        one instant); the others the reset carried across (a switch on the state it
+        resets: its surface apart from zero before and after, on its new branch's
+        side) change at that instant too. The memory unchanged; else it says so."""
         n = self.n
         changed = [k for k in range(len(m)) if m[k] != m_prev[k]]
-        # (several surfaces that cross here together are one instant: MODINT's X1 and
-        # X2 written as TR - X and X - TR; one apart from zero is another change)
+        zero = 1e-9 * (1.0 + float(np.abs(y_prev).max(initial=0.0)))
         e = self.c.surf(t, y_prev.tolist(), m_prev, z_prev)
-        if not changed or z != z_prev or sliding_in(m) or sliding_in(m_prev) or any(
-                abs(e[k]) > 1e-9 * (1.0 + float(np.abs(y_prev).max(initial=0.0)))
-                for k in changed):
+        crossing = [k for k in changed if abs(e[k]) <= zero]
+        landed = self.c.surf(t, y.tolist(), m, z)
+        if not crossing or z != z_prev or sliding_in(m) or sliding_in(m_prev) or any(
+                k in self.watch.levels or not landed[k] * m[k] > zero
+                for k in changed if k not in crossing):
             self.failed = "a state is reset with other changes at the instant"
             return
-        k = changed[0]
-        jump = self._jump(k, t, y_prev, m_prev, m, z_prev, z_prev)
-        if jump is None:
+        rest = self._by_data("surf", t, y_prev, m_prev, z_prev)
+        shifts = []
+        for k in crossing:
+            jump = self._jump(k, t, y_prev, m_prev, m, z_prev, z_prev)
+            if jump is None:
+                return
+            g, _, rate = jump
+            shifts.append(np.zeros(self.phi.shape[1]) if rate is None else
+                          self.shift_of(g, rest[k], rate))
+        shift = shifts[0]
+        if any(not np.allclose(other, shift, rtol=1e-6,
+                               atol=1e-9 * float(np.abs(shift).max(initial=1.0)))
+               for other in shifts[1:]):
+            self.failed = "a state is reset where two switches cross that a data value moves apart"
             return
-        g, _, rate = jump
-        rest = self._by_data("surf", t, y_prev, m_prev, z_prev)[k]
-        shift = np.zeros(self.phi.shape[1]) if rate is None else \
-            self.shift_of(g, rest, rate)
         watch, yl = self.watch, y_prev.copy()
 
         def reset(w, v: np.ndarray) -> np.ndarray:
