@@ -714,8 +714,64 @@ def test_a_delay_s_store_carries_its_sensitivities():
         got = np.array([[track.row("X", t)[j], track.row("XD", t)[j]] for t in times])
         assert np.max(np.abs(got - reference)) <= 1e-6, name
     assert model.sensitivity(["K"], outputs=["X"], fintim=1.5).how == "sensitivity equations"
-    said = trajectory(model, 0, ["P"], values, {}, times, ["X"])
-    assert said == "DELAY's sampling instants move with a data value (its delay)"
+
+
+def delayed_decay(times, k, a, p, x0, n=20):
+    """X' = -K XD + A SIN(TIME), XD = DELAY(N, P, X), X(0) = X0, as the store computes
+    it: samples X_j = X(j H), H = P/N, XD linear between X_{j-N} and X_{j-N+1} on [j H,
+    (j + 1) H] (X0 before P), so X on each piece is X(j H) - K times the integral of
+    that line + A (cos(j H) - cos t): a closed form, complex arguments for the complex
+    step (the pieces chosen by real parts). (X, XD) at each of `times`."""
+    h = p / n
+    x = [x0]
+
+    def line(j: int, t):
+        if j < n:
+            return x0, x0 * (t - j * h)
+        lo, hi = x[j - n], x[j - n + 1]
+        u = t - j * h
+        return lo + (hi - lo) * u / h, lo * u + (hi - lo) * u * u / (2 * h)
+
+    out, j = [], 0
+    for t in times:
+        while ((j + 1) * h).real <= t:
+            x.append(x[j] - k * line(j, (j + 1) * h)[1] + a * (np.cos(j * h) - np.cos((j + 1) * h)))
+            j += 1
+        xd, area = line(j, t)
+        out.append((x[j] - k * area + a * (np.cos(j * h) - np.cos(t)), xd))
+    return out
+
+
+def test_a_free_delay_moves_the_store_s_instants_and_its_reads():
+    """DELAY(20, P, X) with P free: the store samples at j P/20 and reads X at TIME -
+    P, so d/dP moves every sampling instant (the k-th by k/20: each sample's d X/d P
+    is S + f k/20, at its moving instant) and the read (its start at TIME = P, where it
+    leaves the held X0, and its interpolation between samples that move). Against
+    the complex step of the store's own closed form (`delayed_decay`), at instants
+    between samples: X to 1e-8 (measured 4e-10), XD to 1e-7 (measured 9e-9: the read's
+    difference across its interpolation, whose second derivative in P is large).
+    Differenced whole runs until 2026-12-01 ("DELAY's sampling instants move with a
+    data value (its delay)"); the differences across the held start put d X/d P 6e-7
+    off."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    model = amilpy.loads("PARAM K = 0.8, A = 0.3, P = 1.0\nINCON X0 = 1.0\n"
+                         "XD = DELAY(20, P, X)\nX = INTGRL(X0, -K*XD + A*SIN(TIME))\n"
+                         "TIMER FINTIM = 2.5, OUTDEL = 0.25\nPRINT X, XD\nEND\n",
+                         "delay.amil")
+    values = {"K": 0.8, "A": 0.3, "X0": 1.0, "P": 1.0}
+    times = [0.53, 1.03, 1.27, 2.03, 2.47]
+    track = trajectory(model, 0, ["P", "K"], values, {"rtol": 1e-10, "atol": 1e-12},
+                       times, ["X", "XD"])
+    assert not isinstance(track, str), track
+    for name, j in (("P", 0), ("K", 1)):
+        moved = {**values, name: values[name] + 1e-30j}
+        exact = delayed_decay(times, moved["K"], moved["A"], moved["P"], moved["X0"])
+        for t, (x, xd) in zip(times, exact, strict=True):
+            assert track.row("X", t)[j] == pytest.approx(np.imag(x) / 1e-30, abs=1e-8), (t, name)
+            assert track.row("XD", t)[j] == pytest.approx(np.imag(xd) / 1e-30, abs=1e-7), \
+                (t, name)
+    assert model.sensitivity(["P"], outputs=["X"]).how == "sensitivity equations"
 
 
 def test_a_small_value_is_differentiated_by_a_fraction_of_itself(tmp_path):

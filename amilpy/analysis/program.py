@@ -105,11 +105,17 @@ def program_trajectory(model, k: int, names: list[str], data: dict[str, float],
                           zip(plus.schedules, minus.schedules, strict=True)]
         constants.append((plus.constants, minus.constants, h))
         variants.append((plus.code, minus.code, h))
-        start[:, j] = (np.concatenate([plus.code.y0, plus.code.z0]) -
-                       np.concatenate([minus.code.y0, minus.code.z0])) / (2.0 * h)
+        hi = np.concatenate([plus.code.y0, plus.code.z0])
+        lo = np.concatenate([minus.code.y0, minus.code.z0])
+        with np.errstate(invalid="ignore"):  # (a slot at INF in both: no dependence)
+            start[:, j] = np.where(hi == lo, 0.0, (hi - lo) / (2.0 * h))
     floor = np.broadcast_to(np.asarray(plan.tol.atol / plan.tol.rtol, dtype=float), (n,))
     tangent = ProgramTangent(c, None, floor, start, variants, r, outputs_asked(c, variables),
                              bind_slopes(c, names, constants))
+    if c.clock_slots:  # (a store whose instants a free delay may move: `along_clock`)
+        tangent.halves = [(prepared_at(**{name: data[name] + 0.5 * h})[2].code,
+                           prepared_at(**{name: data[name] - 0.5 * h})[2].code)
+                          for name, (_, _, h) in zip(names, variants, strict=True)]
     times = np.asarray(times, dtype=float)
     sampler = Sampler(tangent, times, n + r)
     run = _TangentRun(model.ir, spec, opts, base, _clock.perf_counter(), sampler, variants,
@@ -125,7 +131,7 @@ def program_trajectory(model, k: int, names: list[str], data: dict[str, float],
     missing = [t for t in times.tolist() if t not in sampler.at]
     if missing:
         return f"the run's steps did not reach TIME = {missing[0]:.9g}"
-    return ProgramTrajectory(c, variants, floor, sampler.at, run.watch)
+    return ProgramTrajectory(c, variants, floor, sampler.at, run.watch, tangent.halves)
 
 
 class _TangentRun(AcslRun):
@@ -373,9 +379,9 @@ class ProgramTrajectory:
     """d (state or output)(t)/d p at the instants asked for (`program_trajectory`)."""
 
     def __init__(self, code, variants, floor: np.ndarray, at: dict[float, tuple],
-                 watch) -> None:
+                 watch, halves=None) -> None:
         self.code, self.variants, self.floor, self.at = code, variants, floor, at
-        self.watch = watch
+        self.watch, self.halves = watch, halves
         self.states = {name: i for i, name in enumerate(code.state_names)}
         self.outputs = {name: i for i, name in enumerate(code.out_names)}
 
@@ -385,4 +391,4 @@ class ProgramTrajectory:
         if name in self.states:
             return sens[self.states[name]]
         return output_row(self.code, self.variants, self.outputs[name], t, state, sens,
-                           self.floor, self.watch)
+                          self.floor, self.watch, self.halves)

@@ -23,7 +23,7 @@ one TIME and state (the run's code bound to p +- h, no integration); h = cbrt(ep
 |p| (1e-8 for p = 0: `step_for`). Where the
 variational equations do not follow the flow (a state reset where two switches
 cross that p moves apart, or with a memory change at its instant; a flow tangent to
-a surface, DELAY's sampling instants moved by p; in a
+a surface; in a
 program of the ACSL form, an
 instant its code runs at that moves with p: `analysis.program`) the caller
 differences whole runs instead, and is told why."""
@@ -79,9 +79,10 @@ def _run_jacobian(model, obs: Observations, k: int, names, values, params, optio
 class Trajectory:
     """d y(t)/d p along one run at given instants (`trajectory`), and of any output."""
 
-    def __init__(self, flow, variants, floor, at: dict[float, tuple]) -> None:
+    def __init__(self, flow, variants, floor, at: dict[float, tuple], halves=None) -> None:
         self.flow, self.code = flow, flow.code
         self.variants, self.floor, self.at = variants, floor, at
+        self.halves = halves  # (the variants at half the step: `along_clock`)
         self.states = {name: i for i, name in enumerate(self.code.state_names)}
         self.outputs = {name: i for i, name in enumerate(self.code.out_names)}
         self._rows: dict[float, object] = {}
@@ -100,7 +101,7 @@ class Trajectory:
             self._rows[t] = state if sliding_in(state.modes) else \
                 replace(self.flow.state(state.y, None, state.memory, t), memory=state.memory)
         return output_row(self.code, self.variants, self.outputs[name], t, self._rows[t],
-                           sens, self.floor, self.flow.watch)
+                          sens, self.floor, self.flow.watch, self.halves)
 
 
 def moved_flows(flow_at, code, name: str, value: float):
@@ -179,6 +180,12 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
     by_name = None if exact is None else exact[0]
     tangent = ProgramTangent(c, flow.watch, floor, dy0, variants, r, asked, by_name) if r \
         else ParameterTangent(c, flow.watch, floor, dy0, variants, asked, by_name)
+    halves = None
+    if r and c.clock_slots:  # (a store whose instants a free delay may move: `along_clock`)
+        halves = [(flow_at(**{name: data[name] + 0.5 * h}).code,
+                   flow_at(**{name: data[name] - 0.5 * h}).code)
+                  for name, (_, _, h) in zip(names, variants, strict=True)]
+        tangent.halves = halves
     times = np.asarray(times, dtype=float)
     sampler = Sampler(tangent, times, n + r)
     at: dict[float, tuple] = sampler.at
@@ -196,7 +203,7 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
     missing = [t for t in times.tolist() if t not in at]
     if missing:
         return f"the flow's steps did not reach TIME = {missing[0]:.9g}"
-    return Trajectory(flow, variants, floor, at)
+    return Trajectory(flow, variants, floor, at, halves)
 
 
 

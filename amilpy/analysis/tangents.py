@@ -9,7 +9,7 @@ import numpy as np
 
 from ..run.jacobian import STEP
 from ..run.plan import sliding_in
-from ..run.variational import ParameterTangent, filippov, has_slope, held
+from ..run.variational import ParameterTangent, along_clock, filippov, has_slope, held
 
 
 class Sampler:
@@ -67,7 +67,7 @@ class Sampler:
 
 
 def output_row(c, variants, i: int, t: float, state, sens: np.ndarray, floor: np.ndarray,
-                watch) -> np.ndarray:
+               watch, halves=None) -> np.ndarray:
     """d out_i / d p = d out_i/d y . S + d out_i/d p at (t, state); where S has rows
     for the memory values too (a program's: `analysis.program`), + d out_i/d z . S_z.
     While a surface slides the outputs are weighted as its field (`filippov`)."""
@@ -98,8 +98,14 @@ def output_row(c, variants, i: int, t: float, state, sens: np.ndarray, floor: np
         up[j] += h
         down[j] -= h
         grad[len(y) + j] = (out(c, y, up) - out(c, y, down)) / (up[j] - down[j])
-    direct = np.array([(out(plus, y, z) - out(minus, y, z)) / (2.0 * h)
-                       for plus, minus, h in variants])
+    clock = np.array(sorted(c.clock_slots), dtype=int)
+    rows = sens[len(y) + clock] if len(clock) and len(sens) > len(y) else None
+    if rows is not None and np.any(rows):  # (a free delay moves a store's instants)
+        direct = along_clock(lambda code, v: out(code, y, v), c, variants, halves, z,
+                             clock, rows)
+    else:
+        direct = np.array([(out(plus, y, z) - out(minus, y, z)) / (2.0 * h)
+                           for plus, minus, h in variants])
     return grad @ sens + direct
 
 

@@ -439,7 +439,9 @@ def delay_store(t: float, h: float, d: float, x: float, z, o: int, k: float) -> 
             s[_XLAST] = x  # (a restart: X in the new branches)
         return s
     count = int(s[_COUNT])
-    if h != s[_H]:
+    # (a spacing that differs by rounding alone is the same: a tangent moves the store
+    # and the delay it is asked for together, `ProgramTangent._along`)
+    if abs(h - s[_H]) > 1e-12 * h:
         # a new spacing (ACSL's TDL/NMX as TDL changes) from the sample due next on
         due = s[_NEXT] if s[_NEXT] < math.inf else t_last + h
         s[_H], s[_ANCHOR_T], s[_ANCHOR_J], s[_NEXT] = h, due, float(count), due

@@ -128,6 +128,12 @@ def branch_difference(f: Callable[[list[float]], object], at: list[float], j: in
         v[j] += d
         return np.asarray(f(v), dtype=float)
 
+    return along_branch(at_step, h)
+
+
+def along_branch(at_step: Callable[[float], np.ndarray], h: float) -> np.ndarray:
+    """`branch_difference` along a direction: `at_step(d)` is f moved by d along it
+    (d in 0, +-h and, where the sides disagree, +-h/2)."""
     mid, hi, lo = at_step(0.0), at_step(h), at_step(-h)
     with np.errstate(invalid="ignore", over="ignore"):
         up, down = (hi - mid) / h, (mid - lo) / h

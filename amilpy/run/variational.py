@@ -36,14 +36,16 @@ instant a slot holds (CSMP's PULSE end) jumps the tangent by (f- - f+) times tha
 slot's row (`_wake`). A play (HSTRSS, BCKLSH) is read on the branch the motion
 takes (`leaned`: following its input where the input pushes it, else holding),
 and a step in which one engages is split there (`engaged`). DELAY's store is
-sampled inside the steps as the run samples it, the tangent cut at each instant.
+sampled inside the steps as the run samples it, the tangent cut at each instant;
+where a free delay moves those instants (P/N apart), each sample's map applies at
+its moving instant and the store is differenced along the tangent, its instants
+moving with the delay (`along_clock`, `_along`).
 
 What it does not handle it says (`Tangent.failed`), and the flow map then
 takes central differences of whole flows instead: a state reset (MODINT; a
 `ParameterTangent` follows one: `_reset`), a
 memory value the field (or an output asked for) reads changing along the way
-where the memory is not carried (the flow map's), DELAY's sampling instants that a
-data value moves (its delay),
+where the memory is not carried (the flow map's),
 a crossing where the flow is tangent to the surface (n . f- ~ 0), two PULSE
 trains that turn at one instant a data value moves apart in a field that is not
 the sum of their effects (a product of pulses: the derivative differs from either
@@ -63,7 +65,7 @@ from scipy.linalg import expm
 
 from ..codegen.jacobian import for_parameters
 from .dense import sample, sample_step
-from .jacobian import STEP, branch_difference, jacobian_at
+from .jacobian import STEP, along_branch, branch_difference, jacobian_at
 from .plan import slides, sliding_in
 from .slide import combine, corner_modes, corner_weights, side_mode, slide_alphas
 
@@ -805,8 +807,36 @@ def has_slope(c, z, j: int) -> bool:
     """Whether what reads memory slot j has a slope in it: not an instant not yet set
     (-INF), nor an instant the model switches at, whose only effect is that switch's
     jump (`ProgramTangent._wake`), nor an instant or count a store keeps
-    (`ModelCode.clock_slots`)."""
+    (`ModelCode.clock_slots`: where a free delay moves them, they move with it,
+    `along_clock`)."""
     return math.isfinite(z[j]) and j not in c.wake_slots and j not in c.clock_slots
+
+
+def along_clock(f, base, variants, halves, z, clock: np.ndarray, rows: np.ndarray
+                ) -> np.ndarray:
+    """d f/d p (f(code, z): a column per value) where a free delay moves a store's
+    instants: each value's variants (`base`'s functions bound to p +- h) read the
+    store with its clock slots moved along their rows of the tangent (`rows`: those
+    slots x values), as a run with the value moved keeps them -- moved alone, the
+    store's start and its oldest sample part. With `halves` (the same bound to p +-
+    h/2), on the branch the point is on where one side crosses a kink within h (a
+    read that leaves the held start at TIME = t0 + P: `along_branch`)."""
+    cols = []
+    for j, (plus, minus, h) in enumerate(variants):
+        codes = {0.0: base, h: plus, -h: minus}
+        if halves:
+            codes[0.5 * h], codes[-0.5 * h] = halves[j]
+
+        def at_step(d: float, j=j, codes=codes) -> np.ndarray:
+            v = list(z)
+            for k, r in zip(clock.tolist(), rows[:, j].tolist(), strict=True):
+                if r and math.isfinite(z[k]):
+                    v[k] = z[k] + d * r
+            return np.asarray(f(codes[d], v), dtype=float)
+
+        cols.append(along_branch(at_step, h) if halves else
+                    (at_step(h) - at_step(-h)) / (2.0 * h))
+    return np.array(cols).T
 
 
 class ProgramTangent(ParameterTangent):
@@ -833,6 +863,22 @@ class ProgramTangent(ParameterTangent):
                  for mem in (c.model.memories if c.model is not None else ())]
         self._next_slots = [slot + spec.samples for slot, spec in specs
                             if spec.samples is not None]
+        # whether a store's instants move with the values (a free delay): then its
+        # clock slots are carried like the others (`clock_moves`)
+        self._clock = np.array(sorted(c.clock_slots), dtype=int)
+        self._clock_moves = False
+        # the variants' functions bound to p +- h/2, where the caller has them
+        # (`along_clock`): (plus, minus) per value
+        self.halves: list[tuple[object, object]] | None = None
+
+    def clock_moves(self) -> bool:
+        """Whether a store's instants and counts have a slope in the values (its
+        spacing P/N, a free delay's, set at its start): from then on every map and
+        read is differenced in them too, and the store samples at instants that
+        move (`__call__`)."""
+        if not self._clock_moves and len(self._clock):
+            self._clock_moves = bool(np.any(self._phi[self.n + self._clock]))
+        return self._clock_moves
 
     def _memory_moved(self, t: float, y: np.ndarray, m_prev, m, z_prev, z) -> bool:
         return True
@@ -850,18 +896,18 @@ class ProgramTangent(ParameterTangent):
                 ta >= self._sampled[2]:
             z = self._sampled[1]
         t, g = ta, c.next_sample(z)
-        while g < tb and self.failed is None:
+        # (where a free delay moves the store's instants, one due at the step's end, to
+        # a few ulps, is taken here, at its moving instant: the update at the step's
+        # end would take it at that fixed instant on one side of the value only)
+        near = 4 * np.finfo(float).eps * max(abs(tb), 1.0) if self.clock_moves() else -1.0
+        while (g < tb or g - tb <= near) and self.failed is None:
             super().__call__(t, g, interp, m, z)
             if self.failed is not None:
                 return
             y = np.asarray(interp(g), dtype=float)
             before = list(z)
-            self.map_at(self._memory_map(lambda code, tt, yv, zv: code.sample(tt, yv, m, zv),
-                                         g, y.tolist(), before))
+            self._sample_at(g, y, m, before)
             z = list(c.sample(g, y.tolist(), m, before))
-            if any(np.any(self.phi[self.n + k]) for k in self._next_slots):
-                self.failed = "DELAY's sampling instants move with a data value (its delay)"
-                return
             self.prev, self._lean = (g, y, list(m), list(z)), None
             after = c.next_sample(z)
             if not after > g:
@@ -869,6 +915,53 @@ class ProgramTangent(ParameterTangent):
             t, g = g, after
         super().__call__(t, tb, interp, m, z)
         self._sampled = (given, list(z), tb)
+
+    def _sample_at(self, g: float, y: np.ndarray, m, z) -> None:
+        """A store samples the trajectory at g (its next instant, slot `_next_slots`):
+        the sample's map applies; where a free delay moves g (that slot's row, dg/dp),
+        at the moved instant: J (Phi + f- dg) + (M_t - f+) dg, M_t the map's rate in
+        TIME on the side the sample is taken (t >= g), where the stored value and the
+        newest point's instant move with it."""
+        c, n, yl = self.c, self.n, y.tolist()
+
+        def sample(code, tt, yv, zv):
+            return code.sample(tt, yv, m, zv)
+
+        if not self.clock_moves():
+            self.map_at(self._memory_map(sample, g, yl, z))
+            return
+        due = [k for k in self._next_slots if z[k] == g]
+        shift = self.phi[n + due[0]].copy() if due else np.zeros(len(self.variants))
+        self._along(sample, g, y, z, shift, self.field_rows(g, yl, m, z),
+                    self.field_rows(g, yl, m, list(c.sample(g, yl, m, z))))
+
+    def _along(self, call, t: float, y: np.ndarray, z, shift: np.ndarray,
+               before: np.ndarray, after: np.ndarray) -> None:
+        """A memory map z' = call(code, t, y, z) at an instant that moves by `shift`
+        (dt/dp) applied where a store's clock moves: each column of the tangent is the
+        map's central difference along that column's own direction -- TIME by dt/dp,
+        the states by S + f- dt/dp, the memory by its rows, the value by its variant's
+        step -- so that the spacing slot and the spacing the call asks for (P/N) move
+        together, as in a run with the value moved (moved apart, the store would
+        start a new spacing: a jump); the states' rows take (f- - f+) dt/dp."""
+        n, r = self.n, self.r
+        phi = self.phi.copy()
+        for j, (plus, minus, h) in enumerate(self.variants):
+            dy = phi[:n, j] + before[:n] * shift[j]
+            dz = np.nan_to_num(phi[n:n + r, j], nan=0.0, posinf=0.0, neginf=0.0)
+            ends = []
+            for code, sign in ((plus, 1.0), (minus, -1.0)):
+                zv = [v + sign * h * d if d else v for v, d in zip(z, dz.tolist(), strict=True)]
+                ends.append(np.asarray(call(code, t + sign * h * shift[j],
+                                            (y + sign * h * dy).tolist(), zv), dtype=float))
+            # (the side whose store took the same samples as the run's: a sample due
+            # within the step of the instant is taken on one side only)
+            centre = np.asarray(call(self.c, t, y.tolist(), list(z)), dtype=float)
+            with np.errstate(invalid="ignore"):
+                phi[n:n + r, j] = np.nan_to_num(one_sided((ends[0] - centre) / h,
+                                                          (centre - ends[1]) / h))
+        phi[:n] += np.outer(before[:n] - after[:n], shift)
+        self._phi = phi
 
     def _memory_map(self, call, t: float, yl: list, z) -> np.ndarray:
         """The Jacobian of a memory map z' = call(code, t, y, z) as a map of the
@@ -974,6 +1067,11 @@ class ProgramTangent(ParameterTangent):
                 zv = code.mem(tt, yv, before, after, list(zv))
             return np.asarray(zv, dtype=float)
 
+        if self.clock_moves():
+            shift = self._shift if self._shift is not None else np.zeros(len(self.variants))
+            field = self.field_rows(t, yl, m, z)
+            self._along(update, t, np.asarray(yl), z_prev, shift, field, field)
+            return
         # (an update reads a trigger's sign where its mode is not positive, a sign that
         # jumps at the crossing it may be taken at: `branch_difference` keeps to the
         # branch the run's update took; the same sign moved by a value, `one_sided`)
@@ -1059,8 +1157,15 @@ class ProgramTangent(ParameterTangent):
         return out
 
     def _by_data(self, fn: str, t: float, y: np.ndarray, m, z) -> np.ndarray:
-        """d fn / d (z, p): the memory values' columns, then the data values'."""
-        by_p = super()._by_data(fn, t, y, m, z)
+        """d fn / d (z, p): the memory values' columns, then the data values' (with
+        a store's clock moved along, where a free delay moves it: `along_clock`)."""
+        if self.clock_moves():
+            yl = np.asarray(y, dtype=float).tolist()
+            by_p = along_clock(lambda code, v: self.value(fn, code, t, yl, m, v), self.c,
+                               self.variants, self.halves, z, self._clock,
+                               self._phi[self.n + self._clock, :])
+        else:
+            by_p = super()._by_data(fn, t, y, m, z)
         return np.hstack([self._by_z(fn, t, y, m, z), by_p]) if self.r else by_p
 
     def jump(self, matrix: np.ndarray, t: float, y: np.ndarray, m, z, moved=None) -> None:
