@@ -942,6 +942,37 @@ def test_a_reset_carries_a_switch_on_the_state_across_at_its_instant():
     assert said == "a state is reset where two switches cross that a data value moves apart"
 
 
+def test_a_reset_with_a_memory_update_at_its_instant():
+    """H = ZHOLD(TR - X, Y) follows Y = MODINT(YIC, TR - X, X - TR, K) = YIC + K t to
+    TR and holds it there, where Y is reset to YIC: the memory is updated at the
+    reset's instant, before the reset (as the run does it), so H holds YIC + K TR,
+    and Z = INTEGRAL(H) = YIC t + K t^2/2 to TR, then + (YIC + K TR)(t - TR). After
+    TR: d H/d (YIC, TR, K) = (1, K, TR), d Z/d (YIC, TR, K) = (t, K (t - TR), TR^2/2 +
+    TR (t - TR)), d Y/d (YIC, TR, K) = (1, 0, 0). Differenced whole runs until
+    2026-12-01 ("a state is reset with other changes at the instant"); to 1e-9."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    model = amilpy.loads("PARAM YIC = 0.5, TR = 0.8, K = 2.0\nX = INTGRL(0.0, 1.0)\n"
+                         "Y = MODINT(YIC, TR - X, X - TR, K)\nH = ZHOLD(TR - X, Y)\n"
+                         "Z = INTGRL(0.0, H)\nTIMER FINTIM = 2.0, OUTDEL = 0.1\nEND\n",
+                         "held.amil")
+    values = {"YIC": 0.5, "TR": 0.8, "K": 2.0}
+    times = [0.5, 1.0, 2.0]
+    track = trajectory(model, 0, list(values), values, {"rtol": 1e-12, "atol": 1e-14}, times,
+                       ["Z", "H", "Y"])
+    assert not isinstance(track, str), track
+    yic, tr, k = 0.5, 0.8, 2.0
+    for t in times:
+        if t < tr:
+            z, h, y = [t, 0.0, t * t / 2], [1.0, 0.0, t], [1.0, 0.0, t]
+        else:
+            z = [t, k * (t - tr), tr * tr / 2 + tr * (t - tr)]
+            h, y = [1.0, k, tr], [1.0, 0.0, 0.0]
+        assert track.row("Z", t) == pytest.approx(z, abs=1e-9), t
+        assert track.row("H", t) == pytest.approx(h, abs=1e-9), t
+        assert track.row("Y", t) == pytest.approx(y, abs=1e-9), t
+
+
 @pytest.mark.parametrize("method", ["EULER", "RK4"])
 def test_a_fixed_step_route_is_differenced_at_the_rounding_step(decay, method):
     """A fixed-step route's run is a discrete map of the values, with no error

@@ -628,7 +628,7 @@ class ParameterTangent(Tangent):
         e = self.c.surf(t, y_prev.tolist(), m_prev, z_prev)
         crossing = [k for k in changed if abs(e[k]) <= zero]
         landed = self.c.surf(t, y.tolist(), m, z)
-        if not crossing or z != z_prev or sliding_in(m) or sliding_in(m_prev) or any(
+        if not crossing or sliding_in(m) or sliding_in(m_prev) or any(
                 k in self.watch.levels or not landed[k] * m[k] > zero
                 for k in changed if k not in crossing):
             self.failed = "a state is reset with other changes at the instant"
@@ -647,6 +647,10 @@ class ParameterTangent(Tangent):
                                atol=1e-9 * float(np.abs(shift).max(initial=1.0)))
                for other in shifts[1:]):
             self.failed = "a state is reset where two switches cross that a data value moves apart"
+            return
+        before = self.field_rows(t, y_prev, m_prev, z_prev)
+        if z != z_prev and not self._memory_at_reset(t, y_prev, m_prev, m, z_prev, z, shift,
+                                                     before):
             return
         watch, yl = self.watch, y_prev.copy()
 
@@ -667,8 +671,15 @@ class ParameterTangent(Tangent):
         matrix = np.eye(size)
         matrix[:n, :n] = r_y
         matrix[:n, size - q:] = r_p
-        self.map_at(matrix, (shift, self.field_rows(t, y_prev, m_prev, z_prev),
-                             self.field_rows(t, y, m, z)))
+        self.map_at(matrix, (shift, before, self.field_rows(t, y, m, z)))
+
+    def _memory_at_reset(self, t: float, y_prev: np.ndarray, m_prev, m, z_prev, z,
+                         shift: np.ndarray, before: np.ndarray) -> bool:
+        """The memory updated at a reset's instant, before the reset (as the run does
+        it: the update reads the states the instant found); False (`failed` said)
+        where the tangent does not carry the memory (`ProgramTangent` does)."""
+        self.failed = "a state is reset with a memory change at the instant"
+        return False
 
     def _saltation(self, k: int, t: float, y: np.ndarray, before, after, z_before, z_after
                    ) -> np.ndarray | None:
@@ -1041,12 +1052,22 @@ class ProgramTangent(ParameterTangent):
             lo, hi = (lo, mid) if moved(mid) else (mid, hi)
         return hi if hi < tb else None
 
-    def _update_memory(self, t: float, y: np.ndarray, m_prev, m, z_prev, z) -> None:
+    def _memory_at_reset(self, t: float, y_prev: np.ndarray, m_prev, m, z_prev, z,
+                         shift: np.ndarray, before: np.ndarray) -> bool:
+        self._shift = shift
+        self._update_memory(t, y_prev, m_prev, m, z_prev, z, before)
+        return self.failed is None
+
+    def _update_memory(self, t: float, y: np.ndarray, m_prev, m, z_prev, z,
+                       field: np.ndarray | None = None) -> None:
         """The memory functions' update at t, z = mem(t, y, m_prev, m, z_prev) (every
         step's end, a located switch): its Jacobian in y, z, p and TIME (central
         differences of the generated update) applies to the memory rows, with y's
         total derivative S + f dt/dp where the instant moves (a ZHOLD that holds
-        where its trigger crosses: dZ/dp = dB/dp + dB/dt dt/dp)."""
+        where its trigger crosses: dZ/dp = dB/dp + dB/dt dt/dp); f is `field` in the
+        tangent's rows where given (the field before a reset that follows the update:
+        S is still the one before the instant), else the field after the instant (S
+        after its switches' jumps: the same total)."""
         n, r, c = self.n, self.r, self.c
         yl, m_prev, m = np.asarray(y, dtype=float).tolist(), list(m_prev), list(m)
         path = self._update_path(t, yl, m_prev, m, z_prev, z)
@@ -1067,9 +1088,10 @@ class ProgramTangent(ParameterTangent):
                 zv = code.mem(tt, yv, before, after, list(zv))
             return np.asarray(zv, dtype=float)
 
+        if field is None:
+            field = self.field_rows(t, yl, m, z)
         if self.clock_moves():
             shift = self._shift if self._shift is not None else np.zeros(len(self.variants))
-            field = self.field_rows(t, yl, m, z)
             self._along(update, t, np.asarray(yl), z_prev, shift, field, field)
             return
         # (an update reads a trigger's sign where its mode is not positive, a sign that
@@ -1086,7 +1108,6 @@ class ProgramTangent(ParameterTangent):
         rate = np.zeros(size)
         rate[n:n + r] = (update(c, t + ht, yl, z_prev) - update(c, t - ht, yl, z_prev)) / \
             (2.0 * ht)
-        field = self.field_rows(t, yl, m, z)
         self.map_at(matrix, (shift, field, field, rate))
 
     def _wake(self, t: float, y: np.ndarray, m, z) -> None:
