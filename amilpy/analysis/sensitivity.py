@@ -22,9 +22,8 @@ out/dp and the memory's start, central differences of the generated functions at
 one TIME and state (the run's code bound to p +- h, no integration); h = cbrt(eps)
 |p| (1e-8 for p = 0: `step_for`). Where the
 variational equations do not follow the flow (a state reset where two switches
-cross that p moves apart, or with a memory change at its instant; a flow tangent to
-a surface; in a
-program of the ACSL form, an
+cross that p moves apart, a flow tangent to a surface; in a program of the ACSL
+form, an
 instant its code runs at that moves with p: `analysis.program`) the caller
 differences whole runs instead, and is told why."""
 
