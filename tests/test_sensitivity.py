@@ -1095,6 +1095,33 @@ def test_a_small_term_beside_a_large_one_keeps_its_sensitivity():
     assert loc.raw[:, 0, 1] == pytest.approx(np.exp(-0.5 * t) - 1.0, rel=1e-7, abs=1e-12)
 
 
+def test_acsl_initial_assignments_are_differentiated_from_their_equations():
+    """A Magnolia INITIAL block of assignments (KEV = KE*VD) is followed statement by
+    statement: d KEV/d (KE, VD) = (VD, KE) exactly, and d AG(0)/d DOSE = 1 from the
+    INTEG's initial value, where the bind's central differences carried eps |KEV| / h
+    (1e-11 of it); an IF in INITIAL sends it back to those differences."""
+    from amilpy.analysis.program import bind_slopes
+    from amilpy.run import Options
+    from amilpy.run.acsl import prepare_acsl
+
+    text = ("PROGRAM derived\n  CONSTANT DOSE = 500.0, KA = 1.2, KE = 0.173, VD = 42.0\n"
+            "  INITIAL\n    KEV = KE*VD\n  END\n  DERIVATIVE\n"
+            "    AG = INTEG(-KA*AG, DOSE)\n    AB = INTEG(KA*AG - KEV/VD*AB, 0.0)\n"
+            "    TERMT(T >= 10.0)\n  END\n  CINTERVAL CINT = 0.5\nEND\n")
+    for initial, exact in (("    KEV = KE*VD\n", True),
+                           ("    KEV = KE*VD\n    IF (KEV > 100.0) KEV = 100.0\n", False)):
+        model = amilpy.loads(text.replace("    KEV = KE*VD\n", initial), "derived.csl")
+        spec = model._specs({})[0]
+        code = prepare_acsl(model.ir, spec, Options(), model.cache).code
+        rows, start = bind_slopes(model.ir, spec, code, ["KE", "VD", "DOSE"], [])
+        if not exact:
+            assert start is None
+            continue
+        params = sorted(code.binder.parameters)
+        assert rows[params.index("KEV")].tolist() == [42.0, 0.173, 0.0]
+        assert start[code.state_names.index("AG")].tolist() == [0.0, 0.0, 1.0]
+
+
 def test_a_value_initial_code_assigns_again_is_initial_s():
     """Magnolia lets INITIAL give a CONSTANT a new value: KE = 2 KE, A' = -KE A, A(0)
     = 1, so d A/d KE = -2 t exp(-2 KE t), twice what the value itself would give.

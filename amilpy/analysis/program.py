@@ -42,23 +42,34 @@ from ..run.variational import ProgramTangent
 from .tangents import Sampler, output_row, outputs_asked, step_for
 
 
-def bind_slopes(c, names: list[str], constants: list[tuple[dict, dict, float]]
-                ) -> np.ndarray | None:
-    """d P/d names for the constants P the generated functions read by name
-    (`ParameterTangent.exact`): 1 for a value itself; what INITIAL's code computes
-    from the values (written-order code, with its IFs and loops) by the central
-    differences of the runs bound to each value moved (`constants`: their values, h).
-    None where a value is folded into the code."""
+def bind_slopes(model, spec, c, names: list[str], constants: list[tuple[dict, dict, float]]
+                ) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """(d P/d names for the constants P the generated functions read by name
+    (`ParameterTangent.exact`), d y0/d names or None): from INITIAL's assignments
+    where its code is only those (`codegen.consts.written_slopes`); where it is more
+    (IFs, loops), 1 for a value itself and what INITIAL's code computes from the
+    values by the central differences of the runs bound to each value moved
+    (`constants`: their values, h), the start differenced. (None, None) where a
+    value is folded into the code."""
+    from ..codegen.consts import written_slopes
+    from ..run.acsl import initial_start
+
     if c.binder is None or any(name not in c.binder.parameters for name in names):
-        return None
+        return None, None
+    found = written_slopes(model, names, initial_start(spec), c.constants, c.binder.tables)
+    params = sorted(c.binder.parameters)
+    if found is not None:
+        rows, ics = found
+        zero = np.zeros(len(names))
+        return np.array([rows.get(p, zero) for p in params]).reshape(-1, len(names)), ics
     # (a value INITIAL assigns again -- Magnolia allows it -- is INITIAL's)
-    again = {n for code in c.model.acsl.initial for n in code.assigned}
-    out = np.zeros((len(c.binder.parameters), len(names)))
-    for i, p in enumerate(sorted(c.binder.parameters)):
+    again = {n for code in model.acsl.initial for n in code.assigned}
+    out = np.zeros((len(params), len(names)))
+    for i, p in enumerate(params):
         for j, (plus, minus, h) in enumerate(constants):
             out[i, j] = 1.0 if p == names[j] and p not in again else \
                 (plus[p] - minus[p]) / (2.0 * h)
-    return out
+    return out, None
 
 
 class _Jumped(Exception):
@@ -110,8 +121,11 @@ def program_trajectory(model, k: int, names: list[str], data: dict[str, float],
         with np.errstate(invalid="ignore"):  # (a slot at INF in both: no dependence)
             start[:, j] = np.where(hi == lo, 0.0, (hi - lo) / (2.0 * h))
     floor = np.broadcast_to(np.asarray(plan.tol.atol / plan.tol.rtol, dtype=float), (n,))
+    exact, ics = bind_slopes(model.ir, spec, c, names, constants)
+    if ics is not None:  # (the states' start from its equations; the memory's differenced)
+        start[:n] = ics
     tangent = ProgramTangent(c, None, floor, start, variants, r, outputs_asked(c, variables),
-                             bind_slopes(c, names, constants))
+                             exact)
     if c.clock_slots:  # (a store whose instants a free delay may move: `along_clock`)
         tangent.halves = [(prepared_at(**{name: data[name] + 0.5 * h})[2].code,
                            prepared_at(**{name: data[name] - 0.5 * h})[2].code)

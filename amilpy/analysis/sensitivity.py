@@ -15,8 +15,9 @@ read by name (`codegen.jacobian.for_parameters`, each switch in its branch) time
 d P/d p, the derivatives of those constants in the free values: INITIAL's and the
 initial values' equations differentiated in their sorted order
 (`codegen.consts.slopes`), exact to rounding; a program in ACSL form runs INITIAL
-as written-order code (IFs, loops), whose values are differenced
-(`analysis.program.bind_slopes`). While surfaces slide (the weights move with p
+as written-order code, followed assignment by assignment
+(`codegen.consts.written_slopes`), its values differenced where it has IFs or
+loops (`analysis.program.bind_slopes`). While surfaces slide (the weights move with p
 too), on a PULSE train's surfaces, for a CONST (folded into the code) and for d
 out/dp and the memory's start, central differences of the generated functions at
 one TIME and state (the run's code bound to p +- h, no integration); h = cbrt(eps)

@@ -170,39 +170,83 @@ def slopes(model: ir.Model, free: list[str], constants: dict[str, float],
     function with no written rule by a difference in its own arguments, as the
     field's Jacobian). None where a free value is folded into the code (a CONST) or
     an equation cannot be differentiated so: the caller differences the bind."""
-    from ..parse import syntax as syn
-
     q = len(free)
     if any(name not in parameters for name in free):
         return None
     rows = {name: np.eye(q)[k] for k, name in enumerate(free)}
-
-    def row(expr) -> np.ndarray:
-        if type(expr) is syn.Num:
-            return np.zeros(q)
-        read = sorted({n.name for n in syn.walk(expr)
-                       if isinstance(n, syn.Name) and n.name in constants})
-        moved = [k for k, name in enumerate(read) if name in rows]
-        out = np.zeros(q)
-        if not moved:
-            return out
-        made = _slope_code(model, expr, read, constants, tables)
-        scope = {"__builtins__": {}, **namespace(), "_DIFF": _diff, "_SGN0": _sgn0,
-                 **{name: _table(tables, name) for name in made[1]},
-                 **{parameter(name): constants[name] for name in read}}
-        for k in moved:
-            if made[0][k] is not None:
-                out += float(eval(made[0][k], scope)) * rows[read[k]]  # noqa: S307
-        return out
-
     try:
         for eq in model.initial:
             if eq.target in parameters and eq.target not in rows:
-                rows[eq.target] = row(eq.expr)
-        start = np.array([row(s.ic) for s in model.states]).reshape(len(model.states), q)
+                rows[eq.target] = _row(model, eq.expr, constants, rows, q, tables)
+        start = np.array([_row(model, s.ic, constants, rows, q, tables)
+                          for s in model.states]).reshape(len(model.states), q)
     except (NotImplementedError, ArithmeticError, ValueError, TypeError, KeyError):
         return None
     return rows, start
+
+
+# statements of ACSL INITIAL code that assign no value (`written_slopes`)
+_INERT = (ir.ScheduleAt, ir.TermtIf)
+
+
+def written_slopes(model: ir.Model, free: list[str], start: dict[str, float],
+                   constants: dict[str, float], tables
+                   ) -> tuple[dict[str, np.ndarray], np.ndarray] | None:
+    """`slopes` of a program in ACSL form, whose INITIAL is written-order code run from
+    `start` (`run.acsl.initial_start`): each assignment's derivative at the values
+    the code has there (a name assigned again takes its last). None where the code
+    is more than assignments of REAL values (an IF, a loop, an INTEGER: the caller
+    differences the bind), or where following it does not give the run's
+    `constants`."""
+    q = len(free)
+    rows = {name: np.eye(q)[k] for k, name in enumerate(free)}
+    values = dict(start)
+    try:
+        for code in model.acsl.initial:
+            for st in code.body:
+                if isinstance(st, _INERT):
+                    continue
+                if not isinstance(st, ir.Let) or st.store != "REAL":
+                    return None
+                rows[st.target] = _row(model, st.expr, values, rows, q, tables)
+                values[st.target] = evaluate_constant(model, st.expr, values, tables,
+                                                      st.span)
+        if any(name in constants and not _same(values[name], constants[name])
+               for name in rows):
+            return None
+        ics = np.array([_row(model, s.ic, constants, rows, q, tables)
+                        for s in model.states]).reshape(len(model.states), q)
+    except (NotImplementedError, ArithmeticError, ValueError, TypeError, KeyError, AmilError):
+        return None
+    return rows, ics
+
+
+def _same(a: float, b: float) -> bool:
+    return a == b or abs(a - b) <= 1e-12 * max(abs(a), abs(b))
+
+
+def _row(model: ir.Model, expr, values: dict[str, float], rows: dict[str, np.ndarray],
+         q: int, tables) -> np.ndarray:
+    """d expr/d the free values at `values`: the sum over the names it reads of its
+    derivative in each (`_slope_code`) times that name's row (`rows`; none: 0)."""
+    from ..parse import syntax as syn
+
+    out = np.zeros(q)
+    if type(expr) is syn.Num:
+        return out
+    read = sorted({n.name for n in syn.walk(expr)
+                   if isinstance(n, syn.Name) and n.name in values})
+    moved = [k for k, name in enumerate(read) if name in rows]
+    if not moved:
+        return out
+    made = _slope_code(model, expr, read, values, tables)
+    scope = {"__builtins__": {}, **namespace(), "_DIFF": _diff, "_SGN0": _sgn0,
+             **{name: _table(tables, name) for name in made[1]},
+             **{parameter(name): values[name] for name in read}}
+    for k in moved:
+        if made[0][k] is not None:
+            out += float(eval(made[0][k], scope)) * rows[read[k]]  # noqa: S307
+    return out
 
 
 def _slope_code(model: ir.Model, expr, read: list[str], constants, tables) -> tuple:
