@@ -193,6 +193,28 @@ def test_a_value_stopped_at_its_bound_is_said(tmp_path):
     assert any("K stopped at its lower bound 1" in n for n in fit.notes), fit.notes
 
 
+def test_values_the_data_cannot_determine_are_said(tmp_path):
+    """X' = -K1 K2 X: only the product is in the data, so the fit's Jacobian has a
+    zero singular value (d X/d K1 = (K2/K1) d X/d K2): "the data cannot determine".
+    And a value that moves X by about the noise (B, with X' = -K X + 5E-3
+    B) gets a 95 % interval wider than its bounds -1:1, said in words."""
+    t = np.linspace(0.1, 2.0, 12)
+    data = _csv(tmp_path, "TIME,X", zip(t, 2.0 * np.exp(-0.8 * t), strict=True))
+    product = amilpy.loads(DECAY.replace("PARAM K = 1.5   ! [1/s] rate",
+                                         "PARAM K1 = 1.0, K2 = 1.5")
+                           .replace("-K*X", "-K1*K2*X"))
+    fit = product.fit(data, ["K1=0.1:10", "K2=0.1:10"], weights="none")
+    assert any(n.startswith("the data cannot determine K") for n in fit.notes), fit.notes
+    noise = np.random.default_rng(1).normal(0.0, 0.01, t.size)  # (B lands inside, 0.76)
+    noisy = _csv(tmp_path, "TIME,X", zip(t, 2.0 * np.exp(-0.8 * t) + noise, strict=True),
+                 "noisy.csv")
+    weak = amilpy.loads(DECAY.replace("PARAM K = 1.5   ! [1/s] rate",
+                                      "PARAM K = 1.5, B = 0.5").replace("-K*X", "-K*X + 5.0E-3*B"))
+    fit = weak.fit(noisy, ["K=0.1:5", "B=-1:1"], weights="none")
+    assert any(n.startswith("B: the 95 % interval") and "wider than its bounds -1:1" in n
+               for n in fit.notes), fit.notes
+
+
 def test_a_fit_refuses_what_it_cannot_compare(tmp_path):
     """A run that a FINISH stops before some observations (the residuals would change
     length from one evaluation to the next: a SciPy traceback) and relative weights
