@@ -961,7 +961,7 @@ def test_a_reset_with_a_memory_update_at_its_instant():
     track = trajectory(model, 0, list(values), values, {"rtol": 1e-12, "atol": 1e-14}, times,
                        ["Z", "H", "Y"])
     assert not isinstance(track, str), track
-    yic, tr, k = 0.5, 0.8, 2.0
+    tr, k = 0.8, 2.0
     for t in times:
         if t < tr:
             z, h, y = [t, 0.0, t * t / 2], [1.0, 0.0, t], [1.0, 0.0, t]
