@@ -347,3 +347,49 @@ def test_two_quantizers_that_jump_at_one_edge_slide_there_together(method, outde
     assert np.max(np.abs(np.asarray(r["X"]) - _two_quantizers_exact(r.t))) <= 3e-8
     slides = {round(e.time, 6) for e in r.events if e.kind == "slide"}
     assert slides == {4.029442}
+
+
+def _relay_on_a_quantized_sensor_exact(t: np.ndarray) -> np.ndarray:
+    """X' = HEAT - L, HEAT = FSW(1.2 - QNTZR(1.0, X), 0, 0, 1), L = 0.5 + 0.1 t, X(0)
+    = 1: the heater is on while the sensor reads 0 or 1 (X < 1.5), off above. X = 1 +
+    0.5 t - 0.05 t^2 reaches the edge 1.5 at 5 - sqrt 15; above it X' = -L < 0, below
+    X' = 1 - L > 0 until L = 1 at t = 5: it slides on the edge, then leaves it
+    downwards, X = 1.5 - 0.05 (t - 5)^2 (the next edge, 0.5, at 5 + sqrt 20)."""
+    t1 = 5.0 - np.sqrt(15.0)
+    return np.where(t < t1, 1.0 + 0.5 * t - 0.05 * t * t,
+                    np.where(t < 5.0, 1.5, 1.5 - 0.05 * (t - 5.0) ** 2))
+
+
+@pytest.mark.parametrize("outdel", [0.5, 2.5])
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "DOP853", "RADAU", "BDF", "LSODA"])
+def test_a_relay_on_a_quantized_sensor_slides_on_the_sensor_s_edge(method, outdel):
+    # The relay's argument jumps with the sensor's level, so at the edge each level
+    # must read the relay in the level's own branch: with the relay as it was, neither
+    # level pushed back, RKS chattered (200 restarts) and AUTO followed the edge only
+    # at its output instants (X(4) = 1.0 for 1.5 at OUTDEL 1). Hunt 50, F4 (fixed
+    # 2026-12-01: `SurfaceWatch.follow`). The exit at 5 is tangential, found after
+    # the step across it, and the state there is that step's dense output, whose
+    # polynomial spans the field's kink: 4e-8 on RKS at the default RELERR (printed
+    # to 7 digits: right). To 1e-7.
+    r = run1("X = INTGRL(1.0, HEAT - L)\nHEAT = FSW(1.2 - QNTZR(1.0, X), 0.0, 0.0, 1.0)\n"
+             "L = 0.5 + 0.1*TIME\n"
+             f"TIMER FINTIM = 8.0, OUTDEL = {outdel}\nEND\n", method=method, **LOCATED)
+    assert r.status == "finished", r.message
+    assert np.max(np.abs(np.asarray(r["X"]) - _relay_on_a_quantized_sensor_exact(r.t))) <= 1e-7
+    slides = [round(e.time, 6) for e in r.events if e.kind == "slide"]
+    assert slides == [round(5.0 - np.sqrt(15.0), 6)]
+
+
+def test_sensitivities_through_a_relay_on_a_quantized_sensor_are_the_closed_form():
+    """The same loop with L = L0 + 0.1 TIME: the slide ends at t_e = (1 - L0)/0.1, so
+    d X/d L0 = -t before the edge, 0 on it, -(t - t_e) after (X = 1.5 - 0.05 (t -
+    t_e)^2): the tangent reads each corner's relay in its level too. To 1e-6 (exact
+    to print, measured)."""
+    model = amilpy.loads("PARAM L0 = 0.5\nX = INTGRL(1.0, HEAT - L)\n"
+                         "HEAT = FSW(1.2 - QNTZR(1.0, X), 0.0, 0.0, 1.0)\nL = L0 + 0.1*TIME\n"
+                         "TIMER FINTIM = 8.0, OUTDEL = 0.5\nEND\n", "relay.amil")
+    loc = model.sensitivity(["L0"], outputs=["X"], rtol=1e-10, atol=1e-12)
+    assert loc.how == "sensitivity equations"
+    t = loc.times
+    exact = np.where(t > 5.0, -(t - 5.0), np.where(t < 5.0 - np.sqrt(15.0), -t, 0.0))
+    assert loc.raw[:, 0, 0] == pytest.approx(exact, abs=1e-6)

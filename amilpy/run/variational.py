@@ -67,7 +67,7 @@ from ..codegen.jacobian import for_parameters
 from .dense import sample, sample_step
 from .jacobian import STEP, along_branch, branch_difference, jacobian_at
 from .plan import slides, sliding_in
-from .slide import combine, corner_modes, corner_weights, side_mode, slide_alphas
+from .slide import combine, corner_weights, side_mode, slide_alphas
 
 _C = np.array([0.5 - math.sqrt(15) / 10, 0.5, 0.5 + math.sqrt(15) / 10])
 VARIATION = 3e-3  # h |A(c3) - A(c1)| above this: the step is checked against its halves
@@ -442,8 +442,8 @@ def filippov(watch, code, t: float, y, m, z, floor) -> tuple[np.ndarray, list[li
 def _alphas(watch, code, t: float, y, m, z, floor) -> tuple[np.ndarray, list[list[float]]]:
     """`filippov`'s weight of each sliding surface's + branch, and the corners."""
     ks = watch.sliding(m)
-    modes = corner_modes(m, ks, watch.levels)
     yv = np.asarray(y, dtype=float)
+    modes = watch.corners(t, yv, m, z, ks)
     yl = yv.tolist()
     # (a level surface's slope read on its edge, as the run's rates: `_rated`)
     slopes = [_surface_slope(watch, code, k, t, yv, m, z, floor) for k in ks]

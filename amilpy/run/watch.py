@@ -81,13 +81,43 @@ class SurfaceWatch:
         if len(ks) > MAX_SLIDING:
             raise TooManySlides(len(ks))
         yl = y.tolist()
-        modes = corner_modes(m, ks, self.levels)
+        modes = self.corners(t, y, m, z, ks)
         fields = [np.asarray(self.c.rhs(t, yl, mc, z), dtype=float) for mc in modes]
         rates = np.array([[self.slide_rate(k, t, y, f, self._rated(k, mc, m), z) for k in ks]
                           for f, mc in zip(fields, modes, strict=True)])
         if with_rates:
             return modes, fields, slide_weights(rates), rates
         return modes, fields, slide_weights(rates)
+
+    def corners(self, t: float, y: np.ndarray, m, z, ks: list[int]) -> list[list[float]]:
+        """The corners of the surfaces `ks` sliding in m (`slide.corner_modes`), each
+        level's corner with the switches that level's value puts on another side
+        there on that side (`follow`)."""
+        modes = corner_modes(m, ks, self.levels)
+        if not any(k in self.levels for k in ks):
+            return modes
+        return [self.follow(t, y, mc, m, z) for mc in modes]
+
+    def follow(self, t: float, y: np.ndarray, branch, m, z) -> list[float]:
+        """`branch` (m with levels moved to a level either side of an edge) with each
+        sign surface that the level's value moves to another side there on that side,
+        and each other level function in the level that value gives it: a relay on a
+        quantized sensor, FSW(1.2 - QNTZR(1.0, X), ...), is on in the level below the
+        edge and off above it; AINT(2.2 - QNTZR(1.0, X)) is 1 below, 0 above.
+        Without it, either level read the relay as it was, and neither pushed back
+        (the run chattered across the edge)."""
+        try:
+            lit = self.c.modes_literal(t, y.tolist(), branch, z)
+        except (ArithmeticError, ValueError):
+            return list(branch)
+        out = list(branch)
+        for j, w in enumerate(self.watched):
+            if branch[j] != m[j] or slides(m[j]) or lit[j] == branch[j]:
+                continue
+            # (a sign at zero there is no side; a level's literal is its level, 0 too)
+            if w.kind is SurfaceKind.LEVEL or (w.kind is SurfaceKind.SIGN and lit[j] != 0.0):
+                out[j] = lit[j]
+        return out
 
     def branch_rates(self, k: int, t: float, y: np.ndarray, m, z):
         """Both branches of surface k (other sliding surfaces resolved): their vector
@@ -97,6 +127,8 @@ class SurfaceWatch:
         level = k in self.levels
         mp, mm = list(m), list(m)
         mp[k], mm[k] = side_mode(m[k], 1.0, level), side_mode(m[k], -1.0, level)
+        if level:
+            mp, mm = self.follow(t, y, mp, m, z), self.follow(t, y, mm, m, z)
         fp = np.asarray(self.field(t, y, mp, z), dtype=float)
         fm = np.asarray(self.field(t, y, mm, z), dtype=float)
         return (fp, fm, self.surface_rate(k, t, y, fp, self._rated(k, mp, m), z),
@@ -384,6 +416,7 @@ class SurfaceWatch:
         for k, edge in edges.items():
             on[k], above[k], below[k] = edge, side_mode(edge, 1.0, True), \
                 side_mode(edge, -1.0, True)
+        above, below = self.follow(t, y, above, m, z), self.follow(t, y, below, m, z)
         try:
             f_up = np.asarray(self.field(t, y, above, z), dtype=float)
             f_down = np.asarray(self.field(t, y, below, z), dtype=float)
