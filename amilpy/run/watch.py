@@ -96,27 +96,34 @@ class SurfaceWatch:
         modes = corner_modes(m, ks, self.levels)
         if not any(k in self.levels for k in ks):
             return modes
-        return [self.follow(t, y, mc, m, z) for mc in modes]
+        return self.follow(t, y, modes, z)
 
-    def follow(self, t: float, y: np.ndarray, branch, m, z) -> list[float]:
-        """`branch` (m with levels moved to a level either side of an edge) with each
-        sign surface that the level's value moves to another side there on that side,
-        and each other level function in the level that value gives it: a relay on a
+    def follow(self, t: float, y: np.ndarray, branches: list[list[float]], z
+               ) -> list[list[float]]:
+        """`branches` (the corners of level surfaces either side of an edge) with each
+        sign surface whose side differs from one to another on its side there in each,
+        and each other level function in the level it reads in each: a relay on a
         quantized sensor, FSW(1.2 - QNTZR(1.0, X), ...), is on in the level below the
         edge and off above it; AINT(2.2 - QNTZR(1.0, X)) is 1 below, 0 above.
         Without it, either level read the relay as it was, and neither pushed back
         (the run chattered across the edge)."""
+        yl = y.tolist()
         try:
-            lit = self.c.modes_literal(t, y.tolist(), branch, z)
+            lits = [self.c.modes_literal(t, yl, b, z) for b in branches]
         except (ArithmeticError, ValueError):
-            return list(branch)
-        out = list(branch)
+            return [list(b) for b in branches]
+        out = [list(b) for b in branches]
         for j, w in enumerate(self.watched):
-            if branch[j] != m[j] or slides(m[j]) or lit[j] == branch[j]:
-                continue
+            values = {lit[j] for lit in lits}
+            if len(values) < 2 or any(slides(b[j]) for b in branches) or \
+                    len({b[j] for b in branches}) > 1:
+                continue  # (the same everywhere, sliding, or itself one of the moved)
             # (a sign at zero there is no side; a level's literal is its level, 0 too)
-            if w.kind is SurfaceKind.LEVEL or (w.kind is SurfaceKind.SIGN and lit[j] != 0.0):
-                out[j] = lit[j]
+            if w.kind is SurfaceKind.SIGN and 0.0 in values:
+                continue
+            if w.kind in (SurfaceKind.SIGN, SurfaceKind.LEVEL):
+                for o, lit in zip(out, lits, strict=True):
+                    o[j] = lit[j]
         return out
 
     def branch_rates(self, k: int, t: float, y: np.ndarray, m, z):
@@ -128,7 +135,7 @@ class SurfaceWatch:
         mp, mm = list(m), list(m)
         mp[k], mm[k] = side_mode(m[k], 1.0, level), side_mode(m[k], -1.0, level)
         if level:
-            mp, mm = self.follow(t, y, mp, m, z), self.follow(t, y, mm, m, z)
+            mp, mm = self.follow(t, y, [mp, mm], z)
         fp = np.asarray(self.field(t, y, mp, z), dtype=float)
         fm = np.asarray(self.field(t, y, mm, z), dtype=float)
         return (fp, fm, self.surface_rate(k, t, y, fp, self._rated(k, mp, m), z),
@@ -416,7 +423,7 @@ class SurfaceWatch:
         for k, edge in edges.items():
             on[k], above[k], below[k] = edge, side_mode(edge, 1.0, True), \
                 side_mode(edge, -1.0, True)
-        above, below = self.follow(t, y, above, m, z), self.follow(t, y, below, m, z)
+        above, below = self.follow(t, y, [above, below], z)
         try:
             f_up = np.asarray(self.field(t, y, above, z), dtype=float)
             f_down = np.asarray(self.field(t, y, below, z), dtype=float)
