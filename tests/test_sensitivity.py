@@ -1135,3 +1135,78 @@ def test_a_value_initial_code_assigns_again_is_initial_s():
     assert loc.how == "sensitivity equations"
     t = np.arange(0.0, 2.01, 0.5)
     assert loc.raw[:, 0, 0] == pytest.approx(-2 * t * np.exp(-0.4 * t), abs=1e-8)
+
+
+def test_an_initial_value_a_template_reads_twice_is_differentiated():
+    """LIMIT(0, 1, A*2) in INITIAL: the template binds its argument once ((w1 :=
+    ...)) and reads it twice; its derivative reads that name too, so the expression
+    runs first (a NameError until 2026-12-01, hunt 51 F1). G = 1 + 0.1 * 2 A = 1.08
+    inside the limits: X = exp(-G t), d X/d A = -0.2 t exp(-G t), to 1e-8."""
+    model = amilpy.loads("TITLE LIM\nPARAM A = 0.4\nINITIAL\nG = 1.0 + 0.1*LIMIT(0.0, 1.0, A*2.0)\n"
+                         "DYNAMIC\nX = INTGRL(1.0, -G*X)\nTIMER FINTIM = 1.0, OUTDEL = 0.25\nEND\n",
+                         "lim.amil")
+    loc = model.sensitivity(["A"], outputs=["X"], rtol=1e-10, atol=1e-12)
+    assert loc.how == "sensitivity equations"
+    assert loc.raw[:, 0, 0] == pytest.approx(-0.2 * loc.times * np.exp(-1.08 * loc.times),
+                                             abs=1e-8)
+
+
+def test_a_sawtooth_reset_that_turns_straight_back_jumps_the_tangent():
+    """Y = MODINT(YIC, YMAX - Y, 1, K Y): reset to YIC where it reaches YMAX and
+    integrating again at once, so the modes before and after are the same; the
+    tangent left the reset out (dY/dYMAX 0 throughout, hunt 51 F2). Y = YIC exp(K
+    s), s = t mod ln(YMAX/YIC)/K: against the complex step of that closed form, to
+    1e-8."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    model = amilpy.loads("PARAM YIC = 0.5, YMAX = 1.5, K = 2.0\n"
+                         "Y = MODINT(YIC, YMAX - Y, 1.0, K*Y)\nZ = INTGRL(0.0, Y)\n"
+                         "TIMER FINTIM = 2.0, OUTDEL = 0.1\nEND\n", "saw.amil")
+    values = {"YIC": 0.5, "YMAX": 1.5, "K": 2.0}
+    times = [0.3, 0.7, 1.3, 1.9]
+    track = trajectory(model, 0, list(values), values, {"rtol": 1e-12, "atol": 1e-14}, times,
+                       ["Y", "Z"])
+    assert not isinstance(track, str), track
+
+    def closed(t, v):
+        period = np.log(v["YMAX"] / v["YIC"]) / v["K"]
+        n = int(np.floor(t / period.real))
+        s = t - n * period
+        return v["YIC"] * np.exp(v["K"] * s), \
+            n * (v["YMAX"] - v["YIC"]) / v["K"] + v["YIC"] * (np.exp(v["K"] * s) - 1) / v["K"]
+
+    for t in times:
+        exact = np.array([[np.imag(closed(t, {**values, n: values[n] + 1e-30j})[o]) / 1e-30
+                           for n in values] for o in (0, 1)])
+        assert track.row("Y", t) == pytest.approx(exact[0], abs=1e-8), t
+        assert track.row("Z", t) == pytest.approx(exact[1], abs=1e-8), t
+
+
+@pytest.mark.parametrize("inner, edges", [("AINT(QNTZR(0.5, X))", (0.75, 1.75)),
+                                          ("NINT(QNTZR(0.5, X))", (0.25, 1.25))])
+def test_a_level_function_of_a_level_function_jumps_the_tangent_at_its_edges(inner, edges):
+    """X' = 1 - G L(X), L = AINT(QNTZR(0.5, X)): L is 0 below 0.75, 1 on [0.75, 1.75),
+    2 above (NINT rounds QNTZR's 0.5 up: 0.25 and 1.25). The outer level jumps with
+    the inner one's crossing, its own surface flat in X: its change is the
+    crossing's, whose saltation now takes the field after both (it had none: d X/d G
+    0.12 off at t = 2, hunt 51 F6). Closed form: X = e1 + (1 - G)(t - e1), then e2 +
+    (1 - 2G)(t - t2), t2 = e1 + (e2 - e1)/(1 - G); complex-stepped, to 1e-8."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    model = amilpy.loads(f"PARAM G = 0.1\nX = INTGRL(0.0, 1.0 - G*{inner})\n"
+                         "TIMER FINTIM = 2.5, OUTDEL = 0.5\nEND\n", "nested.amil")
+    times = [0.5, 1.0, 2.0, 2.5]  # (below the next level's edge, 2.25 for NINT)
+    track = trajectory(model, 0, ["G"], {"G": 0.1}, {"rtol": 1e-12, "atol": 1e-14}, times,
+                       ["X"])
+    assert not isinstance(track, str), track
+
+    def closed(t, g):
+        e1, e2 = edges
+        t2 = e1 + (e2 - e1) / (1 - g)
+        if t < e1:
+            return t + 0 * g
+        return e1 + (1 - g) * (t - e1) if t < t2.real else e2 + (1 - 2 * g) * (t - t2)
+
+    for t in times:
+        assert track.row("X", t)[0] == pytest.approx(np.imag(closed(t, 0.1 + 1e-30j)) / 1e-30,
+                                                     abs=1e-8), t

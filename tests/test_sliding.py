@@ -393,3 +393,25 @@ def test_sensitivities_through_a_relay_on_a_quantized_sensor_are_the_closed_form
     t = loc.times
     exact = np.where(t > 5.0, -(t - 5.0), np.where(t < 5.0 - np.sqrt(15.0), -t, 0.0))
     assert loc.raw[:, 0, 0] == pytest.approx(exact, abs=1e-6)
+
+
+@pytest.mark.parametrize("free", ["Q", "TH"])
+def test_a_relay_on_a_quantized_sensor_with_its_quantum_or_threshold_free(free):
+    """The relay loop with the sensor's quantum Q and the relay's threshold TH free: on
+    the edge X = 1.5 Q (d X/d Q = 1.5 there), and TH moves nothing while it stays
+    between the levels. At the slide's exit the relay turns with the level the motion
+    leaves the edge to; that change was taken for a PULSE train's and the fit went
+    to differences (hunt 51 F5). To 1e-6 against the closed form."""
+    model = amilpy.loads("PARAM L0 = 0.5, Q = 1.0, TH = 1.2\nX = INTGRL(1.0, HEAT - L)\n"
+                         "HEAT = FSW(TH - QNTZR(Q, X), 0.0, 0.0, 1.0)\nL = L0 + 0.1*TIME\n"
+                         "TIMER FINTIM = 8.0, OUTDEL = 0.5\nEND\n", "relay.amil")
+    loc = model.sensitivity([free], outputs=["X"], rtol=1e-10, atol=1e-12)
+    assert loc.how == "sensitivity equations"
+    t = loc.times
+    if free == "TH":
+        assert loc.raw[:, 0, 0] == pytest.approx(np.zeros_like(t), abs=1e-9)
+        return
+    # d/dQ: the slide holds X = 1.5 Q to t = 5; after it, X = 1.5 Q - 0.05 (t - 5)^2
+    t1 = 5.0 - np.sqrt(15.0)
+    exact = np.where(t < t1, 0.0, 1.5)
+    assert loc.raw[:, 0, 0] == pytest.approx(exact, abs=1e-6)

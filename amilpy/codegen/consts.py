@@ -265,6 +265,11 @@ def _slope_code(model: ir.Model, expr, read: list[str], constants, tables) -> tu
             if d is None:
                 made.append(None)
                 continue
+            if any(isinstance(n, py.NamedExpr) for n in py.walk(tree)):
+                # (the derivative reads the names the expression binds -- an argument
+                # a template reads twice, LIMIT's (w1 := ...): the expression first)
+                d = py.Subscript(py.Tuple([templates.clone(tree), d], py.Load()),
+                                 py.Constant(1), py.Load())
             body = py.Expression(d)
             py.fix_missing_locations(body)
             assert_closed(py.Module(body=[py.Expr(body.body)], type_ignores=[]),

@@ -270,8 +270,9 @@ class Tangent:
         if zl is None:
             zl = self.leaned(t, y, m, z)
         t_prev, y_prev, m_prev, z_prev = self.prev
-        if self.watch.resets and m != m_prev and \
-                np.any(np.abs(y - y_prev) > 1e-6 * scale_of(y, self.floor)):
+        # (a reset whose switch turns straight back -- MODINT's sawtooth, reset to its
+        # IC and integrating again at one instant -- leaves the modes as they were)
+        if self.watch.resets and np.any(np.abs(y - y_prev) > 1e-6 * scale_of(y, self.floor)):
             self._reset(t, y_prev, y, m_prev, m, z_prev, z)
             return
         moved = z != z_prev and self._memory_moved(t, y, m_prev, m, z_prev, z)
@@ -287,13 +288,22 @@ class Tangent:
         exits = [k for k in range(len(m)) if slides(m_prev[k]) and not slides(m[k])]
         if not self._trains_apart(t, y, m_prev, m, z_prev):
             return
-        for k in range(len(m)):
-            if m[k] == m_prev[k] or k in exits:
-                continue
+        changed = [k for k in range(len(m)) if m[k] != m_prev[k] and k not in exits]
+        # (a switch whose surface is flat in the states and TIME here -- it reads a level
+        # function's level, AINT(QNTZR(0.5, X)) -- jumps with the one that crosses: its
+        # change is that crossing's, at that crossing's instant; or with a slide's exit,
+        # a relay reading the level the motion leaves the edge to)
+        carried = [k for k in changed if self._flat(k, t, y, m_prev, z_prev)] \
+            if len(changed) > 1 or exits else []
+        crossing = [k for k in changed if k not in carried]
+        for i, k in enumerate(crossing):
             after = list(current)
             after[k] = m[k]
             for e in exits:
                 after[e] = m[e]
+            if i == len(crossing) - 1:
+                for j in carried:
+                    after[j] = m[j]
             s = self._saltation(k, t, y, current, after, mem, zl)
             if s is None:
                 return
@@ -307,6 +317,17 @@ class Tangent:
         """Whether the PULSE trains that turn at t can be followed one by one
         (`ParameterTangent`: their instants do not move here)."""
         return True
+
+    def _flat(self, k: int, t: float, y: np.ndarray, m, z) -> bool:
+        """Whether surface k neither moves with the states nor with TIME at (t, y) in
+        the branches m (it reads only levels or memory), and is no PULSE train's."""
+        if self.watch.watched[k].surface in self.c.train_surfaces:
+            return False
+        try:
+            return not np.any(self._gradient(k, t, y, m, z)) and \
+                surface_time_rate(self.c, k, t, y, m, z) == 0.0
+        except (ArithmeticError, ValueError):
+            return False
 
     def _wake(self, t: float, y: np.ndarray, m, z) -> None:
         """An instant a memory slot holds, reached at t (`ProgramTangent`)."""
@@ -627,6 +648,12 @@ class ParameterTangent(Tangent):
         zero = 1e-9 * (1.0 + float(np.abs(y_prev).max(initial=0.0)))
         e = self.c.surf(t, y_prev.tolist(), m_prev, z_prev)
         crossing = [k for k in changed if abs(e[k]) <= zero]
+        resetting = list(m)
+        if not changed:
+            # (turned straight back: the reset was taken with its switch at zero)
+            crossing = [k for k in sorted(self.watch.reset_surfaces) if abs(e[k]) <= zero]
+            for k in crossing:
+                resetting[k] = 0.0
         landed = self.c.surf(t, y.tolist(), m, z)
         if not crossing or sliding_in(m) or sliding_in(m_prev) or any(
                 k in self.watch.levels or not landed[k] * m[k] > zero
@@ -655,7 +682,7 @@ class ParameterTangent(Tangent):
         watch, yl = self.watch, y_prev.copy()
 
         def reset(w, v: np.ndarray) -> np.ndarray:
-            return np.asarray(w.apply_resets(v, list(m)), dtype=float)
+            return np.asarray(w.apply_resets(v, list(resetting)), dtype=float)
 
         r_y = np.empty((n, n))
         for j in range(n):
