@@ -1210,3 +1210,58 @@ def test_a_level_function_of_a_level_function_jumps_the_tangent_at_its_edges(inn
     for t in times:
         assert track.row("X", t)[0] == pytest.approx(np.imag(closed(t, 0.1 + 1e-30j)) / 1e-30,
                                                      abs=1e-8), t
+
+
+def test_a_procedural_if_in_the_derivatives_is_differenced_not_dropped():
+    """A PROCEDURAL whose IF sets the rate (-K X above 0.5, -2 K X below): the
+    generated Jacobian passed the IF through and its derivatives were 0 (d X/d X0 = 1
+    throughout, d X/d K = 0, found by the review of 2026-12-01); now a function with
+    such statements is differenced, for d f/d y and d f/d p alike (and the stiff
+    routes' Jacobian). X = X0 exp(-K t) to t1 = ln(2 X0)/K, then 0.5 exp(-2K (t -
+    t1)): complex step, to 1e-7."""
+    text = ("PROGRAM procedural branch\n  CONSTANT K = 0.5, X0 = 1.0\n  DERIVATIVE\n"
+            "    PROCEDURAL (XD = X)\n      IF (X > 0.5) THEN\n        XD = -K*X\n"
+            "      ELSE\n        XD = -2.0*K*X\n      END IF\n    END\n"
+            "    X = INTEG(XD, X0)\n    TERMT(T >= 3.0)\n  END\n  CINTERVAL CINT = 0.5\nEND\n")
+    model = amilpy.loads(text, "procedural.csl")
+    loc = model.sensitivity(["K", "X0"], outputs=["X"], rtol=1e-10, atol=1e-12)
+    assert loc.how == "sensitivity equations"
+
+    def x(t, k, x0):
+        t1 = np.log(2 * x0) / k
+        return x0 * np.exp(-k * t) if t < t1.real else 0.5 * np.exp(-2 * k * (t - t1))
+
+    for i, t in enumerate(loc.times):
+        exact = [np.imag(x(t, 0.5 + 1e-30j, 1.0)) / 1e-30, np.imag(x(t, 0.5, 1.0 + 1e-30j)) / 1e-30]
+        assert loc.raw[i, 0, :] == pytest.approx(exact, abs=1e-7), t
+    for method in ("BDF", "RADAU"):  # (their Jacobian: every entry differenced)
+        run, = model.run(method=method, advice=False)
+        assert run["X"][-1] == pytest.approx(x(3.0, 0.5, 1.0), rel=1e-6)
+
+
+def test_a_derivative_rule_with_no_value_at_the_point_takes_that_call_by_differences():
+    """SQRT(A*B) at B = 0: the rule 0.5/SQRT(A B) divides by zero (a crash of the
+    exact d f/d p path, review of 2026-12-01); that call is differenced: d X/d A = 0."""
+    model = amilpy.loads("PARAM A = 1.0, B = 0.0\nX = INTGRL(1.0, -SQRT(A*B) - X)\n"
+                         "TIMER FINTIM = 1.0, OUTDEL = 0.5\nEND\n", "sqrt.amil")
+    loc = model.sensitivity(["A"], outputs=["X"])
+    assert loc.how == "sensitivity equations"
+    assert loc.raw[:, 0, 0] == pytest.approx([0.0, 0.0, 0.0], abs=1e-12)
+
+
+def test_acsl_initial_reading_t_keeps_the_bind_s_differences():
+    """KEV = KE*VD*(1 + T) in INITIAL reads T, which has no value among the constants:
+    the assignments are not followed one by one (a NameError until the review of
+    2026-12-01), the bind is differenced; T = 0 there, so d AB/d KE is the plain
+    model's. Against whole-run differences, to 1e-6."""
+    text = ("PROGRAM derived\n  CONSTANT DOSE = 500.0, KA = 1.2, KE = 0.173, VD = 42.0\n"
+            "  INITIAL\n    KEV = KE*VD*(1.0 + T)\n  END\n  DERIVATIVE\n"
+            "    AG = INTEG(-KA*AG, DOSE)\n    AB = INTEG(KA*AG - KEV/VD*AB, 0.0)\n"
+            "    TERMT(T >= 4.0)\n  END\n  CINTERVAL CINT = 1.0\nEND\n")
+    model = amilpy.loads(text, "derived.csl")
+    loc = model.sensitivity(["KE"], outputs=["AB"], rtol=1e-10, atol=1e-12)
+    assert loc.how == "sensitivity equations"
+    h = 1e-5
+    up = np.asarray(model.run(advice=False, rtol=1e-12, atol=1e-14, KE=0.173 + h)[0]["AB"])
+    down = np.asarray(model.run(advice=False, rtol=1e-12, atol=1e-14, KE=0.173 - h)[0]["AB"])
+    assert loc.raw[:, 0, 0] == pytest.approx((up - down) / (2 * h), rel=1e-6, abs=1e-6)

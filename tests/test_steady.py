@@ -244,8 +244,11 @@ def test_a_start_the_field_cannot_be_had_at_is_a_clear_failure(tmp_path, capsys)
                    "X = INTGRL(R, -X)\nTIMER FINTIM = 1.0\nPRINT X\nEND\n")
     assert main(["steady", str(nan)]) == 3
     assert "the start is not finite (X = nan)" in capsys.readouterr().err
+    # (IMPL's loop has no value at the guess: the search goes where it has one, and
+    # says what it found -- since the Jacobian of a field with a loop is differenced,
+    # 2026-12-01, it gets there instead of stopping at the guess)
     assert main(["steady", str(EXAMPLES / "csmp_diode_filter.amil")]) == 3
-    assert "the field cannot be had" in capsys.readouterr().err
+    assert "no equilibrium found" in capsys.readouterr().err
 
 
 def test_a_small_input_is_moved_by_a_fraction_of_itself(tmp_path):

@@ -180,7 +180,7 @@ def slopes(model: ir.Model, free: list[str], constants: dict[str, float],
                 rows[eq.target] = _row(model, eq.expr, constants, rows, q, tables)
         start = np.array([_row(model, s.ic, constants, rows, q, tables)
                           for s in model.states]).reshape(len(model.states), q)
-    except (NotImplementedError, ArithmeticError, ValueError, TypeError, KeyError):
+    except (NotImplementedError, ArithmeticError, ValueError, TypeError, KeyError, NameError):
         return None
     return rows, start
 
@@ -216,7 +216,8 @@ def written_slopes(model: ir.Model, free: list[str], start: dict[str, float],
             return None
         ics = np.array([_row(model, s.ic, constants, rows, q, tables)
                         for s in model.states]).reshape(len(model.states), q)
-    except (NotImplementedError, ArithmeticError, ValueError, TypeError, KeyError, AmilError):
+    except (NotImplementedError, ArithmeticError, ValueError, TypeError, KeyError, NameError,
+            AmilError):  # (NameError: a name INITIAL has no value for, as T)
         return None
     return rows, ics
 

@@ -447,8 +447,12 @@ def _tree(body: list[py.stmt], seed: dict[str, int] | None = None,
                     dv = deriv.d(value, j)
                     if dv is not None:
                         entries.append((i, j, dv))
-        else:
+        elif isinstance(stmt, py.Assign) and isinstance(stmt.value, py.Name):
             out.append(stmt)  # m and z unpacked
+        else:
+            # (a unit's IF or loop assigns locals this does not follow: passed through,
+            # their derivatives were silently 0 -- the callers difference instead)
+            raise NotImplementedError(type(stmt).__name__)
     folded = [fold(e) for _, _, e in entries]
     constant = np.array([const_value(e) if const_value(e) is not None else math.nan
                          for e in folded], dtype=float)

@@ -441,7 +441,7 @@ def delay_store(t: float, h: float, d: float, x: float, z, o: int, k: float) -> 
     count = int(s[_COUNT])
     # (a spacing that differs by rounding alone is the same: a tangent moves the store
     # and the delay it is asked for together, `ProgramTangent._along`)
-    if abs(h - s[_H]) > 1e-12 * h:
+    if h != s[_H] and not abs(h - s[_H]) <= 1e-12 * h:
         # a new spacing (ACSL's TDL/NMX as TDL changes) from the sample due next on
         due = s[_NEXT] if s[_NEXT] < math.inf else t_last + h
         s[_H], s[_ANCHOR_T], s[_ANCHOR_J], s[_NEXT] = h, due, float(count), due

@@ -573,10 +573,15 @@ class ParameterTangent(Tangent):
         # moves counts, `_train_shift` says by how much, from the variants' trains)
         if self.exact is not None and not (sliding_in(m) if fn == "rhs" else
                                            self.c.train_surfaces):
+            out = None
             try:
-                return for_parameters(self.c, fn).dense(t, yl, m, z) @ self.exact
-            except NotImplementedError:
+                out = for_parameters(self.c, fn).dense(t, yl, m, z) @ self.exact
+            except NotImplementedError:  # (statements it does not follow: never)
                 self.exact = None
+            except (ArithmeticError, ValueError):  # (a rule with no value here: SQRT at 0)
+                out = None
+            if out is not None and np.all(np.isfinite(out)):
+                return out
         cols = []
         # (a play's clamp is the only kink the field has in p between instants, its
         # branches frozen: without one, the central difference)

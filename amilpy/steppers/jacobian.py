@@ -38,25 +38,31 @@ class SegmentJacobian:
 
     @property
     def model(self):
+        """The model's Jacobian, or False where its equations have statements the
+        differentiation does not follow (a unit's IF: every entry differenced)."""
         if self._model is None:
-            self._model = self._make()
+            try:
+                self._model = self._make()
+            except NotImplementedError:
+                self._model = False
         return self._model
 
     @property
     def rows(self) -> np.ndarray:
-        return self.model.rows
+        return self.model.rows if self.model else np.repeat(np.arange(self.n), self.n)
 
     @property
     def cols(self) -> np.ndarray:
-        return self.model.cols
+        return self.model.cols if self.model else np.tile(np.arange(self.n), self.n)
 
     def values(self, t: float, y: np.ndarray) -> np.ndarray:
-        try:
-            v = self.model.values(t, y.tolist(), self.m, self.z)
-            if np.all(np.isfinite(v)):
-                return v
-        except (ArithmeticError, ValueError):
-            pass
+        if self.model:
+            try:
+                v = self.model.values(t, y.tolist(), self.m, self.z)
+                if np.all(np.isfinite(v)):
+                    return v
+            except (ArithmeticError, ValueError):
+                pass
         from ..codegen.jacobian import finite_difference
 
         return finite_difference(self.fun, t, y)[self.rows, self.cols]
