@@ -1265,3 +1265,41 @@ def test_acsl_initial_reading_t_keeps_the_bind_s_differences():
     up = np.asarray(model.run(advice=False, rtol=1e-12, atol=1e-14, KE=0.173 + h)[0]["AB"])
     down = np.asarray(model.run(advice=False, rtol=1e-12, atol=1e-14, KE=0.173 - h)[0]["AB"])
     assert loc.raw[:, 0, 0] == pytest.approx((up - down) / (2 * h), rel=1e-6, abs=1e-6)
+
+
+def test_a_free_acsl_delay_says_it_is_differenced():
+    """ACSL's DELAY(X, IC, TDL, NMX) reads IC until TDL, then the history: its value
+    jumps at an instant a free TDL moves, which the tangent does not follow (it gave
+    d XD/d TDL 2e-4 off, and 57 off with a DMIN, hunt 51 F3/F4): whole runs are
+    differenced, and the reason is given."""
+    model = amilpy.loads("PROGRAM delayed\n  CONSTANT K = 0.8, TDL = 0.7\n  DERIVATIVE\n"
+                         "    XD = DELAY(X, 1.0, TDL, 20)\n    X = INTEG(-K*XD + 0.3*SIN(T), 1.0)\n"
+                         "    TERMT(T >= 2.0)\n  END\n  CINTERVAL CINT = 0.1\nEND\n", "delay.csl")
+    loc = model.sensitivity(["TDL"], outputs=["X"])
+    assert loc.how.startswith("differences of whole runs") and "ACSL's DELAY" in loc.how
+    assert model.sensitivity(["K"], outputs=["X"]).how == "sensitivity equations"
+
+
+def test_pulse_instants_a_value_moves_apart_without_a_derivative_say_so():
+    """Two places where one side of a value's move differs from the other (hunt 51 F7,
+    F8), which the tangent answered with one side or neither, silently:
+    - a MODINT reset at TR = 0.8 where a PULSE ends (TZ + W = 0.8): moving TR or W
+      puts the end before or after the reset;
+    - PULSE(TZ, P, W) with W = P, each pulse ending where the next starts: moving W
+      or P opens a gap or an overlap on one side only.
+    Each is differenced, and says why; a value that moves both instants together (TZ)
+    is still followed."""
+    reset = amilpy.loads("PARAM YIC = 0.5, TR = 0.8, K = 2.0, TZ = 0.3, W = 0.5\n"
+                         "X = INTGRL(0.0, 1.0)\nY = MODINT(YIC, TR - X, X - TR, K)\n"
+                         "Z = INTGRL(0.0, Y*PULSE(TZ, 2.0, W))\n"
+                         "TIMER FINTIM = 2.0, OUTDEL = 0.1\nEND\n", "reset.amil")
+    for name in ("TR", "W"):
+        assert reset.sensitivity([name], outputs=["Z"]).how.endswith(
+            "(a state is reset where two switches cross that a data value moves apart)")
+    touching = amilpy.loads("PARAM TZ = 0.3, P = 0.5, W = 0.5\n"
+                            "X = INTGRL(0.0, PULSE(TZ, P, W) - X)\n"
+                            "TIMER FINTIM = 2.0, OUTDEL = 0.1\nEND\n", "touching.amil")
+    for name in ("W", "P"):
+        assert "a PULSE ends where the next starts" in \
+            touching.sensitivity([name], outputs=["X"]).how
+    assert touching.sensitivity(["TZ"], outputs=["X"]).how == "sensitivity equations"

@@ -659,10 +659,14 @@ class ParameterTangent(Tangent):
             crossing = [k for k in sorted(self.watch.reset_surfaces) if abs(e[k]) <= zero]
             for k in crossing:
                 resetting[k] = 0.0
+        # (a PULSE train turning here -- its end at the reset's instant -- is there by
+        # its own instant, which moves as its train does)
+        trains = [k for k in changed if self.watch.watched[k].surface in self.c.train_surfaces]
+        crossing = [k for k in crossing if k not in trains]
         landed = self.c.surf(t, y.tolist(), m, z)
-        if not crossing or sliding_in(m) or sliding_in(m_prev) or any(
+        if not (crossing or trains) or sliding_in(m) or sliding_in(m_prev) or any(
                 k in self.watch.levels or not landed[k] * m[k] > zero
-                for k in changed if k not in crossing):
+                for k in changed if k not in crossing and k not in trains):
             self.failed = "a state is reset with other changes at the instant"
             return
         rest = self._by_data("surf", t, y_prev, m_prev, z_prev)
@@ -674,6 +678,13 @@ class ParameterTangent(Tangent):
             g, _, rate = jump
             shifts.append(np.zeros(self.phi.shape[1]) if rate is None else
                           self.shift_of(g, rest[k], rate))
+        for k in trains:
+            shifts.append(self._train_shift(t, self.watch.watched[k].surface)
+                          if self.variants else np.zeros(self.phi.shape[1]))
+            if shifts[-1] is None:
+                self.failed = "a state is reset where two switches cross that a data value " \
+                              "moves apart"
+                return
         shift = shifts[0]
         if any(not np.allclose(other, shift, rtol=1e-6,
                                atol=1e-9 * float(np.abs(shift).max(initial=1.0)))
@@ -745,7 +756,18 @@ class ParameterTangent(Tangent):
         (each jumps the tangent by its own (f- - f+) dT/dp, `_saltation`): where a
         data value moves their instants apart, the field must be the sum of their
         effects -- else the order they turn in, and so the derivative, differs from
-        either side of the value (a product of two pulses), which `failed` says."""
+        either side of the value (a product of two pulses), which `failed` says. So
+        where one pulse ends as the next starts (PULSE(TZ, P, W) with W = P) and a
+        value moves the two apart: the switch does not turn, but a gap or an overlap
+        opens on one side of the value only."""
+        if self.variants and self.c.trains:
+            for surface in self.c.train_surfaces:
+                if self._train_instants(t, surface) > 1 and \
+                        self._train_shift(t, surface) is None:
+                    self.failed = ("a PULSE ends where the next starts, and a data value "
+                                   "moves the two apart: its derivative differs from "
+                                   "either side")
+                    return False
         turned = [k for k in range(len(m)) if m[k] != m_prev[k]
                   and self.watch.watched[k].surface in self.c.train_surfaces]
         if len(turned) < 2:
@@ -772,6 +794,15 @@ class ParameterTangent(Tangent):
                        "and the field is not the sum of their effects: its derivative "
                        "differs from either side")
         return False
+
+    def _train_instants(self, t: float, surface: int) -> int:
+        """How many of the trains that turn `surface` have an instant at t."""
+        count = 0
+        for i, (first, period) in enumerate(self.c.trains):
+            if surface in self.c.train_owners[i]:
+                k = round((t - first) / period) if period > 0 else 0
+                count += k >= 0 and abs(first + k * period - t) <= 1e-12 * max(abs(t), 1.0)
+        return count
 
     def _train_shift(self, t: float, surface: int) -> np.ndarray | None:
         """d t/d p of the instant at t of the trains that turn `surface` (a PULSE
@@ -906,6 +937,11 @@ class ProgramTangent(ParameterTangent):
                  for mem in (c.model.memories if c.model is not None else ())]
         self._next_slots = [slot + spec.samples for slot, spec in specs
                             if spec.samples is not None]
+        # ACSL's DELAY(X, IC, TDL, NMX[, DMIN]) reads IC until TDL and then the history:
+        # its value jumps there, at an instant a free TDL moves, which is not followed
+        self._jumping_store = any(mem.func == "DELAY" and len(mem.args) > 3
+                                  for mem in (c.model.memories if c.model is not None
+                                              else ()))
         # whether a store's instants move with the values (a free delay): then its
         # clock slots are carried like the others (`clock_moves`)
         self._clock = np.array(sorted(c.clock_slots), dtype=int)
@@ -921,6 +957,10 @@ class ProgramTangent(ParameterTangent):
         move (`__call__`)."""
         if not self._clock_moves and len(self._clock):
             self._clock_moves = bool(np.any(self._phi[self.n + self._clock]))
+            if self._clock_moves and self._jumping_store and self.failed is None:
+                self.failed = ("DELAY's sampling instants move with a data value (ACSL's "
+                               "DELAY: its value jumps from IC to the history where the "
+                               "delay moves it)")
         return self._clock_moves
 
     def _memory_moved(self, t: float, y: np.ndarray, m_prev, m, z_prev, z) -> bool:
