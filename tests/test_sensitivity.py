@@ -1303,3 +1303,36 @@ def test_pulse_instants_a_value_moves_apart_without_a_derivative_say_so():
         assert "a PULSE ends where the next starts" in \
             touching.sensitivity([name], outputs=["X"]).how
     assert touching.sensitivity(["TZ"], outputs=["X"]).how == "sensitivity equations"
+
+
+def test_a_moving_delay_sample_where_a_switch_turns_has_no_derivative():
+    """DELAY(20, P, X) samples at k P/20; a STEP at 0.3 falls on the 6th sample. As P
+    moves, that sample takes X before or after the step's kink -- one side or the
+    other, no derivative (the tangent took one side silently, the review of
+    2026-12-01); it says so. At 0.31, apart from every sample, it is followed and
+    agrees with whole-run differences to 1e-6."""
+    from amilpy.analysis.sensitivity import trajectory
+
+    def case(t1):
+        text = (f"PARAM K = 0.8, A = 0.3, P = 1.0, T1 = {t1}\nINCON X0 = 1.0\n"
+                "XD = DELAY(20, P, X)\nX = INTGRL(X0, -K*XD + A*STEP(T1))\n"
+                "TIMER FINTIM = 2.5, OUTDEL = 0.01\nPRINT X, XD\nEND\n")
+        values = {"K": 0.8, "A": 0.3, "X0": 1.0, "P": 1.0, "T1": t1}
+        model = amilpy.loads(text, "step.amil")
+        return model, values, trajectory(model, 0, ["P"], values,
+                                         {"rtol": 1e-10, "atol": 1e-12}, [1.27, 2.47], ["X"])
+
+    assert case(0.3)[2] == ("a DELAY samples where a switch turns, at an instant a data "
+                            "value moves apart from it: its derivative differs from either "
+                            "side")
+    model, values, track = case(0.31)
+    assert not isinstance(track, str), track
+    h = 1e-5
+
+    def rows(d):
+        run = model.run(advice=False, rtol=1e-12, atol=1e-14, **{**values, "P": 1.0 + d})[0]
+        t = np.asarray(run.times)
+        return np.array([run["X"][int(np.argmin(abs(t - s)))] for s in (1.27, 2.47)])
+
+    reference = (rows(h) - rows(-h)) / (2 * h)
+    assert [track.row("X", s)[0] for s in (1.27, 2.47)] == pytest.approx(reference, abs=1e-6)

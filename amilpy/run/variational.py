@@ -138,6 +138,7 @@ class Tangent:
         self._lean: tuple | None = None  # (its memory, that memory `leaned`)
         self.failed: str | None = None
         self._shift: np.ndarray | None = None  # d t/d p of the instant being joined
+        self._turned_at = -math.inf  # the last instant a switch turned at
         # steps whose h |A(c3) - A(c1)| is at most this need no check against halves
         self._trusted = VARIATION
 
@@ -289,6 +290,10 @@ class Tangent:
         if not self._trains_apart(t, y, m_prev, m, z_prev):
             return
         changed = [k for k in range(len(m)) if m[k] != m_prev[k] and k not in exits]
+        if changed:
+            self._turned_at = t
+            if not self._turn_apart(t):
+                return
         # (a switch whose surface is flat in the states and TIME here -- it reads a level
         # function's level, AINT(QNTZR(0.5, X)) -- jumps with the one that crosses: its
         # change is that crossing's, at that crossing's instant; or with a slide's exit,
@@ -316,6 +321,11 @@ class Tangent:
     def _trains_apart(self, t: float, y: np.ndarray, m_prev, m, z) -> bool:
         """Whether the PULSE trains that turn at t can be followed one by one
         (`ParameterTangent`: their instants do not move here)."""
+        return True
+
+    def _turn_apart(self, t: float) -> bool:
+        """Whether a switch turning at t can be followed (`ProgramTangent`: not where
+        a store samples at t at an instant a value moves)."""
         return True
 
     def _flat(self, k: int, t: float, y: np.ndarray, m, z) -> bool:
@@ -946,6 +956,7 @@ class ProgramTangent(ParameterTangent):
         # clock slots are carried like the others (`clock_moves`)
         self._clock = np.array(sorted(c.clock_slots), dtype=int)
         self._clock_moves = False
+        self._moving_sample = -math.inf  # the last instant a store sampled at that moves
         # the variants' functions bound to p +- h/2, where the caller has them
         # (`along_clock`): (plus, minus) per value
         self.halves: list[tuple[object, object]] | None = None
@@ -979,11 +990,13 @@ class ProgramTangent(ParameterTangent):
                 ta >= self._sampled[2]:
             z = self._sampled[1]
         t, g = ta, c.next_sample(z)
-        # (where a free delay moves the store's instants, one due at the step's end, to
-        # a few ulps, is taken here, at its moving instant: the update at the step's
-        # end would take it at that fixed instant on one side of the value only)
-        near = 4 * np.finfo(float).eps * max(abs(tb), 1.0) if self.clock_moves() else -1.0
-        while (g < tb or g - tb <= near) and self.failed is None:
+        # (where a free delay moves the store's instants, one due at the step's end is
+        # taken here, at its moving instant: the update at the step's end would take it
+        # at that fixed instant on one side of the value only. One a few ulps after it
+        # is the next step's, as the run's: taken here, the run's update would not
+        # retrace it)
+        at_end = self.clock_moves()
+        while (g < tb or (at_end and g == tb)) and self.failed is None:
             super().__call__(t, g, interp, m, z)
             if self.failed is not None:
                 return
@@ -1013,10 +1026,27 @@ class ProgramTangent(ParameterTangent):
         if not self.clock_moves():
             self.map_at(self._memory_map(sample, g, yl, z))
             return
-        due = [k for k in self._next_slots if z[k] == g]
-        shift = self.phi[n + due[0]].copy() if due else np.zeros(len(self.variants))
+        due = [self.phi[n + k] for k in self._next_slots if z[k] == g]
+        shift = due[0].copy() if due else np.zeros(len(self.variants))
+        if any(not np.allclose(other, shift, rtol=1e-9, atol=1e-12) for other in due[1:]):
+            self.failed = "two DELAY stores sample at one instant that a data value moves apart"
+            return
+        if np.any(shift):
+            # (a sample where a switch turns takes the field's one side or the other as
+            # the value moves: no derivative -- a STEP(0.3) at the 6th sample of P/20)
+            self._moving_sample = g
+            if not self._turn_apart(self._turned_at):
+                return
         self._along(sample, g, y, z, shift, self.field_rows(g, yl, m, z),
                     self.field_rows(g, yl, m, list(c.sample(g, yl, m, z))))
+
+    def _turn_apart(self, t: float) -> bool:
+        if math.isfinite(t) and \
+                abs(t - self._moving_sample) <= 4 * np.finfo(float).eps * max(abs(t), 1.0):
+            self.failed = ("a DELAY samples where a switch turns, at an instant a data value "
+                           "moves apart from it: its derivative differs from either side")
+            return False
+        return True
 
     def _along(self, call, t: float, y: np.ndarray, z, shift: np.ndarray,
                before: np.ndarray, after: np.ndarray) -> None:
