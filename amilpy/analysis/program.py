@@ -52,16 +52,16 @@ def bind_slopes(model, spec, c, names: list[str], constants: list[tuple[dict, di
     (`constants`: their values, h), the start differenced. (None, None) where a
     value is folded into the code."""
     from ..codegen.consts import written_slopes
+    from ..codegen.jacobian import by_parameter, parameter_names
     from ..run.acsl import initial_start
 
     if c.binder is None or any(name not in c.binder.parameters for name in names):
         return None, None
     found = written_slopes(model, names, initial_start(spec), c.constants, c.binder.tables)
-    params = sorted(c.binder.parameters)
     if found is not None:
         rows, ics = found
-        zero = np.zeros(len(names))
-        return np.array([rows.get(p, zero) for p in params]).reshape(-1, len(names)), ics
+        return by_parameter(c, rows, len(names)), ics
+    params = parameter_names(c)
     # (a value INITIAL assigns again -- Magnolia allows it -- is INITIAL's)
     again = {n for code in model.acsl.initial for n in code.assigned}
     out = np.zeros((len(params), len(names)))
@@ -127,9 +127,9 @@ def program_trajectory(model, k: int, names: list[str], data: dict[str, float],
     tangent = ProgramTangent(c, None, floor, start, variants, r, outputs_asked(c, variables),
                              exact)
     if c.clock_slots:  # (a store whose instants a free delay may move: `along_clock`)
-        tangent.halves = [(prepared_at(**{name: data[name] + 0.5 * h})[2].code,
-                           prepared_at(**{name: data[name] - 0.5 * h})[2].code)
-                          for name, (_, _, h) in zip(names, variants, strict=True)]
+        tangent.make_halves = lambda: [(prepared_at(**{name: data[name] + 0.5 * h})[2].code,
+                                        prepared_at(**{name: data[name] - 0.5 * h})[2].code)
+                                       for name, (_, _, h) in zip(names, variants, strict=True)]
     times = np.asarray(times, dtype=float)
     sampler = Sampler(tangent, times, n + r)
     run = _TangentRun(model.ir, spec, opts, base, _clock.perf_counter(), sampler, variants,
@@ -145,7 +145,8 @@ def program_trajectory(model, k: int, names: list[str], data: dict[str, float],
     missing = [t for t in times.tolist() if t not in sampler.at]
     if missing:
         return f"the run's steps did not reach TIME = {missing[0]:.9g}"
-    return ProgramTrajectory(c, variants, floor, sampler.at, run.watch, tangent.halves)
+    return ProgramTrajectory(c, variants, floor, sampler.at, run.watch,
+                             lambda: tangent.halves)
 
 
 class _TangentRun(AcslRun):

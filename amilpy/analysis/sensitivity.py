@@ -82,7 +82,7 @@ class Trajectory:
     def __init__(self, flow, variants, floor, at: dict[float, tuple], halves=None) -> None:
         self.flow, self.code = flow, flow.code
         self.variants, self.floor, self.at = variants, floor, at
-        self.halves = halves  # (the variants at half the step: `along_clock`)
+        self.halves = halves  # () -> the variants at half the step (`along_clock`)
         self.states = {name: i for i, name in enumerate(self.code.state_names)}
         self.outputs = {name: i for i, name in enumerate(self.code.out_names)}
         self._rows: dict[float, object] = {}
@@ -123,6 +123,7 @@ def exact_slopes(c, names: list[str]) -> tuple[np.ndarray, np.ndarray] | None:
     initial-value equations (`codegen.consts.slopes`), or None where they cannot be
     had so (a CONST among `names`: folded into the code)."""
     from ..codegen.consts import slopes
+    from ..codegen.jacobian import by_parameter
 
     if c.binder is None or c.model is None:
         return None
@@ -130,9 +131,7 @@ def exact_slopes(c, names: list[str]) -> tuple[np.ndarray, np.ndarray] | None:
     if found is None:
         return None
     rows, start = found
-    zero = np.zeros(len(names))
-    return np.array([rows.get(p, zero) for p in sorted(c.binder.parameters)]
-                    ).reshape(-1, len(names)), start
+    return by_parameter(c, rows, len(names)), start
 
 
 def trajectory(model, k: int, names: list[str], data: dict[str, float], options: dict,
@@ -180,12 +179,10 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
     by_name = None if exact is None else exact[0]
     tangent = ProgramTangent(c, flow.watch, floor, dy0, variants, r, asked, by_name) if r \
         else ParameterTangent(c, flow.watch, floor, dy0, variants, asked, by_name)
-    halves = None
     if r and c.clock_slots:  # (a store whose instants a free delay may move: `along_clock`)
-        halves = [(flow_at(**{name: data[name] + 0.5 * h}).code,
-                   flow_at(**{name: data[name] - 0.5 * h}).code)
-                  for name, (_, _, h) in zip(names, variants, strict=True)]
-        tangent.halves = halves
+        tangent.make_halves = lambda: [(flow_at(**{name: data[name] + 0.5 * h}).code,
+                                        flow_at(**{name: data[name] - 0.5 * h}).code)
+                                       for name, (_, _, h) in zip(names, variants, strict=True)]
     times = np.asarray(times, dtype=float)
     sampler = Sampler(tangent, times, n + r)
     at: dict[float, tuple] = sampler.at
@@ -203,7 +200,8 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
     missing = [t for t in times.tolist() if t not in at]
     if missing:
         return f"the flow's steps did not reach TIME = {missing[0]:.9g}"
-    return Trajectory(flow, variants, floor, at, halves)
+    return Trajectory(flow, variants, floor, at,
+                      (lambda: tangent.halves) if isinstance(tangent, ProgramTangent) else None)
 
 
 

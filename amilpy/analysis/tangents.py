@@ -5,6 +5,8 @@ step."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from ..run.jacobian import STEP
@@ -67,7 +69,7 @@ class Sampler:
 
 
 def output_row(c, variants, i: int, t: float, state, sens: np.ndarray, floor: np.ndarray,
-               watch, halves=None) -> np.ndarray:
+               watch, halves: Callable[[], list] | None = None) -> np.ndarray:
     """d out_i / d p = d out_i/d y . S + d out_i/d p at (t, state); where S has rows
     for the memory values too (a program's: `analysis.program`), + d out_i/d z . S_z.
     While a surface slides the outputs are weighted as its field (`filippov`)."""
@@ -101,8 +103,8 @@ def output_row(c, variants, i: int, t: float, state, sens: np.ndarray, floor: np
     clock = np.array(sorted(c.clock_slots), dtype=int)
     rows = sens[len(y) + clock] if len(clock) and len(sens) > len(y) else None
     if rows is not None and np.any(rows):  # (a free delay moves a store's instants)
-        direct = along_clock(lambda code, v: out(code, y, v), c, variants, halves, z,
-                             clock, rows)
+        direct = along_clock(lambda code, v: out(code, y, v), c, variants,
+                             halves() if halves is not None else None, z, clock, rows)
     else:
         direct = np.array([(out(plus, y, z) - out(minus, y, z)) / (2.0 * h)
                            for plus, minus, h in variants])

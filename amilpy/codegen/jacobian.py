@@ -506,6 +506,19 @@ class ParameterJacobian:
         return out
 
 
+def parameter_names(c) -> list[str]:
+    """The constants a run's generated functions read by name (`ModelCode`), in the
+    order of `ParameterJacobian.names`: a row of `ParameterTangent.exact` each."""
+    return sorted(c.binder.parameters)
+
+
+def by_parameter(c, rows: dict[str, np.ndarray], q: int) -> np.ndarray:
+    """`rows` (a constant's derivatives in q values, by name; none: 0) as the matrix
+    `ParameterTangent.exact` takes, a row per `parameter_names`."""
+    zero = np.zeros(q)
+    return np.array([rows.get(p, zero) for p in parameter_names(c)]).reshape(-1, q)
+
+
 def for_parameters(c, fn: str) -> ParameterJacobian:
     """`ParameterJacobian` of a run's generated `fn` (`codegen.ModelCode`), its code
     built once for every binding of the build, bound once per run. Raises
@@ -516,7 +529,7 @@ def for_parameters(c, fn: str) -> ParameterJacobian:
         from .pytree import parameter
 
         if key not in c.shared:
-            names = sorted(c.binder.parameters)
+            names = parameter_names(c)
             n = len(c.state_names)
             seed = {parameter(name): n + k for k, name in enumerate(names)}
             source = c.binder.rhs_function() if fn == "rhs" else \

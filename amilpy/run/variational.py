@@ -58,6 +58,7 @@ from __future__ import annotations
 
 import copy
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -957,9 +958,16 @@ class ProgramTangent(ParameterTangent):
         self._clock = np.array(sorted(c.clock_slots), dtype=int)
         self._clock_moves = False
         self._moving_sample = -math.inf  # the last instant a store sampled at that moves
-        # the variants' functions bound to p +- h/2, where the caller has them
-        # (`along_clock`): (plus, minus) per value
-        self.halves: list[tuple[object, object]] | None = None
+        # () -> the variants' functions bound to p +- h/2, (plus, minus) per value, where
+        # the caller has them (`along_clock`; built when a store's clock first moves)
+        self.make_halves: Callable[[], list[tuple[object, object]]] | None = None
+        self._halves: list[tuple[object, object]] | None = None
+
+    @property
+    def halves(self) -> list[tuple[object, object]] | None:
+        if self._halves is None and self.make_halves is not None:
+            self._halves = self.make_halves()
+        return self._halves
 
     def clock_moves(self) -> bool:
         """Whether a store's instants and counts have a slope in the values (its
