@@ -18,7 +18,7 @@ from ..library import templates
 from ..library.runtime import Extending
 from ..parse.syntax import deep_enough
 from .emit import Emitter
-from .jacobian import _Deriv, _diff, _ours, _sgn0
+from .jacobian import _Deriv, _ours, derivative_scope
 from .pytree import assert_closed, namespace, parameter
 from .written import user_callable
 
@@ -211,7 +211,8 @@ def written_slopes(model: ir.Model, free: list[str], start: dict[str, float],
                 rows[st.target] = _row(model, st.expr, values, rows, q, tables)
                 values[st.target] = evaluate_constant(model, st.expr, values, tables,
                                                       st.span)
-        if any(name in constants and not _same(values[name], constants[name])
+        if any(name in constants and not math.isclose(values[name], constants[name],
+                                                      rel_tol=1e-12)
                for name in rows):
             return None
         ics = np.array([_row(model, s.ic, constants, rows, q, tables)
@@ -220,10 +221,6 @@ def written_slopes(model: ir.Model, free: list[str], start: dict[str, float],
             AmilError):  # (NameError: a name INITIAL has no value for, as T)
         return None
     return rows, ics
-
-
-def _same(a: float, b: float) -> bool:
-    return a == b or abs(a - b) <= 1e-12 * max(abs(a), abs(b))
 
 
 def _row(model: ir.Model, expr, values: dict[str, float], rows: dict[str, np.ndarray],
@@ -241,9 +238,8 @@ def _row(model: ir.Model, expr, values: dict[str, float], rows: dict[str, np.nda
     if not moved:
         return out
     made = _slope_code(model, expr, read, values, tables)
-    scope = {"__builtins__": {}, **namespace(), "_DIFF": _diff, "_SGN0": _sgn0,
-             **{name: _table(tables, name) for name in made[1]},
-             **{parameter(name): values[name] for name in read}}
+    scope = derivative_scope({name: _table(tables, name) for name in made[1]},
+                             {parameter(name): values[name] for name in read})
     for k in moved:
         if made[0][k] is not None:
             out += float(eval(made[0][k], scope)) * rows[read[k]]  # noqa: S307

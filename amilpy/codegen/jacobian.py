@@ -321,10 +321,16 @@ def bind(built: tuple, tables: dict | None = None, values: dict | None = None,
     """The Jacobian's code (`code`) executed with one run's tables and parameters;
     `written`: its tree, built again (`ModelJacobian.source`)."""
     compiled, n, rows, cols, constant = built
-    scope: dict[str, object] = {"__builtins__": {}, **namespace(), "_DIFF": _diff,
-                                "_SGN0": _sgn0, **(tables or {}), **(values or {})}
+    scope = derivative_scope(tables, values)
     exec(compiled, scope)  # noqa: S102 - compiler-built tree, closed namespace
     return ModelJacobian(n, rows, cols, constant, scope["jac"], written)
+
+
+def derivative_scope(tables: dict | None, values: dict | None) -> dict[str, object]:
+    """The closed namespace generated derivatives run in: the library's functions, the
+    rules' helpers, the tables and the parameters' globals they read."""
+    return {"__builtins__": {}, **namespace(), "_DIFF": _diff, "_SGN0": _sgn0,
+            **(tables or {}), **(values or {})}
 
 
 def code(rhs: py.FunctionDef, n: int, own: bool = False) -> tuple:
@@ -541,8 +547,7 @@ def for_parameters(c, fn: str) -> ParameterJacobian:
                              cols - n, constant)
         compiled, size, names, rows, cols, constant = c.shared[key]
         values = {k: v for k, v in c.namespace.items() if k.startswith("p_")}
-        scope: dict[str, object] = {"__builtins__": {}, **namespace(), "_DIFF": _diff,
-                                    "_SGN0": _sgn0, **(c.tables or {}), **values}
+        scope = derivative_scope(c.tables, values)
         exec(compiled, scope)  # noqa: S102 - compiler-built tree, closed namespace
         c.derived[key] = ParameterJacobian(size, names, rows, cols, constant, scope["jacp"])
     return c.derived[key]
