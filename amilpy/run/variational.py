@@ -692,14 +692,11 @@ class ParameterTangent(Tangent):
         for k in trains:
             shifts.append(self._train_shift(t, self.watch.watched[k].surface)
                           if self.variants else np.zeros(self.phi.shape[1]))
-            if shifts[-1] is None:
-                self.failed = "a state is reset where two switches cross that a data value " \
-                              "moves apart"
-                return
         shift = shifts[0]
-        if any(not np.allclose(other, shift, rtol=1e-6,
-                               atol=1e-9 * float(np.abs(shift).max(initial=1.0)))
-               for other in shifts[1:]):
+        if any(other is None for other in shifts) or any(
+                not np.allclose(other, shift, rtol=1e-6,
+                                atol=1e-9 * float(np.abs(shift).max(initial=1.0)))
+                for other in shifts[1:]):
             self.failed = "a state is reset where two switches cross that a data value moves apart"
             return
         before = self.field_rows(t, y_prev, m_prev, z_prev)
@@ -1067,6 +1064,7 @@ class ProgramTangent(ParameterTangent):
         start a new spacing: a jump); the states' rows take (f- - f+) dt/dp."""
         n, r = self.n, self.r
         phi = self.phi.copy()
+        centre = np.asarray(call(self.c, t, y.tolist(), list(z)), dtype=float)
         for j, (plus, minus, h) in enumerate(self.variants):
             dy = phi[:n, j] + before[:n] * shift[j]
             dz = np.nan_to_num(phi[n:n + r, j], nan=0.0, posinf=0.0, neginf=0.0)
@@ -1077,7 +1075,6 @@ class ProgramTangent(ParameterTangent):
                                             (y + sign * h * dy).tolist(), zv), dtype=float))
             # (the side whose store took the same samples as the run's: a sample due
             # within the step of the instant is taken on one side only)
-            centre = np.asarray(call(self.c, t, y.tolist(), list(z)), dtype=float)
             with np.errstate(invalid="ignore"):
                 phi[n:n + r, j] = np.nan_to_num(one_sided((ends[0] - centre) / h,
                                                           (centre - ends[1]) / h))
@@ -1198,10 +1195,10 @@ class ProgramTangent(ParameterTangent):
                 zv = code.mem(tt, yv, before, after, list(zv))
             return np.asarray(zv, dtype=float)
 
-        if field is None:
-            field = self.field_rows(t, yl, m, z)
         if self.clock_moves():
             shift = self._shift if self._shift is not None else np.zeros(len(self.variants))
+            if field is None:
+                field = self.field_rows(t, yl, m, z)
             self._along(update, t, np.asarray(yl), z_prev, shift, field, field)
             return
         # (an update reads a trigger's sign where its mode is not positive, a sign that
@@ -1218,6 +1215,8 @@ class ProgramTangent(ParameterTangent):
         rate = np.zeros(size)
         rate[n:n + r] = (update(c, t + ht, yl, z_prev) - update(c, t - ht, yl, z_prev)) / \
             (2.0 * ht)
+        if field is None:
+            field = self.field_rows(t, yl, m, z)
         self.map_at(matrix, (shift, field, field, rate))
 
     def _wake(self, t: float, y: np.ndarray, m, z) -> None:
