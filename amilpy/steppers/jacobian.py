@@ -45,15 +45,17 @@ class SegmentJacobian:
                 self._model = self._make()
             except NotImplementedError:
                 self._model = False
+                self._full = (np.repeat(np.arange(self.n), self.n),
+                              np.tile(np.arange(self.n), self.n))
         return self._model
 
     @property
     def rows(self) -> np.ndarray:
-        return self.model.rows if self.model else np.repeat(np.arange(self.n), self.n)
+        return self.model.rows if self.model else self._full[0]
 
     @property
     def cols(self) -> np.ndarray:
-        return self.model.cols if self.model else np.tile(np.arange(self.n), self.n)
+        return self.model.cols if self.model else self._full[1]
 
     def values(self, t: float, y: np.ndarray) -> np.ndarray:
         if self.model:
