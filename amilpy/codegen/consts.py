@@ -178,8 +178,7 @@ def slopes(model: ir.Model, free: list[str], constants: dict[str, float],
         for eq in model.initial:
             if eq.target in parameters and eq.target not in rows:
                 rows[eq.target] = _row(model, eq.expr, constants, rows, q, tables)
-        start = np.array([_row(model, s.ic, constants, rows, q, tables)
-                          for s in model.states]).reshape(len(model.states), q)
+        start = _starts(model, constants, rows, q, tables)
     except (NotImplementedError, ArithmeticError, ValueError, TypeError, KeyError, NameError):
         return None
     return rows, start
@@ -215,12 +214,18 @@ def written_slopes(model: ir.Model, free: list[str], start: dict[str, float],
                                                       rel_tol=1e-12)
                for name in rows):
             return None
-        ics = np.array([_row(model, s.ic, constants, rows, q, tables)
-                        for s in model.states]).reshape(len(model.states), q)
+        ics = _starts(model, constants, rows, q, tables)
     except (NotImplementedError, ArithmeticError, ValueError, TypeError, KeyError, NameError,
             AmilError):  # (NameError: a name INITIAL has no value for, as T)
         return None
     return rows, ics
+
+
+def _starts(model: ir.Model, constants: dict[str, float], rows: dict[str, np.ndarray],
+            q: int, tables) -> np.ndarray:
+    """d/d the free values of the states' initial values, a row per state (`_row`)."""
+    return np.array([_row(model, s.ic, constants, rows, q, tables)
+                     for s in model.states]).reshape(len(model.states), q)
 
 
 def _row(model: ir.Model, expr, values: dict[str, float], rows: dict[str, np.ndarray],

@@ -479,7 +479,7 @@ def for_compiled(c) -> ModelJacobian:
         n = len(c.state_names)
         # one code for every binding of the module
         built = c.binder.from_rhs("jacobian", lambda rhs, own: code(rhs, n, own))
-        values = {k: v for k, v in c.namespace.items() if k.startswith("p_")}
+        values = c.parameter_values
         c.derived["jacobian"] = bind(built, c.tables, values, lambda: _written(c))
     return c.derived["jacobian"]
 
@@ -546,7 +546,7 @@ def for_parameters(c, fn: str) -> ParameterJacobian:
             c.shared[key] = (compile(module, "<jacobian>", "exec"), size, names, rows,
                              cols - n, constant)
         compiled, size, names, rows, cols, constant = c.shared[key]
-        values = {k: v for k, v in c.namespace.items() if k.startswith("p_")}
+        values = c.parameter_values
         scope = derivative_scope(c.tables, values)
         exec(compiled, scope)  # noqa: S102 - compiler-built tree, closed namespace
         c.derived[key] = ParameterJacobian(size, names, rows, cols, constant, scope["jacp"])

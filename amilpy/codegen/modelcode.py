@@ -94,6 +94,12 @@ class ModelCode:
         return None if self.binder is None else self.binder.tree()
 
     @property
+    def parameter_values(self) -> dict[str, float]:
+        """The parameters' globals the generated functions read (p_NAME -> value), for
+        code made from them later (the Jacobians, the rolled rhs) to run with."""
+        return {k: v for k, v in self.namespace.items() if k.startswith("p_")}
+
+    @property
     def source(self) -> str:
         """The generated scalar functions as Python text (written on first use: most
         runs never need it, and a large model's takes long to write)."""

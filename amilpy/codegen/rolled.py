@@ -197,7 +197,7 @@ def for_compiled(c) -> Callable | None:
         fn = None if c.binder is None else \
             c.binder.from_rhs("rolled", lambda rhs, _: build(rhs, len(c.state_names)))
         if fn is not None:  # its own globals, with this run's parameters
-            values = {k: v for k, v in c.namespace.items() if k.startswith("p_")}
+            values = c.parameter_values
             fn = FunctionType(fn.__code__, {**fn.__globals__, **values})
         c.derived["rolled"] = None if fn is None else _guarded(fn, c.rhs)
     return c.derived["rolled"]
