@@ -39,7 +39,7 @@ from ..run.flow import State
 from ..run.jacobian import STEP
 from ..run.plan import SAME_INSTANT, same_instant
 from ..run.variational import ProgramTangent
-from .tangents import Sampler, output_row, outputs_asked, step_for
+from .tangents import Sampler, output_row, outputs_asked, start_slope, step_for
 
 
 def bind_slopes(model, spec, c, names: list[str], constants: list[tuple[dict, dict, float]]
@@ -116,10 +116,8 @@ def program_trajectory(model, k: int, names: list[str], data: dict[str, float],
                           zip(plus.schedules, minus.schedules, strict=True)]
         constants.append((plus.constants, minus.constants, h))
         variants.append((plus.code, minus.code, h))
-        hi = np.concatenate([plus.code.y0, plus.code.z0])
-        lo = np.concatenate([minus.code.y0, minus.code.z0])
-        with np.errstate(invalid="ignore"):  # (a slot at INF in both: no dependence)
-            start[:, j] = np.where(hi == lo, 0.0, (hi - lo) / (2.0 * h))
+        start[:, j] = start_slope(np.concatenate([plus.code.y0, plus.code.z0]),
+                                  np.concatenate([minus.code.y0, minus.code.z0]), h)
     floor = np.broadcast_to(np.asarray(plan.tol.atol / plan.tol.rtol, dtype=float), (n,))
     exact, ics = bind_slopes(model.ir, spec, c, names, constants)
     if ics is not None:  # (the states' start from its equations; the memory's differenced)

@@ -40,7 +40,7 @@ from ..run.flow import FlowFailed
 from ..run.jacobian import STEP  # (cbrt(machine epsilon): the one differencing step)
 from ..run.plan import SAME_INSTANT, sliding_in
 from ..run.variational import ParameterTangent, ProgramTangent
-from .tangents import Sampler, output_row, outputs_asked, step_for
+from .tangents import Sampler, output_row, outputs_asked, start_slope, step_for
 
 if TYPE_CHECKING:
     from .program import ProgramTrajectory
@@ -166,10 +166,8 @@ def trajectory(model, k: int, names: list[str], data: dict[str, float], options:
         plus, minus, h = moved
         variants.append((plus.code, minus.code, h))
         up, down = plus.initial_state(), minus.initial_state()
-        hi = np.concatenate([up.y, up.memory[:r]])
-        lo = np.concatenate([down.y, down.memory[:r]])
-        with np.errstate(invalid="ignore"):  # (a slot at -INF in both: no dependence)
-            dy0[:, j] = np.where(hi == lo, 0.0, (hi - lo) / (2.0 * h))
+        dy0[:, j] = start_slope(np.concatenate([up.y, up.memory[:r]]),
+                                np.concatenate([down.y, down.memory[:r]]), h)
     exact = exact_slopes(c, names)
     if exact is not None:  # (the states' start from its equations; the memory's differenced)
         dy0[:n] = exact[1]

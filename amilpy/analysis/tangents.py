@@ -111,6 +111,13 @@ def output_row(c, variants, i: int, t: float, state, sens: np.ndarray, floor: np
     return grad @ sens + direct
 
 
+def start_slope(hi: np.ndarray, lo: np.ndarray, h: float) -> np.ndarray:
+    """The central difference (hi - lo)/2h of a start moved by +-h: 0 for a slot the
+    same in both (an instant not yet set, +-INF in both: no dependence)."""
+    with np.errstate(invalid="ignore"):
+        return np.where(hi == lo, 0.0, (hi - lo) / (2.0 * h))
+
+
 def step_for(value: float, relative: float) -> float:
     """A central difference's step for a data value: relative to it (a value of 1E-12
     is moved by a fraction of itself, never by more than itself); 1e-8 for 0."""
