@@ -27,8 +27,9 @@ import math
 
 import numpy as np
 from numba import types
+from numba.extending import register_jitable
 
-from ..library.surfaces import DOWN, REPELS, UP, leaving
+from ..library.surfaces import DOWN, REPELS, UP, leaving, slides
 from .dop853 import (  # noqa: F401 - first_step, MODEL: the entry points callers take
     _B,
     _F8,
@@ -75,6 +76,9 @@ from .layout import (
 )
 
 _leaving = _jit(leaving)  # (the run loop's own rule, compiled)
+# the library's rules that the helpers compiled as written call (a level surface's
+# `level_edge` asks whether its mode `slides`): numba compiles them where called
+register_jitable(slides)
 STEPS_PER_CALL = 20000  # the run loop looks at its deadline and progress between calls
 
 @_jit
