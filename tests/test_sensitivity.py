@@ -1267,17 +1267,80 @@ def test_acsl_initial_reading_t_keeps_the_bind_s_differences():
     assert loc.raw[:, 0, 0] == pytest.approx((up - down) / (2 * h), rel=1e-6, abs=1e-6)
 
 
-def test_a_free_acsl_delay_says_it_is_differenced():
-    """ACSL's DELAY(X, IC, TDL, NMX) reads IC until TDL, then the history: its value
-    jumps at an instant a free TDL moves, which the tangent does not follow (it gave
-    d XD/d TDL 2e-4 off, and 57 off with a DMIN, hunt 51 F3/F4): whole runs are
-    differenced, and the reason is given."""
-    model = amilpy.loads("PROGRAM delayed\n  CONSTANT K = 0.8, TDL = 0.7\n  DERIVATIVE\n"
-                         "    XD = DELAY(X, 1.0, TDL, 20)\n    X = INTEG(-K*XD + 0.3*SIN(T), 1.0)\n"
-                         "    TERMT(T >= 2.0)\n  END\n  CINTERVAL CINT = 0.1\nEND\n", "delay.csl")
+def test_a_program_stopped_by_termt_on_its_last_communication_instant_is_followed():
+    """TERMT(T >= 1.2) with CINT 0.1: the run stops at T = 1.2, and prints its last
+    row at the 12th CINT, 1.2000000000000002; the tangent had no row there and the
+    whole sensitivity went to differences ("the run's steps did not reach TIME =
+    1.2"). That row is the end state's. d X/d K = -t exp(-K t), to 1e-8."""
+    model = amilpy.loads("PROGRAM decay\n  CONSTANT K = 0.8\n  DERIVATIVE\n"
+                         "    X = INTEG(-K*X, 1.0)\n    TERMT(T >= 1.2)\n  END\n"
+                         "  CINTERVAL CINT = 0.1\nEND\n", "decay.csl")
+    loc = model.sensitivity(["K"], outputs=["X"], rtol=1e-10, atol=1e-12)
+    assert loc.how == "sensitivity equations"
+    assert loc.times[-1] == 12 * 0.1  # (not 1.2)
+    assert loc.raw[:, 0, 0] == pytest.approx(-loc.times * np.exp(-0.8 * loc.times), abs=1e-8)
+
+
+def _delayed_decay(spacing, ic=0.5, k=0.8, n=20):
+    """X' = -K XD + 0.3 SIN(T), X(0) = 1, XD = ACSL's DELAY(X, IC, TDL, N[, DMIN]) as
+    the run computes it, for t < 2 TDL: IC before TDL, then the store's straight
+    lines between X's samples every `spacing(TDL)` from 0 (X explicit there), read
+    at t - TDL; X integrates them exactly. (X, XD) at t, complex-steppable in TDL."""
+    def x0(s):
+        return 1.0 - k * ic * s + 0.3 * (1.0 - np.cos(s))
+
+    def closed(t, tdl):
+        if t < tdl.real:
+            return x0(t), ic + 0.0 * tdl
+        h, s = spacing(tdl), t - tdl
+        j = int(np.floor((s / h).real))
+        knots = [x0(i * h) for i in range(j + 2)]
+        xd = knots[j] + (knots[j + 1] - knots[j]) * (s - j * h) / h
+        area = sum(0.5 * (knots[i] + knots[i + 1]) * h for i in range(j)) + \
+            0.5 * (knots[j] + xd) * (s - j * h)
+        return x0(tdl) - k * area + 0.3 * (np.cos(tdl) - np.cos(t)), xd
+
+    return closed
+
+
+@pytest.mark.parametrize("dmin, spacing", [("", lambda tdl: tdl / 20),
+                                           (", 0.05", lambda tdl: 0.05 + 0 * tdl)])
+def test_a_free_acsl_delay_follows_its_turn_from_ic_to_the_history(dmin, spacing):
+    """ACSL's DELAY(X, IC, TDL, NMX[, DMIN]) reads IC until TDL, then the store's
+    history, which it samples every TDL/NMX (or DMIN, when longer): a free TDL moves
+    the turn (XD jumps from IC = 0.5 to X(0) = 1 there) and, without DMIN, every
+    sampling instant with it -- the 20th one onto the turn itself, at one instant that
+    moves with TDL as the turn does: one map. It was differenced (the store's clock
+    started from rows the first update left out -- d TDL/NMX/d TDL 0 at t0, and
+    8e3 in its anchor: hunt 51 F3/F4). Against the complex step of the store's own
+    closed form (`_delayed_decay`), to 1e-8 (measured 5e-11 at RELERR 1e-11); the
+    run ends with TERMT at T = 1.2, its last row at 12 CINTs (1.2000000000000002)."""
+    model = amilpy.loads("PROGRAM delayed\n  CONSTANT K = 0.8, TDL = 0.63\n  DERIVATIVE\n"
+                         f"    XD = DELAY(X, 0.5, TDL, 20{dmin})\n"
+                         "    X = INTEG(-K*XD + 0.3*SIN(T), 1.0)\n"
+                         "    TERMT(T >= 1.2)\n  END\n  CINTERVAL CINT = 0.1\nEND\n",
+                         "delay.csl")
+    loc = model.sensitivity(["TDL"], outputs=["X", "XD"], rtol=1e-11, atol=1e-13)
+    assert loc.how == "sensitivity equations"
+    closed = _delayed_decay(spacing)
+    for i, t in enumerate(loc.times):
+        exact = [np.imag(v) / 1e-30 for v in closed(t, 0.63 + 1e-30j)]
+        assert loc.raw[i, :, 0] == pytest.approx(exact, abs=1e-8), t
+
+
+def test_a_sample_at_dmin_s_fixed_spacing_where_a_free_tdl_turns_the_delay_says_so():
+    """TDL = 0.65 = 13 DMIN: the sample due at 0.65 stays there as TDL moves, the turn
+    from IC to the history does not: the sample is taken before the turn on one side
+    and after it on the other (it was followed as if it moved with the turn: d XD/d
+    TDL 57 off, hunt 51 F4). Differenced, and says why."""
+    model = amilpy.loads("PROGRAM delayed\n  CONSTANT K = 0.8, TDL = 0.65\n  DERIVATIVE\n"
+                         "    XD = DELAY(X, 0.5, TDL, 20, 0.05)\n"
+                         "    X = INTEG(-K*XD + 0.3*SIN(T), 1.0)\n"
+                         "    TERMT(T >= 1.5)\n  END\n  CINTERVAL CINT = 0.1\nEND\n",
+                         "delay.csl")
     loc = model.sensitivity(["TDL"], outputs=["X"])
-    assert loc.how.startswith("differences of whole runs") and "ACSL's DELAY" in loc.how
-    assert model.sensitivity(["K"], outputs=["X"]).how == "sensitivity equations"
+    assert loc.how.startswith("differences of whole runs (a DELAY samples where a switch "
+                              "turns")
 
 
 def test_pulse_instants_a_value_moves_apart_without_a_derivative_say_so():

@@ -140,6 +140,13 @@ def program_trajectory(model, k: int, names: list[str], data: dict[str, float],
         return tangent.failed
     if not result.ok:
         return f"the run failed: {result.message}"
+    end = tangent.prev
+    for t in times.tolist():
+        # (a row the run prints at the instant it stops, TERMT located at T = 1.2, on
+        # a grid whose 12th CINT is 1.2000000000000002: its state is the end's)
+        if t not in sampler.at and end is not None and same_instant(t, end[0]):
+            sampler.at[t] = (State(end[1].copy(), tuple(end[2]), tuple(end[3]), t),
+                             tangent.phi[:n + r].copy())
     missing = [t for t in times.tolist() if t not in sampler.at]
     if missing:
         return f"the run's steps did not reach TIME = {missing[0]:.9g}"
@@ -262,6 +269,18 @@ class _TangentRun(AcslRun):
         g, _, rate = jump
         return t.shift_of(g, t._by_data("surf", cur.t, y, m, z)[k], rate), \
             t.field_rows(cur.t, y, m, z)
+
+    def _start(self, y: np.ndarray, z: list[float]):
+        # (the memory's update at t0 -- a DELAY store starting, its first sampling
+        # instant t0 + TDL/NMX -- follows the start the values moved, as the flow's
+        # `initial_state` has it in the tangent's start: the store's clock rows from
+        # there, not from the update at the first step's end)
+        cur = super()._start(y, z)
+        t = self.tangent
+        if self.c.clock_slots and list(cur.z) != list(z) and t.failed is None:
+            t._update_memory(cur.t, np.asarray(cur.y, dtype=float), list(cur.m), list(cur.m),
+                             list(z), list(cur.z))
+        return cur
 
     def instant(self, cur) -> None:
         t = self.tangent

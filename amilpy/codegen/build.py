@@ -449,6 +449,27 @@ class Compiler:
                     limit = min(limit, value)
         return limit
 
+    def read_knots(self, constants: dict[str, float]) -> Callable | None:
+        """(z, ta, tb) -> the sorted instants in (ta, tb) at which a memory's value
+        read a delay known before the run back passes one of its stored points
+        (`MemorySpec.knots`: DELAY's samples); None if no memory has them. A delay
+        that changes in time has none here."""
+        stores = []
+        for mem, func in zip(self.model.memories, self.entries, strict=True):
+            spec = func.memory
+            if spec.knots is None or not spec.horizon:
+                continue
+            value = constant_value(instantiate(spec.horizon, mem.args, mem.span), constants)
+            if value is not None and value > 0.0:
+                stores.append((spec.knots, mem.slot, mem.nslots, value))
+        if not stores:
+            return None
+        if len(stores) == 1:
+            (knots, o, size, d), = stores
+            return lambda z, ta, tb: knots(z, o, size, d, ta, tb)
+        return lambda z, ta, tb: sorted(t for knots, o, size, d in stores
+                                        for t in knots(z, o, size, d, ta, tb))
+
     def check_arguments(self) -> None:
         """Arguments that must be positive or not negative (PULSE's P and W), now that
         the run's constants are known; a fault is located at the call. One that may
@@ -726,7 +747,7 @@ class Compiler:
                 for m, f in zip(model.memories, self.entries, strict=True)
                 if f.memory.wakes is not None or m.func == WEATHER_HOLD),
             sample=scalar["smp"] if self.samples else None, next_sample=self.sampling(),
-            step_limit=binder.step_limit(constants),
+            step_limit=binder.step_limit(constants), read_knots=binder.read_knots(constants),
         )
 
     def trains(self) -> tuple[list[tuple[float, float]], list[frozenset[int]]]:

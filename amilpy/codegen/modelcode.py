@@ -53,6 +53,9 @@ class ModelCode:
     next_sample: Callable | None = None
     # no step longer than this: a delay the derivatives read, known before the run
     step_limit: float = math.inf
+    # (z, ta, tb) -> the instants in (ta, tb) at which such a delayed value passes a
+    # stored point (its slope jumps there), or None: `MemorySpec.knots`
+    read_knots: Callable | None = None
     # line k of the generated code is statements[k - 1] (None: scaffolding)
     statements: list[Statement | None] = field(default_factory=list)
     # (t, y, m, z) -> the states put where their function holds them (LIMINT's

@@ -122,6 +122,10 @@ class MemorySpec:
     # the slots (offsets, given how many there are) that keep instants and counts, not
     # values the arguments give: the sensitivity equations carry no slope in them
     clock: Callable[[int], list[int]] | None = None
+    # (z, offset, slots, delay, ta, tb) -> the instants in (ta, tb) at which the value,
+    # read `horizon` back, passes a point the slots keep: its slope jumps there, and so
+    # the values' part of the field, which a tangent's step must not straddle
+    knots: Callable[[list, int, int, float, float, float], list[float]] | None = None
 
 
 @dataclass(frozen=True)
@@ -573,7 +577,8 @@ register(Func("DELAY", Kind.MEMORY, "DELAY(N, P, X)",
               memory=MemorySpec("2*A + 13", ("*DELAY_INIT(A + 2)",),
                                 "DELAY(TIME, B, C, C, 1.0, Z, OFFSET, A + 2)",
                                 ("*DELAY_STORE(TIME, B / A, B, C, Z, OFFSET, A + 2)",),
-                                samples=rt.DELAY_NEXT, horizon="B", clock=rt.delay_clock),
+                                samples=rt.DELAY_NEXT, horizon="B", clock=rt.delay_clock,
+                                knots=rt.delay_knots),
               variants=(
                   # ACSL: IC until TIME - TDL reaches t0, then X(t - TDL(t)) from NMX
                   # points at least DMIN apart (and TDL/NMX: they span the delay);
@@ -588,7 +593,8 @@ register(Func("DELAY", Kind.MEMORY, "DELAY(N, P, X)",
                            "2*D + 13", ("*DELAY_INIT(D + 2)",),
                            "(DELAY(TIME, C, A, B, 0.0, Z, OFFSET, D + 2) if M0 >= 0 else B)",
                            ("*DELAY_STORE(TIME, AMAX1(E, C / D), C, A, Z, OFFSET, D + 2)",),
-                           samples=rt.DELAY_NEXT, horizon="C", clock=rt.delay_clock)),
+                           samples=rt.DELAY_NEXT, horizon="C", clock=rt.delay_clock,
+                           knots=rt.delay_knots)),
               )))
 
 # --- random: one stream per call site, a draw held for an output interval --------

@@ -399,6 +399,21 @@ def delay_clock(nslots: int) -> list[int]:
     return [_COUNT, _T0, _H, _ANCHOR_T, _ANCHOR_J, _NEXT, _TLAST, *ring]
 
 
+def delay_knots(z, o: int, nslots: int, d: float, ta: float, tb: float) -> list[float]:
+    """The instants in (ta, tb) at which a read d back passes one of the store's
+    samples (at o, `nslots` slots): s + d for each sample s. The read is a straight
+    line between two samples, so its slope jumps there. A step no longer than d
+    (`ModelCode.step_limit`) takes no sample that lands inside it."""
+    count, k = int(z[o + _COUNT]), (nslots - _RING) // 2
+    ring = o + _RING
+    out = []
+    for j in range(max(0, count - k), count):
+        t = z[ring + 2 * (j % k)] + d
+        if ta < t < tb:
+            out.append(t)
+    return out
+
+
 class HelperFault(ValueError):
     """A run-time helper's fault that says itself what is wrong (the fault report
     quotes it, with the statement, instead of the generated call)."""

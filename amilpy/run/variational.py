@@ -139,7 +139,8 @@ class Tangent:
         self._lean: tuple | None = None  # (its memory, that memory `leaned`)
         self.failed: str | None = None
         self._shift: np.ndarray | None = None  # d t/d p of the instant being joined
-        self._turned_at = -math.inf  # the last instant a switch turned at
+        # the last instant a switch turned at, and its d t/d p (None: not moved)
+        self._turned: tuple[float, np.ndarray | None] = (-math.inf, None)
         # steps whose h |A(c3) - A(c1)| is at most this need no check against halves
         self._trusted = VARIATION
 
@@ -291,10 +292,6 @@ class Tangent:
         if not self._trains_apart(t, y, m_prev, m, z_prev):
             return
         changed = [k for k in range(len(m)) if m[k] != m_prev[k] and k not in exits]
-        if changed:
-            self._turned_at = t
-            if not self._turn_apart(t):
-                return
         # (a switch whose surface is flat in the states and TIME here -- it reads a level
         # function's level, AINT(QNTZR(0.5, X)) -- jumps with the one that crosses: its
         # change is that crossing's, at that crossing's instant; or with a slide's exit,
@@ -315,6 +312,11 @@ class Tangent:
                 return
             self._phi = s @ self.phi  # (the steps before the switch first)
             current, mem = after, zl
+        if changed:
+            # (d t/d p of the instant, 0 where no saltation said: a switch flat in p)
+            self._turned = (t, self._shift)
+            if not self._turn_apart():
+                return
         if moved:
             self._update_memory(t, y, m_prev, m, z_prev, z)
         self._wake(t, y, m, zl)
@@ -324,9 +326,10 @@ class Tangent:
         (`ParameterTangent`: their instants do not move here)."""
         return True
 
-    def _turn_apart(self, t: float) -> bool:
-        """Whether a switch turning at t can be followed (`ProgramTangent`: not where
-        a store samples at t at an instant a value moves)."""
+    def _turn_apart(self) -> bool:
+        """Whether the switch that turned last (`_turned`) can be followed
+        (`ProgramTangent`: not where a store samples at its instant, the two moved
+        apart by a value)."""
         return True
 
     def _flat(self, k: int, t: float, y: np.ndarray, m, z) -> bool:
@@ -921,6 +924,10 @@ def along_clock(f, base, variants, halves, z, clock: np.ndarray, rows: np.ndarra
     return np.array(cols).T
 
 
+SAMPLED_AT_TURN = ("a DELAY samples where a switch turns, at an instant a data value moves "
+                   "apart from it: its derivative differs from either side")
+
+
 class ProgramTangent(ParameterTangent):
     """`ParameterTangent` of a program in ACSL form: the states y (n) augmented by the
     r memory values z its DISCRETE and DYNAMIC code keep (constant between the
@@ -945,16 +952,12 @@ class ProgramTangent(ParameterTangent):
                  for mem in (c.model.memories if c.model is not None else ())]
         self._next_slots = [slot + spec.samples for slot, spec in specs
                             if spec.samples is not None]
-        # ACSL's DELAY(X, IC, TDL, NMX[, DMIN]) reads IC until TDL and then the history:
-        # its value jumps there, at an instant a free TDL moves, which is not followed
-        self._jumping_store = any(mem.func == "DELAY" and len(mem.args) > 3
-                                  for mem in (c.model.memories if c.model is not None
-                                              else ()))
         # whether a store's instants move with the values (a free delay): then its
         # clock slots are carried like the others (`clock_moves`)
         self._clock = np.array(sorted(c.clock_slots), dtype=int)
         self._clock_moves = False
-        self._moving_sample = -math.inf  # the last instant a store sampled at that moves
+        # the last instant a store sampled at, and its d t/d p
+        self._sampled_at: tuple[float, np.ndarray | None] = (-math.inf, None)
         # () -> the variants' functions bound to p +- h/2, (plus, minus) per value, where
         # the caller has them (`along_clock`; built when a store's clock first moves)
         self.make_halves: Callable[[], list[tuple[object, object]]] | None = None
@@ -973,10 +976,6 @@ class ProgramTangent(ParameterTangent):
         move (`__call__`)."""
         if not self._clock_moves and len(self._clock):
             self._clock_moves = bool(np.any(self._phi[self.n + self._clock]))
-            if self._clock_moves and self._jumping_store and self.failed is None:
-                self.failed = ("DELAY's sampling instants move with a data value (ACSL's "
-                               "DELAY: its value jumps from IC to the history where the "
-                               "delay moves it)")
         return self._clock_moves
 
     def _memory_moved(self, t: float, y: np.ndarray, m_prev, m, z_prev, z) -> bool:
@@ -989,7 +988,7 @@ class ProgramTangent(ParameterTangent):
         dense output (a later piece of the same step goes on from the samples taken)."""
         c = self.c
         if c.next_sample is None:
-            return super().__call__(ta, tb, interp, m, z)
+            return self._between(ta, tb, interp, m, z)
         given = list(z)
         if self._sampled is not None and self._sampled[0] == given and \
                 ta >= self._sampled[2]:
@@ -1002,7 +1001,7 @@ class ProgramTangent(ParameterTangent):
         # retrace it)
         at_end = self.clock_moves()
         while (g < tb or (at_end and g == tb)) and self.failed is None:
-            super().__call__(t, g, interp, m, z)
+            self._between(t, g, interp, m, z)
             if self.failed is not None:
                 return
             y = np.asarray(interp(g), dtype=float)
@@ -1014,8 +1013,23 @@ class ProgramTangent(ParameterTangent):
             if not after > g:
                 break
             t, g = g, after
-        super().__call__(t, tb, interp, m, z)
+        self._between(t, tb, interp, m, z)
         self._sampled = (given, list(z), tb)
+
+    def _between(self, ta: float, tb: float, interp, m, z) -> None:
+        """[ta, tb] with no sample inside, cut where a delayed value passes a stored
+        point (`ModelCode.read_knots`): the values' part of the field jumps there (d XD
+        /d TDL is minus the history's slope, which changes at each sample), and a step
+        across it loses the quadrature's order -- 3e-6 of d X/d TDL at RELERR 1e-9,
+        ACSL's DELAY sampling every DMIN, which TDL is no multiple of."""
+        knots = self.c.read_knots(z, ta, tb) if self.c.read_knots is not None else ()
+        t = ta
+        for u in knots:
+            ParameterTangent.__call__(self, t, u, interp, m, z)
+            if self.failed is not None:
+                return
+            t = u
+        ParameterTangent.__call__(self, t, tb, interp, m, z)
 
     def _sample_at(self, g: float, y: np.ndarray, m, z) -> None:
         """A store samples the trajectory at g (its next instant, slot `_next_slots`):
@@ -1028,30 +1042,54 @@ class ProgramTangent(ParameterTangent):
         def sample(code, tt, yv, zv):
             return code.sample(tt, yv, m, zv)
 
-        if not self.clock_moves():
-            self.map_at(self._memory_map(sample, g, yl, z))
-            return
-        due = [self.phi[n + k] for k in self._next_slots if z[k] == g]
+        moves = self.clock_moves()
+        due = [self.phi[n + k] for k in self._next_slots if z[k] == g] if moves else []
         shift = due[0].copy() if due else np.zeros(len(self.variants))
         if any(not np.allclose(other, shift, rtol=1e-9, atol=1e-12) for other in due[1:]):
             self.failed = "two DELAY stores sample at one instant that a data value moves apart"
             return
-        if np.any(shift):
-            # (a sample where a switch turns takes the field's one side or the other as
-            # the value moves: no derivative -- a STEP(0.3) at the 6th sample of P/20)
-            self._moving_sample = g
-            if not self._turn_apart(self._turned_at):
-                return
+        self._sampled_at = (g, shift)
+        if not self._turn_apart():
+            return
+        if not moves:
+            self.map_at(self._memory_map(sample, g, yl, z))
+            return
         self._along(sample, g, y, z, shift, self.field_rows(g, yl, m, z),
                     self.field_rows(g, yl, m, list(c.sample(g, yl, m, z))))
 
-    def _turn_apart(self, t: float) -> bool:
-        if math.isfinite(t) and \
-                abs(t - self._moving_sample) <= 4 * np.finfo(float).eps * max(abs(t), 1.0):
-            self.failed = ("a DELAY samples where a switch turns, at an instant a data value "
-                           "moves apart from it: its derivative differs from either side")
-            return False
+    def _samples_move_with(self, t: float, z_prev) -> bool:
+        """Whether the samples a store's update takes at t -- those due there, at a
+        step's end; the loop takes the others from the dense output -- move with the
+        instant (`_shift`, where a switch turns): a sample at DMIN's fixed spacing due
+        where ACSL's DELAY turns from IC to the history, TDL free, is taken before the
+        turn on one side of the value and after it on the other."""
+        q = len(self.variants)
+        instant = self._shift if self._shift is not None else np.zeros(q)
+        if not np.any(instant):
+            return True
+        for k in self._next_slots:
+            if z_prev[k] <= t:
+                own = self.phi[self.n + k] if self.clock_moves() else np.zeros(q)
+                if not np.allclose(own, instant, rtol=1e-9, atol=1e-12):
+                    self.failed = SAMPLED_AT_TURN
+                    return False
         return True
+
+    def _turn_apart(self) -> bool:
+        # (a sample where a switch turns takes the field's one side or the other as a
+        # value moves the two apart: no derivative -- a STEP(0.3) at the 6th sample of
+        # P/20, P free. Moved together -- ACSL's DELAY turning from IC to the history
+        # at its NMX-th sample, both at TDL -- the sample and the switch's jump are
+        # one map at one moving instant, and compose)
+        (t, turn), (g, sample) = self._turned, self._sampled_at
+        if not math.isfinite(t) or abs(t - g) > 4 * np.finfo(float).eps * max(abs(t), 1.0):
+            return True
+        q = len(self.variants)
+        turn = np.zeros(q) if turn is None else turn
+        if np.allclose(turn, sample, rtol=1e-9, atol=1e-12):
+            return True
+        self.failed = SAMPLED_AT_TURN
+        return False
 
     def _along(self, call, t: float, y: np.ndarray, z, shift: np.ndarray,
                before: np.ndarray, after: np.ndarray) -> None:
@@ -1180,6 +1218,8 @@ class ProgramTangent(ParameterTangent):
         path = self._update_path(t, yl, m_prev, m, z_prev, z)
         if path is None:
             self.failed = "the memory changes at an instant the tangent cannot retrace"
+            return
+        if not self._samples_move_with(t, z_prev):
             return
         for k in path.returned:
             # a trigger crossed and taken back at once (the run's `returning`): the
