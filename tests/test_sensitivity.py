@@ -1215,10 +1215,10 @@ def test_a_level_function_of_a_level_function_jumps_the_tangent_at_its_edges(inn
 def test_a_procedural_if_in_the_derivatives_is_differenced_not_dropped():
     """A PROCEDURAL whose IF sets the rate (-K X above 0.5, -2 K X below): the
     generated Jacobian passed the IF through and its derivatives were 0 (d X/d X0 = 1
-    throughout, d X/d K = 0, found by the review of 2026-12-01); now a function with
-    such statements is differenced, for d f/d y and d f/d p alike (and the stiff
-    routes' Jacobian). X = X0 exp(-K t) to t1 = ln(2 X0)/K, then 0.5 exp(-2K (t -
-    t1)): complex step, to 1e-7."""
+    throughout, d X/d K = 0, found by the review of 2026-12-01); then such a function
+    was differenced; now each branch is differentiated as it runs, for d f/d y and
+    d f/d p alike (and the stiff routes' Jacobian). X = X0 exp(-K t) to t1 =
+    ln(2 X0)/K, then 0.5 exp(-2K (t - t1)): complex step, to 1e-7."""
     text = ("PROGRAM procedural branch\n  CONSTANT K = 0.5, X0 = 1.0\n  DERIVATIVE\n"
             "    PROCEDURAL (XD = X)\n      IF (X > 0.5) THEN\n        XD = -K*X\n"
             "      ELSE\n        XD = -2.0*K*X\n      END IF\n    END\n"

@@ -421,28 +421,7 @@ def _tree(body: list[py.stmt], seed: dict[str, int] | None = None,
     out: list[py.stmt] = []
     entries: list[tuple[int, int, py.expr]] = []
     for stmt in body:
-        unpacked = _unpacked(stmt)
-        if unpacked is not None:
-            states.update(unpacked)
-            out.append(stmt)
-        elif _local(stmt) is not None:
-            name = _local(stmt)
-            out.append(stmt)
-            dep = deriv.deps(stmt.value)
-            deriv.local_deps[name] = dep
-            for j in sorted(dep):
-                if wanted is not None and j not in wanted:
-                    continue
-                dv = deriv.d(stmt.value, j)
-                if dv is None:
-                    deriv.known[f"d{j}_{name}"] = 0.0
-                    continue
-                dv = fold(dv)
-                if const_value(dv) is not None:
-                    deriv.known[f"d{j}_{name}"] = const_value(dv)  # propagated, not stored
-                else:
-                    out.append(py.Assign([py.Name(f"d{j}_{name}", py.Store())], dv))
-        elif isinstance(stmt, py.Return):
+        if isinstance(stmt, py.Return):
             for i, value in enumerate(stmt.value.elts):
                 if any(isinstance(x, py.NamedExpr) for x in py.walk(value)):
                     # its derivatives read the names it binds
@@ -453,12 +432,8 @@ def _tree(body: list[py.stmt], seed: dict[str, int] | None = None,
                     dv = deriv.d(value, j)
                     if dv is not None:
                         entries.append((i, j, dv))
-        elif isinstance(stmt, py.Assign) and isinstance(stmt.value, py.Name):
-            out.append(stmt)  # m and z unpacked
         else:
-            # (a unit's IF or loop assigns locals this does not follow: passed through,
-            # their derivatives were silently 0 -- the callers difference instead)
-            raise NotImplementedError(type(stmt).__name__)
+            _statement(stmt, deriv, wanted, out)
     folded = [fold(e) for _, _, e in entries]
     constant = np.array([const_value(e) if const_value(e) is not None else math.nan
                          for e in folded], dtype=float)
@@ -471,6 +446,81 @@ def _tree(body: list[py.stmt], seed: dict[str, int] | None = None,
     rows = np.array([i for i, _, _ in entries], dtype=int)
     cols = np.array([j for _, j, _ in entries], dtype=int)
     return module, rows, cols, constant
+
+
+def _statement(stmt: py.stmt, deriv: _Deriv, wanted: range | None, out: list) -> None:
+    """One rhs statement and its derivatives' (in the states `deriv` knows, the
+    columns `wanted`) onto `out`: an assignment, the unpacking of y, m or z, or a
+    unit's IF (each branch differentiated as it runs: the test is a frozen branch)."""
+    unpacked = _unpacked(stmt)
+    if unpacked is not None:
+        deriv.states.update(unpacked)
+        out.append(stmt)
+    elif _local(stmt) is not None:
+        name = _local(stmt)
+        out.append(stmt)
+        dep = deriv.deps(stmt.value)
+        # (the value's derivatives first: it may read the name's own, as a unit's
+        # code assigning a name again does)
+        made = {j: deriv.d(stmt.value, j) for j in sorted(dep)
+                if wanted is None or j in wanted}
+        deriv.local_deps[name] = dep
+        _forget(deriv, {name})
+        for j, dv in made.items():
+            if dv is None:
+                deriv.known[f"d{j}_{name}"] = 0.0
+                continue
+            dv = fold(dv)
+            if const_value(dv) is not None:
+                deriv.known[f"d{j}_{name}"] = const_value(dv)  # propagated, not stored
+            else:
+                out.append(py.Assign([py.Name(f"d{j}_{name}", py.Store())], dv))
+    elif isinstance(stmt, py.Assign) and isinstance(stmt.value, py.Name):
+        out.append(stmt)  # m and z unpacked
+    elif isinstance(stmt, py.If):
+        _branches(stmt, deriv, wanted, out)
+    else:
+        # (a unit's loop assigns locals this does not follow: passed through, their
+        # derivatives were silently 0 -- the callers difference instead)
+        raise NotImplementedError(type(stmt).__name__)
+
+
+def _branches(stmt: py.If, deriv: _Deriv, wanted: range | None, out: list) -> None:
+    """A unit's IF: each branch's statements with their derivatives, and at each
+    branch's end the derivatives of every local either branch assigns stored under
+    their names (a constant one too), so that what follows reads them whichever ran."""
+    before = (dict(deriv.local_deps), dict(deriv.known))
+    ends = []
+    for branch in (stmt.body, stmt.orelse):
+        deriv.local_deps, deriv.known = dict(before[0]), dict(before[1])
+        code: list[py.stmt] = []
+        for s in branch:
+            _statement(s, deriv, wanted, code)
+        ends.append((code, deriv.local_deps, deriv.known))
+    assigned = sorted({n.id for s in (*stmt.body, *stmt.orelse) for n in py.walk(s)
+                       if isinstance(n, py.Name) and isinstance(n.ctx, py.Store)})
+    deps = {name: frozenset().union(*(d.get(name, frozenset()) for _, d, _ in ends))
+            for name in assigned}
+    for code, local_deps, known in ends:
+        deriv.local_deps, deriv.known = local_deps, known
+        for name in assigned:
+            for j in sorted(deps[name]):
+                if wanted is not None and j not in wanted:
+                    continue
+                dv = deriv.d(py.Name(name, py.Load()), j)
+                if isinstance(dv, py.Name) and dv.id == f"d{j}_{name}":
+                    continue
+                code.append(py.Assign([py.Name(f"d{j}_{name}", py.Store())],
+                                      dv if dv is not None else py.Constant(0.0)))
+    deriv.local_deps, deriv.known = {**before[0], **deps}, dict(before[1])
+    _forget(deriv, set(assigned))
+    out.append(py.If(stmt.test, ends[0][0] or [py.Pass()], ends[1][0]))
+
+
+def _forget(deriv: _Deriv, names: set[str]) -> None:
+    """The constant derivatives known of `names` dropped (each `d{j}_{name}`): they
+    are assigned again."""
+    deriv.known = {k: v for k, v in deriv.known.items() if k.split("_", 1)[1] not in names}
 
 
 def for_compiled(c) -> ModelJacobian:
@@ -601,8 +651,10 @@ def _live(body: list[py.stmt]) -> list[py.stmt]:
     used: set[str] = set()
     kept: list[py.stmt] = []
     for stmt in reversed(body):
+        # (a unit's IF: kept whole where a name it assigns is read later)
         targets = [n.id for n in nodes(stmt) if isinstance(n, py.Name) and
-                   isinstance(n.ctx, py.Store)] if isinstance(stmt, py.Assign) else []
+                   isinstance(n.ctx, py.Store)] if isinstance(stmt, (py.Assign, py.If)) \
+            else []
         reads_args = isinstance(stmt, py.Assign) and isinstance(stmt.value, (py.Name,
                                                                              py.Subscript))
         if isinstance(stmt, py.Return) or reads_args and not targets or \
