@@ -1328,6 +1328,33 @@ def test_a_free_acsl_delay_follows_its_turn_from_ic_to_the_history(dmin, spacing
         assert loc.raw[i, :, 0] == pytest.approx(exact, abs=1e-8), t
 
 
+def test_a_delay_that_reads_a_state_turns_from_ic_with_its_state_s_share():
+    """DELAY(X, IC, TD0 + 0.1*X, 20): the turn from IC to the history is where TIME
+    = TD0 + 0.1 X, a surface in the state. Its read just before the store's start,
+    where a difference of the delay in X steps, gave IC (a jump inside the history
+    branch): d XD/d X had a spike across it that put d X/d (TD0, K, IC) 1e-2 off
+    after the turn (hunt 52). The first segment goes on there now. Against central
+    differences of whole runs at RELERR 1e-13 that agree with themselves at h and
+    h/2: to 2e-6 (measured 5.6e-7 for TD0, whose tangent steps cross the read's
+    knots, which move with X; 2e-8 for K and IC)."""
+    model = amilpy.loads("PROGRAM d\n  CONSTANT K = 0.8, TD0 = 0.53, IC = 0.5\n  DERIVATIVE\n"
+                         "    XD = DELAY(X, IC, TD0 + 0.1*X, 20)\n"
+                         "    X = INTEG(-K*XD + 0.3*SIN(T), 1.0)\n"
+                         "    TERMT(T >= 0.8)\n  END\n  CINTERVAL CINT = 0.02\nEND\n", "d.csl")
+    names, values = ["TD0", "K", "IC"], {"TD0": 0.53, "K": 0.8, "IC": 0.5}
+    loc = model.sensitivity(names, outputs=["X"], rtol=1e-11, atol=1e-13)
+    assert loc.how == "sensitivity equations"
+    for j, name in enumerate(names):
+        def fd(h, name=name):
+            up, down = (np.asarray(model.run(advice=False, rtol=1e-13, atol=1e-15,
+                                             **{name: values[name] + s})[0]["X"])
+                        for s in (h, -h))
+            return (up - down) / (2 * h)
+        ref = fd(1e-4)
+        assert ref == pytest.approx(fd(5e-5), abs=2e-7)  # (no kink within h)
+        assert loc.raw[:, 0, j] == pytest.approx(ref, abs=2e-6), name
+
+
 def test_a_sample_at_dmin_s_fixed_spacing_where_a_free_tdl_turns_the_delay_says_so():
     """TDL = 0.65 = 13 DMIN: the sample due at 0.65 stays there as TDL moves, the turn
     from IC to the history does not: the sample is taken before the turn on one side
@@ -1341,6 +1368,61 @@ def test_a_sample_at_dmin_s_fixed_spacing_where_a_free_tdl_turns_the_delay_says_
     loc = model.sensitivity(["TDL"], outputs=["X"])
     assert loc.how.startswith("differences of whole runs (a DELAY samples where a switch "
                               "turns")
+
+
+@pytest.mark.parametrize("free", [["TDL"], ["TS"], ["TDL", "TS"]])
+def test_a_step_where_the_nmx_th_sample_turns_the_delay_says_so(free):
+    """STEP(TS) at TS = TDL: the store's 20th sample moves with TDL onto X's kink
+    there, the STEP does not -- two switches and a sample at one instant. The sample
+    was checked against the first switch alone, and one side came back silently
+    (d X/d TDL 0.2317 or 0.2569 at t = 1.3 by the side, hunt 52). Every switch turning
+    there counts now: differenced, and says why."""
+    model = amilpy.loads("PROGRAM delayed\n  CONSTANT K = 0.8, TDL = 0.63, TS = 0.63\n"
+                         "  DERIVATIVE\n    XD = DELAY(X, 0.5, TDL, 20)\n"
+                         "    X = INTEG(-K*XD + 0.3*SIN(T) + STEP(TS), 1.0)\n"
+                         "    TERMT(T >= 1.5)\n  END\n  CINTERVAL CINT = 0.1\nEND\n",
+                         "delay.csl")
+    assert model.sensitivity(free, outputs=["X"]).how.startswith(
+        "differences of whole runs (a DELAY samples where a switch turns")
+
+
+def test_two_stores_sampling_together_on_one_free_delay_are_followed():
+    """DELAY(X, 0.5, TDL, 20) and DELAY(X, 0.2, TDL, 10): every second sample of the
+    first is one of the second's, both moving with TDL alike. Moved, the second's
+    next instant (its own row, equal but for rounding) fell an ulp to one side of
+    the instant: the sample skipped or taken twice, and its store reported a lost
+    history -- the run "failed", whole runs differenced (hunt 52). Against those
+    differences at RELERR 1e-13, to 1e-6 (measured 2e-8)."""
+    model = amilpy.loads("PROGRAM d\n  CONSTANT K = 0.8, TDL = 0.63\n  DERIVATIVE\n"
+                         "    XD = DELAY(X, 0.5, TDL, 20)\n    XE = DELAY(X, 0.2, TDL, 10)\n"
+                         "    X = INTEG(-K*XD - 0.3*XE + 0.3*SIN(T), 1.0)\n"
+                         "    TERMT(T >= 2.5)\n  END\n  CINTERVAL CINT = 0.1\nEND\n", "d.csl")
+    loc = model.sensitivity(["TDL"], outputs=["X"], rtol=1e-11, atol=1e-13)
+    assert loc.how == "sensitivity equations"
+    up, down = (np.asarray(model.run(advice=False, rtol=1e-13, atol=1e-15,
+                                     TDL=0.63 + s)[0]["X"]) for s in (1e-4, -1e-4))
+    assert loc.raw[:, 0, 0] == pytest.approx((up - down) / 2e-4, abs=1e-6)
+
+
+def test_switches_crossing_together_that_a_value_moves_apart():
+    """X' = -X + F, T1 = T2 = 0.5, T1 free. F = STEP(T1) + STEP(T2): each jump is its
+    own, in either order: d X/d T1 = -exp(-(t - T1)) after, to 1e-9. F =
+    STEP(T1) STEP(T2): the forcing starts at T1 on one side of T1's move and at T2
+    on the other -- no derivative; the tangent gave 0, silently (found with hunt
+    52). It says so now."""
+    def model(forcing):
+        return amilpy.loads(f"PARAM T1 = 0.5, T2 = 0.5\nX = INTGRL(0.0, -X + {forcing})\n"
+                            "TIMER FINTIM = 1.0, OUTDEL = 0.25\nEND\n", "two.amil")
+
+    loc = model("STEP(T1) + STEP(T2)").sensitivity(["T1"], outputs=["X"])
+    assert loc.how == "sensitivity equations"
+    after = loc.times > 0.5
+    assert loc.raw[after, 0, 0] == pytest.approx(-np.exp(-(loc.times[after] - 0.5)),
+                                                 abs=1e-9)
+    assert model("STEP(T1)*STEP(T2)").sensitivity(["T1"], outputs=["X"]).how == (
+        "differences of whole runs (two switches turn at one instant that a data value "
+        "moves apart, and the order they turn in changes the jump: its derivative differs "
+        "from either side)")
 
 
 def test_pulse_instants_a_value_moves_apart_without_a_derivative_say_so():

@@ -504,11 +504,13 @@ def delay(t: float, d: float, x: float, ic: float, held: float, z, o: int,
     if count == 0:
         return x if held else ic
     s = t - d
+    t_last, x_last = z[o + _TLAST], z[o + _XLAST]
     if not s >= z[o + _T0]:
         if s != s:
             return math.nan
-        return z[o + _X0] if held else ic
-    t_last, x_last = z[o + _TLAST], z[o + _XLAST]
+        if held or count > int(k):
+            return z[o + _X0] if held else ic
+        return _before_start(s, t, x, z, o, count, t_last, x_last)
     if s >= t_last:
         return x_last + (x - x_last) * ((s - t_last) / (t - t_last)) if t > t_last else x_last
     k = int(k)
@@ -536,6 +538,26 @@ def delay(t: float, d: float, x: float, ic: float, held: float, z, o: int,
             hi = mid
     a, b = ring + 2 * (lo % k), ring + 2 * (hi % k)
     return z[a + 1] + (z[b + 1] - z[a + 1]) * ((s - z[a]) / (z[b] - z[a]))
+
+
+def _before_start(s: float, t: float, x: float, z, o: int, count: int, t_last: float,
+                  x_last: float) -> float:
+    """ACSL's DELAY read a little before the store's start t0 on its history branch:
+    the first segment, extended. That branch is taken where its switch (TIME - TDL)
+    says t - TDL has reached t0, so such a read is that instant's rounding or a
+    difference's step in the delay (a TDL that reads a state: d XD/d X): IC there put
+    a jump inside the branch, which a central difference across t0 halved into the
+    Jacobian (1e-2 of d X/d TD0 after the turn)."""
+    t0, x0 = z[o + _T0], z[o + _X0]
+    if count >= 2:
+        t1, x1 = z[o + _RING + 2], z[o + _RING + 3]
+    elif t_last > t0:
+        t1, x1 = t_last, x_last
+    elif t > t0:
+        t1, x1 = t, x
+    else:
+        return x0
+    return x0 + (x1 - x0) * ((s - t0) / (t1 - t0))
 
 
 # ------------------------------------------------- helpers of the generated code

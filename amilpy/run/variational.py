@@ -139,8 +139,9 @@ class Tangent:
         self._lean: tuple | None = None  # (its memory, that memory `leaned`)
         self.failed: str | None = None
         self._shift: np.ndarray | None = None  # d t/d p of the instant being joined
-        # the last instant a switch turned at, and its d t/d p (None: not moved)
-        self._turned: tuple[float, np.ndarray | None] = (-math.inf, None)
+        # the last instant switches turned at, and their d t/d p (`_saltation`'s)
+        self._turned: tuple[float, list[np.ndarray]] = (-math.inf, [])
+        self._turn_shifts: list[np.ndarray] = []
         # steps whose h |A(c3) - A(c1)| is at most this need no check against halves
         self._trusted = VARIATION
 
@@ -283,7 +284,7 @@ class Tangent:
             return
         if self._lean is not None and self._lean[0] == list(z_prev):
             z_prev = self._lean[1]
-        self._shift = None
+        self._shift, self._turn_shifts = None, []
         current, mem = list(m_prev), z_prev
         # leaving a sliding surface is no jump where the field is continuous there (a
         # weight having reached 0 or 1); where another switch at the instant ends the
@@ -299,6 +300,9 @@ class Tangent:
         carried = [k for k in changed if self._flat(k, t, y, m_prev, z_prev)] \
             if len(changed) > 1 or exits else []
         crossing = [k for k in changed if k not in carried]
+        if len(crossing) > 1 and not self._in_any_order(t, y, crossing, carried, exits,
+                                                          m_prev, m, z_prev, zl):
+            return
         for i, k in enumerate(crossing):
             after = list(current)
             after[k] = m[k]
@@ -313,8 +317,9 @@ class Tangent:
             self._phi = s @ self.phi  # (the steps before the switch first)
             current, mem = after, zl
         if changed:
-            # (d t/d p of the instant, 0 where no saltation said: a switch flat in p)
-            self._turned = (t, self._shift)
+            # (each crossing's d t/d p: a switch on TIME alone that no value moves has
+            # none)
+            self._turned = (t, list(self._turn_shifts))
             if not self._turn_apart():
                 return
         if moved:
@@ -325,6 +330,66 @@ class Tangent:
         """Whether the PULSE trains that turn at t can be followed one by one
         (`ParameterTangent`: their instants do not move here)."""
         return True
+
+    def _through(self, order: list[int], t: float, y: np.ndarray, carried, exits, m_prev,
+                 m, z_prev, zl) -> np.ndarray | None:
+        """The jump of the switches `order` crossing at t one after another: their
+        saltations' product (None, `failed` said, where one has none)."""
+        current, mem, total = list(m_prev), z_prev, np.eye(len(self._phi))
+        for i, k in enumerate(order):
+            after = list(current)
+            after[k] = m[k]
+            for e in exits:
+                after[e] = m[e]
+            if i == len(order) - 1:
+                for j in carried:
+                    after[j] = m[j]
+            s = self._saltation(k, t, y, current, after, mem, zl)
+            if s is None:
+                return None
+            total, current, mem = s @ total, after, zl
+        return total
+
+    def _in_any_order(self, t: float, y: np.ndarray, crossing: list[int], carried, exits,
+                      m_prev, m, z_prev, zl) -> bool:
+        """Whether switches that cross at t together give one derivative: where a
+        value moves their instants apart, its side decides which turns first, and
+        the jumps taken in the two orders must agree (separate effects, STEP(T1) +
+        STEP(T2)); where they do not (STEP(T1)*STEP(T2) at T1 = T2, T1 free: the
+        forcing starts at T1 on one side, at T2 on the other) the derivative differs
+        from either side, which `failed` says."""
+        saved = (self._shift, self._turn_shifts)
+        try:
+            shifts = []
+            for k in crossing:  # (each one's first-order shift, from before the instant)
+                self._turn_shifts = []
+                after = list(m_prev)
+                after[k] = m[k]
+                if self._saltation(k, t, y, m_prev, after, z_prev, zl) is None:
+                    return False
+                shifts.append(self._turn_shifts[-1] if self._turn_shifts else None)
+            phi = self.phi
+            for j in range(phi.shape[1]):
+                key = [0.0 if s is None else float(s[j]) for s in shifts]
+                rank = _ranks(key)
+                if len(set(rank)) < 2:
+                    continue
+                up = sorted(range(len(crossing)), key=lambda i: (rank[i], i))
+                down = sorted(range(len(crossing)), key=lambda i: (-rank[i], i))
+                a, b = (self._through([crossing[i] for i in order], t, y, carried, exits,
+                                      m_prev, m, z_prev, zl) for order in (up, down))
+                if a is None or b is None:
+                    return False
+                ua, ub = a @ phi[:, j], b @ phi[:, j]
+                if not np.allclose(ua, ub, rtol=1e-9,
+                                   atol=1e-12 * max(1.0, float(np.abs(ua).max()))):
+                    self.failed = ("two switches turn at one instant that a data value "
+                                   "moves apart, and the order they turn in changes the "
+                                   "jump: its derivative differs from either side")
+                    return False
+            return True
+        finally:
+            self._shift, self._turn_shifts = saved
 
     def _turn_apart(self) -> bool:
         """Whether the switch that turned last (`_turned`) can be followed
@@ -430,6 +495,18 @@ class Tangent:
             self.failed = "the flow is tangent to a switching surface"
             return None
         return g, f_plus - f_minus, rate
+
+
+def _ranks(keys: list[float]) -> list[int]:
+    """Each key's rank among the distinct ones, keys within 1e-9 of each other one."""
+    order = sorted(range(len(keys)), key=lambda i: keys[i])
+    rank, out, last = -1, [0] * len(keys), None
+    for i in order:
+        if last is None or keys[i] - last > 1e-9 * max(abs(last), 1.0) + 1e-12:
+            rank += 1
+            last = keys[i]
+        out[i] = rank
+    return out
 
 
 def central_difference(f, at: list[float], j: int, h: float) -> np.ndarray:
@@ -754,9 +831,12 @@ class ParameterTangent(Tangent):
                 out[:n, len(out) - len(shift):] = -np.outer(diff, shift)
                 if self._shift is None:
                     self._shift = shift
+                self._turn_shifts.append(shift)
             return out
+        shift = self.shift_of(g, rest, rate)
         if self._shift is None:  # (d t/d p of the instant: a memory updated there)
-            self._shift = self.shift_of(g, rest, rate)
+            self._shift = shift
+        self._turn_shifts.append(shift)
         # the augmented states' jump: I + (f+ - f-, 0) (ds/dy, ds/d(rest))^T / rate
         out[:n, :n] += np.outer(diff, g) / rate
         out[:n, n:] = np.outer(diff, rest) / rate
@@ -1064,13 +1144,14 @@ class ProgramTangent(ParameterTangent):
         where ACSL's DELAY turns from IC to the history, TDL free, is taken before the
         turn on one side of the value and after it on the other."""
         q = len(self.variants)
-        instant = self._shift if self._shift is not None else np.zeros(q)
-        if not np.any(instant):
+        shifts = [*self._turn_shifts, *([self._shift] if self._shift is not None else [])]
+        if not any(np.any(shift) for shift in shifts):
             return True
         for k in self._next_slots:
             if z_prev[k] <= t:
                 own = self.phi[self.n + k] if self.clock_moves() else np.zeros(q)
-                if not np.allclose(own, instant, rtol=1e-9, atol=1e-12):
+                if not all(np.allclose(own, shift, rtol=1e-9, atol=1e-12)
+                           for shift in shifts):
                     self.failed = SAMPLED_AT_TURN
                     return False
         return True
@@ -1081,12 +1162,14 @@ class ProgramTangent(ParameterTangent):
         # P/20, P free. Moved together -- ACSL's DELAY turning from IC to the history
         # at its NMX-th sample, both at TDL -- the sample and the switch's jump are
         # one map at one moving instant, and compose)
-        (t, turn), (g, sample) = self._turned, self._sampled_at
+        (t, turns), (g, sample) = self._turned, self._sampled_at
         if not math.isfinite(t) or abs(t - g) > 4 * np.finfo(float).eps * max(abs(t), 1.0):
             return True
         q = len(self.variants)
-        turn = np.zeros(q) if turn is None else turn
-        if np.allclose(turn, sample, rtol=1e-9, atol=1e-12):
+        # (every switch that turns there: ACSL's DELAY turning with its sample, and a
+        # STEP at TDL that stays put, bends X where the sample is taken)
+        if all(np.allclose(turn, sample, rtol=1e-9, atol=1e-12)
+               for turn in turns or [np.zeros(q)]):
             return True
         self.failed = SAMPLED_AT_TURN
         return False
@@ -1109,8 +1192,16 @@ class ProgramTangent(ParameterTangent):
             ends = []
             for code, sign in ((plus, 1.0), (minus, -1.0)):
                 zv = [v + sign * h * d if d else v for v, d in zip(z, dz.tolist(), strict=True)]
-                ends.append(np.asarray(call(code, t + sign * h * shift[j],
-                                            (y + sign * h * dy).tolist(), zv), dtype=float))
+                moved = t + sign * h * shift[j]
+                for k in self._next_slots:
+                    # (a store due at the instant samples at it moved: its own row,
+                    # equal to the instant's but for rounding, put its next sample an
+                    # ulp to one side -- a second store sampling with the first, on a
+                    # spacing twice as long, skipped it or took it twice)
+                    if z[k] == t:
+                        zv[k] = moved
+                ends.append(np.asarray(call(code, moved, (y + sign * h * dy).tolist(), zv),
+                                       dtype=float))
             # (the side whose store took the same samples as the run's: a sample due
             # within the step of the instant is taken on one side only)
             with np.errstate(invalid="ignore"):
