@@ -1386,6 +1386,28 @@ def test_a_step_where_the_nmx_th_sample_turns_the_delay_says_so(free):
         "differences of whole runs (a DELAY samples where a switch turns")
 
 
+def test_discrete_code_that_holds_a_delayed_value_is_followed():
+    """A DISCRETE section every 0.1 holds XD = DELAY(X, 0.5, TDL, 20), which the
+    derivatives read back. The section's Jacobian stepped every memory slot, the
+    store's count too: a count an entry off read the ring where it had been
+    overwritten ("older than the 20 points of its store keep"), and whole runs were
+    differenced for any free value (found with hunt 52); and the store's start at t0
+    went after the section's code there. Against central differences of whole runs
+    at RELERR 1e-13, for TDL and K, to 1e-6 (measured 6.5e-8)."""
+    model = amilpy.loads("PROGRAM d\n  CONSTANT K = 0.8, TDL = 0.63, G = 0.5\n"
+                         "  CINTERVAL CINT = 0.1\n  INITIAL\n    XH = 0.0\n  END\n"
+                         "  DERIVATIVE\n    XD = DELAY(X, 0.5, TDL, 20)\n"
+                         "    X = INTEG(-K*XD + 0.3*SIN(T) - G*XH, 1.0)\n"
+                         "    TERMT(T >= 2.5)\n  END\n  DISCRETE SAMP\n    INTERVAL TSAMP = 0.1\n"
+                         "    XH = XD\n  END\nEND\n", "d.csl")
+    loc = model.sensitivity(["TDL", "K"], outputs=["X"], rtol=1e-11, atol=1e-13)
+    assert loc.how == "sensitivity equations"
+    for j, (name, value) in enumerate((("TDL", 0.63), ("K", 0.8))):
+        up, down = (np.asarray(model.run(advice=False, rtol=1e-13, atol=1e-15,
+                                         **{name: value + s})[0]["X"]) for s in (1e-4, -1e-4))
+        assert loc.raw[:, 0, j] == pytest.approx((up - down) / 2e-4, abs=1e-6), name
+
+
 def test_two_stores_sampling_together_on_one_free_delay_are_followed():
     """DELAY(X, 0.5, TDL, 20) and DELAY(X, 0.2, TDL, 10): every second sample of the
     first is one of the second's, both moving with TDL alike. Moved, the second's

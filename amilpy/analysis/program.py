@@ -271,16 +271,20 @@ class _TangentRun(AcslRun):
             t.field_rows(cur.t, y, m, z)
 
     def _start(self, y: np.ndarray, z: list[float]):
+        self._unstarted = list(z)
+        return super()._start(y, z)
+
+    def first_row(self, cur) -> None:
         # (the memory's update at t0 -- a DELAY store starting, its first sampling
         # instant t0 + TDL/NMX -- follows the start the values moved, as the flow's
         # `initial_state` has it in the tangent's start: the store's clock rows from
-        # there, not from the update at the first step's end)
-        cur = super()._start(y, z)
+        # there, not from the update at the first step's end; before the code at t0,
+        # as the run has it)
         t = self.tangent
-        if self.c.clock_slots and list(cur.z) != list(z) and t.failed is None:
+        if self.c.clock_slots and list(cur.z) != self._unstarted and t.failed is None:
             t._update_memory(cur.t, np.asarray(cur.y, dtype=float), list(cur.m), list(cur.m),
-                             list(z), list(cur.z))
-        return cur
+                             self._unstarted, list(cur.z))
+        super().first_row(cur)
 
     def instant(self, cur) -> None:
         t = self.tangent
@@ -388,6 +392,12 @@ class _TangentRun(AcslRun):
                                 np.maximum(np.abs(v[n:]), 1.0)])
         out = np.eye(n + r + q)
         for j in range(n + r):
+            if j >= n and not moving[j]:
+                # (a memory value no data value moves: its column meets a zero row of
+                # the tangent, and the fields it is moved along have none past the
+                # states. A DELAY store's count, moved by a difference's step, read
+                # its ring an entry off: "older than the store keeps")
+                continue
             h = STEP * scale[j]
             up, down = v.copy(), v.copy()
             up[j] += h
