@@ -1281,13 +1281,14 @@ def test_a_program_stopped_by_termt_on_its_last_communication_instant_is_followe
     assert loc.raw[:, 0, 0] == pytest.approx(-loc.times * np.exp(-0.8 * loc.times), abs=1e-8)
 
 
-def _delayed_decay(spacing, ic=0.5, k=0.8, n=20):
-    """X' = -K XD + 0.3 SIN(T), X(0) = 1, XD = ACSL's DELAY(X, IC, TDL, N[, DMIN]) as
-    the run computes it, for t < 2 TDL: IC before TDL, then the store's straight
-    lines between X's samples every `spacing(TDL)` from 0 (X explicit there), read
-    at t - TDL; X integrates them exactly. (X, XD) at t, complex-steppable in TDL."""
+def _delayed_decay(spacing, ic=0.5, k=0.8, force=0.0):
+    """X' = FORCE - K XD + 0.3 SIN(T), X(0) = 1, XD = ACSL's DELAY(X, IC, TDL, N[,
+    DMIN]) as the run computes it, for t < 2 TDL: IC before TDL, then the store's
+    straight lines between X's samples every `spacing(TDL)` from 0 (X explicit
+    there), read at t - TDL; X integrates them exactly. (X, XD) at t,
+    complex-steppable in TDL."""
     def x0(s):
-        return 1.0 - k * ic * s + 0.3 * (1.0 - np.cos(s))
+        return 1.0 + (force - k * ic) * s + 0.3 * (1.0 - np.cos(s))
 
     def closed(t, tdl):
         if t < tdl.real:
@@ -1298,7 +1299,7 @@ def _delayed_decay(spacing, ic=0.5, k=0.8, n=20):
         xd = knots[j] + (knots[j + 1] - knots[j]) * (s - j * h) / h
         area = sum(0.5 * (knots[i] + knots[i + 1]) * h for i in range(j)) + \
             0.5 * (knots[j] + xd) * (s - j * h)
-        return x0(tdl) - k * area + 0.3 * (np.cos(tdl) - np.cos(t)), xd
+        return x0(tdl) + force * s - k * area + 0.3 * (np.cos(tdl) - np.cos(t)), xd
 
     return closed
 
@@ -1384,6 +1385,30 @@ def test_a_step_where_the_nmx_th_sample_turns_the_delay_says_so(free):
                          "delay.csl")
     assert model.sensitivity(free, outputs=["X"]).how.startswith(
         "differences of whole runs (a DELAY samples where a switch turns")
+
+
+def test_two_stores_that_sample_together_on_delays_moved_apart_are_taken_one_by_one():
+    """DELAY(X, 0.5, TDL, 16) and DELAY(X, 0.2, TDL2, 16), TDL = 1.5, TDL2 = 0.5:
+    every sample of the first (every 3/32) is one of the second's (every 1/32), at
+    instants TDL and TDL2 move apart (by k/16 and 3k/16). It was refused ("two
+    DELAY stores sample at one instant that a data value moves apart"); each store's
+    sample reads X and its own slots alone, so they are taken one by one, each at
+    its own moving instant. XD is IC until 1.5: d X/d TDL is 0 exactly, and d X/d
+    TDL2 the complex step of the second store's closed form (`_delayed_decay`, X'
+    = -0.4 - 0.3 XE + 0.3 SIN(T)), to 1e-8."""
+    model = amilpy.loads("PROGRAM d\n  CONSTANT K = 0.8, TDL = 1.5, TDL2 = 0.5\n  DERIVATIVE\n"
+                         "    XD = DELAY(X, 0.5, TDL, 16)\n    XE = DELAY(X, 0.2, TDL2, 16)\n"
+                         "    X = INTEG(-K*XD - 0.3*XE + 0.3*SIN(T), 1.0)\n"
+                         "    TERMT(T >= 0.95)\n  END\n  CINTERVAL CINT = 0.125\nEND\n", "d.csl")
+    loc = model.sensitivity(["TDL", "TDL2"], outputs=["X"], rtol=1e-11, atol=1e-13)
+    assert loc.how == "sensitivity equations"
+    assert not np.any(loc.raw[:, 0, 0])
+    closed = _delayed_decay(lambda tdl: tdl / 16, ic=0.2, k=0.3, force=-0.4)
+    for i, t in enumerate(loc.times):
+        # (at TDL2 itself the row is the run's, after the turn: X's kink, the side
+        # after it, 0.3 (1 - 0.2) = 0.24 -- the closed form's step straddles it)
+        exact = 0.24 if t == 0.5 else np.imag(closed(t, 0.5 + 1e-30j)[0]) / 1e-30
+        assert loc.raw[i, 0, 1] == pytest.approx(exact, abs=1e-8), t
 
 
 def test_discrete_code_that_holds_a_delayed_value_is_followed():

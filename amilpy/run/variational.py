@@ -1028,10 +1028,12 @@ class ProgramTangent(ParameterTangent):
         # the slots that hold a sampling memory's next instant (DELAY's store)
         from ..library import lookup
 
-        specs = [(mem.slot, lookup(mem.func, len(mem.args)).memory)
+        specs = [(mem, lookup(mem.func, len(mem.args)).memory)
                  for mem in (c.model.memories if c.model is not None else ())]
-        self._next_slots = [slot + spec.samples for slot, spec in specs
-                            if spec.samples is not None]
+        # each sampling store's next-instant slot, and the slots the store keeps
+        self._stores = {mem.slot + spec.samples: range(mem.slot, mem.slot + mem.nslots)
+                        for mem, spec in specs if spec.samples is not None}
+        self._next_slots = list(self._stores)
         # whether a store's instants move with the values (a free delay): then its
         # clock slots are carried like the others (`clock_moves`)
         self._clock = np.array(sorted(c.clock_slots), dtype=int)
@@ -1126,7 +1128,7 @@ class ProgramTangent(ParameterTangent):
         due = [self.phi[n + k] for k in self._next_slots if z[k] == g] if moves else []
         shift = due[0].copy() if due else np.zeros(len(self.variants))
         if any(not np.allclose(other, shift, rtol=1e-9, atol=1e-12) for other in due[1:]):
-            self.failed = "two DELAY stores sample at one instant that a data value moves apart"
+            self._apart(g, y, m, z)
             return
         self._sampled_at = (g, shift)
         if not self._turn_apart():
@@ -1136,6 +1138,28 @@ class ProgramTangent(ParameterTangent):
             return
         self._along(sample, g, y, z, shift, self.field_rows(g, yl, m, z),
                     self.field_rows(g, yl, m, list(c.sample(g, yl, m, z))))
+
+    def _apart(self, g: float, y: np.ndarray, m, z) -> None:
+        """Stores that sample at g, at instants a data value moves apart (two delays
+        of X written as two values that are equal, TDL = TDL2): each store's sample
+        reads the states and its own slots alone, so they are taken one by one, each
+        at its own moving instant."""
+        yl, n = y.tolist(), self.n
+        for k in [k for k in self._next_slots if z[k] == g]:
+            slots = self._stores[k]
+
+            def alone(code, tt, yv, zv, slots=slots):
+                new = code.sample(tt, yv, m, zv)
+                return [new[i] if i in slots else v for i, v in enumerate(zv)]
+
+            shift = self.phi[n + k].copy()
+            self._sampled_at = (g, shift)
+            if not self._turn_apart():
+                return
+            after = alone(self.c, g, yl, list(z))
+            self._along(alone, g, y, z, shift, self.field_rows(g, yl, m, z),
+                        self.field_rows(g, yl, m, after))
+            z = after
 
     def _samples_move_with(self, t: float, z_prev) -> bool:
         """Whether the samples a store's update takes at t -- those due there, at a
@@ -1194,11 +1218,13 @@ class ProgramTangent(ParameterTangent):
                 zv = [v + sign * h * d if d else v for v, d in zip(z, dz.tolist(), strict=True)]
                 moved = t + sign * h * shift[j]
                 for k in self._next_slots:
-                    # (a store due at the instant samples at it moved: its own row,
-                    # equal to the instant's but for rounding, put its next sample an
-                    # ulp to one side -- a second store sampling with the first, on a
-                    # spacing twice as long, skipped it or took it twice)
-                    if z[k] == t:
+                    # (a store due at the instant and moving with it samples at it
+                    # moved: its own row, equal to the instant's but for rounding, put
+                    # its next sample an ulp to one side -- a second store sampling
+                    # with the first, on a spacing twice as long, skipped it or took
+                    # it twice)
+                    if z[k] == t and abs(dz[k] - shift[j]) <= \
+                            1e-9 * abs(shift[j]) + 1e-12:
                         zv[k] = moved
                 ends.append(np.asarray(call(code, moved, (y + sign * h * dy).tolist(), zv),
                                        dtype=float))
