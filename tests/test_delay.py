@@ -98,6 +98,21 @@ def test_the_value_before_t0_plus_p():
     assert [(e.time, e.kind) for e in r.events] == [(P, "breakpoint")]
 
 
+def test_an_acsl_delay_from_a_later_start_reads_ic_until_t0_plus_tdl():
+    """A program from T = 1 (VARIABLE T = 1.0): XD = DELAY(X, -3, 0.5, 20) is IC
+    until 1.5, then X(t - 0.5) = 2 + (t - 1.5), X = 2 + (t - 1). (A read a little
+    before the store's start extends its first segment, for a tangent's difference
+    step; a change of 2026-12-01 extended it from any distance, and XD was 2.0
+    .. 1.9 from 1.0 to 1.4, the review of that day.) To 1e-9."""
+    run, = amilpy.loads("PROGRAM d\n  VARIABLE T = 1.0\n  CONSTANT TDL = 0.5, IC = -3.0\n"
+                        "  DERIVATIVE\n    XD = DELAY(X, IC, TDL, 20)\n    X = INTEG(1.0, 2.0)\n"
+                        "    TERMT(T >= 2.2)\n  END\n  CINTERVAL CINT = 0.1\nEND\n",
+                        "later.csl").run(advice=False, rtol=1e-10, atol=1e-12)
+    t = np.asarray(run.times)
+    expect = np.where(t < 1.5 - 1e-12, -3.0, 2.0 + (t - 1.5))
+    assert np.asarray(run["XD"]) == pytest.approx(expect, abs=1e-9)
+
+
 def method_of_steps(t):
     """y' = -y(t - 1), y = 1 on [-1, 0]: integrated one delay at a time."""
     return np.where(t <= 1, 1 - t, np.where(t <= 2, 1 - t + (t - 1) ** 2 / 2,

@@ -1411,6 +1411,23 @@ def test_two_stores_that_sample_together_on_delays_moved_apart_are_taken_one_by_
         assert loc.raw[i, 0, 1] == pytest.approx(exact, abs=1e-8), t
 
 
+def test_switches_moved_together_keep_together_in_the_order_they_turn():
+    """STEP(T1) STEP(T2) (1 - STEP(T3)) at T1 = T2 = T3 = 0.5, T2 free: T1 and T3
+    turn together whatever T2, so the product is 0 and d X/d T2 = 0. The orders T2
+    first and T2 last agree (0), but the jumps were then taken in the listing's
+    order, T1, T2, T3: T2's with STEP(T1) on and STEP(T3) still off, -1 from 0.5
+    on (the review of 2026-12-01). Each column now takes the order it checked. And
+    the factors in the other order gave 0 already."""
+    for product in ("STEP(T1)*STEP(T2)*(1.0 - STEP(T3))", "STEP(T2)*STEP(T1)*(1.0 - STEP(T3))"):
+        model = amilpy.loads("PROGRAM d\n  CONSTANT T1 = 0.5, T2 = 0.5, T3 = 0.5\n"
+                             f"  DERIVATIVE\n    XD = {product}\n    X = INTEG(XD - 0.5*X, 1.0)\n"
+                             "    TERMT(T >= 1.0)\n  END\n  CINTERVAL CINT = 0.25\nEND\n",
+                             "three.csl")
+        loc = model.sensitivity(["T2"], outputs=["X"], rtol=1e-11, atol=1e-13)
+        assert loc.how == "sensitivity equations"
+        assert loc.raw[:, 0, 0] == pytest.approx(np.zeros(len(loc.times)), abs=1e-12), product
+
+
 def test_discrete_code_that_holds_a_delayed_value_is_followed():
     """A DISCRETE section every 0.1 holds XD = DELAY(X, 0.5, TDL, 20), which the
     derivatives read back. The section's Jacobian stepped every memory slot, the

@@ -464,8 +464,9 @@ def _statement(stmt: py.stmt, deriv: _Deriv, wanted: range | None, out: list) ->
         # code assigning a name again does)
         made = {j: deriv.d(stmt.value, j) for j in sorted(dep)
                 if wanted is None or j in wanted}
+        if name in deriv.local_deps:  # (assigned again: its old constants go)
+            _forget(deriv, {name})
         deriv.local_deps[name] = dep
-        _forget(deriv, {name})
         for j, dv in made.items():
             if dv is None:
                 deriv.known[f"d{j}_{name}"] = 0.0

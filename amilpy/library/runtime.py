@@ -508,7 +508,11 @@ def delay(t: float, d: float, x: float, ic: float, held: float, z, o: int,
     if not s >= z[o + _T0]:
         if s != s:
             return math.nan
-        if held or count > int(k):
+        # (within a difference's step of t0 -- and of the delay -- on the history
+        # branch, its first segment goes on; further back, IC: ACSL's switch is at
+        # TIME = TDL, which is t0 + TDL only for a run from 0)
+        if held or count > int(k) or \
+                z[o + _T0] - s > _NEAR_START * max(abs(d), abs(t), 1.0):
             return z[o + _X0] if held else ic
         return _before_start(s, t, x, z, o, count, t_last, x_last)
     if s >= t_last:
@@ -538,6 +542,9 @@ def delay(t: float, d: float, x: float, ic: float, held: float, z, o: int,
             hi = mid
     a, b = ring + 2 * (lo % k), ring + 2 * (hi % k)
     return z[a + 1] + (z[b + 1] - z[a + 1]) * ((s - z[a]) / (z[b] - z[a]))
+
+
+_NEAR_START = 1e-4  # (of the delay: the Jacobian's and a tangent's difference steps, 6e-6)
 
 
 def _before_start(s: float, t: float, x: float, z, o: int, count: int, t_last: float,

@@ -274,6 +274,7 @@ class Tangent:
         if zl is None:
             zl = self.leaned(t, y, m, z)
         t_prev, y_prev, m_prev, z_prev = self.prev
+        self._shift, self._turn_shifts = None, []
         # (a reset whose switch turns straight back -- MODINT's sawtooth, reset to its
         # IC and integrating again at one instant -- leaves the modes as they were)
         if self.watch.resets and np.any(np.abs(y - y_prev) > 1e-6 * scale_of(y, self.floor)):
@@ -284,8 +285,6 @@ class Tangent:
             return
         if self._lean is not None and self._lean[0] == list(z_prev):
             z_prev = self._lean[1]
-        self._shift, self._turn_shifts = None, []
-        current, mem = list(m_prev), z_prev
         # leaving a sliding surface is no jump where the field is continuous there (a
         # weight having reached 0 or 1); where another switch at the instant ends the
         # slide (a push on TIME), that switch's jump is to the branch left on
@@ -300,22 +299,17 @@ class Tangent:
         carried = [k for k in changed if self._flat(k, t, y, m_prev, z_prev)] \
             if len(changed) > 1 or exits else []
         crossing = [k for k in changed if k not in carried]
-        if len(crossing) > 1 and not self._in_any_order(t, y, crossing, carried, exits,
-                                                          m_prev, m, z_prev, zl):
+        ordered = self._in_any_order(t, y, crossing, carried, exits, m_prev, m, z_prev, zl) \
+            if len(crossing) > 1 else {}
+        if ordered is None:
             return
-        for i, k in enumerate(crossing):
-            after = list(current)
-            after[k] = m[k]
-            for e in exits:
-                after[e] = m[e]
-            if i == len(crossing) - 1:
-                for j in carried:
-                    after[j] = m[j]
-            s = self._saltation(k, t, y, current, after, mem, zl)
-            if s is None:
-                return
-            self._phi = s @ self.phi  # (the steps before the switch first)
-            current, mem = after, zl
+        jump = self._through(crossing, t, y, carried, exits, m_prev, m, z_prev, zl)
+        if jump is None:
+            return
+        phi = self.phi
+        self._phi = jump @ phi  # (the steps before the switches first)
+        for j, moved_apart in ordered.items():  # (each column in the order it turns in)
+            self._phi[:, j] = moved_apart @ phi[:, j]
         if changed:
             # (each crossing's d t/d p: a switch on TIME alone that no value moves has
             # none)
@@ -351,14 +345,17 @@ class Tangent:
         return total
 
     def _in_any_order(self, t: float, y: np.ndarray, crossing: list[int], carried, exits,
-                      m_prev, m, z_prev, zl) -> bool:
-        """Whether switches that cross at t together give one derivative: where a
-        value moves their instants apart, its side decides which turns first, and
-        the jumps taken in the two orders must agree (separate effects, STEP(T1) +
-        STEP(T2)); where they do not (STEP(T1)*STEP(T2) at T1 = T2, T1 free: the
-        forcing starts at T1 on one side, at T2 on the other) the derivative differs
-        from either side, which `failed` says."""
+                      m_prev, m, z_prev, zl) -> dict[int, np.ndarray] | None:
+        """Switches that cross at t together, where a value moves their instants
+        apart: its side decides which turns first, and the jumps taken in the two
+        orders must agree (separate effects, STEP(T1) + STEP(T2)); where they do not
+        (STEP(T1)*STEP(T2) at T1 = T2, T1 free: the forcing starts at T1 on one side,
+        at T2 on the other) the derivative differs from either side: None, `failed`
+        said. Else each such column's jump, in the order the switches turn in (those
+        moved together kept together: T1 and T3 of STEP(T1) STEP(T2) (1 - STEP(T3)),
+        T2 free, never have T2 between them)."""
         saved = (self._shift, self._turn_shifts)
+        ordered: dict[int, np.ndarray] = {}
         try:
             shifts = []
             for k in crossing:  # (each one's first-order shift, from before the instant)
@@ -366,28 +363,37 @@ class Tangent:
                 after = list(m_prev)
                 after[k] = m[k]
                 if self._saltation(k, t, y, m_prev, after, z_prev, zl) is None:
-                    return False
+                    return None
                 shifts.append(self._turn_shifts[-1] if self._turn_shifts else None)
             phi = self.phi
+            products: dict[tuple, np.ndarray | None] = {}  # (an order's, built once)
+
+            def through(order: tuple) -> np.ndarray | None:
+                if order not in products:
+                    products[order] = self._through(list(order), t, y, carried, exits,
+                                                    m_prev, m, z_prev, zl)
+                return products[order]
+
             for j in range(phi.shape[1]):
                 key = [0.0 if s is None else float(s[j]) for s in shifts]
                 rank = _ranks(key)
                 if len(set(rank)) < 2:
                     continue
-                up = sorted(range(len(crossing)), key=lambda i: (rank[i], i))
-                down = sorted(range(len(crossing)), key=lambda i: (-rank[i], i))
-                a, b = (self._through([crossing[i] for i in order], t, y, carried, exits,
-                                      m_prev, m, z_prev, zl) for order in (up, down))
+                up, down = (tuple(crossing[i] for i in sorted(
+                    range(len(crossing)), key=lambda i: (sign * rank[i], i)))
+                    for sign in (1, -1))
+                a, b = through(up), through(down)
                 if a is None or b is None:
-                    return False
+                    return None
                 ua, ub = a @ phi[:, j], b @ phi[:, j]
                 if not np.allclose(ua, ub, rtol=1e-9,
                                    atol=1e-12 * max(1.0, float(np.abs(ua).max()))):
                     self.failed = ("two switches turn at one instant that a data value "
                                    "moves apart, and the order they turn in changes the "
                                    "jump: its derivative differs from either side")
-                    return False
-            return True
+                    return None
+                ordered[j] = a
+            return ordered
         finally:
             self._shift, self._turn_shifts = saved
 
@@ -1080,11 +1086,11 @@ class ProgramTangent(ParameterTangent):
         knots = self.c.read_knots(z, ta, tb) if self.c.read_knots is not None else ()
         t = ta
         for u in knots:
-            ParameterTangent.__call__(self, t, u, interp, m, z)
+            super().__call__(t, u, interp, m, z)
             if self.failed is not None:
                 return
             t = u
-        ParameterTangent.__call__(self, t, tb, interp, m, z)
+        super().__call__(t, tb, interp, m, z)
 
     def _sample_at(self, g: float, y: np.ndarray, m, z) -> None:
         """A store samples the trajectory at g (its next instant, slot `_next_slots`):
