@@ -1371,6 +1371,26 @@ def test_a_sample_at_dmin_s_fixed_spacing_where_a_free_tdl_turns_the_delay_says_
                               "turns")
 
 
+def test_a_sample_where_a_turn_leaves_the_field_as_it_was_is_followed():
+    """Two delays of X, TDL = TDL2 = 0.5, each with IC = X(0) = 1: at 0.5 both turn
+    from IC to the history, which starts at X(0), and the field does not change. The
+    16th sample of each is at that instant, and TDL moves only its own. Such a
+    sample was refused for any switch that turned there (the review of
+    2026-12-01); only a turn that changes the field bends X where the sample is
+    taken. Against central differences of whole runs at RELERR 1e-13, step 1e-5:
+    to 3e-6 (X is C1 but not C2 in TDL at 0.5: the differences are 2.2e-6 off
+    there, 2e-5 with a step of 1e-4; elsewhere they agree to 2.3e-7)."""
+    model = amilpy.loads("PROGRAM d\n  CONSTANT K = 0.8, TDL = 0.5, TDL2 = 0.5\n  DERIVATIVE\n"
+                         "    XD = DELAY(X, 1.0, TDL, 16)\n    XE = DELAY(X, 1.0, TDL2, 16)\n"
+                         "    X = INTEG(-K*XD - 0.3*XE + 0.3*SIN(T), 1.0)\n"
+                         "    TERMT(T >= 1.0)\n  END\n  CINTERVAL CINT = 0.125\nEND\n", "d.csl")
+    loc = model.sensitivity(["TDL"], outputs=["X"], rtol=1e-11, atol=1e-13)
+    assert loc.how == "sensitivity equations"
+    up, down = (np.asarray(model.run(advice=False, rtol=1e-13, atol=1e-15,
+                                     TDL=0.5 + s)[0]["X"]) for s in (1e-5, -1e-5))
+    assert loc.raw[:, 0, 0] == pytest.approx((up - down) / 2e-5, abs=3e-6)
+
+
 @pytest.mark.parametrize("free", [["TDL"], ["TS"], ["TDL", "TS"]])
 def test_a_step_where_the_nmx_th_sample_turns_the_delay_says_so(free):
     """STEP(TS) at TS = TDL: the store's 20th sample moves with TDL onto X's kink

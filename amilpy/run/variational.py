@@ -139,9 +139,12 @@ class Tangent:
         self._lean: tuple | None = None  # (its memory, that memory `leaned`)
         self.failed: str | None = None
         self._shift: np.ndarray | None = None  # d t/d p of the instant being joined
-        # the last instant switches turned at, and their d t/d p (`_saltation`'s)
+        # the last instant switches turned at, and the d t/d p of those that changed
+        # the field
         self._turned: tuple[float, list[np.ndarray]] = (-math.inf, [])
-        self._turn_shifts: list[np.ndarray] = []
+        # each crossing's d t/d p at the instant being joined, and whether its jump
+        # changes the field (`_saltation`)
+        self._turn_shifts: list[tuple[np.ndarray, bool]] = []
         # steps whose h |A(c3) - A(c1)| is at most this need no check against halves
         self._trusted = VARIATION
 
@@ -313,7 +316,7 @@ class Tangent:
         if changed:
             # (each crossing's d t/d p: a switch on TIME alone that no value moves has
             # none)
-            self._turned = (t, list(self._turn_shifts))
+            self._turned = (t, [shift for shift, bends in self._turn_shifts if bends])
             if not self._turn_apart():
                 return
         if moved:
@@ -364,7 +367,7 @@ class Tangent:
                 after[k] = m[k]
                 if self._saltation(k, t, y, m_prev, after, z_prev, zl) is None:
                     return None
-                shifts.append(self._turn_shifts[-1] if self._turn_shifts else None)
+                shifts.append(self._turn_shifts[-1][0] if self._turn_shifts else None)
             phi = self.phi
             products: dict[tuple, np.ndarray | None] = {}  # (an order's, built once)
 
@@ -837,12 +840,13 @@ class ParameterTangent(Tangent):
                 out[:n, len(out) - len(shift):] = -np.outer(diff, shift)
                 if self._shift is None:
                     self._shift = shift
-                self._turn_shifts.append(shift)
+                self._turn_shifts.append((shift, bool(np.any(diff))))
             return out
         shift = self.shift_of(g, rest, rate)
         if self._shift is None:  # (d t/d p of the instant: a memory updated there)
             self._shift = shift
-        self._turn_shifts.append(shift)
+        # (a turn that leaves the field as it was bends nothing where a sample is taken)
+        self._turn_shifts.append((shift, bool(np.any(diff))))
         # the augmented states' jump: I + (f+ - f-, 0) (ds/dy, ds/d(rest))^T / rate
         out[:n, :n] += np.outer(diff, g) / rate
         out[:n, n:] = np.outer(diff, rest) / rate
@@ -1147,7 +1151,8 @@ class ProgramTangent(ParameterTangent):
         where ACSL's DELAY turns from IC to the history, TDL free, is taken before the
         turn on one side of the value and after it on the other."""
         q = len(self.variants)
-        shifts = [*self._turn_shifts, *([self._shift] if self._shift is not None else [])]
+        shifts = [*(shift for shift, bends in self._turn_shifts if bends),
+                  *([self._shift] if self._shift is not None else [])]
         if not any(np.any(shift) for shift in shifts):
             return True
         for k in self._next_slots:
