@@ -1281,6 +1281,14 @@ def test_a_program_stopped_by_termt_on_its_last_communication_instant_is_followe
     assert loc.raw[:, 0, 0] == pytest.approx(-loc.times * np.exp(-0.8 * loc.times), abs=1e-8)
 
 
+def _run_slope(model, name: str, value: float, h: float) -> np.ndarray:
+    """d X/d name on the run's grid: central differences of whole runs at RELERR
+    1e-13, step h."""
+    up, down = (np.asarray(model.run(advice=False, rtol=1e-13, atol=1e-15,
+                                     **{name: value + s})[0]["X"]) for s in (h, -h))
+    return (up - down) / (2 * h)
+
+
 def _delayed_decay(spacing, ic=0.5, k=0.8, force=0.0):
     """X' = FORCE - K XD + 0.3 SIN(T), X(0) = 1, XD = ACSL's DELAY(X, IC, TDL, N[,
     DMIN]) as the run computes it, for t < 2 TDL: IC before TDL, then the store's
@@ -1346,13 +1354,9 @@ def test_a_delay_that_reads_a_state_turns_from_ic_with_its_state_s_share():
     loc = model.sensitivity(names, outputs=["X"], rtol=1e-11, atol=1e-13)
     assert loc.how == "sensitivity equations"
     for j, name in enumerate(names):
-        def fd(h, name=name):
-            up, down = (np.asarray(model.run(advice=False, rtol=1e-13, atol=1e-15,
-                                             **{name: values[name] + s})[0]["X"])
-                        for s in (h, -h))
-            return (up - down) / (2 * h)
-        ref = fd(1e-4)
-        assert ref == pytest.approx(fd(5e-5), abs=2e-7)  # (no kink within h)
+        ref = _run_slope(model, name, values[name], 1e-4)
+        # (no kink within h)
+        assert ref == pytest.approx(_run_slope(model, name, values[name], 5e-5), abs=2e-7)
         assert loc.raw[:, 0, j] == pytest.approx(ref, abs=2e-6), name
 
 
@@ -1386,9 +1390,7 @@ def test_a_sample_where_a_turn_leaves_the_field_as_it_was_is_followed():
                          "    TERMT(T >= 1.0)\n  END\n  CINTERVAL CINT = 0.125\nEND\n", "d.csl")
     loc = model.sensitivity(["TDL"], outputs=["X"], rtol=1e-11, atol=1e-13)
     assert loc.how == "sensitivity equations"
-    up, down = (np.asarray(model.run(advice=False, rtol=1e-13, atol=1e-15,
-                                     TDL=0.5 + s)[0]["X"]) for s in (1e-5, -1e-5))
-    assert loc.raw[:, 0, 0] == pytest.approx((up - down) / 2e-5, abs=3e-6)
+    assert loc.raw[:, 0, 0] == pytest.approx(_run_slope(model, "TDL", 0.5, 1e-5), abs=3e-6)
 
 
 @pytest.mark.parametrize("free", [["TDL"], ["TS"], ["TDL", "TS"]])
@@ -1465,9 +1467,8 @@ def test_discrete_code_that_holds_a_delayed_value_is_followed():
     loc = model.sensitivity(["TDL", "K"], outputs=["X"], rtol=1e-11, atol=1e-13)
     assert loc.how == "sensitivity equations"
     for j, (name, value) in enumerate((("TDL", 0.63), ("K", 0.8))):
-        up, down = (np.asarray(model.run(advice=False, rtol=1e-13, atol=1e-15,
-                                         **{name: value + s})[0]["X"]) for s in (1e-4, -1e-4))
-        assert loc.raw[:, 0, j] == pytest.approx((up - down) / 2e-4, abs=1e-6), name
+        assert loc.raw[:, 0, j] == pytest.approx(_run_slope(model, name, value, 1e-4),
+                                                 abs=1e-6), name
 
 
 def test_two_stores_sampling_together_on_one_free_delay_are_followed():
@@ -1483,9 +1484,7 @@ def test_two_stores_sampling_together_on_one_free_delay_are_followed():
                          "    TERMT(T >= 2.5)\n  END\n  CINTERVAL CINT = 0.1\nEND\n", "d.csl")
     loc = model.sensitivity(["TDL"], outputs=["X"], rtol=1e-11, atol=1e-13)
     assert loc.how == "sensitivity equations"
-    up, down = (np.asarray(model.run(advice=False, rtol=1e-13, atol=1e-15,
-                                     TDL=0.63 + s)[0]["X"]) for s in (1e-4, -1e-4))
-    assert loc.raw[:, 0, 0] == pytest.approx((up - down) / 2e-4, abs=1e-6)
+    assert loc.raw[:, 0, 0] == pytest.approx(_run_slope(model, "TDL", 0.63, 1e-4), abs=1e-6)
 
 
 def test_switches_crossing_together_that_a_value_moves_apart():

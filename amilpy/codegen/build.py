@@ -434,34 +434,32 @@ class Compiler:
             return lambda z: z[slot]
         return lambda z: min(z[k] for k in slots)
 
-    def step_limit(self, constants: dict[str, float]) -> float:
-        """The longest step the derivatives allow: no longer than a delay they read
-        that is known before the run (`MemorySpec.horizon`), so that every stage reads
-        a past the store holds; inf if none."""
-        model = self.model
-        read = needs_memories(model, [s.deriv for s in model.states])
-        limit = math.inf
-        for mem, func in zip(model.memories, self.entries, strict=True):
-            if func.memory.horizon and mem.index in read:
+    def horizons(self, constants: dict[str, float]) -> Iterator[tuple[object, object, float]]:
+        """(memory, its entry, the delay) of each memory whose value reads a past
+        (`MemorySpec.horizon`) at a delay known before the run and positive."""
+        for mem, func in zip(self.model.memories, self.entries, strict=True):
+            if func.memory.horizon:
                 value = constant_value(instantiate(func.memory.horizon, mem.args, mem.span),
                                        constants)
                 if value is not None and value > 0.0:
-                    limit = min(limit, value)
-        return limit
+                    yield mem, func, value
+
+    def step_limit(self, constants: dict[str, float]) -> float:
+        """The longest step the derivatives allow: no longer than a delay they read
+        that is known before the run (`horizons`), so that every stage reads a past
+        the store holds; inf if none."""
+        read = needs_memories(self.model, [s.deriv for s in self.model.states])
+        return min((value for mem, _, value in self.horizons(constants) if mem.index in read),
+                   default=math.inf)
 
     def read_knots(self, constants: dict[str, float]) -> Callable | None:
         """(z, ta, tb) -> the sorted instants in (ta, tb) at which a memory's value
-        read a delay known before the run back passes one of its stored points
-        (`MemorySpec.knots`: DELAY's samples); None if no memory has them. A delay
-        that changes in time has none here."""
-        stores = []
-        for mem, func in zip(self.model.memories, self.entries, strict=True):
-            spec = func.memory
-            if spec.knots is None or not spec.horizon:
-                continue
-            value = constant_value(instantiate(spec.horizon, mem.args, mem.span), constants)
-            if value is not None and value > 0.0:
-                stores.append((spec.knots, mem.slot, mem.nslots, value))
+        read a delay known before the run (`horizons`) back passes one of its stored
+        points (`MemorySpec.knots`: DELAY's samples); None if no memory has them. A
+        delay that changes in time has none here."""
+        stores = [(func.memory.knots, mem.slot, mem.nslots, value)
+                  for mem, func, value in self.horizons(constants)
+                  if func.memory.knots is not None]
         if not stores:
             return None
         if len(stores) == 1:

@@ -1102,7 +1102,7 @@ class ProgramTangent(ParameterTangent):
         at the moved instant: J (Phi + f- dg) + (M_t - f+) dg, M_t the map's rate in
         TIME on the side the sample is taken (t >= g), where the stored value and the
         newest point's instant move with it."""
-        c, n, yl = self.c, self.n, y.tolist()
+        n, yl = self.n, y.tolist()
 
         def sample(code, tt, yv, zv):
             return code.sample(tt, yv, m, zv)
@@ -1113,21 +1113,18 @@ class ProgramTangent(ParameterTangent):
         if any(not np.allclose(other, shift, rtol=1e-9, atol=1e-12) for other in due[1:]):
             self._apart(g, y, m, z)
             return
-        self._sampled_at = (g, shift)
-        if not self._turn_apart():
-            return
         if not moves:
-            self.map_at(self._memory_map(sample, g, yl, z))
+            self._sampled_at = (g, shift)
+            if self._turn_apart():
+                self.map_at(self._memory_map(sample, g, yl, z))
             return
-        self._along(sample, g, y, z, shift, self.field_rows(g, yl, m, z),
-                    self.field_rows(g, yl, m, list(c.sample(g, yl, m, z))))
+        self._moving_sample(sample, g, y, m, z, shift)
 
     def _apart(self, g: float, y: np.ndarray, m, z) -> None:
         """Stores that sample at g, at instants a data value moves apart (two delays
         of X written as two values that are equal, TDL = TDL2): each store's sample
         reads the states and its own slots alone, so they are taken one by one, each
         at its own moving instant."""
-        yl, n = y.tolist(), self.n
         for k in [k for k in self._next_slots if z[k] == g]:
             slots = self._stores[k]
 
@@ -1135,14 +1132,23 @@ class ProgramTangent(ParameterTangent):
                 new = code.sample(tt, yv, m, zv)
                 return [new[i] if i in slots else v for i, v in enumerate(zv)]
 
-            shift = self.phi[n + k].copy()
-            self._sampled_at = (g, shift)
-            if not self._turn_apart():
+            z = self._moving_sample(alone, g, y, m, z, self.phi[self.n + k].copy())
+            if z is None:
                 return
-            after = alone(self.c, g, yl, list(z))
-            self._along(alone, g, y, z, shift, self.field_rows(g, yl, m, z),
-                        self.field_rows(g, yl, m, after))
-            z = after
+
+    def _moving_sample(self, call, g: float, y: np.ndarray, m, z, shift: np.ndarray
+                       ) -> list | None:
+        """The sample z' = call(code, g, y, z) taken at g as it moves by `shift`
+        (`_along`), the fields either side of it in the tangent's rows; z' (None, and
+        `failed` said, where a switch turning at g moves apart from it)."""
+        self._sampled_at = (g, shift)
+        if not self._turn_apart():
+            return None
+        yl = y.tolist()
+        after = list(call(self.c, g, yl, list(z)))
+        self._along(call, g, y, z, shift, self.field_rows(g, yl, m, z),
+                    self.field_rows(g, yl, m, after))
+        return after
 
     def _samples_move_with(self, t: float, z_prev) -> bool:
         """Whether the samples a store's update takes at t -- those due there, at a
