@@ -64,6 +64,7 @@ class _Check:
         self.names.functions = {f.name: len(f.params) for f in parts.functions}
         self.low = Lowering(rep)
         self.low.written = written_text(program.source)
+        self.low.start = self.t0()
         self.code = CodeLowering(rep, self.low, self.names, declared_stores(decl))
 
     # ------------------------------------------------------------------ model

@@ -35,10 +35,12 @@ from ..parse.unparse import expr_text
 TEXT_LIMIT = 60
 
 
-def surface_text(template: str, call: ast.Call, states: tuple[str, ...] = ()) -> str:
+def surface_text(template: str, call: ast.Call, states: tuple[str, ...] = (),
+                 start: float = 0.0) -> str:
     """A surface as the listing writes it: the template over the call's own
     arguments ("W1", "TIME - T1", "X - P2")."""
-    return expr_text(None, instantiate(template, call.args, call.span, states), TEXT_LIMIT)
+    return expr_text(None, instantiate(template, call.args, call.span, states, start),
+                     TEXT_LIMIT)
 
 
 def describe(call: ast.Call, written: Callable[[Span], str | None] = lambda span: None
@@ -134,6 +136,9 @@ class Lowering:
         # the listing's own text of a span (relational switches and TERMTs are
         # described as written: "T >= TSTOP"); None where no single line holds it
         self.written: Callable[[Span], str | None] = lambda span: None
+        # the run's start as the listing declares it (ACSL's VARIABLE T = t0): a
+        # library template's START (ACSL DELAY's turn from IC at t0 + TDL)
+        self.start = 0.0
         self.warnings: list[Diagnostic] = []
         # FST's weather names the listing does not define itself, and those read
         self.weather: frozenset[str] = frozenset()
@@ -293,9 +298,10 @@ class Lowering:
         args = self.args(call, target)
         index = len(self.memories)
         surfaces = tuple(
-            self.surface(instantiate(t, args, call.span), func.surface_kind, index,
-                         ir.Purpose.MEMORY, call.span, describe(call, self.written),
-                         surface_text(t, call))
+            self.surface(instantiate(t, args, call.span, start=self.start),
+                         func.surface_kind, index, ir.Purpose.MEMORY, call.span,
+                         describe(call, self.written),
+                         surface_text(t, call, start=self.start))
             for t in func.surfaces)
         nslots = int(constant_value(instantiate(func.memory.slots, call.args, call.span), {}))
         self.memories.append(ir.Memory(index, func.name, args, self.nslots, nslots, surfaces,

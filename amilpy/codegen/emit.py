@@ -65,6 +65,8 @@ class Emitter(Visitor):
                  parameters: frozenset[str] = frozenset(),
                  define_function: Callable | None = None) -> None:
         self.model = model
+        # a template's START: the run's start as the listing declares it
+        self.start = model.acsl.t0 if model.acsl is not None else 0.0
         # a FUNCTION the listing defines (ACSL form), compiled on first call:
         # `define_function(model, name, constants, tables)` (written.user_callable,
         # given by the builders: its body is emitted by an Emitter too)
@@ -322,7 +324,8 @@ class _Fill(py.NodeTransformer):
                  "OFFSET": lambda: py.Constant(self.memory.slot),
                  "SEED": lambda: number(float(setting.seed)),
                  "HOLD": lambda: number(setting.hold),
-                 "SITE": lambda: py.Constant(self.memory.index)}
+                 "SITE": lambda: py.Constant(self.memory.index),
+                 "START": lambda: number(self.em.start)}
         if name in fixed:
             return fixed[name]()
         if len(name) == 1:

@@ -582,13 +582,13 @@ register(Func("DELAY", Kind.MEMORY, "DELAY(N, P, X)",
               variants=(
                   # ACSL: IC until TIME - TDL reaches t0, then X(t - TDL(t)) from NMX
                   # points at least DMIN apart (and TDL/NMX: they span the delay);
-                  # TDL may change in time. The surface TIME - TDL makes the run
+                  # TDL may change in time. The surface TIME - TDL - t0 makes the run
                   # restart where the value jumps from IC to X(t0) (a breakpoint
                   # when TDL is constant).
                   Func("DELAY", Kind.MEMORY, "DELAY(X, IC, TDL, NMX[, DMIN])",
                        "IC for t - TDL < t0, else X(t - TDL) from NMX points at least DMIN "
                        "apart, interpolated",
-                       literal_args=(3,), positive_args=(2,), surfaces=("TIME - C",),
+                       literal_args=(3,), positive_args=(2,), surfaces=("TIME - C - START",),
                        memory=MemorySpec(
                            "2*D + 13", ("*DELAY_INIT(D + 2)",),
                            "(DELAY(TIME, C, A, B, 0.0, Z, OFFSET, D + 2) if M0 >= 0 else B)",

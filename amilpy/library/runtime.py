@@ -550,7 +550,7 @@ _NEAR_START = 1e-4  # (of the delay: the Jacobian's and a tangent's difference s
 def _before_start(s: float, t: float, x: float, z, o: int, count: int, t_last: float,
                   x_last: float) -> float:
     """ACSL's DELAY read a little before the store's start t0 on its history branch:
-    the first segment, extended. That branch is taken where its switch (TIME - TDL)
+    the first segment, extended. That branch is taken where its switch (TIME - TDL - t0)
     says t - TDL has reached t0, so such a read is that instant's rounding or a
     difference's step in the delay (a TDL that reads a state: d XD/d X): IC there put
     a jump inside the branch, which a central difference across t0 halved into the

@@ -18,8 +18,9 @@ from ..diagnostics import Span
 from ..parse import syntax
 
 ARGUMENTS = "ABCDEFGH"
-# placeholders whose meaning does not depend on the function
-FIXED_NAMES = frozenset({"TIME", "INF"})
+# placeholders whose meaning does not depend on the function; START is the run's
+# start time as the listing declares it (ACSL's VARIABLE T = t0; 0 elsewhere)
+FIXED_NAMES = frozenset({"TIME", "INF", "START"})
 # placeholders of memory templates set by the run, not the listing: the random
 # streams' seed, how long a draw is held, and the call site's own number
 RUN_NAMES = frozenset({"SEED", "HOLD", "SITE"})
@@ -118,14 +119,18 @@ def _known(name: str, args: int, modes: int, states: int, slots: bool, update: b
 class _Build(py.NodeVisitor):
     """An arithmetic template as a syntax expression over given subtrees."""
 
-    def __init__(self, args: tuple, states: tuple[str, ...], span: Span) -> None:
+    def __init__(self, args: tuple, states: tuple[str, ...], span: Span, start: float
+                 ) -> None:
         self.args = args
         self.states = states
         self.span = span
+        self.start = start
 
     def visit_Name(self, node: py.Name) -> syntax.Expr:
         if node.id == "TIME":
             return syntax.Name("TIME", self.span)
+        if node.id == "START":
+            return syntax.Num(self.start, self.span, repr(self.start))
         k = _index(node.id, "Y")
         if k is not None:
             return syntax.Name(self.states[k], self.span)
@@ -138,6 +143,9 @@ class _Build(py.NodeVisitor):
         return syntax.Neg(self.visit(node.operand), self.span)
 
     def visit_BinOp(self, node: py.BinOp) -> syntax.Expr:
+        if isinstance(node.right, py.Name) and node.right.id == "START" and \
+                isinstance(node.op, (py.Add, py.Sub)) and self.start == 0.0:
+            return self.visit(node.left)  # (a run from 0: the surface as it was written)
         op = {py.Sub: "-", py.Add: "+", py.Div: "/", py.Mult: "*"}[type(node.op)]
         return syntax.BinOp(op, self.visit(node.left), self.visit(node.right), self.span)
 
@@ -148,11 +156,11 @@ class _Build(py.NodeVisitor):
         raise AssertionError(f"not an arithmetic template node: {py.dump(node)}")
 
 
-def instantiate(text: str, args: tuple, span: Span, states: tuple[str, ...] = ()
-                ) -> syntax.Expr:
+def instantiate(text: str, args: tuple, span: Span, states: tuple[str, ...] = (),
+                start: float = 0.0) -> syntax.Expr:
     """The syntax expression of an arithmetic template over the given arguments
-    (shared, not copied) and state names."""
-    return _Build(args, states, span).visit(_parsed(text))
+    (shared, not copied) and state names; START is `start`."""
+    return _Build(args, states, span, start).visit(_parsed(text))
 
 
 @cache
