@@ -204,6 +204,27 @@ END
     assert run["Z"][-1] == pytest.approx((27.0 - 1.0) / 6.0, rel=1e-9)
 
 
+def test_numbers_among_a_procedurals_inputs_order_nothing():
+    """The EPA lead model (O'Flaherty form) writes `PROCEDURAL (A, B = 1, 1)`: a
+    number in the input list depends on nothing, so it orders nothing; the unit's
+    names are sorted by what its body reads (Y here, computed after it). Z =
+    integral of (2t + 1)^2, as in the test above."""
+    run, = amilpy.loads("""PROGRAM p
+  CINTERVAL CINT = 0.5
+  DERIVATIVE
+    PROCEDURAL (A, B = 1, 1.0, Y)
+      A = Y*2.0 + 1.0
+      B = A*A
+    END
+    Y = INTEG(1.0, 0.0)
+    Z = INTEG(B, 0.0)
+    TERMT(T >= 1.0)
+  END
+END
+""", "p.csl").run(rtol=1e-10, atol=1e-12)
+    assert run["Z"][-1] == pytest.approx((27.0 - 1.0) / 6.0, rel=1e-9)
+
+
 def test_procedural_lists_that_disagree_with_the_body_warn():
     m = amilpy.loads("PROGRAM p\nDERIVATIVE\nPROCEDURAL (A = )\nA = T\nB = 2.0\nEND\n"
                      "X = INTEG(A + B, 0.0)\nTERMT(T >= 1.0)\nEND\nEND\n", "p.csl")

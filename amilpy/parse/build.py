@@ -174,7 +174,8 @@ class Builder:
                 if part.data == "outputs":
                     outputs = tuple(str(n).upper() for n in part.children)
                 elif part.children:  # proc_inputs: "=" inputs?
-                    inputs = tuple(str(n).upper() for n in part.children[0].children)
+                    inputs = tuple(str(n).upper() for n in part.children[0].children
+                                   if n.type == "NAME")
         return Head("PROCEDURAL", self.span(node), data=(outputs, inputs))
 
     def st_if_head(self, node) -> Head:
