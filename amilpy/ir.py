@@ -449,7 +449,7 @@ class Model:
     # FST's EVENT blocks, and its SET variables (kept between events, like states)
     events: list[FstEvent] = field(default_factory=list)
     sets: list[str] = field(default_factory=list)
-    own_pi: bool = False  # an FST listing's own PI (`syntax.Program.own_pi`): no pi given
+    own_pi: bool = False  # an FST or ACSL listing's own PI (`syntax.Program.own_pi`): no pi given
     # the TERMT surfaces of a routine's STOP or FATALERR: a run they stop ends the job
     # (Fortran's STOP ends the program: no later run is made)
     ending: frozenset[int] = frozenset()

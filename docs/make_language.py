@@ -151,10 +151,11 @@ SIDE_BY_SIDE: tuple[tuple[str, str, str], ...] = (
      "(`MNDAT(1)` ...; the sizes are fixed when the listing is read); a range of elements "
      "is given one value for all or one each (`X(1:3) = 1., 2., 3.`); the whole array "
      "passed to a routine by its name"),
-    ("FST", "`PI = 3.1416` in a listing with FST's statements (WEATHER, "
-     "TRANSLATION_GENERAL, DEFINE_CALL, EVENT, SET)", "the listing's own PI (FST has "
-     "none): a variable of the listing (or a PARAM), read, printed and set as any. "
-     "Elsewhere PI is reserved"),
+    ("FST, ACSL", "`PI = 3.1416` in a listing with FST's statements (WEATHER, "
+     "TRANSLATION_GENERAL, DEFINE_CALL, EVENT, SET), or `CONSTANT PI = 3.141592` (or PI "
+     "assigned in INITIAL) in an ACSL program", "the listing's own PI (neither language "
+     "has one): a variable of the listing (or a PARAM, a CONSTANT), read, printed and set "
+     "as any. Elsewhere PI is reserved (pi where a listing reads it)"),
     ("FST", "`EVENT` / `ZEROCONDITION E` / `NEWVALUE X = e` ... / `ENDEVENT`",
      "a state event: where E reaches zero from either side (located; in step-point mode "
      "at the first step point where it has, before that point's row) the NEWVALUEs are "

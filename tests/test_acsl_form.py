@@ -139,6 +139,23 @@ def test_a_listing_may_name_a_variable_time():
     assert r["TIME_"][-1] == pytest.approx(2.0) and r.t[-1] == pytest.approx(1.0)
 
 
+def test_an_acsl_program_that_defines_pi_computes_with_its_own():
+    """ACSL has no PI of its own, and its listings define one (the EPA lead model's
+    CONSTANT PI = 3.141592): the listing's value is used, as a CONSTANT or assigned
+    in INITIAL. X = PI*W*t. A program that defines none reads pi."""
+    text = ("PROGRAM p\n  CONSTANT {pi}W = 2.0\n  INITIAL\n    {init}\n  END\n"
+            "  DERIVATIVE\n    X = INTEG(PI*W, 0.0)\n    TERMT(T >= 1.0)\n  END\n"
+            "  CINTERVAL CINT = 0.5\nEND\n")
+    for pi, init, value in (("PI = 3.0, ", "V = 1.0", 3.0), ("", "PI = 3.5", 3.5),
+                            ("", "V = 1.0", math.pi)):
+        run, = amilpy.loads(text.format(pi=pi, init=init), "pi.csl").run(advice=False)
+        assert run["X"][-1] == pytest.approx(2.0 * value, rel=1e-9)
+    # a CONSTANT PI is data like any other: set from outside
+    run, = amilpy.loads(text.format(pi="PI = 3.0, ", init="V = 1.0"), "pi.csl").run(
+        advice=False, PI=4.0)
+    assert run["X"][-1] == pytest.approx(8.0, rel=1e-9)
+
+
 def test_cinterval_reassigned_in_initial_and_later():
     r = run("""PROGRAM p
   INITIAL

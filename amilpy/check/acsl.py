@@ -23,7 +23,7 @@ from . import order
 from .code import CodeLowering, assigned_names
 from .groups import DATA_STATEMENTS, RunGroups
 from .lower import TEXT_LIMIT, Lowering
-from .names import Names
+from .names import Names, reserved_names
 from .parts import (
     Parts,
     Renamer,
@@ -58,7 +58,8 @@ class _Check:
                                                 for s in c.settings), c.span)
                         for c in self.controls if c.keyword not in ("MERROR", "XERROR")]
         group = [d for d in decl if isinstance(d, DATA_STATEMENTS)] + control_data
-        self.data = RunGroups(rep).read([group], needs_fintim=False)
+        self.data = RunGroups(rep, reserved_names(program)).read([group],
+                                                                 needs_fintim=False)
         self.names = Names(rep, program, self.data)
         self.names.reserved = (TIME,)
         self.names.functions = {f.name: len(f.params) for f in parts.functions}
@@ -135,7 +136,7 @@ class _Check:
             runs=data.runs, data_names=data.names,
             spans={**data.spans, **self.names.defined}, data_kinds=data.kinds, units=units,
             acsl=acsl, warnings=low.warnings + self.warnings(initial, kept, initial_names),
-            closed=low.closed)
+            closed=low.closed, own_pi=self.program.own_pi)
         classify(model)
         rep.raise_if_any()
         return model

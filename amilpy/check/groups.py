@@ -179,7 +179,7 @@ class RunGroups(Visitor):
 
     def __init__(self, rep: Reporter, reserved: tuple[str, ...] = RESERVED) -> None:
         self.rep = rep
-        self.reserved = reserved  # (an FST listing's own PI is no reserved name)
+        self.reserved = reserved  # (an FST or ACSL listing's own PI is no reserved name)
         self.data: dict[str, float] = {}
         self.spans: dict[str, Span] = {}
         self.kinds: dict[str, str] = {}

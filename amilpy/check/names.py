@@ -29,7 +29,7 @@ PURE = (Kind.MATH, Kind.TABLE, Kind.SWITCH, Kind.TIME)  # INITIAL, TERMINAL: eva
 
 
 def reserved_names(program: ast.Program) -> tuple[str, ...]:
-    """The names the listing may not assign: an FST listing's own PI is a variable of
+    """The names the listing may not assign: an FST or ACSL listing's own PI is a variable of
     it (`Program.own_pi`)."""
     return tuple(n for n in RESERVED if n != "PI") if program.own_pi else RESERVED
 
@@ -243,7 +243,7 @@ class Names:
 
     def check_named(self, known: set[str], states: set[str]) -> None:
         """Reports and FINISH name known quantities; RELERR/ABSERR X=... name states."""
-        # (an FST listing's own PI is a quantity of it)
+        # (an FST or ACSL listing's own PI is a quantity of it)
         report_known = known - (SETTINGS - ({"PI"} if self.own_pi else set()))
         for st in self.data.reports:
             named = list(zip(st.names, st.name_spans, strict=True))

@@ -95,7 +95,7 @@ def parse(text: str, path: str | None = None) -> ast.Program:
     statements, macros = expand(statements, builder.errors, form == "ACSL")
     statements = lower_jumps(statements, builder.errors, sorted_top=form == "ACSL")
     statements = _subroutines_called(statements, text, path, builder.errors, builder.calls)
-    own_pi = _fst_own_pi(statements)
+    own_pi = _own_pi(statements, form == "ACSL")
     statements = texts.set_aside(statements, builder.errors)
     statements, fixed = arrays.expand(statements, builder.errors, form == "ACSL",
                                       nester.notes, "[" in text)
@@ -108,12 +108,13 @@ def parse(text: str, path: str | None = None) -> ast.Program:
 _FST_STATEMENTS = (ast.Translation, ast.Weather, ast.DefineCall, ast.Event, ast.SetValue)
 
 
-def _fst_own_pi(statements: list) -> bool:
+def _own_pi(statements: list, acsl: bool) -> bool:
     """Whether an FST listing (one with FST's own statements: TRANSLATION_GENERAL,
-    WEATHER, DEFINE_CALL, EVENT, SET) assigns PI: FST has no PI of its own, and LINGRA
-    computes with its PI = 3.1416, not pi."""
+    WEATHER, DEFINE_CALL, EVENT, SET) or an ACSL program assigns PI: neither language
+    has a PI of its own; LINGRA computes with its PI = 3.1416, not pi, and the EPA
+    lead model with its CONSTANT PI = 3.141592."""
     everything = ast.every_statement(statements)
-    return any(isinstance(st, _FST_STATEMENTS) for st in everything) and any(
+    return (acsl or any(isinstance(st, _FST_STATEMENTS) for st in everything)) and any(
         (isinstance(st, ast.Assign) and "PI" in st.targets) or
         (isinstance(st, ast.Procedural) and "PI" in st.outputs) or  # (a CALL's)
         (isinstance(st, ast.Data) and any(it.name == "PI" for it in st.items))
