@@ -156,6 +156,20 @@ def test_an_acsl_program_that_defines_pi_computes_with_its_own():
     assert run["X"][-1] == pytest.approx(8.0, rel=1e-9)
 
 
+def test_an_empty_unnamed_discrete_section_is_read_and_a_full_one_needs_a_name():
+    """The EPA lead model keeps an empty `DISCRETE ... END` from its template: it runs
+    nothing, so it needs no name. One with statements does: nothing could run it."""
+    text = ("PROGRAM p\n  DYNAMIC\n    DERIVATIVE\n      X = INTEG(1.0, 0.0)\n    END\n"
+            "    DISCRETE   ! START OF DISCRETE SECTION\n{body}    END\n"
+            "    TERMT(T >= 1.0)\n  END\n  CINTERVAL CINT = 0.5\nEND\n")
+    run, = amilpy.loads(text.format(body="\n"), "d.csl").run(advice=False)
+    assert run["X"][-1] == pytest.approx(1.0, rel=1e-12)
+    with pytest.raises(AmilError) as err:
+        amilpy.loads(text.format(body="      X = 0.0\n"), "d.csl")
+    assert "a DISCRETE section needs a name" in err.value.render()
+    assert err.value.diagnostics[0].span.line == 6
+
+
 def test_cinterval_reassigned_in_initial_and_later():
     r = run("""PROGRAM p
   INITIAL

@@ -131,6 +131,8 @@ class Parts:
         elif kind == "TERMINAL":
             self.terminal.append((self.walk(st.body, "TERMINAL", rep), st.span))
         elif kind == "DISCRETE":
+            if st.name is None and not st.body:
+                return  # (an empty one, a template's placeholder: the EPA lead model's)
             if st.name is None:
                 rep.error("a DISCRETE section needs a name", st.span,
                           "DISCRETE name ... END; SCHEDULE name .AT. t runs it")
