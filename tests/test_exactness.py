@@ -74,6 +74,36 @@ def test_a_switch_between_two_rows_is_located_on_every_route(route: str, outdel:
     assert abs(math.sin(W * t_hi) - 1.0) < 1e-6 and abs(math.sin(W * t_lo) + 1.0) < 1e-6
 
 
+BEFORE_ANOTHER = """\
+TITLE FLIPS OF SIN(10*X) BEFORE ANOTHER SWITCH, IN ONE OUTPUT INTERVAL
+DYNAMIC
+   X  = INTGRL(0.0, 1.0)
+   S5 = INTGRL(0.0, FSW(SIN(10.0*X), -1.0, 0.0, 1.0))
+   S7 = INTGRL(0.0, FSW(X - 0.75, 0.0, 1.0, 1.0))
+TIMER FINTIM = 2.0, OUTDEL = {outdel}
+PRINT S5, S7
+END
+STOP
+"""
+
+
+@pytest.mark.parametrize("route", ROUTES)
+@pytest.mark.parametrize("outdel", ["0.1", "2.0"])
+def test_flips_before_another_switch_in_the_same_interval_are_located(route, outdel):
+    """SIN(10 X) changes sign at k pi/10; X - 0.75 once, at 0.75. At OUTDEL 2.0 the
+    one row at 2.0 shows the second crossed and the first as it was (six flips, an
+    even number): AUTO located 0.75 alone, and S5 = integral of SIGN(SIN(10 t)) was
+    0.743 instead of 2 - 6 pi/10 = 0.115 (hunt 53). Every flip, to 1e-8 in TIME (the
+    default tolerances), and S5, S7 to 1e-8."""
+    run, = amilpy.loads(BEFORE_ANOTHER.format(outdel=outdel), "flips").run(method=route)
+    want = sorted([k * math.pi / 10 for k in range(1, 7)] + [0.75])
+    times = sorted(e.time for e in run.events if e.kind == "switch")
+    assert len(times) == len(want), (route, outdel, times)
+    assert max(abs(a - b) for a, b in zip(times, want, strict=True)) < 1e-8
+    assert abs(run.final["S5"] - (2.0 - 6.0 * math.pi / 10)) < 1e-8
+    assert abs(run.final["S7"] - 1.25) < 1e-8
+
+
 # --- the clutch drive: the lab report's numbers on every route and grid -------------------
 
 CLUTCH = MODELS / "ex4_clutch.amil"

@@ -163,12 +163,18 @@ class SegmentStart:
         is on the wrong side of the branches in force, and of the first at which one
         that matters is (len(T) if none). One matters unless its branch is silent
         (where it is first and last on the wrong side there): the loop follows its sign
-        without a restart, and an output instant shows where it stays crossed."""
+        without a restart, and an output instant shows where it stays crossed.
+        `wrong_at(T, Y, behind=(t, y))`: the same for the surfaces that are on their
+        side at (t, y), an instant after T (one evaluation for both)."""
         c, plan, watch, m, z = self.c, self.plan, self.watch, cur.m, cur.z
 
-        def wrong_at(T: np.ndarray, Y: np.ndarray, only=None) -> tuple[int, int]:
+        def wrong_at(T: np.ndarray, Y: np.ndarray, only=None, behind=None
+                     ) -> tuple[int, int]:
             if not len(T):
                 return 0, 0
+            n = len(T)
+            if behind is not None:
+                T, Y = np.append(T, behind[0]), np.vstack([Y, behind[1]])
             try:
                 with np.errstate(all="ignore"):
                     E = [column(v, len(T)) for v in c.surf_v(T, list(Y.T), m, z)]
@@ -176,24 +182,29 @@ class SegmentStart:
                 # a surface with no value at one of the instants (1/(X - 1) where X = 1):
                 # the instants before it are taken, and the fault is met and said
                 # where it happens, step by step
-                bad = next((i for i in range(len(T)) if _faults(c, T[i], Y[i], m, z)), None)
+                bad = next((i for i in range(n) if _faults(c, T[i], Y[i], m, z)), None)
                 if bad is None:
+                    if behind is not None:
+                        return n, n  # (at the instant behind them)
                     raise
                 return bad, bad
             found = crossings(plan, E, m)
+            if behind is not None:
+                found = {k: mask[:n] for k, mask in found.items() if not mask[n]}
             if only is not None:
                 found = {k: mask for k, mask in found.items() if k in only}
+            found = {k: mask for k, mask in found.items() if mask.any()}
             if not found:
-                return len(T), len(T)
+                return n, n
             # (the surfaces in the order they cross: the first loud one is the answer,
             # and a crossing is mostly an event, so one look at silence is enough)
             first = sorted((int(np.argmax(mask)), k) for k, mask in found.items())
             for i, k in first:
-                last = int(len(T) - 1 - np.argmax(found[k][::-1]))
+                last = int(n - 1 - np.argmax(found[k][::-1]))
                 if not (watch.silent(k, float(T[i]), Y[i], m, z) and
                         watch.silent(k, float(T[last]), Y[last], m, z)):
                     return first[0][0], i
-            return first[0][0], len(T)
+            return first[0][0], n
         return wrong_at
 
     def _jacobian(self, cur: Cursor, f) -> SegmentJacobian | None:

@@ -193,12 +193,13 @@ class OdeintStepper(Chunked):
     stops near its step limit instead of finishing a chunk of 4096 instants.
 
     `log` and `watch` (the module's doc): the evaluations the vector field logs, and
-    `watch = (wrong_at, modes, memory)`, where `wrong_at(T, Y)` gives the index of the
-    first of the instants T (states Y) at which a surface is on the wrong side of the
-    branches in force, and of the first at which one that matters is (one whose branch
-    is silent the loop follows without a restart); len(T) for none. `modes`/`memory`
-    are the lists the loop changes in place (a branch followed without a restart),
-    read to know when an examination is out of date.
+    `watch = (wrong_at, modes, memory)`, where `wrong_at(T, Y, only=None, behind=None)`
+    gives the index of the first of the instants T (states Y) at which a surface (of
+    `only`, if given; of those on their side at `behind` = (t, y), if given) is on the
+    wrong side of the branches in force, and of the first at which one that matters is
+    (one whose branch is silent the loop follows without a restart); len(T) for none.
+    `modes`/`memory` are the lists the loop changes in place (a branch followed without
+    a restart), read to know when an examination is out of date.
     """
 
     def __init__(self, fun: Rhs, t0: float, y0: np.ndarray, t_bound: float, checks, *,
@@ -265,6 +266,10 @@ class OdeintStepper(Chunked):
         self._exam_bad = math.inf  # the first instant on the wrong side
         self._exam_limit = t0  # the step ends before it looked at up to here
         self._exam_to = t0
+        # the first instant a surface that matters is crossed at, and its state: the
+        # surfaces not crossed there may cross and cross back before it
+        self._exam_loud = t0
+        self._exam_behind: tuple | None = None
         self._crossing: tuple | None = None  # (what `_crossing_step` was asked, found)
 
     @property
@@ -462,7 +467,8 @@ class OdeintStepper(Chunked):
     def _examine(self) -> None:
         """Look at the surfaces at the chunk's step ends ahead. A crossing the instants
         show is located between them (`refine` puts LSODA's step around it in); one
-        they hide -- a step end on the wrong side in an interval whose end is not --
+        they hide -- a step end on the wrong side in an interval whose end is not, or,
+        in the interval whose end shows a crossing, of a surface not crossed there --
         becomes visible: that step end is made an exact check instant (integrated from
         the instant before it), with a few more on the wrong side after it
         (INSERT_AHEAD, in case it turns out on the right side after all)."""
@@ -481,16 +487,30 @@ class OdeintStepper(Chunked):
             # matters (one whose branch nothing uses is followed where it flips)
             self._exam_limit = float(T[loud - 1]) if 0 < loud < len(T) else \
                 self.t if loud == 0 else float(T[-1])
-        limit = self._exam_limit
-        if self._exam_to >= limit or not len(self.S):
+            # the interval up to that instant shows the crossings of the surfaces wrong
+            # there (located between its ends); another surface may cross and cross
+            # back inside it, before them, where no instant shows it
+            self._exam_behind = (float(T[loud]), Y[loud]) if loud < len(T) else None
+            self._exam_loud = float(T[loud]) if loud < len(T) else self._exam_limit
+        if not len(self.S):
             return
-        lo = int(np.searchsorted(self.S, max(self.t, self._exam_to), side="right"))
-        hi = int(np.searchsorted(self.S, limit, side="left"))
-        wrong = wrong_at(self.S[lo:hi], self.SY[lo:hi])[1] if hi > lo else 0
-        if wrong >= hi - lo:
-            self._exam_to = limit
-            return
-        k = lo + wrong
+        for end, behind in ((self._exam_limit, None), (self._exam_loud, self._exam_behind)):
+            if self._exam_to >= end:
+                continue
+            lo = int(np.searchsorted(self.S, max(self.t, self._exam_to), side="right"))
+            hi = int(np.searchsorted(self.S, end, side="left"))
+            wrong = wrong_at(self.S[lo:hi], self.SY[lo:hi], behind=behind)[1] \
+                if hi > lo else 0
+            if wrong < hi - lo:
+                self._exam_hidden(lo + wrong, hi)
+                return
+            self._exam_to = end
+
+    def _exam_hidden(self, k: int, hi: int) -> None:
+        """Step end k (of the chunk's, those before `hi` examined) is on the wrong side
+        where no pending instant shows it: it is made an exact instant, with a few
+        after it, and the first on the wrong side is noted."""
+        wrong_at = self.watch[0]
         tau = float(self.S[k])
         i = int(np.searchsorted(self.T, tau, side="left"))  # the first instant >= tau
         ahead = [float(self.S[j]) for j in range(k + 1, hi) if self.S[j] < self.T[i]]
