@@ -5,6 +5,11 @@ switching surfaces at every integrator step costs on each candidate way of doing
     OPENBLAS_NUM_THREADS=1 python benchmarks/exactness.py [--repeats 5] [--out DIR]
     python benchmarks/exactness.py --before /path/to/older/checkout --rtol 1e-10 ...
     python benchmarks/exactness.py --before ... --instructions   # (needs valgrind)
+    python benchmarks/exactness.py --before ... --only-equal-error --out DIR
+
+`--equal-error` (with `--before`): both trees over RELERR 1e-5 ... 1e-11, the time each
+takes at equal error (read off each one's work-precision front), and their ratio; with
+`--only-equal-error` that table alone, written to exactness_equal_error.md.
 
 Table 1 (`default route`): METHOD AUTO at RELERR `--rtol` (default: the listing's
 default, which is 1e-10 now), ABSERR = RELERR x `--atol-ratio` (1e-3, as the defaults):
@@ -201,6 +206,95 @@ def _coarse_error(case, run) -> float:
                for n in case.states)
 
 
+# ------------------------------------------------------------------ equal error
+
+LADDER = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11)
+# every RELERR of the ladder in one child (a first run each, then the least CPU time of
+# `repeats`): the time and the error against the exact reference
+_LADDER = """
+import json, sys, time
+sys.path.insert(0, {tree!r})
+import amilpy
+sys.path.insert(1, {here!r})
+from cases import all_cases, error_on_grid
+case = all_cases()[{name!r}]
+model = amilpy.loads(case.text, case.name)
+out = []
+for rtol in {rtols!r}:
+    kw = dict(rtol=rtol, atol=rtol * {atol_ratio!r})
+    run = model.run(advice=False, **kw)[0]
+    times = []
+    for _ in range({repeats}):
+        t0 = time.process_time()
+        model.run(advice=False, **kw)
+        times.append(time.process_time() - t0)
+    out.append(dict(rtol=rtol, ms=1e3 * min(times), nfev=run.stats.get("nfev"),
+                    error=error_on_grid(case, run.t, {{n: run[n] for n in case.states}})))
+assert amilpy.__file__.startswith({tree!r})
+print(json.dumps(out))
+"""
+
+
+def _ladder_child(tree: str, name: str, atol_ratio: float, repeats: int) -> list[dict]:
+    import json
+    import subprocess
+
+    code = _LADDER.format(tree=tree, here=HERE, name=name, rtols=LADDER,
+                          atol_ratio=atol_ratio, repeats=repeats)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=tree,
+                         env=dict(os.environ, OPENBLAS_NUM_THREADS="1"))
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def _front(points: list[dict]) -> list[dict]:
+    """The cheapest time for each error reached (a Pareto front), by falling error."""
+    out, best = [], math.inf
+    for p in sorted(points, key=lambda p: p["ms"]):
+        if p["error"] < best:
+            out.append(p)
+            best = p["error"]
+    return out
+
+
+def time_at(front: list[dict], error: float) -> float | None:
+    """The front's time at `error`, interpolated log-log (None outside it)."""
+    f = sorted(front, key=lambda p: -p["error"])
+    for a, b in zip(f, f[1:], strict=False):
+        if b["error"] <= error <= a["error"]:
+            w = (math.log(error / a["error"]) / math.log(b["error"] / a["error"])
+                 if a["error"] != b["error"] else 0.0)
+            return math.exp(math.log(a["ms"]) + w * math.log(b["ms"] / a["ms"]))
+    return None
+
+
+def equal_error(names, before: str, atol_ratio: float, repeats: int, rounds: int = 2
+                ) -> list[dict]:
+    """AUTO now and AUTO in `before` over the RELERR ladder, each tree a fresh child
+    per model and round, the trees alternating; each point the least time over the
+    rounds. Returns per model the two ladders and the ratio of the times at equal
+    error (each decade from 1e-3 to 1e-9 both fronts reach)."""
+    here = os.path.dirname(HERE)
+    rows = []
+    for name in names:
+        runs: dict[str, list] = {"now": [], "before": []}
+        for _ in range(rounds):
+            runs["now"].append(_ladder_child(here, name, atol_ratio, repeats))
+            runs["before"].append(_ladder_child(before, name, atol_ratio, repeats))
+        ladders = {k: [dict(v[0][i], ms=min(r[i]["ms"] for r in v)) for i in range(len(LADDER))]
+                   for k, v in runs.items()}
+        fronts = {k: _front(v) for k, v in ladders.items()}
+        ratios = {}
+        for error in (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9):
+            a, b = time_at(fronts["now"], error), time_at(fronts["before"], error)
+            if a is not None and b is not None:
+                ratios[error] = (a, b)
+        rows.append({"model": name, **ladders, "ratios": ratios})
+        print(name, "  ".join(f"{e:.0e}: {a / b:.2f}" for e, (a, b) in ratios.items()),
+              flush=True)
+    return rows
+
+
 # --------------------------------------------------------------------- candidates
 
 def _model(case, rtol, atol):
@@ -324,7 +418,7 @@ def _ways(case, rtol: float, atol: float) -> list[tuple[str, object]]:
     return ways
 
 
-def markdown(table1, table2, args) -> str:
+def markdown(table1, table2, args, table3=()) -> str:
     import platform
 
     import scipy
@@ -337,9 +431,11 @@ def markdown(table1, table2, args) -> str:
            f"from `{os.path.dirname(amilpy.__file__)}`, Python {platform.python_version()}, "
            f"SciPy {scipy.__version__}, NumPy {np.__version__}, load average {load}; CPU "
            f"time, median of {args.repeats}.\n",
-           "## The default route (METHOD AUTO)\n",
-           "| model | settings | ms | evaluations | events | error | OUTDEL x20: events "
-           "| error |", "|---|---|---:|---:|---:|---:|---:|---:|"]
+           ]
+    if table1:
+        out += ["## The default route (METHOD AUTO)\n",
+                "| model | settings | ms | evaluations | events | error | OUTDEL x20: events "
+                "| error |", "|---|---|---:|---:|---:|---:|---:|---:|"]
     for r in table1:
         out.append(f"| {r['model']} | {r['settings']} | {r['ms']:.1f} | {r['nfev']} | "
                    f"{r['events']} | {r['error']:.1e} | {r['coarse events']} | "
@@ -368,6 +464,26 @@ def markdown(table1, table2, args) -> str:
                 b = r["before"]
                 out.append(f"| {r['model']} | {r['Minstr']:.1f} | {b['Minstr']:.1f} | "
                            f"{r['Minstr'] / b['Minstr']:.2f} |")
+    if table3:
+        errors = sorted({e for r in table3 for e in r["ratios"]}, reverse=True)
+        out += ["", f"## At equal error: AUTO now against `{args.before}` (`--equal-error`)\n",
+                f"RELERR {', '.join(f'{x:g}' for x in LADDER)} (ABSERR = RELERR x "
+                f"{args.atol_ratio:g}) on both, each a fresh child per model and round, the "
+                f"trees alternating, the least CPU time of {args.repeats} runs over 2 rounds; "
+                "each tree's time at an error read off its Pareto front (log-log): now ms / "
+                "before ms = ratio, where both fronts reach that error.\n",
+                "| model | " + " | ".join(f"error {e:.0e}" for e in errors) + " |",
+                "|---|" + "---:|" * len(errors)]
+        for r in table3:
+            cells = [f"{r['ratios'][e][0]:.1f} / {r['ratios'][e][1]:.1f} = "
+                     f"**{r['ratios'][e][0] / r['ratios'][e][1]:.2f}**"
+                     if e in r["ratios"] else "-" for e in errors]
+            out.append(f"| {r['model']} | " + " | ".join(cells) + " |")
+        out += ["", "The ladders (RELERR: ms, error; now, then before):\n"]
+        for r in table3:
+            for k in ("now", "before"):
+                out.append(f"- {r['model']}, {k}: " + ", ".join(
+                    f"{p['rtol']:.0e}: {p['ms']:.1f} ms, {p['error']:.1e}" for p in r[k]))
     if table2:
         ways = [k for k in table2[0] if k != "model"]
         out += ["", f"## Watching every step: the candidates (RELERR {args.cand_rtol:g}, "
@@ -395,16 +511,27 @@ def main(argv=None) -> tuple[list[dict], list[dict]]:
                    help="a checkout of older amilpy code: its columns side by side")
     p.add_argument("--instructions", action="store_true",
                    help="with --before: also count each run's instructions (valgrind)")
+    p.add_argument("--equal-error", action="store_true",
+                   help="with --before: both trees over the RELERR ladder, the ratio of "
+                   "the times at equal error")
+    p.add_argument("--only-equal-error", action="store_true",
+                   help="the equal-error table alone (with --before)")
     args = p.parse_args(argv)
-    t1 = default_route(args.models, args.rtol, args.atol_ratio, args.repeats, args.before,
-                       args.instructions)
+    if args.only_equal_error:
+        args.equal_error = True
+        args.no_candidates = True
+    t3 = equal_error(args.models, args.before, args.atol_ratio, args.repeats) \
+        if args.equal_error and args.before else []
+    t1 = [] if args.only_equal_error else default_route(
+        args.models, args.rtol, args.atol_ratio, args.repeats, args.before, args.instructions)
     t2 = [] if args.no_candidates else candidates(args.models, args.cand_rtol, args.atol_ratio,
                                                   args.repeats)
-    text = markdown(t1, t2, args)
+    text = markdown(t1, t2, args, t3)
     print(text)
     if args.out:
         os.makedirs(args.out, exist_ok=True)
-        with open(os.path.join(args.out, "exactness.md"), "w", encoding="utf-8") as fh:
+        name = "exactness_equal_error.md" if args.only_equal_error else "exactness.md"
+        with open(os.path.join(args.out, name), "w", encoding="utf-8") as fh:
             fh.write(text)
     return t1, t2
 
