@@ -104,6 +104,55 @@ def test_flips_before_another_switch_in_the_same_interval_are_located(route, out
     assert abs(run.final["S7"] - 1.25) < 1e-8
 
 
+ODD_FLIPS = """\
+TITLE SIGN OF SIN(W*TIME + PH): ITS FIRST SIGN CHANGE IN EACH ROW INTERVAL
+PARAM W = 10.0, PH = 0.1
+DYNAMIC
+   S = INTGRL(0.0, FSW(SIN(W*TIME + PH), -1.0, 0.0, 1.0))
+TIMER FINTIM = 2.0, OUTDEL = {outdel}
+PRINT S
+END
+STOP
+"""
+
+
+@pytest.mark.parametrize("route", ROUTES)
+@pytest.mark.parametrize("w, ph, outdel", [(10.0, 0.1, "1.0"), (40.0, 2.0, "2.0"),
+                                           (7.0, 1.0, "0.5")])
+def test_the_first_of_several_crossings_in_a_row_interval_is_the_one_located(
+        route, w, ph, outdel):
+    """SIN(W t + PH) changes sign at (k pi - PH)/W: three times in (0, 1) for W = 10,
+    PH = 0.1, where the row at 1 shows one change. AUTO searched the root over the
+    whole row interval and found the third (S(2) = 0.743 for 0.115, hunt 53; 24 of 25
+    changes lost for W = 40, OUTDEL 2). Each change to 1e-8 in TIME, S to 1e-8."""
+    run, = amilpy.loads(ODD_FLIPS.format(outdel=outdel), "odd").run(method=route, W=w, PH=ph)
+    want = [(k * math.pi - ph) / w for k in range(1, 100) if 0 < (k * math.pi - ph) / w < 2]
+    times = [e.time for e in run.events if e.kind == "switch"]
+    assert len(times) == len(want), (route, times)
+    assert max(abs(a - b) for a, b in zip(times, want, strict=True)) < 1e-8
+    edges = [0.0, *want, 2.0]
+    exact = sum((b - a) * (1 if k % 2 == 0 else -1)
+                for k, (a, b) in enumerate(zip(edges, edges[1:], strict=False)))
+    assert abs(run.final["S"] - exact) < 1e-8
+
+
+@pytest.mark.parametrize("route", ROUTES + ["LSODA", "RADAU", "BDF"])
+def test_a_level_edge_at_a_breakpoint_takes_the_level_the_motion_goes_to(route):
+    """QNTZR(0.3, X), X = t, has an edge at X = 0.75, where STEP(0.75) restarts the
+    run: the level there is the one X goes into (3), as at a located crossing. It
+    stayed at 2 until the next step's end (LSODA 0.7568, RADAU 0.7579) or, on AUTO
+    with OUTDEL = FINTIM, until the end of the run (S5 = 1.02, hunt 53). S5 =
+    integral of the levels 0.3 k = 0.09*21 + 2.1*0.05 = 1.995, to 1e-9."""
+    run, = amilpy.loads("TITLE Q\nDYNAMIC\n   X = INTGRL(0.0, 1.0)\n"
+                        "   S5 = INTGRL(0.0, QNTZR(0.3, X))\n"
+                        "   S7 = INTGRL(0.0, STEP(0.75))\n"
+                        "TIMER FINTIM = 2.0, OUTDEL = 2.0\nEND\nSTOP\n", "q").run(method=route)
+    assert abs(run.final["S5"] - 1.995) < 1e-9
+    assert abs(run.final["S7"] - 1.25) < 1e-9
+    levels = [e.time for e in run.events if e.kind == "level"]
+    assert levels == pytest.approx([0.15, 0.45, 0.75, 1.05, 1.35, 1.65, 1.95], abs=1e-9)
+
+
 # --- the clutch drive: the lab report's numbers on every route and grid -------------------
 
 CLUTCH = MODELS / "ex4_clutch.amil"

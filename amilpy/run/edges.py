@@ -48,8 +48,9 @@ def locate_crossings(watch: SurfaceWatch, stepper, hits: list[int], m, z, ta: fl
     watched surfaces at ta and at tb, when the caller has them."""
     coarse = stepper.refines and not stepper.sharpen()
     interp = stepper.interpolant()
+    within = _first_steps(stepper, hits, ta, tb)
     roots, departed = _roots(watch, hits, m, z, interp, ta, tb, segment_start,
-                             COARSE * (tb - ta) if coarse else None, ends)
+                             COARSE * (tb - ta) if coarse else None, ends, within)
     if not coarse or not roots:
         return roots, departed
     # the window around the first root, and once more around where it moved to if it
@@ -58,16 +59,35 @@ def locate_crossings(watch: SurfaceWatch, stepper, hits: list[int], m, z, ta: fl
         first = min(roots.values())
         interp = stepper.refine(first, set(roots))
         better, _ = _roots(watch, list(roots), m, z, interp, ta, tb, segment_start, None,
-                           ends)
+                           ends, within)
         roots.update(better)
         if not better or stepper.resolved(min(roots.values()), set(roots)):
             break
     return roots, departed
 
 
+def _first_steps(stepper, hits: list[int], ta: float, tb: float
+                 ) -> dict[int, tuple[float, float]]:
+    """Where a stepper's interval holds several of its own steps (AUTO's), the step
+    each crossed surface first crosses in: a root searched over the whole interval
+    may be any of an odd number of crossings (SIGN(SIN(10 t)) over a row interval of
+    1: it found the third)."""
+    if not stepper.refines:
+        return {}
+    out = {}
+    for k in hits:
+        step = stepper.crossing_step({k})
+        if step is not None and ta <= step[0] < step[1] <= tb and step != (ta, tb):
+            out[k] = step
+    return out
+
+
 def _roots(watch: SurfaceWatch, hits: list[int], m, z, interp, ta: float, tb: float,
-           segment_start: float, xtol: float | None, ends
+           segment_start: float, xtol: float | None, ends,
+           within: dict[int, tuple[float, float]] | None = None
            ) -> tuple[dict[int, float], set[int]]:
+    """Each surface's root in [ta, tb]; the one in its first step there (`within`)
+    where that step brackets one and the root found is past it."""
     roots: dict[int, float] = {}
     departed: set[int] = set()
     # linear surfaces first: their roots are cheap, and a nonlinear surface that
@@ -78,11 +98,35 @@ def _roots(watch: SurfaceWatch, hits: list[int], m, z, interp, ta: float, tb: fl
             tk = _shared_root(watch, k, m, z, interp, roots.values(), ta, tb)
         if tk is None:
             tk = watch.locate(k, m, z, interp, ta, tb, segment_start, xtol=xtol)
+        if within and k in within and (tk is None or tk > within[k][1]):
+            # (a later one of several crossings: the first is in its first step)
+            first = _bracketed_root(watch, k, m, z, interp, *within[k], xtol)
+            tk = first if first is not None else tk
         if tk is None:
             departed.add(k)
         else:
             roots[k] = tk
     return roots, departed
+
+
+def _bracketed_root(watch: SurfaceWatch, k: int, m, z, interp, lo: float, hi: float,
+                    xtol: float | None) -> float | None:
+    """Surface k's root in [lo, hi] where its sign on the dense output changes across
+    them (None where it does not: the step ends' states are the solver's, and the
+    whole interval is searched instead)."""
+    surf = watch.c.surf
+
+    def g(t: float) -> float:
+        return surf(t, interp(t).tolist(), m, z)[k]
+
+    glo, ghi = g(lo), g(hi)
+    if ghi == 0.0 and glo != 0.0:
+        return hi
+    if not (math.isfinite(glo) and math.isfinite(ghi)) or glo == 0.0 or \
+            sign(glo) == sign(ghi):
+        return None
+    return brentq(g, lo, hi, xtol=xtol or _XTOL * max(abs(hi), 1e-300), rtol=_XTOL,
+                  maxiter=200)
 
 
 def _shared_root(watch: SurfaceWatch, k: int, m, z, interp, known, ta: float,

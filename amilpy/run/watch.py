@@ -225,13 +225,21 @@ class SurfaceWatch:
                 for k, edge in self._edges_together(t, y, new, z, at_zero, decided).items():
                     new[k] = edge
                     decided.add(k)
+            # (a level's surface at zero: its argument stands on an edge, here where
+            # another surface turned -- QNTZR(0.3, X) at X = 0.75 where STEP(0.75) --
+            # and takes the level the motion goes to, as a located crossing does)
+            on_edge = self.c.surf(t, y.tolist(), new, z) \
+                if self.levels and not waiting and not first else None
             for k in range(len(new)):
                 if k in self.levels:
+                    edge = on_edge is not None and on_edge[k] == 0.0 and not slides(new[k])
                     # (one sliding on an edge stays there unless located anew)
-                    if not waiting and k not in decided and (k in at_zero or first or (
+                    if not waiting and k not in decided and (k in at_zero or first or edge or (
                             lit[k] != new[k] and not slides(new[k]))):
-                        new[k] = self.level_ahead(k, t, y, new, z, located=k in at_zero)
-                        decided.add(k)
+                        new[k] = self.level_ahead(k, t, y, new, z,
+                                                  located=k in at_zero or edge)
+                        if not edge or k in at_zero:  # (an edge may move with the others)
+                            decided.add(k)
                     continue
                 landed = lit[k] == 0.0 and new[k] != 0.0 and not slides(new[k])
                 if k in at_zero or (first and lit[k] == 0.0) or landed:

@@ -34,6 +34,9 @@ output is a cubic between two instants many LSODA steps apart):
     refine(t, surfaces)            integrate a narrow window around t again; the
                                    dense output with its exact ends
     resolved(t, surfaces) -> bool  whether the dense output around t is that narrow
+    crossing_step(surfaces)        the integrator's own step, among those inside the
+        -> (ta, tb) | None         present interval, that the first crossing of these
+                                   surfaces is in (None: one step, or not known)
 
 To add a route: subclass `Stepper` (the constructor takes what `make_stepper`
 passes for its kind), then add a row to `routes.ROUTES` whose `stepper` names

@@ -270,7 +270,7 @@ class OdeintStepper(Chunked):
         # surfaces not crossed there may cross and cross back before it
         self._exam_loud = t0
         self._exam_behind: tuple | None = None
-        self._crossing: tuple | None = None  # (what `_crossing_step` was asked, found)
+        self._crossing: tuple | None = None  # (what `crossing_step` was asked, found)
 
     @property
     def nfev(self) -> int:
@@ -661,7 +661,7 @@ class OdeintStepper(Chunked):
             return dense  # (the fallback's step: its own solver's dense output)
         h = self.t - self.t_old
         points = [max(self.t_old, t - self.WINDOW * h), min(self.t, t + self.WINDOW * h)]
-        step = self._crossing_step(surfaces)
+        step = self.crossing_step(surfaces)
         if step is not None:
             lo, hi = step
             w = 0.05 * (hi - lo)
@@ -683,11 +683,11 @@ class OdeintStepper(Chunked):
         if not isinstance(dense, Nodes):
             return True  # (the fallback's step: nothing here can narrow it)
         k = min(max(bisect.bisect_left(dense.t, t), 1), len(dense.t) - 1)
-        step = self._crossing_step(surfaces)
+        step = self.crossing_step(surfaces)
         h = step[1] - step[0] if step is not None else self.t - self.t_old
         return dense.t[k] - dense.t[k - 1] <= 0.11 * h
 
-    def _crossing_step(self, surfaces=None) -> tuple[float, float] | None:
+    def crossing_step(self, surfaces=None) -> tuple[float, float] | None:
         """The LSODA step of the present interval a crossing of `surfaces` is in, by
         its step ends: from the one before the first on the wrong side to that one
         (to the interval's end if none is); None when LSODA took one step or none
