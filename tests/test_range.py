@@ -62,3 +62,33 @@ def test_clutch_peaks_are_the_located_ones():
     run, = model.run(advice=False)
     assert run.range["W1"][0] == pytest.approx(-147.92, abs=0.01)
     assert run.range["MC"][2] == pytest.approx(0.2717, abs=1e-4)
+
+
+BOUNCES_ON_ROWS = """PROGRAM ball whose impacts fall on output instants
+  CONSTANT G = 9.81, E = 0.5, H0 = 4.905
+  CINTERVAL CINT = 0.5
+  DERIVATIVE
+    V = INTEG(-G, 0.0)
+    H = INTEG(V, H0)
+    SCHEDULE BOUNCE .XN. H
+    TERMT(T >= 2.1)
+  END
+  DISCRETE BOUNCE
+    V = -E*V
+  END
+  RANGE V
+END
+"""
+
+
+@pytest.mark.parametrize("method", ["AUTO", "BDF", "LSODA", "RKS"])
+def test_range_across_impacts_on_the_rows(method):
+    """H = H0 - G t^2/2 reaches 0 at t = 1, a row; V jumps from -9.81 to 4.905 there,
+    and again at 2 (-4.905 to 2.4525). RANGE's search over a span of a few ulps
+    between the row and the located impact divided by a rate step rounded to 0: a
+    ZeroDivisionError traceback (hunt 53). V's minimum -9.81 and maximum 4.905, both
+    at 1, to 1e-8."""
+    run, = amilpy.loads(BOUNCES_ON_ROWS, "ball.csl").run(method=method, advice=False)
+    lo, t_lo, hi, t_hi = run.range["V"]
+    assert lo == pytest.approx(-9.81, abs=1e-8) and hi == pytest.approx(4.905, abs=1e-8)
+    assert t_lo == pytest.approx(1.0, abs=1e-8) and t_hi == pytest.approx(1.0, abs=1e-8)

@@ -284,11 +284,12 @@ def turns(value, ta: float, tb: float, points: int = 3) -> list[tuple[float, flo
     out = [(ta, value(ta)), (tb, value(tb))]
     if not tb - ta > 64 * _EPS * max(abs(ta), abs(tb)):
         return out  # (a restart an ulp after a row: no room for a rate)
-    d = 1e-7 * (tb - ta)
+    # (a few ulps at least: a span of a few hundred ulps made the step round to 0)
+    d = max(1e-7 * (tb - ta), 4 * _EPS * max(abs(ta), abs(tb)))
 
     def rate(t: float) -> float:
         lo, hi = max(t - d, ta), min(t + d, tb)
-        return (value(hi) - value(lo)) / (hi - lo)
+        return (value(hi) - value(lo)) / (hi - lo) if hi > lo else math.nan
 
     grid = np.linspace(ta, tb, points)
     r = [rate(float(t)) for t in grid]
