@@ -92,3 +92,37 @@ def test_range_across_impacts_on_the_rows(method):
     lo, t_lo, hi, t_hi = run.range["V"]
     assert lo == pytest.approx(-9.81, abs=1e-8) and hi == pytest.approx(4.905, abs=1e-8)
     assert t_lo == pytest.approx(1.0, abs=1e-8) and t_hi == pytest.approx(1.0, abs=1e-8)
+
+
+DOSES = """PROGRAM bolus doses at 0, 2, 4, 6
+  CONSTANT KE = 0.3, DOSE = 1.0, TAU = 2.0
+  CINTERVAL CINT = 5.0
+  INITIAL
+    SCHEDULE DOSING .AT. 0.0
+  END
+  DERIVATIVE
+    A = INTEG(-KE*A, 0.0)
+    TERMT(T >= 7.0)
+  END
+  DISCRETE DOSING
+    A = A + DOSE
+    SCHEDULE DOSING .AT. T + TAU
+  END
+  RANGE A
+END
+"""
+
+
+@pytest.mark.parametrize("method", ["AUTO", "DOP853", "RKS", "BDF"])
+def test_range_holds_the_peak_a_dose_between_rows_makes(method):
+    """Doses at 0, 2, 4, 6 between rows 5 apart: the peak is right after the last,
+    A(6+) = sum of exp(-0.3 (6 - 2k)), k = 0..3 = 2.015305, and the trough right
+    before the first repeat, A(2-) = exp(-0.6) (the state before the dose at 0 is no
+    part of the run: its first row is after it). RANGE read the first step's end
+    after each dose (DOP853: 1.998707 at 6.0276, hunt 53). To 1e-7 (the states' own
+    error at the default tolerances is below that), the times to 1e-9."""
+    run, = amilpy.loads(DOSES, "doses.csl").run(method=method, advice=False)
+    lo, t_lo, hi, t_hi = run.range["A"]
+    peak = sum(math.exp(-0.3 * (6.0 - 2.0 * k)) for k in range(4))
+    assert hi == pytest.approx(peak, abs=1e-7) and t_hi == pytest.approx(6.0, abs=1e-9)
+    assert lo == pytest.approx(math.exp(-0.6), abs=1e-7) and t_lo == pytest.approx(2.0, abs=1e-9)

@@ -383,6 +383,7 @@ class AcslRun(_Run):
         # that the motion crosses right here, and the code leaves as it was, fires)
         surfaces = self.c.surf(cur.t, cur.y.tolist(), cur.m, cur.z) \
             if sliding or self.integ.scheduling else None
+        before = (cur.y, list(cur.m), list(cur.z))
         changed = self.run_due(cur)
         times = self.plan.grid.times
         on_grid = self.rec.out_i < len(times) and \
@@ -398,6 +399,14 @@ class AcslRun(_Run):
             self.restart_firing(cur, surfaces)
         self.termt_now(cur)
         self.rec.hold = None
+        if not np.array_equal(before[0], cur.y):
+            # (RANGE reads both sides of the states the code set, and integrates again
+            # from after it: a dose between two rows is the peak; at the start there
+            # is no side before the first row's)
+            if self.rec.last_t is not None:
+                self.rec.sample(cur.t, *before)
+            self.rec.restarted(cur.t, cur.y.copy(), list(cur.m), list(cur.z))
+            self.rec.sample(cur.t, cur.y, cur.m, cur.z)
         if on_grid:
             self.rec.grid_row(cur.t, cur.y, cur.m, cur.z,
                               shown=self.rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
