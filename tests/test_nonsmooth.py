@@ -617,3 +617,38 @@ def test_amod_on_a_multiple_is_the_start_of_its_branch():
         assert abs(x[t]) < 1e-15, (t, x[t])
     for t in (0.05, 0.45, 0.95):
         assert x[t] == pytest.approx(0.05, abs=1e-15)
+
+
+@pytest.mark.parametrize("method", ["AUTO", "RKS", "DOP853", "LSODA", "RADAU", "BDF",
+                                    "COMPILED"])
+@pytest.mark.parametrize("form", ["ACSL", "CSMP"])
+def test_rsw_of_a_sliding_test_takes_filippovs_combination(method, form):
+    """X' = 1 - 2 (X > 0.5) slides on X = 0.5 from t = 0.5 (the relay chatters; its
+    Filippov value is 1/2). RSW(X > 0.5, 1, 0) is that test's value read through a
+    switch of its own: it kept the side it had when the slide began and took 1 all
+    along (Y2(3) = 2.5, hunt 53), where (X > 0.5)*1.0 gives Filippov's 1/2: Y = 1.25
+    at 3. RSW's condition now takes its side in each branch of the slide. With a
+    second RSW of another value of the test, Z' = RSW(X >= 0.5, -1, 1) + SIN(t)/2:
+    1 before the slide, 0 on it: 0.5 + (1 - cos 3)/2 at 3. To 1e-9 (BDF, whose default
+    RELERR is 1e-8: 1e-8; measured 3.7e-9)."""
+    if form == "ACSL":
+        text = ("PROGRAM r\n  CINTERVAL CINT = 0.5\n  DERIVATIVE\n"
+                "    X = INTEG(1.0 - 2.0*(X > 0.5), 0.0)\n"
+                "    Y1 = INTEG((X > 0.5)*1.0, 0.0)\n"
+                "    Y2 = INTEG(RSW(X > 0.5, 1.0, 0.0), 0.0)\n"
+                "    Z = INTEG(RSW(X >= 0.5, -1.0, 1.0) + 0.5*SIN(T), 0.0)\n"
+                "    TERMT(T >= 3.0)\n  END\nEND\n")
+        name = "r.csl"
+    else:
+        text = ("TITLE R\nDYNAMIC\n   X = INTGRL(0.0, 1.0 - 2.0*COMPAR(X, 0.5))\n"
+                "   Y1 = INTGRL(0.0, COMPAR(X, 0.5))\n"
+                "   Y2 = INTGRL(0.0, RSW(X > 0.5, 1.0, 0.0))\n"
+                "   Z = INTGRL(0.0, RSW(X >= 0.5, -1.0, 1.0) + 0.5*SIN(TIME))\n"
+                "TIMER FINTIM = 3.0, OUTDEL = 0.5\nEND\nSTOP\n")
+        name = "r.amil"
+    run, = amilpy.loads(text, name).run(method=method, advice=False)
+    tol = 1e-8 if method == "BDF" else 1e-9
+    assert run.final["X"] == pytest.approx(0.5, abs=tol)
+    assert run.final["Y1"] == pytest.approx(1.25, abs=tol)
+    assert run.final["Y2"] == pytest.approx(1.25, abs=tol)
+    assert run.final["Z"] == pytest.approx(0.5 + (1.0 - math.cos(3.0)) / 2, abs=tol)

@@ -55,6 +55,9 @@ class SurfaceWatch:
         # derivative is 0 either way, but the state is put back where one flips
         self.reset_surfaces = {k for r in self.resets for k in (r.first, r.second)
                                if isinstance(k, int)}
+        # (modes, sliding surfaces) -> the surfaces whose value is a sliding switch's
+        # (RSW(X > 0.5, ...) while X - 0.5 slides): their sides differ corner to corner
+        self._followers: dict[tuple, list[int]] = {}
 
     # ------------------------------------------------------------ vector fields
     sliding = staticmethod(sliding)
@@ -94,9 +97,39 @@ class SurfaceWatch:
         level's corner with the switches that level's value puts on another side
         there on that side (`follow`)."""
         modes = corner_modes(m, ks, self.levels)
-        if not any(k in self.levels for k in ks):
-            return modes
-        return self.follow(t, y, modes, z)
+        if any(k in self.levels for k in ks):
+            return self.follow(t, y, modes, z)
+        return self._with_followers(t, y, m, z, ks, modes)
+
+    def _with_followers(self, t: float, y: np.ndarray, m, z, ks: list[int],
+                        corners: list[list[float]]) -> list[list[float]]:
+        """The corners of sign surfaces sliding, with each surface whose value is a
+        value of theirs (a switch's condition that is a sliding relational test, RSW(X >
+        0.5, 1., 0.)) on its side in each corner -- at zero where the test is 0 there,
+        which selects the function's own branch at 0. Without it the condition kept
+        the side it had when the slide began, and RSW took one branch all along (2.5
+        for Filippov's 1.25, hunt 53). Which surfaces follow is found once per slide."""
+        key = (tuple(m), tuple(ks))
+        deps = self._followers.get(key)
+        if deps is not None and not deps:
+            return corners
+        yl = y.tolist()
+        try:
+            lits = [self.c.modes_literal(t, yl, b, z) for b in corners]
+        except (ArithmeticError, ValueError):
+            return corners
+        if deps is None:
+            deps = [j for j in range(len(m)) if j not in ks and not slides(m[j])
+                    and self.watched[j].kind is SurfaceKind.SIGN
+                    and len({lit[j] for lit in lits}) > 1]
+            if len(self._followers) > 4096:
+                self._followers.clear()
+            self._followers[key] = deps
+        out = [list(b) for b in corners]
+        for o, lit in zip(out, lits, strict=True):
+            for j in deps:
+                o[j] = lit[j]
+        return out
 
     def follow(self, t: float, y: np.ndarray, branches: list[list[float]], z
                ) -> list[list[float]]:
