@@ -262,7 +262,8 @@ def _integrated(ctx: Context, b: Bracket, columns: list[tuple[str, int, bool]],
         if t not in cache:
             _, _, interp, m, z = pieces[min(bisect_left(ends, t), len(pieces) - 1)]
             try:
-                cache[t] = watch.outputs(t, np.asarray(interp(t), float), m, z)
+                y = np.asarray(interp(t), float)
+                cache[t] = watch.outputs(t, y, watch.as_they_are(t, y, m, z), z)
             except (ArithmeticError, ValueError):
                 cache[t] = [math.nan] * len(ctx.c.out_names)
         return cache[t]

@@ -78,6 +78,22 @@ class SurfaceWatch:
         columns = [np.asarray(self.c.out(t, y.tolist(), mc, z), dtype=float) for mc in modes]
         return combine(weights, columns).tolist()
 
+    def as_they_are(self, t: float, y: np.ndarray, m, z) -> list[float]:
+        """Modes m with each sign surface that is not sliding on the side it is on at
+        (t, y): inside a step the loop follows a silent surface's sign only at the
+        step's end (a switch only printed, ABS(SIN(3 T) - 0.2)), and a value read
+        between (RANGE's) took the other branch: -0.799 for an ABS (hunt 53)."""
+        try:
+            lit = self.c.modes_literal(t, y.tolist(), m, z)
+        except (ArithmeticError, ValueError):
+            return m
+        out = list(m)
+        for k, w in enumerate(self.watched):
+            if w.kind is SurfaceKind.SIGN and lit[k] != 0.0 and lit[k] != m[k] and \
+                    not slides(m[k]):
+                out[k] = lit[k]
+        return out
+
     def _mix(self, t, y, m, z, ks, with_rates: bool = False):
         """The corners (every sliding surface of `ks` in either branch), their fields,
         and the weight of each corner (and the sliding surfaces' rates at each)."""
