@@ -578,3 +578,28 @@ END
     assert run.t == pytest.approx([0.0, 0.5, 1.0, 1.2, 1.4, 1.6, 1.8, 2.0, 2.2, 2.4, 2.6,
                                    2.8, 3.0], abs=1e-12)
     assert run["X"] == pytest.approx(np.sin(run.t), abs=1e-9)
+
+
+@pytest.mark.parametrize("method", ["AUTO", "LSODA", "RKS", "BDF", "DOP853"])
+def test_a_row_at_an_impact_shows_the_values_after_it(method):
+    """H = 4.905 - 9.81 t^2/2 lands at t = 1, then (E = 0.5) at 2: both CINT instants.
+    Located a few ulps past the instant, the impact's row had been taken before its
+    code on AUTO (V = -9.81 and -4.905, hunt 53) and at 2 on LSODA; a row at an
+    instant shows the values after the instant's code: V = 4.905 and 2.4525."""
+    run, = amilpy.loads("""PROGRAM ball
+  CONSTANT G = 9.81, E = 0.5, H0 = 4.905
+  CINTERVAL CINT = 0.5
+  DERIVATIVE
+    V = INTEG(-G, 0.0)
+    H = INTEG(V, H0)
+    SCHEDULE BOUNCE .XN. H
+    TERMT(T >= 2.1)
+  END
+  DISCRETE BOUNCE
+    V = -E*V
+  END
+END
+""", "ball.csl").run(method=method, advice=False)
+    t, v = np.asarray(run.t), np.asarray(run["V"])
+    assert v[np.isclose(t, 1.0)] == pytest.approx([4.905], abs=1e-7)
+    assert v[np.isclose(t, 2.0)] == pytest.approx([2.4525], abs=1e-7)

@@ -407,6 +407,10 @@ class AcslRun(_Run):
                 self.rec.sample(cur.t, *before)
             self.rec.restarted(cur.t, cur.y.copy(), list(cur.m), list(cur.z))
             self.rec.sample(cur.t, cur.y, cur.m, cur.z)
+        if not on_grid and changed:
+            # (the instant's row taken a float before a crossing located just after
+            # it -- a ball landing on a CINT instant, to rounding: after its code)
+            self.rec.retake(cur.t, cur.y, cur.m, cur.z)
         if on_grid:
             self.rec.grid_row(cur.t, cur.y, cur.m, cur.z,
                               shown=self.rec.shown_modes(cur.t, cur.y, cur.m, cur.z))
