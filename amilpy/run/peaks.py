@@ -36,9 +36,9 @@ from ..codegen import ModelCode
 from ..steppers import solver_tolerance
 from .fastpaths import kernel_arguments
 from .loop import Cursor, Integrator, Stop
-from .plan import Options, RunPlan, SurfaceKind, sliding_in
+from .plan import Options, RunPlan, sliding_in
 from .record import Bracket, Extrema, RestartStates, column, vertices
-from .watch import SurfaceWatch, TooManySlides, crossings
+from .watch import SurfaceWatch, TooManySlides
 
 SAMPLES = 33  # instants per zoom level on the AUTO route
 _EPS = float(np.finfo(float).eps)
@@ -115,6 +115,9 @@ def _rate(ctx: Context, at: Bracket, col: int, span: float) -> float | None:
     try:
         y = np.asarray(at.y, float)
         f = np.asarray(ctx.watch.field(at.ta, y, m, z), float)
+        # (a switch only printed is read as it stands: a row a batch of steps
+        # recorded keeps the batch's branch of it, and its rate had the wrong sign)
+        m = ctx.watch.as_they_are(at.ta, y, m, z)
         # (a bracket between two points at one TIME, a sample and a row: the rate there)
         d = 1e-7 * span if span > 0 else 1e-13 * max(abs(at.ta), 1e-300)
         v0 = ctx.watch.outputs(at.ta, y, m, z)[col]
@@ -145,19 +148,14 @@ def _sampled(ctx: Context, b: Bracket, columns: list[tuple[str, int, bool]], fou
             return None
         if ys is None or not np.isfinite(ys).all():
             return None
-        cols = list(ys.T)
+        # (a switch inside, even one the derivatives do not see: its kink may be the
+        # extremum, which a parabola through samples misses; the loop's way solves
+        # for it)
+        modes = ctx.watch.standing(ts, ys, m, z)
+        if modes is None or any(isinstance(v, np.ndarray) for v in modes):
+            return None
         with np.errstate(all="ignore"):
-            surfaces = [column(e, len(ts)) for e in c.surf_v(ts, cols, m, z)]
-            modes: list = list(m)
-            for k, mask in crossings(plan, surfaces, m).items():
-                i = int(np.argmax(mask))
-                if plan.watched[k].kind is not SurfaceKind.SIGN or \
-                        not ctx.watch.silent(k, float(ts[i]), ys[i], m, z):
-                    return None  # a switch inside: the loop's way
-                # a switch the derivatives do not see (the loop follows its sign
-                # without a restart): the outputs read it as it stands
-                modes[k] = np.sign(surfaces[k])
-            return ys, [column(v, len(ts)) for v in c.out_v(ts, cols, modes, z)]
+            return ys, [column(v, len(ts)) for v in c.out_v(ts, list(ys.T), modes, z)]
 
     ts = np.linspace(b.ta, b.tb, SAMPLES)
     first = sample(ts, b.y)

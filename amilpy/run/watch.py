@@ -35,6 +35,7 @@ _XTOL = 4 * _EPS
 class SurfaceWatch:
     def __init__(self, c: ModelCode, plan: RunPlan) -> None:
         self.c = c
+        self.plan = plan
         self.watched = plan.watched
         self.resets = plan.resets
         self.lookahead_h = plan.lookahead_h
@@ -93,6 +94,24 @@ class SurfaceWatch:
                     not slides(m[k]):
                 out[k] = lit[k]
         return out
+
+    def standing(self, ts: np.ndarray, ys: np.ndarray, m, z) -> list | None:
+        """`as_they_are` over many instants of one branch (rows ys at ts): modes m with
+        each silent sign surface that has crossed a column of its own signs (zero
+        where it is zero: the X = 0 branch, as a row there shows); None when a
+        surface the loop must locate has crossed (the samples' values then need the
+        loop's way)."""
+        with np.errstate(all="ignore"):
+            surfaces = [np.broadcast_to(np.asarray(e, float), ts.shape)
+                        for e in self.c.surf_v(ts, list(ys.T), m, z)]
+        modes: list = list(m)
+        for k, mask in crossings(self.plan, surfaces, m).items():
+            i = int(np.argmax(mask))
+            if self.watched[k].kind is not SurfaceKind.SIGN or \
+                    not self.silent(k, float(ts[i]), ys[i], m, z):
+                return None
+            modes[k] = np.sign(surfaces[k])
+        return modes
 
     def _mix(self, t, y, m, z, ks, with_rates: bool = False):
         """The corners (every sliding surface of `ks` in either branch), their fields,
