@@ -298,10 +298,36 @@ def test_acsl_instants_that_change_nothing_cost_no_restart(dynamic: str) -> None
         assert abs(run.stats["nfev"] - plain.stats["nfev"]) <= 0.05 * plain.stats["nfev"]
 
 
-def test_acsl_instant_that_changes_a_rate_restarts_there() -> None:
+WITHOUT_DYNAMIC = DYNAMIC_OUTPUTS.replace(
+    "      Z = INTEG(Y, 0.0)\n", "      Z = INTEG(Y, 0.0)\n      TERMT(T >= TSTOP)\n").replace(
+    "    {dynamic}\n    TERMT(T >= TSTOP)\n", "").replace(
+    "  CINTERVAL CINT = 0.01\n", "  CINTERVAL CINT = 0.01\n  MAXTERVAL MAXT = 0.01\n")
+
+
+@pytest.mark.parametrize("method", ["LSODA", "BDF", "RADAU", "DOP853", "RKS"])
+def test_acsl_instants_that_change_nothing_cost_no_restart_on_the_step_routes(method):
+    # The step-by-step routes ended a segment at each of the 1000 CINT instants and
+    # started the next afresh (LSODA from order 1: 28,899 evaluations, BDF 27,000);
+    # the step over an instant is now handed out in two, and the same integration
+    # goes on. It costs what the program without a DYNAMIC block costs with its
+    # steps capped at CINT as this one's are (TERMT in DYNAMIC: the run's length is
+    # unknown): measured equal to 3 evaluations in 1,000 to 15,000; within 2 %.
+    run, = amilpy.loads(DYNAMIC_OUTPUTS.format(dynamic="YPCT = 100.0*Y/Y0\n    KR = K"),
+                        "decay").run(method=method, advice=False)
+    plain, = amilpy.loads(WITHOUT_DYNAMIC, "decay").run(method=method, advice=False)
+    assert run.status == plain.status == "stopped"
+    assert run.stats["nfev"] <= 1.02 * plain.stats["nfev"]
+    # (the tolerance of the defaults, RELERR 1e-11: measured 1.5e-11 on BDF)
+    assert np.max(np.abs(run["Y"] - np.exp(-0.5 * run.t))) < 1e-9
+
+
+@pytest.mark.parametrize("method", ["AUTO", "LSODA", "BDF", "DOP853"])
+def test_acsl_instant_that_changes_a_rate_restarts_there(method: str) -> None:
     # KR doubles at T = 4 (a CINT instant): Y = exp(-0.5 t) before, then
     # exp(-2 - 1.0 (t - 4)); the change is seen at the instant, not stepped over
-    run = acsl_run("KR = K\n    IF (T >= 4.0) KR = 2.0*K")
+    # (the step routes go on through the instants that change nothing: not this one)
+    run, = amilpy.loads(DYNAMIC_OUTPUTS.format(dynamic="KR = K\n    IF (T >= 4.0) KR = 2.0*K"),
+                        "decay").run(method=method, advice=False)
     t = run.t
     want = np.where(t <= 4.0, np.exp(-0.5 * t), np.exp(-2.0 - 1.0 * (t - 4.0)))
     assert np.max(np.abs(run["Y"] - want)) < 2e-6

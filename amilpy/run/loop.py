@@ -190,8 +190,8 @@ class Integrator(RunLoop, SegmentStart, StepWatch, Restarts, FastPaths):
 
     # ---------------------------------------------------------------- segments
     def _pausing(self, cur: Cursor) -> bool:
-        """Whether a segment from `cur` can stop at an instant and go on (chunked)."""
-        return self.plan.chunked and not sliding_in(cur.m) and len(cur.y) > 0
+        """Whether a segment from `cur` can stop at an instant and go on."""
+        return self.plan.pauses and not sliding_in(cur.m) and len(cur.y) > 0
 
     def _next_stop(self, cur: Cursor, t_end: float, pause: bool, observed: bool
                    ) -> tuple[float, bool]:

@@ -271,6 +271,10 @@ class RunPlan:
     roots: dict[int, float]  # watched position -> its breakpoint
     resets: tuple[Reset, ...]
     chunked: bool  # AUTO drives odeint over chunks of output instants
+    # a segment can stop at an instant and go on from it, its history kept (AUTO's
+    # chunks, SciPy's solvers: `Stepper.stop_at`), where an ACSL instant's code or a
+    # memory's update changes nothing the derivatives read
+    pauses: bool
     max_step: float  # TIMER DELMAX (ACSL: MAXTERVAL), at most a hundredth of the run
     h_floor: float  # steps shorter than this make no progress
     floor_origin: str  # where h_floor comes from, for the message
@@ -679,6 +683,8 @@ def make_plan(model: ir.Model, spec: ir.RunSpec, opts: Options, c: ModelCode,
         watch_idx=tuple(k for k, w in enumerate(watched) if not w.breakpoint_only),
         breakpoints=tuple(breakpoints), roots=roots, resets=tuple(resets),
         chunked=route.stepper == "odeint" and not c.memory_every_step,
+        pauses=route.stepper == "scipy" or (route.stepper == "odeint"
+                                            and not c.memory_every_step),
         # the output grid does not bound the step (OUTDEL changes no printed number:
         # every step's surfaces are looked at and its rows come from its dense output),
         # a hundredth of the run does, as the default OUTDEL did: a state below its

@@ -22,7 +22,9 @@ Optional capability, declared by subclassing `Chunked` (the AUTO route):
     consume(n)                     take the next n of them at once
     samples(t) -> (S, SY)          the integrator's own step ends before t not handed
                                    out yet, between the instants (RANGE's samples)
-    stop_at(t) -> bool             make t a check instant (the loop pauses there)
+    stop_at(t) -> bool             make t a check instant (the loop pauses there;
+                                   SciPy's solvers have it too: the step over t is
+                                   handed out in two, `ScipyStepper.stop_at`)
     first_wrong() -> int | None    the first pending instant where a surface is on
                                    the wrong side, as the stepper found (None: it
                                    does not look; the loop does)
